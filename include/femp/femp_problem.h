@@ -1,0 +1,101 @@
+// femp: the top-level problem. It owns the modules and runs the macro time
+// step of the paper's sec. 2.6 (METHOD sec. 5):
+//   1. tag cells from the points, update alpha, gamma and properties;
+//   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1);
+//   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4; not yet built);
+//   4. solid by MPM + FE with transition-node coupling (eqs. 5-17; not yet
+//      built), sub-cycled to the macro time;
+//   5. output, next step.
+#ifndef femp_femp_problem_h
+#define femp_femp_problem_h
+
+#include <deal.II/base/conditional_ostream.h>
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/timer.h>
+
+#include <femp/background_grid.h>
+#include <femp/heat_transfer.h>
+#include <femp/laser.h>
+#include <femp/material.h>
+#include <femp/material_points.h>
+#include <femp/output.h>
+
+#include <memory>
+
+namespace femp
+{
+  using namespace dealii;
+
+  /// Declare every parameter of femp (all modules) in @p prm.
+  void
+  declare_all_parameters(ParameterHandler &prm);
+
+  template <int dim>
+  class FempProblem
+  {
+  public:
+    struct TimeParameters
+    {
+      double       end_time      = 1e-3;
+      double       time_step     = 0;
+      double       safety_factor = 0.5;
+      unsigned int max_steps     = 100000000;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+    };
+
+    /// Read and check all parameters; throws InputError before any work.
+    FempProblem(ParameterHandler &prm, MPI_Comm comm);
+
+    void
+    run();
+
+    /// Summary numbers of the finished run (for tests and benchmarks).
+    struct Summary
+    {
+      unsigned int steps = 0;
+      double       time  = 0;
+      double       T_max = 0;
+      MeltPoolSize pool;
+    };
+    const Summary &
+    summary() const
+    {
+      return result;
+    }
+
+  private:
+    MPI_Comm           comm;
+    ConditionalOStream pcout;
+    TimeParameters     time_prm;
+    Material           material;
+    typename BackgroundGrid<dim>::Parameters  grid_prm;
+    typename MaterialPoints<dim>::Parameters  points_prm;
+    typename HeatTransfer<dim>::Parameters    heat_prm;
+    typename Laser<dim>::Parameters           laser_prm;
+    typename Output<dim>::Parameters          output_prm;
+    double                                    melt_temperature;
+
+    std::unique_ptr<BackgroundGrid<dim>> grid;
+    std::unique_ptr<Laser<dim>>          laser;
+    std::unique_ptr<MaterialPoints<dim>> points;
+    std::unique_ptr<HeatTransfer<dim>>   heat;
+    std::unique_ptr<Output<dim>>         output;
+    TimerOutput                          timer;
+    Summary                              result;
+
+    void
+    setup();
+    double
+    choose_time_step(const unsigned int step, const double time);
+    void
+    write_output(const unsigned int n, const double time, const bool last);
+    std::vector<typename Output<dim>::Field>
+    output_fields() const;
+  };
+} // namespace femp
+
+#endif

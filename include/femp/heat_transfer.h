@@ -1,0 +1,210 @@
+// femp: HeatTransfer<dim>, the temperature equation (1) of the paper on the
+// cell centres of the background grid:
+//
+//   rho c DT/Dt = div(lambda grad T) - alpha rho_m L_m Dgamma/Dt
+//     - [q_evap(T) + h (T - T_ref) + sigma_SB eps (T^4 - T_ref^4)]
+//       * 2 rho c / (rho_m c_m + rho_g c_g) |grad alpha| + q_laser
+//
+// Forward Euler in time; 5/7-point central differences with harmonic-mean
+// face conductivities; first-order upwind convection with a cell-centred
+// velocity (none unless a flow solver or a prescribed field provides one);
+// latent heat by a local iteration per cell over the solid, mushy and liquid
+// branches of the enthalpy relation (METHOD sec. 2); surface losses and the
+// laser deposited through |grad alpha| with the density weighting above.
+// Cells without metal (alpha = 0) are not solved and carry no flux.
+#ifndef femp_heat_transfer_h
+#define femp_heat_transfer_h
+
+#include <deal.II/base/function_parser.h>
+#include <deal.II/base/parameter_handler.h>
+
+#include <femp/background_grid.h>
+#include <femp/laser.h>
+#include <femp/material.h>
+
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class HeatTransfer
+  {
+  public:
+    struct Parameters
+    {
+      double initial_temperature   = 300.;
+      double reference_temperature = 300.;
+      double convection_coefficient = 10.;
+      double emissivity             = 0.4;
+      double evaporation_coefficient = 0.82;
+      double latent_heat_evaporation = 7.41e6;
+      double evaporation_temperature = 3090.;
+      double molar_mass              = 0.0558;
+      double ambient_pressure        = 101325.;
+      std::map<std::string, double> fixed_temperatures;
+      std::string                   laser_deposition = "first surface";
+      std::string                   prescribed_velocity;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+    };
+
+    /// Cumulative energies since initialize(), J (2D: J/m), global sums.
+    struct EnergyBudget
+    {
+      double laser       = 0; ///< deposited by the laser
+      double evaporation = 0; ///< lost by evaporation
+      double convection  = 0; ///< lost by surface convection
+      double radiation   = 0; ///< lost by radiation
+      double boundary    = 0; ///< entered through fixed-temperature faces
+      /// Losses of the implicit (linearized) part, this rank only; added to
+      /// the total by total_losses().
+      double implicit_losses_local = 0;
+    };
+
+    /// Total surface losses so far (global), J (2D: J/m).
+    double
+    total_losses() const;
+
+    HeatTransfer(const Parameters &         prm,
+                 const Material &           material,
+                 const Laser<dim> &         laser,
+                 const BackgroundGrid<dim> &grid);
+
+    /// Allocate the fields, set T to the initial temperature, gamma from T.
+    void
+    initialize();
+
+    /// New metal fraction (owned cells and ghosts); rebuilds the list of
+    /// surface cells and the |grad alpha| weights.
+    void
+    set_metal_fraction(const std::vector<double> &alpha);
+
+    /// Cell-centred velocity, one array per direction over the local box
+    /// (with ghosts); nullptr switches convection off.
+    void
+    set_velocity(const std::array<std::vector<double>, dim> *velocity);
+
+    /// Largest stable step for the current state (global), s: diffusion and
+    /// convection, without safety factor.
+    double
+    stable_time_step();
+
+    /// Advance T and gamma by one forward-Euler step of size @p dt from time
+    /// @p time. Throws if the state turns non-finite.
+    void
+    advance(const double dt, const double time);
+
+    const std::vector<double> &
+    temperature() const
+    {
+      return T;
+    }
+    std::vector<double> &
+    temperature()
+    {
+      return T;
+    }
+    const std::vector<double> &
+    liquid_fraction() const
+    {
+      return gamma;
+    }
+    const std::vector<double> &
+    metal_fraction() const
+    {
+      return alpha;
+    }
+    /// Laser flux density deposited per volume in the last step, W/m^3.
+    const std::vector<double> &
+    laser_source() const
+    {
+      return laser_density;
+    }
+    const EnergyBudget &
+    energy_budget() const
+    {
+      return budget;
+    }
+    /// Global stored enthalpy relative to T_ref (J, or J/m in 2D):
+    /// sum V [alpha rho_m (int c_m dT + L_m gamma) + (1-alpha) rho_g c_g dT].
+    double
+    stored_enthalpy() const;
+    /// Global maximum temperature over metal cells after the last step.
+    double
+    max_temperature() const
+    {
+      return T_max;
+    }
+    /// Stable step found during the last advance() (before safety factor).
+    double
+    last_stable_time_step() const
+    {
+      return dt_stable_next;
+    }
+    const Material &
+    material() const
+    {
+      return mat;
+    }
+
+    /// Number of cells that needed the phase-change iteration in the last
+    /// step (local), for timing reports.
+    std::size_t
+    n_phase_change_cells() const
+    {
+      return n_phase_cells;
+    }
+
+  private:
+    Parameters                 prm;
+    const Material &           mat;
+    const Laser<dim> &         laser;
+    const BackgroundGrid<dim> &grid;
+
+    std::vector<double> T, T_new, gamma, alpha, conductance, source;
+    std::vector<double> laser_density, loss_coefficient;
+    const std::array<std::vector<double>, dim> *velocity = nullptr;
+    std::array<std::vector<double>, dim>        prescribed;
+
+    struct SurfaceCell
+    {
+      std::uint32_t index;
+      double        grad_alpha;  ///< |grad alpha|, 1/m
+    };
+    std::vector<SurfaceCell> surface;
+    /// Owned cells where the vertical beam first meets metal.
+    std::vector<std::uint32_t> first_surface;
+
+    struct FixedFace
+    {
+      std::uint32_t index;
+      double        value;
+    };
+    std::vector<FixedFace> fixed_faces;
+
+    EnergyBudget budget;
+    double       T_max          = 0;
+    double       dt_stable_next = 0;
+    std::size_t  n_phase_cells  = 0;
+
+    void
+    compute_conductance();
+    void
+    compute_surface_sources(const double dt, const double time);
+    double
+    heat_capacity(const double T, const double a) const
+    {
+      return a * mat.density * mat.specific_heat.value(T) +
+             (1 - a) * mat.gas_density * mat.gas_specific_heat;
+    }
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,101 @@
+// femp: input validation helpers and piecewise-linear property tables.
+//
+// Every physically impossible or inconsistent input is reported through
+// InputError, whose message names the parameter (with its subsection path),
+// the value that was given and what is allowed. main() prints it and exits
+// with a non-zero status before any computation starts.
+#ifndef femp_input_checks_h
+#define femp_input_checks_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/point.h>
+
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace femp
+{
+  /// An error in the user's input. what() is a complete, user-facing message.
+  class InputError : public std::runtime_error
+  {
+  public:
+    InputError(const std::string &parameter,
+               const std::string &value,
+               const std::string &allowed);
+  };
+
+  /// Throw InputError unless @p condition holds.
+  template <typename T>
+  void
+  require(const bool         condition,
+          const std::string &parameter,
+          const T &          value,
+          const std::string &allowed)
+  {
+    if (!condition)
+      {
+        std::ostringstream s;
+        s.precision(10);
+        s << value;
+        throw InputError(parameter, s.str(), allowed);
+      }
+  }
+
+  /**
+   * A property given as a piecewise-linear function of temperature, read from
+   * a string "T1:v1, T2:v2, ..." (K : value, T strictly increasing) or a
+   * single number for a constant. Outside the first and last breakpoints the
+   * end values are held constant. The antiderivative is available for exact
+   * enthalpy bookkeeping.
+   */
+  class PiecewiseLinear
+  {
+  public:
+    PiecewiseLinear(const double constant = 0.);
+
+    /// Parse @p text; @p parameter names the prm entry in error messages.
+    static PiecewiseLinear
+    parse(const std::string &text, const std::string &parameter);
+
+    double
+    value(const double T) const
+    {
+      if (T_.size() == 1 || T <= T_.front())
+        return v_.front();
+      if (T >= T_.back())
+        return v_.back();
+      std::size_t i = 1;
+      while (T > T_[i])
+        ++i;
+      const double w = (T - T_[i - 1]) * inv_dT_[i - 1];
+      return v_[i - 1] + w * (v_[i] - v_[i - 1]);
+    }
+
+    /// Integral of the property from @p T0 to @p T1 (exact for the table).
+    double
+    integral(const double T0, const double T1) const;
+
+    double
+    min_value() const;
+    double
+    max_value() const;
+
+  private:
+    std::vector<double> T_, v_, inv_dT_;
+    double
+    antiderivative(const double T) const;
+  };
+
+  /// Parse a comma-separated list of dim numbers into a point.
+  template <int dim>
+  dealii::Point<dim>
+  parse_point(const std::string &text, const std::string &parameter);
+
+  /// Pattern for a list of exactly @p dim coordinates.
+  std::string
+  point_pattern_description(const int dim);
+} // namespace femp
+
+#endif

@@ -1,0 +1,102 @@
+// femp: the Gaussian laser heat source q_laser of eq. (1) (ref. [12]) and
+// its scan path. The beam is vertical (along -z in 3D, -y in 2D); its axis
+// moves over the horizontal coordinates along a path of straight segments,
+// each with its own speed and with the laser on or off. The absorbed flux
+// density at horizontal distance r from the axis is
+//   3D: q = 2 eta P / (pi r_b^2) exp(-2 r^2 / r_b^2)            (W/m^2)
+//   2D: q = sqrt(2/pi) eta P / r_b exp(-2 r^2 / r_b^2), P in W/m (W/m^2)
+// so that its integral over the surface plane is eta P.
+#ifndef femp_laser_h
+#define femp_laser_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/point.h>
+
+#include <string>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class Laser
+  {
+  public:
+    struct Segment
+    {
+      Point<dim> start, end; ///< last coordinate unused
+      double     speed;      ///< m/s
+      double     power;      ///< W (3D) or W/m (2D); 0 = laser off
+      double     t_begin, t_end;
+    };
+
+    struct Parameters
+    {
+      double      power       = 200.;
+      double      absorptivity = 0.35;
+      double      beam_radius = 20e-6;
+      double      scan_speed  = 2.;
+      Point<dim>  start_point, end_point;
+      double      start_time = 0.;
+      std::string scan_path_file;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+    };
+
+    Laser(const Parameters &prm);
+
+    /// Check that the path stays inside the horizontal extent of the box.
+    void
+    check_path_inside(const Point<dim> &lower, const Point<dim> &upper) const;
+
+    /// True and the beam axis position if the laser is on at time @p t.
+    bool
+    position(const double t, Point<dim> &axis, double &power) const;
+
+    /// Absorbed flux density (W/m^2) at horizontal offset squared @p r2 for
+    /// laser power @p power.
+    double
+    flux(const double r2, const double power) const
+    {
+      const double a = prm.absorptivity * power;
+      const double e = std::exp(-2. * r2 * inv_rb2);
+      if (dim == 3)
+        return 2. * a * inv_rb2 / M_PI * e;
+      else
+        return std::sqrt(2. / M_PI) * a / prm.beam_radius * e;
+    }
+
+    double
+    beam_radius() const
+    {
+      return prm.beam_radius;
+    }
+    double
+    absorptivity() const
+    {
+      return prm.absorptivity;
+    }
+    const std::vector<Segment> &
+    segments() const
+    {
+      return path;
+    }
+    /// Time at which the last segment ends.
+    double
+    end_time() const
+    {
+      return path.empty() ? 0. : path.back().t_end;
+    }
+
+  private:
+    Parameters           prm;
+    double               inv_rb2;
+    std::vector<Segment> path;
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,143 @@
+// femp: the material points (METHOD sec. 1-2) on the background grid,
+// carried by deal.II's Particles::ParticleHandler.
+//
+// A scene builds a substrate block and a powder layer of randomly packed
+// spherical grains; each region is filled with points on a global lattice of
+// the given spacing, inserted cell by cell. The metal fraction alpha of a
+// cell is the fraction of its n^dim sub-cells that hold at least one point
+// (ref. [11]); temperatures pass from cells to points after each thermal
+// step, and from points to cells that just gained points.
+//
+// Property layout of each point (index: quantity, unit):
+//   0 mass (kg; 2D: kg/m)        1 volume (m^3; 2D: m^2)
+//   2 temperature (K)            3 state (0 powder, 1 solid, 2 fluid)
+//   4 peak temperature (K), the melt history
+//   5 .. 5+dim-1 velocity (m/s)
+//   then dim(dim+1)/2 Cauchy stress components (Pa; xx, yy, [zz], xy, [xz, yz])
+//   then the equivalent plastic strain (-)
+#ifndef femp_material_points_h
+#define femp_material_points_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/fe/mapping_q1.h>
+#include <deal.II/particles/particle_handler.h>
+
+#include <femp/background_grid.h>
+#include <femp/material.h>
+
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class MaterialPoints
+  {
+  public:
+    enum State
+    {
+      powder = 0,
+      solid  = 1,
+      fluid  = 2
+    };
+
+    struct PropertyIndex
+    {
+      static constexpr unsigned int mass             = 0;
+      static constexpr unsigned int volume           = 1;
+      static constexpr unsigned int temperature      = 2;
+      static constexpr unsigned int state            = 3;
+      static constexpr unsigned int peak_temperature = 4;
+      static constexpr unsigned int velocity         = 5;
+      static constexpr unsigned int stress           = 5 + dim;
+      static constexpr unsigned int plastic_strain   = 5 + dim + dim * (dim + 1) / 2;
+      static constexpr unsigned int n_properties     = plastic_strain + 1;
+    };
+
+    struct Parameters
+    {
+      double       point_spacing    = 4e-6;
+      double       substrate_top    = 1.5e-4;
+      unsigned int subcells         = 2;
+      double       layer_thickness  = 5e-5;
+      double       mean_diameter    = 30e-6;
+      double       std_diameter     = 8e-6;
+      double       min_diameter     = 15e-6;
+      double       max_diameter     = 45e-6;
+      double       packing_fraction = 0.45;
+      unsigned int seed             = 1;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Checks against the grid that need both parameter sets.
+      void
+      check(const typename BackgroundGrid<dim>::Parameters &grid) const;
+    };
+
+    MaterialPoints(const Parameters &         prm,
+                   const Material &           material,
+                   const BackgroundGrid<dim> &grid);
+
+    /// Fill the substrate block and the powder layer with points at the
+    /// initial temperature @p T0.
+    void
+    create(const double T0);
+
+    /// Metal fraction alpha per cell of the local box (ghosts exchanged).
+    std::vector<double>
+    metal_fraction() const;
+
+    /// Points take the temperature of their cell; states and melt history
+    /// follow (powder or solid -> fluid above the solidus, fluid -> solid at
+    /// or below it).
+    void
+    cells_to_points(const std::vector<double> &T);
+
+    /// Zone tag per cell of the local box, from the states of its points:
+    /// 0 gas (no points), 1 powder, 2 solid, 3 fluid (any fluid point).
+    std::vector<double>
+    zone_tags() const;
+
+    const Particles::ParticleHandler<dim> &
+    particle_handler() const
+    {
+      return handler;
+    }
+    types::particle_index
+    n_global_points() const
+    {
+      return handler.n_global_particles();
+    }
+    unsigned int
+    n_powder_grains() const
+    {
+      return n_grains;
+    }
+    double
+    achieved_packing_fraction() const
+    {
+      return packing;
+    }
+    /// Names of the properties, for output.
+    static std::vector<std::string>
+    property_names();
+
+  private:
+    Parameters                      prm;
+    const Material &                mat;
+    const BackgroundGrid<dim> &     grid;
+    MappingQ1<dim>                  mapping;
+    Particles::ParticleHandler<dim> handler;
+    // Owned cells that hold points: flat index and iterator.
+    std::vector<std::pair<std::uint32_t,
+                          typename Triangulation<dim>::active_cell_iterator>>
+                 occupied;
+    unsigned int n_grains = 0;
+    double       packing  = 0;
+  };
+} // namespace femp
+
+#endif

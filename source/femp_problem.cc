@@ -1,0 +1,300 @@
+// femp: the top-level problem: reads and checks parameters, builds the
+// modules, and runs the macro time loop of the paper's sec. 2.6.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/femp_problem.h>
+#include <femp/input_checks.h>
+
+#include <chrono>
+#include <iomanip>
+
+namespace femp
+{
+  void
+  declare_all_parameters(ParameterHandler &prm)
+  {
+    prm.declare_entry("Dimension", "3", Patterns::Integer(2, 3),
+                      "Space dimension of the scene: 2 or 3.");
+    prm.enter_subsection("Physics");
+    prm.declare_entry("Heat transfer", "true", Patterns::Bool(),
+                      "Solve the temperature equation (1).");
+    prm.declare_entry("Melt flow", "false", Patterns::Bool(),
+                      "Solve the melt-pool flow (eqs. 3-4). Not available in "
+                      "this version: must be false.");
+    prm.declare_entry("Solid stress", "false", Patterns::Bool(),
+                      "Solve the thermal stress by MPM and FE (eqs. 5-17). Not "
+                      "available in this version: must be false.");
+    prm.leave_subsection();
+    FempProblem<3>::TimeParameters::declare_parameters(prm);
+    Material::declare_parameters(prm);
+    BackgroundGrid<3>::Parameters::declare_parameters(prm);
+    MaterialPoints<3>::Parameters::declare_parameters(prm);
+    HeatTransfer<3>::Parameters::declare_parameters(prm);
+    Laser<3>::Parameters::declare_parameters(prm);
+    Output<3>::Parameters::declare_parameters(prm);
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::TimeParameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Time stepping");
+    prm.declare_entry("End time", "1e-3", Patterns::Double(0.),
+                      "Simulated time at which the run ends, s; range (0, inf).");
+    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+                      "Temperature step, s; 0 chooses it automatically as the "
+                      "safety factor times the stable limit. A prescribed step "
+                      "above the stable limit is refused. Range [0, inf).");
+    prm.declare_entry("Safety factor", "0.5", Patterns::Double(0., 1.),
+                      "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
+                      "(diffusion) and h/|u| (convection) used as the "
+                      "automatic step; range (0, 1].");
+    prm.declare_entry("Maximum number of steps", "100000000", Patterns::Integer(1),
+                      "Stop after this many steps even before the end time.");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::TimeParameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Time stepping");
+    end_time      = prm.get_double("End time");
+    time_step     = prm.get_double("Time step");
+    safety_factor = prm.get_double("Safety factor");
+    max_steps     = prm.get_integer("Maximum number of steps");
+    prm.leave_subsection();
+    require(end_time > 0, "Time stepping/End time", end_time,
+            "it must be positive (s)");
+    require(safety_factor > 0, "Time stepping/Safety factor", safety_factor,
+            "it must lie in (0, 1]");
+  }
+
+
+  template <int dim>
+  FempProblem<dim>::FempProblem(ParameterHandler &prm, MPI_Comm comm)
+    : comm(comm)
+    , pcout(std::cout, Utilities::MPI::this_mpi_process(comm) == 0)
+    , timer(pcout, TimerOutput::never, TimerOutput::wall_times)
+  {
+    prm.enter_subsection("Physics");
+    require(!prm.get_bool("Melt flow"), "Physics/Melt flow", "true",
+            "the melt-flow solver is not part of this version of femp; set it "
+            "to false");
+    require(!prm.get_bool("Solid stress"), "Physics/Solid stress", "true",
+            "the solid-stress solver is not part of this version of femp; set "
+            "it to false");
+    prm.leave_subsection();
+    time_prm.parse_parameters(prm);
+    material.parse_parameters(prm);
+    grid_prm.parse_parameters(prm);
+    points_prm.parse_parameters(prm);
+    points_prm.check(grid_prm);
+    heat_prm.parse_parameters(prm);
+    laser_prm.parse_parameters(prm);
+    output_prm.parse_parameters(prm);
+    output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
+    melt_temperature = material.liquidus;
+
+    // Checks that need several modules, still before any work.
+    laser = std::make_unique<Laser<dim>>(laser_prm);
+    laser->check_path_inside(grid_prm.lower_corner, grid_prm.upper_corner);
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::setup()
+  {
+    {
+      TimerOutput::Scope t(timer, "setup: grid");
+      grid = std::make_unique<BackgroundGrid<dim>>(grid_prm, comm);
+      grid->create();
+    }
+    {
+      TimerOutput::Scope t(timer, "setup: material points");
+      points = std::make_unique<MaterialPoints<dim>>(points_prm, material, *grid);
+      points->create(heat_prm.initial_temperature);
+    }
+    heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
+    heat->initialize();
+    {
+      TimerOutput::Scope t(timer, "setup: metal fraction");
+      heat->set_metal_fraction(points->metal_fraction());
+    }
+    output = std::make_unique<Output<dim>>(output_prm, *grid);
+    output->initialize({"T", "gamma", "alpha"});
+
+    pcout << "femp: " << dim << "D scene, "
+          << Utilities::MPI::n_mpi_processes(comm) << " MPI rank(s)\n"
+          << "  background grid: " << grid->n_global_cells() << " cells of "
+          << grid->h() << " m (";
+    for (int d = 0; d < dim; ++d)
+      pcout << grid->n_cells()[d] << (d + 1 < dim ? " x " : ")\n");
+    pcout << "  material points: " << points->n_global_points() << " ("
+          << points->n_powder_grains() << " powder grains, packing fraction "
+          << std::setprecision(3) << points->achieved_packing_fraction() << ")\n"
+          << "  output: " << output_prm.directory << "/grid.pvd, "
+          << output_prm.directory << "/points.pvd, "
+          << output_prm.directory << "/melt_pool.csv\n";
+  }
+
+
+  template <int dim>
+  double
+  FempProblem<dim>::choose_time_step(const unsigned int step, const double time)
+  {
+    const double stable =
+      step == 0 ? heat->stable_time_step() : heat->last_stable_time_step();
+    double dt = time_prm.time_step > 0 ? time_prm.time_step :
+                                         time_prm.safety_factor * stable;
+    if (time_prm.time_step > stable)
+      {
+        std::ostringstream s;
+        s << "it exceeds the stable limit " << stable << " s of the explicit "
+          << "temperature step" << (step > 0 ? " reached at step " + std::to_string(step) +
+                                                 ", time " + std::to_string(time) + " s" :
+                                               std::string())
+          << "; use 0 (automatic) or a step <= " << stable << " s";
+        throw InputError("Time stepping/Time step",
+                         std::to_string(time_prm.time_step), s.str());
+      }
+    return std::min(dt, time_prm.end_time - time);
+  }
+
+
+  template <int dim>
+  std::vector<typename Output<dim>::Field>
+  FempProblem<dim>::output_fields() const
+  {
+    return {{"T", &heat->temperature()},
+            {"gamma", &heat->liquid_fraction()},
+            {"alpha", &heat->metal_fraction()}};
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::write_output(const unsigned int n,
+                                 const double       time,
+                                 const bool         last)
+  {
+    TimerOutput::Scope t(timer, "output");
+    std::vector<double> phase(grid->n_local(), 0.);
+    const auto &        a = heat->metal_fraction();
+    const auto &        g = heat->liquid_fraction();
+    for (std::size_t i = 0; i < phase.size(); ++i)
+      phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
+    const std::vector<double> zone = points->zone_tags();
+    auto fields = output_fields();
+    fields.push_back({"laser_source", &heat->laser_source()});
+    fields.push_back({"phase", &phase});
+    fields.push_back({"zone", &zone});
+    const bool with_points = output_prm.write_points == "always" ||
+                             (output_prm.write_points == "last" && last);
+    output->write_fields(n, time, fields,
+                         with_points ? &points->particle_handler() : nullptr,
+                         MaterialPoints<dim>::property_names());
+    output->write_probe_lines(n, time, output_fields());
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::run()
+  {
+    const auto wall_start = std::chrono::steady_clock::now();
+    setup();
+
+    double       time = 0;
+    unsigned int step = 0, n_output = 0;
+    double       next_output = output_prm.output_interval;
+    double       next_series = 0;
+    write_output(n_output++, time, false);
+
+    while (time < time_prm.end_time * (1 - 1e-12) && step < time_prm.max_steps)
+      {
+        const double dt = choose_time_step(step, time);
+
+        // 1. Tag cells, alpha, gamma, properties: alpha changes only when
+        //    points move (the melt-flow and solid modules), so nothing to do
+        //    in a thermal-only scene; gamma and the properties follow T
+        //    inside HeatTransfer::advance().
+
+        // 2. Temperature in fluid, solid and powder (eq. 1).
+        {
+          TimerOutput::Scope t(timer, "temperature step");
+          heat->advance(dt, time);
+        }
+        {
+          TimerOutput::Scope t(timer, "cells to points");
+          points->cells_to_points(heat->temperature());
+        }
+
+        // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4): not in this
+        //    version (Physics/Melt flow must be false).
+        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17): not in
+        //    this version (Physics/Solid stress must be false).
+
+        time += dt;
+        ++step;
+
+        // 5. Output.
+        const bool last = time >= time_prm.end_time * (1 - 1e-12) ||
+                          step >= time_prm.max_steps;
+        if (time >= next_series * (1 - 1e-12) || last)
+          {
+            TimerOutput::Scope t(timer, "time series");
+            result.pool = measure_melt_pool(*grid, heat->temperature(),
+                                            heat->metal_fraction(),
+                                            melt_temperature,
+                                            points_prm.substrate_top);
+            output->write_series(time, output_fields(), result.pool);
+            next_series = time + output_prm.series_interval;
+          }
+        if ((output_prm.output_interval > 0 &&
+             time >= next_output * (1 - 1e-9)) ||
+            last)
+          {
+            write_output(n_output++, time, last);
+            while (next_output <= time * (1 + 1e-9) &&
+                   output_prm.output_interval > 0)
+              next_output += output_prm.output_interval;
+          }
+        if (step % output_prm.progress_interval == 0 || last)
+          {
+            const double wall = std::chrono::duration<double>(
+                                  std::chrono::steady_clock::now() - wall_start)
+                                  .count();
+            const double left = wall / time * (time_prm.end_time - time);
+            pcout << std::setprecision(4) << "t = " << std::setw(10) << time
+                  << " s  step " << std::setw(7) << step << "  dt = "
+                  << std::setw(10) << dt << " s  T_max = " << std::setw(8)
+                  << heat->max_temperature() << " K  pool L x W x D = "
+                  << result.pool.length * 1e6 << " x "
+                  << result.pool.width * 1e6 << " x "
+                  << result.pool.depth * 1e6 << " um  wall "
+                  << std::setprecision(3) << wall << " s, left ~" << left
+                  << " s" << std::endl;
+          }
+      }
+    result.steps = step;
+    result.time  = time;
+    result.T_max = heat->max_temperature();
+
+    const auto &e = heat->energy_budget();
+    pcout << std::setprecision(6) << "Energy (J): laser " << e.laser
+ << ", surface losses " << heat->total_losses()
+          << " (evaporation " << e.evaporation << ", convection "
+          << e.convection << ", radiation " << e.radiation
+          << " at the start of each step), fixed faces " << e.boundary << ", stored "
+          << heat->stored_enthalpy() << std::endl;
+    timer.print_summary();
+  }
+
+  template class FempProblem<2>;
+  template class FempProblem<3>;
+} // namespace femp

@@ -1,0 +1,560 @@
+// femp: HeatTransfer<dim>, the temperature equation (1) on the background
+// grid: diffusion, upwind convection, latent heat, surface losses and the
+// laser source. See include/femp/heat_transfer.h for the discretization.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/heat_transfer.h>
+#include <femp/input_checks.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace femp
+{
+  namespace
+  {
+    constexpr double stefan_boltzmann = 5.670374419e-8; // W/(m^2 K^4)
+    constexpr double gas_constant     = 8.314462618;    // J/(mol K)
+  } // namespace
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Heat transfer");
+    prm.declare_entry("Initial temperature", "300", Patterns::Double(0.),
+                      "Uniform initial temperature of all metal, K; range (0, inf).");
+    prm.declare_entry("Reference temperature", "300", Patterns::Double(0.),
+                      "Ambient temperature T_ref for convection and radiation "
+                      "losses, K; range (0, inf).");
+    prm.declare_entry("Convection coefficient", "10", Patterns::Double(0.),
+                      "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
+    prm.declare_entry("Emissivity", "0.4", Patterns::Double(0., 1.),
+                      "Surface emissivity eps for radiation losses; range [0, 1].");
+    prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
+                      "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
+                      "evaporative cooling off; range [0, 1].");
+    prm.declare_entry("Latent heat of evaporation", "7.41e6", Patterns::Double(0.),
+                      "L_v, J/kg; range [0, inf).");
+    prm.declare_entry("Evaporation temperature", "3090", Patterns::Double(0.),
+                      "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
+    prm.declare_entry("Molar mass", "0.0558", Patterns::Double(0.),
+                      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
+    prm.declare_entry("Ambient pressure", "101325", Patterns::Double(0.),
+                      "Ambient pressure p_0, Pa; range [0, inf).");
+    prm.declare_entry("Fixed temperatures", "",
+                      Patterns::Map(Patterns::Selection("x-|x+|y-|y+|z-|z+"),
+                                    Patterns::Double(0.)),
+                      "Faces of the domain box held at a fixed temperature, as "
+                      "'face: T' pairs, e.g. 'z-: 300' (faces x-, x+, y-, y+, "
+                      "z-, z+; K). All other faces are insulated.");
+    prm.declare_entry("Laser deposition", "first surface",
+                      Patterns::Selection("first surface|gradient"),
+                      "How the laser's surface flux q enters the cells. 'first "
+                      "surface': in each vertical column of cells, q/h goes "
+                      "into the topmost cell with alpha >= 1/2, where the beam "
+                      "first meets metal (absorbed power = eta P). 'gradient': "
+                      "q 2 rho c/(rho_m c_m + rho_g c_g) |grad alpha| in every "
+                      "surface cell, as written in eq. (1); in a powder bed "
+                      "this heats every grain surface under the beam, also "
+                      "shadowed ones, and absorbs more than eta P.");
+    prm.declare_entry("Prescribed velocity", "",
+                      Patterns::Anything(),
+                      "Optional steady velocity field for the convection term, "
+                      "m/s, as dim expressions in x, y, z separated by ';' "
+                      "(e.g. '0.1; 0; 0'). Empty: no convection unless a flow "
+                      "solver provides a velocity.");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Heat transfer");
+    initial_temperature     = prm.get_double("Initial temperature");
+    reference_temperature   = prm.get_double("Reference temperature");
+    convection_coefficient  = prm.get_double("Convection coefficient");
+    emissivity              = prm.get_double("Emissivity");
+    evaporation_coefficient = prm.get_double("Evaporation coefficient");
+    latent_heat_evaporation = prm.get_double("Latent heat of evaporation");
+    evaporation_temperature = prm.get_double("Evaporation temperature");
+    molar_mass              = prm.get_double("Molar mass");
+    ambient_pressure        = prm.get_double("Ambient pressure");
+    laser_deposition        = prm.get("Laser deposition");
+    prescribed_velocity     = Utilities::trim(prm.get("Prescribed velocity"));
+    fixed_temperatures.clear();
+    for (const auto &entry :
+         Utilities::split_string_list(prm.get("Fixed temperatures"), ','))
+      {
+        const auto kv = Utilities::split_string_list(entry, ':');
+        const std::string face = kv[0];
+        require((face[0] - 'x') < dim, "Heat transfer/Fixed temperatures",
+                entry, "in " + std::to_string(dim) + "D only faces of the first " +
+                         std::to_string(dim) + " directions exist");
+        fixed_temperatures[face] = Utilities::string_to_double(kv[1]);
+      }
+    prm.leave_subsection();
+    require(initial_temperature > 0, "Heat transfer/Initial temperature",
+            initial_temperature, "it must be positive (K)");
+    require(evaporation_temperature > 0, "Heat transfer/Evaporation temperature",
+            evaporation_temperature, "it must be positive (K)");
+    require(molar_mass > 0, "Heat transfer/Molar mass", molar_mass,
+            "it must be positive (kg/mol)");
+  }
+
+
+  template <int dim>
+  HeatTransfer<dim>::HeatTransfer(const Parameters &         prm,
+                                  const Material &           material,
+                                  const Laser<dim> &         laser,
+                                  const BackgroundGrid<dim> &grid)
+    : prm(prm)
+    , mat(material)
+    , laser(laser)
+    , grid(grid)
+  {}
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::initialize()
+  {
+    T     = grid.make_field(prm.initial_temperature);
+    T_new = T;
+    gamma = grid.make_field(mat.liquid_fraction(prm.initial_temperature));
+    alpha = grid.make_field(0.);
+    conductance   = grid.make_field(0.);
+    source        = grid.make_field(0.);
+    laser_density = grid.make_field(0.);
+    loss_coefficient = grid.make_field(0.);
+    budget        = EnergyBudget();
+
+    // Fixed-temperature faces: owned cells touching them.
+    fixed_faces.clear();
+    const auto &n = grid.n_cells();
+    for (const auto &[face, value] : prm.fixed_temperatures)
+      {
+        const int  d     = face[0] - 'x';
+        const bool upper = face[1] == '+';
+        for (const auto idx : grid.owned_cells())
+          {
+            const auto ijk = grid.global_index(idx);
+            if (ijk[d] == (upper ? int(n[d]) - 1 : 0))
+              fixed_faces.push_back({idx, value});
+          }
+      }
+
+    if (!prm.prescribed_velocity.empty())
+      {
+        auto exprs = Utilities::split_string_list(prm.prescribed_velocity, ';');
+        require(exprs.size() == static_cast<std::size_t>(dim),
+                "Heat transfer/Prescribed velocity", prm.prescribed_velocity,
+                "it must hold " + std::to_string(dim) +
+                  " expressions separated by ';'");
+        FunctionParser<dim> f(dim);
+        try
+          {
+            f.initialize(dim == 2 ? "x,y" : "x,y,z", exprs, {});
+          }
+        catch (...)
+          {
+            throw InputError("Heat transfer/Prescribed velocity",
+                             prm.prescribed_velocity,
+                             "the expressions must be valid functions of x, y (, z)");
+          }
+        for (int d = 0; d < dim; ++d)
+          prescribed[d] = grid.make_field(0.);
+        for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
+          if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
+            {
+              const auto c = grid.cell_center(idx);
+              for (int d = 0; d < dim; ++d)
+                prescribed[d][idx] = f.value(c, d);
+            }
+        velocity = &prescribed;
+      }
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::set_velocity(
+    const std::array<std::vector<double>, dim> *v)
+  {
+    velocity = v;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a)
+  {
+    alpha = a;
+    // Surface cells: owned metal cells with a non-zero alpha gradient. At the
+    // domain boundary alpha is extended with zero gradient, so the box faces
+    // are not free surfaces.
+    surface.clear();
+    const auto & st = grid.strides();
+    const auto & n  = grid.n_cells();
+    const double h  = grid.h();
+    for (const auto idx : grid.owned_cells())
+      {
+        if (alpha[idx] <= 0)
+          continue;
+        const auto ijk = grid.global_index(idx);
+        Tensor<1, dim> g;
+        for (int d = 0; d < dim; ++d)
+          {
+            const double am = ijk[d] > 0 ? alpha[idx - st[d]] : alpha[idx];
+            const double ap =
+              ijk[d] < int(n[d]) - 1 ? alpha[idx + st[d]] : alpha[idx];
+            g[d] = (ap - am) / (2 * h);
+          }
+        const double norm = g.norm();
+        if (norm > 1e-12 / h)
+          surface.push_back({idx, norm});
+      }
+
+    // First-surface cells: per vertical column, the topmost cell with
+    // alpha >= 1/2 over all ranks (one reduction per change of alpha).
+    const unsigned int n_columns = dim == 3 ? n[0] * n[1] : n[0];
+    std::vector<int>   top(n_columns, -1);
+    for (const auto idx : grid.owned_cells())
+      if (alpha[idx] >= 0.5)
+        {
+          const auto   ijk = grid.global_index(idx);
+          const auto   col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+          top[col]         = std::max(top[col], ijk[dim - 1]);
+        }
+    MPI_Allreduce(MPI_IN_PLACE, top.data(), n_columns, MPI_INT, MPI_MAX,
+                  grid.communicator());
+    first_surface.clear();
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto ijk = grid.global_index(idx);
+        const auto col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+        if (top[col] == ijk[dim - 1])
+          first_surface.push_back(idx);
+      }
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::compute_conductance()
+  {
+    // Mixture conductivity alpha lambda_m(T) + (1 - alpha) lambda_g in metal
+    // cells; zero in gas cells and in the padding, which blocks their faces.
+    const auto &status = grid.cell_status();
+    for (std::size_t idx = 0; idx < T.size(); ++idx)
+      {
+        const double a = alpha[idx];
+        conductance[idx] =
+          (a > 0 && status[idx] != BackgroundGrid<dim>::outside) ?
+            a * mat.conductivity.value(T[idx]) + (1 - a) * mat.gas_conductivity :
+            0.;
+      }
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::compute_surface_sources(const double dt, const double time)
+  {
+    const double V = std::pow(grid.h(), dim);
+    Point<dim>   axis;
+    double       power    = 0;
+    const bool   laser_on = laser.position(time, axis, power);
+    const bool   gradient_mode = prm.laser_deposition == "gradient";
+    const double rho_g_c_g = mat.gas_density * mat.gas_specific_heat;
+    const double Tref      = prm.reference_temperature;
+    const double Tref4     = Tref * Tref * Tref * Tref;
+    const double evap_pref =
+      prm.evaporation_coefficient * prm.latent_heat_evaporation *
+      prm.molar_mass / std::sqrt(2 * M_PI * prm.molar_mass * gas_constant) *
+      prm.ambient_pressure;
+    const double evap_exp = prm.latent_heat_evaporation * prm.molar_mass /
+                            (gas_constant * prm.evaporation_temperature);
+    double e_laser = 0, e_evap = 0, e_conv = 0, e_rad = 0;
+    for (const auto &s : surface)
+      {
+        const double Tc = T[s.index];
+        const double a  = alpha[s.index];
+        const double rho_c_m = mat.density * mat.specific_heat.value(Tc);
+        const double w  = 2 * heat_capacity(Tc, a) / (rho_c_m + rho_g_c_g);
+        const double wg = w * s.grad_alpha;
+        const double q_evap =
+          evap_pref > 0 ? evap_pref / std::sqrt(Tc) *
+                            std::exp(evap_exp * (Tc - prm.evaporation_temperature) / Tc) :
+                          0.;
+        const double q_conv = prm.convection_coefficient * (Tc - Tref);
+        const double q_rad =
+          stefan_boltzmann * prm.emissivity * (Tc * Tc * Tc * Tc - Tref4);
+        double q_laser = 0;
+        if (laser_on && gradient_mode)
+          {
+            const Point<dim> c  = grid.cell_center(s.index);
+            double           r2 = 0;
+            for (int d = 0; d < dim - 1; ++d)
+              r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
+            q_laser = laser.flux(r2, power) * wg;
+          }
+        // Loss derivative dq/dT, for the linearized implicit treatment.
+        const double dq_dT =
+          q_evap * evap_exp * prm.evaporation_temperature / (Tc * Tc) -
+          0.5 * q_evap / Tc + prm.convection_coefficient +
+          4 * stefan_boltzmann * prm.emissivity * Tc * Tc * Tc;
+        laser_density[s.index] = q_laser;
+        source[s.index] = q_laser - (q_evap + q_conv + q_rad) * wg;
+        loss_coefficient[s.index] = std::max(0., dq_dT) * wg;
+        e_laser += q_laser;
+        e_evap += q_evap * wg;
+        e_conv += q_conv * wg;
+        e_rad += q_rad * wg;
+      }
+    if (!gradient_mode)
+      {
+        const double ih = 1. / grid.h();
+        for (const auto idx : first_surface)
+          {
+            if (!laser_on)
+              {
+                laser_density[idx] = 0;
+                continue;
+              }
+            const Point<dim> c  = grid.cell_center(idx);
+            double           r2 = 0;
+            for (int d = 0; d < dim - 1; ++d)
+              r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
+            const double q = laser.flux(r2, power) * ih;
+            laser_density[idx] = q;
+            source[idx] += q;
+            e_laser += q;
+          }
+      }
+    budget.laser += e_laser * V * dt;
+    budget.evaporation += e_evap * V * dt;
+    budget.convection += e_conv * V * dt;
+    budget.radiation += e_rad * V * dt;
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::stable_time_step()
+  {
+    compute_conductance();
+    const auto & st  = grid.strides();
+    const double ih2 = 1. / (grid.h() * grid.h());
+    double       rate_max = 0;
+    for (const auto idx : grid.owned_cells())
+      {
+        const double a = alpha[idx];
+        if (a <= 0)
+          continue;
+        const double kc   = conductance[idx];
+        double       sumk = 0;
+        for (int d = 0; d < dim; ++d)
+          for (const std::ptrdiff_t s : {-st[d], st[d]})
+            {
+              const double kn = conductance[idx + s];
+              sumk += kn > 0 ? 2 * kc * kn / (kc + kn) : 0.;
+            }
+        double rate = sumk * ih2 / heat_capacity(T[idx], a);
+        if (velocity)
+          for (int d = 0; d < dim; ++d)
+            rate += std::abs((*velocity)[d][idx]) / grid.h();
+        rate_max = std::max(rate_max, rate);
+      }
+    for (const auto &f : fixed_faces)
+      rate_max = std::max(rate_max,
+                          4 * conductance[f.index] * ih2 /
+                            heat_capacity(T[f.index], alpha[f.index]));
+    rate_max = Utilities::MPI::max(rate_max, grid.communicator());
+    return rate_max > 0 ? 1. / rate_max : std::numeric_limits<double>::max();
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::advance(const double dt, const double time)
+  {
+    compute_conductance();
+    compute_surface_sources(dt, time);
+
+    const auto & st      = grid.strides();
+    const double h       = grid.h();
+    const double ih      = 1. / h;
+    const double ih2     = ih * ih;
+    const double V       = std::pow(h, dim);
+    const double Ts      = mat.solidus;
+    const double Tl      = mat.liquidus;
+    const double inv_dTm = 1. / (Tl - Ts);
+    const double rhoL    = mat.density * mat.latent_heat_fusion;
+
+    // Fixed-temperature faces: the face value sits h/2 from the cell centre.
+    double e_boundary = 0;
+    double rate_max   = 0;
+    for (const auto &f : fixed_faces)
+      if (alpha[f.index] > 0)
+        {
+          const double k = conductance[f.index];
+          const double q = 2 * k * (f.value - T[f.index]) * ih2;
+          source[f.index] += q;
+          e_boundary += q * V * dt;
+          rate_max = std::max(rate_max,
+                              4 * k * ih2 /
+                                heat_capacity(T[f.index], alpha[f.index]));
+        }
+
+    double      Tmax   = -std::numeric_limits<double>::max();
+    std::size_t nphase = 0;
+    for (const auto idx : grid.owned_cells())
+      {
+        const double a = alpha[idx];
+        if (a <= 0)
+          continue;
+        const double Tc   = T[idx];
+        const double kc   = conductance[idx];
+        double       flux = 0, sumk = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            const double km = conductance[idx - st[d]];
+            const double kp = conductance[idx + st[d]];
+            const double fm = km > 0 ? 2 * kc * km / (kc + km) : 0.;
+            const double fp = kp > 0 ? 2 * kc * kp / (kc + kp) : 0.;
+            flux += fm * (T[idx - st[d]] - Tc) + fp * (T[idx + st[d]] - Tc);
+            sumk += fm + fp;
+          }
+        const double rc   = heat_capacity(Tc, a);
+        double       rate = sumk * ih2 / rc;
+        double       conv = 0;
+        if (velocity)
+          for (int d = 0; d < dim; ++d)
+            {
+              const double u = (*velocity)[d][idx];
+              // Upwind difference; no advective flux from gas or the outside.
+              const std::ptrdiff_t s = u > 0 ? -st[d] : st[d];
+              const double dT = conductance[idx + s] > 0 ? Tc - T[idx + s] : 0.;
+              conv -= std::abs(u) * dT * ih;
+              rate += std::abs(u) * ih;
+            }
+        rate_max = std::max(rate_max, rate);
+
+        // Enthalpy change of this step (J/m^3). Surface losses are
+        // linearized about T^n and taken implicitly: q(T) ~ q + q' (T - T^n),
+        // which adds dt q' to the heat capacity of this step.
+        const double dH = dt * (flux * ih2 + source[idx] + rc * conv);
+        const double rc_eff = rc + dt * loss_coefficient[idx];
+        double       Tn = Tc + dH / rc_eff;
+        const double gn = gamma[idx];
+        if (rhoL > 0 && !((Tn < Ts && gn == 0.) || (Tn > Tl && gn == 1.)))
+          {
+            // Local semi-implicit update: find T with
+            //   rc (T - Tc) + a rho L (gamma(T) - gn) = dH
+            // on the solid, mushy or liquid branch (exact: the relation is
+            // piecewise linear and monotone in T).
+            ++nphase;
+            const double lat = a * rhoL;
+            if (rc_eff * (Ts - Tc) - lat * gn - dH >= 0)
+              Tn = Tc + (dH + lat * gn) / rc_eff;
+            else if (rc_eff * (Tl - Tc) + lat * (1 - gn) - dH <= 0)
+              Tn = Tc + (dH - lat * (1 - gn)) / rc_eff;
+            else
+              Tn = (dH + rc_eff * Tc + lat * (gn + Ts * inv_dTm)) /
+                   (rc_eff + lat * inv_dTm);
+          }
+        gamma[idx] = mat.liquid_fraction(Tn);
+        T_new[idx] = Tn;
+        Tmax       = std::isfinite(Tn) ? std::max(Tmax, Tn) :
+                                         std::numeric_limits<double>::infinity();
+      }
+    // Energy of the implicit part of the losses; reset the sparse sources.
+    double e_implicit = 0;
+    for (const auto &s : surface)
+      {
+        e_implicit += loss_coefficient[s.index] * (T_new[s.index] - T[s.index]);
+        source[s.index] = 0;
+      }
+    budget.implicit_losses_local += e_implicit * V * dt;
+    for (const auto &f : fixed_faces)
+      source[f.index] = 0;
+    for (const auto idx : first_surface)
+      source[idx] = 0;
+    for (const auto idx : grid.owned_cells())
+      if (alpha[idx] <= 0)
+        T_new[idx] = T[idx];
+    std::swap(T, T_new);
+    grid.update_ghosts(T);
+    grid.update_ghosts(gamma);
+    n_phase_cells = nphase;
+
+    budget.boundary += Utilities::MPI::sum(e_boundary, grid.communicator());
+    const double local[2] = {Tmax, rate_max};
+    double       global[2];
+    Utilities::MPI::max(ArrayView<const double>(local, 2),
+                        grid.communicator(),
+                        ArrayView<double>(global, 2));
+    T_max          = global[0];
+    dt_stable_next = global[1] > 0 ? 1. / global[1] :
+                                     std::numeric_limits<double>::max();
+
+    if (!std::isfinite(T_max))
+      {
+        // Find where it went wrong, for the diagnostic.
+        std::ostringstream where;
+        for (const auto idx : grid.owned_cells())
+          if (!std::isfinite(T[idx]))
+            {
+              where << " First non-finite temperature on rank "
+                    << Utilities::MPI::this_mpi_process(grid.communicator())
+                    << " in the cell at " << grid.cell_center(idx) << " m.";
+              break;
+            }
+        AssertThrow(false,
+                    ExcMessage("The temperature became non-finite at time " +
+                               std::to_string(time + dt) + " s (step size " +
+                               std::to_string(dt) + " s)." + where.str() +
+                               " The step may exceed the stable limit, or a "
+                               "surface loss (evaporation) may be too stiff."));
+      }
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::stored_enthalpy() const
+  {
+    const double Tref = prm.reference_temperature;
+    const double V    = std::pow(grid.h(), dim);
+    double       H    = 0;
+    for (const auto idx : grid.owned_cells())
+      {
+        const double a = alpha[idx];
+        if (a <= 0)
+          continue;
+        H += a * mat.density *
+               (mat.specific_heat.integral(Tref, T[idx]) +
+                mat.latent_heat_fusion * gamma[idx]) +
+             (1 - a) * mat.gas_density * mat.gas_specific_heat * (T[idx] - Tref);
+      }
+    return Utilities::MPI::sum(H * V, grid.communicator());
+  }
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::total_losses() const
+  {
+    return budget.evaporation + budget.convection + budget.radiation +
+           Utilities::MPI::sum(budget.implicit_losses_local,
+                               grid.communicator());
+  }
+
+  template class HeatTransfer<2>;
+  template class HeatTransfer<3>;
+} // namespace femp

@@ -1,0 +1,362 @@
+// femp: material points on the background grid: creation of the substrate
+// and the powder layer (inserted cell by cell), metal fraction by sub-cell
+// occupation, and the cell-to-point temperature transfer (METHOD sec. 1-2).
+#include <deal.II/base/mpi.h>
+
+#include <femp/input_checks.h>
+#include <femp/material_points.h>
+#include <femp/powder_bed.h>
+
+#include <bitset>
+#include <cmath>
+
+namespace femp
+{
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Material points");
+    prm.declare_entry("Point spacing", "4e-6", Patterns::Double(0.),
+                      "Spacing of the lattice on which material points are "
+                      "placed, m; range (0, cell size / sub-cell divisions].");
+    prm.declare_entry("Substrate top", "1.5e-4", Patterns::Double(),
+                      "Vertical coordinate (z in 3D, y in 2D) of the top of the "
+                      "substrate block, m; the block fills the domain below it. "
+                      "Range [lower corner, upper corner].");
+    prm.declare_entry("Sub-cell divisions", "2", Patterns::Integer(1, 4),
+                      "Sub-cells per direction n used to compute the metal "
+                      "fraction alpha by occupation; range 1..4.");
+    prm.enter_subsection("Powder layer");
+    prm.declare_entry("Layer thickness", "5e-5", Patterns::Double(0.),
+                      "Thickness of the powder layer on the substrate, m; 0 for "
+                      "no powder. Range [0, upper corner - substrate top].");
+    prm.declare_entry("Mean grain diameter", "30e-6", Patterns::Double(0.),
+                      "Mean diameter of the normally distributed grain sizes, m.");
+    prm.declare_entry("Grain diameter deviation", "8e-6", Patterns::Double(0.),
+                      "Standard deviation of the grain diameters, m; range [0, inf).");
+    prm.declare_entry("Minimum grain diameter", "15e-6", Patterns::Double(0.),
+                      "Smallest grain diameter, m (the distribution is "
+                      "truncated); range (0, maximum].");
+    prm.declare_entry("Maximum grain diameter", "45e-6", Patterns::Double(0.),
+                      "Largest grain diameter, m; also capped by the layer "
+                      "thickness. Range [minimum, inf).");
+    prm.declare_entry("Packing fraction", "0.45", Patterns::Double(0., 0.64),
+                      "Target volume fraction of grains in the layer; random "
+                      "sequential addition reaches about 0.3-0.45 (3D). Range "
+                      "(0, 0.64].");
+    prm.declare_entry("Random seed", "1", Patterns::Integer(0),
+                      "Seed of the packing; the same seed gives the same bed.");
+    prm.leave_subsection();
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Material points");
+    point_spacing = prm.get_double("Point spacing");
+    substrate_top = prm.get_double("Substrate top");
+    subcells      = prm.get_integer("Sub-cell divisions");
+    prm.enter_subsection("Powder layer");
+    layer_thickness  = prm.get_double("Layer thickness");
+    mean_diameter    = prm.get_double("Mean grain diameter");
+    std_diameter     = prm.get_double("Grain diameter deviation");
+    min_diameter     = prm.get_double("Minimum grain diameter");
+    max_diameter     = prm.get_double("Maximum grain diameter");
+    packing_fraction = prm.get_double("Packing fraction");
+    seed             = prm.get_integer("Random seed");
+    prm.leave_subsection();
+    prm.leave_subsection();
+    require(point_spacing > 0, "Material points/Point spacing", point_spacing,
+            "it must be positive (m)");
+    require(min_diameter > 0 && min_diameter <= max_diameter,
+            "Material points/Powder layer/Minimum grain diameter", min_diameter,
+            "it must be positive and not exceed the maximum grain diameter");
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::check(
+    const typename BackgroundGrid<dim>::Parameters &g) const
+  {
+    require(point_spacing <= g.cell_size / subcells * (1 + 1e-9),
+            "Material points/Point spacing", point_spacing,
+            "it must not exceed cell size / sub-cell divisions = " +
+              std::to_string(g.cell_size / subcells) +
+              " m, so that every sub-cell of a full cell holds a point");
+    const double lo = g.lower_corner[dim - 1], hi = g.upper_corner[dim - 1];
+    require(substrate_top >= lo && substrate_top <= hi,
+            "Material points/Substrate top", substrate_top,
+            "it must lie in the vertical extent of the domain [" +
+              std::to_string(lo) + ", " + std::to_string(hi) + "] m");
+    require(substrate_top + layer_thickness <= hi * (1 + 1e-12),
+            "Material points/Powder layer/Layer thickness", layer_thickness,
+            "the powder layer must fit below the top of the domain (at most " +
+              std::to_string(hi - substrate_top) + " m)");
+  }
+
+
+  template <int dim>
+  MaterialPoints<dim>::MaterialPoints(const Parameters &         prm,
+                                      const Material &           material,
+                                      const BackgroundGrid<dim> &grid)
+    : prm(prm)
+    , mat(material)
+    , grid(grid)
+  {}
+
+
+  template <int dim>
+  std::vector<std::string>
+  MaterialPoints<dim>::property_names()
+  {
+    std::vector<std::string> names = {
+      "mass", "volume", "temperature", "state", "peak_temperature"};
+    for (int d = 0; d < dim; ++d)
+      names.push_back(std::string("velocity_") + char('x' + d));
+    const char *s2[] = {"stress_xx", "stress_yy", "stress_xy"};
+    const char *s3[] = {"stress_xx", "stress_yy", "stress_zz",
+                        "stress_xy", "stress_xz", "stress_yz"};
+    for (int i = 0; i < dim * (dim + 1) / 2; ++i)
+      names.push_back(dim == 2 ? s2[i] : s3[i]);
+    names.push_back("plastic_strain");
+    return names;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::create(const double T0)
+  {
+    handler.initialize(grid.triangulation(), mapping, PropertyIndex::n_properties);
+
+    const double s  = prm.point_spacing;
+    const double h  = grid.h();
+    const auto & x0 = grid.origin();
+
+    // Points per owned cell, as (flat index, position), gathered first.
+    std::vector<std::pair<std::uint32_t, Point<dim>>> points;
+
+    // Substrate block: global lattice x = x0 + (i + 1/2) s below the top.
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto           ijk = grid.global_index(idx);
+        std::array<long, dim> first, last;
+        bool                 empty = false;
+        for (int d = 0; d < dim; ++d)
+          {
+            double lo = ijk[d] * h, hi = (ijk[d] + 1) * h;
+            if (d == dim - 1)
+              hi = std::min(hi, prm.substrate_top - x0[d]);
+            first[d] = static_cast<long>(std::ceil(lo / s - 0.5));
+            last[d]  = static_cast<long>(std::ceil(hi / s - 0.5)) - 1;
+            empty    = empty || last[d] < first[d];
+          }
+        if (empty)
+          continue;
+        std::array<long, dim> i = first;
+        while (true)
+          {
+            Point<dim> p;
+            for (int d = 0; d < dim; ++d)
+              p[d] = x0[d] + (i[d] + 0.5) * s;
+            points.emplace_back(idx, p);
+            int d = 0;
+            for (; d < dim; ++d)
+              {
+                if (++i[d] <= last[d])
+                  break;
+                i[d] = first[d];
+              }
+            if (d == dim)
+              break;
+          }
+      }
+
+    // Powder layer: the same bed on every rank; keep points of owned cells.
+    if (prm.layer_thickness > 0)
+      {
+        PowderBedSpec spec;
+        spec.dim = dim;
+        for (int d = 0; d < dim; ++d)
+          {
+            spec.lower[d] = x0[d];
+            spec.upper[d] = x0[d] + grid.n_cells()[d] * h;
+          }
+        spec.lower[dim - 1]    = prm.substrate_top;
+        spec.upper[dim - 1]    = prm.substrate_top + prm.layer_thickness;
+        spec.mean_diameter     = prm.mean_diameter;
+        spec.std_diameter      = prm.std_diameter;
+        spec.min_diameter      = prm.min_diameter;
+        spec.max_diameter      = prm.max_diameter;
+        spec.packing_fraction  = prm.packing_fraction;
+        spec.seed              = prm.seed;
+        const PowderBed bed    = pack_powder_bed(spec);
+        n_grains               = bed.grains.size();
+        packing                = bed.achieved_packing_fraction;
+        for (const auto &g : bed.grains)
+          {
+            std::array<long, dim> first, last;
+            for (int d = 0; d < dim; ++d)
+              {
+                const double lo = std::max(g.center[d] - g.radius, spec.lower[d]);
+                const double hi = std::min(g.center[d] + g.radius,
+                                           x0[d] + grid.n_cells()[d] * h);
+                first[d] = static_cast<long>(std::ceil((lo - x0[d]) / s - 0.5));
+                last[d]  = static_cast<long>(std::ceil((hi - x0[d]) / s - 0.5)) - 1;
+              }
+            std::array<long, dim> i = first;
+            bool                  done = false;
+            for (int d = 0; d < dim; ++d)
+              done = done || last[d] < first[d];
+            while (!done)
+              {
+                Point<dim> p;
+                double     r2 = 0;
+                for (int d = 0; d < dim; ++d)
+                  {
+                    p[d] = x0[d] + (i[d] + 0.5) * s;
+                    r2 += (p[d] - g.center[d]) * (p[d] - g.center[d]);
+                  }
+                if (r2 <= g.radius * g.radius && p[dim - 1] >= prm.substrate_top)
+                  {
+                    const auto ijk = grid.cell_of(p);
+                    if (grid.in_box(ijk))
+                      {
+                        const auto idx = grid.local_index(ijk);
+                        if (grid.cell_status()[idx] == BackgroundGrid<dim>::owned)
+                          points.emplace_back(idx, p);
+                      }
+                  }
+                int d = 0;
+                for (; d < dim; ++d)
+                  {
+                    if (++i[d] <= last[d])
+                      break;
+                    i[d] = first[d];
+                  }
+                done = (d == dim);
+              }
+          }
+      }
+
+    // Insert cell by cell (stable sort keeps the lattice order in a cell).
+    std::stable_sort(points.begin(), points.end(),
+                     [](const auto &a, const auto &b) { return a.first < b.first; });
+    const types::particle_index n_local = points.size();
+    types::particle_index       offset  = 0;
+    MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, grid.communicator());
+    if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
+      offset = 0;
+
+    std::vector<double> props(PropertyIndex::n_properties, 0.);
+    const double        volume = std::pow(s, dim);
+    props[PropertyIndex::mass]             = mat.density * volume;
+    props[PropertyIndex::volume]           = volume;
+    props[PropertyIndex::temperature]      = T0;
+    props[PropertyIndex::peak_temperature] = T0;
+    handler.reserve(points.size());
+    occupied.clear();
+    for (std::size_t n = 0; n < points.size(); ++n)
+      {
+        const auto  idx  = points[n].first;
+        const auto &cell = grid.cell_iterator(idx);
+        if (occupied.empty() || occupied.back().first != idx)
+          occupied.emplace_back(idx, cell);
+        const Point<dim> &p = points[n].second;
+        Point<dim>        ref;
+        const Point<dim>  v0 = cell->vertex(0);
+        for (int d = 0; d < dim; ++d)
+          ref[d] = (p[d] - v0[d]) / h;
+        props[PropertyIndex::state] =
+          p[dim - 1] < prm.substrate_top ? solid : powder;
+        handler.insert_particle(p, ref, offset + n, cell,
+                                ArrayView<const double>(props));
+      }
+    handler.update_cached_numbers();
+  }
+
+
+  template <int dim>
+  std::vector<double>
+  MaterialPoints<dim>::metal_fraction() const
+  {
+    const unsigned int n   = prm.subcells;
+    const double       ih  = n / grid.h();
+    const auto &       x0  = grid.origin();
+    std::vector<std::uint64_t> mask(grid.n_local(), 0);
+    for (const auto &particle : handler)
+      {
+        const Point<dim> p = particle.get_location();
+        std::array<int, dim> ijk;
+        unsigned int         bit = 0, m = 1;
+        for (int d = 0; d < dim; ++d)
+          {
+            const int sub = static_cast<int>(std::floor((p[d] - x0[d]) * ih));
+            const int c   = std::min(std::max(sub / int(n), 0),
+                                   int(grid.n_cells()[d]) - 1);
+            ijk[d] = c;
+            bit += m * std::min(std::max(sub - c * int(n), 0), int(n) - 1);
+            m *= n;
+          }
+        mask[grid.local_index(ijk)] |= (std::uint64_t(1) << bit);
+      }
+    const double        inv_nsub = 1. / std::pow(n, dim);
+    std::vector<double> alpha(grid.n_local(), 0.);
+    for (std::size_t i = 0; i < alpha.size(); ++i)
+      alpha[i] = std::bitset<64>(mask[i]).count() * inv_nsub;
+    std::vector<double> &a = alpha;
+    grid.update_ghosts(a);
+    return alpha;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::cells_to_points(const std::vector<double> &T)
+  {
+    using P         = PropertyIndex;
+    const double Ts = mat.solidus;
+    for (const auto &[idx, cell] : occupied)
+      {
+        const double Tc = T[idx];
+        for (auto &particle : handler.particles_in_cell(cell))
+          {
+            const ArrayView<double> v = particle.get_properties();
+            v[P::temperature]         = Tc;
+            if (Tc > v[P::peak_temperature])
+              v[P::peak_temperature] = Tc;
+            if (Tc > Ts)
+              v[P::state] = fluid;
+            else if (v[P::state] == fluid)
+              v[P::state] = solid;
+          }
+      }
+  }
+
+  template <int dim>
+  std::vector<double>
+  MaterialPoints<dim>::zone_tags() const
+  {
+    std::vector<double> zone(grid.n_local(), 0.);
+    for (const auto &[idx, cell] : occupied)
+      {
+        bool any_fluid = false, any_powder = false;
+        for (const auto &particle : handler.particles_in_cell(cell))
+          {
+            const auto state = particle.get_properties()[PropertyIndex::state];
+            any_fluid        = any_fluid || state == fluid;
+            any_powder       = any_powder || state == powder;
+          }
+        zone[idx] = any_fluid ? 3 : (any_powder ? 1 : 2);
+      }
+    return zone;
+  }
+
+  template class MaterialPoints<2>;
+  template class MaterialPoints<3>;
+} // namespace femp
