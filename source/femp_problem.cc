@@ -100,6 +100,22 @@ namespace femp
     melt_temperature = material.liquidus;
 
     // Checks that need several modules, still before any work.
+    if (time_prm.time_step > 0)
+      {
+        // Upper bound of the stable diffusion step of any cell full of
+        // metal; the exact limit is checked again at every step.
+        const double h     = grid_prm.cell_size;
+        const double bound = h * h * material.density *
+                             material.specific_heat.max_value() /
+                             (2 * dim * material.conductivity.min_value());
+        std::ostringstream allowed;
+        allowed << "it exceeds the stable limit of the explicit temperature "
+                   "step for every metal cell (at most "
+                << bound << " s for h = " << h
+                << " m and these material tables); use 0 (automatic)";
+        require(time_prm.time_step <= bound, "Time stepping/Time step",
+                time_prm.time_step, allowed.str());
+      }
     laser = std::make_unique<Laser<dim>>(laser_prm);
     laser->check_path_inside(grid_prm.lower_corner, grid_prm.upper_corner);
   }
@@ -209,6 +225,7 @@ namespace femp
     const auto wall_start = std::chrono::steady_clock::now();
     setup();
 
+    const double H0   = heat->stored_enthalpy();
     double       time = 0;
     unsigned int step = 0, n_output = 0;
     double       next_output = output_prm.output_interval;
@@ -285,13 +302,29 @@ namespace femp
     result.time  = time;
     result.T_max = heat->max_temperature();
 
-    const auto &e = heat->energy_budget();
-    pcout << std::setprecision(6) << "Energy (J): laser " << e.laser
- << ", surface losses " << heat->total_losses()
-          << " (evaporation " << e.evaporation << ", convection "
-          << e.convection << ", radiation " << e.radiation
-          << " at the start of each step), fixed faces " << e.boundary << ", stored "
-          << heat->stored_enthalpy() << std::endl;
+    const auto e    = heat->energy_budget();
+    result.laser    = e.laser;
+    result.losses   = heat->total_losses();
+    result.boundary = e.boundary;
+    result.stored   = heat->stored_enthalpy() - H0;
+    result.n_points = points->n_global_points();
+    {
+      double sum = 0;
+      for (const auto &p : points->particle_handler())
+        sum += p.get_properties()[MaterialPoints<dim>::PropertyIndex::temperature];
+      result.point_T_mean =
+        Utilities::MPI::sum(sum, comm) / std::max<double>(1, result.n_points);
+    }
+    pcout << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
+          << "): laser " << result.laser << ", surface losses "
+          << result.losses << " (evaporation " << e.evaporation
+          << ", convection " << e.convection << ", radiation " << e.radiation
+          << " at the start of each step), fixed faces " << result.boundary
+          << ", stored " << result.stored << "; balance error "
+          << std::abs(result.laser + result.boundary - result.losses -
+                      result.stored) /
+               std::max(1e-300, result.laser + std::abs(result.boundary))
+          << std::endl;
     timer.print_summary();
   }
 

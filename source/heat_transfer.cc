@@ -394,8 +394,8 @@ namespace femp
     const double V       = std::pow(h, dim);
     const double Ts      = mat.solidus;
     const double Tl      = mat.liquidus;
-    const double inv_dTm = 1. / (Tl - Ts);
     const double rhoL    = mat.density * mat.latent_heat_fusion;
+    const bool variable_c = !mat.specific_heat.is_constant();
 
     // Fixed-temperature faces: the face value sits h/2 from the cell centre.
     double e_boundary = 0;
@@ -453,21 +453,17 @@ namespace femp
         const double rc_eff = rc + dt * loss_coefficient[idx];
         double       Tn = Tc + dH / rc_eff;
         const double gn = gamma[idx];
-        if (rhoL > 0 && !((Tn < Ts && gn == 0.) || (Tn > Tl && gn == 1.)))
+        const bool   phase =
+          rhoL > 0 && !((Tn < Ts && gn == 0.) || (Tn > Tl && gn == 1.));
+        if (phase || (variable_c && std::abs(Tn - Tc) > 1.))
           {
-            // Local semi-implicit update: find T with
-            //   rc (T - Tc) + a rho L (gamma(T) - gn) = dH
-            // on the solid, mushy or liquid branch (exact: the relation is
-            // piecewise linear and monotone in T).
+            // Local semi-implicit iteration: find T with
+            //   H(T) + dt q' (T - Tc) = H(Tc) + dH,
+            // H(T) = a rho_m (C(T) + L gamma(T)) + (1 - a) rho_g c_g T,
+            // C the antiderivative of c_m. Safeguarded Newton on the
+            // monotone H; exact energy bookkeeping with c_m(T) and latent heat.
             ++nphase;
-            const double lat = a * rhoL;
-            if (rc_eff * (Ts - Tc) - lat * gn - dH >= 0)
-              Tn = Tc + (dH + lat * gn) / rc_eff;
-            else if (rc_eff * (Tl - Tc) + lat * (1 - gn) - dH <= 0)
-              Tn = Tc + (dH - lat * (1 - gn)) / rc_eff;
-            else
-              Tn = (dH + rc_eff * Tc + lat * (gn + Ts * inv_dTm)) /
-                   (rc_eff + lat * inv_dTm);
+            Tn = solve_enthalpy(a, Tc, gn, dH, dt * loss_coefficient[idx], Tn);
           }
         gamma[idx] = mat.liquid_fraction(Tn);
         T_new[idx] = Tn;
@@ -481,7 +477,7 @@ namespace femp
         e_implicit += loss_coefficient[s.index] * (T_new[s.index] - T[s.index]);
         source[s.index] = 0;
       }
-    budget.implicit_losses_local += e_implicit * V * dt;
+    budget.implicit_losses += e_implicit * V * dt;
     for (const auto &f : fixed_faces)
       source[f.index] = 0;
     for (const auto idx : first_surface)
@@ -494,7 +490,7 @@ namespace femp
     grid.update_ghosts(gamma);
     n_phase_cells = nphase;
 
-    budget.boundary += Utilities::MPI::sum(e_boundary, grid.communicator());
+    budget.boundary += e_boundary;
     const double local[2] = {Tmax, rate_max};
     double       global[2];
     Utilities::MPI::max(ArrayView<const double>(local, 2),
@@ -528,6 +524,66 @@ namespace femp
 
   template <int dim>
   double
+  HeatTransfer<dim>::enthalpy_density(const double a, const double T) const
+  {
+    return a * mat.density *
+             (mat.specific_heat.antiderivative(T) +
+              mat.latent_heat_fusion * mat.liquid_fraction(T)) +
+           (1 - a) * mat.gas_density * mat.gas_specific_heat * T;
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::solve_enthalpy(const double a,
+                                    const double Tc,
+                                    const double gc,
+                                    const double dH,
+                                    const double implicit_coefficient,
+                                    const double guess) const
+  {
+    // f(T) = H(T) + k (T - Tc) - H(Tc) - dH, increasing in T.
+    const double H0 = a * mat.density *
+                        (mat.specific_heat.antiderivative(Tc) +
+                         mat.latent_heat_fusion * gc) +
+                      (1 - a) * mat.gas_density * mat.gas_specific_heat * Tc;
+    const double target = H0 + dH;
+    auto f = [&](const double T) {
+      return enthalpy_density(a, T) + implicit_coefficient * (T - Tc) - target;
+    };
+    // Bracket: the sensible heat alone bounds the change.
+    const double c_min = a * mat.density * mat.specific_heat.min_value() +
+                         (1 - a) * mat.gas_density * mat.gas_specific_heat +
+                         implicit_coefficient;
+    double lo = Tc - std::abs(dH) / c_min - 1e-9, hi = Tc + std::abs(dH) / c_min + 1e-9;
+    double T  = std::clamp(guess, lo, hi);
+    const double tol = 1e-12 * (std::abs(target) + std::abs(dH)) + 1e-300;
+    for (unsigned int it = 0; it < 100; ++it)
+      {
+        const double r = f(T);
+        if (std::abs(r) <= tol)
+          break;
+        (r > 0 ? hi : lo) = T;
+        const double slope =
+          a * mat.density *
+            (mat.specific_heat.value(T) +
+             ((T > mat.solidus && T < mat.liquidus) ?
+                mat.latent_heat_fusion / (mat.liquidus - mat.solidus) :
+                0.)) +
+          (1 - a) * mat.gas_density * mat.gas_specific_heat + implicit_coefficient;
+        double next = T - r / slope;
+        if (!(next > lo && next < hi))
+          next = 0.5 * (lo + hi);
+        if (hi - lo < 1e-12 * std::abs(T))
+          break;
+        T = next;
+      }
+    return T;
+  }
+
+
+  template <int dim>
+  double
   HeatTransfer<dim>::stored_enthalpy() const
   {
     const double Tref = prm.reference_temperature;
@@ -538,21 +594,34 @@ namespace femp
         const double a = alpha[idx];
         if (a <= 0)
           continue;
-        H += a * mat.density *
-               (mat.specific_heat.integral(Tref, T[idx]) +
-                mat.latent_heat_fusion * gamma[idx]) +
-             (1 - a) * mat.gas_density * mat.gas_specific_heat * (T[idx] - Tref);
+        H += enthalpy_density(a, T[idx]) - enthalpy_density(a, Tref) +
+             a * mat.density * mat.latent_heat_fusion *
+               (gamma[idx] - mat.liquid_fraction(T[idx]));
       }
     return Utilities::MPI::sum(H * V, grid.communicator());
   }
 
   template <int dim>
+  typename HeatTransfer<dim>::EnergyBudget
+  HeatTransfer<dim>::energy_budget() const
+  {
+    const double local[6] = {budget.laser,     budget.evaporation,
+                             budget.convection, budget.radiation,
+                             budget.boundary,  budget.implicit_losses};
+    double       global[6];
+    Utilities::MPI::sum(ArrayView<const double>(local, 6),
+                        grid.communicator(),
+                        ArrayView<double>(global, 6));
+    return {global[0], global[1], global[2], global[3], global[4], global[5]};
+  }
+
+
+  template <int dim>
   double
   HeatTransfer<dim>::total_losses() const
   {
-    return budget.evaporation + budget.convection + budget.radiation +
-           Utilities::MPI::sum(budget.implicit_losses_local,
-                               grid.communicator());
+    const auto e = energy_budget();
+    return e.evaporation + e.convection + e.radiation + e.implicit_losses;
   }
 
   template class HeatTransfer<2>;

@@ -6,6 +6,7 @@
 #include <femp/femp_problem.h>
 #include <femp/input_checks.h>
 
+#include <cctype>
 #include <fstream>
 #include <iostream>
 
@@ -75,7 +76,18 @@ main(int argc, char *argv[])
           const auto pos = msg.find("Additional information:");
           if (pos != std::string::npos)
             msg = msg.substr(pos + 23);
-          throw std::runtime_error("Invalid input in '" + arg + "':" + msg);
+          const auto trace = msg.find("Stacktrace:");
+          if (trace != std::string::npos)
+            msg = msg.substr(0, trace);
+          // One line: collapse deal.II's line breaks and indentation.
+          std::string flat;
+          for (const char c : msg)
+            if (!std::isspace(static_cast<unsigned char>(c)))
+              flat += c;
+            else if (!flat.empty() && flat.back() != ' ')
+              flat += ' ';
+          throw std::runtime_error("Invalid input in '" + arg + "': " +
+                                   dealii::Utilities::trim(flat));
         }
       const int dim = prm.get_integer("Dimension");
       if (dim == 2)

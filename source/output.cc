@@ -131,9 +131,18 @@ namespace femp
   Output<dim>::initialize(const std::vector<std::string> &quantities)
   {
     const MPI_Comm comm = grid.communicator();
+    int ok = 1;
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
-        std::filesystem::create_directories(prm.directory);
+        std::error_code error;
+        std::filesystem::create_directories(prm.directory, error);
+        ok = !error && std::filesystem::is_directory(prm.directory);
+      }
+    ok = Utilities::MPI::min(ok, comm);
+    require(ok == 1, "Output/Directory", prm.directory,
+            "it cannot be created or is not a directory");
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      {
         pool_csv.open(prm.directory + "/melt_pool.csv");
         pool_csv << "time,length,width,depth,volume,T_max\n";
         if (!prm.probe_points.empty())

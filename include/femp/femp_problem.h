@@ -60,6 +60,11 @@ namespace femp
       double       time  = 0;
       double       T_max = 0;
       MeltPoolSize pool;
+      /// Energies over the run, J (2D: J/m): laser input, surface losses,
+      /// heat in through fixed faces, change of stored enthalpy.
+      double laser = 0, losses = 0, boundary = 0, stored = 0;
+      types::particle_index n_points = 0;
+      double                point_T_mean = 0; ///< mean point temperature, K
     };
     const Summary &
     summary() const

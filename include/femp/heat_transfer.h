@@ -55,7 +55,7 @@ namespace femp
       parse_parameters(ParameterHandler &prm);
     };
 
-    /// Cumulative energies since initialize(), J (2D: J/m), global sums.
+    /// Cumulative energies since initialize(), J (2D: J/m).
     struct EnergyBudget
     {
       double laser       = 0; ///< deposited by the laser
@@ -63,12 +63,12 @@ namespace femp
       double convection  = 0; ///< lost by surface convection
       double radiation   = 0; ///< lost by radiation
       double boundary    = 0; ///< entered through fixed-temperature faces
-      /// Losses of the implicit (linearized) part, this rank only; added to
-      /// the total by total_losses().
-      double implicit_losses_local = 0;
+      /// Losses of the implicit (linearized) part of the step; included in
+      /// total_losses().
+      double implicit_losses = 0;
     };
 
-    /// Total surface losses so far (global), J (2D: J/m).
+    /// Total surface losses so far (global, collective), J (2D: J/m).
     double
     total_losses() const;
 
@@ -127,11 +127,9 @@ namespace femp
     {
       return laser_density;
     }
-    const EnergyBudget &
-    energy_budget() const
-    {
-      return budget;
-    }
+    /// Cumulative energies, summed over all ranks (collective call).
+    EnergyBudget
+    energy_budget() const;
     /// Global stored enthalpy relative to T_ref (J, or J/m in 2D):
     /// sum V [alpha rho_m (int c_m dT + L_m gamma) + (1-alpha) rho_g c_g dT].
     double
@@ -198,6 +196,17 @@ namespace femp
     compute_conductance();
     void
     compute_surface_sources(const double dt, const double time);
+    /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
+    double
+    enthalpy_density(const double a, const double T) const;
+    /// Solve the local enthalpy equation of one cell (see advance()).
+    double
+    solve_enthalpy(const double a,
+                   const double Tc,
+                   const double gc,
+                   const double dH,
+                   const double implicit_coefficient,
+                   const double guess) const;
     double
     heat_capacity(const double T, const double a) const
     {

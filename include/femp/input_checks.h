@@ -77,6 +77,17 @@ namespace femp
     double
     integral(const double T0, const double T1) const;
 
+    /// Integral of the property from the first breakpoint to @p T.
+    double
+    antiderivative(const double T) const;
+
+    /// True if the table has a single value.
+    bool
+    is_constant() const
+    {
+      return v_.size() == 1;
+    }
+
     double
     min_value() const;
     double
@@ -84,8 +95,6 @@ namespace femp
 
   private:
     std::vector<double> T_, v_, inv_dT_;
-    double
-    antiderivative(const double T) const;
   };
 
   /// Parse a comma-separated list of dim numbers into a point.

@@ -1,0 +1,31 @@
+// femp tests: run a whole scene from a prm file through FempProblem.
+#ifndef femp_scene_driver_h
+#define femp_scene_driver_h
+
+#include <femp/femp_problem.h>
+
+#include <fstream>
+#include <iostream>
+
+namespace femp_test
+{
+  /// Parse @p file and run the scene with std::cout silenced; returns the
+  /// summary.
+  template <int dim>
+  typename femp::FempProblem<dim>::Summary
+  run_scene(const std::string &file, MPI_Comm comm)
+  {
+    dealii::ParameterHandler prm;
+    femp::declare_all_parameters(prm);
+    prm.parse_input(file);
+    std::streambuf *old = std::cout.rdbuf();
+    std::ofstream   log("scene.log");
+    std::cout.rdbuf(log.rdbuf());
+    femp::FempProblem<dim> problem(prm, comm);
+    problem.run();
+    std::cout.rdbuf(old);
+    return problem.summary();
+  }
+} // namespace femp_test
+
+#endif

@@ -1,0 +1,64 @@
+// Verification: two-phase Stefan problem (Neumann solution,
+// VERIFICATION.md sec. 2). All properties 1 (rho, c, lambda, L); solid
+// initially 1 K below the melting point T_m = 10 K; the face x = 0 held
+// 1 K above it. Closed form: front s = 2 lambda sqrt(t) with
+// lambda = 0.377760. The simulation melts over the narrow range
+// T_m -/+ 0.005 K; its front is the liquid amount sum(gamma h). Checks the
+// front at t = 0.25, 0.5, 1 (2 % once it spans >= 20 cells) and the global
+// energy balance: stored enthalpy = heat that entered through the faces.
+#include "test_tools.h"
+
+using namespace femp_test;
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+
+  const int    dim = 2;
+  const double h   = 0.01, Tm = 10, lambda = 0.377760;
+  const auto   gp  = box<dim>(Point<dim>(0, 0), Point<dim>(3, 2 * h), h);
+  BackgroundGrid<dim> grid(gp, comm);
+  grid.create();
+  Material mat           = unit_material();
+  mat.solidus            = Tm - 0.005;
+  mat.liquidus           = Tm + 0.005;
+  mat.latent_heat_fusion = 1;
+  Laser<dim> laser(laser_off<dim>());
+  auto p = heat_parameters<dim>(Tm - 1, {{"x-", Tm + 1}, {"x+", Tm - 1}});
+  p.reference_temperature = Tm - 1;
+  HeatTransfer<dim> heat(p, mat, laser, grid);
+  heat.initialize();
+  heat.set_metal_fraction(grid.make_field(1.));
+  const double H0 = heat.stored_enthalpy();
+
+  const double dt = 0.4 * heat.stable_time_step();
+  double       t  = 0;
+  for (const double t_check : {0.25, 0.5, 1.0})
+    {
+      while (t < t_check - 1e-12)
+        {
+          const double step = std::min(dt, t_check - t);
+          heat.advance(step, t);
+          t += step;
+        }
+      // Front: liquid length along the strip (per row).
+      double liquid = 0;
+      for (const auto idx : grid.owned_cells())
+        liquid += heat.liquid_fraction()[idx] * h * h;
+      const double s     = Utilities::MPI::sum(liquid, comm) / (2 * h);
+      const double exact = 2 * lambda * std::sqrt(t);
+      std::ostringstream what;
+      what << "front t=" << t_check << " (" << std::setprecision(3)
+           << exact / h << " cells): relative error";
+      checks.at_most(what.str(), std::abs(s - exact) / exact, 0.02);
+    }
+  const double stored  = heat.stored_enthalpy() - H0;
+  const double entered = heat.energy_budget().boundary;
+  checks.print("stored enthalpy (J/m)", stored, 5);
+  checks.at_most("energy balance |stored - entered| / entered",
+                 std::abs(stored - entered) / std::abs(entered), 1e-9);
+  return checks.exit_code();
+}
