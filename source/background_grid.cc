@@ -232,6 +232,98 @@ namespace femp
       }
     send_buffers.resize(neighbours.size());
     recv_buffers.resize(neighbours.size());
+
+    // Nodes: layout, the nodes of owned cells, and per neighbour rank the
+    // nodes shared with its owned cells (= nodes of owned cells that are
+    // also nodes of a ghost cell it owns).
+    n_nodes_box = 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        node_stride[d] = (d == 0 ? 1 : node_stride[d - 1] * (size[d - 1] + 1));
+        n_nodes_box *= size[d] + 1;
+      }
+    const unsigned int n_corners = 1u << dim;
+    auto corner = [&](const std::array<int, dim> &cell, const unsigned int c) {
+      std::array<int, dim> node = cell;
+      for (int d = 0; d < dim; ++d)
+        node[d] += (c >> d) & 1;
+      return node;
+    };
+    std::vector<char> of_owned(n_nodes_box, 0);
+    for (const auto idx : owned_list)
+      for (unsigned int c = 0; c < n_corners; ++c)
+        of_owned[local_node_index(corner(global_index(idx), c))] = 1;
+    active_nodes.clear();
+    for (std::size_t i = 0; i < n_nodes_box; ++i)
+      if (of_owned[i])
+        active_nodes.push_back(i);
+    std::map<int, std::set<std::uint32_t>> shared;
+    for (const auto &[ijk, cell] : known)
+      if (cell->is_ghost())
+        for (unsigned int c = 0; c < n_corners; ++c)
+          {
+            const auto node = local_node_index(corner(ijk, c));
+            if (of_owned[node])
+              shared[cell->subdomain_id()].insert(node);
+          }
+    node_neighbours.clear();
+    shared_nodes.clear();
+    for (auto &[rank, nodes] : shared)
+      {
+        node_neighbours.push_back(rank);
+        // Local flat order equals global lexicographic order inside a box
+        // only per rank; sort by global node index to agree with the peer.
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+        for (const auto node : nodes)
+          {
+            std::size_t   rest = node;
+            std::uint64_t g = 0, m = 1;
+            std::array<int, dim> ijk;
+            for (int d = dim - 1; d >= 0; --d)
+              {
+                ijk[d] = lo[d] + static_cast<int>(rest / node_stride[d]);
+                rest %= node_stride[d];
+              }
+            for (int d = 0; d < dim; ++d)
+              {
+                g += m * ijk[d];
+                m *= n_global[d] + 1;
+              }
+            keyed.emplace_back(g, node);
+          }
+        std::sort(keyed.begin(), keyed.end());
+        shared_nodes.emplace_back();
+        for (const auto &k : keyed)
+          shared_nodes.back().push_back(k.second);
+      }
+    node_send.resize(node_neighbours.size());
+    node_recv.resize(node_neighbours.size());
+  }
+
+
+  template <int dim>
+  void
+  BackgroundGrid<dim>::sum_shared_nodes(std::vector<double> &field) const
+  {
+    if (node_neighbours.empty())
+      return;
+    std::vector<MPI_Request> requests(2 * node_neighbours.size());
+    const int                tag = 4712;
+    for (std::size_t n = 0; n < node_neighbours.size(); ++n)
+      {
+        node_recv[n].resize(shared_nodes[n].size());
+        MPI_Irecv(node_recv[n].data(), node_recv[n].size(), MPI_DOUBLE,
+                  node_neighbours[n], tag, comm, &requests[2 * n]);
+        node_send[n].resize(shared_nodes[n].size());
+        for (std::size_t i = 0; i < shared_nodes[n].size(); ++i)
+          node_send[n][i] = field[shared_nodes[n][i]];
+        MPI_Isend(node_send[n].data(), node_send[n].size(), MPI_DOUBLE,
+                  node_neighbours[n], tag, comm, &requests[2 * n + 1]);
+      }
+    MPI_Waitall(requests.size(), requests.data(), MPI_STATUSES_IGNORE);
+    for (std::size_t n = 0; n < node_neighbours.size(); ++n)
+      for (std::size_t i = 0; i < shared_nodes[n].size(); ++i)
+        field[shared_nodes[n][i]] += node_recv[n][i];
   }
 
 

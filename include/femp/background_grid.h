@@ -201,6 +201,56 @@ namespace femp
     void
     update_ghosts(std::vector<double> &field) const;
 
+    // ---- grid nodes ----------------------------------------------------
+    // Node (i,j,k) is the corner x0 + (i,j,k) h; nodes of the local box are
+    // those of its cells, (size_d + 1) per direction, stored with the same
+    // lower index lo_d as the cells.
+
+    /// Number of node entries of the local box.
+    std::size_t
+    n_local_nodes() const
+    {
+      return n_nodes_box;
+    }
+    /// Flat-index stride per direction for node arrays.
+    const std::array<std::ptrdiff_t, dim> &
+    node_strides() const
+    {
+      return node_stride;
+    }
+    /// Flat local index of global node index @p ijk.
+    std::size_t
+    local_node_index(const std::array<int, dim> &ijk) const
+    {
+      std::size_t idx = 0;
+      for (int d = 0; d < dim; ++d)
+        idx += (ijk[d] - lo[d]) * node_stride[d];
+      return idx;
+    }
+    /// Flat node index of the lower (0,0,0) corner of cell at flat @p cell.
+    std::size_t
+    first_node_of_cell(const std::size_t cell) const
+    {
+      return local_node_index(global_index(cell));
+    }
+    /// Flat local node indices of the nodes of locally owned cells.
+    const std::vector<std::uint32_t> &
+    owned_cell_nodes() const
+    {
+      return active_nodes;
+    }
+    /// Sum node values over all ranks that share a node (nodes of owned
+    /// cells): after the call, every rank holds the global sum on each node
+    /// of its owned cells. Use after scattering particle data to nodes.
+    void
+    sum_shared_nodes(std::vector<double> &field) const;
+    /// A new node field over the local box.
+    std::vector<double>
+    make_node_field(const double value = 0.) const
+    {
+      return std::vector<double>(n_nodes_box, value);
+    }
+
     /// A new field over the local box, initialized to @p value.
     std::vector<double>
     make_field(const double value = 0.) const
@@ -228,6 +278,15 @@ namespace femp
     std::vector<int>                        neighbours;
     std::vector<std::vector<std::uint32_t>> send_indices, recv_indices;
     mutable std::vector<std::vector<double>> send_buffers, recv_buffers;
+
+    // Nodes: layout and the shared-node pattern (same node list on both
+    // sides, in increasing global node order).
+    std::size_t                             n_nodes_box = 0;
+    std::array<std::ptrdiff_t, dim>         node_stride;
+    std::vector<std::uint32_t>              active_nodes;
+    std::vector<int>                        node_neighbours;
+    std::vector<std::vector<std::uint32_t>> shared_nodes;
+    mutable std::vector<std::vector<double>> node_send, node_recv;
   };
 } // namespace femp
 
