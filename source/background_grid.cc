@@ -105,24 +105,42 @@ namespace femp
         (prm.upper_corner[d] - prm.lower_corner[d]) / prm.cell_size));
 
     // Coarse blocks of 2^r cells per direction, refined r times globally:
-    // fewer p4est trees for the same fine grid where the counts allow it.
+    // p4est then handles few trees (deal.II's coarse-cell reordering costs
+    // ~50 us per tree). Where a cell count is not a multiple of 2^r, the
+    // triangulation (not the domain) is padded on the upper side; padding
+    // cells lie outside the domain and are never used or written. Pick the
+    // largest r <= 3 whose padding adds at most 10 % cells.
     unsigned int r = 0;
-    while (r < 6)
+    std::array<unsigned int, dim> n_tria = n_global;
+    for (unsigned int level = 3; level > 0; --level)
       {
-        bool divisible = true;
+        const unsigned int b = 1u << level;
+        double             padded = 1, exact = 1;
+        std::array<unsigned int, dim> n_try;
         for (int d = 0; d < dim; ++d)
-          divisible = divisible && (n_global[d] % (2u << r) == 0);
-        if (!divisible)
-          break;
-        ++r;
+          {
+            n_try[d] = (n_global[d] + b - 1) / b * b;
+            padded *= n_try[d];
+            exact *= n_global[d];
+          }
+        if (padded <= 1.1 * exact)
+          {
+            r      = level;
+            n_tria = n_try;
+            break;
+          }
       }
     std::vector<unsigned int> repetitions(dim);
+    Point<dim>                tria_upper = prm.lower_corner;
     for (int d = 0; d < dim; ++d)
-      repetitions[d] = n_global[d] >> r;
+      {
+        repetitions[d] = n_tria[d] >> r;
+        tria_upper[d] += n_tria[d] * prm.cell_size;
+      }
     GridGenerator::subdivided_hyper_rectangle(tria,
                                               repetitions,
                                               prm.lower_corner,
-                                              prm.upper_corner);
+                                              tria_upper);
     if (r > 0)
       tria.refine_global(r);
 
@@ -134,7 +152,7 @@ namespace femp
                           typename Triangulation<dim>::active_cell_iterator>>
       known;
     for (const auto &cell : tria.active_cell_iterators())
-      if (!cell->is_artificial())
+      if (!cell->is_artificial() && in_domain(cell->center()))
         {
           const auto ijk = cell_of(cell->center());
           known.emplace_back(ijk, cell);

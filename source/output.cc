@@ -196,13 +196,35 @@ namespace femp
     const MPI_Comm comm = grid.communicator();
     const auto &   tria = grid.triangulation();
     {
-      DataOut<dim>               data_out;
+      DataOut<dim> data_out;
       data_out.attach_triangulation(tria);
+      // Only owned cells of the domain (not the triangulation's padding).
+      const auto &flat_of = grid.flat_index_of_active_cell();
+      auto        wanted  = [&](const typename Triangulation<dim>::cell_iterator &c) {
+        return c->is_active() && c->is_locally_owned() &&
+               flat_of[c->active_cell_index()] != numbers::invalid_unsigned_int;
+      };
+      data_out.set_cell_selection(
+        [wanted](const Triangulation<dim> &t) {
+          for (auto c : t.active_cell_iterators())
+            if (wanted(c))
+              return typename Triangulation<dim>::cell_iterator(c);
+          return t.end();
+        },
+        [wanted](const Triangulation<dim> &t,
+                 const typename Triangulation<dim>::cell_iterator &c) {
+          typename Triangulation<dim>::active_cell_iterator next(c);
+          for (++next; next != t.end(); ++next)
+            if (wanted(next))
+              return typename Triangulation<dim>::cell_iterator(next);
+          return t.end();
+        });
       std::vector<Vector<float>> data(fields.size() + 1,
                                       Vector<float>(tria.n_active_cells()));
       const auto &flat = grid.flat_index_of_active_cell();
       for (const auto &cell : tria.active_cell_iterators())
-        if (cell->is_locally_owned())
+        if (cell->is_locally_owned() &&
+            flat[cell->active_cell_index()] != numbers::invalid_unsigned_int)
           {
             const auto i = cell->active_cell_index();
             for (std::size_t f = 0; f < fields.size(); ++f)
@@ -216,7 +238,8 @@ namespace femp
                                DataOut<dim>::type_cell_data);
       data_out.build_patches();
       DataOutBase::VtkFlags flags;
-      flags.time = time;
+      flags.time              = time;
+      flags.compression_level = DataOutBase::VtkFlags::best_speed;
       data_out.set_flags(flags);
       const std::string name = data_out.write_vtu_with_pvtu_record(
         prm.directory + "/", "grid", n, comm, 5, 8);
@@ -234,6 +257,10 @@ namespace femp
           interpretation(point_names.size(),
                          DataComponentInterpretation::component_is_scalar);
         data_out.build_patches(*points, point_names, interpretation);
+        DataOutBase::VtkFlags flags;
+        flags.time              = time;
+        flags.compression_level = DataOutBase::VtkFlags::best_speed;
+        data_out.set_flags(flags);
         const std::string name = data_out.write_vtu_with_pvtu_record(
           prm.directory + "/", "points", n, comm, 5, 8);
         point_records.emplace_back(time, name);

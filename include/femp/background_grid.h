@@ -151,6 +151,17 @@ namespace femp
         }
       return ijk;
     }
+    /// True if @p x lies inside the domain box (not in the padding of the
+    /// triangulation).
+    bool
+    in_domain(const Point<dim> &x) const
+    {
+      for (int d = 0; d < dim; ++d)
+        if ((x[d] - prm.lower_corner[d]) * inv_h >= n_global[d] ||
+            x[d] < prm.lower_corner[d])
+          return false;
+      return true;
+    }
     /// True if global index @p ijk lies inside the local box.
     bool
     in_box(const std::array<int, dim> &ijk) const

@@ -1,0 +1,130 @@
+// femp benchmark: cost of the temperature step and of the per-step point
+// bookkeeping on the paper's case 3.2 grid (800 x 240 x 140 um, h = 4 um:
+// 200 x 60 x 35 = 420,000 cells... see below) with 316L tables, latent
+// heat, all surface losses and a moving laser, and of creating ~2 million
+// material points. Run on one core, Release:
+//   build/contrib/bench_thermal [repetitions]
+// Prints medians over the repetitions.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/timer.h>
+
+#include <femp/background_grid.h>
+#include <femp/heat_transfer.h>
+#include <femp/laser.h>
+#include <femp/material.h>
+#include <femp/material_points.h>
+
+#include <algorithm>
+#include <iomanip>
+#include <iostream>
+
+using namespace dealii;
+using namespace femp;
+
+double
+median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  const int         reps = argc > 1 ? std::atoi(argv[1]) : 5;
+  const int         dim  = 3;
+  MPI_Comm          comm = MPI_COMM_WORLD;
+  ParameterHandler  prm;
+  Material::declare_parameters(prm);
+  Material mat;
+  mat.parse_parameters(prm); // 316L defaults (Kim 1975)
+
+  // Case 3.2 grid: 800 x 240 x 140 um at h = 4 um = 200 x 60 x 35 cells.
+  BackgroundGrid<dim>::Parameters gp;
+  gp.lower_corner = Point<dim>(0, 0, 0);
+  gp.upper_corner = Point<dim>(800e-6, 240e-6, 140e-6);
+  gp.cell_size    = 4e-6;
+  Timer timer;
+  BackgroundGrid<dim> grid(gp, comm);
+  grid.create();
+  const double t_grid = timer.wall_time();
+  const double n_cells = grid.n_global_cells();
+
+  // Points: substrate to 80 um at 2 um spacing (8 per cell), a 40 um powder
+  // layer on top: about 2 million points.
+  MaterialPoints<dim>::Parameters mp;
+  mp.point_spacing   = 2e-6;
+  mp.substrate_top   = 80e-6;
+  mp.layer_thickness = 40e-6;
+  mp.mean_diameter   = 26e-6;
+  mp.std_diameter    = 6e-6;
+  mp.min_diameter    = 15e-6;
+  mp.max_diameter    = 40e-6;
+  MaterialPoints<dim> points(mp, mat, grid);
+  timer.restart();
+  points.create(300);
+  const double t_points = timer.wall_time();
+  const double n_points = points.n_global_points();
+  timer.restart();
+  const auto   alpha = points.metal_fraction();
+  const double t_alpha = timer.wall_time();
+
+  Laser<dim>::Parameters lp;
+  lp.start_point = Point<dim>(100e-6, 120e-6, 0);
+  lp.end_point   = Point<dim>(700e-6, 120e-6, 0);
+  Laser<dim> laser(lp);
+  HeatTransfer<dim>::Parameters hp;
+  hp.fixed_temperatures = {{"z-", 300.}};
+  HeatTransfer<dim> heat(hp, mat, laser, grid);
+  heat.initialize();
+  heat.set_metal_fraction(alpha);
+  // A hot track so that cells are solid, mushy and liquid.
+  auto &T = heat.temperature();
+  for (std::size_t i = 0; i < T.size(); ++i)
+    {
+      const auto c = grid.cell_center(i);
+      const double r2 = std::pow(c[1] - 120e-6, 2) + std::pow(c[2] - 100e-6, 2);
+      T[i] = 300 + 2700 * std::exp(-r2 / (2 * 30e-6 * 30e-6)) *
+                     (c[0] > 100e-6 && c[0] < 500e-6);
+    }
+  double metal = 0;
+  for (const auto idx : grid.owned_cells())
+    metal += alpha[idx] > 0;
+  metal = Utilities::MPI::sum(metal, comm);
+
+  double       time = 0;
+  const double dt   = 0.5 * heat.stable_time_step();
+  for (int i = 0; i < 3; ++i, time += dt)
+    heat.advance(dt, time);
+  const int           steps = 20;
+  std::vector<double> t_step, t_c2p;
+  for (int r = 0; r < reps; ++r)
+    {
+      timer.restart();
+      for (int i = 0; i < steps; ++i, time += dt)
+        heat.advance(dt, time);
+      t_step.push_back(timer.wall_time() / steps);
+      timer.restart();
+      for (int i = 0; i < steps; ++i)
+        points.cells_to_points(heat.temperature());
+      t_c2p.push_back(timer.wall_time() / steps);
+    }
+  if (Utilities::MPI::this_mpi_process(comm) == 0)
+    {
+      std::cout << std::setprecision(3)
+                << "grid cells                      " << n_cells << " (" << metal << " with metal)\n"
+                << "grid creation                   " << t_grid << " s\n"
+                << "material points                 " << n_points << "\n"
+                << "point creation                  " << t_points << " s ("
+                << 1e9 * t_points / n_points << " ns/point)\n"
+                << "metal fraction (alpha)          " << 1e9 * t_alpha / n_points << " ns/point\n"
+                << "phase-change cells per step     " << heat.n_phase_change_cells() << "\n"
+                << "temperature step (median)       " << 1e3 * median(t_step) << " ms = "
+                << 1e9 * median(t_step) / n_cells << " ns per cell-step ("
+                << 1e9 * median(t_step) / metal << " per metal cell)\n"
+                << "cells to points (median)        " << 1e3 * median(t_c2p) << " ms = "
+                << 1e9 * median(t_c2p) / n_points << " ns per point-step\n";
+    }
+  return 0;
+}
