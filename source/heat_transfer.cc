@@ -129,6 +129,8 @@ namespace femp
     gamma = grid.make_field(mat.liquid_fraction(prm.initial_temperature));
     alpha = grid.make_field(0.);
     conductance   = grid.make_field(0.);
+    capacity      = grid.make_field(1.);
+    is_source.assign(grid.n_local(), 0);
     source        = grid.make_field(0.);
     laser_density = grid.make_field(0.);
     loss_coefficient = grid.make_field(0.);
@@ -241,24 +243,18 @@ namespace femp
         if (top[col] == ijk[dim - 1])
           first_surface.push_back(idx);
       }
-  }
 
-
-  template <int dim>
-  void
-  HeatTransfer<dim>::compute_conductance()
-  {
-    // Mixture conductivity alpha lambda_m(T) + (1 - alpha) lambda_g in metal
-    // cells; zero in gas cells and in the padding, which blocks their faces.
-    const auto &status = grid.cell_status();
-    for (std::size_t idx = 0; idx < T.size(); ++idx)
-      {
-        const double a = alpha[idx];
-        conductance[idx] =
-          (a > 0 && status[idx] != BackgroundGrid<dim>::outside) ?
-            a * mat.conductivity.value(T[idx]) + (1 - a) * mat.gas_conductivity :
-            0.;
-      }
+    // All cells with sparse sources, once each, in increasing order.
+    source_cells.clear();
+    for (const auto &sc : surface)
+      source_cells.push_back(sc.index);
+    for (const auto idx : first_surface)
+      source_cells.push_back(idx);
+    for (const auto &f : fixed_faces)
+      source_cells.push_back(f.index);
+    std::sort(source_cells.begin(), source_cells.end());
+    source_cells.erase(std::unique(source_cells.begin(), source_cells.end()),
+                       source_cells.end());
   }
 
 
@@ -288,10 +284,13 @@ namespace femp
         const double rho_c_m = mat.density * mat.specific_heat.value(Tc);
         const double w  = 2 * heat_capacity(Tc, a) / (rho_c_m + rho_g_c_g);
         const double wg = w * s.grad_alpha;
-        const double q_evap =
-          evap_pref > 0 ? evap_pref / std::sqrt(Tc) *
-                            std::exp(evap_exp * (Tc - prm.evaporation_temperature) / Tc) :
-                          0.;
+        // Evaporation; exp() of exponents below -40 (relative 4e-18 of the
+        // flux at T_v) is skipped.
+        const double exponent =
+          evap_exp * (Tc - prm.evaporation_temperature) / Tc;
+        const double q_evap = (evap_pref > 0 && exponent > -40) ?
+                                evap_pref / std::sqrt(Tc) * std::exp(exponent) :
+                                0.;
         const double q_conv = prm.convection_coefficient * (Tc - Tref);
         const double q_rad =
           stefan_boltzmann * prm.emissivity * (Tc * Tc * Tc * Tc - Tref4);
@@ -348,7 +347,7 @@ namespace femp
   double
   HeatTransfer<dim>::stable_time_step()
   {
-    compute_conductance();
+    compute_properties();
     const auto & st  = grid.strides();
     const double ih2 = 1. / (grid.h() * grid.h());
     double       rate_max = 0;
@@ -365,7 +364,7 @@ namespace femp
               const double kn = conductance[idx + s];
               sumk += kn > 0 ? 2 * kc * kn / (kc + kn) : 0.;
             }
-        double rate = sumk * ih2 / heat_capacity(T[idx], a);
+        double rate = sumk * ih2 / capacity[idx];
         if (velocity)
           for (int d = 0; d < dim; ++d)
             rate += std::abs((*velocity)[d][idx]) / grid.h();
@@ -373,8 +372,7 @@ namespace femp
       }
     for (const auto &f : fixed_faces)
       rate_max = std::max(rate_max,
-                          4 * conductance[f.index] * ih2 /
-                            heat_capacity(T[f.index], alpha[f.index]));
+                          4 * conductance[f.index] * ih2 / capacity[f.index]);
     rate_max = Utilities::MPI::max(rate_max, grid.communicator());
     return rate_max > 0 ? 1. / rate_max : std::numeric_limits<double>::max();
   }
@@ -382,20 +380,64 @@ namespace femp
 
   template <int dim>
   void
+  HeatTransfer<dim>::compute_properties()
+  {
+    // Pass A: conductivity (zero in gas cells and in the padding, which
+    // blocks their faces) and heat capacity of every cell of the box.
+    const std::uint8_t *status   = grid.cell_status().data();
+    const double        rho_g_cg = mat.gas_density * mat.gas_specific_heat;
+    const double        k_g      = mat.gas_conductivity;
+    const double        rho_m    = mat.density;
+    const double *      Tp = T.data(), *ap = alpha.data();
+    double *            kp = conductance.data(), *cp = capacity.data();
+    const std::size_t   n = T.size();
+    if (!mat.conductivity.has_padded_segments() ||
+        !mat.specific_heat.has_padded_segments())
+      {
+        // Long tables: scalar lookups.
+        for (std::size_t idx = 0; idx < n; ++idx)
+          {
+            const double a     = ap[idx];
+            const double metal = (a > 0 && status[idx] != 0) ? 1. : 0.;
+            kp[idx] = metal * (a * mat.conductivity.value(Tp[idx]) + (1 - a) * k_g);
+            cp[idx] = metal * (a * rho_m * mat.specific_heat.value(Tp[idx]) +
+                               (1 - a) * rho_g_cg) +
+                      (1 - metal);
+          }
+        return;
+      }
+    const auto k_m = mat.conductivity.segments();
+    const auto c_m = mat.specific_heat.segments();
+#pragma omp simd
+    for (std::size_t idx = 0; idx < n; ++idx)
+      {
+        const double a     = ap[idx];
+        const double metal = (a > 0) & (status[idx] != 0) ? 1. : 0.;
+        const double Tc    = Tp[idx];
+        kp[idx] = metal * (a * k_m(Tc) + (1 - a) * k_g);
+        cp[idx] = metal * (a * rho_m * c_m(Tc) + (1 - a) * rho_g_cg) +
+                  (1 - metal); // 1 in gas and padding: never used for heat
+      }
+  }
+
+
+  template <int dim>
+  void
   HeatTransfer<dim>::advance(const double dt, const double time)
   {
-    compute_conductance();
+    compute_properties();
     compute_surface_sources(dt, time);
 
-    const auto & st      = grid.strides();
-    const double h       = grid.h();
-    const double ih      = 1. / h;
-    const double ih2     = ih * ih;
-    const double V       = std::pow(h, dim);
-    const double Ts      = mat.solidus;
-    const double Tl      = mat.liquidus;
-    const double rhoL    = mat.density * mat.latent_heat_fusion;
-    const bool variable_c = !mat.specific_heat.is_constant();
+    const auto & st   = grid.strides();
+    const auto & size = grid.box_size();
+    const double h    = grid.h();
+    const double ih   = 1. / h;
+    const double ih2  = ih * ih;
+    const double V    = std::pow(h, dim);
+    const double Ts   = mat.solidus;
+    const double Tl   = mat.liquidus;
+    const double rhoL = mat.density * mat.latent_heat_fusion;
+    const bool   variable_c = !mat.specific_heat.is_constant();
 
     // Fixed-temperature faces: the face value sits h/2 from the cell centre.
     double e_boundary = 0;
@@ -407,90 +449,183 @@ namespace femp
           const double q = 2 * k * (f.value - T[f.index]) * ih2;
           source[f.index] += q;
           e_boundary += q * V * dt;
-          rate_max = std::max(rate_max,
-                              4 * k * ih2 /
-                                heat_capacity(T[f.index], alpha[f.index]));
+          rate_max = std::max(rate_max, 4 * k * ih2 / capacity[f.index]);
         }
 
-    double      Tmax   = -std::numeric_limits<double>::max();
-    std::size_t nphase = 0;
-    for (const auto idx : grid.owned_cells())
-      {
-        const double a = alpha[idx];
-        if (a <= 0)
-          continue;
-        const double Tc   = T[idx];
-        const double kc   = conductance[idx];
-        double       flux = 0, sumk = 0;
-        for (int d = 0; d < dim; ++d)
-          {
-            const double km = conductance[idx - st[d]];
-            const double kp = conductance[idx + st[d]];
-            const double fm = km > 0 ? 2 * kc * km / (kc + km) : 0.;
-            const double fp = kp > 0 ? 2 * kc * kp / (kc + kp) : 0.;
-            flux += fm * (T[idx - st[d]] - Tc) + fp * (T[idx + st[d]] - Tc);
-            sumk += fm + fp;
-          }
-        const double rc   = heat_capacity(Tc, a);
-        double       rate = sumk * ih2 / rc;
-        double       conv = 0;
-        if (velocity)
+    // Pass B: conduction on whole x-rows of the box interior, branch-free
+    // so that it vectorizes; gas and padding cells have zero conductance and
+    // keep their value. Rows where a cell may need the phase-change
+    // iteration are flagged for pass D.
+    const double  *Tp = T.data(), *kp = conductance.data(), *cp = capacity.data(),
+                  *gp = gamma.data();
+    double        *Tn = T_new.data();
+    const std::ptrdiff_t sy = dim > 1 ? st[1] : 0, sz = dim > 2 ? st[2] : 0;
+    const int            ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
+    const int            j0 = dim > 1 ? 1 : 0, k0 = dim > 2 ? 1 : 0;
+    flagged_rows.clear();
+    const bool has_latent = rhoL > 0;
+    double     box_max = -std::numeric_limits<double>::max(), box_bad = 0;
+    for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
+      for (int jj = j0; jj < ny - 1; ++jj)
+        {
+          const std::size_t row = jj * sy + kk * sz;
+          double row_rate = 0, row_max = 0, row_bad = 0, row_flags = 0;
+#pragma omp simd reduction(max : row_rate, row_max) reduction(+ : row_bad, row_flags)
+          for (int ii = 1; ii < size[0] - 1; ++ii)
+            {
+              const std::size_t i  = row + ii;
+              const double      Tc = Tp[i], kc = kp[i];
+              // harmonic mean 2 k_c k_n / (k_c + k_n), zero if either is zero
+              const double kxm = kp[i - 1], kxp = kp[i + 1];
+              const double fxm = 2 * kc * kxm / (kc + kxm + 1e-300);
+              const double fxp = 2 * kc * kxp / (kc + kxp + 1e-300);
+              double flux = fxm * (Tp[i - 1] - Tc) + fxp * (Tp[i + 1] - Tc);
+              double sumk = fxm + fxp;
+              if constexpr (dim > 1)
+                {
+                  const double kym = kp[i - sy], kyp = kp[i + sy];
+                  const double fym = 2 * kc * kym / (kc + kym + 1e-300);
+                  const double fyp = 2 * kc * kyp / (kc + kyp + 1e-300);
+                  flux += fym * (Tp[i - sy] - Tc) + fyp * (Tp[i + sy] - Tc);
+                  sumk += fym + fyp;
+                }
+              if constexpr (dim > 2)
+                {
+                  const double kzm = kp[i - sz], kzp = kp[i + sz];
+                  const double fzm = 2 * kc * kzm / (kc + kzm + 1e-300);
+                  const double fzp = 2 * kc * kzp / (kc + kzp + 1e-300);
+                  flux += fzm * (Tp[i - sz] - Tc) + fzp * (Tp[i + sz] - Tc);
+                  sumk += fzm + fzp;
+                }
+              const double inv_c = 1. / cp[i];
+              const double Tnew  = Tc + dt * ih2 * flux * inv_c;
+              Tn[i]              = Tnew;
+              const double rate  = sumk * ih2 * inv_c;
+              row_rate           = rate > row_rate ? rate : row_rate;
+              row_max            = Tnew > row_max ? Tnew : row_max;
+              row_bad += Tnew - Tnew; // NaN if Tnew is not finite
+              // Flag: a cell may change phase (unless clearly solid or
+              // clearly liquid) or, with c(T) tables, takes a large step.
+              const double g     = gp[i];
+              const bool   solid = (Tnew < Ts) & (g == 0.);
+              const bool   liquid = (Tnew > Tl) & (g == 1.);
+              const bool   phase = has_latent & !(solid | liquid);
+              const bool   large = variable_c & (std::abs(Tnew - Tc) > 1.);
+              row_flags += (phase | large) ? 1. : 0.;
+            }
+          const bool needs_phase = row_flags > 0;
+          box_max = std::max(box_max, row_max);
+          box_bad += row_bad;
+          rate_max = std::max(rate_max, row_rate);
+          if (needs_phase)
+            flagged_rows.push_back(row);
+        }
+
+    // Convection (only when a velocity field is present): first-order
+    // upwind, no advective flux from gas or from outside the domain.
+    if (velocity)
+      for (const auto idx : grid.owned_cells())
+        {
+          if (alpha[idx] <= 0)
+            continue;
+          double conv = 0, rate = 0;
           for (int d = 0; d < dim; ++d)
             {
-              const double u = (*velocity)[d][idx];
-              // Upwind difference; no advective flux from gas or the outside.
-              const std::ptrdiff_t s = u > 0 ? -st[d] : st[d];
-              const double dT = conductance[idx + s] > 0 ? Tc - T[idx + s] : 0.;
+              const double         u  = (*velocity)[d][idx];
+              const std::ptrdiff_t s  = u > 0 ? -st[d] : st[d];
+              const double         dT = conductance[idx + s] > 0 ? T[idx] - T[idx + s] : 0.;
               conv -= std::abs(u) * dT * ih;
               rate += std::abs(u) * ih;
             }
-        rate_max = std::max(rate_max, rate);
+          T_new[idx] += dt * conv;
+          // Convection and diffusion rates add up in this cell.
+          double sumk = 0;
+          for (int d = 0; d < dim; ++d)
+            for (const std::ptrdiff_t s : {-st[d], st[d]})
+              {
+                const double kn = conductance[idx + s], kc = conductance[idx];
+                sumk += kn > 0 ? 2 * kc * kn / (kc + kn) : 0.;
+              }
+          rate_max = std::max(rate_max, rate + sumk * ih2 / capacity[idx]);
+        }
 
-        // Enthalpy change of this step (J/m^3). Surface losses are
-        // linearized about T^n and taken implicitly: q(T) ~ q + q' (T - T^n),
-        // which adds dt q' to the heat capacity of this step.
-        const double dH = dt * (flux * ih2 + source[idx] + rc * conv);
+    // Pass C: cells with sparse sources (laser, surface losses, fixed
+    // faces). Surface losses are linearized about T^n and taken implicitly,
+    // q(T) ~ q + q' (T - T^n), which adds dt q' to the heat capacity.
+    std::size_t nphase = 0;
+    for (const auto idx : source_cells)
+      {
+        const double Tc = T[idx];
+        const double rc = capacity[idx];
+        const double dH = (T_new[idx] - Tc) * rc + dt * source[idx];
         const double rc_eff = rc + dt * loss_coefficient[idx];
-        double       Tn = Tc + dH / rc_eff;
-        const double gn = gamma[idx];
-        const bool   phase =
-          rhoL > 0 && !((Tn < Ts && gn == 0.) || (Tn > Tl && gn == 1.));
-        if (phase || (variable_c && std::abs(Tn - Tc) > 1.))
+        double       Tnew   = Tc + dH / rc_eff;
+        if (needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
           {
-            // Local semi-implicit iteration: find T with
-            //   H(T) + dt q' (T - Tc) = H(Tc) + dH,
-            // H(T) = a rho_m (C(T) + L gamma(T)) + (1 - a) rho_g c_g T,
-            // C the antiderivative of c_m. Safeguarded Newton on the
-            // monotone H; exact energy bookkeeping with c_m(T) and latent heat.
             ++nphase;
-            Tn = solve_enthalpy(a, Tc, gn, dH, dt * loss_coefficient[idx], Tn);
+            Tnew = solve_enthalpy(alpha[idx], Tc, gamma[idx], dH,
+                                  dt * loss_coefficient[idx], Tnew);
           }
-        gamma[idx] = mat.liquid_fraction(Tn);
-        T_new[idx] = Tn;
-        Tmax       = std::isfinite(Tn) ? std::max(Tmax, Tn) :
-                                         std::numeric_limits<double>::infinity();
+        T_new[idx]   = Tnew;
+        gamma[idx]   = mat.liquid_fraction(Tnew);
+        is_source[idx] = 1;
       }
+
+    // Pass D: the local enthalpy iteration in flagged rows (not for source
+    // cells, done above): find T with
+    //   H(T) = H(T^n) + dH,  H = a rho_m (C(T) + L gamma(T)) + (1-a) rho_g c_g T,
+    // C the antiderivative of c_m; exact bookkeeping of c(T) and latent heat.
+    const auto &status = grid.cell_status();
+    for (const std::size_t row : flagged_rows)
+      for (int ii = 1; ii < size[0] - 1; ++ii)
+        {
+          const std::size_t idx = row + ii;
+          if (is_source[idx] || alpha[idx] <= 0 ||
+              status[idx] != BackgroundGrid<dim>::owned)
+            continue;
+          const double Tc = T[idx];
+          double       Tnew = T_new[idx];
+          if (!needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
+            continue;
+          ++nphase;
+          const double dH = (Tnew - Tc) * capacity[idx];
+          Tnew       = solve_enthalpy(alpha[idx], Tc, gamma[idx], dH, 0., Tnew);
+          T_new[idx] = Tnew;
+          gamma[idx] = mat.liquid_fraction(Tnew);
+        }
+
     // Energy of the implicit part of the losses; reset the sparse sources.
     double e_implicit = 0;
-    for (const auto &s : surface)
+    for (const auto &sc : surface)
+      e_implicit += loss_coefficient[sc.index] * (T_new[sc.index] - T[sc.index]);
+    for (const auto idx : source_cells)
       {
-        e_implicit += loss_coefficient[s.index] * (T_new[s.index] - T[s.index]);
-        source[s.index] = 0;
+        source[idx]    = 0;
+        is_source[idx] = 0;
       }
     budget.implicit_losses += e_implicit * V * dt;
-    for (const auto &f : fixed_faces)
-      source[f.index] = 0;
-    for (const auto idx : first_surface)
-      source[idx] = 0;
-    for (const auto idx : grid.owned_cells())
-      if (alpha[idx] <= 0)
-        T_new[idx] = T[idx];
+    budget.boundary += e_boundary;
+
+    // Peak temperature and finiteness: the box interior holds owned cells,
+    // true ghost values and untouched gas, so its maximum is the global one.
+    // Cells changed after pass B (sources, phase change) are added here.
+    double Tmax = box_max;
+    for (const auto idx : source_cells)
+      Tmax = std::max(Tmax, T_new[idx]);
+    for (const std::size_t row : flagged_rows)
+      for (int ii = 1; ii < size[0] - 1; ++ii)
+        Tmax = std::max(Tmax, T_new[row + ii]);
+    bool finite = std::isfinite(box_bad) && std::isfinite(Tmax);
+    for (const auto idx : source_cells)
+      finite = finite && std::isfinite(T_new[idx]);
+    if (!finite)
+      Tmax = std::numeric_limits<double>::infinity();
+
     std::swap(T, T_new);
     grid.update_ghosts(T);
     grid.update_ghosts(gamma);
     n_phase_cells = nphase;
 
-    budget.boundary += e_boundary;
     const double local[2] = {Tmax, rate_max};
     double       global[2];
     Utilities::MPI::max(ArrayView<const double>(local, 2),

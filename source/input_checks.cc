@@ -20,7 +20,9 @@ namespace femp
   PiecewiseLinear::PiecewiseLinear(const double constant)
     : T_{0.}
     , v_{constant}
-  {}
+  {
+    seg.v0 = constant;
+  }
 
 
   PiecewiseLinear
@@ -68,8 +70,18 @@ namespace femp
         if (!std::isfinite(table.v_.back()) || !std::isfinite(table.T_.back()))
           throw InputError(parameter, text, allowed);
       }
+    table.seg.v0 = table.v_.front();
     for (std::size_t i = 1; i < table.T_.size(); ++i)
-      table.inv_dT_.push_back(1. / (table.T_[i] - table.T_[i - 1]));
+      {
+        table.inv_dT_.push_back(1. / (table.T_[i] - table.T_[i - 1]));
+        if (i - 1 < max_segments)
+          {
+            table.seg.T[i - 1] = table.T_[i - 1];
+            table.seg.w[i - 1] = table.T_[i] - table.T_[i - 1];
+            table.seg.slope[i - 1] =
+              (table.v_[i] - table.v_[i - 1]) * table.inv_dT_.back();
+          }
+      }
     return table;
   }
 

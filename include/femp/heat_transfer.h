@@ -166,7 +166,10 @@ namespace femp
     const Laser<dim> &         laser;
     const BackgroundGrid<dim> &grid;
 
-    std::vector<double> T, T_new, gamma, alpha, conductance, source;
+    std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
+    std::vector<std::uint8_t>  is_source;
+    std::vector<std::uint32_t> source_cells;
+    std::vector<std::size_t>   flagged_rows;
     std::vector<double> laser_density, loss_coefficient;
     const std::array<std::vector<double>, dim> *velocity = nullptr;
     std::array<std::vector<double>, dim>        prescribed;
@@ -193,7 +196,20 @@ namespace femp
     std::size_t  n_phase_cells  = 0;
 
     void
-    compute_conductance();
+    compute_properties();
+    /// True if a cell going from @p Tc to @p Tn needs the local enthalpy
+    /// iteration: it may change phase, or c(T) varies over a large step.
+    bool
+    needs_local_solve(const double Tc,
+                      const double Tn,
+                      const double g,
+                      const double rhoL,
+                      const bool   variable_c) const
+    {
+      const bool phase = rhoL > 0 && !((Tn < mat.solidus && g == 0.) ||
+                                       (Tn > mat.liquidus && g == 1.));
+      return phase || (variable_c && std::abs(Tn - Tc) > 1.);
+    }
     void
     compute_surface_sources(const double dt, const double time);
     /// Enthalpy per volume of a cell with metal fraction @p a at @p T.

@@ -10,6 +10,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <array>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -77,6 +78,43 @@ namespace femp
     double
     integral(const double T0, const double T1) const;
 
+    /// Same as value(), without branches: v_0 + sum_i s_i clamp(T - T_i, 0,
+    /// T_{i+1} - T_i), so that loops over cells vectorize.
+    /// Tables of up to max_segments segments can be evaluated without
+    /// branches, v_0 + sum_i s_i clamp(T - T_i, 0, w_i), so that loops over
+    /// cells vectorize; a local copy of Segments avoids aliasing with the
+    /// arrays the loop writes.
+    static constexpr unsigned int max_segments = 8;
+    struct Segments
+    {
+      double                           v0 = 0;
+      std::array<double, max_segments> T{}, w{}, slope{}; // padded: slope 0
+      double
+      operator()(const double x) const
+      {
+        double v = v0;
+#pragma GCC unroll 8
+        for (unsigned int i = 0; i < max_segments; ++i)
+          {
+            const double d = x - T[i];
+            v += slope[i] * (d < 0 ? 0. : (d > w[i] ? w[i] : d));
+          }
+        return v;
+      }
+    };
+    /// True if segments() may be used (at most max_segments).
+    bool
+    has_padded_segments() const
+    {
+      return T_.size() <= max_segments + 1;
+    }
+    /// Requires has_padded_segments().
+    Segments
+    segments() const
+    {
+      return seg;
+    }
+
     /// Integral of the property from the first breakpoint to @p T.
     double
     antiderivative(const double T) const;
@@ -95,6 +133,7 @@ namespace femp
 
   private:
     std::vector<double> T_, v_, inv_dT_;
+    Segments seg;
   };
 
   /// Parse a comma-separated list of dim numbers into a point.
