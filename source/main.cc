@@ -57,7 +57,7 @@ main(int argc, char *argv[])
       if (arg == "--print-parameters")
         {
           if (root)
-            prm.print_parameters(std::cout, ParameterHandler::PRM);
+            prm.print_parameters(std::cout, ParameterHandler::OutputStyle(ParameterHandler::PRM | ParameterHandler::KeepDeclarationOrder));
           return 0;
         }
       {

@@ -12,6 +12,8 @@
 
 #include "test_tools.h"
 
+#include <fstream>
+
 using namespace femp_test;
 
 const double kappa = 1, v = 4, sigma = 0.1, Q = 30, T0 = 1, Tm = 4;
@@ -138,6 +140,57 @@ main(int argc, char **argv)
   double t = 0;
   for (unsigned int i = 0; i < n; ++i, t += t_end / n)
     heat.advance(t_end / n, t);
+
+  // Slices for the plot in doc/ (contrib/plot_verification.py): the
+  // surface layer (z = -h/2) and the symmetry layer (y = h/2), simulated
+  // and closed form, in the frame of the beam.
+  {
+    Point<dim> beam;
+    double     power;
+    laser.position(t_end - 1e-12, beam, power);
+    const auto &n = grid.n_cells();
+    std::vector<double> surf(n[0] * n[1], 0.), side(n[0] * n[2], 0.);
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto ijk = grid.global_index(idx);
+        if (ijk[2] == int(n[2]) - 1)
+          surf[ijk[0] + n[0] * ijk[1]] = heat.temperature()[idx];
+        if (ijk[1] == 0)
+          side[ijk[0] + n[0] * ijk[2]] = heat.temperature()[idx];
+      }
+    std::vector<double> surf_sum(surf.size()), side_sum(side.size());
+    Utilities::MPI::sum(ArrayView<const double>(surf), comm, ArrayView<double>(surf_sum));
+    Utilities::MPI::sum(ArrayView<const double>(side), comm, ArrayView<double>(side_sum));
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        std::ofstream out("rosenthal_slices.csv");
+        out << "plane,xi,y_or_z,T_sim,T_exact\n";
+        for (unsigned int i = 0; i < n[0]; ++i)
+          {
+            const double xi = (i + 0.5) * h - beam[0];
+            if (xi < -3 || xi > 1)
+              continue;
+            for (unsigned int j = 0; j < n[1]; ++j)
+              {
+                const double y = (j + 0.5) * h;
+                if (y > 1)
+                  continue;
+                out << "surface," << xi << ',' << y << ','
+                    << surf_sum[i + n[0] * j] << ','
+                    << eagar_tsai(xi, y, 0.5 * h) << '\n';
+              }
+            for (unsigned int k = 0; k < n[2]; ++k)
+              {
+                const double z = -2 + (k + 0.5) * h;
+                if (z < -1)
+                  continue;
+                out << "side," << xi << ',' << z << ','
+                    << side_sum[i + n[0] * k] << ','
+                    << eagar_tsai(xi, 0.5 * h, z) << '\n';
+              }
+          }
+      }
+  }
 
   const auto pool = measure_melt_pool(grid, heat.temperature(),
                                       heat.metal_fraction(), Tm, 0.);

@@ -8,6 +8,8 @@
 // energy balance: stored enthalpy = heat that entered through the faces.
 #include "test_tools.h"
 
+#include <fstream>
+
 using namespace femp_test;
 
 int
@@ -36,25 +38,67 @@ main(int argc, char **argv)
 
   const double dt = 0.4 * heat.stable_time_step();
   double       t  = 0;
+  // Front history and the final profile for the plot in doc/
+  // (contrib/plot_verification.py).
+  std::ofstream history;
+  if (Utilities::MPI::this_mpi_process(comm) == 0)
+    {
+      history.open("stefan_front.csv");
+      history << "t,s_sim,s_exact\n";
+    }
+  auto front = [&]() {
+    double liquid = 0;
+    for (const auto idx : grid.owned_cells())
+      liquid += heat.liquid_fraction()[idx] * h * h;
+    return Utilities::MPI::sum(liquid, comm) / (2 * h);
+  };
+  unsigned int step = 0;
   for (const double t_check : {0.25, 0.5, 1.0})
     {
       while (t < t_check - 1e-12)
         {
-          const double step = std::min(dt, t_check - t);
-          heat.advance(step, t);
-          t += step;
+          const double size = std::min(dt, t_check - t);
+          heat.advance(size, t);
+          t += size;
+          if (++step % 50 == 0)
+            {
+              const double s_sim = front();
+              if (history.is_open())
+                history << t << ',' << s_sim << ',' << 2 * lambda * std::sqrt(t) << '\n';
+            }
         }
       // Front: liquid length along the strip (per row).
-      double liquid = 0;
-      for (const auto idx : grid.owned_cells())
-        liquid += heat.liquid_fraction()[idx] * h * h;
-      const double s     = Utilities::MPI::sum(liquid, comm) / (2 * h);
+      const double s     = front();
       const double exact = 2 * lambda * std::sqrt(t);
       std::ostringstream what;
       what << "front t=" << t_check << " (" << std::setprecision(3)
            << exact / h << " cells): relative error";
       checks.at_most(what.str(), std::abs(s - exact) / exact, 0.02);
     }
+  // Final profile against the Neumann solution (liquid and solid parts).
+  {
+    const double nu = 1; // sqrt(alpha_l / alpha_s), all properties 1
+    std::vector<double> T_row(grid.n_cells()[0], 0.), T_sum(T_row.size());
+    for (const auto idx : grid.owned_cells())
+      if (grid.global_index(idx)[1] == 0)
+        T_row[grid.global_index(idx)[0]] = heat.temperature()[idx];
+    Utilities::MPI::sum(ArrayView<const double>(T_row), comm, ArrayView<double>(T_sum));
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        std::ofstream out("stefan_profile.csv");
+        out << "x,T_sim,T_exact\n";
+        const double s = 2 * lambda * std::sqrt(t);
+        for (unsigned int i = 0; i < T_sum.size(); ++i)
+          {
+            const double x = (i + 0.5) * h;
+            const double eta = x / (2 * std::sqrt(t));
+            const double T_exact =
+              x < s ? (Tm + 1) - std::erf(eta) / std::erf(lambda) :
+                      (Tm - 1) + std::erfc(nu * eta) / std::erfc(nu * lambda);
+            out << x << ',' << T_sum[i] << ',' << T_exact << '\n';
+          }
+      }
+  }
   const double stored  = heat.stored_enthalpy() - H0;
   const double entered = heat.energy_budget().boundary;
   checks.print("stored enthalpy (J/m)", stored, 5);

@@ -135,6 +135,13 @@ namespace femp
     std::vector<std::pair<std::uint32_t,
                           typename Triangulation<dim>::active_cell_iterator>>
                  occupied;
+    // Property arrays of the points in the pool, grouped by occupied cell:
+    // points of occupied[c] are point_properties[cell_begin[c] ..
+    // cell_begin[c+1]).
+    std::vector<double *>      point_properties;
+    std::vector<std::uint32_t> cell_begin;
+    void
+    cache_point_handles();
     unsigned int n_grains = 0;
     double       packing  = 0;
   };
