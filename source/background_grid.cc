@@ -67,10 +67,10 @@ namespace femp
                   std::round(n) >= 1,
                 "Background grid/Cell size",
                 cell_size,
-                "it must divide the domain extent " + std::to_string(extent) +
+                "it must divide the domain extent " + num(extent) +
                   " m in direction " + std::to_string(d) +
                   " into a whole number of cells (extent / h = " +
-                  std::to_string(n) + ")");
+                  num(n) + ")");
       }
   }
 

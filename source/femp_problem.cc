@@ -172,7 +172,7 @@ namespace femp
         std::ostringstream s;
         s << "it exceeds the stable limit " << stable << " s of the explicit "
           << "temperature step" << (step > 0 ? " reached at step " + std::to_string(step) +
-                                                 ", time " + std::to_string(time) + " s" :
+                                                 ", time " + num(time) + " s" :
                                                std::string())
           << "; use 0 (automatic) or a step <= " << stable << " s";
         throw InputError("Time stepping/Time step",

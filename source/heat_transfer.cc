@@ -649,8 +649,8 @@ namespace femp
             }
         AssertThrow(false,
                     ExcMessage("The temperature became non-finite at time " +
-                               std::to_string(time + dt) + " s (step size " +
-                               std::to_string(dt) + " s)." + where.str() +
+                               num(time + dt) + " s (step size " + num(dt) +
+                               " s)." + where.str() +
                                " The step may exceed the stable limit, or a "
                                "surface loss (evaporation) may be too stiff."));
       }

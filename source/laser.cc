@@ -131,8 +131,8 @@ namespace femp
                     v.str(),
                     "the scan path must stay inside the horizontal extent of "
                     "the domain (coordinate " + std::to_string(d) + " in [" +
-                      std::to_string(lower[d]) + ", " +
-                      std::to_string(upper[d]) + "] m)");
+                      num(lower[d]) + ", " +
+                      num(upper[d]) + "] m)");
           }
   }
 

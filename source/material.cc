@@ -67,7 +67,7 @@ namespace femp
     require(solidus > 0, "Material/Solidus temperature", solidus,
             "it must be positive (K)");
     require(liquidus > solidus, "Material/Liquidus temperature", liquidus,
-            "it must exceed the solidus temperature " + std::to_string(solidus) + " K");
+            "it must exceed the solidus temperature " + num(solidus) + " K");
     require(latent_heat_fusion >= 0, "Material/Latent heat of fusion",
             latent_heat_fusion, "it must be non-negative (J/kg)");
     require(gas_density >= 0, "Material/Gas density", gas_density, "it must be non-negative");

@@ -86,17 +86,17 @@ namespace femp
     require(point_spacing <= g.cell_size / subcells * (1 + 1e-9),
             "Material points/Point spacing", point_spacing,
             "it must not exceed cell size / sub-cell divisions = " +
-              std::to_string(g.cell_size / subcells) +
+              num(g.cell_size / subcells) +
               " m, so that every sub-cell of a full cell holds a point");
     const double lo = g.lower_corner[dim - 1], hi = g.upper_corner[dim - 1];
     require(substrate_top >= lo && substrate_top <= hi,
             "Material points/Substrate top", substrate_top,
             "it must lie in the vertical extent of the domain [" +
-              std::to_string(lo) + ", " + std::to_string(hi) + "] m");
+              num(lo) + ", " + num(hi) + "] m");
     require(substrate_top + layer_thickness <= hi * (1 + 1e-12),
             "Material points/Powder layer/Layer thickness", layer_thickness,
             "the powder layer must fit below the top of the domain (at most " +
-              std::to_string(hi - substrate_top) + " m)");
+              num(hi - substrate_top) + " m)");
   }
 
 

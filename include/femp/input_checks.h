@@ -27,6 +27,15 @@ namespace femp
                const std::string &allowed);
   };
 
+  /// A number for a message, with 6 significant digits (like %g).
+  inline std::string
+  num(const double x)
+  {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+  }
+
   /// Throw InputError unless @p condition holds.
   template <typename T>
   void
