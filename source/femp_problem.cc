@@ -274,6 +274,7 @@ namespace femp
           }
         if ((output_prm.output_interval > 0 &&
              time >= next_output * (1 - 1e-9)) ||
+            (output_prm.output_steps > 0 && step % output_prm.output_steps == 0) ||
             last)
           {
             write_output(n_output++, time, last);

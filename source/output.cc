@@ -25,6 +25,9 @@ namespace femp
     prm.declare_entry("Output interval", "1e-4", Patterns::Double(0.),
                       "Simulated time between VTU/PVTU outputs of the fields, "
                       "s; 0 writes only the first and last state. Range [0, inf).");
+    prm.declare_entry("Steps between outputs", "0", Patterns::Integer(0),
+                      "Also write the fields every this many steps; 0: only "
+                      "by 'Output interval'. Range [0, inf).");
     prm.declare_entry("Write material points", "last",
                       Patterns::Selection("always|last|never"),
                       "Write the material points and their properties at every "
@@ -57,6 +60,7 @@ namespace femp
     directory         = prm.get("Directory");
     output_interval   = prm.get_double("Output interval");
     write_points      = prm.get("Write material points");
+    output_steps      = prm.get_integer("Steps between outputs");
     series_interval   = prm.get_double("Time series interval");
     progress_interval = prm.get_integer("Progress interval");
     probe_points.clear();

@@ -3,8 +3,9 @@
 file(REMOVE_RECURSE ${WORKDIR})
 file(MAKE_DIRECTORY ${WORKDIR})
 separate_arguments(flags UNIX_COMMAND "${MPIFLAGS}")
+string(REPLACE "|" ";" args "${ARGS}")
 execute_process(
-  COMMAND ${MPIEXEC} ${flags} -np ${NPROC} ${EXE} ${ARGS}
+  COMMAND ${MPIEXEC} ${flags} -np ${NPROC} ${EXE} ${args}
   WORKING_DIRECTORY ${WORKDIR}
   OUTPUT_FILE ${WORKDIR}/test_stdout
   ERROR_FILE ${WORKDIR}/test_stderr

@@ -4,20 +4,29 @@
 
 #include <femp/femp_problem.h>
 
+#include <array>
 #include <fstream>
 #include <iostream>
 
 namespace femp_test
 {
-  /// Parse @p file and run the scene with std::cout silenced; returns the
-  /// summary.
+  /// Parse @p file, apply @p overrides ({subsection, entry, value}), and run
+  /// the scene with std::cout silenced; returns the summary.
   template <int dim>
   typename femp::FempProblem<dim>::Summary
-  run_scene(const std::string &file, MPI_Comm comm)
+  run_scene(const std::string &file,
+            MPI_Comm           comm,
+            const std::vector<std::array<std::string, 3>> &overrides = {})
   {
     dealii::ParameterHandler prm;
     femp::declare_all_parameters(prm);
     prm.parse_input(file);
+    for (const auto &[section, entry, value] : overrides)
+      {
+        prm.enter_subsection(section);
+        prm.set(entry, value);
+        prm.leave_subsection();
+      }
     std::streambuf *old = std::cout.rdbuf();
     std::ofstream   log("scene.log");
     std::cout.rdbuf(log.rdbuf());

@@ -36,6 +36,7 @@ namespace femp
       double                 output_interval = 1e-4;
       std::string            write_points    = "last"; ///< always|last|never
       double                 series_interval = 0;
+      unsigned int           output_steps    = 0;
       unsigned int           progress_interval = 100;
       std::vector<Point<dim>> probe_points;
       std::vector<ProbeLine>  probe_lines;
