@@ -8,6 +8,7 @@
 #include <femp/input_checks.h>
 
 #include <cmath>
+#include <type_traits>
 #include <limits>
 #include <sstream>
 
@@ -382,6 +383,15 @@ namespace femp
   void
   HeatTransfer<dim>::compute_properties()
   {
+    compute_properties(0, T.size());
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::compute_properties(const std::size_t begin,
+                                        const std::size_t end)
+  {
     // Pass A: conductivity (zero in gas cells and in the padding, which
     // blocks their faces) and heat capacity of every cell of the box.
     const std::uint8_t *status   = grid.cell_status().data();
@@ -390,12 +400,11 @@ namespace femp
     const double        rho_m    = mat.density;
     const double *      Tp = T.data(), *ap = alpha.data();
     double *            kp = conductance.data(), *cp = capacity.data();
-    const std::size_t   n = T.size();
     if (!mat.conductivity.has_padded_segments() ||
         !mat.specific_heat.has_padded_segments())
       {
         // Long tables: scalar lookups.
-        for (std::size_t idx = 0; idx < n; ++idx)
+        for (std::size_t idx = begin; idx < end; ++idx)
           {
             const double a     = ap[idx];
             const double metal = (a > 0 && status[idx] != 0) ? 1. : 0.;
@@ -408,16 +417,31 @@ namespace femp
       }
     const auto k_m = mat.conductivity.segments();
     const auto c_m = mat.specific_heat.segments();
+    // Short tables (the usual case) unroll to 4 segments, others to 8.
+    auto sweep = [&](auto nk, auto nc) {
+      constexpr unsigned int NK = decltype(nk)::value, NC = decltype(nc)::value;
 #pragma omp simd
-    for (std::size_t idx = 0; idx < n; ++idx)
-      {
-        const double a     = ap[idx];
-        const double metal = (a > 0) & (status[idx] != 0) ? 1. : 0.;
-        const double Tc    = Tp[idx];
-        kp[idx] = metal * (a * k_m(Tc) + (1 - a) * k_g);
-        cp[idx] = metal * (a * rho_m * c_m(Tc) + (1 - a) * rho_g_cg) +
-                  (1 - metal); // 1 in gas and padding: never used for heat
-      }
+      for (std::size_t idx = begin; idx < end; ++idx)
+        {
+          const double a     = ap[idx];
+          const double metal = (a > 0) & (status[idx] != 0) ? 1. : 0.;
+          const double Tc    = Tp[idx];
+          kp[idx] = metal * (a * k_m.template eval<NK>(Tc) + (1 - a) * k_g);
+          cp[idx] = metal * (a * rho_m * c_m.template eval<NC>(Tc) +
+                             (1 - a) * rho_g_cg) +
+                    (1 - metal); // 1 in gas and padding: never used for heat
+        }
+    };
+    using four  = std::integral_constant<unsigned int, 4>;
+    using eight = std::integral_constant<unsigned int, PiecewiseLinear::max_segments>;
+    if (k_m.n <= 4 && c_m.n <= 4)
+      sweep(four(), four());
+    else if (k_m.n <= 4)
+      sweep(four(), eight());
+    else if (c_m.n <= 4)
+      sweep(eight(), four());
+    else
+      sweep(eight(), eight());
   }
 
 
@@ -425,7 +449,13 @@ namespace femp
   void
   HeatTransfer<dim>::advance(const double dt, const double time)
   {
-    compute_properties();
+    // Properties: in 3D plane by plane just ahead of the sweep (pass B), so
+    // that they are still in cache when the stencil reads them.
+    const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();
+    if (dim == 3)
+      compute_properties(0, 2 * plane);
+    else
+      compute_properties();
     compute_surface_sources(dt, time);
 
     const auto & st   = grid.strides();
@@ -439,18 +469,7 @@ namespace femp
     const double rhoL = mat.density * mat.latent_heat_fusion;
     const bool   variable_c = !mat.specific_heat.is_constant();
 
-    // Fixed-temperature faces: the face value sits h/2 from the cell centre.
-    double e_boundary = 0;
-    double rate_max   = 0;
-    for (const auto &f : fixed_faces)
-      if (alpha[f.index] > 0)
-        {
-          const double k = conductance[f.index];
-          const double q = 2 * k * (f.value - T[f.index]) * ih2;
-          source[f.index] += q;
-          e_boundary += q * V * dt;
-          rate_max = std::max(rate_max, 4 * k * ih2 / capacity[f.index]);
-        }
+    double rate_max = 0;
 
     // Pass B: conduction on whole x-rows of the box interior, branch-free
     // so that it vectorizes; gas and padding cells have zero conductance and
@@ -466,6 +485,9 @@ namespace femp
     const bool has_latent = rhoL > 0;
     double     box_max = -std::numeric_limits<double>::max(), box_bad = 0;
     for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
+      {
+      if (dim == 3)
+        compute_properties((kk + 1) * plane, (kk + 2) * plane);
       for (int jj = j0; jj < ny - 1; ++jj)
         {
           const std::size_t row = jj * sy + kk * sz;
@@ -520,6 +542,20 @@ namespace femp
           if (needs_phase)
             flagged_rows.push_back(row);
         }
+      }
+
+    // Fixed-temperature faces: the face value sits h/2 from the cell centre.
+    double e_boundary = 0;
+    for (const auto &f : fixed_faces)
+      if (alpha[f.index] > 0)
+        {
+          const double k = conductance[f.index];
+          const double q = 2 * k * (f.value - T[f.index]) * ih2;
+          source[f.index] += q;
+          e_boundary += q * V * dt;
+          rate_max = std::max(rate_max, 4 * k * ih2 / capacity[f.index]);
+        }
+
 
     // Convection (only when a velocity field is present): first-order
     // upwind, no advective flux from gas or from outside the domain.

@@ -71,6 +71,7 @@ namespace femp
           throw InputError(parameter, text, allowed);
       }
     table.seg.v0 = table.v_.front();
+    table.seg.n  = table.T_.size() - 1;
     for (std::size_t i = 1; i < table.T_.size(); ++i)
       {
         table.inv_dT_.push_back(1. / (table.T_[i] - table.T_[i - 1]));

@@ -197,6 +197,9 @@ namespace femp
 
     void
     compute_properties();
+    /// Properties of the flat index range [begin, end) of the box.
+    void
+    compute_properties(const std::size_t begin, const std::size_t end);
     /// True if a cell going from @p Tc to @p Tn needs the local enthalpy
     /// iteration: it may change phase, or c(T) varies over a large step.
     bool

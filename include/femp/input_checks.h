@@ -98,17 +98,25 @@ namespace femp
     {
       double                           v0 = 0;
       std::array<double, max_segments> T{}, w{}, slope{}; // padded: slope 0
+      unsigned int                     n = 0; ///< segments in use
+      /// Evaluate with the first N segments (N >= n).
+      template <unsigned int N = max_segments>
       double
-      operator()(const double x) const
+      eval(const double x) const
       {
         double v = v0;
 #pragma GCC unroll 8
-        for (unsigned int i = 0; i < max_segments; ++i)
+        for (unsigned int i = 0; i < N; ++i)
           {
             const double d = x - T[i];
             v += slope[i] * (d < 0 ? 0. : (d > w[i] ? w[i] : d));
           }
         return v;
+      }
+      double
+      operator()(const double x) const
+      {
+        return eval<max_segments>(x);
       }
     };
     /// True if segments() may be used (at most max_segments).
