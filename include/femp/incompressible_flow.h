@@ -1,0 +1,192 @@
+// femp: melt-pool flow by the improved incompressible material point method
+// (paper sec. 2.3, eqs. 3-4; METHOD sec. 3; ref. [11]).
+//
+// Fluid material points carry mass and velocity; each fluid step maps them
+// to the nodes of the background grid (P2G, bilinear/trilinear tent
+// weights), predicts the nodal velocity with gravity, viscosity (explicit)
+// and the Darcy damping of the mushy zone (implicit),
+//   u* = (u + dt f/rho) / (1 + dt K_c (1-gamma)^2 / ((gamma^3 + eps0) rho)),
+// solves the pressure Poisson equation div(dt/rho grad p) = div u* on the
+// centres of the fluid cells (5-point/7-point stencil, CG + Trilinos ML
+// AMG whose hierarchy is reused while the set of fluid cells does not
+// change), corrects the nodal velocity u = u* - dt/rho grad p, and updates
+// the points with a FLIP/PIC blend before moving them with the nodal
+// velocity (explicit advection).
+//
+// Not implemented here (yet): surface tension, Marangoni stress and recoil
+// pressure of eq. (3); the free surface takes p = 0.
+#ifndef femp_incompressible_flow_h
+#define femp_incompressible_flow_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/tensor.h>
+#include <deal.II/base/timer.h>
+#include <deal.II/lac/trilinos_precondition.h>
+#include <deal.II/lac/trilinos_sparse_matrix.h>
+#include <deal.II/lac/trilinos_vector.h>
+
+#include <femp/background_grid.h>
+#include <femp/material.h>
+#include <femp/material_points.h>
+
+#include <array>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class IncompressibleFlow
+  {
+  public:
+    struct Parameters
+    {
+      double         viscosity = 6e-3; ///< mu, Pa s
+      Tensor<1, dim> gravity;          ///< g, m/s^2 (default: -9.81 vertical)
+      double         darcy_constant = 1e8;  ///< K_c, kg/(m^3 s)
+      double         darcy_epsilon  = 1e-3; ///< eps0, -
+      double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
+      double         cfl            = 0.25; ///< convective Courant number
+      double         solver_tolerance = 1e-10; ///< relative CG residual
+      unsigned int   max_iterations   = 1000;
+
+      Parameters();
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+    };
+
+    /// Cell classes used by the flow (cell_type()).
+    enum CellType : int
+    {
+      gas     = 0, ///< no metal point: free surface beyond, p = 0
+      solid   = 1, ///< metal points but none fluid: rigid, no-slip
+      fluid   = 2, ///< at least one fluid point: pressure unknown
+      outside = 3  ///< beyond the domain: free-slip wall
+    };
+
+    /// Stable step limits, s (each is reported by the caller).
+    struct StepLimits
+    {
+      double convective; ///< cfl h / max(u_max, sqrt(|g| h))
+      double viscous;    ///< h^2 rho / (2 dim mu)
+      double
+      min() const
+      {
+        return std::min(convective, viscous);
+      }
+    };
+
+    struct Statistics
+    {
+      unsigned int  steps            = 0;
+      unsigned int  matrix_rebuilds  = 0; ///< matrix + AMG hierarchy builds
+      unsigned long cg_iterations    = 0; ///< total over all steps
+      unsigned int  last_iterations  = 0;
+      unsigned int  max_iterations   = 0;
+      unsigned int  resorts          = 0; ///< steps in which points changed cell
+      double        max_point_speed  = 0; ///< m/s, after the last step
+      unsigned long n_fluid_cells    = 0; ///< global, last step
+    };
+
+    IncompressibleFlow(const Parameters &         prm,
+                       const Material &           material,
+                       const BackgroundGrid<dim> &grid,
+                       MaterialPoints<dim> &      points,
+                       TimerOutput *              timer = nullptr);
+
+    /// Liquid fraction gamma per cell of the local box (ghost values
+    /// needed) for the Darcy term; nullptr (default): gamma = 1 everywhere.
+    void
+    set_liquid_fraction(const std::vector<double> *gamma);
+
+    /// Limits from the current point velocities (collective).
+    StepLimits
+    stable_time_step() const;
+
+    /// One fluid step of length @p dt. Refuses a step above the viscous
+    /// limit or with cfl above 1; stops with a diagnostic when the solution
+    /// becomes non-finite or a point would cross more than one cell.
+    void
+    step(const double dt);
+
+    /// Pressure per cell of the local box (ghosts exchanged), Pa; zero
+    /// outside fluid cells.
+    const std::vector<double> &
+    pressure() const
+    {
+      return p_cell;
+    }
+    /// Cell type per cell of the local box (as double, ghosts exchanged).
+    const std::vector<double> &
+    cell_type() const
+    {
+      return type;
+    }
+    /// Cell-centred fluid velocity (mean of the nodes of fluid cells, zero
+    /// elsewhere, ghosts exchanged), for HeatTransfer::set_velocity().
+    const std::array<std::vector<double>, dim> &
+    cell_velocity() const
+    {
+      return u_cell;
+    }
+    const Statistics &
+    statistics() const
+    {
+      return stats;
+    }
+
+  private:
+    void
+    classify_cells();
+    void
+    transfer_to_grid();
+    void
+    predictor(const double dt);
+    void
+    pressure_solve(const double dt);
+    void
+    correction(const double dt);
+    void
+    grid_to_points(const double dt);
+
+    /// Wall conditions on the active nodes: no-slip next to solid cells,
+    /// free slip (zero normal component) on the domain boundary.
+    void
+    apply_boundary_conditions(std::array<std::vector<double>, dim> &u) const;
+
+    Parameters                 prm;
+    const double               rho;
+    const BackgroundGrid<dim> &grid;
+    MaterialPoints<dim> &      points;
+    TimerOutput *              timer;
+    const std::vector<double> *gamma = nullptr;
+
+    static constexpr unsigned int n_corners = 1u << dim;
+    std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
+    std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
+    std::array<std::array<double, n_corners>, n_corners> stiffness; // Q1 Laplace
+
+    std::vector<double>                  type, type_old, gid, p_cell;
+    std::vector<double>                  mass, volume;
+    std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
+    std::vector<std::uint32_t>           active;      // nodes of fluid cells
+    std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
+    std::vector<std::uint8_t>            node_mark;   // in active
+    std::vector<std::uint8_t>            node_fix;    // bit d: u_d = 0
+    std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
+    std::vector<double>                  divergence;  // per owned fluid cell
+
+    IndexSet                          owned_rows;
+    TrilinosWrappers::SparseMatrix    matrix;
+    TrilinosWrappers::PreconditionAMG amg;
+    TrilinosWrappers::MPI::Vector     solution, rhs;
+    bool                              have_matrix = false;
+
+    Statistics stats;
+  };
+} // namespace femp
+
+#endif
