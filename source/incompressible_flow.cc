@@ -301,12 +301,12 @@ namespace femp
     const double  ih   = 1. / grid.h();
     const auto &  x0   = grid.origin();
     auto &        handler = points.particle_handler();
-    for (const auto n : active)
-      {
-        mass[n] = 0;
-        for (int d = 0; d < dim; ++d)
-          mom[d][n] = 0;
-      }
+    // Zero the whole node arrays: sum_shared_nodes() writes the partial sums
+    // of neighbour ranks also onto nodes that are not active here, and stale
+    // values there would re-enter the next sum (a memset, ~1 ns per node).
+    std::fill(mass.begin(), mass.end(), 0.);
+    for (int d = 0; d < dim; ++d)
+      std::fill(mom[d].begin(), mom[d].end(), 0.);
     for (const auto &[idx, cell] : points.occupied_cells())
       {
         if (type[idx] != fluid)
@@ -365,9 +365,8 @@ namespace femp
     const bool viscous = prm.viscosity > 0;
     if (viscous)
       {
-        for (const auto n : active)
-          for (int d = 0; d < dim; ++d)
-            force[d][n] = 0;
+        for (int d = 0; d < dim; ++d)
+          std::fill(force[d].begin(), force[d].end(), 0.);
         for (const auto c : fluid_cells)
           {
             const std::size_t n0 = grid.first_node_of_cell(c);
@@ -476,7 +475,10 @@ namespace femp
         owned_rows.add_range(offset, offset + n_local);
         owned_rows.compress();
 
-        TrilinosWrappers::SparsityPattern sp(owned_rows, comm, 2 * dim + 1);
+        // (An empty row range must ask for 0 entries per row: Epetra's
+        // size check uses the min/max row of the range.)
+        TrilinosWrappers::SparsityPattern sp(owned_rows, comm,
+                                             n_local > 0 ? 2 * dim + 1 : 0);
         for (std::size_t i = 0; i < fluid_cells.size(); ++i)
           {
             const std::size_t c   = fluid_cells[i];
