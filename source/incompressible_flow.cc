@@ -12,6 +12,12 @@
 //   the ghost value p_gas = -p_fluid in both the Poisson equation and the
 //   nodal gradient (second order, exact hydrostatics for a pool filling
 //   whole cells);
+// - surface tension: Dirichlet pressure p_s = sigma div(n) on the faces
+//   between fluid and gas (ghost value 2 p_s - p_fluid). alpha is the
+//   point volume mapped to nodes with tent weights divided by h^dim, then
+//   averaged to cell centres (smoothed alpha); n = -grad alpha/|grad alpha|
+//   at the nodes of a surface cell (pair-averaged differences of the cell
+//   values) and div(n) at its centre (edge-averaged differences);
 // - walls: zero normal velocity on the domain boundary (free slip) and zero
 //   velocity on the nodes of solid (non-fluid metal) cells (no slip);
 //   Neumann pressure on both;
@@ -61,10 +67,9 @@ namespace femp
     prm.enter_subsection("Melt flow");
     prm.declare_entry("Viscosity", "6e-3", Patterns::Double(0.),
                       "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
-    prm.declare_entry("Gravity", dim == 2 ? "0, -9.81" : "0, 0, -9.81",
-                      Patterns::List(Patterns::Double(), dim, dim),
-                      "Gravitational acceleration g, one component per "
-                      "direction, m/s^2.");
+    prm.declare_entry("Gravity", "9.81", Patterns::Double(0.),
+                      "Magnitude of the gravitational acceleration g, m/s^2, "
+                      "acting along -y (2D) or -z (3D); range [0, inf).");
     prm.declare_entry("Darcy constant", "1e8", Patterns::Double(0.),
                       "Mushy-zone constant K_c of the Darcy damping "
                       "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
@@ -76,6 +81,10 @@ namespace femp
                       "PIC; range [0, 1].");
     prm.declare_entry("Courant number", "0.25", Patterns::Double(0.),
                       "C of the convective limit dt <= C h / u_max; range (0, 1].");
+    prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
+                      "Surface tension coefficient sigma, N/m (0: no surface "
+                      "tension); enters as the capillary pressure sigma div(n) "
+                      "at the free surface. Range [0, inf).");
     prm.declare_entry("Solver tolerance", "1e-10", Patterns::Double(0.),
                       "Relative residual of the pressure CG solve; range (0, 1e-2].");
     prm.declare_entry("Maximum iterations", "1000", Patterns::Integer(1),
@@ -90,14 +99,13 @@ namespace femp
   {
     prm.enter_subsection("Melt flow");
     viscosity = prm.get_double("Viscosity");
-    const auto g =
-      Utilities::split_string_list(prm.get("Gravity"));
-    for (int d = 0; d < dim; ++d)
-      gravity[d] = Utilities::string_to_double(g[d]);
+    gravity          = Tensor<1, dim>();
+    gravity[dim - 1] = -prm.get_double("Gravity");
     darcy_constant   = prm.get_double("Darcy constant");
     darcy_epsilon    = prm.get_double("Darcy epsilon");
     flip_fraction    = prm.get_double("FLIP fraction");
     cfl              = prm.get_double("Courant number");
+    surface_tension  = prm.get_double("Surface tension");
     solver_tolerance = prm.get_double("Solver tolerance");
     max_iterations   = prm.get_integer("Maximum iterations");
     prm.leave_subsection();
@@ -111,6 +119,8 @@ namespace femp
             flip_fraction, "it must lie in [0, 1]");
     require(cfl > 0 && cfl <= 1, "Melt flow/Courant number", cfl,
             "it must lie in (0, 1]");
+    require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
+            "it must be non-negative (N/m)");
     require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
             "Melt flow/Solver tolerance", solver_tolerance,
             "it must lie in (0, 1e-2]");
@@ -174,6 +184,9 @@ namespace femp
     type_old   = grid.make_field(-1.);
     gid        = grid.make_field(-1.);
     p_cell     = grid.make_field(0.);
+    p_surface  = grid.make_field(0.);
+    alpha_cell = grid.make_field(0.);
+    alpha_node = grid.make_node_field();
     mass       = grid.make_node_field();
     volume     = grid.make_node_field();
     node_mark  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
@@ -224,6 +237,10 @@ namespace femp
     limits.viscous = prm.viscosity > 0 ?
                        h * h * rho / (2 * dim * prm.viscosity) :
                        std::numeric_limits<double>::infinity();
+    limits.capillary =
+      prm.surface_tension > 0 ?
+        std::sqrt(rho * h * h * h / (2 * numbers::PI * prm.surface_tension)) :
+        std::numeric_limits<double>::infinity();
     return limits;
   }
 
@@ -417,6 +434,93 @@ namespace femp
 
   template <int dim>
   void
+  IncompressibleFlow<dim>::capillary_pressure()
+  {
+    using P          = typename MaterialPoints<dim>::PropertyIndex;
+    const double h   = grid.h();
+    const double ih  = 1. / h;
+    const double ihd = std::pow(ih, dim);
+    const auto & x0  = grid.origin();
+    const auto & cs  = grid.strides();
+    // alpha at nodes: volume of all metal points, tent weights.
+    std::fill(alpha_node.begin(), alpha_node.end(), 0.);
+    const auto &handler = points.particle_handler();
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        const auto        ijk = grid.global_index(idx);
+        const std::size_t n0  = grid.first_node_of_cell(idx);
+        for (const auto &particle : handler.particles_in_cell(cell))
+          {
+            const Point<dim> x = particle.get_location();
+            double           xi[dim];
+            for (int d = 0; d < dim; ++d)
+              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
+            const double V = particle.get_properties()[P::volume] * ihd;
+            for (unsigned int k = 0; k < n_corners; ++k)
+              {
+                double w = V;
+                for (int d = 0; d < dim; ++d)
+                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
+                alpha_node[n0 + corner_offset[k]] += w;
+              }
+          }
+      }
+    grid.sum_shared_nodes(alpha_node);
+    // Smoothed alpha at the owned cell centres: mean of the cell's nodes.
+    const auto &status = grid.cell_status();
+    std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
+    for (const auto c : grid.owned_cells())
+      {
+        const std::size_t n0 = grid.first_node_of_cell(c);
+        double            a  = 0;
+        for (unsigned int k = 0; k < n_corners; ++k)
+          a += alpha_node[n0 + corner_offset[k]];
+        alpha_cell[c] = a / n_corners;
+      }
+    grid.update_ghosts(alpha_cell);
+    // p_s = sigma div(n) on surface cells (owned fluid cells with a gas face).
+    std::fill(p_surface.begin(), p_surface.end(), 0.);
+    for (const auto c : fluid_cells)
+      {
+        bool surface = false;
+        for (int d = 0; d < dim; ++d)
+          surface = surface || type[c + cs[d]] == gas || type[c - cs[d]] == gas;
+        if (!surface)
+          continue;
+        double div = 0;
+        for (unsigned int k = 0; k < n_corners; ++k)
+          {
+            // Node k of cell c; the cell above it is c0.
+            const std::size_t c0 = c + around_offset[k];
+            double            g[dim], norm = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                g[d] = 0;
+                for (unsigned int j = 0; j < n_corners; ++j)
+                  if (!((j >> d) & 1))
+                    {
+                      const std::size_t up = c0 - around_offset[j];
+                      const std::size_t lo = up - cs[d];
+                      // Outside the domain alpha has zero gradient.
+                      if (status[up] != BackgroundGrid<dim>::outside &&
+                          status[lo] != BackgroundGrid<dim>::outside)
+                        g[d] += alpha_cell[up] - alpha_cell[lo];
+                    }
+                norm += g[d] * g[d];
+              }
+            norm = std::sqrt(norm);
+            if (norm > 1e-8)
+              for (int d = 0; d < dim; ++d)
+                div -= (((k >> d) & 1) ? 1. : -1.) * g[d] / norm;
+          }
+        p_surface[c] = prm.surface_tension * div / (h * (1u << (dim - 1)));
+      }
+    grid.update_ghosts(p_surface);
+  }
+
+
+  template <int dim>
+  void
   IncompressibleFlow<dim>::pressure_solve(const double dt)
   {
     const MPI_Comm comm = grid.communicator();
@@ -532,8 +636,20 @@ namespace femp
     Section s(timer, "flow: pressure solve");
     const auto   offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
     const double f      = -rho * h * h / dt;
+    const bool capillary = prm.surface_tension > 0;
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-      rhs(offset + i) = f * divergence[i];
+      {
+        double b = f * divergence[i];
+        if (capillary)
+          {
+            const std::size_t c = fluid_cells[i];
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t o : {-cs[d], cs[d]})
+                if (type[c + o] == gas)
+                  b += 2 * p_surface[c];
+          }
+        rhs(offset + i) = b;
+      }
     rhs.compress(VectorOperation::insert);
     // Warm start from the previous pressure (same numbering) scaled to dt.
     if (changed)
@@ -598,9 +714,9 @@ namespace femp
                 if (tu == fluid && tl == fluid)
                   sum += p_cell[up] - p_cell[lo], ++k;
                 else if (tu == fluid && tl == gas)
-                  sum += 2 * p_cell[up], ++k;
+                  sum += 2 * (p_cell[up] - p_surface[up]), ++k;
                 else if (tu == gas && tl == fluid)
-                  sum -= 2 * p_cell[lo], ++k;
+                  sum -= 2 * (p_cell[lo] - p_surface[lo]), ++k;
               }
             if (k > 0)
               u_new[d][n] -= f * sum / k;
@@ -721,12 +837,14 @@ namespace femp
   IncompressibleFlow<dim>::step(const double dt)
   {
     const StepLimits limits = stable_time_step();
-    if (!(dt > 0) || dt > limits.viscous * (1 + 1e-12))
+    if (!(dt > 0) || dt > limits.viscous * (1 + 1e-12) ||
+        dt > limits.capillary * (1 + 1e-12))
       {
         std::ostringstream msg;
         msg << "Melt flow: the time step " << dt
             << " s is not positive or exceeds the viscous limit "
-            << limits.viscous << " s (h^2 rho/(2 dim mu)).";
+            << limits.viscous << " s (h^2 rho/(2 dim mu)) or the capillary "
+            << "limit " << limits.capillary << " s (sqrt(rho h^3/(2 pi sigma))).";
         throw std::runtime_error(msg.str());
       }
     {
@@ -738,6 +856,11 @@ namespace femp
       Section s(timer, "flow: predictor");
       predictor(dt);
     }
+    if (prm.surface_tension > 0)
+      {
+        Section s(timer, "flow: capillary pressure");
+        capillary_pressure();
+      }
     pressure_solve(dt);
     {
       Section s(timer, "flow: correction");

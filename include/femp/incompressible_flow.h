@@ -13,8 +13,12 @@
 // the points with a FLIP/PIC blend before moving them with the nodal
 // velocity (explicit advection).
 //
-// Not implemented here (yet): surface tension, Marangoni stress and recoil
-// pressure of eq. (3); the free surface takes p = 0.
+// Surface tension enters through the free-surface condition: the Dirichlet
+// pressure on the faces between fluid and gas cells is the capillary
+// pressure p_s = sigma div(n) (n the outward normal of the smoothed metal
+// fraction alpha, METHOD sec. 3), the sharp-interface form of the CSF term
+// sigma kappa n |grad alpha| of eq. (3). Not implemented here (yet):
+// Marangoni stress and recoil pressure.
 #ifndef femp_incompressible_flow_h
 #define femp_incompressible_flow_h
 
@@ -48,6 +52,7 @@ namespace femp
       double         darcy_epsilon  = 1e-3; ///< eps0, -
       double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
       double         cfl            = 0.25; ///< convective Courant number
+      double         surface_tension = 0;   ///< sigma, N/m (0: off)
       double         solver_tolerance = 1e-10; ///< relative CG residual
       unsigned int   max_iterations   = 1000;
 
@@ -72,10 +77,11 @@ namespace femp
     {
       double convective; ///< cfl h / max(u_max, sqrt(|g| h))
       double viscous;    ///< h^2 rho / (2 dim mu)
+      double capillary;  ///< sqrt(rho h^3 / (2 pi sigma))
       double
       min() const
       {
-        return std::min(convective, viscous);
+        return std::min(std::min(convective, viscous), capillary);
       }
     };
 
@@ -119,6 +125,13 @@ namespace femp
     {
       return p_cell;
     }
+    /// Capillary pressure p_s = sigma div(n) of the free-surface cells
+    /// (ghosts exchanged), Pa; zero elsewhere or when sigma = 0.
+    const std::vector<double> &
+    surface_pressure() const
+    {
+      return p_surface;
+    }
     /// Cell type per cell of the local box (as double, ghosts exchanged).
     const std::vector<double> &
     cell_type() const
@@ -146,6 +159,8 @@ namespace femp
     void
     predictor(const double dt);
     void
+    capillary_pressure();
+    void
     pressure_solve(const double dt);
     void
     correction(const double dt);
@@ -171,6 +186,7 @@ namespace femp
 
     std::vector<double>                  type, type_old, gid, p_cell;
     std::vector<double>                  mass, volume;
+    std::vector<double>                  alpha_node, alpha_cell, p_surface;
     std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
     std::vector<std::uint32_t>           active;      // nodes of fluid cells
     std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
