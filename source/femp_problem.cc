@@ -21,8 +21,9 @@ namespace femp
                       "Solve the temperature equation (1).");
     prm.declare_entry("Melt flow", "false", Patterns::Bool(),
                       "Solve the melt-pool flow (eqs. 3-4) of the fluid points "
-                      "(subsection Melt flow); surface tension, Marangoni and "
-                      "recoil are not in this version.");
+                      "(subsection Melt flow): gravity, viscosity, Darcy "
+                      "damping, surface tension, Marangoni stress and recoil "
+                      "pressure.");
     prm.declare_entry("Solid stress", "false", Patterns::Bool(),
                       "Solve the thermal stress by MPM and FE (eqs. 5-17). Not "
                       "available in this version: must be false.");
@@ -144,9 +145,14 @@ namespace femp
     }
     if (melt_flow)
       {
+        flow_prm.latent_heat_evaporation = heat_prm.latent_heat_evaporation;
+        flow_prm.evaporation_temperature = heat_prm.evaporation_temperature;
+        flow_prm.molar_mass              = heat_prm.molar_mass;
+        flow_prm.ambient_pressure        = heat_prm.ambient_pressure;
         flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
                                                          *grid, *points, &timer);
         flow->set_liquid_fraction(&heat->liquid_fraction());
+        flow->set_temperature(&heat->temperature());
         heat->set_velocity(&flow->cell_velocity());
       }
     output = std::make_unique<Output<dim>>(output_prm, *grid);

@@ -85,6 +85,16 @@ namespace femp
                       "Surface tension coefficient sigma, N/m (0: no surface "
                       "tension); enters as the capillary pressure sigma div(n) "
                       "at the free surface. Range [0, inf).");
+    prm.declare_entry("Surface tension temperature derivative", "0",
+                      Patterns::Double(),
+                      "dsigma/dT of the Marangoni stress, N/(m K) (negative "
+                      "for most metals; 0: no Marangoni stress). Range any "
+                      "real number.");
+    prm.declare_entry("Recoil coefficient", "0", Patterns::Double(0., 1.),
+                      "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
+                      "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
+                      "L_v, M, T_v, p0 from the Heat transfer subsection. "
+                      "Range [0, 1].");
     prm.declare_entry("Solver tolerance", "1e-10", Patterns::Double(0.),
                       "Relative residual of the pressure CG solve; range (0, 1e-2].");
     prm.declare_entry("Maximum iterations", "1000", Patterns::Integer(1),
@@ -106,6 +116,9 @@ namespace femp
     flip_fraction    = prm.get_double("FLIP fraction");
     cfl              = prm.get_double("Courant number");
     surface_tension  = prm.get_double("Surface tension");
+    surface_tension_gradient =
+      prm.get_double("Surface tension temperature derivative");
+    recoil_coefficient = prm.get_double("Recoil coefficient");
     solver_tolerance = prm.get_double("Solver tolerance");
     max_iterations   = prm.get_integer("Maximum iterations");
     prm.leave_subsection();
@@ -187,6 +200,10 @@ namespace femp
     p_surface  = grid.make_field(0.);
     alpha_cell = grid.make_field(0.);
     alpha_node = grid.make_node_field();
+    for (int d = 0; d < dim; ++d)
+      surface_force[d] = grid.make_node_field();
+    for (int f = 0; f < 2 * dim; ++f)
+      theta[f] = grid.make_field(0.5);
     mass       = grid.make_node_field();
     volume     = grid.make_node_field();
     node_mark  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
@@ -207,6 +224,14 @@ namespace femp
   IncompressibleFlow<dim>::set_liquid_fraction(const std::vector<double> *g)
   {
     gamma = g;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::set_temperature(const std::vector<double> *T)
+  {
+    temperature = T;
   }
 
 
@@ -425,6 +450,8 @@ namespace femp
             double acc = prm.gravity[d];
             if (viscous && volume[n] > 0)
               acc += force[d][n] / (rho * volume[n]);
+            if (prm.surface_tension_gradient != 0 && volume[n] > 0)
+              acc += surface_force[d][n] / (rho * volume[n]);
             u_new[d][n] = (u_old[d][n] + dt * acc) / damping;
           }
       }
@@ -434,8 +461,13 @@ namespace femp
 
   template <int dim>
   void
-  IncompressibleFlow<dim>::capillary_pressure()
+  IncompressibleFlow<dim>::surface_terms()
   {
+    const bool thermal =
+      prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
+    AssertThrow(!thermal || temperature != nullptr,
+                ExcMessage("Melt flow: Marangoni stress and recoil pressure "
+                           "need the temperature (set_temperature())."));
     using P          = typename MaterialPoints<dim>::PropertyIndex;
     const double h   = grid.h();
     const double ih  = 1. / h;
@@ -466,6 +498,22 @@ namespace femp
           }
       }
     grid.sum_shared_nodes(alpha_node);
+    // Mirror at the domain boundary (walls are not free surfaces).
+    {
+      const auto &nc = grid.n_cells();
+      const auto &ns = grid.node_strides();
+      for (const auto n : grid.owned_cell_nodes())
+        {
+          std::size_t rest = n;
+          for (int d = dim - 1; d >= 0; --d)
+            {
+              const int i = grid.box_lower()[d] + int(rest / ns[d]);
+              rest %= ns[d];
+              if (i == 0 || i == int(nc[d]))
+                alpha_node[n] *= 2;
+            }
+        }
+    }
     // Smoothed alpha at the owned cell centres: mean of the cell's nodes.
     const auto &status = grid.cell_status();
     std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
@@ -478,8 +526,37 @@ namespace femp
         alpha_cell[c] = a / n_corners;
       }
     grid.update_ghosts(alpha_cell);
-    // p_s = sigma div(n) on surface cells (owned fluid cells with a gas face).
+
+    // Free-surface position on each fluid-gas face: where the smoothed
+    // alpha, linear between the two cell centres, is 1/2; theta is its
+    // distance from the fluid cell centre in units of h, in
+    // [theta_min, 1] (1/2 for a fluid cell filled to its face).
+    for (int f = 0; f < 2 * dim; ++f)
+      std::fill(theta[f].begin(), theta[f].end(), 0.5);
+    for (const auto c : fluid_cells)
+      for (int d = 0; d < dim; ++d)
+        for (const int side : {0, 1})
+          {
+            const std::size_t g = side ? c + cs[d] : c - cs[d];
+            if (type[g] != gas)
+              continue;
+            const double ac = alpha_cell[c], ag = alpha_cell[g];
+            const double th = ac > ag ? (ac - 0.5) / (ac - ag) : theta_min;
+            theta[2 * d + side][c] = std::min(std::max(th, theta_min), 1.);
+          }
+    for (int f = 0; f < 2 * dim; ++f)
+      grid.update_ghosts(theta[f]);
+    if (!has_surface_terms())
+      return;
+
+    // Surface cells (owned fluid cells with a gas face): p_s = sigma div(n)
+    // + p_recoil(T), and the Marangoni traction on their gas faces.
     std::fill(p_surface.begin(), p_surface.end(), 0.);
+    if (prm.surface_tension_gradient != 0)
+      for (int d = 0; d < dim; ++d)
+        std::fill(surface_force[d].begin(), surface_force[d].end(), 0.);
+    const double R_gas = 8.314462618;
+    const double Tv    = prm.evaporation_temperature;
     for (const auto c : fluid_cells)
       {
         bool surface = false;
@@ -488,6 +565,7 @@ namespace femp
         if (!surface)
           continue;
         double div = 0;
+        double nc[dim] = {};
         for (unsigned int k = 0; k < n_corners; ++k)
           {
             // Node k of cell c; the cell above it is c0.
@@ -511,10 +589,62 @@ namespace femp
             norm = std::sqrt(norm);
             if (norm > 1e-8)
               for (int d = 0; d < dim; ++d)
-                div -= (((k >> d) & 1) ? 1. : -1.) * g[d] / norm;
+                {
+                  div -= (((k >> d) & 1) ? 1. : -1.) * g[d] / norm;
+                  nc[d] -= g[d] / norm;
+                }
           }
-        p_surface[c] = prm.surface_tension * div / (h * (1u << (dim - 1)));
+        double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
+        if (!thermal)
+          {
+            p_surface[c] = ps;
+            continue;
+          }
+        const double T = (*temperature)[c];
+        if (prm.recoil_coefficient > 0 && T > 0)
+          ps += prm.recoil_coefficient * prm.ambient_pressure *
+                std::exp(prm.latent_heat_evaporation * prm.molar_mass *
+                         (T - Tv) / (R_gas * T * Tv));
+        p_surface[c] = ps;
+        if (prm.surface_tension_gradient == 0)
+          continue;
+        // Unit normal of the cell; grad T from metal neighbours.
+        double nn = 0;
+        for (int d = 0; d < dim; ++d)
+          nn += nc[d] * nc[d];
+        nn = std::sqrt(nn);
+        if (nn < 1e-12)
+          continue;
+        double gT[dim], ndotg = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            nc[d] /= nn;
+            const bool   m = type[c - cs[d]] == fluid || type[c - cs[d]] == solid;
+            const bool   p = type[c + cs[d]] == fluid || type[c + cs[d]] == solid;
+            const double Tm = m ? (*temperature)[c - cs[d]] : T;
+            const double Tp = p ? (*temperature)[c + cs[d]] : T;
+            gT[d] = (m && p) ? (Tp - Tm) / (2 * h) : (Tp - Tm) / h;
+            ndotg += nc[d] * gT[d];
+          }
+        const double face = std::pow(h, dim - 1) / (1u << (dim - 1));
+        for (int d = 0; d < dim; ++d)
+          for (const int side : {0, 1})
+            {
+              const std::ptrdiff_t o = side ? cs[d] : -cs[d];
+              if (type[c + o] != gas)
+                continue;
+              const double w = prm.surface_tension_gradient * face * std::abs(nc[d]);
+              const std::size_t n0 = grid.first_node_of_cell(c);
+              for (unsigned int k = 0; k < n_corners; ++k)
+                if ((int((k >> d) & 1)) == side)
+                  for (int e = 0; e < dim; ++e)
+                    surface_force[e][n0 + corner_offset[k]] +=
+                      w * (gT[e] - ndotg * nc[e]);
+            }
       }
+    if (prm.surface_tension_gradient != 0)
+      for (int d = 0; d < dim; ++d)
+        grid.sum_shared_nodes(surface_force[d]);
     grid.update_ghosts(p_surface);
   }
 
@@ -563,7 +693,7 @@ namespace femp
 
     if (changed)
       {
-        Section s(timer, "flow: pressure matrix + AMG setup");
+        Section s(timer, "flow: pressure matrix setup");
         const types::global_dof_index n_local = fluid_cells.size();
         types::global_dof_index       offset  = 0;
         MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, comm);
@@ -609,14 +739,40 @@ namespace femp
                       diag += 1;
                       matrix.set(row, types::global_dof_index(gid[c + o]), -1.);
                     }
-                  else if (t == gas)
-                    diag += 2; // p = 0 on the face: ghost p_gas = -p_c
                 }
             matrix.set(row, row, diag);
           }
         matrix.compress(VectorOperation::insert);
         rhs.reinit(owned_rows, comm);
         solution.reinit(owned_rows, comm);
+      }
+    // Diagonal, every step: the free-surface faces contribute 1/theta
+    // (Dirichlet value at the interface, ghost-fluid method); only these
+    // values change while the fluid set stays, and the AMG hierarchy of the
+    // last setup remains a good preconditioner.
+    {
+      const auto offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+      for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+        {
+          const std::size_t c    = fluid_cells[i];
+          double            diag = 0;
+          for (int d = 0; d < dim; ++d)
+            for (const int side : {0, 1})
+              {
+                const auto t = type[side ? c + cs[d] : c - cs[d]];
+                if (t == fluid)
+                  diag += 1;
+                else if (t == gas)
+                  diag += 1. / theta[2 * d + side][c];
+              }
+          matrix.set(offset + i, offset + i, diag);
+        }
+      matrix.compress(VectorOperation::insert);
+    }
+    if (changed)
+      {
+        Section s(timer, "flow: AMG setup");
+        const types::global_dof_index n_total = owned_rows.size();
         if (n_total > 0)
           {
             TrilinosWrappers::PreconditionAMG::AdditionalData data;
@@ -636,7 +792,7 @@ namespace femp
     Section s(timer, "flow: pressure solve");
     const auto   offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
     const double f      = -rho * h * h / dt;
-    const bool capillary = prm.surface_tension > 0;
+    const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
         double b = f * divergence[i];
@@ -644,9 +800,9 @@ namespace femp
           {
             const std::size_t c = fluid_cells[i];
             for (int d = 0; d < dim; ++d)
-              for (const std::ptrdiff_t o : {-cs[d], cs[d]})
-                if (type[c + o] == gas)
-                  b += 2 * p_surface[c];
+              for (const int side : {0, 1})
+                if (type[side ? c + cs[d] : c - cs[d]] == gas)
+                  b += p_surface[c] / theta[2 * d + side][c];
           }
         rhs(offset + i) = b;
       }
@@ -714,9 +870,9 @@ namespace femp
                 if (tu == fluid && tl == fluid)
                   sum += p_cell[up] - p_cell[lo], ++k;
                 else if (tu == fluid && tl == gas)
-                  sum += 2 * (p_cell[up] - p_surface[up]), ++k;
+                  sum += (p_cell[up] - p_surface[up]) / theta[2 * d][up], ++k;
                 else if (tu == gas && tl == fluid)
-                  sum -= 2 * (p_cell[lo] - p_surface[lo]), ++k;
+                  sum -= (p_cell[lo] - p_surface[lo]) / theta[2 * d + 1][lo], ++k;
               }
             if (k > 0)
               u_new[d][n] -= f * sum / k;
@@ -853,14 +1009,13 @@ namespace femp
       transfer_to_grid();
     }
     {
+      Section s(timer, "flow: free surface");
+      surface_terms();
+    }
+    {
       Section s(timer, "flow: predictor");
       predictor(dt);
     }
-    if (prm.surface_tension > 0)
-      {
-        Section s(timer, "flow: capillary pressure");
-        capillary_pressure();
-      }
     pressure_solve(dt);
     {
       Section s(timer, "flow: correction");

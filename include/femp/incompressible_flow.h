@@ -17,8 +17,12 @@
 // pressure on the faces between fluid and gas cells is the capillary
 // pressure p_s = sigma div(n) (n the outward normal of the smoothed metal
 // fraction alpha, METHOD sec. 3), the sharp-interface form of the CSF term
-// sigma kappa n |grad alpha| of eq. (3). Not implemented here (yet):
-// Marangoni stress and recoil pressure.
+// sigma kappa n |grad alpha| of eq. (3); the recoil pressure
+// p_r = zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] adds to it. The Marangoni
+// stress dsigma/dT (grad T - (n.grad T) n) is a traction on the faces
+// between fluid and gas cells, each face weighted by |n_d| so that the
+// staircase of faces carries the area of the smoothed interface; it is
+// spread to the face's nodes.
 #ifndef femp_incompressible_flow_h
 #define femp_incompressible_flow_h
 
@@ -53,6 +57,14 @@ namespace femp
       double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
       double         cfl            = 0.25; ///< convective Courant number
       double         surface_tension = 0;   ///< sigma, N/m (0: off)
+      double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      double         recoil_coefficient = 0; ///< zeta_p (0: no recoil)
+      // Evaporation data for the recoil pressure (from Heat transfer, not
+      // declared in Melt flow): L_v J/kg, M kg/mol, T_v K, p0 Pa.
+      double latent_heat_evaporation = 7.41e6;
+      double evaporation_temperature = 3090.;
+      double molar_mass              = 0.0558;
+      double ambient_pressure        = 101325.;
       double         solver_tolerance = 1e-10; ///< relative CG residual
       unsigned int   max_iterations   = 1000;
 
@@ -108,6 +120,11 @@ namespace femp
     void
     set_liquid_fraction(const std::vector<double> *gamma);
 
+    /// Cell temperature (ghost values needed), K, for the Marangoni stress
+    /// and the recoil pressure; required when either is switched on.
+    void
+    set_temperature(const std::vector<double> *T);
+
     /// Limits from the current point velocities (collective).
     StepLimits
     stable_time_step() const;
@@ -158,8 +175,17 @@ namespace femp
     transfer_to_grid();
     void
     predictor(const double dt);
+    /// Smoothed alpha, the interface position theta on free-surface faces,
+    /// and (when on) normals, capillary + recoil pressure and the Marangoni
+    /// nodal forces of the surface cells.
     void
-    capillary_pressure();
+    surface_terms();
+    bool
+    has_surface_terms() const
+    {
+      return prm.surface_tension > 0 || prm.surface_tension_gradient != 0 ||
+             prm.recoil_coefficient > 0;
+    }
     void
     pressure_solve(const double dt);
     void
@@ -178,6 +204,7 @@ namespace femp
     MaterialPoints<dim> &      points;
     TimerOutput *              timer;
     const std::vector<double> *gamma = nullptr;
+    const std::vector<double> *temperature = nullptr;
 
     static constexpr unsigned int n_corners = 1u << dim;
     std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
@@ -187,6 +214,9 @@ namespace femp
     std::vector<double>                  type, type_old, gid, p_cell;
     std::vector<double>                  mass, volume;
     std::vector<double>                  alpha_node, alpha_cell, p_surface;
+    std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
+    std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
+    static constexpr double theta_min = 0.2;
     std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
     std::vector<std::uint32_t>           active;      // nodes of fluid cells
     std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
