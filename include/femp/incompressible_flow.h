@@ -216,7 +216,7 @@ namespace femp
     std::vector<double>                  alpha_node, alpha_cell, p_surface;
     std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
     std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
-    static constexpr double theta_min = 0.2;
+    static constexpr double theta_min = 0.05;
     std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
     std::vector<std::uint32_t>           active;      // nodes of fluid cells
     std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
