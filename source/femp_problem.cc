@@ -353,7 +353,8 @@ namespace femp
               << std::setprecision(3)
               << double(st.cg_iterations) / std::max(1u, st.steps)
               << " per solve, at most " << st.max_iterations
-              << "), points re-sorted in " << st.resorts << " steps, "
+              << "), " << st.halvings << " steps redone as halves, points "
+              << "re-sorted in " << st.resorts << " steps, "
               << st.n_fluid_cells << " fluid cells and max speed "
               << st.max_point_speed << " m/s at the end" << std::endl;
       }
@@ -365,17 +366,20 @@ namespace femp
   void
   FempProblem<dim>::flow_substeps(const double dt)
   {
-    const auto   limits = flow->stable_time_step();
-    const auto   n_sub  = static_cast<unsigned int>(std::ceil(dt / limits.min()));
-    const double dt_f   = dt / std::max(1u, n_sub);
+    // Sub-cycle with the current limits (they change as the flow speeds up).
     const unsigned int resorts = flow->statistics().resorts;
-    for (unsigned int i = 0; i < std::max(1u, n_sub); ++i)
-      flow->step(dt_f);
+    double             t       = 0;
+    while (t < dt * (1 - 1e-12))
+      {
+        const double dt_f = std::min(flow->stable_time_step().min(), dt - t);
+        flow->step(dt_f);
+        t += dt_f;
+      }
     if (flow->statistics().resorts == resorts)
       return;
     // Points changed cells: new alpha; cells that gained metal take the
     // mean temperature of their points (METHOD sec. 2).
-    TimerOutput::Scope  t(timer, "flow: alpha and new metal cells");
+    TimerOutput::Scope  scope(timer, "flow: alpha and new metal cells");
     std::vector<double> alpha = points->metal_fraction();
     const auto &        old   = heat->metal_fraction();
     auto &              T     = heat->temperature();

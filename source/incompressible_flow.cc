@@ -1003,6 +1003,14 @@ namespace femp
             << "limit " << limits.capillary << " s (sqrt(rho h^3/(2 pi sigma))).";
         throw std::runtime_error(msg.str());
       }
+    advance(dt, 0);
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::advance(const double dt, const unsigned int depth)
+  {
     {
       Section s(timer, "flow: transfer to grid");
       classify_cells();
@@ -1020,6 +1028,38 @@ namespace femp
     {
       Section s(timer, "flow: correction");
       correction(dt);
+    }
+    // Step rejection: if the new nodal velocity would carry a point more
+    // than a cell (e.g. a sudden recoil or capillary pressure that the
+    // limits of the last step did not foresee), redo the step as two halves.
+    {
+      double umax = 0;
+      for (const auto n : active)
+        {
+          double s2 = 0;
+          for (int d = 0; d < dim; ++d)
+            s2 += u_new[d][n] * u_new[d][n];
+          umax = std::max(umax, s2);
+        }
+      umax = std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
+      if (umax * dt > grid.h())
+        {
+          if (depth >= 20)
+            {
+              std::ostringstream msg;
+              msg << "Melt flow became unstable: nodal speed " << umax
+                  << " m/s moves points more than a cell even after halving "
+                  << "the step 20 times (step " << dt << " s).";
+              throw std::runtime_error(msg.str());
+            }
+          ++stats.halvings;
+          advance(dt / 2, depth + 1);
+          advance(dt / 2, depth + 1);
+          return;
+        }
+    }
+    {
+      Section s(timer, "flow: correction");
       for (int d = 0; d < dim; ++d)
         std::fill(u_cell[d].begin(), u_cell[d].end(), 0.);
       for (const auto c : fluid_cells)

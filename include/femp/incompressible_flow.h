@@ -105,6 +105,7 @@ namespace femp
       unsigned int  last_iterations  = 0;
       unsigned int  max_iterations   = 0;
       unsigned int  resorts          = 0; ///< steps in which points changed cell
+      unsigned int  halvings         = 0; ///< steps redone as two halves
       double        max_point_speed  = 0; ///< m/s, after the last step
       unsigned long n_fluid_cells    = 0; ///< global, last step
     };
@@ -129,9 +130,10 @@ namespace femp
     StepLimits
     stable_time_step() const;
 
-    /// One fluid step of length @p dt. Refuses a step above the viscous
-    /// limit or with cfl above 1; stops with a diagnostic when the solution
-    /// becomes non-finite or a point would cross more than one cell.
+    /// One fluid step of length @p dt. Refuses a step above the viscous or
+    /// capillary limit; a step whose new nodal speed would move points more
+    /// than a cell is redone as two halves (at most 2^20 pieces); stops with
+    /// a diagnostic when the solution becomes non-finite.
     void
     step(const double dt);
 
@@ -169,6 +171,10 @@ namespace femp
     }
 
   private:
+    /// The step proper; redone as two halves (recursively, @p depth) when
+    /// the new nodal speed would move a point more than a cell.
+    void
+    advance(const double dt, const unsigned int depth);
     void
     classify_cells();
     void
