@@ -204,6 +204,17 @@ namespace femp
       surface_force[d] = grid.make_node_field();
     for (int f = 0; f < 2 * dim; ++f)
       theta[f] = grid.make_field(0.5);
+    near1 = grid.make_field();
+    near2 = grid.make_field();
+    // Offsets of the 3^dim cells around a cell.
+    for (unsigned int k = 0; k < std::pow(3, dim); ++k)
+      {
+        std::ptrdiff_t o = 0;
+        unsigned int   r = k;
+        for (int d = 0; d < dim; ++d, r /= 3)
+          o += (int(r % 3) - 1) * cs[d];
+        stencil.push_back(o);
+      }
     mass       = grid.make_node_field();
     volume     = grid.make_node_field();
     node_mark  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
@@ -474,11 +485,38 @@ namespace femp
     const double ihd = std::pow(ih, dim);
     const auto & x0  = grid.origin();
     const auto & cs  = grid.strides();
-    // alpha at nodes: volume of all metal points, tent weights.
+    // Only cells near the fluid need alpha: near1 = within one cell of a
+    // fluid cell (alpha_cell is used there), near2 = within two (their
+    // points contribute to the nodes of near1 cells). Marked from the fluid
+    // cells of the local box; near1 of ghosts comes from their owners.
+    const auto &status = grid.cell_status();
+    std::fill(near1.begin(), near1.end(), 0.);
+    std::fill(near2.begin(), near2.end(), 0.);
+    for (std::size_t c = 0; c < type.size(); ++c)
+      if (type[c] == fluid)
+        for (const auto o : stencil)
+          {
+            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
+            if (e >= 0 && std::size_t(e) < near1.size())
+              near1[e] = 1;
+          }
+    grid.update_ghosts(near1);
+    for (std::size_t c = 0; c < near1.size(); ++c)
+      if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
+        for (const auto o : stencil)
+          {
+            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
+            if (e >= 0 && std::size_t(e) < near2.size())
+              near2[e] = 1;
+          }
+    // alpha at nodes: volume of the metal points near the fluid, tent
+    // weights.
     std::fill(alpha_node.begin(), alpha_node.end(), 0.);
     const auto &handler = points.particle_handler();
     for (const auto &[idx, cell] : points.occupied_cells())
       {
+        if (near2[idx] == 0)
+          continue;
         const auto        ijk = grid.global_index(idx);
         const std::size_t n0  = grid.first_node_of_cell(idx);
         for (const auto &particle : handler.particles_in_cell(cell))
@@ -498,31 +536,29 @@ namespace femp
           }
       }
     grid.sum_shared_nodes(alpha_node);
-    // Mirror at the domain boundary (walls are not free surfaces).
-    {
-      const auto &nc = grid.n_cells();
-      const auto &ns = grid.node_strides();
-      for (const auto n : grid.owned_cell_nodes())
-        {
-          std::size_t rest = n;
-          for (int d = dim - 1; d >= 0; --d)
-            {
-              const int i = grid.box_lower()[d] + int(rest / ns[d]);
-              rest %= ns[d];
-              if (i == 0 || i == int(nc[d]))
-                alpha_node[n] *= 2;
-            }
-        }
-    }
-    // Smoothed alpha at the owned cell centres: mean of the cell's nodes.
-    const auto &status = grid.cell_status();
+    // Smoothed alpha at the owned near1 cell centres: mean of the cell's
+    // nodes, node values mirrored at the domain boundary (walls are not
+    // free surfaces).
     std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
+    const auto &nc = grid.n_cells();
     for (const auto c : grid.owned_cells())
       {
-        const std::size_t n0 = grid.first_node_of_cell(c);
-        double            a  = 0;
+        if (near1[c] == 0)
+          continue;
+        const auto        ijk = grid.global_index(c);
+        const std::size_t n0  = grid.first_node_of_cell(c);
+        double            a   = 0;
         for (unsigned int k = 0; k < n_corners; ++k)
-          a += alpha_node[n0 + corner_offset[k]];
+          {
+            double f = 1;
+            for (int d = 0; d < dim; ++d)
+              {
+                const int i = ijk[d] + ((k >> d) & 1);
+                if (i == 0 || i == int(nc[d]))
+                  f *= 2;
+              }
+            a += f * alpha_node[n0 + corner_offset[k]];
+          }
         alpha_cell[c] = a / n_corners;
       }
     grid.update_ghosts(alpha_cell);
@@ -1059,7 +1095,7 @@ namespace femp
         }
     }
     {
-      Section s(timer, "flow: correction");
+      Section s(timer, "flow: cell velocity");
       for (int d = 0; d < dim; ++d)
         std::fill(u_cell[d].begin(), u_cell[d].end(), 0.);
       for (const auto c : fluid_cells)

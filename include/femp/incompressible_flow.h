@@ -223,6 +223,8 @@ namespace femp
     std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
     std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
     static constexpr double theta_min = 0.05;
+    std::vector<double>         near1, near2; // cells near the fluid (0/1)
+    std::vector<std::ptrdiff_t> stencil;      // 3^dim neighbourhood offsets
     std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
     std::vector<std::uint32_t>           active;      // nodes of fluid cells
     std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
