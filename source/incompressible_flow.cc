@@ -1018,7 +1018,10 @@ namespace femp
     if (Utilities::MPI::logical_or(moved, grid.communicator()))
       {
         Section s(timer, "flow: re-sort points");
-        points.points_moved();
+        // Points that stayed on their rank are moved cell by cell; a point
+        // that left the rank needs deal.II's global sort of all points.
+        if (!points.relocate_points())
+          points.points_moved();
         ++stats.resorts;
       }
   }

@@ -447,6 +447,72 @@ namespace femp
   }
 
 
+  template <int dim>
+  bool
+  MaterialPoints<dim>::relocate_points()
+  {
+    struct Move
+    {
+      Point<dim>            location, reference;
+      types::particle_index id;
+      std::uint32_t         cell;
+      std::vector<double>   properties;
+    };
+    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+                      to_remove;
+    std::vector<Move> moves;
+    bool              local = true;
+    const double      h     = grid.h();
+    for (const auto &[idx, cell] : occupied)
+      {
+        const auto own   = grid.global_index(idx);
+        auto       range = handler.particles_in_cell(cell);
+        for (auto it = range.begin(); it != range.end(); ++it)
+          {
+            const Point<dim> x   = it->get_location();
+            const auto       ijk = grid.cell_of(x);
+            if (ijk == own)
+              continue;
+            if (!grid.in_box(ijk) ||
+                grid.cell_status()[grid.local_index(ijk)] !=
+                  BackgroundGrid<dim>::owned)
+              {
+                local = false;
+                break;
+              }
+            Move m;
+            m.location = x;
+            m.cell     = grid.local_index(ijk);
+            m.id       = it->get_id();
+            for (int d = 0; d < dim; ++d)
+              m.reference[d] = (x[d] - grid.origin()[d]) / h - ijk[d];
+            const auto p = it->get_properties();
+            m.properties.assign(p.begin(), p.end());
+            moves.push_back(std::move(m));
+            to_remove.push_back(it);
+          }
+        if (!local)
+          break;
+      }
+    if (Utilities::MPI::logical_or(!local, grid.communicator()))
+      return false;
+    handler.remove_particles(to_remove);
+    for (const auto &m : moves)
+      handler.insert_particle(m.location, m.reference, m.id,
+                              grid.cell_iterator(m.cell),
+                              ArrayView<const double>(m.properties));
+    handler.update_cached_numbers();
+    occupied.clear();
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto &cell = grid.cell_iterator(idx);
+        if (handler.n_particles_in_cell(cell) > 0)
+          occupied.emplace_back(idx, cell);
+      }
+    return true;
+  }
+
+
   template class MaterialPoints<2>;
   template class MaterialPoints<3>;
 } // namespace femp

@@ -102,6 +102,14 @@ namespace femp
     void
     points_moved();
 
+    /// Cheaper alternative to points_moved() when no point left the cells
+    /// of its rank: moves each point that left its cell into its new owned
+    /// cell (remove + insert, cost per moved point) and refreshes the list
+    /// of occupied cells. Collective; returns false, changing nothing, when
+    /// on some rank a point left the owned cells (then call points_moved()).
+    bool
+    relocate_points();
+
     /// Owned cells that hold points: (flat index, cell iterator).
     const std::vector<
       std::pair<std::uint32_t, typename Triangulation<dim>::active_cell_iterator>> &
