@@ -1,5 +1,6 @@
 // femp: melt-pool flow, improved incompressible MPM (paper sec. 2.3,
-// eqs. 3-4 without the surface terms; METHOD sec. 3, ref. [11]).
+// eqs. 3-4 with gravity, viscosity, Darcy damping, surface tension,
+// Marangoni stress and recoil pressure; METHOD sec. 3, ref. [11]).
 //
 // Discretization choices (documented in doc/flow.md):
 // - velocities on grid nodes, pressure on the centres of fluid cells;
@@ -8,16 +9,18 @@
 //   gradient: mean over the 2^(dim-1) pairs of cells that straddle the node;
 //   the Poisson operator is the compact 5-point (7-point) Laplacian, so the
 //   projection is approximate (exact for a linear pressure);
-// - free surface: p = 0 on the faces between fluid and gas cells, imposed by
-//   the ghost value p_gas = -p_fluid in both the Poisson equation and the
-//   nodal gradient (second order, exact hydrostatics for a pool filling
-//   whole cells);
-// - surface tension: Dirichlet pressure p_s = sigma div(n) on the faces
-//   between fluid and gas (ghost value 2 p_s - p_fluid). alpha is the
-//   point volume mapped to nodes with tent weights divided by h^dim, then
-//   averaged to cell centres (smoothed alpha); n = -grad alpha/|grad alpha|
-//   at the nodes of a surface cell (pair-averaged differences of the cell
-//   values) and div(n) at its centre (edge-averaged differences);
+// - free surface: Dirichlet pressure p_s at the interface on each face
+//   between a fluid and a gas cell, at theta h from the fluid centre (where
+//   the smoothed alpha is 1/2; theta in [0.05, 1]), imposed by the ghost
+//   value p_c + (p_s - p_c)/theta in both the Poisson equation and the
+//   nodal gradient (ghost-fluid method; exact hydrostatics);
+// - smoothed alpha: point volume mapped to nodes with tent weights divided
+//   by h^dim, averaged to cell centres; computed only near the fluid;
+// - p_s = sigma div(n) + recoil: n = -grad alpha/|grad alpha| at the nodes
+//   of a surface cell (pair-averaged differences of the cell values) and
+//   div(n) at its centre (edge-averaged differences);
+// - Marangoni: traction dsigma/dT (grad T - (n.grad T) n) on the fluid-gas
+//   faces, weighted by |n_d|, spread to the face nodes;
 // - walls: zero normal velocity on the domain boundary (free slip) and zero
 //   velocity on the nodes of solid (non-fluid metal) cells (no slip);
 //   Neumann pressure on both;

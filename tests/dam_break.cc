@@ -2,14 +2,14 @@
 // water column of width a and height 2a collapses in a tank 5a wide with
 // free-slip walls. The surge front position Z = z/a against
 // T = t sqrt(2g/a), and the residual column height H = h/(2a) at the left
-// wall against t sqrt(g/a), must lie within 10 % of the experiment over the
+// wall against t sqrt(g/a), are compared with the experiment over the
 // tabulated range (until the front reaches the far wall). 2D, a/16 cells
 // (argument: cells per a), 4 points per cell; 1 and 2 ranks give the same
 // output.
 //
 // Result (doc/flow.md): the surge front leads the experiment by up to ~20 %
-// near T = 1.2 and the residual column drains faster (up to 23 % low at
-// t sqrt(g/a) = 4.2 at a/16, 13 % at a/32) -- the known lead of simulations
+// near T = 1.2 and the residual column drains faster (up to 28 % low at
+// t sqrt(g/a) = 4.2 at a/16; at most 11 % low at a/32) -- the known lead of simulations
 // over Martin & Moyce, whose gate took time to open. The 10 % target
 // is NOT met, so both deviations are printed, not gated. Gated: the front
 // lies between 0.9 times the experiment and the inviscid shallow-water
