@@ -20,8 +20,10 @@ namespace femp
     prm.declare_entry("Heat transfer", "true", Patterns::Bool(),
                       "Solve the temperature equation (1).");
     prm.declare_entry("Melt flow", "false", Patterns::Bool(),
-                      "Solve the melt-pool flow (eqs. 3-4). Not available in "
-                      "this version: must be false.");
+                      "Solve the melt-pool flow (eqs. 3-4) of the fluid points "
+                      "(subsection Melt flow): gravity, viscosity, Darcy "
+                      "damping, surface tension, Marangoni stress and recoil "
+                      "pressure.");
     prm.declare_entry("Solid stress", "false", Patterns::Bool(),
                       "Solve the thermal stress by MPM and FE (eqs. 5-17). Not "
                       "available in this version: must be false.");
@@ -31,6 +33,7 @@ namespace femp
     BackgroundGrid<3>::Parameters::declare_parameters(prm);
     MaterialPoints<3>::Parameters::declare_parameters(prm);
     HeatTransfer<3>::Parameters::declare_parameters(prm);
+    IncompressibleFlow<3>::Parameters::declare_parameters(prm);
     Laser<3>::Parameters::declare_parameters(prm);
     Output<3>::Parameters::declare_parameters(prm);
   }
@@ -81,9 +84,7 @@ namespace femp
     , timer(pcout, TimerOutput::never, TimerOutput::wall_times)
   {
     prm.enter_subsection("Physics");
-    require(!prm.get_bool("Melt flow"), "Physics/Melt flow", "true",
-            "the melt-flow solver is not part of this version of femp; set it "
-            "to false");
+    melt_flow = prm.get_bool("Melt flow");
     require(!prm.get_bool("Solid stress"), "Physics/Solid stress", "true",
             "the solid-stress solver is not part of this version of femp; set "
             "it to false");
@@ -94,6 +95,7 @@ namespace femp
     points_prm.parse_parameters(prm);
     points_prm.check(grid_prm);
     heat_prm.parse_parameters(prm);
+    flow_prm.parse_parameters(prm);
     laser_prm.parse_parameters(prm);
     output_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
@@ -141,6 +143,18 @@ namespace femp
       TimerOutput::Scope t(timer, "setup: metal fraction");
       heat->set_metal_fraction(points->metal_fraction());
     }
+    if (melt_flow)
+      {
+        flow_prm.latent_heat_evaporation = heat_prm.latent_heat_evaporation;
+        flow_prm.evaporation_temperature = heat_prm.evaporation_temperature;
+        flow_prm.molar_mass              = heat_prm.molar_mass;
+        flow_prm.ambient_pressure        = heat_prm.ambient_pressure;
+        flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
+                                                         *grid, *points, &timer);
+        flow->set_liquid_fraction(&heat->liquid_fraction());
+        flow->set_temperature(&heat->temperature());
+        heat->set_velocity(&flow->cell_velocity());
+      }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
     output->initialize({"T", "gamma", "alpha"});
 
@@ -251,8 +265,9 @@ namespace femp
           points->cells_to_points(heat->temperature());
         }
 
-        // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4): not in this
-        //    version (Physics/Melt flow must be false).
+        // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4), sub-cycled.
+        if (melt_flow)
+          flow_substeps(dt);
         // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17): not in
         //    this version (Physics/Solid stress must be false).
 
@@ -326,7 +341,61 @@ namespace femp
                       result.stored) /
                std::max(1e-300, result.laser + std::abs(result.boundary))
           << std::endl;
+    if (flow)
+      {
+        const auto &st                = flow->statistics();
+        result.flow_steps             = st.steps;
+        result.pressure_matrix_builds = st.matrix_rebuilds;
+        result.pressure_cg_iterations = st.cg_iterations;
+        result.max_fluid_speed        = st.max_point_speed;
+        pcout << "Melt flow: " << st.steps << " fluid steps, pressure matrix "
+              << "and AMG hierarchy built " << st.matrix_rebuilds
+              << " times, CG iterations " << st.cg_iterations << " in total ("
+              << std::setprecision(3)
+              << double(st.cg_iterations) / std::max(1u, st.steps)
+              << " per solve, at most " << st.max_iterations
+              << "), " << st.halvings << " steps redone as halves, points "
+              << "re-sorted in " << st.resorts << " steps, "
+              << st.n_fluid_cells << " fluid cells and max speed "
+              << st.max_point_speed << " m/s at the end" << std::endl;
+      }
     timer.print_summary();
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::flow_substeps(const double dt)
+  {
+    // Sub-cycle with the current limits (they change as the flow speeds up).
+    const unsigned int resorts = flow->statistics().resorts;
+    double             t       = 0;
+    while (t < dt * (1 - 1e-12))
+      {
+        const double dt_f = std::min(flow->stable_time_step().min(), dt - t);
+        flow->step(dt_f);
+        t += dt_f;
+      }
+    if (flow->statistics().resorts == resorts)
+      return;
+    // Points changed cells: new alpha; cells that gained metal take the
+    // mean temperature of their points (METHOD sec. 2).
+    TimerOutput::Scope  scope(timer, "flow: alpha and new metal cells");
+    std::vector<double> alpha = points->metal_fraction();
+    const auto &        old   = heat->metal_fraction();
+    auto &              T     = heat->temperature();
+    using P                   = typename MaterialPoints<dim>::PropertyIndex;
+    for (const auto &[idx, cell] : points->occupied_cells())
+      if (old[idx] <= 0 && alpha[idx] > 0)
+        {
+          double sum = 0, n = 0;
+          for (const auto &particle : points->particle_handler().particles_in_cell(cell))
+            sum += particle.get_properties()[P::temperature], ++n;
+          if (n > 0)
+            T[idx] = sum / n;
+        }
+    grid->update_ghosts(T);
+    heat->set_metal_fraction(alpha);
   }
 
   template class FempProblem<2>;

@@ -524,7 +524,8 @@ namespace femp
               Tn[i]              = Tnew;
               const double rate  = sumk * ih2 * inv_c;
               row_rate           = rate > row_rate ? rate : row_rate;
-              row_max            = Tnew > row_max ? Tnew : row_max;
+              // metal cells only: gas may keep a stale T after points moved
+              row_max = (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
               row_bad += Tnew - Tnew; // NaN if Tnew is not finite
               // Flag: a cell may change phase (unless clearly solid or
               // clearly liquid) or, with c(T) tables, takes a large step.
@@ -642,15 +643,18 @@ namespace femp
     budget.implicit_losses += e_implicit * V * dt;
     budget.boundary += e_boundary;
 
-    // Peak temperature and finiteness: the box interior holds owned cells,
-    // true ghost values and untouched gas, so its maximum is the global one.
+    // Peak temperature over metal cells and finiteness: the box interior
+    // holds owned cells and true ghost values, so its maximum over metal
+    // cells is the global one.
     // Cells changed after pass B (sources, phase change) are added here.
     double Tmax = box_max;
     for (const auto idx : source_cells)
-      Tmax = std::max(Tmax, T_new[idx]);
+      if (alpha[idx] > 0)
+        Tmax = std::max(Tmax, T_new[idx]);
     for (const std::size_t row : flagged_rows)
       for (int ii = 1; ii < size[0] - 1; ++ii)
-        Tmax = std::max(Tmax, T_new[row + ii]);
+        if (alpha[row + ii] > 0)
+          Tmax = std::max(Tmax, T_new[row + ii]);
     bool finite = std::isfinite(box_bad) && std::isfinite(Tmax);
     for (const auto idx : source_cells)
       finite = finite && std::isfinite(T_new[idx]);

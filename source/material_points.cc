@@ -377,6 +377,165 @@ namespace femp
     return zone;
   }
 
+  template <int dim>
+  void
+  MaterialPoints<dim>::create_region(
+    const std::function<bool(const Point<dim> &)> &inside,
+    const double                                   T0,
+    const State                                    state)
+  {
+    handler.clear();
+    handler.initialize(grid.triangulation(), mapping, PropertyIndex::n_properties);
+    const double s  = prm.point_spacing;
+    const double h  = grid.h();
+    const auto & x0 = grid.origin();
+    std::vector<std::pair<std::uint32_t, Point<dim>>> points;
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto            ijk = grid.global_index(idx);
+        std::array<long, dim> first, last;
+        for (int d = 0; d < dim; ++d)
+          {
+            first[d] = static_cast<long>(std::ceil(ijk[d] * h / s - 0.5));
+            last[d] = static_cast<long>(std::ceil((ijk[d] + 1) * h / s - 0.5)) - 1;
+          }
+        std::array<long, dim> i    = first;
+        bool                  done = false;
+        for (int d = 0; d < dim; ++d)
+          done = done || last[d] < first[d];
+        while (!done)
+          {
+            Point<dim> p;
+            for (int d = 0; d < dim; ++d)
+              p[d] = x0[d] + (i[d] + 0.5) * s;
+            if (inside(p))
+              points.emplace_back(idx, p);
+            int d = 0;
+            for (; d < dim; ++d)
+              {
+                if (++i[d] <= last[d])
+                  break;
+                i[d] = first[d];
+              }
+            done = (d == dim);
+          }
+      }
+    const types::particle_index n_local = points.size();
+    types::particle_index       offset  = 0;
+    MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, grid.communicator());
+    if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
+      offset = 0;
+    std::vector<double> props(PropertyIndex::n_properties, 0.);
+    const double        volume = std::pow(s, dim);
+    props[PropertyIndex::mass]             = mat.density * volume;
+    props[PropertyIndex::volume]           = volume;
+    props[PropertyIndex::temperature]      = T0;
+    props[PropertyIndex::peak_temperature] = T0;
+    props[PropertyIndex::state]            = state;
+    handler.reserve(points.size());
+    occupied.clear();
+    for (std::size_t n = 0; n < points.size(); ++n)
+      {
+        const auto  idx  = points[n].first;
+        const auto &cell = grid.cell_iterator(idx);
+        if (occupied.empty() || occupied.back().first != idx)
+          occupied.emplace_back(idx, cell);
+        const Point<dim> &p  = points[n].second;
+        const Point<dim>  v0 = cell->vertex(0);
+        Point<dim>        ref;
+        for (int d = 0; d < dim; ++d)
+          ref[d] = (p[d] - v0[d]) / h;
+        handler.insert_particle(p, ref, offset + n, cell,
+                                ArrayView<const double>(props));
+      }
+    handler.update_cached_numbers();
+    cache_point_handles();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::points_moved()
+  {
+    handler.sort_particles_into_subdomains_and_cells();
+    occupied.clear();
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto &cell = grid.cell_iterator(idx);
+        if (handler.n_particles_in_cell(cell) > 0)
+          occupied.emplace_back(idx, cell);
+      }
+    cache_point_handles();
+  }
+
+
+  template <int dim>
+  bool
+  MaterialPoints<dim>::relocate_points()
+  {
+    struct Move
+    {
+      Point<dim>            location, reference;
+      types::particle_index id;
+      std::uint32_t         cell;
+      std::vector<double>   properties;
+    };
+    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+                      to_remove;
+    std::vector<Move> moves;
+    bool              local = true;
+    const double      h     = grid.h();
+    for (const auto &[idx, cell] : occupied)
+      {
+        const auto own   = grid.global_index(idx);
+        auto       range = handler.particles_in_cell(cell);
+        for (auto it = range.begin(); it != range.end(); ++it)
+          {
+            const Point<dim> x   = it->get_location();
+            const auto       ijk = grid.cell_of(x);
+            if (ijk == own)
+              continue;
+            if (!grid.in_box(ijk) ||
+                grid.cell_status()[grid.local_index(ijk)] !=
+                  BackgroundGrid<dim>::owned)
+              {
+                local = false;
+                break;
+              }
+            Move m;
+            m.location = x;
+            m.cell     = grid.local_index(ijk);
+            m.id       = it->get_id();
+            for (int d = 0; d < dim; ++d)
+              m.reference[d] = (x[d] - grid.origin()[d]) / h - ijk[d];
+            const auto p = it->get_properties();
+            m.properties.assign(p.begin(), p.end());
+            moves.push_back(std::move(m));
+            to_remove.push_back(it);
+          }
+        if (!local)
+          break;
+      }
+    if (Utilities::MPI::logical_or(!local, grid.communicator()))
+      return false;
+    handler.remove_particles(to_remove);
+    for (const auto &m : moves)
+      handler.insert_particle(m.location, m.reference, m.id,
+                              grid.cell_iterator(m.cell),
+                              ArrayView<const double>(m.properties));
+    handler.update_cached_numbers();
+    occupied.clear();
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto &cell = grid.cell_iterator(idx);
+        if (handler.n_particles_in_cell(cell) > 0)
+          occupied.emplace_back(idx, cell);
+      }
+    cache_point_handles();
+    return true;
+  }
+
+
   template class MaterialPoints<2>;
   template class MaterialPoints<3>;
 } // namespace femp

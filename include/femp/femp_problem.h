@@ -15,6 +15,7 @@
 
 #include <femp/background_grid.h>
 #include <femp/heat_transfer.h>
+#include <femp/incompressible_flow.h>
 #include <femp/laser.h>
 #include <femp/material.h>
 #include <femp/material_points.h>
@@ -65,6 +66,11 @@ namespace femp
       double laser = 0, losses = 0, boundary = 0, stored = 0;
       types::particle_index n_points = 0;
       double                point_T_mean = 0; ///< mean point temperature, K
+      // Melt flow (zero when Physics/Melt flow is false).
+      unsigned int flow_steps             = 0;
+      unsigned int pressure_matrix_builds = 0; ///< matrix + AMG setups
+      unsigned long pressure_cg_iterations = 0; ///< total
+      double       max_fluid_speed        = 0; ///< m/s, at the end
     };
     const Summary &
     summary() const
@@ -83,11 +89,18 @@ namespace femp
     typename Laser<dim>::Parameters           laser_prm;
     typename Output<dim>::Parameters          output_prm;
     double                                    melt_temperature;
+    bool                                      melt_flow = false;
+    typename IncompressibleFlow<dim>::Parameters flow_prm;
 
     std::unique_ptr<BackgroundGrid<dim>> grid;
     std::unique_ptr<Laser<dim>>          laser;
     std::unique_ptr<MaterialPoints<dim>> points;
     std::unique_ptr<HeatTransfer<dim>>   heat;
+    std::unique_ptr<IncompressibleFlow<dim>> flow;
+    /// Step 3 of the macro step: the flow sub-cycled over @p dt, then alpha
+    /// and the temperature of cells that gained points (METHOD sec. 2, 5).
+    void
+    flow_substeps(const double dt);
     std::unique_ptr<Output<dim>>         output;
     TimerOutput                          timer;
     Summary                              result;

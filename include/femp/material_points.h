@@ -25,6 +25,7 @@
 #include <femp/background_grid.h>
 #include <femp/material.h>
 
+#include <functional>
 #include <vector>
 
 namespace femp
@@ -86,6 +87,37 @@ namespace femp
     void
     create(const double T0);
 
+    /// Fill the owned cells with points on the lattice of the given spacing
+    /// where @p inside is true, all in state @p state at temperature @p T0
+    /// (flow test bodies: a water column, a droplet, a pool). Replaces any
+    /// points created before.
+    void
+    create_region(const std::function<bool(const Point<dim> &)> &inside,
+                  const double T0, const State state);
+
+    /// After point positions changed so that some point left its cell:
+    /// move points to their new cells and ranks and refresh the list of
+    /// occupied cells (deal.II's sort costs ~0.5 us per point, so call it
+    /// only when needed).
+    void
+    points_moved();
+
+    /// Cheaper alternative to points_moved() when no point left the cells
+    /// of its rank: moves each point that left its cell into its new owned
+    /// cell (remove + insert, cost per moved point) and refreshes the list
+    /// of occupied cells. Collective; returns false, changing nothing, when
+    /// on some rank a point left the owned cells (then call points_moved()).
+    bool
+    relocate_points();
+
+    /// Owned cells that hold points: (flat index, cell iterator).
+    const std::vector<
+      std::pair<std::uint32_t, typename Triangulation<dim>::active_cell_iterator>> &
+    occupied_cells() const
+    {
+      return occupied;
+    }
+
     /// Metal fraction alpha per cell of the local box (ghosts exchanged).
     std::vector<double>
     metal_fraction() const;
@@ -103,6 +135,13 @@ namespace femp
 
     const Particles::ParticleHandler<dim> &
     particle_handler() const
+    {
+      return handler;
+    }
+    /// Write access for the flow and solid solvers, which update velocities
+    /// and positions (call points_moved() after a point left its cell).
+    Particles::ParticleHandler<dim> &
+    particle_handler()
     {
       return handler;
     }

@@ -1,0 +1,88 @@
+#!/usr/bin/python3
+"""femp contrib: plots of the melt-flow verification (doc/flow.md) from the
+outputs of the test programs (tests/*.output or fresh runs).
+
+Usage: contrib/flow_plots.py OUTDIR DAM_BREAK_OUTPUT [DAM_BREAK_OUTPUT_2 ...]
+                             --cavity CAVITY_OUTPUT
+Each dam-break output is labelled with its file name."""
+import re
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+
+def parse_dam_break(path):
+    front, height = [], []
+    for line in open(path):
+        m = re.match(r"front Z at T = ([\d.]+) \(experiment ([\d.]+)\) = ([\d.]+)", line)
+        if m:
+            front.append(tuple(float(g) for g in m.groups()))
+        m = re.match(r"height H at t sqrt\(g/a\) = ([\d.]+) \(experiment ([\d.]+)\) = ([\d.]+)", line)
+        if m:
+            height.append(tuple(float(g) for g in m.groups()))
+    return front, height
+
+
+def parse_cavity(path):
+    rows = []
+    for line in open(path):
+        m = re.match(r"u/U_s at zeta = ([\d.]+) \(analytic ([-\d.]+)\) = ([-\d.]+)", line)
+        if m:
+            rows.append(tuple(float(g) for g in m.groups()))
+    return rows
+
+
+def main():
+    args = sys.argv[1:]
+    outdir = args.pop(0)
+    cavity = None
+    if "--cavity" in args:
+        i = args.index("--cavity")
+        cavity = args[i + 1]
+        del args[i : i + 2]
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    first = True
+    for path in args:
+        front, height = parse_dam_break(path)
+        label = path.split("/")[-1]
+        if first:
+            ax[0].plot([f[0] for f in front], [f[1] for f in front], "ko", label="Martin & Moyce 1952")
+            ax[1].plot([h[0] for h in height], [h[1] for h in height], "ko", label="Martin & Moyce 1952")
+            T = [0, 3.5]
+            ax[0].plot(T, [1 + 2 * t for t in T], "k:", label="Ritter front 1 + 2T")
+            first = False
+        ax[0].plot([f[0] for f in front], [f[2] for f in front], "-", label="femp " + label)
+        ax[1].plot([h[0] for h in height], [h[2] for h in height], "-", label="femp " + label)
+    ax[0].set_xlabel("T = t sqrt(2g/a)")
+    ax[0].set_ylabel("front Z = z/a")
+    ax[1].set_xlabel("t sqrt(g/a)")
+    ax[1].set_ylabel("column height H = h/(2a)")
+    for a in ax:
+        a.grid(True)
+        a.legend(fontsize=8)
+    fig.suptitle("Dam break (2D), femp incompressible MPM")
+    fig.tight_layout()
+    fig.savefig(outdir + "/dam_break.png", dpi=100)
+
+    if cavity:
+        rows = parse_cavity(cavity)
+        fig, ax = plt.subplots(figsize=(5, 4))
+        import numpy as np
+
+        z = np.linspace(0, 1, 101)
+        ax.plot(3 * z**2 - 2 * z, z, "k-", label="analytic (3 zeta^2 - 2 zeta)")
+        ax.plot([r[2] for r in rows], [r[0] for r in rows], "o", label="femp, D = 8 h")
+        ax.set_xlabel("u / U_s")
+        ax.set_ylabel("zeta = z / D")
+        ax.grid(True)
+        ax.legend(fontsize=8)
+        ax.set_title("Thermocapillary return flow, mid-length")
+        fig.tight_layout()
+        fig.savefig(outdir + "/thermocapillary_cavity.png", dpi=100)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,246 @@
+// femp: melt-pool flow by the improved incompressible material point method
+// (paper sec. 2.3, eqs. 3-4; METHOD sec. 3; ref. [11]).
+//
+// Fluid material points carry mass and velocity; each fluid step maps them
+// to the nodes of the background grid (P2G, bilinear/trilinear tent
+// weights), predicts the nodal velocity with gravity, viscosity (explicit)
+// and the Darcy damping of the mushy zone (implicit),
+//   u* = (u + dt f/rho) / (1 + dt K_c (1-gamma)^2 / ((gamma^3 + eps0) rho)),
+// solves the pressure Poisson equation div(dt/rho grad p) = div u* on the
+// centres of the fluid cells (5-point/7-point stencil, CG + Trilinos ML
+// AMG whose hierarchy is reused while the set of fluid cells does not
+// change), corrects the nodal velocity u = u* - dt/rho grad p, and updates
+// the points with a FLIP/PIC blend before moving them with the nodal
+// velocity (explicit advection).
+//
+// Surface tension enters through the free-surface condition: the Dirichlet
+// pressure on the faces between fluid and gas cells is the capillary
+// pressure p_s = sigma div(n) (n the outward normal of the smoothed metal
+// fraction alpha, METHOD sec. 3), the sharp-interface form of the CSF term
+// sigma kappa n |grad alpha| of eq. (3); the recoil pressure
+// p_r = zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] adds to it. The Marangoni
+// stress dsigma/dT (grad T - (n.grad T) n) is a traction on the faces
+// between fluid and gas cells, each face weighted by |n_d| so that the
+// staircase of faces carries the area of the smoothed interface; it is
+// spread to the face's nodes.
+#ifndef femp_incompressible_flow_h
+#define femp_incompressible_flow_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/tensor.h>
+#include <deal.II/base/timer.h>
+#include <deal.II/lac/trilinos_precondition.h>
+#include <deal.II/lac/trilinos_sparse_matrix.h>
+#include <deal.II/lac/trilinos_vector.h>
+
+#include <femp/background_grid.h>
+#include <femp/material.h>
+#include <femp/material_points.h>
+
+#include <array>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class IncompressibleFlow
+  {
+  public:
+    struct Parameters
+    {
+      double         viscosity = 6e-3; ///< mu, Pa s
+      Tensor<1, dim> gravity;          ///< g, m/s^2 (default: -9.81 vertical)
+      double         darcy_constant = 1e8;  ///< K_c, kg/(m^3 s)
+      double         darcy_epsilon  = 1e-3; ///< eps0, -
+      double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
+      double         cfl            = 0.25; ///< convective Courant number
+      double         surface_tension = 0;   ///< sigma, N/m (0: off)
+      double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      double         recoil_coefficient = 0; ///< zeta_p (0: no recoil)
+      // Evaporation data for the recoil pressure (from Heat transfer, not
+      // declared in Melt flow): L_v J/kg, M kg/mol, T_v K, p0 Pa.
+      double latent_heat_evaporation = 7.41e6;
+      double evaporation_temperature = 3090.;
+      double molar_mass              = 0.0558;
+      double ambient_pressure        = 101325.;
+      double         solver_tolerance = 1e-10; ///< relative CG residual
+      unsigned int   max_iterations   = 1000;
+
+      Parameters();
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+    };
+
+    /// Cell classes used by the flow (cell_type()).
+    enum CellType : int
+    {
+      gas     = 0, ///< no metal point: free surface beyond, p = 0
+      solid   = 1, ///< metal points but none fluid: rigid, no-slip
+      fluid   = 2, ///< at least one fluid point: pressure unknown
+      outside = 3  ///< beyond the domain: free-slip wall
+    };
+
+    /// Stable step limits, s (each is reported by the caller).
+    struct StepLimits
+    {
+      double convective; ///< cfl h / max(u_max, sqrt(|g| h))
+      double viscous;    ///< h^2 rho / (2 dim mu)
+      double capillary;  ///< sqrt(rho h^3 / (2 pi sigma))
+      double
+      min() const
+      {
+        return std::min(std::min(convective, viscous), capillary);
+      }
+    };
+
+    struct Statistics
+    {
+      unsigned int  steps            = 0;
+      unsigned int  matrix_rebuilds  = 0; ///< matrix + AMG hierarchy builds
+      unsigned long cg_iterations    = 0; ///< total over all steps
+      unsigned int  last_iterations  = 0;
+      unsigned int  max_iterations   = 0;
+      unsigned int  resorts          = 0; ///< steps in which points changed cell
+      unsigned int  halvings         = 0; ///< steps redone as two halves
+      double        max_point_speed  = 0; ///< m/s, after the last step
+      unsigned long n_fluid_cells    = 0; ///< global, last step
+    };
+
+    IncompressibleFlow(const Parameters &         prm,
+                       const Material &           material,
+                       const BackgroundGrid<dim> &grid,
+                       MaterialPoints<dim> &      points,
+                       TimerOutput *              timer = nullptr);
+
+    /// Liquid fraction gamma per cell of the local box (ghost values
+    /// needed) for the Darcy term; nullptr (default): gamma = 1 everywhere.
+    void
+    set_liquid_fraction(const std::vector<double> *gamma);
+
+    /// Cell temperature (ghost values needed), K, for the Marangoni stress
+    /// and the recoil pressure; required when either is switched on.
+    void
+    set_temperature(const std::vector<double> *T);
+
+    /// Limits from the current point velocities (collective).
+    StepLimits
+    stable_time_step() const;
+
+    /// One fluid step of length @p dt. Refuses a step above the viscous or
+    /// capillary limit; a step whose new nodal speed would move points more
+    /// than a cell is redone as two halves (at most 2^20 pieces); stops with
+    /// a diagnostic when the solution becomes non-finite.
+    void
+    step(const double dt);
+
+    /// Pressure per cell of the local box (ghosts exchanged), Pa; zero
+    /// outside fluid cells.
+    const std::vector<double> &
+    pressure() const
+    {
+      return p_cell;
+    }
+    /// Capillary pressure p_s = sigma div(n) of the free-surface cells
+    /// (ghosts exchanged), Pa; zero elsewhere or when sigma = 0.
+    const std::vector<double> &
+    surface_pressure() const
+    {
+      return p_surface;
+    }
+    /// Cell type per cell of the local box (as double, ghosts exchanged).
+    const std::vector<double> &
+    cell_type() const
+    {
+      return type;
+    }
+    /// Cell-centred fluid velocity (mean of the nodes of fluid cells, zero
+    /// elsewhere, ghosts exchanged), for HeatTransfer::set_velocity().
+    const std::array<std::vector<double>, dim> &
+    cell_velocity() const
+    {
+      return u_cell;
+    }
+    const Statistics &
+    statistics() const
+    {
+      return stats;
+    }
+
+  private:
+    /// The step proper; redone as two halves (recursively, @p depth) when
+    /// the new nodal speed would move a point more than a cell.
+    void
+    advance(const double dt, const unsigned int depth);
+    void
+    classify_cells();
+    void
+    transfer_to_grid();
+    void
+    predictor(const double dt);
+    /// Smoothed alpha, the interface position theta on free-surface faces,
+    /// and (when on) normals, capillary + recoil pressure and the Marangoni
+    /// nodal forces of the surface cells.
+    void
+    surface_terms();
+    bool
+    has_surface_terms() const
+    {
+      return prm.surface_tension > 0 || prm.surface_tension_gradient != 0 ||
+             prm.recoil_coefficient > 0;
+    }
+    void
+    pressure_solve(const double dt);
+    void
+    correction(const double dt);
+    void
+    grid_to_points(const double dt);
+
+    /// Wall conditions on the active nodes: no-slip next to solid cells,
+    /// free slip (zero normal component) on the domain boundary.
+    void
+    apply_boundary_conditions(std::array<std::vector<double>, dim> &u) const;
+
+    Parameters                 prm;
+    const double               rho;
+    const BackgroundGrid<dim> &grid;
+    MaterialPoints<dim> &      points;
+    TimerOutput *              timer;
+    const std::vector<double> *gamma = nullptr;
+    const std::vector<double> *temperature = nullptr;
+
+    static constexpr unsigned int n_corners = 1u << dim;
+    std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
+    std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
+    std::array<std::array<double, n_corners>, n_corners> stiffness; // Q1 Laplace
+
+    std::vector<double>                  type, type_old, gid, p_cell;
+    std::vector<double>                  mass, volume;
+    std::vector<double>                  alpha_node, alpha_cell, p_surface;
+    std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
+    std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
+    static constexpr double theta_min = 0.05;
+    std::vector<double>         near1, near2; // cells near the fluid (0/1)
+    std::vector<std::ptrdiff_t> stencil;      // 3^dim neighbourhood offsets
+    std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
+    std::vector<std::uint32_t>           active;      // nodes of fluid cells
+    std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
+    std::vector<std::uint8_t>            node_mark;   // in active
+    std::vector<std::uint8_t>            node_fix;    // bit d: u_d = 0
+    std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
+    std::vector<double>                  divergence;  // per owned fluid cell
+
+    IndexSet                          owned_rows;
+    TrilinosWrappers::SparseMatrix    matrix;
+    TrilinosWrappers::PreconditionAMG amg;
+    TrilinosWrappers::MPI::Vector     solution, rhs;
+    bool                              have_matrix = false;
+
+    Statistics stats;
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,1130 @@
+// femp: melt-pool flow, improved incompressible MPM (paper sec. 2.3,
+// eqs. 3-4 with gravity, viscosity, Darcy damping, surface tension,
+// Marangoni stress and recoil pressure; METHOD sec. 3, ref. [11]).
+//
+// Discretization choices (documented in doc/flow.md):
+// - velocities on grid nodes, pressure on the centres of fluid cells;
+// - divergence of the nodal velocity at a cell centre: mean over the
+//   2^(dim-1) cell edges of the difference quotient; nodal pressure
+//   gradient: mean over the 2^(dim-1) pairs of cells that straddle the node;
+//   the Poisson operator is the compact 5-point (7-point) Laplacian, so the
+//   projection is approximate (exact for a linear pressure);
+// - free surface: Dirichlet pressure p_s at the interface on each face
+//   between a fluid and a gas cell, at theta h from the fluid centre (where
+//   the smoothed alpha is 1/2; theta in [0.05, 1]), imposed by the ghost
+//   value p_c + (p_s - p_c)/theta in both the Poisson equation and the
+//   nodal gradient (ghost-fluid method; exact hydrostatics);
+// - smoothed alpha: point volume mapped to nodes with tent weights divided
+//   by h^dim, averaged to cell centres; computed only near the fluid;
+// - p_s = sigma div(n) + recoil: n = -grad alpha/|grad alpha| at the nodes
+//   of a surface cell (pair-averaged differences of the cell values) and
+//   div(n) at its centre (edge-averaged differences);
+// - Marangoni: traction dsigma/dT (grad T - (n.grad T) n) on the fluid-gas
+//   faces, weighted by |n_d|, spread to the face nodes;
+// - walls: zero normal velocity on the domain boundary (free slip) and zero
+//   velocity on the nodes of solid (non-fluid metal) cells (no slip);
+//   Neumann pressure on both;
+// - viscosity: explicit, from the Q1 stiffness of each fluid cell with the
+//   lumped nodal volume (cell-wise, so it is independent of the partition);
+// - G2P: v_p <- beta (v_p + sum w (u_new - u_old)) + (1 - beta) sum w u_new
+//   (FLIP fraction beta, default 0.95); points move with sum w u_new.
+#include <deal.II/base/mpi.h>
+#include <deal.II/lac/solver_cg.h>
+#include <deal.II/lac/solver_control.h>
+#include <deal.II/lac/trilinos_sparsity_pattern.h>
+
+#include <femp/incompressible_flow.h>
+#include <femp/input_checks.h>
+
+#include <cmath>
+#include <optional>
+#include <sstream>
+
+namespace femp
+{
+  namespace
+  {
+    /// A timer section when a timer is given.
+    struct Section
+    {
+      Section(TimerOutput *t, const char *name)
+      {
+        if (t)
+          scope.emplace(*t, name);
+      }
+      std::optional<TimerOutput::Scope> scope;
+    };
+  } // namespace
+
+  template <int dim>
+  IncompressibleFlow<dim>::Parameters::Parameters()
+  {
+    gravity[dim - 1] = -9.81;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Melt flow");
+    prm.declare_entry("Viscosity", "6e-3", Patterns::Double(0.),
+                      "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
+    prm.declare_entry("Gravity", "9.81", Patterns::Double(0.),
+                      "Magnitude of the gravitational acceleration g, m/s^2, "
+                      "acting along -y (2D) or -z (3D); range [0, inf).");
+    prm.declare_entry("Darcy constant", "1e8", Patterns::Double(0.),
+                      "Mushy-zone constant K_c of the Darcy damping "
+                      "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
+    prm.declare_entry("Darcy epsilon", "1e-3", Patterns::Double(0.),
+                      "eps0 of the Darcy damping, avoids division by zero; "
+                      "range (0, 1].");
+    prm.declare_entry("FLIP fraction", "0.95", Patterns::Double(0., 1.),
+                      "beta of the grid-to-point update: 1 pure FLIP, 0 pure "
+                      "PIC; range [0, 1].");
+    prm.declare_entry("Courant number", "0.25", Patterns::Double(0.),
+                      "C of the convective limit dt <= C h / u_max; range (0, 1].");
+    prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
+                      "Surface tension coefficient sigma, N/m (0: no surface "
+                      "tension); enters as the capillary pressure sigma div(n) "
+                      "at the free surface. Range [0, inf).");
+    prm.declare_entry("Surface tension temperature derivative", "0",
+                      Patterns::Double(),
+                      "dsigma/dT of the Marangoni stress, N/(m K) (negative "
+                      "for most metals; 0: no Marangoni stress). Range any "
+                      "real number.");
+    prm.declare_entry("Recoil coefficient", "0", Patterns::Double(0., 1.),
+                      "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
+                      "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
+                      "L_v, M, T_v, p0 from the Heat transfer subsection. "
+                      "Range [0, 1].");
+    prm.declare_entry("Solver tolerance", "1e-10", Patterns::Double(0.),
+                      "Relative residual of the pressure CG solve; range (0, 1e-2].");
+    prm.declare_entry("Maximum iterations", "1000", Patterns::Integer(1),
+                      "Most CG iterations per pressure solve; range [1, inf).");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Melt flow");
+    viscosity = prm.get_double("Viscosity");
+    gravity          = Tensor<1, dim>();
+    gravity[dim - 1] = -prm.get_double("Gravity");
+    darcy_constant   = prm.get_double("Darcy constant");
+    darcy_epsilon    = prm.get_double("Darcy epsilon");
+    flip_fraction    = prm.get_double("FLIP fraction");
+    cfl              = prm.get_double("Courant number");
+    surface_tension  = prm.get_double("Surface tension");
+    surface_tension_gradient =
+      prm.get_double("Surface tension temperature derivative");
+    recoil_coefficient = prm.get_double("Recoil coefficient");
+    solver_tolerance = prm.get_double("Solver tolerance");
+    max_iterations   = prm.get_integer("Maximum iterations");
+    prm.leave_subsection();
+    require(viscosity >= 0, "Melt flow/Viscosity", viscosity,
+            "it must be non-negative (Pa s)");
+    require(darcy_constant >= 0, "Melt flow/Darcy constant", darcy_constant,
+            "it must be non-negative (kg/(m^3 s))");
+    require(darcy_epsilon > 0 && darcy_epsilon <= 1, "Melt flow/Darcy epsilon",
+            darcy_epsilon, "it must lie in (0, 1]");
+    require(flip_fraction >= 0 && flip_fraction <= 1, "Melt flow/FLIP fraction",
+            flip_fraction, "it must lie in [0, 1]");
+    require(cfl > 0 && cfl <= 1, "Melt flow/Courant number", cfl,
+            "it must lie in (0, 1]");
+    require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
+            "it must be non-negative (N/m)");
+    require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
+            "Melt flow/Solver tolerance", solver_tolerance,
+            "it must lie in (0, 1e-2]");
+  }
+
+
+  template <int dim>
+  IncompressibleFlow<dim>::IncompressibleFlow(const Parameters &         prm,
+                                              const Material &           material,
+                                              const BackgroundGrid<dim> &grid,
+                                              MaterialPoints<dim> &      points,
+                                              TimerOutput *              timer)
+    : prm(prm)
+    , rho(material.density)
+    , grid(grid)
+    , points(points)
+    , timer(timer)
+  {
+    const auto &ns = grid.node_strides();
+    const auto &cs = grid.strides();
+    for (unsigned int c = 0; c < n_corners; ++c)
+      {
+        corner_offset[c] = 0;
+        around_offset[c] = 0;
+        for (int d = 0; d < dim; ++d)
+          if ((c >> d) & 1)
+            {
+              corner_offset[c] += ns[d];
+              around_offset[c] += cs[d];
+            }
+      }
+    // Q1 stiffness int grad N_a . grad N_b over a cell of size h
+    // (2-point Gauss rule per direction, exact for Q1).
+    const double h   = grid.h();
+    const double gp[2] = {0.5 - 0.5 / std::sqrt(3.), 0.5 + 0.5 / std::sqrt(3.)};
+    for (auto &row : stiffness)
+      row.fill(0.);
+    for (unsigned int q = 0; q < n_corners; ++q)
+      {
+        std::array<double, dim> xi;
+        for (int d = 0; d < dim; ++d)
+          xi[d] = gp[(q >> d) & 1];
+        const double w = std::pow(0.5, dim) * std::pow(h, dim);
+        std::array<std::array<double, dim>, n_corners> grad;
+        for (unsigned int a = 0; a < n_corners; ++a)
+          for (int k = 0; k < dim; ++k)
+            {
+              double g = ((a >> k) & 1) ? 1. : -1.;
+              for (int d = 0; d < dim; ++d)
+                if (d != k)
+                  g *= ((a >> d) & 1) ? xi[d] : 1. - xi[d];
+              grad[a][k] = g / h;
+            }
+        for (unsigned int a = 0; a < n_corners; ++a)
+          for (unsigned int b = 0; b < n_corners; ++b)
+            for (int k = 0; k < dim; ++k)
+              stiffness[a][b] += w * grad[a][k] * grad[b][k];
+      }
+
+    type       = grid.make_field(outside);
+    type_old   = grid.make_field(-1.);
+    gid        = grid.make_field(-1.);
+    p_cell     = grid.make_field(0.);
+    p_surface  = grid.make_field(0.);
+    alpha_cell = grid.make_field(0.);
+    alpha_node = grid.make_node_field();
+    for (int d = 0; d < dim; ++d)
+      surface_force[d] = grid.make_node_field();
+    for (int f = 0; f < 2 * dim; ++f)
+      theta[f] = grid.make_field(0.5);
+    near1 = grid.make_field();
+    near2 = grid.make_field();
+    // Offsets of the 3^dim cells around a cell.
+    for (unsigned int k = 0; k < std::pow(3, dim); ++k)
+      {
+        std::ptrdiff_t o = 0;
+        unsigned int   r = k;
+        for (int d = 0; d < dim; ++d, r /= 3)
+          o += (int(r % 3) - 1) * cs[d];
+        stencil.push_back(o);
+      }
+    mass       = grid.make_node_field();
+    volume     = grid.make_node_field();
+    node_mark  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
+    node_fix   = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
+    for (int d = 0; d < dim; ++d)
+      {
+        mom[d]    = grid.make_node_field();
+        u_old[d]  = grid.make_node_field();
+        u_new[d]  = grid.make_node_field();
+        force[d]  = grid.make_node_field();
+        u_cell[d] = grid.make_field();
+      }
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::set_liquid_fraction(const std::vector<double> *g)
+  {
+    gamma = g;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::set_temperature(const std::vector<double> *T)
+  {
+    temperature = T;
+  }
+
+
+  template <int dim>
+  typename IncompressibleFlow<dim>::StepLimits
+  IncompressibleFlow<dim>::stable_time_step() const
+  {
+    double umax = stats.max_point_speed;
+    if (stats.steps == 0)
+      {
+        using P = typename MaterialPoints<dim>::PropertyIndex;
+        for (const auto &particle : points.particle_handler())
+          {
+            const auto v = particle.get_properties();
+            if (v[P::state] != MaterialPoints<dim>::fluid)
+              continue;
+            double s = 0;
+            for (int d = 0; d < dim; ++d)
+              s += v[P::velocity + d] * v[P::velocity + d];
+            umax = std::max(umax, std::sqrt(s));
+          }
+        umax = Utilities::MPI::max(umax, grid.communicator());
+      }
+    const double h = grid.h();
+    StepLimits   limits;
+    limits.convective =
+      prm.cfl * h / std::max(umax, std::sqrt(prm.gravity.norm() * h) + 1e-300);
+    limits.viscous = prm.viscosity > 0 ?
+                       h * h * rho / (2 * dim * prm.viscosity) :
+                       std::numeric_limits<double>::infinity();
+    limits.capillary =
+      prm.surface_tension > 0 ?
+        std::sqrt(rho * h * h * h / (2 * numbers::PI * prm.surface_tension)) :
+        std::numeric_limits<double>::infinity();
+    return limits;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::classify_cells()
+  {
+    using P           = typename MaterialPoints<dim>::PropertyIndex;
+    const auto &status = grid.cell_status();
+    std::swap(type, type_old);
+    for (std::size_t i = 0; i < type.size(); ++i)
+      type[i] = status[i] == BackgroundGrid<dim>::outside ? outside : gas;
+    fluid_cells.clear();
+    const auto &handler = points.particle_handler();
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        bool any_fluid = false;
+        for (const auto &particle : handler.particles_in_cell(cell))
+          if (particle.get_properties()[P::state] == MaterialPoints<dim>::fluid)
+            {
+              any_fluid = true;
+              break;
+            }
+        type[idx] = any_fluid ? fluid : solid;
+        if (any_fluid)
+          fluid_cells.push_back(idx);
+      }
+    grid.update_ghosts(type);
+
+    // Active nodes (nodes of owned fluid cells) and their wall flags.
+    for (const auto n : active)
+      node_mark[n] = 0;
+    active.clear();
+    active_cell.clear();
+    const auto &nc = grid.n_cells();
+    for (const auto c : fluid_cells)
+      {
+        const std::size_t n0 = grid.first_node_of_cell(c);
+        for (unsigned int k = 0; k < n_corners; ++k)
+          {
+            const std::size_t n = n0 + corner_offset[k];
+            if (node_mark[n])
+              continue;
+            node_mark[n] = 1;
+            active.push_back(n);
+            const std::size_t c0 = c + around_offset[k];
+            active_cell.push_back(c0);
+            // Node ijk equals the cell index of c0.
+            const auto   ijk = grid.global_index(c0);
+            std::uint8_t fix = 0;
+            for (int d = 0; d < dim; ++d)
+              if (ijk[d] == 0 || ijk[d] == int(nc[d]))
+                fix |= (1u << d);
+            int n_fluid = 0;
+            for (unsigned int j = 0; j < n_corners; ++j)
+              {
+                const auto t = type[c0 - around_offset[j]];
+                if (t == solid)
+                  fix = (1u << dim) - 1;
+                n_fluid += (t == fluid);
+              }
+            node_fix[n] = fix;
+            volume[n]   = n_fluid * std::pow(0.5 * grid.h(), dim);
+          }
+      }
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::transfer_to_grid()
+  {
+    using P            = typename MaterialPoints<dim>::PropertyIndex;
+    const double  ih   = 1. / grid.h();
+    const auto &  x0   = grid.origin();
+    auto &        handler = points.particle_handler();
+    // Zero the whole node arrays: sum_shared_nodes() writes the partial sums
+    // of neighbour ranks also onto nodes that are not active here, and stale
+    // values there would re-enter the next sum (a memset, ~1 ns per node).
+    std::fill(mass.begin(), mass.end(), 0.);
+    for (int d = 0; d < dim; ++d)
+      std::fill(mom[d].begin(), mom[d].end(), 0.);
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        if (type[idx] != fluid)
+          continue;
+        const auto        ijk = grid.global_index(idx);
+        const std::size_t n0  = grid.first_node_of_cell(idx);
+        for (const auto &particle : handler.particles_in_cell(cell))
+          {
+            const auto v = particle.get_properties();
+            if (v[P::state] != MaterialPoints<dim>::fluid)
+              continue;
+            const Point<dim> x = particle.get_location();
+            double           xi[dim];
+            for (int d = 0; d < dim; ++d)
+              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
+            const double m = v[P::mass];
+            for (unsigned int k = 0; k < n_corners; ++k)
+              {
+                double w = m;
+                for (int d = 0; d < dim; ++d)
+                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
+                const std::size_t n = n0 + corner_offset[k];
+                mass[n] += w;
+                for (int d = 0; d < dim; ++d)
+                  mom[d][n] += w * v[P::velocity + d];
+              }
+          }
+      }
+    grid.sum_shared_nodes(mass);
+    for (int d = 0; d < dim; ++d)
+      grid.sum_shared_nodes(mom[d]);
+    for (const auto n : active)
+      for (int d = 0; d < dim; ++d)
+        u_old[d][n] = mass[n] > 0 ? mom[d][n] / mass[n] : 0.;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::apply_boundary_conditions(
+    std::array<std::vector<double>, dim> &u) const
+  {
+    for (const auto n : active)
+      if (node_fix[n])
+        for (int d = 0; d < dim; ++d)
+          if ((node_fix[n] >> d) & 1)
+            u[d][n] = 0;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::predictor(const double dt)
+  {
+    // Viscous force -mu K u per fluid cell, summed over ranks.
+    const bool viscous = prm.viscosity > 0;
+    if (viscous)
+      {
+        for (int d = 0; d < dim; ++d)
+          std::fill(force[d].begin(), force[d].end(), 0.);
+        for (const auto c : fluid_cells)
+          {
+            const std::size_t n0 = grid.first_node_of_cell(c);
+            for (int d = 0; d < dim; ++d)
+              {
+                double u[n_corners];
+                for (unsigned int b = 0; b < n_corners; ++b)
+                  u[b] = u_old[d][n0 + corner_offset[b]];
+                for (unsigned int a = 0; a < n_corners; ++a)
+                  {
+                    double f = 0;
+                    for (unsigned int b = 0; b < n_corners; ++b)
+                      f += stiffness[a][b] * u[b];
+                    force[d][n0 + corner_offset[a]] -= prm.viscosity * f;
+                  }
+              }
+          }
+        for (int d = 0; d < dim; ++d)
+          grid.sum_shared_nodes(force[d]);
+      }
+    const double darcy = dt * prm.darcy_constant / rho;
+    for (std::size_t a = 0; a < active.size(); ++a)
+      {
+        const std::size_t n = active[a];
+        double            damping = 1;
+        if (gamma != nullptr && prm.darcy_constant > 0)
+          {
+            const std::size_t c0 = active_cell[a];
+            double            g = 0;
+            int               k = 0;
+            for (unsigned int j = 0; j < n_corners; ++j)
+              if (type[c0 - around_offset[j]] == fluid)
+                g += (*gamma)[c0 - around_offset[j]], ++k;
+            g = k > 0 ? g / k : 1.;
+            damping += darcy * (1 - g) * (1 - g) / (g * g * g + prm.darcy_epsilon);
+          }
+        for (int d = 0; d < dim; ++d)
+          {
+            double acc = prm.gravity[d];
+            if (viscous && volume[n] > 0)
+              acc += force[d][n] / (rho * volume[n]);
+            if (prm.surface_tension_gradient != 0 && volume[n] > 0)
+              acc += surface_force[d][n] / (rho * volume[n]);
+            u_new[d][n] = (u_old[d][n] + dt * acc) / damping;
+          }
+      }
+    apply_boundary_conditions(u_new);
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::surface_terms()
+  {
+    const bool thermal =
+      prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
+    AssertThrow(!thermal || temperature != nullptr,
+                ExcMessage("Melt flow: Marangoni stress and recoil pressure "
+                           "need the temperature (set_temperature())."));
+    using P          = typename MaterialPoints<dim>::PropertyIndex;
+    const double h   = grid.h();
+    const double ih  = 1. / h;
+    const double ihd = std::pow(ih, dim);
+    const auto & x0  = grid.origin();
+    const auto & cs  = grid.strides();
+    // Only cells near the fluid need alpha: near1 = within one cell of a
+    // fluid cell (alpha_cell is used there), near2 = within two (their
+    // points contribute to the nodes of near1 cells). Marked from the fluid
+    // cells of the local box; near1 of ghosts comes from their owners.
+    const auto &status = grid.cell_status();
+    std::fill(near1.begin(), near1.end(), 0.);
+    std::fill(near2.begin(), near2.end(), 0.);
+    for (std::size_t c = 0; c < type.size(); ++c)
+      if (type[c] == fluid)
+        for (const auto o : stencil)
+          {
+            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
+            if (e >= 0 && std::size_t(e) < near1.size())
+              near1[e] = 1;
+          }
+    grid.update_ghosts(near1);
+    for (std::size_t c = 0; c < near1.size(); ++c)
+      if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
+        for (const auto o : stencil)
+          {
+            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
+            if (e >= 0 && std::size_t(e) < near2.size())
+              near2[e] = 1;
+          }
+    // alpha at nodes: volume of the metal points near the fluid, tent
+    // weights.
+    std::fill(alpha_node.begin(), alpha_node.end(), 0.);
+    const auto &handler = points.particle_handler();
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        if (near2[idx] == 0)
+          continue;
+        const auto        ijk = grid.global_index(idx);
+        const std::size_t n0  = grid.first_node_of_cell(idx);
+        for (const auto &particle : handler.particles_in_cell(cell))
+          {
+            const Point<dim> x = particle.get_location();
+            double           xi[dim];
+            for (int d = 0; d < dim; ++d)
+              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
+            const double V = particle.get_properties()[P::volume] * ihd;
+            for (unsigned int k = 0; k < n_corners; ++k)
+              {
+                double w = V;
+                for (int d = 0; d < dim; ++d)
+                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
+                alpha_node[n0 + corner_offset[k]] += w;
+              }
+          }
+      }
+    grid.sum_shared_nodes(alpha_node);
+    // Smoothed alpha at the owned near1 cell centres: mean of the cell's
+    // nodes, node values mirrored at the domain boundary (walls are not
+    // free surfaces).
+    std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
+    const auto &nc = grid.n_cells();
+    for (const auto c : grid.owned_cells())
+      {
+        if (near1[c] == 0)
+          continue;
+        const auto        ijk = grid.global_index(c);
+        const std::size_t n0  = grid.first_node_of_cell(c);
+        double            a   = 0;
+        for (unsigned int k = 0; k < n_corners; ++k)
+          {
+            double f = 1;
+            for (int d = 0; d < dim; ++d)
+              {
+                const int i = ijk[d] + ((k >> d) & 1);
+                if (i == 0 || i == int(nc[d]))
+                  f *= 2;
+              }
+            a += f * alpha_node[n0 + corner_offset[k]];
+          }
+        alpha_cell[c] = a / n_corners;
+      }
+    grid.update_ghosts(alpha_cell);
+
+    // Free-surface position on each fluid-gas face: where the smoothed
+    // alpha, linear between the two cell centres, is 1/2; theta is its
+    // distance from the fluid cell centre in units of h, in
+    // [theta_min, 1] (1/2 for a fluid cell filled to its face).
+    for (int f = 0; f < 2 * dim; ++f)
+      std::fill(theta[f].begin(), theta[f].end(), 0.5);
+    for (const auto c : fluid_cells)
+      for (int d = 0; d < dim; ++d)
+        for (const int side : {0, 1})
+          {
+            const std::size_t g = side ? c + cs[d] : c - cs[d];
+            if (type[g] != gas)
+              continue;
+            const double ac = alpha_cell[c], ag = alpha_cell[g];
+            const double th = ac > ag ? (ac - 0.5) / (ac - ag) : theta_min;
+            theta[2 * d + side][c] = std::min(std::max(th, theta_min), 1.);
+          }
+    for (int f = 0; f < 2 * dim; ++f)
+      grid.update_ghosts(theta[f]);
+    if (!has_surface_terms())
+      return;
+
+    // Surface cells (owned fluid cells with a gas face): p_s = sigma div(n)
+    // + p_recoil(T), and the Marangoni traction on their gas faces.
+    std::fill(p_surface.begin(), p_surface.end(), 0.);
+    if (prm.surface_tension_gradient != 0)
+      for (int d = 0; d < dim; ++d)
+        std::fill(surface_force[d].begin(), surface_force[d].end(), 0.);
+    const double R_gas = 8.314462618;
+    const double Tv    = prm.evaporation_temperature;
+    for (const auto c : fluid_cells)
+      {
+        bool surface = false;
+        for (int d = 0; d < dim; ++d)
+          surface = surface || type[c + cs[d]] == gas || type[c - cs[d]] == gas;
+        if (!surface)
+          continue;
+        double div = 0;
+        double nc[dim] = {};
+        for (unsigned int k = 0; k < n_corners; ++k)
+          {
+            // Node k of cell c; the cell above it is c0.
+            const std::size_t c0 = c + around_offset[k];
+            double            g[dim], norm = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                g[d] = 0;
+                for (unsigned int j = 0; j < n_corners; ++j)
+                  if (!((j >> d) & 1))
+                    {
+                      const std::size_t up = c0 - around_offset[j];
+                      const std::size_t lo = up - cs[d];
+                      // Outside the domain alpha has zero gradient.
+                      if (status[up] != BackgroundGrid<dim>::outside &&
+                          status[lo] != BackgroundGrid<dim>::outside)
+                        g[d] += alpha_cell[up] - alpha_cell[lo];
+                    }
+                norm += g[d] * g[d];
+              }
+            norm = std::sqrt(norm);
+            if (norm > 1e-8)
+              for (int d = 0; d < dim; ++d)
+                {
+                  div -= (((k >> d) & 1) ? 1. : -1.) * g[d] / norm;
+                  nc[d] -= g[d] / norm;
+                }
+          }
+        double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
+        if (!thermal)
+          {
+            p_surface[c] = ps;
+            continue;
+          }
+        const double T = (*temperature)[c];
+        if (prm.recoil_coefficient > 0 && T > 0)
+          ps += prm.recoil_coefficient * prm.ambient_pressure *
+                std::exp(prm.latent_heat_evaporation * prm.molar_mass *
+                         (T - Tv) / (R_gas * T * Tv));
+        p_surface[c] = ps;
+        if (prm.surface_tension_gradient == 0)
+          continue;
+        // Unit normal of the cell; grad T from metal neighbours.
+        double nn = 0;
+        for (int d = 0; d < dim; ++d)
+          nn += nc[d] * nc[d];
+        nn = std::sqrt(nn);
+        if (nn < 1e-12)
+          continue;
+        double gT[dim], ndotg = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            nc[d] /= nn;
+            const bool   m = type[c - cs[d]] == fluid || type[c - cs[d]] == solid;
+            const bool   p = type[c + cs[d]] == fluid || type[c + cs[d]] == solid;
+            const double Tm = m ? (*temperature)[c - cs[d]] : T;
+            const double Tp = p ? (*temperature)[c + cs[d]] : T;
+            gT[d] = (m && p) ? (Tp - Tm) / (2 * h) : (Tp - Tm) / h;
+            ndotg += nc[d] * gT[d];
+          }
+        const double face = std::pow(h, dim - 1) / (1u << (dim - 1));
+        for (int d = 0; d < dim; ++d)
+          for (const int side : {0, 1})
+            {
+              const std::ptrdiff_t o = side ? cs[d] : -cs[d];
+              if (type[c + o] != gas)
+                continue;
+              const double w = prm.surface_tension_gradient * face * std::abs(nc[d]);
+              const std::size_t n0 = grid.first_node_of_cell(c);
+              for (unsigned int k = 0; k < n_corners; ++k)
+                if ((int((k >> d) & 1)) == side)
+                  for (int e = 0; e < dim; ++e)
+                    surface_force[e][n0 + corner_offset[k]] +=
+                      w * (gT[e] - ndotg * nc[e]);
+            }
+      }
+    if (prm.surface_tension_gradient != 0)
+      for (int d = 0; d < dim; ++d)
+        grid.sum_shared_nodes(surface_force[d]);
+    grid.update_ghosts(p_surface);
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::pressure_solve(const double dt)
+  {
+    const MPI_Comm comm = grid.communicator();
+    const double   h    = grid.h();
+    const auto &   cs   = grid.strides();
+
+    // Divergence of u* at the owned fluid cells.
+    const double scale = 1. / (h * (1u << (dim - 1)));
+    divergence.resize(fluid_cells.size());
+    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+      {
+        const std::size_t n0  = grid.first_node_of_cell(fluid_cells[i]);
+        double            div = 0;
+        for (unsigned int k = 0; k < n_corners; ++k)
+          for (int d = 0; d < dim; ++d)
+            div += (((k >> d) & 1) ? 1. : -1.) * u_new[d][n0 + corner_offset[k]];
+        divergence[i] = div * scale;
+      }
+
+    // Has the set of fluid cells (or of their neighbour types) changed?
+    bool changed = !have_matrix;
+    if (!changed)
+      for (const auto c : fluid_cells)
+        {
+          if (type_old[c] != fluid)
+            {
+              changed = true;
+              break;
+            }
+          for (int d = 0; d < dim && !changed; ++d)
+            changed = type_old[c + cs[d]] != type[c + cs[d]] ||
+                      type_old[c - cs[d]] != type[c - cs[d]];
+          if (changed)
+            break;
+        }
+    // Cells that stopped being fluid also change the system.
+    if (!changed && have_matrix)
+      changed = fluid_cells.size() != owned_rows.n_elements();
+    changed = Utilities::MPI::logical_or(changed, comm);
+
+    if (changed)
+      {
+        Section s(timer, "flow: pressure matrix setup");
+        const types::global_dof_index n_local = fluid_cells.size();
+        types::global_dof_index       offset  = 0;
+        MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, comm);
+        if (Utilities::MPI::this_mpi_process(comm) == 0)
+          offset = 0;
+        const types::global_dof_index n_total =
+          Utilities::MPI::sum(n_local, comm);
+        std::fill(gid.begin(), gid.end(), -1.);
+        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+          gid[fluid_cells[i]] = offset + i;
+        grid.update_ghosts(gid);
+        owned_rows = IndexSet(n_total);
+        owned_rows.add_range(offset, offset + n_local);
+        owned_rows.compress();
+
+        // (An empty row range must ask for 0 entries per row: Epetra's
+        // size check uses the min/max row of the range.)
+        TrilinosWrappers::SparsityPattern sp(owned_rows, comm,
+                                             n_local > 0 ? 2 * dim + 1 : 0);
+        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+          {
+            const std::size_t c   = fluid_cells[i];
+            const auto        row = offset + i;
+            sp.add(row, row);
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t o : {-cs[d], cs[d]})
+                if (type[c + o] == fluid)
+                  sp.add(row, types::global_dof_index(gid[c + o]));
+          }
+        sp.compress();
+        matrix.reinit(sp);
+        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+          {
+            const std::size_t c    = fluid_cells[i];
+            const auto        row  = offset + i;
+            double            diag = 0;
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t o : {-cs[d], cs[d]})
+                {
+                  const auto t = type[c + o];
+                  if (t == fluid)
+                    {
+                      diag += 1;
+                      matrix.set(row, types::global_dof_index(gid[c + o]), -1.);
+                    }
+                }
+            matrix.set(row, row, diag);
+          }
+        matrix.compress(VectorOperation::insert);
+        rhs.reinit(owned_rows, comm);
+        solution.reinit(owned_rows, comm);
+      }
+    // Diagonal, every step: the free-surface faces contribute 1/theta
+    // (Dirichlet value at the interface, ghost-fluid method); only these
+    // values change while the fluid set stays, and the AMG hierarchy of the
+    // last setup remains a good preconditioner.
+    {
+      const auto offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+      for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+        {
+          const std::size_t c    = fluid_cells[i];
+          double            diag = 0;
+          for (int d = 0; d < dim; ++d)
+            for (const int side : {0, 1})
+              {
+                const auto t = type[side ? c + cs[d] : c - cs[d]];
+                if (t == fluid)
+                  diag += 1;
+                else if (t == gas)
+                  diag += 1. / theta[2 * d + side][c];
+              }
+          matrix.set(offset + i, offset + i, diag);
+        }
+      matrix.compress(VectorOperation::insert);
+    }
+    if (changed)
+      {
+        Section s(timer, "flow: AMG setup");
+        const types::global_dof_index n_total = owned_rows.size();
+        if (n_total > 0)
+          {
+            TrilinosWrappers::PreconditionAMG::AdditionalData data;
+            data.elliptic              = true;
+            data.higher_order_elements = false;
+            data.smoother_sweeps       = 2;
+            data.aggregation_threshold = 0.02;
+            amg.initialize(matrix, data);
+          }
+        have_matrix = true;
+        ++stats.matrix_rebuilds;
+        stats.n_fluid_cells = n_total;
+      }
+    if (owned_rows.size() == 0)
+      return;
+
+    Section s(timer, "flow: pressure solve");
+    const auto   offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+    const double f      = -rho * h * h / dt;
+    const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
+    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+      {
+        double b = f * divergence[i];
+        if (capillary)
+          {
+            const std::size_t c = fluid_cells[i];
+            for (int d = 0; d < dim; ++d)
+              for (const int side : {0, 1})
+                if (type[side ? c + cs[d] : c - cs[d]] == gas)
+                  b += p_surface[c] / theta[2 * d + side][c];
+          }
+        rhs(offset + i) = b;
+      }
+    rhs.compress(VectorOperation::insert);
+    // Warm start from the previous pressure (same numbering) scaled to dt.
+    if (changed)
+      solution = 0;
+    const double norm = rhs.l2_norm();
+    if (norm == 0)
+      solution = 0;
+    else
+      {
+        SolverControl control(prm.max_iterations, prm.solver_tolerance * norm);
+        SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
+        try
+          {
+            cg.solve(matrix, solution, rhs, amg);
+          }
+        catch (const SolverControl::NoConvergence &e)
+          {
+            std::ostringstream msg;
+            msg << "Melt flow: the pressure CG solve did not converge in "
+                << e.last_step << " iterations (residual " << e.last_residual
+                << ", target " << control.tolerance() << ", "
+                << owned_rows.size() << " fluid cells).";
+            throw std::runtime_error(msg.str());
+          }
+        stats.last_iterations = control.last_step();
+        stats.cg_iterations += control.last_step();
+        stats.max_iterations =
+          std::max(stats.max_iterations, control.last_step());
+      }
+    std::fill(p_cell.begin(), p_cell.end(), 0.);
+    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+      p_cell[fluid_cells[i]] = solution(offset + i);
+    grid.update_ghosts(p_cell);
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::correction(const double dt)
+  {
+    const double h  = grid.h();
+    const auto & cs = grid.strides();
+    const double f  = dt / (rho * h);
+    for (std::size_t a = 0; a < active.size(); ++a)
+      {
+        const std::size_t n  = active[a];
+        const std::size_t c0 = active_cell[a]; // cell above the node
+        for (int d = 0; d < dim; ++d)
+          {
+            if ((node_fix[n] >> d) & 1)
+              continue;
+            double sum = 0;
+            int    k   = 0;
+            // Pairs: upper cell c0 - o (o_d = 0), lower = upper - stride_d.
+            for (unsigned int j = 0; j < n_corners; ++j)
+              {
+                if ((j >> d) & 1)
+                  continue;
+                const std::size_t up = c0 - around_offset[j];
+                const std::size_t lo = up - cs[d];
+                const auto        tu = type[up], tl = type[lo];
+                if (tu == fluid && tl == fluid)
+                  sum += p_cell[up] - p_cell[lo], ++k;
+                else if (tu == fluid && tl == gas)
+                  sum += (p_cell[up] - p_surface[up]) / theta[2 * d][up], ++k;
+                else if (tu == gas && tl == fluid)
+                  sum -= (p_cell[lo] - p_surface[lo]) / theta[2 * d + 1][lo], ++k;
+              }
+            if (k > 0)
+              u_new[d][n] -= f * sum / k;
+          }
+      }
+    apply_boundary_conditions(u_new);
+
+    for (const auto n : active)
+      for (int d = 0; d < dim; ++d)
+        if (!std::isfinite(u_new[d][n]))
+          {
+            std::size_t          rest = n;
+            std::array<int, dim> ijk;
+            for (int e = dim - 1; e >= 0; --e)
+              {
+                ijk[e] = grid.box_lower()[e] + int(rest / grid.node_strides()[e]);
+                rest %= grid.node_strides()[e];
+              }
+            std::ostringstream msg;
+            msg << "Melt flow became unstable: non-finite velocity at the grid "
+                << "node at x =";
+            for (int e = 0; e < dim; ++e)
+              msg << ' ' << grid.origin()[e] + ijk[e] * grid.h();
+            msg << " m (time step " << dt << " s). Reduce the time step.";
+            throw std::runtime_error(msg.str());
+          }
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::grid_to_points(const double dt)
+  {
+    using P           = typename MaterialPoints<dim>::PropertyIndex;
+    const double h    = grid.h();
+    const double ih   = 1. / h;
+    const auto & x0   = grid.origin();
+    const auto & nc   = grid.n_cells();
+    const double beta = prm.flip_fraction;
+    auto &       handler = points.particle_handler();
+    bool         moved   = false;
+    double       umax    = 0;
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        if (type[idx] != fluid)
+          continue;
+        const auto        ijk = grid.global_index(idx);
+        const std::size_t n0  = grid.first_node_of_cell(idx);
+        for (auto &particle : handler.particles_in_cell(cell))
+          {
+            const auto v = particle.get_properties();
+            if (v[P::state] != MaterialPoints<dim>::fluid)
+              continue;
+            Point<dim> x = particle.get_location();
+            double     xi[dim];
+            for (int d = 0; d < dim; ++d)
+              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
+            double vg[dim] = {}, dv[dim] = {};
+            for (unsigned int k = 0; k < n_corners; ++k)
+              {
+                double w = 1;
+                for (int d = 0; d < dim; ++d)
+                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
+                const std::size_t n = n0 + corner_offset[k];
+                for (int d = 0; d < dim; ++d)
+                  {
+                    vg[d] += w * u_new[d][n];
+                    dv[d] += w * (u_new[d][n] - u_old[d][n]);
+                  }
+              }
+            double   speed2 = 0, step2 = 0;
+            bool     left   = false;
+            Point<dim> ref;
+            for (int d = 0; d < dim; ++d)
+              {
+                v[P::velocity + d] =
+                  beta * (v[P::velocity + d] + dv[d]) + (1 - beta) * vg[d];
+                speed2 += v[P::velocity + d] * v[P::velocity + d];
+                const double dx = dt * vg[d];
+                step2 += dx * dx;
+                // Stay inside the domain (walls are free slip).
+                const double lo = x0[d] + 1e-9 * h;
+                const double hi = x0[d] + nc[d] * h - 1e-9 * h;
+                x[d]            = std::min(std::max(x[d] + dx, lo), hi);
+                ref[d]          = (x[d] - x0[d]) * ih - ijk[d];
+                left            = left || ref[d] < 0 || ref[d] >= 1;
+              }
+            if (!(step2 <= h * h))
+              {
+                std::ostringstream msg;
+                msg << "Melt flow became unstable: a point at x = " << x
+                    << " m would move " << std::sqrt(step2)
+                    << " m in one step, more than a cell (" << h
+                    << " m); time step " << dt << " s. Reduce the time step "
+                    << "or the Courant number.";
+                throw std::runtime_error(msg.str());
+              }
+            umax = std::max(umax, speed2);
+            particle.set_location(x);
+            if (!left)
+              particle.set_reference_location(ref);
+            moved = moved || left;
+          }
+      }
+    stats.max_point_speed =
+      std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
+    if (Utilities::MPI::logical_or(moved, grid.communicator()))
+      {
+        Section s(timer, "flow: re-sort points");
+        // Points that stayed on their rank are moved cell by cell; a point
+        // that left the rank needs deal.II's global sort of all points.
+        if (!points.relocate_points())
+          points.points_moved();
+        ++stats.resorts;
+      }
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::step(const double dt)
+  {
+    const StepLimits limits = stable_time_step();
+    if (!(dt > 0) || dt > limits.viscous * (1 + 1e-12) ||
+        dt > limits.capillary * (1 + 1e-12))
+      {
+        std::ostringstream msg;
+        msg << "Melt flow: the time step " << dt
+            << " s is not positive or exceeds the viscous limit "
+            << limits.viscous << " s (h^2 rho/(2 dim mu)) or the capillary "
+            << "limit " << limits.capillary << " s (sqrt(rho h^3/(2 pi sigma))).";
+        throw std::runtime_error(msg.str());
+      }
+    advance(dt, 0);
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::advance(const double dt, const unsigned int depth)
+  {
+    {
+      Section s(timer, "flow: transfer to grid");
+      classify_cells();
+      transfer_to_grid();
+    }
+    {
+      Section s(timer, "flow: free surface");
+      surface_terms();
+    }
+    {
+      Section s(timer, "flow: predictor");
+      predictor(dt);
+    }
+    pressure_solve(dt);
+    {
+      Section s(timer, "flow: correction");
+      correction(dt);
+    }
+    // Step rejection: if the new nodal velocity would carry a point more
+    // than a cell (e.g. a sudden recoil or capillary pressure that the
+    // limits of the last step did not foresee), redo the step as two halves.
+    {
+      double umax = 0;
+      for (const auto n : active)
+        {
+          double s2 = 0;
+          for (int d = 0; d < dim; ++d)
+            s2 += u_new[d][n] * u_new[d][n];
+          umax = std::max(umax, s2);
+        }
+      umax = std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
+      if (umax * dt > grid.h())
+        {
+          if (depth >= 20)
+            {
+              std::ostringstream msg;
+              msg << "Melt flow became unstable: nodal speed " << umax
+                  << " m/s moves points more than a cell even after halving "
+                  << "the step 20 times (step " << dt << " s).";
+              throw std::runtime_error(msg.str());
+            }
+          ++stats.halvings;
+          advance(dt / 2, depth + 1);
+          advance(dt / 2, depth + 1);
+          return;
+        }
+    }
+    {
+      Section s(timer, "flow: cell velocity");
+      for (int d = 0; d < dim; ++d)
+        std::fill(u_cell[d].begin(), u_cell[d].end(), 0.);
+      for (const auto c : fluid_cells)
+        {
+          const std::size_t n0 = grid.first_node_of_cell(c);
+          for (int d = 0; d < dim; ++d)
+            {
+              double s = 0;
+              for (unsigned int k = 0; k < n_corners; ++k)
+                s += u_new[d][n0 + corner_offset[k]];
+              u_cell[d][c] = s / n_corners;
+            }
+        }
+      for (int d = 0; d < dim; ++d)
+        grid.update_ghosts(u_cell[d]);
+    }
+    {
+      Section s(timer, "flow: grid to points + advection");
+      grid_to_points(dt);
+    }
+    ++stats.steps;
+  }
+
+  template class IncompressibleFlow<2>;
+  template class IncompressibleFlow<3>;
+} // namespace femp

@@ -1,0 +1,74 @@
+// femp tests: a small flow scene (grid, fluid material points, the
+// incompressible flow solver) for the melt-flow verification tests.
+#ifndef femp_flow_tools_h
+#define femp_flow_tools_h
+
+#include <femp/incompressible_flow.h>
+#include <femp/material_points.h>
+
+#include "test_tools.h"
+
+#include <functional>
+
+namespace femp_test
+{
+  template <int dim>
+  struct FlowScene
+  {
+    /// Box [0, size] with cells of size h, a fluid body where @p inside is
+    /// true, points at spacing h/2, density rho.
+    FlowScene(const Point<dim> &                              size,
+              const double                                    h,
+              const double                                    rho,
+              const std::function<bool(const Point<dim> &)> &inside,
+              const typename IncompressibleFlow<dim>::Parameters &flow_prm,
+              MPI_Comm                                        comm)
+      : grid(box<dim>(Point<dim>(), size, h), comm)
+    {
+      material         = unit_material();
+      material.density = rho;
+      grid.create();
+      points_prm.point_spacing   = h / 2;
+      points_prm.subcells        = 2;
+      points_prm.layer_thickness = 0;
+      points = std::make_unique<MaterialPoints<dim>>(points_prm, material, grid);
+      points->create_region(inside, 300., MaterialPoints<dim>::fluid);
+      flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material, grid,
+                                                       *points);
+    }
+
+    /// Maximum over fluid points of f(point), over all ranks.
+    double
+    max_over_points(
+      const std::function<double(const Point<dim> &, ArrayView<const double>)> &f)
+      const
+    {
+      double m = -1e300;
+      for (const auto &p : points->particle_handler())
+        m = std::max(m, f(p.get_location(), p.get_properties()));
+      return Utilities::MPI::max(m, grid.communicator());
+    }
+
+    Material                                  material;
+    BackgroundGrid<dim>                       grid;
+    typename MaterialPoints<dim>::Parameters  points_prm;
+    std::unique_ptr<MaterialPoints<dim>>      points;
+    std::unique_ptr<IncompressibleFlow<dim>>  flow;
+  };
+
+  /// Speed of a point from its properties.
+  template <int dim>
+  double
+  point_speed(ArrayView<const double> v)
+  {
+    double s = 0;
+    for (int d = 0; d < dim; ++d)
+      {
+        const double u = v[MaterialPoints<dim>::PropertyIndex::velocity + d];
+        s += u * u;
+      }
+    return std::sqrt(s);
+  }
+} // namespace femp_test
+
+#endif

@@ -1,0 +1,61 @@
+// Melt flow, static droplet (VERIFICATION.md sec. 4): a 2D drop of radius R
+// = 10 h, no gravity, surface tension sigma. The pressure inside must match
+// the Laplace jump sigma/R within 5 % (mean over the cells within R/2 of the
+// centre), after many steps; the spurious-current capillary number
+// mu u_max / sigma is printed. 1 and 2 ranks give the same output.
+#include "flow_tools.h"
+
+using namespace femp_test;
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+  constexpr int                    dim = 2;
+  const double L = 1, h = L / 40, R = 0.25, rho = 1000, sigma = 1, mu = 0.5;
+  const Point<dim> centre(0.5, 0.5);
+  try
+    {
+      typename IncompressibleFlow<dim>::Parameters prm;
+      prm.viscosity       = mu;
+      prm.gravity         = Tensor<1, dim>();
+      prm.surface_tension = sigma;
+      FlowScene<dim> scene(Point<dim>(L, L), h, rho,
+                           [&](const Point<dim> &x) {
+                             return x.distance(centre) < R;
+                           },
+                           prm, comm);
+      const auto limits = scene.flow->stable_time_step();
+      const double dt   = limits.min();
+      const unsigned int n_steps = 200;
+      for (unsigned int n = 0; n < n_steps; ++n)
+        scene.flow->step(dt);
+      const auto &p    = scene.flow->pressure();
+      double      sum = 0, count = 0;
+      for (const auto idx : scene.grid.owned_cells())
+        if (scene.grid.cell_center(idx).distance(centre) < R / 2)
+          sum += p[idx], ++count;
+      const double p_in = Utilities::MPI::sum(sum, comm) /
+                          Utilities::MPI::sum(count, comm);
+      const double umax = scene.max_over_points(
+        [](const Point<dim> &, auto v) { return point_speed<dim>(v); });
+      const double t_sigma = std::sqrt(rho * R * R * R / sigma);
+      checks.print("capillary time step limit, s", limits.capillary);
+      checks.print("steps", n_steps);
+      checks.print("time / sqrt(rho R^3/sigma)",
+                   std::round(n_steps * dt / t_sigma * 100) / 100);
+      checks.print("inside pressure / (sigma/R)",
+                   std::round(p_in / (sigma / R) * 1000) / 1000);
+      checks.at_most("|Laplace jump error|", std::abs(p_in - sigma / R) / (sigma / R), 0.05);
+      checks.print("spurious-current capillary number mu u_max/sigma",
+                   std::round(mu * umax / sigma * 1e4) / 1e4);
+    }
+  catch (const std::exception &e)
+    {
+      std::cerr << e.what() << std::endl;
+      return 1;
+    }
+  return checks.exit_code();
+}
