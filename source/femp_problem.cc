@@ -23,8 +23,8 @@ namespace femp
                       "Solve the melt-pool flow (eqs. 3-4). Not available in "
                       "this version: must be false.");
     prm.declare_entry("Solid stress", "false", Patterns::Bool(),
-                      "Solve the thermal stress by MPM and FE (eqs. 5-17). Not "
-                      "available in this version: must be false.");
+                      "Solve the thermal stress by MPM and FE (eqs. 5-17): "
+                      "subsections 'Solid' and 'Solid FEM'.");
     prm.leave_subsection();
     FempProblem<3>::TimeParameters::declare_parameters(prm);
     Material::declare_parameters(prm);
@@ -33,6 +33,9 @@ namespace femp
     HeatTransfer<3>::Parameters::declare_parameters(prm);
     Laser<3>::Parameters::declare_parameters(prm);
     Output<3>::Parameters::declare_parameters(prm);
+    SolidMaterial::declare_parameters(prm);
+    SolidStress<3>::Parameters::declare_parameters(prm);
+    SolidFEM<3>::Parameters::declare_parameters(prm);
   }
 
 
@@ -84,9 +87,7 @@ namespace femp
     require(!prm.get_bool("Melt flow"), "Physics/Melt flow", "true",
             "the melt-flow solver is not part of this version of femp; set it "
             "to false");
-    require(!prm.get_bool("Solid stress"), "Physics/Solid stress", "true",
-            "the solid-stress solver is not part of this version of femp; set "
-            "it to false");
+    solid_enabled = prm.get_bool("Solid stress");
     prm.leave_subsection();
     time_prm.parse_parameters(prm);
     material.parse_parameters(prm);
@@ -98,6 +99,16 @@ namespace femp
     output_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     melt_temperature = material.liquidus;
+    if (solid_enabled)
+      {
+        solid_material.parse_parameters(prm);
+        solid_material.density          = material.density;
+        solid_material.melt_temperature = material.solidus;
+        solid_prm.parse_parameters(prm);
+        solid_prm.check(solid_material, grid_prm);
+        fem_prm.parse_parameters(prm);
+        fem_prm.check(grid_prm);
+      }
 
     // Checks that need several modules, still before any work.
     if (time_prm.time_step > 0)
@@ -143,6 +154,14 @@ namespace femp
     }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
     output->initialize({"T", "gamma", "alpha"});
+    if (solid_enabled)
+      {
+        TimerOutput::Scope t(timer, "setup: solid");
+        solid = std::make_unique<SolidStress<dim>>(solid_prm, fem_prm,
+                                                   solid_material, *grid,
+                                                   *points);
+        solid->initialize(heat->temperature(), output_prm.directory);
+      }
 
     pcout << "femp: " << dim << "D scene, "
           << Utilities::MPI::n_mpi_processes(comm) << " MPI rank(s)\n"
@@ -153,6 +172,12 @@ namespace femp
     pcout << "  material points: " << points->n_global_points() << " ("
           << points->n_powder_grains() << " powder grains, packing fraction "
           << std::setprecision(3) << points->achieved_packing_fraction() << ")\n"
+          << (solid ? "  solid: " + std::to_string(int(solid->sizes()[0])) +
+                        " material points, " +
+                        std::to_string(int(solid->sizes()[1])) +
+                        " finite elements, step " +
+                        std::to_string(solid->time_step()) + " s\n" :
+                      std::string())
           << "  output: " << output_prm.directory << "/grid.pvd, "
           << output_prm.directory << "/points.pvd, "
           << output_prm.directory << "/melt_pool.csv\n";
@@ -253,15 +278,20 @@ namespace femp
 
         // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4): not in this
         //    version (Physics/Melt flow must be false).
-        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17): not in
-        //    this version (Physics/Solid stress must be false).
-
         time += dt;
         ++step;
-
-        // 5. Output.
         const bool last = time >= time_prm.end_time * (1 - 1e-12) ||
                           step >= time_prm.max_steps;
+
+        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17),
+        //    sub-cycled against the temperature step.
+        if (solid)
+          {
+            TimerOutput::Scope t(timer, "solid");
+            solid->advance(time, heat->temperature(), last);
+          }
+
+        // 5. Output.
         if (time >= next_series * (1 - 1e-12) || last)
           {
             TimerOutput::Scope t(timer, "time series");
@@ -315,6 +345,20 @@ namespace femp
       result.point_T_mean =
         Utilities::MPI::sum(sum, comm) / std::max<double>(1, result.n_points);
     }
+    if (solid)
+      {
+        result.solid_steps  = solid->n_steps();
+        result.solid_energy = solid->energies();
+        const auto &e       = result.solid_energy;
+        pcout << std::setprecision(6) << "Solid: " << result.solid_steps
+              << " steps of " << solid->time_step()
+              << " s; energies (J" << (dim == 2 ? "/m" : "")
+              << "): external work " << e.external << ", stress work "
+              << e.internal << ", kinetic " << e.kinetic << ", hourglass "
+              << e.hourglass << ", balance " << e.balance()
+              << "; kinetic/internal " << e.kinetic / std::max(1e-300, std::abs(e.internal))
+              << std::endl;
+      }
     pcout << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
           << "): laser " << result.laser << ", surface losses "
           << result.losses << " (evaporation " << e.evaporation

@@ -3,8 +3,8 @@
 //   1. tag cells from the points, update alpha, gamma and properties;
 //   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1);
 //   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4; not yet built);
-//   4. solid by MPM + FE with transition-node coupling (eqs. 5-17; not yet
-//      built), sub-cycled to the macro time;
+//   4. solid by MPM + FE with transition-node coupling (SolidStress,
+//      eqs. 5-17), sub-cycled to the macro time;
 //   5. output, next step.
 #ifndef femp_femp_problem_h
 #define femp_femp_problem_h
@@ -19,6 +19,7 @@
 #include <femp/material.h>
 #include <femp/material_points.h>
 #include <femp/output.h>
+#include <femp/solid_stress.h>
 
 #include <memory>
 
@@ -65,6 +66,9 @@ namespace femp
       double laser = 0, losses = 0, boundary = 0, stored = 0;
       types::particle_index n_points = 0;
       double                point_T_mean = 0; ///< mean point temperature, K
+      /// Solid (if Physics/Solid stress): steps and final energies.
+      unsigned int solid_steps = 0;
+      typename SolidStress<dim>::Energies solid_energy;
     };
     const Summary &
     summary() const
@@ -83,12 +87,17 @@ namespace femp
     typename Laser<dim>::Parameters           laser_prm;
     typename Output<dim>::Parameters          output_prm;
     double                                    melt_temperature;
+    bool                                      solid_enabled = false;
+    SolidMaterial                             solid_material;
+    typename SolidStress<dim>::Parameters     solid_prm;
+    typename SolidFEM<dim>::Parameters        fem_prm;
 
     std::unique_ptr<BackgroundGrid<dim>> grid;
     std::unique_ptr<Laser<dim>>          laser;
     std::unique_ptr<MaterialPoints<dim>> points;
     std::unique_ptr<HeatTransfer<dim>>   heat;
     std::unique_ptr<Output<dim>>         output;
+    std::unique_ptr<SolidStress<dim>>    solid;
     TimerOutput                          timer;
     Summary                              result;
 

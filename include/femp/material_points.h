@@ -15,6 +15,8 @@
 //   5 .. 5+dim-1 velocity (m/s)
 //   then dim(dim+1)/2 Cauchy stress components (Pa; xx, yy, [zz], xy, [xz, yz])
 //   then the equivalent plastic strain (-)
+//   2D only: then the out-of-plane stress sigma_zz (Pa; plane strain)
+//   then the solid's artificial viscous pressure q (Pa; see SolidMPM)
 #ifndef femp_material_points_h
 #define femp_material_points_h
 
@@ -52,7 +54,12 @@ namespace femp
       static constexpr unsigned int velocity         = 5;
       static constexpr unsigned int stress           = 5 + dim;
       static constexpr unsigned int plastic_strain   = 5 + dim + dim * (dim + 1) / 2;
-      static constexpr unsigned int n_properties     = plastic_strain + 1;
+      /// 2D only (plane strain): out-of-plane stress sigma_zz.
+      static constexpr unsigned int stress_zz        = plastic_strain + 1;
+      /// Artificial bulk-viscosity pressure of the solid (SolidMPM).
+      static constexpr unsigned int viscous_pressure =
+        plastic_strain + 1 + (dim == 2 ? 1 : 0);
+      static constexpr unsigned int n_properties = viscous_pressure + 1;
     };
 
     struct Parameters
@@ -103,6 +110,12 @@ namespace femp
 
     const Particles::ParticleHandler<dim> &
     particle_handler() const
+    {
+      return handler;
+    }
+    /// Write access for the solid (positions, velocities, stresses).
+    Particles::ParticleHandler<dim> &
+    particle_handler()
     {
       return handler;
     }
