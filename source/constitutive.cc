@@ -99,59 +99,85 @@ namespace femp
         return result;
       }
 
-    // Objective rotation of the old stress (Jaumann, Hughes-Winget).
+    // Plain arrays in the hot path: s[i][j] full 3x3 copy of the stress.
+    double S[3][3];
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        S[i][j] = state.sigma[i][j];
+
+    // Objective rotation of the old stress (Jaumann, Hughes-Winget):
+    // R = (I - W/2)^-1 (I + W/2) = I + (W + W^2/2) / (1 + |w|^2/4) (Cayley),
+    // exactly orthogonal; W is the spin times the step.
     const double w01 = 0.5 * (L_dt[0][1] - L_dt[1][0]);
     const double w02 = 0.5 * (L_dt[0][2] - L_dt[2][0]);
     const double w12 = 0.5 * (L_dt[1][2] - L_dt[2][1]);
-    SymmetricTensor<2, 3> sigma = state.sigma;
     if (w01 != 0 || w02 != 0 || w12 != 0)
       {
-        Tensor<2, 3> W;
-        W[0][1] = w01, W[1][0] = -w01;
-        W[0][2] = w02, W[2][0] = -w02;
-        W[1][2] = w12, W[2][1] = -w12;
-        const Tensor<2, 3> I  = unit_symmetric_tensor<3>();
-        const Tensor<2, 3> R  = invert(I - 0.5 * W) * (I + 0.5 * W);
-        const Tensor<2, 3> s  = sigma;
-        const Tensor<2, 3> rs = R * s * transpose(R);
-        sigma                 = symmetrize(rs);
+        const double W[3][3] = {{0, w01, w02}, {-w01, 0, w12}, {-w02, -w12, 0}};
+        const double f = 1. / (1 + 0.25 * (w01 * w01 + w02 * w02 + w12 * w12));
+        double       R[3][3];
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = 0; j < 3; ++j)
+            {
+              double w2 = 0;
+              for (unsigned int k = 0; k < 3; ++k)
+                w2 += W[i][k] * W[k][j];
+              R[i][j] = (i == j ? 1. : 0.) + f * (W[i][j] + 0.5 * w2);
+            }
+        double RS[3][3];
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = 0; j < 3; ++j)
+            RS[i][j] = R[i][0] * S[0][j] + R[i][1] * S[1][j] + R[i][2] * S[2][j];
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = i; j < 3; ++j)
+            S[i][j] = S[j][i] =
+              RS[i][0] * R[j][0] + RS[i][1] * R[j][1] + RS[i][2] * R[j][2];
       }
 
-    // Elastic predictor with the moduli at the new temperature.
+    // Elastic predictor with the moduli at the new temperature. A point
+    // that solidified in this step starts stress-free at the solidus.
     const double E      = m.youngs_modulus.value(T_new);
     const double nu     = m.poisson_ratio;
     const double mu     = E / (2 * (1 + nu));
     const double lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
-    SymmetricTensor<2, 3> de = symmetrize(L_dt);
-    // A point that solidified in this step starts stress-free at the solidus.
-    const double dth =
-      m.expansion * (T_new - std::min(T_old, m.melt_temperature));
-    for (unsigned int d = 0; d < 3; ++d)
-      de[d][d] -= dth;
-    const double tr = trace(de);
-    sigma += 2 * mu * de;
-    for (unsigned int d = 0; d < 3; ++d)
-      sigma[d][d] += lambda * tr;
+    const double dth = m.expansion * (T_new - std::min(T_old, m.melt_temperature));
+    double       de[3][3];
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        de[i][j] = 0.5 * (L_dt[i][j] + L_dt[j][i]) - (i == j ? dth : 0.);
+    const double tr = de[0][0] + de[1][1] + de[2][2];
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        S[i][j] += 2 * mu * de[i][j] + (i == j ? lambda * tr : 0.);
 
     // J2 radial return, linear isotropic hardening.
-    const double          H   = m.plastic_modulus.value(T_new);
-    const double          sy  = m.yield_stress.value(T_new) + H * state.eps_p;
-    const double          p   = trace(sigma) / 3;
-    SymmetricTensor<2, 3> s   = sigma;
+    const double p = (S[0][0] + S[1][1] + S[2][2]) / 3;
     for (unsigned int d = 0; d < 3; ++d)
-      s[d][d] -= p;
-    const double q = std::sqrt(1.5 * (s * s));
-    if (q > sy)
+      S[d][d] -= p;
+    double ss = 0;
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        ss += S[i][j] * S[i][j];
+    const double q  = std::sqrt(1.5 * ss);
+    const double sy = m.yield_stress.value(T_new);
+    double       scale = 1;
+    if (q > sy) // cheap test first: the hardening term only raises sy
       {
-        const double dg = (q - sy) / (3 * mu + H);
-        s *= 1 - 3 * mu * dg / q;
-        state.eps_p += dg;
-        result.yielded           = true;
-        result.plastic_increment = dg;
-        sigma                    = s;
-        for (unsigned int d = 0; d < 3; ++d)
-          sigma[d][d] += p;
+        const double H   = m.plastic_modulus.value(T_new);
+        const double syh = sy + H * state.eps_p;
+        if (q > syh)
+          {
+            const double dg = (q - syh) / (3 * mu + H);
+            scale           = 1 - 3 * mu * dg / q;
+            state.eps_p += dg;
+            result.yielded           = true;
+            result.plastic_increment = dg;
+          }
       }
+    SymmetricTensor<2, 3> sigma;
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = i; j < 3; ++j)
+        sigma[i][j] = scale * S[i][j] + (i == j ? p : 0.);
     state.sigma = sigma;
     return result;
   }
