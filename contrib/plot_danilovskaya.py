@@ -38,7 +38,7 @@ def main():
     ax[0].set_title("stress at A (x = 1.01 m)")
     ax[0].legend()
     ax[1].plot(hist["t"], hist["theta_exact"], "k-", label="closed form")
-    ax[1].plot(hist["t"], hist["theta_mpm"], "b--", label="femp")
+    ax[1].plot(hist["t"], hist["theta_mpm"], "b--", label="femp (one grid field in all runs)")
     ax[1].set_xlabel("t (nondimensional)")
     ax[1].set_ylabel("theta = (T - T_ref) / T0")
     ax[1].set_title("temperature at A")

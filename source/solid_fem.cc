@@ -224,24 +224,22 @@ namespace femp
 
   template <int dim>
   void
-  SolidFEM<dim>::add_mass_momentum(SolidNodeFields<dim> &nodes) const
+  SolidFEM<dim>::add_mass_momentum(SolidNodeFields<dim> &nodes,
+                                   const bool            with_mass) const
   {
-    for (const auto n : fe_nodes)
-      {
-        nodes.mass[n] += node_mass[n];
-        for (int d = 0; d < dim; ++d)
-          nodes.momentum[d][n] += node_mass[n] * vel[d][n];
-      }
-  }
-
-
-  template <int dim>
-  void
-  SolidFEM<dim>::add_momentum(SolidNodeFields<dim> &nodes) const
-  {
-    for (const auto n : fe_nodes)
-      for (int d = 0; d < dim; ++d)
-        nodes.momentum[d][n] += node_mass[n] * vel[d][n];
+    // Element by element (partial sums of this rank): a transition node may
+    // be a node of owned cells of a rank that owns none of its elements, so
+    // the FE share must go through the same sum over ranks as the points'.
+    const double m = mat.density * V * mass_scale / n_corners;
+    for (std::size_t e = 0; e < element_cell.size(); ++e)
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          const std::size_t I = element_node0[e] + corner_offset[a];
+          if (with_mass)
+            nodes.mass[I] += m;
+          for (int d = 0; d < dim; ++d)
+            nodes.momentum[d][I] += m * vel[d][I];
+        }
   }
 
 
@@ -308,27 +306,35 @@ namespace femp
 
   template <int dim>
   double
-  SolidFEM<dim>::kinetic_energy(const std::vector<std::uint8_t> &counted) const
+  SolidFEM<dim>::kinetic_energy() const
   {
-    double k = 0;
-    for (const auto n : fe_nodes)
-      if (counted[n])
-        for (int d = 0; d < dim; ++d)
-          k += 0.5 * node_mass[n] * vel[d][n] * vel[d][n];
+    // By element shares, so that every node counts once over all ranks.
+    const double m = mat.density * V * mass_scale / n_corners;
+    double       k = 0;
+    for (std::size_t e = 0; e < element_cell.size(); ++e)
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          const std::size_t I = element_node0[e] + corner_offset[a];
+          for (int d = 0; d < dim; ++d)
+            k += 0.5 * m * vel[d][I] * vel[d][I];
+        }
     return k;
   }
 
 
   template <int dim>
   double
-  SolidFEM<dim>::gravity_power(const Tensor<1, dim> &            g,
-                               const std::vector<std::uint8_t> &counted) const
+  SolidFEM<dim>::gravity_power(const Tensor<1, dim> &g) const
   {
-    double w = 0;
-    for (const auto n : fe_nodes)
-      if (counted[n])
-        for (int d = 0; d < dim; ++d)
-          w += true_node_mass[n] * g[d] * vel[d][n];
+    const double m = mat.density * V / n_corners;
+    double       w = 0;
+    for (std::size_t e = 0; e < element_cell.size(); ++e)
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          const std::size_t I = element_node0[e] + corner_offset[a];
+          for (int d = 0; d < dim; ++d)
+            w += m * g[d] * vel[d][I];
+        }
     return w;
   }
 

@@ -175,21 +175,18 @@ namespace femp
                                    prm.safety_factor *
                                      prm.stable_limit(mat, grid.h());
 
-    // Boundary flags and the node counting rule: a node is counted by the
-    // rank that owns the cell clamp(ijk, 0, n - 1).
+    // Boundary flags of the nodes of owned cells.
     constrained.assign(grid.n_local_nodes(), 0);
-    counted.assign(grid.n_local_nodes(), 0);
     const auto &ns = grid.node_strides();
     const auto &lo = grid.box_lower();
     for (const auto n : grid.owned_cell_nodes())
       {
-        std::array<int, dim> ijk, cijk;
+        std::array<int, dim> ijk;
         std::size_t          r = n;
         for (int d = dim - 1; d >= 0; --d)
           {
             ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
             r %= ns[d];
-            cijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
           }
         for (int f = 0; f < 2 * dim; ++f)
           {
@@ -204,9 +201,6 @@ namespace femp
               if (name == face_names[f])
                 constrained[n] |= 1u << d;
           }
-        counted[n] = grid.in_box(cijk) &&
-                     grid.cell_status()[grid.local_index(cijk)] ==
-                       BackgroundGrid<dim>::owned;
       }
     T_solid = T;
     T_prev  = T;
@@ -214,7 +208,7 @@ namespace femp
     t_solid = t_prev = 0;
     steps            = 0;
     mpm.gather(fem.zone_mask(), prm.mass_scaling);
-    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(counted),
+    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
                                  comm);
     W_ext = W_int = 0;
 
@@ -266,7 +260,7 @@ namespace femp
             gathered = true;
           }
         // Linear interpolation of the cell temperatures in [t_prev, t].
-        const double w = (t_next - t_prev) / (t - t_prev);
+        const double w = t > t_prev ? (t_next - t_prev) / (t - t_prev) : 1.;
         for (const auto c : grid.owned_cells())
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
         step(t_next - t_solid);
@@ -295,6 +289,7 @@ namespace femp
         std::fill(hourglass[d].begin(), hourglass[d].end(), 0.);
       }
     mpm.p2g(nodes, prm.gravity);
+    fem.add_mass_momentum(nodes, true);
     fem.add_forces(nodes, hourglass, prm.gravity, T_solid);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
@@ -307,7 +302,6 @@ namespace femp
         grid.sum_shared_nodes(nodes.force[d]);
         grid.sum_shared_nodes(hourglass[d]);
       }
-    fem.add_mass_momentum(nodes);
 
     // 2. Grid momentum update with boundary conditions; force -> f / m.
     double ext_power = 0;
@@ -339,9 +333,9 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       std::fill(nodes.momentum[d].begin(), nodes.momentum[d].end(), 0.);
     mpm.p2g_momentum(nodes);
+    fem.add_mass_momentum(nodes, false);
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(nodes.momentum[d]);
-    fem.add_momentum(nodes);
     for (const auto n : grid.owned_cell_nodes())
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
@@ -355,10 +349,10 @@ namespace femp
     ++steps;
 
     // Energies and the blow-up check (one reduction per step).
-    const double local_K = mpm.kinetic_energy() + fem.kinetic_energy(counted);
+    const double local_K = mpm.kinetic_energy() + fem.kinetic_energy();
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) +
-      fem.gravity_power(prm.gravity, counted);
+      fem.gravity_power(prm.gravity);
     double sums[4] = {local_K, work, dt * local_ext, inside ? 0. : 1.};
     Utilities::MPI::sum(ArrayView<const double>(sums, 4), comm,
                         ArrayView<double>(sums, 4));

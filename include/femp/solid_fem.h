@@ -91,12 +91,10 @@ namespace femp
                std::array<std::vector<double>, dim> &hourglass,
                const Tensor<1, dim> &                 gravity,
                const std::vector<double> &            T) const;
-    /// Add the (global) nodal masses and momenta of the FE nodes.
+    /// Add the element shares of the nodal masses (if @p with_mass) and
+    /// momenta (partial sums of this rank, like the points').
     void
-    add_mass_momentum(SolidNodeFields<dim> &nodes) const;
-    /// Add the (global) nodal momenta of the FE nodes.
-    void
-    add_momentum(SolidNodeFields<dim> &nodes) const;
+    add_mass_momentum(SolidNodeFields<dim> &nodes, const bool with_mass) const;
     /// FE nodes take the grid velocity (eqs. 15-16; eq. 17 at transition
     /// nodes) plus their own hourglass acceleration, then move.
     void
@@ -111,13 +109,12 @@ namespace femp
                     const std::vector<double> &T_old,
                     const std::vector<double> &T_new);
 
-    /// Kinetic energy of FE nodes counted by this rank (@p counted marks the
-    /// nodes this rank counts once), gravity power, hourglass energy.
+    /// Kinetic energy and gravity power of this rank's elements (element
+    /// shares of the nodal masses).
     double
-    kinetic_energy(const std::vector<std::uint8_t> &counted) const;
+    kinetic_energy() const;
     double
-    gravity_power(const Tensor<1, dim> &            gravity,
-                  const std::vector<std::uint8_t> &counted) const;
+    gravity_power(const Tensor<1, dim> &gravity) const;
     /// Hourglass energy 1/2 k sum q^2 with the scene's kappa, or with the
     /// reference kappa = 0.05 if @p reference (mode amplitude measure).
     double

@@ -23,6 +23,9 @@
 // do not produce spurious strain rates (the classic USL instability), and it
 // is the variant whose energy behaviour is best documented for explicit MPM.
 // The extra P2G of momentum costs about a sixth of a step.
+// The forces use sigma_p + q_p I, with the artificial bulk-viscosity
+// pressure q_p = b1 rho c h tr(D) of the last stress update (see
+// SolidMaterial::bulk_viscosity), stored with the point.
 //
 // Points move with the solid velocity. They are not re-sorted into cells:
 // thermal-stress displacements are far below a cell (case 3.1: ~1e-3 h), so

@@ -162,7 +162,6 @@ namespace femp
     std::array<std::vector<double>, dim> hourglass;
     const std::array<std::vector<double>, dim> *external_forces = nullptr;
     std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
-    std::vector<std::uint8_t> counted;     ///< node counted by this rank
     std::vector<double>       T_solid, T_prev, T_next;
     double                    t_solid = 0, t_prev = 0, dt_solid = 0;
     unsigned int              steps   = 0;
