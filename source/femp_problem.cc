@@ -231,6 +231,13 @@ namespace femp
       phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
     const std::vector<double> zone = points->zone_tags();
     auto fields = output_fields();
+    std::vector<double> sigma_xx, von_mises;
+    if (solid)
+      {
+        solid->cell_stress_fields(sigma_xx, von_mises);
+        fields.push_back({"sigma_xx", &sigma_xx});
+        fields.push_back({"von_mises", &von_mises});
+      }
     fields.push_back({"laser_source", &heat->laser_source()});
     fields.push_back({"phase", &phase});
     fields.push_back({"zone", &zone});

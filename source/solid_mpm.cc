@@ -48,6 +48,17 @@ namespace femp
     for (auto it = handler.begin(); it != handler.end(); ++it)
       {
         const ArrayView<double> q = it->get_properties();
+        if (q[P::state] == MaterialPoints<dim>::fluid)
+          {
+            // Melted: no stress and no hardening memory, so that the point
+            // starts stress-free when it solidifies again.
+            for (unsigned int c = P::stress; c < P::stress + dim * (dim + 1) / 2; ++c)
+              q[c] = 0;
+            q[P::plastic_strain]   = 0;
+            q[P::viscous_pressure] = 0;
+            if constexpr (dim == 2)
+              q[P::stress_zz] = 0;
+          }
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;
         const Point<dim> p   = it->get_location();
@@ -327,6 +338,21 @@ namespace femp
       if (cell[p] == idx)
         s += stress[p].sigma[0][0], ++n;
     return {n > 0 ? s / n : 0., n};
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::add_cell_stresses(std::vector<double> &sxx,
+                                   std::vector<double> &vm,
+                                   std::vector<double> &count) const
+  {
+    for (std::size_t p = 0; p < mass.size(); ++p)
+      {
+        sxx[cell[p]] += stress[p].sigma[0][0];
+        vm[cell[p]] += von_mises(stress[p].sigma);
+        count[cell[p]] += 1;
+      }
   }
 
 

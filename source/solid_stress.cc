@@ -433,6 +433,29 @@ namespace femp
 
 
   template <int dim>
+  void
+  SolidStress<dim>::cell_stress_fields(std::vector<double> &sxx,
+                                       std::vector<double> &vm) const
+  {
+    sxx.assign(grid.n_local(), 0.);
+    vm.assign(grid.n_local(), 0.);
+    std::vector<double> count(grid.n_local(), 0.);
+    mpm.add_cell_stresses(sxx, vm, count);
+    for (const auto c : grid.owned_cells())
+      if (const StressPoint *s = fem.element_stress(c))
+        {
+          sxx[c] = s->sigma[0][0];
+          vm[c]  = von_mises(s->sigma);
+        }
+      else if (count[c] > 0)
+        {
+          sxx[c] /= count[c];
+          vm[c] /= count[c];
+        }
+  }
+
+
+  template <int dim>
   std::array<double, 2>
   SolidStress<dim>::sizes() const
   {

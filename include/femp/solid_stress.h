@@ -146,6 +146,12 @@ namespace femp
     /// point (element stress, or the mean over the cell's points; collective).
     std::vector<std::array<double, 2>>
     probe(const std::vector<Point<dim>> &x) const;
+    /// Cell fields over the local box for output: sigma_xx and the von
+    /// Mises stress (Pa) of the element of a cell, or the mean over its
+    /// solid points; 0 in cells without solid.
+    void
+    cell_stress_fields(std::vector<double> &sigma_xx,
+                       std::vector<double> &von_mises) const;
     /// Number of material points and finite elements in the solid (global).
     std::array<double, 2>
     sizes() const;
