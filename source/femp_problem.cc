@@ -25,8 +25,9 @@ namespace femp
                       "damping, surface tension, Marangoni stress and recoil "
                       "pressure.");
     prm.declare_entry("Solid stress", "false", Patterns::Bool(),
-                      "Solve the thermal stress by MPM and FE (eqs. 5-17). Not "
-                      "available in this version: must be false.");
+                      "Solve the thermal stress by MPM and FE (eqs. 5-17): "
+                      "subsections 'Solid' and 'Solid FEM'. Not yet together "
+                      "with Melt flow.");
     prm.leave_subsection();
     FempProblem<3>::TimeParameters::declare_parameters(prm);
     Material::declare_parameters(prm);
@@ -36,6 +37,9 @@ namespace femp
     IncompressibleFlow<3>::Parameters::declare_parameters(prm);
     Laser<3>::Parameters::declare_parameters(prm);
     Output<3>::Parameters::declare_parameters(prm);
+    SolidMaterial::declare_parameters(prm);
+    SolidStress<3>::Parameters::declare_parameters(prm);
+    SolidFEM<3>::Parameters::declare_parameters(prm);
   }
 
 
@@ -84,10 +88,11 @@ namespace femp
     , timer(pcout, TimerOutput::never, TimerOutput::wall_times)
   {
     prm.enter_subsection("Physics");
-    melt_flow = prm.get_bool("Melt flow");
-    require(!prm.get_bool("Solid stress"), "Physics/Solid stress", "true",
-            "the solid-stress solver is not part of this version of femp; set "
-            "it to false");
+    melt_flow     = prm.get_bool("Melt flow");
+    solid_enabled = prm.get_bool("Solid stress");
+    require(!(melt_flow && solid_enabled), "Physics/Solid stress", "true",
+            "the melt flow and the solid stress are verified separately but "
+            "not yet run together; switch one of them off");
     prm.leave_subsection();
     time_prm.parse_parameters(prm);
     material.parse_parameters(prm);
@@ -100,6 +105,16 @@ namespace femp
     output_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     melt_temperature = material.liquidus;
+    if (solid_enabled)
+      {
+        solid_material.parse_parameters(prm);
+        solid_material.density          = material.density;
+        solid_material.melt_temperature = material.solidus;
+        solid_prm.parse_parameters(prm);
+        solid_prm.check(solid_material, grid_prm);
+        fem_prm.parse_parameters(prm);
+        fem_prm.check(grid_prm);
+      }
 
     // Checks that need several modules, still before any work.
     if (time_prm.time_step > 0)
@@ -157,6 +172,14 @@ namespace femp
       }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
     output->initialize({"T", "gamma", "alpha"});
+    if (solid_enabled)
+      {
+        TimerOutput::Scope t(timer, "setup: solid");
+        solid = std::make_unique<SolidStress<dim>>(solid_prm, fem_prm,
+                                                   solid_material, *grid,
+                                                   *points);
+        solid->initialize(heat->temperature(), output_prm.directory);
+      }
 
     pcout << "femp: " << dim << "D scene, "
           << Utilities::MPI::n_mpi_processes(comm) << " MPI rank(s)\n"
@@ -167,6 +190,12 @@ namespace femp
     pcout << "  material points: " << points->n_global_points() << " ("
           << points->n_powder_grains() << " powder grains, packing fraction "
           << std::setprecision(3) << points->achieved_packing_fraction() << ")\n"
+          << (solid ? "  solid: " + std::to_string(int(solid->sizes()[0])) +
+                        " material points, " +
+                        std::to_string(int(solid->sizes()[1])) +
+                        " finite elements, step " +
+                        std::to_string(solid->time_step()) + " s\n" :
+                      std::string())
           << "  output: " << output_prm.directory << "/grid.pvd, "
           << output_prm.directory << "/points.pvd, "
           << output_prm.directory << "/melt_pool.csv\n";
@@ -220,6 +249,13 @@ namespace femp
       phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
     const std::vector<double> zone = points->zone_tags();
     auto fields = output_fields();
+    std::vector<double> sigma_xx, von_mises;
+    if (solid)
+      {
+        solid->cell_stress_fields(sigma_xx, von_mises);
+        fields.push_back({"sigma_xx", &sigma_xx});
+        fields.push_back({"von_mises", &von_mises});
+      }
     fields.push_back({"laser_source", &heat->laser_source()});
     fields.push_back({"phase", &phase});
     fields.push_back({"zone", &zone});
@@ -268,15 +304,21 @@ namespace femp
         // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4), sub-cycled.
         if (melt_flow)
           flow_substeps(dt);
-        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17): not in
-        //    this version (Physics/Solid stress must be false).
 
         time += dt;
         ++step;
-
-        // 5. Output.
         const bool last = time >= time_prm.end_time * (1 - 1e-12) ||
                           step >= time_prm.max_steps;
+
+        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17),
+        //    sub-cycled against the temperature step.
+        if (solid)
+          {
+            TimerOutput::Scope t(timer, "solid");
+            solid->advance(time, heat->temperature(), last);
+          }
+
+        // 5. Output.
         if (time >= next_series * (1 - 1e-12) || last)
           {
             TimerOutput::Scope t(timer, "time series");
@@ -331,6 +373,20 @@ namespace femp
       result.point_T_mean =
         Utilities::MPI::sum(sum, comm) / std::max<double>(1, result.n_points);
     }
+    if (solid)
+      {
+        result.solid_steps  = solid->n_steps();
+        result.solid_energy = solid->energies();
+        const auto &e       = result.solid_energy;
+        pcout << std::setprecision(6) << "Solid: " << result.solid_steps
+              << " steps of " << solid->time_step()
+              << " s; energies (J" << (dim == 2 ? "/m" : "")
+              << "): external work " << e.external << ", stress work "
+              << e.internal << ", kinetic " << e.kinetic << ", hourglass "
+              << e.hourglass << ", balance " << e.balance()
+              << "; kinetic/internal " << e.kinetic / std::max(1e-300, std::abs(e.internal))
+              << std::endl;
+      }
     pcout << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
           << "): laser " << result.laser << ", surface losses "
           << result.losses << " (evaporation " << e.evaporation

@@ -124,6 +124,9 @@ namespace femp
     for (int i = 0; i < dim * (dim + 1) / 2; ++i)
       names.push_back(dim == 2 ? s2[i] : s3[i]);
     names.push_back("plastic_strain");
+    if (dim == 2)
+      names.push_back("stress_zz");
+    names.push_back("viscous_pressure");
     return names;
   }
 

@@ -3,8 +3,8 @@
 //   1. tag cells from the points, update alpha, gamma and properties;
 //   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1);
 //   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4; not yet built);
-//   4. solid by MPM + FE with transition-node coupling (eqs. 5-17; not yet
-//      built), sub-cycled to the macro time;
+//   4. solid by MPM + FE with transition-node coupling (SolidStress,
+//      eqs. 5-17), sub-cycled to the macro time;
 //   5. output, next step.
 #ifndef femp_femp_problem_h
 #define femp_femp_problem_h
@@ -20,6 +20,7 @@
 #include <femp/material.h>
 #include <femp/material_points.h>
 #include <femp/output.h>
+#include <femp/solid_stress.h>
 
 #include <memory>
 
@@ -71,6 +72,9 @@ namespace femp
       unsigned int pressure_matrix_builds = 0; ///< matrix + AMG setups
       unsigned long pressure_cg_iterations = 0; ///< total
       double       max_fluid_speed        = 0; ///< m/s, at the end
+      /// Solid (if Physics/Solid stress): steps and final energies.
+      unsigned int solid_steps = 0;
+      typename SolidStress<dim>::Energies solid_energy;
     };
     const Summary &
     summary() const
@@ -91,6 +95,10 @@ namespace femp
     double                                    melt_temperature;
     bool                                      melt_flow = false;
     typename IncompressibleFlow<dim>::Parameters flow_prm;
+    bool                                      solid_enabled = false;
+    SolidMaterial                             solid_material;
+    typename SolidStress<dim>::Parameters     solid_prm;
+    typename SolidFEM<dim>::Parameters        fem_prm;
 
     std::unique_ptr<BackgroundGrid<dim>> grid;
     std::unique_ptr<Laser<dim>>          laser;
@@ -102,6 +110,7 @@ namespace femp
     void
     flow_substeps(const double dt);
     std::unique_ptr<Output<dim>>         output;
+    std::unique_ptr<SolidStress<dim>>    solid;
     TimerOutput                          timer;
     Summary                              result;
 

@@ -15,6 +15,8 @@
 //   5 .. 5+dim-1 velocity (m/s)
 //   then dim(dim+1)/2 Cauchy stress components (Pa; xx, yy, [zz], xy, [xz, yz])
 //   then the equivalent plastic strain (-)
+//   2D only: then the out-of-plane stress sigma_zz (Pa; plane strain)
+//   then the solid's artificial viscous pressure q (Pa; see SolidMPM)
 #ifndef femp_material_points_h
 #define femp_material_points_h
 
@@ -53,7 +55,12 @@ namespace femp
       static constexpr unsigned int velocity         = 5;
       static constexpr unsigned int stress           = 5 + dim;
       static constexpr unsigned int plastic_strain   = 5 + dim + dim * (dim + 1) / 2;
-      static constexpr unsigned int n_properties     = plastic_strain + 1;
+      /// 2D only (plane strain): out-of-plane stress sigma_zz.
+      static constexpr unsigned int stress_zz        = plastic_strain + 1;
+      /// Artificial bulk-viscosity pressure of the solid (SolidMPM).
+      static constexpr unsigned int viscous_pressure =
+        plastic_strain + 1 + (dim == 2 ? 1 : 0);
+      static constexpr unsigned int n_properties = viscous_pressure + 1;
     };
 
     struct Parameters
@@ -138,8 +145,9 @@ namespace femp
     {
       return handler;
     }
-    /// Write access for the flow and solid solvers, which update velocities
-    /// and positions (call points_moved() after a point left its cell).
+    /// Write access for the flow and solid solvers, which update velocities,
+    /// positions and stresses (call points_moved() after a point left its
+    /// cell).
     Particles::ParticleHandler<dim> &
     particle_handler()
     {

@@ -1,0 +1,125 @@
+// femp benchmark of the solid step (issue 3 item 9; not a test): cost per
+// point-step of the material point method (P2G, grid update, G2P, MUSL
+// re-map, constitutive update) and per element-step of the finite elements
+// (internal and hourglass forces, node update, constitutive update), on a
+// 3D block heated by a slowly rising, non-uniform temperature field so that
+// the constitutive update does real work (thermal strain, plasticity at the
+// hot end). One run with every cell full of material points (2 x 2 x 2 per
+// cell), one with every cell a finite element.
+//
+//   build/contrib/solid_benchmark [cells per direction, default 32] [steps]
+//
+// Run on one core (no mpirun) with a Release build. Prints ns of process CPU
+// time per point-step and per element-step (the grid node work of a step is
+// included in both: it is part of what a step costs).
+#include <deal.II/base/mpi.h>
+
+#include <femp/material_points.h>
+#include <femp/solid_stress.h>
+
+#include <ctime>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+
+using namespace dealii;
+using namespace femp;
+
+namespace
+{
+  constexpr int dim = 3;
+
+  double
+  run(const unsigned int n, const unsigned int steps, const bool fe,
+      const bool subcycled, double &n_objects)
+  {
+    const double                      h = 1e-5;
+    typename BackgroundGrid<dim>::Parameters gp;
+    gp.lower_corner = Point<dim>();
+    gp.upper_corner = Point<dim>(n * h, n * h, n * h / 2);
+    gp.cell_size    = h;
+    BackgroundGrid<dim> grid(gp, MPI_COMM_WORLD);
+    grid.create();
+    Material mat; // 316L-like defaults
+    mat.solidus  = 1e6;
+    mat.liquidus = 2e6;
+    typename MaterialPoints<dim>::Parameters pp;
+    pp.point_spacing   = h / 2;
+    pp.substrate_top   = n * h / 2;
+    pp.layer_thickness = 0;
+    MaterialPoints<dim> points(pp, mat, grid);
+    points.create(300.);
+
+    SolidMaterial sm; // defaults: steel, E 193 GPa, sigma_y 250 MPa
+    sm.density          = mat.density;
+    sm.melt_temperature = mat.solidus;
+    sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
+    typename SolidStress<dim>::Parameters sp;
+    sp.fixed_faces = {"z-"};
+    sp.energy_file = "";
+    typename SolidFEM<dim>::Parameters fp;
+    fp.enabled      = fe;
+    fp.lower_corner = gp.lower_corner;
+    fp.upper_corner = gp.upper_corner;
+    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    std::vector<double> T = grid.make_field(300.);
+    solid.initialize(T, "");
+    const auto sizes = solid.sizes();
+    n_objects        = fe ? sizes[1] : sizes[0];
+
+    // Temperature: rises by up to 1000 K over the run near x = 0.
+    auto set_T = [&](const double t) {
+      for (const auto c : grid.owned_cells())
+        {
+          const double x = grid.cell_center(c)[0] / (n * h);
+          T[c]           = 300 + 1000 * t * std::exp(-4 * x);
+        }
+    };
+    const double dt = solid.time_step();
+    // Warm-up step, then timed steps (advance one solid step per call, as
+    // when the temperature step is the smaller one).
+    set_T(0.01);
+    solid.advance(dt, T, true);
+    const std::clock_t start = std::clock();
+    if (subcycled) // all steps inside one temperature step
+      {
+        set_T(1.);
+        solid.advance((steps + 1) * dt, T, true);
+      }
+    else // one call (and one gather/scatter of the points) per step
+      for (unsigned int s = 1; s <= steps; ++s)
+        {
+          set_T(double(s) / steps);
+          solid.advance((s + 1) * dt, T, true);
+        }
+    // Process CPU time, not wall time: on a shared machine the wall time
+    // also counts the time other processes hold the core.
+    const double cpu = double(std::clock() - start) / CLOCKS_PER_SEC;
+    return cpu / steps / n_objects * 1e9;
+  }
+} // namespace
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  const unsigned int n     = argc > 1 ? std::atoi(argv[1]) : 32;
+  const unsigned int steps = argc > 2 ? std::atoi(argv[2]) : 50;
+  double             n_points = 0, n_elements = 0;
+  const double       mpm  = run(n, steps, false, false, n_points);
+  const double       fe   = run(n, steps, true, false, n_elements);
+  const double       mpm1 = run(n, steps, false, true, n_points);
+  const double       fe1  = run(n, steps, true, true, n_elements);
+  std::cout << std::setprecision(4) << "grid " << n << " x " << n << " x "
+            << n / 2 << " cells, " << steps << " steps, "
+            << Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) << " rank(s)\n"
+            << "one advance() per solid step (points gathered every step):\n"
+            << "  MPM: " << n_points << " points, " << mpm << " ns per point-step\n"
+            << "  FE:  " << n_elements << " elements, " << fe
+            << " ns per element-step\n"
+            << "all steps sub-cycled in one advance() (one gather):\n"
+            << "  MPM: " << mpm1 << " ns per point-step\n"
+            << "  FE:  " << fe1 << " ns per element-step\n"
+            << "cost per cell, 8 points vs one element: " << 8 * mpm / fe
+            << " (per step), " << 8 * mpm1 / fe1 << " (sub-cycled)\n";
+}

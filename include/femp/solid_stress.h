@@ -1,0 +1,184 @@
+// femp: SolidStress<dim>, the solid step of the macro step (METHOD sec. 4-5,
+// paper eqs. 5-17): material points (SolidMPM) and finite elements
+// (SolidFEM) coupled through the background-grid nodes, sub-cycled against
+// the temperature step.
+//
+// Coupling (eqs. 14-17). FE nodes are grid nodes (solid_fem.h), so a
+// transition node i coincides with a grid node I and N_Ii = 1. Each step:
+//   1. point mass, momentum and forces to the grid (eqs. 11-13); FE element
+//      forces (eq. 9) without their hourglass part added at their nodes;
+//      sums over ranks; FE nodal masses and momenta added (eq. 14);
+//   2. grid momentum update p_I += dt f_I, boundary conditions;
+//   3. points: FLIP velocity and position update; FE nodes (interior and
+//      transition): velocity from the grid (eqs. 15-17) plus their own
+//      hourglass acceleration f_i^HG / m_i, displacement update;
+//   4. MUSL re-map of the point and FE-node momenta, grid velocities;
+//   5. stresses at points (grid velocities) and Gauss points (FE node
+//      velocities), eq. 5, with the cell temperatures of eq. 2.
+// In the FE interior this is exactly the central-difference FE update of
+// eq. 10, and in the MPM zone exactly MUSL.
+//
+// Time stepping. The solid keeps its own time t_s and step
+//   dt_s = C h / (sqrt(dim) c),  c = sqrt(M_max / (s rho)),
+// (C: safety factor; M_max: largest P-wave modulus of the E(T) table;
+// s: mass-scaling factor). advance(t) is called after every temperature
+// step and takes whole solid steps up to t; the cell temperatures of each
+// sub-step are interpolated linearly between the temperature fields of the
+// last two calls, so both orders work: several solid steps inside one
+// temperature step, or (case 3.1) one solid step spanning many temperature
+// steps. The last call of a run ends the solid exactly at the end time.
+//
+// Energies (global, J or J/m in 2D): external work (gravity, fluid forces),
+// stress work int sigma : D (internal), kinetic, hourglass; the balance
+// W_ext - (K - K_0) - W_int - E_HG and the ratio K / |W_int| (how far from
+// quasi-static a mass-scaled run is) go to a CSV file.
+#ifndef femp_solid_stress_h
+#define femp_solid_stress_h
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <femp/background_grid.h>
+#include <femp/constitutive.h>
+#include <femp/material_points.h>
+#include <femp/solid_fem.h>
+#include <femp/solid_mpm.h>
+
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class SolidStress
+  {
+  public:
+    struct Parameters
+    {
+      double                   time_step     = 0;
+      double                   safety_factor = 0.5;
+      double                   mass_scaling  = 1;
+      Tensor<1, dim>           gravity;
+      std::vector<std::string> fixed_faces, roller_faces;
+      std::string              energy_file = "solid_energy.csv";
+      std::string              probe_file  = "solid_probes.csv";
+      std::vector<Point<dim>>  probes;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Checks that need the material and the grid: the prescribed step
+      /// against the elastic limit.
+      void
+      check(const SolidMaterial &                           m,
+            const typename BackgroundGrid<dim>::Parameters &g) const;
+      /// Largest stable step h / (sqrt(dim) c), s.
+      double
+      stable_limit(const SolidMaterial &m, const double h) const;
+    };
+
+    struct Energies
+    {
+      double external = 0, internal = 0, kinetic = 0, hourglass = 0;
+      double initial_kinetic = 0;
+      /// Energy of the hourglass modes measured with the reference
+      /// stiffness kappa = 0.05 even when control is off (stability studies:
+      /// how large the zero-energy modes have grown).
+      double hourglass_mode = 0;
+      double
+      balance() const
+      {
+        return external - (kinetic - initial_kinetic) - internal - hourglass;
+      }
+    };
+
+    SolidStress(const Parameters &                     prm,
+                const typename SolidFEM<dim>::Parameters &fem_prm,
+                const SolidMaterial &                  material,
+                const BackgroundGrid<dim> &            grid,
+                MaterialPoints<dim> &                  points);
+
+    /// Set up the FE zone, boundary flags and the temperature history from
+    /// the cell temperatures @p T at time 0. @p directory receives the CSV
+    /// files (empty: none written).
+    void
+    initialize(const std::vector<double> &T, const std::string &directory);
+
+    /// Advance the solid to @p t (see header comment) given the cell
+    /// temperatures @p T at @p t; @p final ends exactly at @p t.
+    void
+    advance(const double t, const std::vector<double> &T, const bool final);
+
+    /// Entry point for the melt-flow solver: nodal forces on the background
+    /// grid nodes (one array per direction over the local node box; partial
+    /// contributions of this rank, summed over ranks with the solid's own),
+    /// held constant over the solid sub-steps; nullptr for none.
+    void
+    set_external_nodal_forces(const std::array<std::vector<double>, dim> *f)
+    {
+      external_forces = f;
+    }
+
+    /// Solid step size in use, s.
+    double
+    time_step() const
+    {
+      return dt_solid;
+    }
+    double
+    time() const
+    {
+      return t_solid;
+    }
+    unsigned int
+    n_steps() const
+    {
+      return steps;
+    }
+    /// Global energies (collective).
+    Energies
+    energies() const;
+    /// sigma_xx (Pa) and temperature (K) at the cell holding each probe
+    /// point (element stress, or the mean over the cell's points; collective).
+    std::vector<std::array<double, 2>>
+    probe(const std::vector<Point<dim>> &x) const;
+    /// Cell fields over the local box for output: sigma_xx and the von
+    /// Mises stress (Pa) of the element of a cell, or the mean over its
+    /// solid points; 0 in cells without solid.
+    void
+    cell_stress_fields(std::vector<double> &sigma_xx,
+                       std::vector<double> &von_mises) const;
+    /// Number of material points and finite elements in the solid (global).
+    std::array<double, 2>
+    sizes() const;
+
+  private:
+    Parameters                 prm;
+    const SolidMaterial &      mat;
+    const BackgroundGrid<dim> &grid;
+    MPI_Comm                   comm;
+    SolidMPM<dim>              mpm;
+    SolidFEM<dim>              fem;
+
+    SolidNodeFields<dim>                  nodes;
+    std::array<std::vector<double>, dim> hourglass;
+    const std::array<std::vector<double>, dim> *external_forces = nullptr;
+    std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
+    std::vector<double>       T_solid, T_prev, T_next;
+    double                    t_solid = 0, t_prev = 0, dt_solid = 0;
+    unsigned int              steps   = 0;
+    double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
+    std::unique_ptr<std::ofstream> energy_out, probe_out;
+
+    void
+    step(const double dt);
+    void
+    write_rows();
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,500 @@
+// femp: the solid step (paper eqs. 5-17, METHOD sec. 4-5): MPM and FE
+// coupled at the transition nodes through the background-grid nodes, with
+// sub-cycling against the temperature step; see solid_stress.h.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/input_checks.h>
+#include <femp/solid_stress.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace femp
+{
+  namespace
+  {
+    const char *face_names[6] = {"x-", "x+", "y-", "y+", "z-", "z+"};
+
+    std::vector<std::string>
+    parse_faces(const std::string &text, const std::string &parameter,
+                const int dim)
+    {
+      std::vector<std::string> faces;
+      for (auto f : Utilities::split_string_list(text, ','))
+        {
+          f = Utilities::trim(f);
+          if (f.empty())
+            continue;
+          bool ok = false;
+          for (int i = 0; i < 2 * dim; ++i)
+            ok = ok || f == face_names[i];
+          require(ok, parameter, f,
+                  dim == 2 ? "it must be a comma-separated list of faces x-, x+, y-, y+" :
+                             "it must be a comma-separated list of faces x-, x+, "
+                             "y-, y+, "
+                             "z-, z+");
+          faces.push_back(f);
+        }
+      return faces;
+    }
+  } // namespace
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Solid");
+    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+                      "Solid step, s; 0 chooses the safety factor times the "
+                      "elastic limit h / (sqrt(dim) c), c = sqrt(M / (s rho)) "
+                      "with the largest P-wave modulus M of the E(T) table and "
+                      "the mass-scaling factor s. A step above the limit is "
+                      "refused. Range [0, inf).");
+    prm.declare_entry("Safety factor", "0.5", Patterns::Double(0., 1.),
+                      "Courant number C of the automatic solid step; range "
+                      "(0, 1].");
+    prm.declare_entry("Mass scaling factor", "1", Patterns::Double(1.),
+                      "Factor s >= 1 on the inertial mass of points and FE "
+                      "nodes (gravity keeps the true mass): the stable step "
+                      "grows by sqrt(s). Only for quasi-static scenes: watch "
+                      "the kinetic-to-internal energy ratio in the energy "
+                      "file (it should stay well below 0.1). Range [1, inf).");
+    prm.declare_entry("Gravity", "0, 0, 0", Patterns::Anything(),
+                      "Gravitational acceleration, m/s^2 (dim components).");
+    prm.declare_entry("Fixed faces", "", Patterns::Anything(),
+                      "Domain faces whose grid nodes are fixed (zero "
+                      "velocity): a comma-separated list of x-, x+, y-, y+, "
+                      "z-, z+; empty for none. Faces not listed here or under "
+                      "'Roller faces' are traction-free.");
+    prm.declare_entry("Roller faces", "", Patterns::Anything(),
+                      "Domain faces whose grid nodes cannot move normal to "
+                      "the face (rollers); same format as 'Fixed faces'.");
+    prm.declare_entry("Energy file", "solid_energy.csv", Patterns::Anything(),
+                      "CSV file (in the output directory) with the solid "
+                      "energies after every solid step: external work, stress "
+                      "work, kinetic, hourglass, balance, kinetic/internal "
+                      "ratio; empty for none.");
+    prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
+                      "CSV file (in the output directory) with sigma_xx (Pa) "
+                      "and T (K) at the probe points after every solid step.");
+    prm.declare_entry("Probe points", "", Patterns::Anything(),
+                      "Points 'x,y[,z]; x,y[,z]; ...' (m) whose cell stress "
+                      "and temperature are written to the probe file; empty "
+                      "for none.");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Solid");
+    time_step     = prm.get_double("Time step");
+    safety_factor = prm.get_double("Safety factor");
+    mass_scaling  = prm.get_double("Mass scaling factor");
+    const Point<dim> g = parse_point<dim>(prm.get("Gravity"), "Solid/Gravity");
+    for (int d = 0; d < dim; ++d)
+      gravity[d] = g[d];
+    fixed_faces  = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
+    roller_faces = parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
+    energy_file  = prm.get("Energy file");
+    probe_file   = prm.get("Probe file");
+    probes.clear();
+    for (const auto &s : Utilities::split_string_list(prm.get("Probe points"), ';'))
+      if (!Utilities::trim(s).empty())
+        probes.push_back(parse_point<dim>(s, "Solid/Probe points"));
+    prm.leave_subsection();
+    require(safety_factor > 0, "Solid/Safety factor", safety_factor,
+            "it must lie in (0, 1]");
+  }
+
+
+  template <int dim>
+  double
+  SolidStress<dim>::Parameters::stable_limit(const SolidMaterial &m,
+                                             const double         h) const
+  {
+    const double c  = std::sqrt(m.max_p_wave_modulus() / (mass_scaling * m.density));
+    const double b1 = m.bulk_viscosity;
+    return h / (std::sqrt(double(dim)) * c) * (std::sqrt(1 + b1 * b1) - b1);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::Parameters::check(
+    const SolidMaterial &                           m,
+    const typename BackgroundGrid<dim>::Parameters &g) const
+  {
+    const double limit = stable_limit(m, g.cell_size);
+    std::ostringstream s;
+    s << "it exceeds the elastic stable limit h / (sqrt(dim) c) (sqrt(1 + b1^2) "
+         "- b1) = "
+      << limit
+      << " s (h = " << g.cell_size << " m, largest P-wave modulus "
+      << m.max_p_wave_modulus() << " Pa, density " << m.density
+      << " kg/m^3, mass scaling " << mass_scaling
+      << "); use 0 (automatic) or a smaller step";
+    require(time_step <= limit, "Solid/Time step", time_step, s.str());
+    for (const auto &x : probes)
+      for (int d = 0; d < dim; ++d)
+        require(x[d] >= g.lower_corner[d] && x[d] <= g.upper_corner[d],
+                "Solid/Probe points", x, "every point must lie in the domain");
+  }
+
+
+  template <int dim>
+  SolidStress<dim>::SolidStress(const Parameters &                        prm,
+                                const typename SolidFEM<dim>::Parameters &fem_prm,
+                                const SolidMaterial &                     material,
+                                const BackgroundGrid<dim> &               grid,
+                                MaterialPoints<dim> &                     points)
+    : prm(prm)
+    , mat(material)
+    , grid(grid)
+    , comm(grid.communicator())
+    , mpm(grid, material, points)
+    , fem(fem_prm, grid, material)
+  {}
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::initialize(const std::vector<double> &T,
+                               const std::string &        directory)
+  {
+    fem.setup(prm.mass_scaling);
+    nodes.resize(grid.n_local_nodes());
+    for (int d = 0; d < dim; ++d)
+      hourglass[d].assign(grid.n_local_nodes(), 0.);
+    dt_solid = prm.time_step > 0 ? prm.time_step :
+                                   prm.safety_factor *
+                                     prm.stable_limit(mat, grid.h());
+
+    // Boundary flags of the nodes of owned cells.
+    constrained.assign(grid.n_local_nodes(), 0);
+    const auto &ns = grid.node_strides();
+    const auto &lo = grid.box_lower();
+    for (const auto n : grid.owned_cell_nodes())
+      {
+        std::array<int, dim> ijk;
+        std::size_t          r = n;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
+            r %= ns[d];
+          }
+        for (int f = 0; f < 2 * dim; ++f)
+          {
+            const int  d  = f / 2;
+            const bool on = (f % 2 == 0) ? ijk[d] == 0 : ijk[d] == int(grid.n_cells()[d]);
+            if (!on)
+              continue;
+            for (const auto &name : prm.fixed_faces)
+              if (name == face_names[f])
+                constrained[n] |= (1u << dim) - 1;
+            for (const auto &name : prm.roller_faces)
+              if (name == face_names[f])
+                constrained[n] |= 1u << d;
+          }
+      }
+    T_solid = T;
+    T_prev  = T;
+    T_next  = T;
+    t_solid = t_prev = 0;
+    steps            = 0;
+    mpm.gather(fem.zone_mask(), prm.mass_scaling);
+    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
+                                 comm);
+    W_ext = W_int = 0;
+
+    if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        if (!prm.energy_file.empty())
+          {
+            energy_out = std::make_unique<std::ofstream>(directory + "/" +
+                                                         prm.energy_file);
+            AssertThrow(*energy_out, ExcMessage("cannot write " + directory +
+                                                "/" + prm.energy_file));
+            *energy_out << "time,step,external_work,internal_work,kinetic,"
+                           "hourglass,balance,kinetic_to_internal,hourglass_mode\n";
+          }
+        if (!prm.probe_file.empty() && !prm.probes.empty())
+          {
+            probe_out = std::make_unique<std::ofstream>(directory + "/" +
+                                                        prm.probe_file);
+            AssertThrow(*probe_out, ExcMessage("cannot write " + directory +
+                                               "/" + prm.probe_file));
+            *probe_out << "time";
+            for (std::size_t i = 0; i < prm.probes.size(); ++i)
+              *probe_out << ",sigma_xx_" << i << ",T_" << i;
+            *probe_out << "\n";
+          }
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::advance(const double               t,
+                            const std::vector<double> &T,
+                            const bool                 final)
+  {
+    bool gathered = false;
+    while (t_solid < t * (1 - 1e-12))
+      {
+        double t_next = t_solid + dt_solid;
+        if (t_next > t * (1 + 1e-12))
+          {
+            if (!final)
+              break;
+            t_next = t;
+          }
+        if (!gathered)
+          {
+            mpm.gather(fem.zone_mask(), prm.mass_scaling);
+            gathered = true;
+          }
+        // Linear interpolation of the cell temperatures in [t_prev, t].
+        const double w = t > t_prev ? (t_next - t_prev) / (t - t_prev) : 1.;
+        for (const auto c : grid.owned_cells())
+          T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
+        step(t_next - t_solid);
+        T_solid.swap(T_next);
+        t_solid = t_next;
+        write_rows();
+      }
+    if (gathered)
+      mpm.scatter();
+    for (const auto c : grid.owned_cells())
+      T_prev[c] = T[c];
+    t_prev = t;
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::step(const double dt)
+  {
+    // 1. Mass, momentum and forces to the grid nodes (eqs. 11-14).
+    std::fill(nodes.mass.begin(), nodes.mass.end(), 0.);
+    for (int d = 0; d < dim; ++d)
+      {
+        std::fill(nodes.momentum[d].begin(), nodes.momentum[d].end(), 0.);
+        std::fill(nodes.force[d].begin(), nodes.force[d].end(), 0.);
+        std::fill(hourglass[d].begin(), hourglass[d].end(), 0.);
+      }
+    mpm.p2g(nodes, prm.gravity);
+    fem.add_mass_momentum(nodes, true);
+    fem.add_forces(nodes, hourglass, prm.gravity, T_solid);
+    if (external_forces)
+      for (int d = 0; d < dim; ++d)
+        for (const auto n : grid.owned_cell_nodes())
+          nodes.force[d][n] += (*external_forces)[d][n];
+    grid.sum_shared_nodes(nodes.mass);
+    for (int d = 0; d < dim; ++d)
+      {
+        grid.sum_shared_nodes(nodes.momentum[d]);
+        grid.sum_shared_nodes(nodes.force[d]);
+        grid.sum_shared_nodes(hourglass[d]);
+      }
+
+    // 2. Grid momentum update with boundary conditions; force -> f / m.
+    double ext_power = 0;
+    for (const auto n : grid.owned_cell_nodes())
+      {
+        const double m = nodes.mass[n];
+        for (int d = 0; d < dim; ++d)
+          {
+            if (m <= 0 || (constrained[n] & (1u << d)))
+              {
+                nodes.force[d][n] = nodes.momentum[d][n] = 0;
+                nodes.velocity[d][n]                     = 0;
+                continue;
+              }
+            nodes.momentum[d][n] += dt * nodes.force[d][n];
+            nodes.force[d][n] /= m;
+            nodes.velocity[d][n] = nodes.momentum[d][n] / m;
+          }
+        if (external_forces) // partial forces: the rank sum is the total
+          for (int d = 0; d < dim; ++d)
+            ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
+      }
+
+    // 3. Points and FE nodes (eqs. 15-17).
+    const bool inside = mpm.g2p(nodes, dt);
+    fem.update_nodes(nodes, hourglass, constrained, dt);
+
+    // 4. MUSL: re-map the momenta, grid velocities.
+    for (int d = 0; d < dim; ++d)
+      std::fill(nodes.momentum[d].begin(), nodes.momentum[d].end(), 0.);
+    mpm.p2g_momentum(nodes);
+    fem.add_mass_momentum(nodes, false);
+    for (int d = 0; d < dim; ++d)
+      grid.sum_shared_nodes(nodes.momentum[d]);
+    for (const auto n : grid.owned_cell_nodes())
+      for (int d = 0; d < dim; ++d)
+        nodes.velocity[d][n] =
+          (nodes.mass[n] > 0 && !(constrained[n] & (1u << d))) ?
+            nodes.momentum[d][n] / nodes.mass[n] :
+            0.;
+
+    // 5. Stresses (eq. 5).
+    double work = mpm.update_stresses(nodes, dt, T_solid, T_next);
+    work += fem.update_stresses(dt, T_solid, T_next);
+    ++steps;
+
+    // Energies and the blow-up check (one reduction per step).
+    const double local_K = mpm.kinetic_energy() + fem.kinetic_energy();
+    const double local_ext =
+      ext_power + mpm.gravity_power(prm.gravity) +
+      fem.gravity_power(prm.gravity);
+    double sums[4] = {local_K, work, dt * local_ext, inside ? 0. : 1.};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 4), comm,
+                        ArrayView<double>(sums, 4));
+    K = sums[0];
+    W_int += sums[1];
+    W_ext += sums[2];
+    const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
+    if (blown || sums[3] > 0)
+      {
+        Point<dim> where;
+        bool       found = false;
+        if (blown)
+          found = mpm.find_non_finite(where) || fem.find_non_finite(where);
+        else if (!inside)
+          where = mpm.escaped_point(), found = true;
+        const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
+        const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
+        if (root < (1u << 30))
+          MPI_Bcast(&where[0], dim, MPI_DOUBLE, root, comm);
+        std::ostringstream s;
+        s << "solid: "
+          << (blown ? "the solution became non-finite (unstable: check "
+                      "'Solid/Time step' and 'Solid/Hourglass coefficient')" :
+                      "a material point left its cell (displacement larger "
+                      "than this version supports)")
+          << " at solid step " << steps << ", time " << t_solid + dt
+          << " s, near x = " << where;
+        throw std::runtime_error(s.str());
+      }
+  }
+
+
+  template <int dim>
+  typename SolidStress<dim>::Energies
+  SolidStress<dim>::energies() const
+  {
+    Energies e;
+    e.external        = W_ext;
+    e.internal        = W_int;
+    e.kinetic         = K;
+    e.initial_kinetic = K0;
+    e.hourglass = Utilities::MPI::sum(fem.hourglass_energy(T_solid, false), comm);
+    e.hourglass_mode =
+      Utilities::MPI::sum(fem.hourglass_energy(T_solid, true), comm);
+    return e;
+  }
+
+
+  template <int dim>
+  std::vector<std::array<double, 2>>
+  SolidStress<dim>::probe(const std::vector<Point<dim>> &x) const
+  {
+    std::vector<double> v(3 * x.size(), 0.);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      {
+        const auto ijk = grid.cell_of(x[i]);
+        if (!grid.in_box(ijk))
+          continue;
+        const auto idx = grid.local_index(ijk);
+        if (grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
+          continue;
+        if (const StressPoint *s = fem.element_stress(idx))
+          v[3 * i] = s->sigma[0][0], v[3 * i + 2] = 1;
+        else
+          {
+            const auto [sxx, n] = mpm.cell_stress_xx(idx);
+            v[3 * i]            = sxx;
+            v[3 * i + 2]        = n > 0;
+          }
+        v[3 * i + 1] = T_solid[idx];
+      }
+    Utilities::MPI::sum(v, comm, v);
+    std::vector<std::array<double, 2>> r(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i)
+      r[i] = {{v[3 * i], v[3 * i + 1]}};
+    return r;
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::cell_stress_fields(std::vector<double> &sxx,
+                                       std::vector<double> &vm) const
+  {
+    sxx.assign(grid.n_local(), 0.);
+    vm.assign(grid.n_local(), 0.);
+    std::vector<double> count(grid.n_local(), 0.);
+    mpm.add_cell_stresses(sxx, vm, count);
+    for (const auto c : grid.owned_cells())
+      if (const StressPoint *s = fem.element_stress(c))
+        {
+          sxx[c] = s->sigma[0][0];
+          vm[c]  = von_mises(s->sigma);
+        }
+      else if (count[c] > 0)
+        {
+          sxx[c] /= count[c];
+          vm[c] /= count[c];
+        }
+  }
+
+
+  template <int dim>
+  std::array<double, 2>
+  SolidStress<dim>::sizes() const
+  {
+    return {{Utilities::MPI::sum(double(mpm.n_points()), comm),
+             Utilities::MPI::sum(double(fem.n_elements()), comm)}};
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::write_rows()
+  {
+    if (!prm.energy_file.empty() || !prm.probes.empty())
+      {
+        // Collective parts first, on every rank.
+        const bool want_energy = !prm.energy_file.empty();
+        Energies   e;
+        if (want_energy)
+          e = energies();
+        std::vector<std::array<double, 2>> p;
+        if (!prm.probes.empty())
+          p = probe(prm.probes);
+        if (energy_out)
+          *energy_out << std::setprecision(10) << t_solid << "," << steps << ","
+                      << e.external << "," << e.internal << "," << e.kinetic
+                      << "," << e.hourglass << "," << e.balance() << ","
+                      << e.kinetic / std::max(std::abs(e.internal), 1e-300)
+                      << "," << e.hourglass_mode << "\n";
+        if (probe_out)
+          {
+            *probe_out << std::setprecision(10) << t_solid;
+            for (const auto &q : p)
+              *probe_out << "," << q[0] << "," << q[1];
+            *probe_out << "\n";
+          }
+      }
+  }
+
+
+  template class SolidStress<2>;
+  template class SolidStress<3>;
+} // namespace femp

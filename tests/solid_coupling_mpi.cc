@@ -1,0 +1,140 @@
+// FEMP coupling over MPI ranks (issue 3 item 4): a 2D substrate block,
+// 1.6 m x 0.8 m, cells of 0.1 m; finite elements below y = 0.4 m (the
+// constant-solid zone), material points above (2 x 2 per cell), so that the
+// horizontal FE-MPM interface crosses the rank boundaries of any partition
+// along x. Bottom fixed, sides on rollers, gravity, and a hot spot on the
+// top that rises linearly in time to 400 K (prescribed cell temperatures,
+// no heat solver), with a yield stress that softens with temperature so
+// that the top yields. The printed numbers (stresses at probes on both
+// sides of the interface, energies, plastic state) must not depend on the
+// number of ranks (the test runs on 1, 2 and 3 ranks against one output),
+// and the stress must be continuous across the interface.
+#include <femp/material_points.h>
+#include <femp/solid_stress.h>
+
+#include "test_tools.h"
+
+using namespace femp_test;
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+  constexpr int                    dim = 2;
+  const double                     h   = 0.1;
+
+  const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
+  BackgroundGrid<dim> grid(gp, comm);
+  grid.create();
+  Material mat = unit_material();
+  mat.density  = 1;
+  typename MaterialPoints<dim>::Parameters pp;
+  pp.point_spacing   = h / 2;
+  pp.substrate_top   = 0.8;
+  pp.layer_thickness = 0;
+  pp.subcells        = 2;
+  MaterialPoints<dim> points(pp, mat, grid);
+  points.create(300.);
+
+  SolidMaterial sm;
+  sm.youngs_modulus   = PiecewiseLinear(100.);
+  sm.plastic_modulus  = PiecewiseLinear(5.);
+  sm.yield_stress     = PiecewiseLinear::parse("300:0.02, 400:0.005", "yield");
+  sm.poisson_ratio    = 0.3;
+  sm.expansion        = 1e-4;
+  sm.density          = 1;
+  sm.melt_temperature = 1e6;
+  typename SolidStress<dim>::Parameters sp;
+  sp.fixed_faces  = {"y-"};
+  sp.roller_faces = {"x-", "x+"};
+  sp.gravity[1]   = -0.01;
+  sp.energy_file  = "";
+  typename SolidFEM<dim>::Parameters fp;
+  fp.enabled      = true;
+  fp.lower_corner = Point<dim>(0, 0);
+  fp.upper_corner = Point<dim>(1.6, 0.4);
+  SolidStress<dim> solid(sp, fp, sm, grid, points);
+  std::vector<double> T = grid.make_field(300.);
+  solid.initialize(T, "");
+
+  // Hot spot on the top, rising linearly to 400 K at t = 1 s; the solid is
+  // advanced after each of 20 "temperature steps".
+  const int n = 20;
+  for (int s = 1; s <= n; ++s)
+    {
+      const double t = double(s) / n;
+      for (const auto c : grid.owned_cells())
+        {
+          const Point<dim> x = grid.cell_center(c);
+          T[c] = 300 + 100 * t * std::exp(-((x[0] - 0.8) * (x[0] - 0.8) +
+                                            (x[1] - 0.8) * (x[1] - 0.8)) /
+                                          0.05);
+        }
+      solid.advance(t, T, s == n);
+    }
+
+  const auto sizes = solid.sizes();
+  checks.print("material points", sizes[0], 6);
+  checks.print("finite elements", sizes[1], 6);
+  checks.print("solid steps", solid.n_steps(), 6);
+  // Probes: columns at x = 0.25, 0.85 and 1.35, cells just below (FE) and
+  // above (MPM) the interface y = 0.4, and one near the top.
+  std::vector<Point<dim>> probes;
+  for (const double x : {0.25, 0.85, 1.35})
+    for (const double y : {0.35, 0.45, 0.75})
+      probes.emplace_back(x, y);
+  const auto v = solid.probe(probes);
+  double     jump = 0, scale = 0;
+  for (std::size_t i = 0; i < probes.size(); ++i)
+    {
+      std::ostringstream s;
+      s << "sigma_xx at (" << probes[i][0] << ", " << probes[i][1] << ") / 1e-3";
+      checks.print(s.str(), v[i][0] / 1e-3, 4);
+      scale = std::max(scale, std::abs(v[i][0]));
+    }
+  for (int c = 0; c < 3; ++c)
+    jump = std::max(jump, std::abs(v[3 * c][0] - v[3 * c + 1][0]));
+  const auto e = solid.energies();
+  checks.print("stress work / 1e-6", e.internal / 1e-6, 4);
+  checks.print("kinetic energy / 1e-9", e.kinetic / 1e-9, 3);
+  checks.print("hourglass energy / 1e-9", e.hourglass / 1e-9, 3);
+  checks.print("external work / 1e-6", e.external / 1e-6, 4);
+  // Continuity: the stress steps across the interface (one cell apart) by
+  // much less than its size in the block.
+  checks.at_most("max |sigma_xx(0.35) - sigma_xx(0.45)| / max |sigma_xx|",
+                 jump / scale, 0.3);
+  checks.at_most("energy balance / stress work", std::abs(e.balance() / e.internal),
+                 0.05);
+
+  // Melting and re-solidification of the points of one hot cell: lower the
+  // solidus to 450 K, heat the cell at (0.85, 0.75) to 500 K (its points
+  // turn fluid and leave the solid), then cool it to just below the
+  // solidus: the points come back stress-free, so after one more solid step
+  // their stress is tiny, not the -0.06 Pa they carried before.
+  {
+    mat.solidus         = 450;
+    sm.melt_temperature = 450;
+    const Point<dim> hot(0.85, 0.75);
+    const auto       ijk = grid.cell_of(hot);
+    const bool       mine =
+      grid.in_box(ijk) &&
+      grid.cell_status()[grid.local_index(ijk)] == BackgroundGrid<dim>::owned;
+    const double before = solid.probe({hot})[0][0];
+    double       t      = solid.time();
+    for (const double T_hot : {500., 449.999})
+      {
+        if (mine)
+          T[grid.local_index(ijk)] = T_hot;
+        points.cells_to_points(T);
+        t += solid.time_step();
+        solid.advance(t, T, true);
+      }
+    const double after = solid.probe({hot})[0][0];
+    checks.print("re-solidified cell: sigma_xx before melting / 1e-3", before / 1e-3, 4);
+    checks.at_most("re-solidified cell: |sigma_xx after| / |sigma_xx before|",
+                   std::abs(after / before), 0.05);
+  }
+  return checks.exit_code();
+}
