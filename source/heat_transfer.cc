@@ -245,6 +245,19 @@ namespace femp
           first_surface.push_back(idx);
       }
 
+    // Rows of the box interior that hold metal (owned or ghost); rows of gas
+    // only are skipped by the per-step passes: their conductance is zero
+    // (set by the full property pass below) and their temperature unused.
+    {
+      const auto &size = grid.box_size();
+      const int   ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
+      row_has_metal.assign(std::size_t(ny) * nz, 0);
+      for (std::size_t idx = 0; idx < alpha.size(); ++idx)
+        if (alpha[idx] > 0)
+          row_has_metal[idx / size[0]] = 1;
+      compute_properties();
+    }
+
     // All cells with sparse sources, once each, in increasing order.
     source_cells.clear();
     for (const auto &sc : surface)
@@ -452,10 +465,18 @@ namespace femp
     // Properties: in 3D plane by plane just ahead of the sweep (pass B), so
     // that they are still in cache when the stencil reads them.
     const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();
+    const std::size_t row_len = grid.box_size()[0];
+    auto properties_of_plane = [&](const std::size_t first_row,
+                                   const std::size_t n_rows) {
+      for (std::size_t r = first_row; r < first_row + n_rows; ++r)
+        if (row_has_metal[r])
+          compute_properties(r * row_len, (r + 1) * row_len);
+    };
+    const std::size_t rows_per_plane = dim == 3 ? plane / row_len : 0;
     if (dim == 3)
-      compute_properties(0, 2 * plane);
+      properties_of_plane(0, 2 * rows_per_plane);
     else
-      compute_properties();
+      properties_of_plane(0, row_has_metal.size());
     compute_surface_sources(dt, time);
 
     const auto & st   = grid.strides();
@@ -487,9 +508,11 @@ namespace femp
     for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
       {
       if (dim == 3)
-        compute_properties((kk + 1) * plane, (kk + 2) * plane);
+        properties_of_plane((kk + 1) * rows_per_plane, rows_per_plane);
       for (int jj = j0; jj < ny - 1; ++jj)
         {
+          if (!row_has_metal[(jj * sy + kk * sz) / row_len])
+            continue; // gas only: nothing changes
           const std::size_t row = jj * sy + kk * sz;
           double row_rate = 0, row_max = 0, row_bad = 0, row_flags = 0;
 #pragma omp simd reduction(max : row_rate, row_max) reduction(+ : row_bad, row_flags)

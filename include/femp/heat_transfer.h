@@ -170,6 +170,8 @@ namespace femp
     std::vector<std::uint8_t>  is_source;
     std::vector<std::uint32_t> source_cells;
     std::vector<std::size_t>   flagged_rows;
+    /// Per x-row of the local box: 1 if any cell of the row holds metal.
+    std::vector<std::uint8_t>  row_has_metal;
     std::vector<double> laser_density, loss_coefficient;
     const std::array<std::vector<double>, dim> *velocity = nullptr;
     std::array<std::vector<double>, dim>        prescribed;
