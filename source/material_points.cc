@@ -8,6 +8,7 @@
 #include <femp/powder_bed.h>
 
 #include <bitset>
+#include <limits>
 #include <cmath>
 
 namespace femp
@@ -144,41 +145,9 @@ namespace femp
     // Points per owned cell, as (flat index, position), gathered first.
     std::vector<std::pair<std::uint32_t, Point<dim>>> points;
 
-    // Substrate block: global lattice x = x0 + (i + 1/2) s below the top.
+    // Substrate block: the lattice below the substrate top.
     for (const auto idx : grid.owned_cells())
-      {
-        const auto           ijk = grid.global_index(idx);
-        std::array<long, dim> first, last;
-        bool                 empty = false;
-        for (int d = 0; d < dim; ++d)
-          {
-            double lo = ijk[d] * h, hi = (ijk[d] + 1) * h;
-            if (d == dim - 1)
-              hi = std::min(hi, prm.substrate_top - x0[d]);
-            first[d] = static_cast<long>(std::ceil(lo / s - 0.5));
-            last[d]  = static_cast<long>(std::ceil(hi / s - 0.5)) - 1;
-            empty    = empty || last[d] < first[d];
-          }
-        if (empty)
-          continue;
-        std::array<long, dim> i = first;
-        while (true)
-          {
-            Point<dim> p;
-            for (int d = 0; d < dim; ++d)
-              p[d] = x0[d] + (i[d] + 0.5) * s;
-            points.emplace_back(idx, p);
-            int d = 0;
-            for (; d < dim; ++d)
-              {
-                if (++i[d] <= last[d])
-                  break;
-                i[d] = first[d];
-              }
-            if (d == dim)
-              break;
-          }
-      }
+      add_lattice_points(idx, prm.substrate_top, nullptr, points);
 
     // Powder layer: the same bed on every rank; keep points of owned cells.
     if (prm.layer_thickness > 0)
@@ -247,7 +216,67 @@ namespace femp
           }
       }
 
-    // Insert cell by cell (stable sort keeps the lattice order in a cell).
+    insert_points(points, T0, [this](const Point<dim> &p) {
+      return p[dim - 1] < prm.substrate_top ? solid : powder;
+    });
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::add_lattice_points(
+    const std::uint32_t                                idx,
+    const double                                       vertical_limit,
+    const std::function<bool(const Point<dim> &)> &    keep,
+    std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const
+  {
+    // Global lattice x = x0 + (i + 1/2) s; the points of cell idx below
+    // vertical_limit (and accepted by keep, if given).
+    const double s   = prm.point_spacing;
+    const double h   = grid.h();
+    const auto & x0  = grid.origin();
+    const auto   ijk = grid.global_index(idx);
+    std::array<long, dim> first, last;
+    for (int d = 0; d < dim; ++d)
+      {
+        double lo = ijk[d] * h, hi = (ijk[d] + 1) * h;
+        if (d == dim - 1)
+          hi = std::min(hi, vertical_limit - x0[d]);
+        first[d] = static_cast<long>(std::ceil(lo / s - 0.5));
+        last[d]  = static_cast<long>(std::ceil(hi / s - 0.5)) - 1;
+        if (last[d] < first[d])
+          return;
+      }
+    std::array<long, dim> i = first;
+    while (true)
+      {
+        Point<dim> p;
+        for (int d = 0; d < dim; ++d)
+          p[d] = x0[d] + (i[d] + 0.5) * s;
+        if (!keep || keep(p))
+          points.emplace_back(idx, p);
+        int d = 0;
+        for (; d < dim; ++d)
+          {
+            if (++i[d] <= last[d])
+              break;
+            i[d] = first[d];
+          }
+        if (d == dim)
+          return;
+      }
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::insert_points(
+    std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
+    const double                                       T0,
+    const std::function<State(const Point<dim> &)> &   state_of)
+  {
+    // Insert cell by cell (stable sort keeps the lattice order in a cell),
+    // with globally unique ids from an exclusive scan of the counts.
     std::stable_sort(points.begin(), points.end(),
                      [](const auto &a, const auto &b) { return a.first < b.first; });
     const types::particle_index n_local = points.size();
@@ -256,8 +285,9 @@ namespace femp
     if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
       offset = 0;
 
+    const double        h = grid.h();
     std::vector<double> props(PropertyIndex::n_properties, 0.);
-    const double        volume = std::pow(s, dim);
+    const double        volume = std::pow(prm.point_spacing, dim);
     props[PropertyIndex::mass]             = mat.density * volume;
     props[PropertyIndex::volume]           = volume;
     props[PropertyIndex::temperature]      = T0;
@@ -275,8 +305,7 @@ namespace femp
         const Point<dim>  v0 = cell->vertex(0);
         for (int d = 0; d < dim; ++d)
           ref[d] = (p[d] - v0[d]) / h;
-        props[PropertyIndex::state] =
-          p[dim - 1] < prm.substrate_top ? solid : powder;
+        props[PropertyIndex::state] = state_of(p);
         handler.insert_particle(p, ref, offset + n, cell,
                                 ArrayView<const double>(props));
       }
@@ -389,70 +418,10 @@ namespace femp
   {
     handler.clear();
     handler.initialize(grid.triangulation(), mapping, PropertyIndex::n_properties);
-    const double s  = prm.point_spacing;
-    const double h  = grid.h();
-    const auto & x0 = grid.origin();
     std::vector<std::pair<std::uint32_t, Point<dim>>> points;
     for (const auto idx : grid.owned_cells())
-      {
-        const auto            ijk = grid.global_index(idx);
-        std::array<long, dim> first, last;
-        for (int d = 0; d < dim; ++d)
-          {
-            first[d] = static_cast<long>(std::ceil(ijk[d] * h / s - 0.5));
-            last[d] = static_cast<long>(std::ceil((ijk[d] + 1) * h / s - 0.5)) - 1;
-          }
-        std::array<long, dim> i    = first;
-        bool                  done = false;
-        for (int d = 0; d < dim; ++d)
-          done = done || last[d] < first[d];
-        while (!done)
-          {
-            Point<dim> p;
-            for (int d = 0; d < dim; ++d)
-              p[d] = x0[d] + (i[d] + 0.5) * s;
-            if (inside(p))
-              points.emplace_back(idx, p);
-            int d = 0;
-            for (; d < dim; ++d)
-              {
-                if (++i[d] <= last[d])
-                  break;
-                i[d] = first[d];
-              }
-            done = (d == dim);
-          }
-      }
-    const types::particle_index n_local = points.size();
-    types::particle_index       offset  = 0;
-    MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, grid.communicator());
-    if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
-      offset = 0;
-    std::vector<double> props(PropertyIndex::n_properties, 0.);
-    const double        volume = std::pow(s, dim);
-    props[PropertyIndex::mass]             = mat.density * volume;
-    props[PropertyIndex::volume]           = volume;
-    props[PropertyIndex::temperature]      = T0;
-    props[PropertyIndex::peak_temperature] = T0;
-    props[PropertyIndex::state]            = state;
-    handler.reserve(points.size());
-    occupied.clear();
-    for (std::size_t n = 0; n < points.size(); ++n)
-      {
-        const auto  idx  = points[n].first;
-        const auto &cell = grid.cell_iterator(idx);
-        if (occupied.empty() || occupied.back().first != idx)
-          occupied.emplace_back(idx, cell);
-        const Point<dim> &p  = points[n].second;
-        const Point<dim>  v0 = cell->vertex(0);
-        Point<dim>        ref;
-        for (int d = 0; d < dim; ++d)
-          ref[d] = (p[d] - v0[d]) / h;
-        handler.insert_particle(p, ref, offset + n, cell,
-                                ArrayView<const double>(props));
-      }
-    handler.update_cached_numbers();
-    cache_point_handles();
+      add_lattice_points(idx, std::numeric_limits<double>::max(), inside, points);
+    insert_points(points, T0, [state](const Point<dim> &) { return state; });
   }
 
 

@@ -189,6 +189,19 @@ namespace femp
     std::vector<std::uint32_t> cell_begin;
     void
     cache_point_handles();
+    /// Append the lattice points of owned cell @p idx below
+    /// @p vertical_limit that @p keep accepts (all if empty).
+    void
+    add_lattice_points(
+      const std::uint32_t                                idx,
+      const double                                       vertical_limit,
+      const std::function<bool(const Point<dim> &)> &    keep,
+      std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const;
+    /// Insert (cell, position) pairs cell by cell at temperature @p T0.
+    void
+    insert_points(std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
+                  const double                                       T0,
+                  const std::function<State(const Point<dim> &)> &   state_of);
     unsigned int n_grains = 0;
     double       packing  = 0;
   };
