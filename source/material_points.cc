@@ -427,9 +427,10 @@ namespace femp
 
   template <int dim>
   void
-  MaterialPoints<dim>::points_moved()
+  MaterialPoints<dim>::index_occupied_cells()
   {
-    handler.sort_particles_into_subdomains_and_cells();
+    // Owned cells that hold points, and where their properties live; after
+    // points were inserted, removed or re-sorted.
     occupied.clear();
     for (const auto idx : grid.owned_cells())
       {
@@ -438,6 +439,15 @@ namespace femp
           occupied.emplace_back(idx, cell);
       }
     cache_point_handles();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::points_moved()
+  {
+    handler.sort_particles_into_subdomains_and_cells();
+    index_occupied_cells();
   }
 
 
@@ -496,14 +506,7 @@ namespace femp
                               grid.cell_iterator(m.cell),
                               ArrayView<const double>(m.properties));
     handler.update_cached_numbers();
-    occupied.clear();
-    for (const auto idx : grid.owned_cells())
-      {
-        const auto &cell = grid.cell_iterator(idx);
-        if (handler.n_particles_in_cell(cell) > 0)
-          occupied.emplace_back(idx, cell);
-      }
-    cache_point_handles();
+    index_occupied_cells();
     return true;
   }
 

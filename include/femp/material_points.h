@@ -189,6 +189,9 @@ namespace femp
     std::vector<std::uint32_t> cell_begin;
     void
     cache_point_handles();
+    /// Rebuild occupied (and the pointer cache) from the handler.
+    void
+    index_occupied_cells();
     /// Append the lattice points of owned cell @p idx below
     /// @p vertical_limit that @p keep accepts (all if empty).
     void
