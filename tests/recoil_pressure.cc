@@ -1,0 +1,150 @@
+// Melt flow, recoil pressure (paper eq. 3; doc/flow.md): two checks of the
+// recoil pressure p_r = zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] that the
+// flow applies as part of the free-surface pressure, with the reference
+// value computed here from the formula.
+//  1. A pool at rest under gravity with a uniform temperature above T_v:
+//     the cell-centre pressure must be p_r + rho g (H_m - z) within 1 % of
+//     p_r + rho g H_m, and the points must stay at rest (round-off).
+//  2. A free square block of fluid without gravity, hot (T > T_v) in its
+//     upper half and cold below: recoil pushes on the top face only (the
+//     pushes on the two side faces cancel), so the total momentum after a
+//     time t must be -p_r L t per unit depth (2D). Printed error, 5 %
+//     tolerance.
+// 2D, 1 and 2 ranks give the same output.
+#include "flow_tools.h"
+
+#include <cmath>
+
+using namespace femp_test;
+
+namespace
+{
+  constexpr int dim = 2;
+
+  double
+  recoil(const IncompressibleFlow<dim>::Parameters &prm, const double T)
+  {
+    const double R = 8.314462618;
+    return prm.recoil_coefficient * prm.ambient_pressure *
+           std::exp(prm.latent_heat_evaporation * prm.molar_mass *
+                    (T - prm.evaporation_temperature) /
+                    (R * T * prm.evaporation_temperature));
+  }
+
+  IncompressibleFlow<dim>::Parameters
+  parameters(const double g)
+  {
+    IncompressibleFlow<dim>::Parameters prm;
+    prm.viscosity          = 1e-3;
+    prm.solver_tolerance   = 1e-12;
+    prm.gravity            = Tensor<1, dim>();
+    prm.gravity[dim - 1]   = -g;
+    prm.recoil_coefficient = 0.54;
+    return prm;
+  }
+
+  void
+  pool_at_rest(Checks &checks, MPI_Comm comm)
+  {
+    const double h = 0.025, rho = 1000, g = 9.81, H = 0.3, T = 3300;
+    const auto   prm = parameters(g);
+    FlowScene<dim> scene(Point<dim>(0.4, 0.4), h, rho,
+                         [&](const Point<dim> &x) { return x[dim - 1] < H; },
+                         prm, comm);
+    std::vector<double> temperature = scene.grid.make_field(T);
+    scene.flow->set_temperature(&temperature);
+    const double dt = scene.flow->stable_time_step().min();
+    const unsigned int n_steps = 200;
+    for (unsigned int n = 0; n < n_steps; ++n)
+      scene.flow->step(dt);
+
+    const double pr = recoil(prm, T);
+    const double s  = h / 2; // material surface: top lattice point + s/2
+    const double Hm = std::ceil(H / s - 0.5) * s;
+    const auto & p    = scene.flow->pressure();
+    const auto & type = scene.flow->cell_type();
+    double       err  = 0;
+    for (const auto idx : scene.grid.owned_cells())
+      if (type[idx] == IncompressibleFlow<dim>::fluid)
+        {
+          const double z = scene.grid.cell_center(idx)[dim - 1];
+          err = std::max(err, std::abs(p[idx] - pr - rho * g * (Hm - z)));
+        }
+    err = Utilities::MPI::max(err, comm) / (pr + rho * g * Hm);
+    const double umax = scene.max_over_points(
+      [](const Point<dim> &, ArrayView<const double> v) {
+        return point_speed<dim>(v);
+      });
+    checks.print("pool: recoil pressure p_r at T = 3300 K, Pa", pr);
+    checks.print("pool: rho g H_m, Pa", rho * g * Hm);
+    checks.at_most("pool: max |p - p_r - rho g (H_m - z)| / (p_r + rho g H_m)",
+                   err, 0.01);
+    checks.at_most("pool: max point speed / (g t)",
+                   umax / (g * n_steps * dt), 1e-9);
+  }
+
+  void
+  pushed_block(Checks &checks, MPI_Comm comm)
+  {
+    const double h = 0.025, rho = 1000, L = 0.2, T_hot = 2500, T_cold = 300;
+    const Point<dim> lo(0.2, 0.2), hi(0.4, 0.4), size(0.6, 0.6);
+    const auto       prm = parameters(0.);
+    FlowScene<dim>   scene(
+      size, h, rho,
+      [&](const Point<dim> &x) {
+        return x[0] > lo[0] && x[0] < hi[0] && x[1] > lo[1] && x[1] < hi[1];
+      },
+      prm, comm);
+    // Hot above the block's mid-height, cold below (per cell centre).
+    std::vector<double> temperature = scene.grid.make_field(T_cold);
+    for (std::size_t i = 0; i < temperature.size(); ++i)
+      if (scene.grid.cell_center(i)[dim - 1] > 0.5 * (lo[1] + hi[1]))
+        temperature[i] = T_hot;
+    scene.flow->set_temperature(&temperature);
+
+    const double       dt = 1e-3;
+    const unsigned int n_steps = 50;
+    for (unsigned int n = 0; n < n_steps; ++n)
+      scene.flow->step(dt);
+
+    using P = MaterialPoints<dim>::PropertyIndex;
+    Tensor<1, dim> momentum;
+    double         mass = 0;
+    for (const auto &particle : scene.points->particle_handler())
+      {
+        const auto v = particle.get_properties();
+        mass += v[P::mass];
+        for (int d = 0; d < dim; ++d)
+          momentum[d] += v[P::mass] * v[P::velocity + d];
+      }
+    mass     = Utilities::MPI::sum(mass, comm);
+    momentum = Utilities::MPI::sum(momentum, comm);
+    const double t        = n_steps * dt;
+    const double expected = -recoil(prm, T_hot) * L * t; // per unit depth
+    checks.print("block: mass per unit depth, kg/m", mass);
+    checks.print("block: expected vertical momentum -p_r L t, kg/s", expected);
+    checks.print("block: vertical momentum, kg/s", momentum[1]);
+    checks.at_most("block: |momentum_z / (-p_r L t) - 1|",
+                   std::abs(momentum[1] / expected - 1), 0.05);
+    checks.at_most("block: |momentum_x| / |p_r L t|",
+                   std::abs(momentum[0] / expected), 1e-6);
+  }
+} // namespace
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  Checks                           checks(MPI_COMM_WORLD);
+  try
+    {
+      pool_at_rest(checks, MPI_COMM_WORLD);
+      pushed_block(checks, MPI_COMM_WORLD);
+    }
+  catch (const std::exception &e)
+    {
+      std::cerr << e.what() << std::endl;
+      return 1;
+    }
+  return checks.exit_code();
+}
