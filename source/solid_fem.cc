@@ -100,17 +100,63 @@ namespace femp
     {
       return ((a >> d) & 1u) ? 1. : -1.;
     }
-    /// Flanagan-Belytschko hourglass base vector alpha at corner a.
-    template <int dim>
+    /// H_ma = prod_{d in m} s_a,d: the transform's matrix (see fwht).
     constexpr double
-    gam(const unsigned int al, const unsigned int a)
+    hadamard(const unsigned int m, const unsigned int a)
     {
-      if (dim == 2)
-        return sgn(a, 0) * sgn(a, 1);
-      return al == 0 ? sgn(a, 0) * sgn(a, 1) :
-             al == 1 ? sgn(a, 1) * sgn(a, 2) :
-             al == 2 ? sgn(a, 0) * sgn(a, 2) :
-                       sgn(a, 0) * sgn(a, 1) * sgn(a, 2);
+      double h = 1;
+      for (unsigned int d = 0; d < 3; ++d)
+        if ((m >> d) & 1u)
+          h *= sgn(a, d);
+      return h;
+    }
+    /// Flanagan-Belytschko hourglass base vector alpha as a transform index
+    /// (a product of two or more s_d: xy in 2D; xy, xz, yz, xyz in 3D).
+    template <int dim>
+    constexpr unsigned int
+    hg_mask(const unsigned int al)
+    {
+      return dim == 2 ? 3u : (al == 0 ? 3u : al == 1 ? 5u : al == 2 ? 6u : 7u);
+    }
+
+
+    /// In-place Walsh-Hadamard transform over the 2^dim corners (bit d of
+    /// the corner index: upper side in direction d): x_m <- sum_a H_ma x_a
+    /// with H_ma = prod_{d in m} s_a,d. Per stage (lo, hi) -> (lo + hi,
+    /// hi - lo).
+    template <int dim>
+    inline void
+    fwht(double (&x)[1u << dim][dim])
+    {
+#pragma GCC unroll 4
+      for (int d = 0; d < dim; ++d)
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if (!((a >> d) & 1u))
+            for (int i = 0; i < dim; ++i)
+              {
+                const double lo = x[a][i], hi = x[a | (1u << d)][i];
+                x[a][i]              = lo + hi;
+                x[a | (1u << d)][i] = hi - lo;
+              }
+    }
+    /// Transposed transform: f_a = sum_m H_ma C_m; per stage (lo, hi) ->
+    /// (lo - hi, lo + hi).
+    template <int dim>
+    inline void
+    fwht_transpose(double (&x)[1u << dim][dim])
+    {
+#pragma GCC unroll 4
+      for (int d = 0; d < dim; ++d)
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if (!((a >> d) & 1u))
+            for (int i = 0; i < dim; ++i)
+              {
+                const double lo = x[a][i], hi = x[a | (1u << d)][i];
+                x[a][i]              = lo - hi;
+                x[a | (1u << d)][i] = lo + hi;
+              }
     }
   } // namespace
 
@@ -264,6 +310,7 @@ namespace femp
         }
     const std::size_t n_el = element_id.size();
     stress.assign(n_el, StressPoint());
+    modes.assign(n_el * n_hg * dim, 0.);
     visc.assign(n_el, 0.);
 
     // Lumped masses: element shares summed over ranks.
@@ -282,7 +329,6 @@ namespace femp
         inv_mass[ln] = 1. / mass[ln];
       }
     vel.assign(dim * n_local, 0.);
-    disp.assign(dim * n_local, 0.);
     ext.assign(dim * n_local, 0.);
     ext_nodes.clear();
     kinetic = 0;
@@ -517,7 +563,6 @@ namespace femp
         double v2 = 0, gv = 0, fv = 0;
         for (int d = 0; d < dim; ++d)
           {
-            disp[dim * ln + d] += dt * v[d];
             v2 += v[d] * v[d];
             gv += g[d] * v[d];
             fv += ext[dim * ln + d] * v[d];
@@ -566,31 +611,39 @@ namespace femp
     double *F = force.begin();
     std::fill(F, F + dim * n_local, 0.);
     const double *vl   = vel.data();
-    const double *ul   = disp.data();
     double        work = 0;
     const std::size_t n_el = element_id.size();
     for (std::size_t e = 0; e < n_el; ++e)
       {
-        const std::uint32_t *c = &conn[nc * e];
+        const std::uint32_t *c  = &conn[nc * e];
         StressPoint &        st = stress[e];
-        double               T  = T_cur[e];
+        // Walsh-Hadamard transforms over the corners: coefficient m of x is
+        // sum_a (prod_{d in m} s_a,d) x_a, so the one-bit coefficients give
+        // the velocity gradient (b_a = s_a B) and the coefficients with two
+        // or more bits the hourglass modes q_alpha (Gamma = products of s).
+        double *q = &modes[n_hg * dim * e];
+        double  T = T_cur[e];
+        double E;
         if constexpr (update)
           {
-            const double T_new = T_start[e] + w * (T_end[e] - T_start[e]);
-            Tensor<2, 3> L;
+            double Vc[nc][dim];
 #pragma GCC unroll 8
             for (unsigned int a = 0; a < nc; ++a)
               for (int i = 0; i < dim; ++i)
-                {
-                  const double vi = vl[dim * c[a] + i];
-                  for (int j = 0; j < dim; ++j)
-                    L[i][j] += sgn(a, j) * vi;
-                }
-            double trL = 0;
+                Vc[a][i] = vl[dim * c[a] + i];
+            fwht<dim>(Vc);
+            // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
+            // element: q += dt Gamma_alpha . v (the same transform).
+            for (unsigned int al = 0; al < n_hg; ++al)
+              for (int i = 0; i < dim; ++i)
+                q[dim * al + i] += dt * Vc[hg_mask<dim>(al)][i];
+            const double T_new = T_start[e] + w * (T_end[e] - T_start[e]);
+            Tensor<2, 3> L;
+            double       trL = 0;
             for (int i = 0; i < dim; ++i)
               {
                 for (int j = 0; j < dim; ++j)
-                  L[i][j] *= Bdt;
+                  L[i][j] = Bdt * Vc[1u << j][i];
                 trL += L[i][i];
               }
             double s_old[dim][dim];
@@ -598,62 +651,45 @@ namespace femp
               for (int j = 0; j < dim; ++j)
                 s_old[i][j] = st.sigma[i][j];
             update_stress(mat, L, T, T_new, st);
-            double sw = 0;
+            // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
+            // summed in two independent chains.
+            double sd = 0, so = 0;
             for (int i = 0; i < dim; ++i)
-              for (int j = 0; j < dim; ++j)
-                sw += (s_old[i][j] + st.sigma[i][j]) * L[i][j];
+              {
+                sd += (s_old[i][i] + st.sigma[i][i]) * L[i][i];
+                for (int j = i + 1; j < dim; ++j)
+                  so += (s_old[i][j] + st.sigma[i][j]) * (L[i][j] + L[j][i]);
+              }
+            const double sw = sd + so;
             work += 0.5 * V * sw + V * visc[e] * trL;
             T        = T_new;
             T_cur[e] = T_new;
+            E        = mat.youngs_modulus.value(T);
             if (mat.bulk_viscosity > 0)
-              visc[e] =
-                vfac * std::sqrt(mat.youngs_modulus.value(T)) * trL;
+              visc[e] = vfac * std::sqrt(E) * trL;
           }
-        // Forces of the next step: internal (eq. 9, with the viscous
-        // pressure), gravity, hourglass.
-        double P[dim][dim];
+        else
+          E = mat.youngs_modulus.value(T);
+        // Forces of the next step as coefficients of the same transform:
+        // gravity (m = 0), internal force -V sigma b_a with the viscous
+        // pressure (one-bit m, eq. 9), hourglass -k Gamma q (the others);
+        // the transposed transform gives the corner forces.
+        const double k = kfac * E;
+        double       C[nc][dim];
+        for (unsigned int al = 0; al < n_hg; ++al)
+          for (int i = 0; i < dim; ++i)
+            C[hg_mask<dim>(al)][i] = -k * q[dim * al + i];
         for (int i = 0; i < dim; ++i)
-          for (int j = 0; j < dim; ++j)
-            P[i][j] = -VB * (st.sigma[i][j] + (i == j ? visc[e] : 0.));
-        double f[nc][dim];
-#pragma GCC unroll 8
-        for (unsigned int a = 0; a < nc; ++a)
-          for (int i = 0; i < dim; ++i)
-            {
-              double s = mg[i];
-              for (int j = 0; j < dim; ++j)
-                s += sgn(a, j) * P[i][j];
-              f[a][i] = s;
-            }
-        if (kfac > 0)
           {
-            const double k = kfac * mat.youngs_modulus.value(T);
-            double       q[n_hg][dim] = {};
-#pragma GCC unroll 8
-            for (unsigned int a = 0; a < nc; ++a)
-              for (int i = 0; i < dim; ++i)
-                {
-                  const double u = ul[dim * c[a] + i];
-                  for (unsigned int al = 0; al < n_hg; ++al)
-                    q[al][i] += gam<dim>(al, a) * u;
-                }
-            for (unsigned int al = 0; al < n_hg; ++al)
-              for (int i = 0; i < dim; ++i)
-                q[al][i] *= k;
-#pragma GCC unroll 8
-            for (unsigned int a = 0; a < nc; ++a)
-              for (int i = 0; i < dim; ++i)
-                {
-                  double s = 0;
-                  for (unsigned int al = 0; al < n_hg; ++al)
-                    s += gam<dim>(al, a) * q[al][i];
-                  f[a][i] -= s;
-                }
+            C[0][i] = mg[i];
+            for (int j = 0; j < dim; ++j)
+              C[1u << j][i] = -VB * (st.sigma[i][j] + (i == j ? visc[e] : 0.));
           }
+        fwht_transpose<dim>(C);
 #pragma GCC unroll 8
         for (unsigned int a = 0; a < nc; ++a)
           for (int i = 0; i < dim; ++i)
-            F[dim * c[a] + i] += f[a][i];
+            F[dim * c[a] + i] += C[a][i];
       }
 
     // Hourglass forces of this rank's elements at the transition nodes
@@ -662,16 +698,12 @@ namespace femp
     if (kfac > 0)
       for (const auto &tc : tr_corners)
         {
-          const std::uint32_t *c = &conn[nc * tc[0]];
-          const double         k = kfac * mat.youngs_modulus.value(T_cur[tc[0]]);
+          const double *q = &modes[n_hg * dim * tc[0]];
+          const double  k = kfac * mat.youngs_modulus.value(T_cur[tc[0]]);
           for (int i = 0; i < dim; ++i)
             for (unsigned int al = 0; al < n_hg; ++al)
-              {
-                double q = 0;
-                for (unsigned int a = 0; a < nc; ++a)
-                  q += gam<dim>(al, a) * ul[dim * c[a] + i];
-                tr_hg[dim * tc[2] + i] -= k * gam<dim>(al, tc[1]) * q;
-              }
+              tr_hg[dim * tc[2] + i] -=
+                k * hadamard(hg_mask<dim>(al), tc[1]) * q[dim * al + i];
         }
     return work;
   }
@@ -687,15 +719,10 @@ namespace femp
     double energy = 0;
     for (std::size_t e = 0; e < element_id.size(); ++e)
       {
-        const double k = hourglass_stiffness(T_cur[e], kappa);
-        for (int i = 0; i < dim; ++i)
-          for (unsigned int al = 0; al < n_hg; ++al)
-            {
-              double q = 0;
-              for (unsigned int a = 0; a < n_corners; ++a)
-                q += gam<dim>(al, a) * disp[dim * conn[n_corners * e + a] + i];
-              energy += 0.5 * k * q * q;
-            }
+        const double  k = hourglass_stiffness(T_cur[e], kappa);
+        const double *q = &modes[n_hg * dim * e];
+        for (unsigned int j = 0; j < n_hg * dim; ++j)
+          energy += 0.5 * k * q[j] * q[j];
       }
     return energy;
   }

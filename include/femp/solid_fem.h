@@ -8,7 +8,7 @@
 // one background-grid cell and every FE node coincides with a grid node
 // (N_Ii = 1 at transition nodes). p4est partitions it independently of the
 // background grid. Nodes are numbered by a DoFHandler with FE_Q<dim>(1);
-// node data (velocity, displacement, lumped mass) live in flat arrays over
+// node data (velocity, lumped mass) live in flat arrays over
 // the locally relevant nodes (owned first, then ghosts, in the numbering of
 // the Utilities::MPI::Partitioner), nodal force sums over ranks go through a
 // LinearAlgebra::distributed::Vector (compress(add), update_ghost_values).
@@ -173,7 +173,7 @@ namespace femp
                       std::vector<double> &      a_grid);
 
     /// Central-difference node update (eq. 10): sums of the element forces
-    /// over ranks, new velocities and displacements of all local FE nodes
+    /// over ranks, new velocities of all local FE nodes
     /// (transition nodes from update_transition()). Returns {kinetic
     /// energy, external power} of the owned nodes.
     std::array<double, 2>
@@ -228,6 +228,9 @@ namespace femp
     std::vector<std::uint32_t> conn;      ///< n_corners local nodes each
     std::vector<StressPoint>   stress;
     std::vector<double>        visc;      ///< viscous pressure q, Pa
+    /// Hourglass mode amplitudes q_alpha,i = sum_a Gamma_alpha,a u_a,i,
+    /// n_hg * dim per element, advanced with the element's velocities.
+    std::vector<double>        modes;
     std::vector<double>        T_start, T_end, T_cur;
     std::vector<std::uint64_t> element_id; ///< lexicographic in the zone
     std::size_t                off_rank = 0;
@@ -237,7 +240,7 @@ namespace femp
 
     // Nodes (owned, then ghosts).
     std::size_t                n_owned = 0, n_local = 0;
-    std::vector<double>        vel, disp; ///< dim per node
+    std::vector<double>        vel; ///< dim per node
     std::vector<double>        mass, inv_mass;
     std::vector<std::uint8_t>  fix;      ///< bit d: velocity d fixed
     std::vector<int>           node_tr;  ///< transition index or -1
