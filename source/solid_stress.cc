@@ -232,6 +232,10 @@ namespace femp
                 active[n] = 1;
               }
           }
+      mpm_cells.clear();
+      for (const auto c : grid.owned_cells())
+        if (!fem.zone_mask()[c])
+          mpm_cells.push_back(c);
       grid_transition.clear();
       const auto &size = grid.box_size();
       for (std::size_t t = 0; t < fem.n_transition(); ++t)
@@ -309,14 +313,15 @@ namespace femp
               break;
             t_next = t;
           }
-        if (!gathered)
+        if (!gathered && !mpm_cells.empty())
           {
             mpm.gather(fem.zone_mask(), prm.mass_scaling);
             gathered = true;
           }
         // Linear interpolation of the cell temperatures in [t_prev, t].
         const double w = t > t_prev ? (t_next - t_prev) / (t - t_prev) : 1.;
-        for (const auto c : grid.owned_cells())
+        // (Cells of the FE zone: the elements interpolate their own.)
+        for (const auto c : mpm_cells)
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
         step(t_next - t_solid, w);
         T_solid.swap(T_next);
@@ -325,7 +330,7 @@ namespace femp
       }
     if (gathered)
       mpm.scatter();
-    for (const auto c : grid.owned_cells())
+    for (const auto c : mpm_cells)
       T_prev[c] = T[c];
     t_prev = t;
   }
@@ -538,6 +543,14 @@ namespace femp
           vm[c] /= count[c];
         }
     fem.cell_stress_fields(sxx, vm);
+  }
+
+
+  template <int dim>
+  double
+  SolidStress<dim>::fe_elements_off_rank() const
+  {
+    return Utilities::MPI::sum(double(fem.n_elements_off_rank()), comm);
   }
 
 

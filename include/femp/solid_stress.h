@@ -163,6 +163,10 @@ namespace femp
     void
     cell_stress_fields(std::vector<double> &sigma_xx,
                        std::vector<double> &von_mises) const;
+    /// FE elements whose grid cell is owned by another rank (global; the
+    /// two meshes are partitioned independently).
+    double
+    fe_elements_off_rank() const;
     /// Number of material points and finite elements in the solid (global).
     std::array<double, 2>
     sizes() const;
@@ -180,6 +184,9 @@ namespace femp
     /// transition nodes among its owned-cell nodes: the only grid nodes a
     /// solid step touches.
     std::vector<std::uint32_t> active_nodes;
+    /// Owned cells outside the FE zone (the only cells whose temperature
+    /// the points need; none: no gather of the points at all).
+    std::vector<std::uint32_t> mpm_cells;
     /// (transition index, local grid node) for transition nodes among the
     /// nodes of this rank's owned cells.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
