@@ -309,6 +309,10 @@ namespace femp
             }
         }
     const std::size_t n_el = element_id.size();
+    element_by_id.clear();
+    for (std::size_t e = 0; e < n_el; ++e)
+      element_by_id.emplace_back(element_id[e], e);
+    std::sort(element_by_id.begin(), element_by_id.end());
     stress.assign(n_el, StressPoint());
     modes.assign(n_el * n_hg * dim, 0.);
     visc.assign(n_el, 0.);
@@ -742,14 +746,14 @@ namespace femp
           return false;
         id = id * zn[d] + (ijk[d] - zlo[d]);
       }
-    for (std::size_t e = 0; e < element_id.size(); ++e)
-      if (element_id[e] == id)
-        {
-          sxx = stress[e].sigma[0][0];
-          T   = T_cur[e];
-          return true;
-        }
-    return false;
+    const auto it = std::lower_bound(element_by_id.begin(),
+                                     element_by_id.end(),
+                                     std::make_pair(id, std::uint32_t(0)));
+    if (it == element_by_id.end() || it->first != id)
+      return false;
+    sxx = stress[it->second].sigma[0][0];
+    T   = T_cur[it->second];
+    return true;
   }
 
 

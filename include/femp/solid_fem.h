@@ -233,6 +233,7 @@ namespace femp
     std::vector<double>        modes;
     std::vector<double>        T_start, T_end, T_cur;
     std::vector<std::uint64_t> element_id; ///< lexicographic in the zone
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> element_by_id;
     std::size_t                off_rank = 0;
     Utilities::MPI::NoncontiguousPartitioner T_exchange; ///< grid -> FE
     std::vector<std::uint32_t> grid_zone_cells;          ///< owned zone cells
