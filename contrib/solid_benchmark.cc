@@ -8,6 +8,7 @@
 // cell), one with every cell a finite element.
 //
 //   build/contrib/solid_benchmark [cells per direction, default 32] [steps]
+//                                 [fe | mpm | constitutive: only that part]
 //
 // Run on one core (no mpirun) with a Release build. Prints ns of process CPU
 // time per point-step and per element-step (the grid node work of a step is
@@ -97,6 +98,39 @@ namespace
     const double cpu = double(std::clock() - start) / CLOCKS_PER_SEC;
     return cpu / steps / n_objects * 1e9;
   }
+  /// The constitutive update alone (eq. 5), as the FE calls it: ns per
+  /// call over @p n states, with a velocity gradient of a heated element
+  /// (thermal strain, spin) and a temperature rising by 1000 K.
+  double
+  constitutive_only(const unsigned int n, const unsigned int steps)
+  {
+    SolidMaterial sm;
+    sm.melt_temperature = 1e6;
+    sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
+    std::vector<StressPoint> states(n);
+    double                   sum   = 0;
+    const std::clock_t       start = std::clock();
+    for (unsigned int s = 0; s < steps; ++s)
+      {
+        const double T0 = 300 + 1000. * s / steps, T1 = 300 + 1000. * (s + 1) / steps;
+        for (unsigned int i = 0; i < n; ++i)
+          {
+            Tensor<2, 3> L;
+            const double x = 1e-6 * (1 + (i % 7));
+            L[0][0]        = x;
+            L[0][1]        = 0.3 * x;
+            L[1][0]        = -0.1 * x;
+            L[1][1]        = 0.5 * x;
+            L[2][2]        = -0.2 * x;
+            update_stress(sm, L, T0 - 100. * (i % 5), T1 - 100. * (i % 5), states[i]);
+          }
+        sum += states[n / 2].sigma[0][0];
+      }
+    const double cpu = double(std::clock() - start) / CLOCKS_PER_SEC;
+    if (sum == 42) // keep the loop
+      std::cout << "";
+    return cpu / steps / n * 1e9;
+  }
 } // namespace
 
 int
@@ -106,6 +140,25 @@ main(int argc, char **argv)
   const unsigned int n     = argc > 1 ? std::atoi(argv[1]) : 32;
   const unsigned int steps = argc > 2 ? std::atoi(argv[2]) : 50;
   double             n_points = 0, n_elements = 0;
+  const std::string  only = argc > 3 ? argv[3] : "";
+  if (only == "constitutive")
+    {
+      std::cout << "update_stress alone: "
+                << constitutive_only(n * n * n / 2, steps) << " ns per call\n";
+      return 0;
+    }
+  if (!only.empty())
+    {
+      const bool   fe = only == "fe";
+      double       n_obj = 0;
+      const double a     = run(n, steps, fe, false, n_obj);
+      const double b     = run(n, steps, fe, true, n_obj);
+      std::cout << std::setprecision(4) << (fe ? "FE: " : "MPM: ") << n_obj
+                << (fe ? " elements, " : " points, ") << a
+                << " ns per step (one advance() per step), " << b
+                << " ns per step (sub-cycled)\n";
+      return 0;
+    }
   const double       mpm  = run(n, steps, false, false, n_points);
   const double       fe   = run(n, steps, true, false, n_elements);
   const double       mpm1 = run(n, steps, false, true, n_points);

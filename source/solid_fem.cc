@@ -1,6 +1,12 @@
 // femp: explicit finite elements of the constant-solid zone (paper eqs.
-// 6-10): one-point hexahedra/quadrilaterals with Flanagan-Belytschko
-// hourglass forces and lumped mass; see solid_fem.h.
+// 6-10) on their own parallel::distributed::Triangulation: one-point
+// hexahedra/quadrilaterals with Flanagan-Belytschko hourglass forces, lumped
+// mass, central difference, transition nodes (eqs. 14-17); see solid_fem.h.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/mpi_noncontiguous_partitioner.templates.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/grid/grid_generator.h>
+
 #include <femp/input_checks.h>
 #include <femp/solid_fem.h>
 
@@ -86,6 +92,75 @@ namespace femp
   }
 
 
+  namespace
+  {
+    /// s_a,d = +-1: sign of corner a (bit d set: upper side) in direction d.
+    constexpr double
+    sgn(const unsigned int a, const unsigned int d)
+    {
+      return ((a >> d) & 1u) ? 1. : -1.;
+    }
+    /// H_ma = prod_{d in m} s_a,d: the transform's matrix (see fwht).
+    constexpr double
+    hadamard(const unsigned int m, const unsigned int a)
+    {
+      double h = 1;
+      for (unsigned int d = 0; d < 3; ++d)
+        if ((m >> d) & 1u)
+          h *= sgn(a, d);
+      return h;
+    }
+    /// Flanagan-Belytschko hourglass base vector alpha as a transform index
+    /// (a product of two or more s_d: xy in 2D; xy, xz, yz, xyz in 3D).
+    template <int dim>
+    constexpr unsigned int
+    hg_mask(const unsigned int al)
+    {
+      return dim == 2 ? 3u : (al == 0 ? 3u : al == 1 ? 5u : al == 2 ? 6u : 7u);
+    }
+
+
+    /// In-place Walsh-Hadamard transform over the 2^dim corners (bit d of
+    /// the corner index: upper side in direction d): x_m <- sum_a H_ma x_a
+    /// with H_ma = prod_{d in m} s_a,d. Per stage (lo, hi) -> (lo + hi,
+    /// hi - lo).
+    template <int dim>
+    inline void
+    fwht(double (&x)[1u << dim][dim])
+    {
+#pragma GCC unroll 4
+      for (int d = 0; d < dim; ++d)
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if (!((a >> d) & 1u))
+            for (int i = 0; i < dim; ++i)
+              {
+                const double lo = x[a][i], hi = x[a | (1u << d)][i];
+                x[a][i]              = lo + hi;
+                x[a | (1u << d)][i] = hi - lo;
+              }
+    }
+    /// Transposed transform: f_a = sum_m H_ma C_m; per stage (lo, hi) ->
+    /// (lo - hi, lo + hi).
+    template <int dim>
+    inline void
+    fwht_transpose(double (&x)[1u << dim][dim])
+    {
+#pragma GCC unroll 4
+      for (int d = 0; d < dim; ++d)
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if (!((a >> d) & 1u))
+            for (int i = 0; i < dim; ++i)
+              {
+                const double lo = x[a][i], hi = x[a | (1u << d)][i];
+                x[a][i]              = lo - hi;
+                x[a | (1u << d)][i] = lo + hi;
+              }
+    }
+  } // namespace
+
+
   template <int dim>
   SolidFEM<dim>::SolidFEM(const Parameters &         prm,
                           const BackgroundGrid<dim> &grid,
@@ -93,275 +168,565 @@ namespace femp
     : prm(prm)
     , grid(grid)
     , mat(material)
+    , comm(grid.communicator())
+    , tria(grid.communicator())
+    , fe(1)
+  {}
+
+
+  template <int dim>
+  double
+  SolidFEM<dim>::hourglass_stiffness(const double T, const double kappa) const
   {
-    const auto &s = grid.node_strides();
-    for (unsigned int a = 0; a < n_corners; ++a)
-      {
-        corner_offset[a] = 0;
-        for (int d = 0; d < dim; ++d)
-          {
-            const bool up = a & (1u << d);
-            sign[a][d]    = up ? 1. : -1.;
-            if (up)
-              corner_offset[a] += s[d];
-          }
-        if constexpr (dim == 2)
-          gamma[0][a] = sign[a][0] * sign[a][1];
-        else
-          {
-            gamma[0][a] = sign[a][0] * sign[a][1];
-            gamma[1][a] = sign[a][1] * sign[a][2];
-            gamma[2][a] = sign[a][0] * sign[a][2];
-            gamma[3][a] = sign[a][0] * sign[a][1] * sign[a][2];
-          }
-      }
+    return kappa * mat.p_wave_modulus(T) * V * bb / n_corners;
   }
 
 
   template <int dim>
   void
-  SolidFEM<dim>::setup(const double mass_scaling)
+  SolidFEM<dim>::setup(const double                             mass_scaling,
+                       const std::array<std::uint8_t, 2 * dim> &face_bits,
+                       const Tensor<1, dim> &                   gravity,
+                       const std::vector<double> &              T)
   {
     mass_scale     = mass_scaling;
+    g              = gravity;
     const double h = grid.h();
     V              = std::pow(h, dim);
     const double b = 1. / (std::pow(2., dim - 1) * h);
     bb             = n_corners * dim * b * b;
     in_zone_cell.assign(grid.n_local(), 0);
-    element_of_cell.assign(grid.n_local(), -1);
-    element_cell.clear(), element_node0.clear(), stress.clear();
-    node_mass.assign(grid.n_local_nodes(), 0.);
-    true_node_mass.assign(grid.n_local_nodes(), 0.);
-    for (int d = 0; d < dim; ++d)
-      {
-        vel[d].assign(grid.n_local_nodes(), 0.);
-        disp[d].assign(grid.n_local_nodes(), 0.);
-      }
     if (!prm.enabled)
       return;
-    for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
+    const auto &N = grid.n_cells();
+    for (int d = 0; d < dim; ++d)
       {
-        if (grid.cell_status()[idx] == BackgroundGrid<dim>::outside)
-          continue;
-        const Point<dim> c  = grid.cell_center(idx);
-        bool             in = true;
-        for (int d = 0; d < dim; ++d)
-          in = in && c[d] > prm.lower_corner[d] && c[d] < prm.upper_corner[d];
-        in_zone_cell[idx] = in;
+        zlo[d] = static_cast<int>(
+          std::round((prm.lower_corner[d] - grid.origin()[d]) / h));
+        zn[d] = static_cast<int>(
+          std::round((prm.upper_corner[d] - prm.lower_corner[d]) / h));
       }
-    std::vector<std::uint8_t> is_node(grid.n_local_nodes(), 0);
-    for (const auto idx : grid.owned_cells())
-      if (in_zone_cell[idx])
-        {
-          element_of_cell[idx] = element_cell.size();
-          element_cell.push_back(idx);
-          const std::size_t n0 = grid.first_node_of_cell(idx);
-          element_node0.push_back(n0);
-          for (unsigned int a = 0; a < n_corners; ++a)
-            {
-              node_mass[n0 + corner_offset[a]] +=
-                mat.density * V * mass_scaling / n_corners;
-              true_node_mass[n0 + corner_offset[a]] +=
-                mat.density * V / n_corners;
-              is_node[n0 + corner_offset[a]] = 1;
-            }
-        }
-    stress.resize(element_cell.size());
-    visc.assign(element_cell.size(), 0.);
-    grid.sum_shared_nodes(node_mass);
-    grid.sum_shared_nodes(true_node_mass);
-    fe_nodes.clear();
-    for (std::size_t n = 0; n < is_node.size(); ++n)
-      if (is_node[n])
-        fe_nodes.push_back(n);
-  }
-
-
-  template <int dim>
-  void
-  SolidFEM<dim>::add_forces(SolidNodeFields<dim> &                 nodes,
-                            std::array<std::vector<double>, dim> &hourglass,
-                            const Tensor<1, dim> &                 gravity,
-                            const std::vector<double> &            T) const
-  {
-    const double bscale = V / (std::pow(2., dim - 1) * grid.h());
-    const double nu     = mat.poisson_ratio;
-    const double mfac   = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
-    const double mg     = mat.density * V / n_corners;
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
-      {
-        const std::size_t n0 = element_node0[e];
-        const auto &      s  = stress[e].sigma;
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const std::size_t I = n0 + corner_offset[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                double f = visc[e] * sign[a][i];
-                for (int j = 0; j < dim; ++j)
-                  f += s[i][j] * sign[a][j];
-                nodes.force[i][I] += mg * gravity[i] - bscale * f;
-              }
-          }
-        if (prm.hourglass_coefficient > 0)
-          {
-            const double k = prm.hourglass_coefficient *
-                             mat.youngs_modulus.value(T[element_cell[e]]) *
-                             mfac * V * bb / n_corners;
-            for (int i = 0; i < dim; ++i)
-              for (unsigned int al = 0; al < n_hg; ++al)
-                {
-                  double q = 0;
-                  for (unsigned int a = 0; a < n_corners; ++a)
-                    q += gamma[al][a] * disp[i][n0 + corner_offset[a]];
-                  for (unsigned int a = 0; a < n_corners; ++a)
-                    hourglass[i][n0 + corner_offset[a]] -= k * gamma[al][a] * q;
-                }
-          }
-      }
-  }
-
-
-  template <int dim>
-  void
-  SolidFEM<dim>::add_mass_momentum(SolidNodeFields<dim> &nodes,
-                                   const bool            with_mass) const
-  {
-    // Element by element (partial sums of this rank): a transition node may
-    // be a node of owned cells of a rank that owns none of its elements, so
-    // the FE share must go through the same sum over ranks as the points'.
-    const double m = mat.density * V * mass_scale / n_corners;
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
-      for (unsigned int a = 0; a < n_corners; ++a)
-        {
-          const std::size_t I = element_node0[e] + corner_offset[a];
-          if (with_mass)
-            nodes.mass[I] += m;
-          for (int d = 0; d < dim; ++d)
-            nodes.momentum[d][I] += m * vel[d][I];
-        }
-  }
-
-
-  template <int dim>
-  void
-  SolidFEM<dim>::update_nodes(const SolidNodeFields<dim> &                 nodes,
-                              const std::array<std::vector<double>, dim> &hg,
-                              const std::vector<std::uint8_t> &constrained,
-                              const double                     dt)
-  {
-    for (const auto n : fe_nodes)
+    auto in_zone = [&](const std::array<int, dim> &ijk) {
+      for (int d = 0; d < dim; ++d)
+        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
+          return false;
+      return true;
+    };
+    auto zone_cell_id = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * zn[d] + (ijk[d] - zlo[d]);
+      return id;
+    };
+    auto zone_node_id = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
+      return id;
+    };
+    // A zone node on a zone face that is not a domain face.
+    auto is_transition = [&](const std::array<int, dim> &ijk) {
+      for (int d = 0; d < dim; ++d)
+        if ((ijk[d] == zlo[d] && zlo[d] > 0) ||
+            (ijk[d] == zlo[d] + zn[d] && zlo[d] + zn[d] < int(N[d])))
+          return true;
+      return false;
+    };
+    auto fix_bits = [&](const std::array<int, dim> &ijk) {
+      std::uint8_t f = 0;
       for (int d = 0; d < dim; ++d)
         {
-          double v = nodes.velocity[d][n];
-          if (!(constrained[n] & (1u << d)))
-            v += dt * hg[d][n] / node_mass[n];
-          vel[d][n] = v;
-          disp[d][n] += dt * v;
+          if (ijk[d] == 0)
+            f |= face_bits[2 * d];
+          if (ijk[d] == int(N[d]))
+            f |= face_bits[2 * d + 1];
         }
+      return f;
+    };
+    for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
+      if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
+        in_zone_cell[idx] = in_zone(grid.global_index(idx));
+
+    // The FE triangulation: coarse blocks of 2^r cells (largest r <= 3 that
+    // divides every cell count), refined r times; p4est partitions it.
+    unsigned int r = 3;
+    for (; r > 0; --r)
+      {
+        bool ok = true;
+        for (int d = 0; d < dim; ++d)
+          ok = ok && zn[d] % (1 << r) == 0;
+        if (ok)
+          break;
+      }
+    std::vector<unsigned int> reps(dim);
+    for (int d = 0; d < dim; ++d)
+      reps[d] = zn[d] >> r;
+    tria.clear();
+    GridGenerator::subdivided_hyper_rectangle(tria, reps, prm.lower_corner,
+                                              prm.upper_corner);
+    tria.refine_global(r);
+    dof_handler.reinit(tria);
+    dof_handler.distribute_dofs(fe);
+    const IndexSet &owned  = dof_handler.locally_owned_dofs();
+    IndexSet        ghosts;
+    DoFTools::extract_locally_active_dofs(dof_handler, ghosts);
+    ghosts.subtract_set(owned);
+    node_partitioner =
+      std::make_shared<Utilities::MPI::Partitioner>(owned, ghosts, comm);
+    n_owned = owned.n_elements();
+    n_local = n_owned + ghosts.n_elements();
+    {
+      IndexSet vo(dim * dof_handler.n_dofs()), vg(dim * dof_handler.n_dofs());
+      if (n_owned > 0)
+        vo.add_range(dim * owned.nth_index_in_set(0),
+                     dim * (owned.nth_index_in_set(n_owned - 1) + 1));
+      for (const auto i : ghosts)
+        vg.add_range(dim * i, dim * i + dim);
+      force.reinit(std::make_shared<Utilities::MPI::Partitioner>(vo, vg, comm));
+    }
+
+    // Elements and the structured index of each local node.
+    const double m_el = mat.density * V * mass_scaling / n_corners;
+    conn.clear(), element_id.clear();
+    std::vector<std::array<int, dim>> node_ijk(n_local);
+    std::vector<types::global_dof_index> dofs(n_corners);
+    off_rank = 0;
+    for (const auto &cell : dof_handler.active_cell_iterators())
+      if (cell->is_locally_owned())
+        {
+          const auto ijk = grid.cell_of(cell->center());
+          element_id.push_back(zone_cell_id(ijk));
+          if (!grid.in_box(ijk) || grid.cell_status()[grid.local_index(ijk)] !=
+                                     BackgroundGrid<dim>::owned)
+            ++off_rank;
+          cell->get_dof_indices(dofs);
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const unsigned int ln = node_partitioner->global_to_local(dofs[a]);
+              conn.push_back(ln);
+              for (int d = 0; d < dim; ++d)
+                node_ijk[ln][d] = ijk[d] + ((a >> d) & 1u);
+            }
+        }
+    const std::size_t n_el = element_id.size();
+    element_by_id.clear();
+    for (std::size_t e = 0; e < n_el; ++e)
+      element_by_id.emplace_back(element_id[e], e);
+    std::sort(element_by_id.begin(), element_by_id.end());
+    stress.assign(n_el, StressPoint());
+    modes.assign(n_el * n_hg * dim, 0.);
+    visc.assign(n_el, 0.);
+
+    // Lumped masses: element shares summed over ranks.
+    force.zero_out_ghost_values();
+    force = 0.;
+    double *F = force.begin();
+    for (const auto ln : conn)
+      for (int d = 0; d < dim; ++d)
+        F[dim * ln + d] += m_el;
+    force.compress(VectorOperation::add);
+    force.update_ghost_values();
+    mass.resize(n_local), inv_mass.resize(n_local);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      {
+        mass[ln]     = F[dim * ln];
+        inv_mass[ln] = 1. / mass[ln];
+      }
+    vel.assign(dim * n_local, 0.);
+    ext.assign(dim * n_local, 0.);
+    ext_nodes.clear();
+    kinetic = 0;
+
+    // Transition nodes, numbered on every rank in lexicographic order of
+    // the zone's nodes.
+    std::vector<std::uint64_t> tr_id;
+    tr_ijk.clear(), tr_mass.clear(), tr_fix.clear();
+    {
+      std::array<int, dim> ijk;
+      std::uint64_t        n_nodes = 1;
+      for (int d = 0; d < dim; ++d)
+        n_nodes *= zn[d] + 1;
+      for (std::uint64_t id = 0; id < n_nodes; ++id)
+        {
+          std::uint64_t r = id;
+          for (int d = 0; d < dim; ++d)
+            {
+              ijk[d] = zlo[d] + int(r % (zn[d] + 1));
+              r /= zn[d] + 1;
+            }
+          if (!is_transition(ijk))
+            continue;
+          tr_id.push_back(id);
+          tr_ijk.push_back(ijk);
+          tr_fix.push_back(fix_bits(ijk));
+          unsigned int n_adj = 1; // adjacent zone elements
+          for (int d = 0; d < dim; ++d)
+            n_adj *= (ijk[d] > zlo[d]) + (ijk[d] < zlo[d] + zn[d]);
+          tr_mass.push_back(n_adj * m_el);
+        }
+    }
+    tr_vel.assign(dim * tr_ijk.size(), 0.);
+    tr_hg.assign(dim * tr_ijk.size(), 0.);
+    fix.resize(n_local), node_tr.resize(n_local), node_zone_id.resize(n_local);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      {
+        fix[ln]          = fix_bits(node_ijk[ln]);
+        node_zone_id[ln] = zone_node_id(node_ijk[ln]);
+        const auto it =
+          std::lower_bound(tr_id.begin(), tr_id.end(), node_zone_id[ln]);
+        node_tr[ln] =
+          (it != tr_id.end() && *it == node_zone_id[ln]) ? it - tr_id.begin() : -1;
+      }
+    tr_corners.clear();
+    for (std::size_t e = 0; e < n_el; ++e)
+      for (unsigned int a = 0; a < n_corners; ++a)
+        if (node_tr[conn[n_corners * e + a]] >= 0)
+          tr_corners.push_back(
+            {{std::uint32_t(e), a, std::uint32_t(node_tr[conn[n_corners * e + a]])}});
+
+    // Temperatures: the grid rank owning a zone cell sends it (eq. 2).
+    grid_zone_cells.clear();
+    std::vector<types::global_dof_index> send_ids, recv_ids(element_id.begin(),
+                                                            element_id.end());
+    for (const auto c : grid.owned_cells())
+      if (in_zone_cell[c])
+        {
+          grid_zone_cells.push_back(c);
+          send_ids.push_back(zone_cell_id(grid.global_index(c)));
+        }
+    T_exchange.reinit(send_ids, recv_ids, comm);
+    T_send.resize(grid_zone_cells.size());
+    T_end.assign(n_el, 0.);
+    new_temperatures(T);
+    T_start = T_end;
+    T_cur   = T_end;
+
+    element_loop<false>(0, 1);
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::new_temperatures(const std::vector<double> &T)
+  {
+    if (!prm.enabled)
+      return;
+    T_start = T_end;
+    for (std::size_t i = 0; i < grid_zone_cells.size(); ++i)
+      T_send[i] = T[grid_zone_cells[i]];
+    T_exchange.export_to_ghosted_array(ArrayView<const double>(T_send),
+                                       ArrayView<double>(T_end));
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_external_forces(const std::array<std::vector<double>, dim> *f)
+  {
+    if (!prm.enabled || (f == nullptr && ext_nodes.empty()))
+      return;
+    for (const auto ln : ext_nodes)
+      for (int d = 0; d < dim; ++d)
+        ext[dim * ln + d] = 0;
+    ext_nodes.clear();
+    if (f == nullptr)
+      return;
+    // Grid nodes of owned cells inside the zone, not transition nodes (those
+    // get the grid's forces through the grid): (zone node id, force).
+    std::vector<double> mine;
+    const auto &        lo = grid.box_lower();
+    const auto &        ns = grid.node_strides();
+    for (const auto n : grid.owned_cell_nodes())
+      {
+        std::array<int, dim> ijk;
+        std::size_t          r = n;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
+            r %= ns[d];
+          }
+        bool          in = true, nonzero = false;
+        std::uint64_t id = 0;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            in = in && ijk[d] >= zlo[d] && ijk[d] <= zlo[d] + zn[d];
+            id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
+          }
+        for (int d = 0; d < dim; ++d)
+          nonzero = nonzero || (*f)[d][n] != 0;
+        if (!in || !nonzero)
+          continue;
+        bool tr = false;
+        for (int d = 0; d < dim; ++d)
+          tr = tr || (ijk[d] == zlo[d] && zlo[d] > 0) ||
+               (ijk[d] == zlo[d] + zn[d] &&
+                zlo[d] + zn[d] < int(grid.n_cells()[d]));
+        if (tr)
+          continue;
+        mine.push_back(double(id));
+        for (int d = 0; d < dim; ++d)
+          mine.push_back((*f)[d][n]);
+      }
+    const auto all = Utilities::MPI::all_gather(comm, mine);
+    // Owned FE nodes by zone node id.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> ids;
+    for (std::size_t ln = 0; ln < n_owned; ++ln)
+      ids.emplace_back(node_zone_id[ln], ln);
+    std::sort(ids.begin(), ids.end());
+    for (const auto &v : all)
+      for (std::size_t i = 0; i < v.size(); i += dim + 1)
+        {
+          const auto id = std::uint64_t(v[i]);
+          const auto it = std::lower_bound(
+            ids.begin(), ids.end(), std::make_pair(id, std::uint32_t(0)));
+          if (it == ids.end() || it->first != id)
+            continue;
+          if (std::find(ext_nodes.begin(), ext_nodes.end(), it->second) ==
+              ext_nodes.end())
+            ext_nodes.push_back(it->second);
+          for (int d = 0; d < dim; ++d)
+            ext[dim * it->second + d] += v[i + 1 + d];
+        }
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::add_transition_partials(std::vector<double> &buf) const
+  {
+    const double *F = force.begin();
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      if (node_tr[ln] >= 0)
+        {
+          const std::size_t t = node_tr[ln];
+          for (int d = 0; d < dim; ++d)
+            buf[tr_width * t + 1 + dim + d] += F[dim * ln + d] - tr_hg[dim * t + d];
+        }
+    for (std::size_t t = 0; t < tr_ijk.size(); ++t)
+      for (int d = 0; d < dim; ++d)
+        buf[tr_width * t + 1 + 2 * dim + d] += tr_hg[dim * t + d];
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::update_transition(const std::vector<double> &buf,
+                                   const double               dt,
+                                   std::vector<double> &      v_grid,
+                                   std::vector<double> &      a_grid)
+  {
+    v_grid.resize(dim * tr_ijk.size());
+    a_grid.resize(dim * tr_ijk.size());
+    for (std::size_t t = 0; t < tr_ijk.size(); ++t)
+      {
+        const double *b = &buf[tr_width * t];
+        const double  m = b[0] + tr_mass[t];
+        for (int d = 0; d < dim; ++d)
+          {
+            double &v = tr_vel[dim * t + d];
+            if (tr_fix[t] & (1u << d))
+              {
+                v_grid[dim * t + d] = a_grid[dim * t + d] = v = 0;
+                continue;
+              }
+            const double f = b[1 + dim + d];
+            const double p = b[1 + d] + tr_mass[t] * v + dt * f;
+            a_grid[dim * t + d] = f / m;
+            v_grid[dim * t + d] = p / m;
+            v = p / m + dt * b[1 + 2 * dim + d] / tr_mass[t];
+          }
+      }
+  }
+
+
+  template <int dim>
+  std::array<double, 2>
+  SolidFEM<dim>::update_nodes(const double dt)
+  {
+    if (!prm.enabled)
+      return {{0., 0.}};
+    force.compress(VectorOperation::add);
+    double *F = force.begin();
+    for (const auto ln : ext_nodes)
+      for (int d = 0; d < dim; ++d)
+        F[dim * ln + d] += ext[dim * ln + d];
+    force.update_ghost_values();
+    double k = 0, p = 0;
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      {
+        double *v = &vel[dim * ln];
+        if (node_tr[ln] >= 0)
+          for (int d = 0; d < dim; ++d)
+            v[d] = tr_vel[dim * node_tr[ln] + d];
+        else
+          {
+            const double im = dt * inv_mass[ln];
+            for (int d = 0; d < dim; ++d)
+              v[d] = (fix[ln] & (1u << d)) ? 0. : v[d] + im * F[dim * ln + d];
+          }
+        double v2 = 0, gv = 0, fv = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            v2 += v[d] * v[d];
+            gv += g[d] * v[d];
+            fv += ext[dim * ln + d] * v[d];
+          }
+        if (ln < n_owned)
+          {
+            k += 0.5 * mass[ln] * v2;
+            p += mass[ln] / mass_scale * gv + fv;
+          }
+      }
+    kinetic = k;
+    return {{k, p}};
   }
 
 
   template <int dim>
   double
-  SolidFEM<dim>::update_stresses(const double               dt,
-                                 const std::vector<double> &T_old,
-                                 const std::vector<double> &T_new)
+  SolidFEM<dim>::update_elements(const double dt, const double w)
   {
-    const double b     = dt / (std::pow(2., dim - 1) * grid.h());
-    const double rho_s = mat.density * mass_scale;
-    double       work  = 0;
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
+    if (!prm.enabled)
+      return 0;
+    return element_loop<true>(dt, w);
+  }
+
+
+  template <int dim>
+  template <bool update>
+  double
+  SolidFEM<dim>::element_loop(const double dt, const double w)
+  {
+    constexpr unsigned int nc = n_corners;
+    const double           h  = grid.h();
+    const double           B  = 1. / (std::pow(2., dim - 1) * h);
+    const double           Bdt   = B * dt;
+    const double           VB    = V * B;
+    const double           nu    = mat.poisson_ratio;
+    const double           mfac  = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    const double           kfac  = prm.hourglass_coefficient * mfac * V * bb / nc;
+    const double           vfac  = mat.bulk_viscosity * h *
+                          std::sqrt(mfac * mat.density * mass_scale) /
+                          (dt > 0 ? dt : 1.);
+    double                 mg[dim];
+    for (int d = 0; d < dim; ++d)
+      mg[d] = mat.density * V / nc * g[d];
+    force.zero_out_ghost_values();
+    double *F = force.begin();
+    std::fill(F, F + dim * n_local, 0.);
+    const double *vl   = vel.data();
+    double        work = 0;
+    const std::size_t n_el = element_id.size();
+    for (std::size_t e = 0; e < n_el; ++e)
       {
-        const std::size_t n0 = element_node0[e];
-        Tensor<2, 3>      L;
-        for (unsigned int a = 0; a < n_corners; ++a)
+        const std::uint32_t *c  = &conn[nc * e];
+        StressPoint &        st = stress[e];
+        // Walsh-Hadamard transforms over the corners: coefficient m of x is
+        // sum_a (prod_{d in m} s_a,d) x_a, so the one-bit coefficients give
+        // the velocity gradient (b_a = s_a B) and the coefficients with two
+        // or more bits the hourglass modes q_alpha (Gamma = products of s).
+        double *q = &modes[n_hg * dim * e];
+        double  T = T_cur[e];
+        double E;
+        if constexpr (update)
           {
-            const std::size_t I = n0 + corner_offset[a];
+            double Vc[nc][dim];
+#pragma GCC unroll 8
+            for (unsigned int a = 0; a < nc; ++a)
+              for (int i = 0; i < dim; ++i)
+                Vc[a][i] = vl[dim * c[a] + i];
+            fwht<dim>(Vc);
+            // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
+            // element: q += dt Gamma_alpha . v (the same transform).
+            for (unsigned int al = 0; al < n_hg; ++al)
+              for (int i = 0; i < dim; ++i)
+                q[dim * al + i] += dt * Vc[hg_mask<dim>(al)][i];
+            const double T_new = T_start[e] + w * (T_end[e] - T_start[e]);
+            Tensor<2, 3> L;
+            double       trL = 0;
             for (int i = 0; i < dim; ++i)
               {
-                const double vi = vel[i][I] * b;
                 for (int j = 0; j < dim; ++j)
-                  L[i][j] += vi * sign[a][j];
+                  L[i][j] = Bdt * Vc[1u << j][i];
+                trL += L[i][i];
               }
+            double s_old[dim][dim];
+            for (int i = 0; i < dim; ++i)
+              for (int j = 0; j < dim; ++j)
+                s_old[i][j] = st.sigma[i][j];
+            update_stress(mat, L, T, T_new, st);
+            // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
+            // summed in two independent chains.
+            double sd = 0, so = 0;
+            for (int i = 0; i < dim; ++i)
+              {
+                sd += (s_old[i][i] + st.sigma[i][i]) * L[i][i];
+                for (int j = i + 1; j < dim; ++j)
+                  so += (s_old[i][j] + st.sigma[i][j]) * (L[i][j] + L[j][i]);
+              }
+            const double sw = sd + so;
+            work += 0.5 * V * sw + V * visc[e] * trL;
+            T        = T_new;
+            T_cur[e] = T_new;
+            E        = mat.youngs_modulus.value(T);
+            if (mat.bulk_viscosity > 0)
+              visc[e] = vfac * std::sqrt(E) * trL;
           }
-        const SymmetricTensor<2, 3> s_old = stress[e].sigma;
-        const std::size_t           c     = element_cell[e];
-        update_stress(mat, L, T_old[c], T_new[c], stress[e]);
-        double w = 0;
+        else
+          E = mat.youngs_modulus.value(T);
+        // Forces of the next step as coefficients of the same transform:
+        // gravity (m = 0), internal force -V sigma b_a with the viscous
+        // pressure (one-bit m, eq. 9), hourglass -k Gamma q (the others);
+        // the transposed transform gives the corner forces.
+        const double k = kfac * E;
+        double       C[nc][dim];
+        for (unsigned int al = 0; al < n_hg; ++al)
+          for (int i = 0; i < dim; ++i)
+            C[hg_mask<dim>(al)][i] = -k * q[dim * al + i];
         for (int i = 0; i < dim; ++i)
-          for (int j = 0; j < dim; ++j)
-            w += (s_old[i][j] + stress[e].sigma[i][j]) * L[i][j];
-        double trL = 0;
-        for (int i = 0; i < dim; ++i)
-          trL += L[i][i];
-        work += 0.5 * V * w + V * visc[e] * trL;
-        if (mat.bulk_viscosity > 0)
-          visc[e] = mat.bulk_viscosity * grid.h() *
-                    std::sqrt(mat.p_wave_modulus(T_new[c]) * rho_s) * trL / dt;
+          {
+            C[0][i] = mg[i];
+            for (int j = 0; j < dim; ++j)
+              C[1u << j][i] = -VB * (st.sigma[i][j] + (i == j ? visc[e] : 0.));
+          }
+        fwht_transpose<dim>(C);
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < nc; ++a)
+          for (int i = 0; i < dim; ++i)
+            F[dim * c[a] + i] += C[a][i];
       }
+
+    // Hourglass forces of this rank's elements at the transition nodes
+    // (kept out of the grid's force, added back locally, eq. 17).
+    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
+    if (kfac > 0)
+      for (const auto &tc : tr_corners)
+        {
+          const double *q = &modes[n_hg * dim * tc[0]];
+          const double  k = kfac * mat.youngs_modulus.value(T_cur[tc[0]]);
+          for (int i = 0; i < dim; ++i)
+            for (unsigned int al = 0; al < n_hg; ++al)
+              tr_hg[dim * tc[2] + i] -=
+                k * hadamard(hg_mask<dim>(al), tc[1]) * q[dim * al + i];
+        }
     return work;
   }
 
 
   template <int dim>
   double
-  SolidFEM<dim>::kinetic_energy() const
+  SolidFEM<dim>::hourglass_energy(const bool reference) const
   {
-    // By element shares, so that every node counts once over all ranks.
-    const double m = mat.density * V * mass_scale / n_corners;
-    double       k = 0;
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
-      for (unsigned int a = 0; a < n_corners; ++a)
-        {
-          const std::size_t I = element_node0[e] + corner_offset[a];
-          for (int d = 0; d < dim; ++d)
-            k += 0.5 * m * vel[d][I] * vel[d][I];
-        }
-    return k;
-  }
-
-
-  template <int dim>
-  double
-  SolidFEM<dim>::gravity_power(const Tensor<1, dim> &g) const
-  {
-    const double m = mat.density * V / n_corners;
-    double       w = 0;
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
-      for (unsigned int a = 0; a < n_corners; ++a)
-        {
-          const std::size_t I = element_node0[e] + corner_offset[a];
-          for (int d = 0; d < dim; ++d)
-            w += m * g[d] * vel[d][I];
-        }
-    return w;
-  }
-
-
-  template <int dim>
-  double
-  SolidFEM<dim>::hourglass_energy(const std::vector<double> &T,
-                                  const bool                 reference) const
-  {
-    const double nu   = mat.poisson_ratio;
-    const double mfac = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     const double kappa = reference ? 0.05 : prm.hourglass_coefficient;
-    if (kappa == 0)
+    if (kappa == 0 || !prm.enabled)
       return 0;
     double energy = 0;
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
+    for (std::size_t e = 0; e < element_id.size(); ++e)
       {
-        const double k = kappa * mat.youngs_modulus.value(T[element_cell[e]]) *
-                         mfac * V * bb / n_corners;
-        for (int i = 0; i < dim; ++i)
-          for (unsigned int al = 0; al < n_hg; ++al)
-            {
-              double q = 0;
-              for (unsigned int a = 0; a < n_corners; ++a)
-                q += gamma[al][a] * disp[i][element_node0[e] + corner_offset[a]];
-              energy += 0.5 * k * q * q;
-            }
+        const double  k = hourglass_stiffness(T_cur[e], kappa);
+        const double *q = &modes[n_hg * dim * e];
+        for (unsigned int j = 0; j < n_hg * dim; ++j)
+          energy += 0.5 * k * q[j] * q[j];
       }
     return energy;
   }
@@ -369,12 +734,80 @@ namespace femp
 
   template <int dim>
   bool
+  SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
+  {
+    if (!prm.enabled)
+      return false;
+    const auto    ijk = grid.cell_of(x);
+    std::uint64_t id  = 0;
+    for (int d = dim - 1; d >= 0; --d)
+      {
+        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
+          return false;
+        id = id * zn[d] + (ijk[d] - zlo[d]);
+      }
+    const auto it = std::lower_bound(element_by_id.begin(),
+                                     element_by_id.end(),
+                                     std::make_pair(id, std::uint32_t(0)));
+    if (it == element_by_id.end() || it->first != id)
+      return false;
+    sxx = stress[it->second].sigma[0][0];
+    T   = T_cur[it->second];
+    return true;
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::cell_stress_fields(std::vector<double> &sxx,
+                                    std::vector<double> &vm) const
+  {
+    if (!prm.enabled)
+      return;
+    // Element stresses to the grid ranks owning their cells.
+    std::vector<types::global_dof_index> have(element_id.begin(),
+                                              element_id.end()),
+      want;
+    for (const auto c : grid_zone_cells)
+      {
+        const auto    ijk = grid.global_index(c);
+        std::uint64_t id  = 0;
+        for (int d = dim - 1; d >= 0; --d)
+          id = id * zn[d] + (ijk[d] - zlo[d]);
+        want.push_back(id);
+      }
+    Utilities::MPI::NoncontiguousPartitioner back(have, want, comm);
+    std::vector<double> a(element_id.size()), b(element_id.size()),
+      ra(want.size()), rb(want.size());
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      {
+        a[e] = stress[e].sigma[0][0];
+        b[e] = von_mises(stress[e].sigma);
+      }
+    back.export_to_ghosted_array(ArrayView<const double>(a), ArrayView<double>(ra));
+    back.export_to_ghosted_array(ArrayView<const double>(b), ArrayView<double>(rb));
+    for (std::size_t i = 0; i < want.size(); ++i)
+      {
+        sxx[grid_zone_cells[i]] = ra[i];
+        vm[grid_zone_cells[i]]  = rb[i];
+      }
+  }
+
+
+  template <int dim>
+  bool
   SolidFEM<dim>::find_non_finite(Point<dim> &where) const
   {
-    for (std::size_t e = 0; e < element_cell.size(); ++e)
+    for (std::size_t e = 0; e < element_id.size(); ++e)
       if (!std::isfinite(stress[e].sigma.norm()))
         {
-          where = grid.cell_center(element_cell[e]);
+          std::uint64_t r = element_id[e];
+          for (int d = 0; d < dim; ++d)
+            {
+              where[d] = grid.origin()[d] +
+                         (zlo[d] + double(r % zn[d]) + 0.5) * grid.h();
+              r /= zn[d];
+            }
           return true;
         }
     return false;

@@ -167,10 +167,7 @@ namespace femp
   SolidStress<dim>::initialize(const std::vector<double> &T,
                                const std::string &        directory)
   {
-    fem.setup(prm.mass_scaling);
     nodes.resize(grid.n_local_nodes());
-    for (int d = 0; d < dim; ++d)
-      hourglass[d].assign(grid.n_local_nodes(), 0.);
     dt_solid = prm.time_step > 0 ? prm.time_step :
                                    prm.safety_factor *
                                      prm.stable_limit(mat, grid.h());
@@ -202,6 +199,66 @@ namespace femp
                 constrained[n] |= 1u << d;
           }
       }
+    // FE zone; velocity components fixed per domain face.
+    std::array<std::uint8_t, 2 * dim> face_bits{};
+    for (int f = 0; f < 2 * dim; ++f)
+      {
+        for (const auto &name : prm.fixed_faces)
+          if (name == face_names[f])
+            face_bits[f] |= (1u << dim) - 1;
+        for (const auto &name : prm.roller_faces)
+          if (name == face_names[f])
+            face_bits[f] |= 1u << (f / 2);
+      }
+    fem.setup(prm.mass_scaling, face_bits, prm.gravity, T);
+
+    // Grid nodes a step touches: nodes of owned cells outside the FE zone,
+    // and the transition nodes among the nodes of owned cells.
+    {
+      std::vector<std::uint8_t> active(grid.n_local_nodes(), 0),
+        owned_node(grid.n_local_nodes(), 0);
+      for (const auto n : grid.owned_cell_nodes())
+        owned_node[n] = 1;
+      for (const auto c : grid.owned_cells())
+        if (!fem.zone_mask()[c])
+          {
+            const std::size_t n0 = grid.first_node_of_cell(c);
+            for (unsigned int a = 0; a < (1u << dim); ++a)
+              {
+                std::size_t n = n0;
+                for (int d = 0; d < dim; ++d)
+                  if (a & (1u << d))
+                    n += ns[d];
+                active[n] = 1;
+              }
+          }
+      mpm_cells.clear();
+      for (const auto c : grid.owned_cells())
+        if (!fem.zone_mask()[c])
+          mpm_cells.push_back(c);
+      grid_transition.clear();
+      const auto &size = grid.box_size();
+      for (std::size_t t = 0; t < fem.n_transition(); ++t)
+        {
+          const auto &ijk = fem.transition_node(t);
+          bool        in  = true;
+          for (int d = 0; d < dim; ++d)
+            in = in && ijk[d] >= lo[d] && ijk[d] <= lo[d] + size[d];
+          if (!in)
+            continue;
+          const std::size_t n = grid.local_node_index(ijk);
+          if (!owned_node[n])
+            continue;
+          active[n] = 1;
+          grid_transition.emplace_back(t, n);
+        }
+      active_nodes.clear();
+      for (std::size_t n = 0; n < active.size(); ++n)
+        if (active[n])
+          active_nodes.push_back(n);
+      tr_buffer.assign(SolidFEM<dim>::tr_width * fem.n_transition(), 0.);
+    }
+
     T_solid = T;
     T_prev  = T;
     T_next  = T;
@@ -245,6 +302,8 @@ namespace femp
                             const bool                 final)
   {
     bool gathered = false;
+    fem.new_temperatures(T);
+    fem.set_external_forces(external_forces);
     while (t_solid < t * (1 - 1e-12))
       {
         double t_next = t_solid + dt_solid;
@@ -254,23 +313,24 @@ namespace femp
               break;
             t_next = t;
           }
-        if (!gathered)
+        if (!gathered && !mpm_cells.empty())
           {
             mpm.gather(fem.zone_mask(), prm.mass_scaling);
             gathered = true;
           }
         // Linear interpolation of the cell temperatures in [t_prev, t].
         const double w = t > t_prev ? (t_next - t_prev) / (t - t_prev) : 1.;
-        for (const auto c : grid.owned_cells())
+        // (Cells of the FE zone: the elements interpolate their own.)
+        for (const auto c : mpm_cells)
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
-        step(t_next - t_solid);
+        step(t_next - t_solid, w);
         T_solid.swap(T_next);
         t_solid = t_next;
         write_rows();
       }
     if (gathered)
       mpm.scatter();
-    for (const auto c : grid.owned_cells())
+    for (const auto c : mpm_cells)
       T_prev[c] = T[c];
     t_prev = t;
   }
@@ -278,34 +338,54 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::step(const double dt)
+  SolidStress<dim>::step(const double dt, const double w)
   {
-    // 1. Mass, momentum and forces to the grid nodes (eqs. 11-14).
-    std::fill(nodes.mass.begin(), nodes.mass.end(), 0.);
-    for (int d = 0; d < dim; ++d)
+    // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
+    // partial sums of this rank, on the grid nodes of MPM cells.
+    for (const auto n : active_nodes)
       {
-        std::fill(nodes.momentum[d].begin(), nodes.momentum[d].end(), 0.);
-        std::fill(nodes.force[d].begin(), nodes.force[d].end(), 0.);
-        std::fill(hourglass[d].begin(), hourglass[d].end(), 0.);
+        nodes.mass[n] = 0;
+        for (int d = 0; d < dim; ++d)
+          nodes.momentum[d][n] = nodes.force[d][n] = 0;
       }
     mpm.p2g(nodes, prm.gravity);
-    fem.add_mass_momentum(nodes, true);
-    fem.add_forces(nodes, hourglass, prm.gravity, T_solid);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
-        for (const auto n : grid.owned_cell_nodes())
+        for (const auto n : active_nodes)
           nodes.force[d][n] += (*external_forces)[d][n];
+
+    // 2. Transition nodes (eqs. 14-17): partial grid and FE sums of this
+    // rank, summed over all ranks in one reduction; every rank then holds
+    // the totals and computes the same grid and FE velocities there.
+    constexpr unsigned int W = SolidFEM<dim>::tr_width;
+    if (fem.n_transition() > 0)
+      {
+        std::fill(tr_buffer.begin(), tr_buffer.end(), 0.);
+        for (const auto &[t, n] : grid_transition)
+          {
+            tr_buffer[W * t] += nodes.mass[n];
+            for (int d = 0; d < dim; ++d)
+              {
+                tr_buffer[W * t + 1 + d] += nodes.momentum[d][n];
+                tr_buffer[W * t + 1 + dim + d] += nodes.force[d][n];
+              }
+          }
+        fem.add_transition_partials(tr_buffer);
+        if (Utilities::MPI::n_mpi_processes(comm) > 1)
+          MPI_Allreduce(MPI_IN_PLACE, tr_buffer.data(), tr_buffer.size(),
+                        MPI_DOUBLE, MPI_SUM, comm);
+        fem.update_transition(tr_buffer, dt, tr_v, tr_a);
+      }
     grid.sum_shared_nodes(nodes.mass);
     for (int d = 0; d < dim; ++d)
       {
         grid.sum_shared_nodes(nodes.momentum[d]);
         grid.sum_shared_nodes(nodes.force[d]);
-        grid.sum_shared_nodes(hourglass[d]);
       }
 
-    // 2. Grid momentum update with boundary conditions; force -> f / m.
-    double ext_power = 0;
-    for (const auto n : grid.owned_cell_nodes())
+    // 3. Grid momentum update with boundary conditions; force -> f / m;
+    // transition nodes from step 2.
+    for (const auto n : active_nodes)
       {
         const double m = nodes.mass[n];
         for (int d = 0; d < dim; ++d)
@@ -320,23 +400,38 @@ namespace femp
             nodes.force[d][n] /= m;
             nodes.velocity[d][n] = nodes.momentum[d][n] / m;
           }
-        if (external_forces) // partial forces: the rank sum is the total
-          for (int d = 0; d < dim; ++d)
-            ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
       }
+    for (const auto &[t, n] : grid_transition)
+      {
+        nodes.mass[n] = tr_buffer[W * t] + fem.transition_mass(t);
+        for (int d = 0; d < dim; ++d)
+          {
+            nodes.velocity[d][n] = tr_v[dim * t + d];
+            nodes.force[d][n]    = tr_a[dim * t + d];
+          }
+      }
+    double ext_power = 0;
+    if (external_forces) // partial forces: the rank sum is the total
+      for (int d = 0; d < dim; ++d)
+        for (const auto n : active_nodes)
+          ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
 
-    // 3. Points and FE nodes (eqs. 15-17).
+    // Points: FLIP velocity and position; FE nodes: central difference.
     const bool inside = mpm.g2p(nodes, dt);
-    fem.update_nodes(nodes, hourglass, constrained, dt);
+    const auto fe_energy = fem.update_nodes(dt);
 
     // 4. MUSL: re-map the momenta, grid velocities.
     for (int d = 0; d < dim; ++d)
-      std::fill(nodes.momentum[d].begin(), nodes.momentum[d].end(), 0.);
+      for (const auto n : active_nodes)
+        nodes.momentum[d][n] = 0;
     mpm.p2g_momentum(nodes);
-    fem.add_mass_momentum(nodes, false);
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(nodes.momentum[d]);
-    for (const auto n : grid.owned_cell_nodes())
+    for (const auto &[t, n] : grid_transition)
+      for (int d = 0; d < dim; ++d)
+        nodes.momentum[d][n] +=
+          fem.transition_mass(t) * fem.transition_velocity(t)[d];
+    for (const auto n : active_nodes)
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
           (nodes.mass[n] > 0 && !(constrained[n] & (1u << d))) ?
@@ -345,14 +440,13 @@ namespace femp
 
     // 5. Stresses (eq. 5).
     double work = mpm.update_stresses(nodes, dt, T_solid, T_next);
-    work += fem.update_stresses(dt, T_solid, T_next);
+    work += fem.update_elements(dt, w);
     ++steps;
 
     // Energies and the blow-up check (one reduction per step).
-    const double local_K = mpm.kinetic_energy() + fem.kinetic_energy();
+    const double local_K   = mpm.kinetic_energy() + fe_energy[0];
     const double local_ext =
-      ext_power + mpm.gravity_power(prm.gravity) +
-      fem.gravity_power(prm.gravity);
+      ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
     double sums[4] = {local_K, work, dt * local_ext, inside ? 0. : 1.};
     Utilities::MPI::sum(ArrayView<const double>(sums, 4), comm,
                         ArrayView<double>(sums, 4));
@@ -394,9 +488,8 @@ namespace femp
     e.internal        = W_int;
     e.kinetic         = K;
     e.initial_kinetic = K0;
-    e.hourglass = Utilities::MPI::sum(fem.hourglass_energy(T_solid, false), comm);
-    e.hourglass_mode =
-      Utilities::MPI::sum(fem.hourglass_energy(T_solid, true), comm);
+    e.hourglass      = Utilities::MPI::sum(fem.hourglass_energy(false), comm);
+    e.hourglass_mode = Utilities::MPI::sum(fem.hourglass_energy(true), comm);
     return e;
   }
 
@@ -408,21 +501,23 @@ namespace femp
     std::vector<double> v(3 * x.size(), 0.);
     for (std::size_t i = 0; i < x.size(); ++i)
       {
+        double fe_sxx, fe_T;
+        if (fem.probe(x[i], fe_sxx, fe_T)) // element of this rank
+          {
+            v[3 * i] = fe_sxx, v[3 * i + 1] = fe_T, v[3 * i + 2] = 1;
+            continue;
+          }
         const auto ijk = grid.cell_of(x[i]);
         if (!grid.in_box(ijk))
           continue;
         const auto idx = grid.local_index(ijk);
-        if (grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
+        if (grid.cell_status()[idx] != BackgroundGrid<dim>::owned ||
+            fem.zone_mask()[idx])
           continue;
-        if (const StressPoint *s = fem.element_stress(idx))
-          v[3 * i] = s->sigma[0][0], v[3 * i + 2] = 1;
-        else
-          {
-            const auto [sxx, n] = mpm.cell_stress_xx(idx);
-            v[3 * i]            = sxx;
-            v[3 * i + 2]        = n > 0;
-          }
-        v[3 * i + 1] = T_solid[idx];
+        const auto [sxx, n] = mpm.cell_stress_xx(idx);
+        v[3 * i]            = sxx;
+        v[3 * i + 2]        = n > 0;
+        v[3 * i + 1]        = T_solid[idx];
       }
     Utilities::MPI::sum(v, comm, v);
     std::vector<std::array<double, 2>> r(x.size());
@@ -442,16 +537,20 @@ namespace femp
     std::vector<double> count(grid.n_local(), 0.);
     mpm.add_cell_stresses(sxx, vm, count);
     for (const auto c : grid.owned_cells())
-      if (const StressPoint *s = fem.element_stress(c))
-        {
-          sxx[c] = s->sigma[0][0];
-          vm[c]  = von_mises(s->sigma);
-        }
-      else if (count[c] > 0)
+      if (count[c] > 0)
         {
           sxx[c] /= count[c];
           vm[c] /= count[c];
         }
+    fem.cell_stress_fields(sxx, vm);
+  }
+
+
+  template <int dim>
+  double
+  SolidStress<dim>::fe_elements_off_rank() const
+  {
+    return Utilities::MPI::sum(double(fem.n_elements_off_rank()), comm);
   }
 
 

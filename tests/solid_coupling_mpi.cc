@@ -9,12 +9,85 @@
 // sides of the interface, energies, plastic state) must not depend on the
 // number of ranks (the test runs on 1, 2 and 3 ranks against one output),
 // and the stress must be continuous across the interface.
+// Independent partitions: a second scene with an FE zone of 14 x 3 cells
+// at the lower right (so that p4est partitions the FE triangulation
+// row-wise, unlike the grid's blocks, and the interface has a vertical and
+// a horizontal part) puts FE elements on ranks that do not own their grid
+// cells; it is run on all ranks and again on one rank alone
+// (MPI_COMM_SELF), and the results must agree to round-off.
 #include <femp/material_points.h>
 #include <femp/solid_stress.h>
 
 #include "test_tools.h"
 
 using namespace femp_test;
+
+namespace
+{
+  /// The second scene: probes (sigma_xx, T) and energies after 10 steps of
+  /// heating; @p off_rank: FE elements whose grid cell another rank owns.
+  std::vector<double>
+  partition_scene(MPI_Comm comm, double &off_rank)
+  {
+    constexpr int dim = 2;
+    const double  h   = 0.1;
+    const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
+    BackgroundGrid<dim> grid(gp, comm);
+    grid.create();
+    Material mat = unit_material();
+    mat.density  = 1;
+    typename MaterialPoints<dim>::Parameters pp;
+    pp.point_spacing   = h / 2;
+    pp.substrate_top   = 0.8;
+    pp.layer_thickness = 0;
+    pp.subcells        = 2;
+    MaterialPoints<dim> points(pp, mat, grid);
+    points.create(300.);
+    SolidMaterial sm;
+    sm.youngs_modulus   = PiecewiseLinear(100.);
+    sm.plastic_modulus  = PiecewiseLinear(5.);
+    sm.yield_stress     = PiecewiseLinear::parse("300:0.02, 400:0.005", "yield");
+    sm.expansion        = 1e-4;
+    sm.density          = 1;
+    sm.melt_temperature = 1e6;
+    typename SolidStress<dim>::Parameters sp;
+    sp.fixed_faces  = {"y-"};
+    sp.roller_faces = {"x-", "x+"};
+    sp.gravity[1]   = -0.01;
+    sp.energy_file  = "";
+    typename SolidFEM<dim>::Parameters fp;
+    fp.enabled      = true;
+    fp.lower_corner = Point<dim>(0.2, 0);
+    fp.upper_corner = Point<dim>(1.6, 0.3);
+    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    std::vector<double> T = grid.make_field(300.);
+    solid.initialize(T, "");
+    for (int s = 1; s <= 10; ++s)
+      {
+        const double t = 0.05 * s;
+        for (const auto c : grid.owned_cells())
+          {
+            const Point<dim> x = grid.cell_center(c);
+            T[c] = 300 + 200 * t * std::exp(-((x[0] - 0.3) * (x[0] - 0.3) +
+                                              (x[1] - 0.3) * (x[1] - 0.3)) /
+                                            0.05);
+          }
+        solid.advance(t, T, s == 10);
+      }
+    off_rank = solid.fe_elements_off_rank();
+    std::vector<Point<dim>> probes;
+    for (const double x : {0.15, 0.25, 0.85, 1.55})
+      for (const double y : {0.05, 0.25, 0.35, 0.75})
+        probes.emplace_back(x, y);
+    std::vector<double> r;
+    for (const auto &v : solid.probe(probes))
+      r.push_back(v[0]);
+    const auto e = solid.energies();
+    for (const double x : {e.internal, e.kinetic, e.hourglass, e.external})
+      r.push_back(x);
+    return r;
+  }
+} // namespace
 
 int
 main(int argc, char **argv)
@@ -135,6 +208,31 @@ main(int argc, char **argv)
     checks.print("re-solidified cell: sigma_xx before melting / 1e-3", before / 1e-3, 4);
     checks.at_most("re-solidified cell: |sigma_xx after| / |sigma_xx before|",
                    std::abs(after / before), 0.05);
+  }
+
+  // Independent partitions of the FE triangulation and the grid.
+  {
+    double     off_rank = 0, off_self = 0;
+    const auto all      = partition_scene(comm, off_rank);
+    std::vector<double> self(all.size(), 0.);
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      self = partition_scene(MPI_COMM_SELF, off_self);
+    self = Utilities::MPI::broadcast(comm, self, 0);
+    double diff = 0, scale = 0;
+    for (std::size_t i = 0; i < all.size(); ++i)
+      {
+        diff  = std::max(diff, std::abs(all[i] - self[i]));
+        scale = std::max(scale, std::abs(self[i]));
+      }
+    const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
+    checks.print("partition scene: stress work / 1e-6", all[16] / 1e-6, 4);
+    checks.print("partition scene: sigma_xx at (0.25, 0.25) / 1e-3", all[5] / 1e-3, 4);
+    checks.in_range("partition scene: FE elements on ranks that do not own "
+                    "their grid cell (some with several ranks, none on one)",
+                    n_ranks == 1 ? off_rank == 0 : off_rank > 0, 1, 1);
+    checks.in_range("partition scene: max difference to a one-rank run / "
+                    "max value below 1e-9",
+                    diff <= 1e-9 * scale, 1, 1);
   }
   return checks.exit_code();
 }

@@ -1,42 +1,60 @@
 // femp: SolidFEM<dim>, explicit finite elements for the constant-solid zone
 // (paper eqs. 6-10, METHOD sec. 4): 8-node hexahedra (4-node quadrilaterals
 // in 2D, plane strain), one-point quadrature, Flanagan-Belytschko hourglass
-// control, lumped mass, central difference.
+// control, lumped mass, central difference; transition nodes (eqs. 14-17).
 //
-// Mesh: the FE zone is a box of whole background-grid cells; every element
-// is one grid cell and its nodes are grid nodes, so the FE mesh is aligned
-// with the grid by construction and every FE node that lies on the zone
-// boundary shared with material points is a transition node. The elements
-// are partitioned with the background grid (a rank owns the elements of its
-// owned cells), and node data live in the grid's node layout; the sums of
-// element contributions over ranks use BackgroundGrid::sum_shared_nodes().
-// (The issue asks for a separate parallel::distributed::Triangulation; this
-// version shares the grid's instead: see doc/solid.md.)
+// Mesh: its own parallel::distributed::Triangulation of the FE zone (a box
+// on grid lines), cells of the grid's size h, so that every element covers
+// one background-grid cell and every FE node coincides with a grid node
+// (N_Ii = 1 at transition nodes). p4est partitions it independently of the
+// background grid. Nodes are numbered by a DoFHandler with FE_Q<dim>(1);
+// node data (velocity, lumped mass) live in flat arrays over
+// the locally relevant nodes (owned first, then ghosts, in the numbering of
+// the Utilities::MPI::Partitioner), nodal force sums over ranks go through a
+// LinearAlgebra::distributed::Vector (compress(add), update_ghost_values).
+// Element data (corner node indices, stress state, temperatures) are flat
+// arrays. The temperature of an element is that of its grid cell (eq. 2):
+// the grid rank that owns the cell sends it, once per advance() (not per
+// solid step), through a Utilities::MPI::NoncontiguousPartitioner keyed by
+// the cell's lexicographic index in the zone.
 //
 // Element (undeformed cube of side h, small-displacement geometry; the
 // Jaumann spin is still taken from the velocity gradient):
 //   b_a = grad N_a(centre) = s_a / (2^(dim-1) h),  s_a in {-1, 1}^dim,
 //   f_a^int = -V sigma b_a                                   (eq. 9)
-//   Gauss-point temperature: the temperature of the element's grid cell,
-//   found by index (eq. 2).
 // Hourglass (Flanagan-Belytschko, stiffness form): for a rectangular element
 // the hourglass base vectors Gamma (xy, yz, xz, xyz products of s_a; one in
 // 2D) are orthogonal to the linear field, so gamma = Gamma and
 //   q_alpha,i = sum_a Gamma_alpha,a u_a,i,
 //   f_a,i^HG = -k sum_alpha Gamma_alpha,a q_alpha,i,
 //   k = kappa M(T) V (sum_a |b_a|^2) / 2^dim,  M = P-wave modulus,
-// with the hourglass energy 1/2 k sum q^2 per element.
+// with the hourglass energy 1/2 k sum q^2 per element. All elements are the
+// same cube, so b_a and Gamma are compile-time constants: one fused loop per
+// element (gather velocities, L, constitutive update, stress work, viscous
+// pressure, internal + hourglass forces of the next step scattered to the
+// nodes) and one loop over the nodes.
+//
+// Transition nodes (METHOD sec. 4): FE nodes on a face of the zone that is
+// not a domain face (they touch grid cells outside the zone). They are
+// numbered globally from geometry (every rank knows all of them); see
+// solid_stress.h for the exchange of their sums.
 #ifndef femp_solid_fem_h
 #define femp_solid_fem_h
 
+#include <deal.II/base/mpi_noncontiguous_partitioner.h>
 #include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/partitioner.h>
 #include <deal.II/base/point.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/lac/la_parallel_vector.h>
 
 #include <femp/background_grid.h>
 #include <femp/constitutive.h>
-#include <femp/solid_mpm.h>
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace femp
@@ -63,16 +81,27 @@ namespace femp
       check(const typename BackgroundGrid<dim>::Parameters &grid) const;
     };
 
+    static constexpr unsigned int n_corners = 1u << dim;
+    static constexpr unsigned int n_hg      = dim == 2 ? 1 : 4;
+    /// Doubles per transition node in the exchange buffer: grid mass, grid
+    /// momentum (dim), force without hourglass (dim), hourglass force (dim).
+    static constexpr unsigned int tr_width = 1 + 3 * dim;
+
     SolidFEM(const Parameters &         prm,
              const BackgroundGrid<dim> &grid,
              const SolidMaterial &      material);
 
-    /// Build the element list, the lumped masses (times @p mass_scaling) and
-    /// the per-cell mask of the FE zone.
+    /// Build the FE triangulation, node numbering, element arrays, lumped
+    /// masses (times @p mass_scaling), the transition nodes and the initial
+    /// forces. @p face_bits[f]: velocity components fixed on domain face f
+    /// (x-, x+, y-, ...). @p T: grid cell temperatures at time 0.
     void
-    setup(const double mass_scaling);
+    setup(const double                          mass_scaling,
+          const std::array<std::uint8_t, 2 * dim> &face_bits,
+          const Tensor<1, dim> &                gravity,
+          const std::vector<double> &           T);
 
-    /// 1 for cells of the local box inside the FE zone.
+    /// 1 for cells of the grid's local box inside the FE zone.
     const std::vector<std::uint8_t> &
     zone_mask() const
     {
@@ -81,64 +110,101 @@ namespace femp
     std::size_t
     n_elements() const
     {
-      return element_cell.size();
+      return conn.size() / n_corners;
+    }
+    /// Owned elements whose grid cell is not owned by this rank.
+    std::size_t
+    n_elements_off_rank() const
+    {
+      return off_rank;
     }
 
-    /// Partial sums of this rank: internal forces (eq. 9) and gravity into
-    /// @p nodes.force, hourglass forces into @p hourglass.
+    /// Start of an advance(): the grid cell temperatures @p T at its end time
+    /// become the elements' end temperatures (the old ones the start).
+    /// Collective.
     void
-    add_forces(SolidNodeFields<dim> &                 nodes,
-               std::array<std::vector<double>, dim> &hourglass,
-               const Tensor<1, dim> &                 gravity,
-               const std::vector<double> &            T) const;
-    /// Add the element shares of the nodal masses (if @p with_mass) and
-    /// momenta (partial sums of this rank, like the points').
+    new_temperatures(const std::vector<double> &T);
+    /// External nodal forces of the grid (partial sums of this rank over the
+    /// nodes of its owned cells) at FE nodes that are not transition nodes
+    /// go to the FE nodes; nullptr for none. Collective.
     void
-    add_mass_momentum(SolidNodeFields<dim> &nodes, const bool with_mass) const;
-    /// FE nodes take the grid velocity (eqs. 15-16; eq. 17 at transition
-    /// nodes) plus their own hourglass acceleration, then move.
-    void
-    update_nodes(const SolidNodeFields<dim> &                 nodes,
-                 const std::array<std::vector<double>, dim> &hourglass,
-                 const std::vector<std::uint8_t> &           constrained,
-                 const double                                dt);
-    /// Stress update at the Gauss points; returns the stress work of this
-    /// rank's elements.
-    double
-    update_stresses(const double               dt,
-                    const std::vector<double> &T_old,
-                    const std::vector<double> &T_new);
+    set_external_forces(const std::array<std::vector<double>, dim> *f);
 
-    /// Kinetic energy and gravity power of this rank's elements (element
-    /// shares of the nodal masses).
+    // ---- transition nodes ------------------------------------------------
+    std::size_t
+    n_transition() const
+    {
+      return tr_ijk.size();
+    }
+    /// Global structured node index of transition node @p t.
+    const std::array<int, dim> &
+    transition_node(const std::size_t t) const
+    {
+      return tr_ijk[t];
+    }
+    /// FE mass (scaled, all elements) and velocity of transition node @p t.
     double
-    kinetic_energy() const;
+    transition_mass(const std::size_t t) const
+    {
+      return tr_mass[t];
+    }
+    const double *
+    transition_velocity(const std::size_t t) const
+    {
+      return &tr_vel[dim * t];
+    }
+    std::uint8_t
+    transition_constraint(const std::size_t t) const
+    {
+      return tr_fix[t];
+    }
+    /// Add this rank's FE partial sums (force without hourglass, hourglass
+    /// force) at the transition nodes into @p buffer (tr_width per node).
+    void
+    add_transition_partials(std::vector<double> &buffer) const;
+    /// From the global sums in @p buffer: the grid velocity v_I and
+    /// acceleration a_I of each transition node (eqs. 14-16; written to
+    /// @p v_grid and @p a_grid, dim per node), and the new FE velocity
+    /// v_I + dt f^HG / m_i (eq. 17) kept for every transition node.
+    void
+    update_transition(const std::vector<double> &buffer,
+                      const double               dt,
+                      std::vector<double> &      v_grid,
+                      std::vector<double> &      a_grid);
+
+    /// Central-difference node update (eq. 10): sums of the element forces
+    /// over ranks, new velocities of all local FE nodes
+    /// (transition nodes from update_transition()). Returns {kinetic
+    /// energy, external power} of the owned nodes.
+    std::array<double, 2>
+    update_nodes(const double dt);
+    /// Fused element loop: stress update over the step @p dt with the
+    /// temperature interpolated at weight @p w between the start and end
+    /// temperatures of the advance() (eq. 5), then the element forces of
+    /// the next step. Returns the stress work of this rank's elements.
     double
-    gravity_power(const Tensor<1, dim> &gravity) const;
+    update_elements(const double dt, const double w);
+
+    /// Kinetic energy of the owned nodes (from the last update_nodes()).
+    double
+    kinetic_energy() const
+    {
+      return kinetic;
+    }
     /// Hourglass energy 1/2 k sum q^2 with the scene's kappa, or with the
     /// reference kappa = 0.05 if @p reference (mode amplitude measure).
     double
-    hourglass_energy(const std::vector<double> &T, const bool reference) const;
+    hourglass_energy(const bool reference) const;
 
-    /// Element stress at cell @p idx, or nullptr if no element there.
-    const StressPoint *
-    element_stress(const std::size_t idx) const
-    {
-      return element_of_cell.empty() || element_of_cell[idx] < 0 ?
-               nullptr :
-               &stress[element_of_cell[idx]];
-    }
-    /// FE nodes of owned elements (local node indices) and their data.
-    const std::vector<std::uint32_t> &
-    nodes() const
-    {
-      return fe_nodes;
-    }
-    const std::array<std::vector<double>, dim> &
-    node_velocity() const
-    {
-      return vel;
-    }
+    /// sigma_xx (Pa) and temperature (K) of the owned element containing
+    /// @p x, or false if none.
+    bool
+    probe(const Point<dim> &x, double &sigma_xx, double &T) const;
+    /// sigma_xx and von Mises stress of the zone cells of the grid's local
+    /// box (at owned cells; other entries untouched). Collective.
+    void
+    cell_stress_fields(std::vector<double> &sigma_xx,
+                       std::vector<double> &von_mises) const;
     bool
     find_non_finite(Point<dim> &where) const;
 
@@ -146,22 +212,59 @@ namespace femp
     Parameters                 prm;
     const BackgroundGrid<dim> &grid;
     const SolidMaterial &      mat;
-    static constexpr unsigned int n_corners = 1u << dim;
-    static constexpr unsigned int n_hg      = dim == 2 ? 1 : 4;
-    std::array<std::ptrdiff_t, n_corners> corner_offset;
-    std::array<std::array<double, dim>, n_corners> sign;   ///< s_a
-    std::array<std::array<double, n_corners>, n_hg> gamma; ///< Gamma_alpha,a
+    MPI_Comm                   comm;
 
-    std::vector<std::uint32_t> element_cell, element_node0;
-    std::vector<int>           element_of_cell;
-    std::vector<std::uint8_t>  in_zone_cell;
+    parallel::distributed::Triangulation<dim> tria;
+    FE_Q<dim>                                 fe;
+    DoFHandler<dim>                           dof_handler;
+    std::shared_ptr<const Utilities::MPI::Partitioner> node_partitioner;
+    LinearAlgebra::distributed::Vector<double>         force; ///< dim per node
+
+    std::array<int, dim> zlo, zn; ///< zone: first cell index, cells
+    double               V = 0, bb = 0, mass_scale = 1;
+    Tensor<1, dim>       g;
+
+    // Elements.
+    std::vector<std::uint32_t> conn;      ///< n_corners local nodes each
     std::vector<StressPoint>   stress;
-    std::vector<double>        visc; ///< viscous pressure q, Pa
-    std::vector<std::uint32_t> fe_nodes;
-    std::vector<double>        node_mass, true_node_mass;
-    std::array<std::vector<double>, dim> vel, disp;
-    double                     V = 0, bb = 0; ///< element volume, sum |b_a|^2
-    double                     mass_scale = 1;
+    std::vector<double>        visc;      ///< viscous pressure q, Pa
+    /// Hourglass mode amplitudes q_alpha,i = sum_a Gamma_alpha,a u_a,i,
+    /// n_hg * dim per element, advanced with the element's velocities.
+    std::vector<double>        modes;
+    std::vector<double>        T_start, T_end, T_cur;
+    std::vector<std::uint64_t> element_id; ///< lexicographic in the zone
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> element_by_id;
+    std::size_t                off_rank = 0;
+    Utilities::MPI::NoncontiguousPartitioner T_exchange; ///< grid -> FE
+    std::vector<std::uint32_t> grid_zone_cells;          ///< owned zone cells
+    std::vector<double>        T_send;
+
+    // Nodes (owned, then ghosts).
+    std::size_t                n_owned = 0, n_local = 0;
+    std::vector<double>        vel; ///< dim per node
+    std::vector<double>        mass, inv_mass;
+    std::vector<std::uint8_t>  fix;      ///< bit d: velocity d fixed
+    std::vector<int>           node_tr;  ///< transition index or -1
+    std::vector<std::uint64_t> node_zone_id; ///< lexicographic node index
+    std::vector<double>        ext;      ///< external force, dim per node
+    std::vector<std::uint32_t> ext_nodes;
+    double                     kinetic = 0;
+
+    // Transition nodes (global, every rank).
+    std::vector<std::array<int, dim>> tr_ijk;
+    std::vector<double>               tr_mass, tr_vel;
+    std::vector<std::uint8_t>         tr_fix;
+    /// (element, corner, transition index) of this rank's elements.
+    std::vector<std::array<std::uint32_t, 3>> tr_corners;
+    std::vector<double>                       tr_hg; ///< partial f^HG
+
+    std::vector<std::uint8_t> in_zone_cell;
+
+    template <bool update>
+    double
+    element_loop(const double dt, const double w);
+    double
+    hourglass_stiffness(const double T, const double kappa) const;
   };
 } // namespace femp
 

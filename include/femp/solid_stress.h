@@ -3,21 +3,32 @@
 // (SolidFEM) coupled through the background-grid nodes, sub-cycled against
 // the temperature step.
 //
-// Coupling (eqs. 14-17). FE nodes are grid nodes (solid_fem.h), so a
-// transition node i coincides with a grid node I and N_Ii = 1. Each step:
-//   1. point mass, momentum and forces to the grid (eqs. 11-13); FE element
-//      forces (eq. 9) without their hourglass part added at their nodes;
-//      sums over ranks; FE nodal masses and momenta added (eq. 14);
-//   2. grid momentum update p_I += dt f_I, boundary conditions;
-//   3. points: FLIP velocity and position update; FE nodes (interior and
-//      transition): velocity from the grid (eqs. 15-17) plus their own
-//      hourglass acceleration f_i^HG / m_i, displacement update;
-//   4. MUSL re-map of the point and FE-node momenta, grid velocities;
-//   5. stresses at points (grid velocities) and Gauss points (FE node
-//      velocities), eq. 5, with the cell temperatures of eq. 2.
-// In the FE interior this is exactly the central-difference FE update of
-// eq. 10, and in the MPM zone exactly MUSL.
-//
+// Coupling (eqs. 14-17). The FE mesh is its own triangulation, aligned
+// with the grid (solid_fem.h), so a transition node i coincides with a grid
+// node I and N_Ii = 1. The two meshes are partitioned independently: the
+// rank owning an FE element need not own the grid cells around its
+// transition nodes. Each step:
+//   1. point mass, momentum and forces to the grid (eqs. 11-13), partial
+//      sums of this rank, on the grid nodes of MPM cells only;
+//   2. one MPI_Allreduce of a buffer over all transition nodes (numbered
+//      globally from geometry): this rank's partial grid mass, momentum and
+//      force there (before the grid's shared-node sum), its FE elements'
+//      internal force without hourglass part (eq. 9, gravity included) and
+//      its hourglass force. Every rank then has the totals and computes the
+//      same grid velocity and acceleration at every transition node
+//      (m = m_grid + m_FE, p = p_grid + m_FE v_i + dt f, eq. 14-16) and the
+//      new FE velocity v_i = v_I + dt f_i^HG / m_i (eq. 17, hourglass force
+//      added back locally);
+//   3. grid momentum update elsewhere (MPM nodes), FE central-difference
+//      update elsewhere (FE nodes, eq. 10; nodal sums over ranks through
+//      deal.II's distributed vector); points: FLIP velocity and position;
+//   4. MUSL re-map of the point momenta; at transition nodes the FE momentum
+//      m_FE v_i (known on every rank) is added;
+//   5. stresses at points (grid velocities) and, in one fused element loop,
+//      at Gauss points (FE node velocities) together with the element forces
+//      of the next step; eq. 5 with the cell temperatures of eq. 2.
+// Interior FE nodes never touch the grid: the FE costs no per-step work on
+// grid nodes. Without material points the grid work of a step is empty.
 // Time stepping. The solid keeps its own time t_s and step
 //   dt_s = C h / (sqrt(dim) c),  c = sqrt(M_max / (s rho)),
 // (C: safety factor; M_max: largest P-wave modulus of the E(T) table;
@@ -152,6 +163,10 @@ namespace femp
     void
     cell_stress_fields(std::vector<double> &sigma_xx,
                        std::vector<double> &von_mises) const;
+    /// FE elements whose grid cell is owned by another rank (global; the
+    /// two meshes are partitioned independently).
+    double
+    fe_elements_off_rank() const;
     /// Number of material points and finite elements in the solid (global).
     std::array<double, 2>
     sizes() const;
@@ -165,7 +180,17 @@ namespace femp
     SolidFEM<dim>              fem;
 
     SolidNodeFields<dim>                  nodes;
-    std::array<std::vector<double>, dim> hourglass;
+    /// Grid nodes of this rank's owned cells outside the FE zone plus the
+    /// transition nodes among its owned-cell nodes: the only grid nodes a
+    /// solid step touches.
+    std::vector<std::uint32_t> active_nodes;
+    /// Owned cells outside the FE zone (the only cells whose temperature
+    /// the points need; none: no gather of the points at all).
+    std::vector<std::uint32_t> mpm_cells;
+    /// (transition index, local grid node) for transition nodes among the
+    /// nodes of this rank's owned cells.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
+    std::vector<double> tr_buffer, tr_v, tr_a;
     const std::array<std::vector<double>, dim> *external_forces = nullptr;
     std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
     std::vector<double>       T_solid, T_prev, T_next;
@@ -174,8 +199,10 @@ namespace femp
     double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
     std::unique_ptr<std::ofstream> energy_out, probe_out;
 
+    /// One solid step of size @p dt; @p w: weight of the step's end time
+    /// between the last two temperature fields.
     void
-    step(const double dt);
+    step(const double dt, const double w);
     void
     write_rows();
   };
