@@ -101,6 +101,8 @@ namespace femp
     points_prm.check(grid_prm);
     heat_prm.parse_parameters(prm);
     flow_prm.parse_parameters(prm);
+    if (melt_flow)
+      flow_prm.check_time_step(grid_prm.cell_size, material.density);
     laser_prm.parse_parameters(prm);
     output_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
@@ -414,6 +416,18 @@ namespace femp
               << "re-sorted in " << st.resorts << " steps, "
               << st.n_fluid_cells << " fluid cells and max speed "
               << st.max_point_speed << " m/s at the end" << std::endl;
+        const auto &r = result.flow_limits;
+        pcout << std::setprecision(4)
+              << "Melt flow time step limits (smallest over the run): "
+              << "convective " << r.convective << " s, viscous " << r.viscous
+              << " s, capillary " << r.capillary << " s (used x "
+              << r.capillary_fraction << ")\n"
+              << "  sub-steps governed by: convective " << r.governed[0]
+              << ", viscous " << r.governed[1] << ", capillary "
+              << r.governed[2] << ", prescribed (Melt flow/Time step) "
+              << r.governed[3] << "; sub-steps per temperature step "
+              << (r.max_substeps > 0 ? r.min_substeps : 0) << " to "
+              << r.max_substeps << std::endl;
       }
     timer.print_summary();
   }
@@ -423,15 +437,30 @@ namespace femp
   void
   FempProblem<dim>::flow_substeps(const double dt)
   {
-    // Sub-cycle with the current limits (they change as the flow speeds up).
+    // Sub-cycle with the current limits (they change as the flow speeds
+    // up), or with the prescribed step; the last sub-step ends with the
+    // temperature step. The limits and which one governed are recorded for
+    // the report at the end of the run.
     const unsigned int resorts = flow->statistics().resorts;
+    auto &             r       = result.flow_limits;
     double             t       = 0;
+    unsigned int       n_sub   = 0;
     while (t < dt * (1 - 1e-12))
       {
-        const double dt_f = std::min(flow->stable_time_step().min(), dt - t);
+        const auto l = flow->stable_time_step();
+        r.convective = std::min(r.convective, l.convective);
+        r.viscous    = std::min(r.viscous, l.viscous);
+        r.capillary  = std::min(r.capillary, l.capillary);
+        r.capillary_fraction = l.capillary_fraction;
+        const double wanted  = flow_prm.time_step > 0 ? flow_prm.time_step : l.min();
+        ++r.governed[flow_prm.time_step > 0 ? 3 : l.governing()];
+        const double dt_f = std::min(wanted, dt - t);
         flow->step(dt_f);
         t += dt_f;
+        ++n_sub;
       }
+    r.min_substeps = std::min(r.min_substeps, n_sub);
+    r.max_substeps = std::max(r.max_substeps, n_sub);
     if (flow->statistics().resorts == resorts)
       return;
     // Points changed cells: new alpha; cells that gained metal take the
