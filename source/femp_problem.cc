@@ -156,6 +156,22 @@ namespace femp
     }
     heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
     heat->initialize();
+    if (!points_prm.bodies.empty())
+      {
+        // Cells of initial bodies take the mean temperature of their points.
+        auto &T = heat->temperature();
+        using P = typename MaterialPoints<dim>::PropertyIndex;
+        for (const auto &[idx, cell] : points->occupied_cells())
+          {
+            double sum = 0, n = 0;
+            for (const auto &particle :
+                 points->particle_handler().particles_in_cell(cell))
+              sum += particle.get_properties()[P::temperature], ++n;
+            if (n > 0)
+              T[idx] = sum / n;
+          }
+        grid->update_ghosts(T);
+      }
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
       heat->set_metal_fraction(points->metal_fraction());
@@ -173,7 +189,12 @@ namespace femp
         heat->set_velocity(&flow->cell_velocity());
       }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
-    output->initialize({"T", "gamma", "alpha"});
+    {
+      std::vector<std::string> names;
+      for (const auto &f : output_fields())
+        names.push_back(f.name);
+      output->initialize(names);
+    }
     if (solid_enabled)
       {
         TimerOutput::Scope t(timer, "setup: solid");
@@ -231,9 +252,19 @@ namespace femp
   std::vector<typename Output<dim>::Field>
   FempProblem<dim>::output_fields() const
   {
-    return {{"T", &heat->temperature()},
-            {"gamma", &heat->liquid_fraction()},
-            {"alpha", &heat->metal_fraction()}};
+    std::vector<typename Output<dim>::Field> fields = {
+      {"T", &heat->temperature()},
+      {"gamma", &heat->liquid_fraction()},
+      {"alpha", &heat->metal_fraction()}};
+    if (flow)
+      {
+        // Melt flow: pressure (Pa) and cell-centred fluid velocity (m/s).
+        static const char *u_names[3] = {"u_x", "u_y", "u_z"};
+        fields.push_back({"p", &flow->pressure()});
+        for (int d = 0; d < dim; ++d)
+          fields.push_back({u_names[d], &flow->cell_velocity()[d]});
+      }
+    return fields;
   }
 
 
@@ -397,7 +428,8 @@ namespace femp
           << ", stored " << result.stored << "; balance error "
           << std::abs(result.laser + result.boundary - result.losses -
                       result.stored) /
-               std::max(1e-300, result.laser + std::abs(result.boundary))
+               std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
+                                         result.losses))
           << std::endl;
     if (flow)
       {

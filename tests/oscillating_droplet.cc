@@ -92,7 +92,8 @@ run(const double fraction, const double R_over_h, const double mu,
           std::ofstream f(series_file);
           f << "# oscillating droplet R/h = " << R_over_h
             << ", capillary step fraction " << fraction
-            << ", analytic period " << T_exact << " s\n"
+            << ", analytic period " << T_exact << " s, gamma T = "
+            << gamma * T_exact << "\n"
             << "t/T_exact,S/S0\n";
           for (const auto &[ti, Si] : series)
             f << ti / T_exact << "," << Si / S0 << "\n";
