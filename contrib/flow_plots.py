@@ -4,7 +4,11 @@ outputs of the test programs (tests/*.output or fresh runs).
 
 Usage: contrib/flow_plots.py OUTDIR DAM_BREAK_OUTPUT [DAM_BREAK_OUTPUT_2 ...]
                              --cavity CAVITY_OUTPUT
-Each dam-break output is labelled with its file name."""
+                             [--droplet SERIES_CSV [SERIES_CSV ...]]
+Each dam-break output is labelled with its file name. Droplet series come
+from build/tests/test_oscillating_droplet FRACTION R/h FILE.csv (shape
+measure S/S0 over t/T, T the analytic period of the 2D mode-2 oscillation);
+the plot shows them with the analytic exp(-gamma t) cos(2 pi t/T)."""
 import re
 import sys
 
@@ -35,6 +39,31 @@ def parse_cavity(path):
     return rows
 
 
+def plot_droplet(outdir, paths):
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    gamma_T = None
+    for path in paths:
+        header = open(path).readline()
+        m = re.search(r"R/h = ([\d.]+), capillary step fraction ([\d.]+).*gamma T = ([\d.eE+-]+)", header)
+        label = "femp R = %s h, step %s x capillary limit" % (m.group(1), m.group(2)) if m else path
+        if m:
+            gamma_T = float(m.group(3))
+        d = np.loadtxt(path, delimiter=",", skiprows=2)
+        ax.plot(d[:, 0], d[:, 1], "-", label=label)
+    t = np.linspace(0, 1.5, 301)
+    g = gamma_T if gamma_T is not None else 0.0
+    ax.plot(t, np.exp(-g * t) * np.cos(2 * np.pi * t), "k:", label="analytic, 2D mode 2 (damped)")
+    ax.set_xlabel("t / T,  T = 2 pi / sqrt(6 sigma/(rho R^3) - gamma^2)")
+    ax.set_ylabel("shape measure S / S0")
+    ax.grid(True)
+    ax.legend(fontsize=8)
+    ax.set_title("Oscillating droplet (2D, mode 2)")
+    fig.tight_layout()
+    fig.savefig(outdir + "/oscillating_droplet.png", dpi=100)
+
+
 def main():
     args = sys.argv[1:]
     outdir = args.pop(0)
@@ -43,6 +72,18 @@ def main():
         i = args.index("--cavity")
         cavity = args[i + 1]
         del args[i : i + 2]
+    droplet = []
+    if "--droplet" in args:
+        i = args.index("--droplet")
+        j = i + 1
+        while j < len(args) and not args[j].startswith("--"):
+            j += 1
+        droplet = args[i + 1 : j]
+        del args[i:j]
+    if droplet:
+        plot_droplet(outdir, droplet)
+    if not args:
+        return
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
     first = True
     for path in args:

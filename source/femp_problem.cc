@@ -101,6 +101,8 @@ namespace femp
     points_prm.check(grid_prm);
     heat_prm.parse_parameters(prm);
     flow_prm.parse_parameters(prm);
+    if (melt_flow)
+      flow_prm.check_time_step(grid_prm.cell_size, material.density);
     laser_prm.parse_parameters(prm);
     output_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
@@ -154,6 +156,22 @@ namespace femp
     }
     heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
     heat->initialize();
+    if (!points_prm.bodies.empty())
+      {
+        // Cells of initial bodies take the mean temperature of their points.
+        auto &T = heat->temperature();
+        using P = typename MaterialPoints<dim>::PropertyIndex;
+        for (const auto &[idx, cell] : points->occupied_cells())
+          {
+            double sum = 0, n = 0;
+            for (const auto &particle :
+                 points->particle_handler().particles_in_cell(cell))
+              sum += particle.get_properties()[P::temperature], ++n;
+            if (n > 0)
+              T[idx] = sum / n;
+          }
+        grid->update_ghosts(T);
+      }
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
       heat->set_metal_fraction(points->metal_fraction());
@@ -171,7 +189,12 @@ namespace femp
         heat->set_velocity(&flow->cell_velocity());
       }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
-    output->initialize({"T", "gamma", "alpha"});
+    {
+      std::vector<std::string> names;
+      for (const auto &f : output_fields())
+        names.push_back(f.name);
+      output->initialize(names);
+    }
     if (solid_enabled)
       {
         TimerOutput::Scope t(timer, "setup: solid");
@@ -229,9 +252,19 @@ namespace femp
   std::vector<typename Output<dim>::Field>
   FempProblem<dim>::output_fields() const
   {
-    return {{"T", &heat->temperature()},
-            {"gamma", &heat->liquid_fraction()},
-            {"alpha", &heat->metal_fraction()}};
+    std::vector<typename Output<dim>::Field> fields = {
+      {"T", &heat->temperature()},
+      {"gamma", &heat->liquid_fraction()},
+      {"alpha", &heat->metal_fraction()}};
+    if (flow)
+      {
+        // Melt flow: pressure (Pa) and cell-centred fluid velocity (m/s).
+        static const char *u_names[3] = {"u_x", "u_y", "u_z"};
+        fields.push_back({"p", &flow->pressure()});
+        for (int d = 0; d < dim; ++d)
+          fields.push_back({u_names[d], &flow->cell_velocity()[d]});
+      }
+    return fields;
   }
 
 
@@ -395,7 +428,8 @@ namespace femp
           << ", stored " << result.stored << "; balance error "
           << std::abs(result.laser + result.boundary - result.losses -
                       result.stored) /
-               std::max(1e-300, result.laser + std::abs(result.boundary))
+               std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
+                                         result.losses))
           << std::endl;
     if (flow)
       {
@@ -414,6 +448,18 @@ namespace femp
               << "re-sorted in " << st.resorts << " steps, "
               << st.n_fluid_cells << " fluid cells and max speed "
               << st.max_point_speed << " m/s at the end" << std::endl;
+        const auto &r = result.flow_limits;
+        pcout << std::setprecision(4)
+              << "Melt flow time step limits (smallest over the run): "
+              << "convective " << r.convective << " s, viscous " << r.viscous
+              << " s, capillary " << r.capillary << " s (used x "
+              << r.capillary_fraction << ")\n"
+              << "  sub-steps governed by: convective " << r.governed[0]
+              << ", viscous " << r.governed[1] << ", capillary "
+              << r.governed[2] << ", prescribed (Melt flow/Time step) "
+              << r.governed[3] << "; sub-steps per temperature step "
+              << (r.max_substeps > 0 ? r.min_substeps : 0) << " to "
+              << r.max_substeps << std::endl;
       }
     timer.print_summary();
   }
@@ -423,15 +469,35 @@ namespace femp
   void
   FempProblem<dim>::flow_substeps(const double dt)
   {
-    // Sub-cycle with the current limits (they change as the flow speeds up).
+    // Sub-cycle with the current limits (they change as the flow speeds
+    // up), or with the prescribed step, in equal pieces that end with the
+    // temperature step. The limits and which one governed are recorded for
+    // the report at the end of the run.
     const unsigned int resorts = flow->statistics().resorts;
+    auto &             r       = result.flow_limits;
     double             t       = 0;
+    unsigned int       n_sub   = 0;
     while (t < dt * (1 - 1e-12))
       {
-        const double dt_f = std::min(flow->stable_time_step().min(), dt - t);
+        const auto l = flow->stable_time_step();
+        r.convective = std::min(r.convective, l.convective);
+        r.viscous    = std::min(r.viscous, l.viscous);
+        r.capillary  = std::min(r.capillary, l.capillary);
+        r.capillary_fraction = l.capillary_fraction;
+        const double wanted  = flow_prm.time_step > 0 ? flow_prm.time_step : l.min();
+        ++r.governed[flow_prm.time_step > 0 ? 3 : l.governing()];
+        // Equal sub-steps over the rest of the temperature step, none above
+        // the wanted step: no tiny last sub-step (uneven sub-steps shortened
+        // the droplet period in prm/oscillating_droplet.prm).
+        const double rest = dt - t;
+        const double dt_f =
+          rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
         flow->step(dt_f);
         t += dt_f;
+        ++n_sub;
       }
+    r.min_substeps = std::min(r.min_substeps, n_sub);
+    r.max_substeps = std::max(r.max_substeps, n_sub);
     if (flow->statistics().resorts == resorts)
       return;
     // Points changed cells: new alpha; cells that gained metal take the

@@ -84,6 +84,20 @@ namespace femp
                       "PIC; range [0, 1].");
     prm.declare_entry("Courant number", "0.25", Patterns::Double(0.),
                       "C of the convective limit dt <= C h / u_max; range (0, 1].");
+    prm.declare_entry("Capillary step fraction", "0.5", Patterns::Double(0.),
+                      "Fraction of the capillary limit sqrt(rho h^3/(2 pi "
+                      "sigma)) used by the automatic fluid step (surface "
+                      "tension is explicit on the old geometry; the "
+                      "oscillating-droplet study in doc/flow.md chose 0.5); "
+                      "range (0, 1].");
+    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+                      "Prescribed fluid step, s; 0 (default) chooses it "
+                      "automatically at every sub-step as the smallest of the "
+                      "convective, viscous and (fraction of the) capillary "
+                      "limits. A prescribed step above the viscous limit "
+                      "h^2 rho/(2 dim mu) or the capillary limit is refused; "
+                      "above the convective limit the step-halving safety "
+                      "applies. Range [0, inf).");
     prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
                       "Surface tension coefficient sigma, N/m (0: no surface "
                       "tension); enters as the capillary pressure sigma div(n) "
@@ -118,6 +132,8 @@ namespace femp
     darcy_epsilon    = prm.get_double("Darcy epsilon");
     flip_fraction    = prm.get_double("FLIP fraction");
     cfl              = prm.get_double("Courant number");
+    capillary_fraction = prm.get_double("Capillary step fraction");
+    time_step        = prm.get_double("Time step");
     surface_tension  = prm.get_double("Surface tension");
     surface_tension_gradient =
       prm.get_double("Surface tension temperature derivative");
@@ -137,9 +153,56 @@ namespace femp
             "it must lie in (0, 1]");
     require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
             "it must be non-negative (N/m)");
+    require(capillary_fraction > 0 && capillary_fraction <= 1,
+            "Melt flow/Capillary step fraction", capillary_fraction,
+            "it must lie in (0, 1]");
+    require(time_step >= 0, "Melt flow/Time step", time_step,
+            "it must be non-negative (s; 0: automatic)");
     require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
             "Melt flow/Solver tolerance", solver_tolerance,
             "it must lie in (0, 1e-2]");
+  }
+
+
+  template <int dim>
+  typename IncompressibleFlow<dim>::StepLimits
+  IncompressibleFlow<dim>::material_limits(const Parameters &prm,
+                                           const double      h,
+                                           const double      rho)
+  {
+    StepLimits limits;
+    limits.convective = std::numeric_limits<double>::infinity();
+    limits.viscous    = prm.viscosity > 0 ?
+                          h * h * rho / (2 * dim * prm.viscosity) :
+                          std::numeric_limits<double>::infinity();
+    limits.capillary =
+      prm.surface_tension > 0 ?
+        std::sqrt(rho * h * h * h / (2 * numbers::PI * prm.surface_tension)) :
+        std::numeric_limits<double>::infinity();
+    limits.capillary_fraction = prm.capillary_fraction;
+    return limits;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::Parameters::check_time_step(const double h,
+                                                       const double rho) const
+  {
+    if (time_step <= 0)
+      return;
+    const StepLimits   l = material_limits(*this, h, rho);
+    std::ostringstream allowed;
+    allowed << "it exceeds the "
+            << (l.viscous <= l.capillary ? "viscous limit h^2 rho/(2 dim mu) = " :
+                                           "capillary limit sqrt(rho h^3/(2 pi "
+                                           "sigma)) = ")
+            << std::min(l.viscous, l.capillary) << " s (h = " << h
+            << " m, rho = " << rho << " kg/m^3, mu = " << viscosity
+            << " Pa s, sigma = " << surface_tension
+            << " N/m); use 0 (automatic) or a step at most this limit";
+    require(time_step <= std::min(l.viscous, l.capillary) * (1 + 1e-12),
+            "Melt flow/Time step", time_step, allowed.str());
   }
 
 
@@ -269,17 +332,10 @@ namespace femp
           }
         umax = Utilities::MPI::max(umax, grid.communicator());
       }
-    const double h = grid.h();
-    StepLimits   limits;
+    const double h      = grid.h();
+    StepLimits   limits = material_limits(prm, h, rho);
     limits.convective =
       prm.cfl * h / std::max(umax, std::sqrt(prm.gravity.norm() * h) + 1e-300);
-    limits.viscous = prm.viscosity > 0 ?
-                       h * h * rho / (2 * dim * prm.viscosity) :
-                       std::numeric_limits<double>::infinity();
-    limits.capillary =
-      prm.surface_tension > 0 ?
-        std::sqrt(rho * h * h * h / (2 * numbers::PI * prm.surface_tension)) :
-        std::numeric_limits<double>::infinity();
     return limits;
   }
 

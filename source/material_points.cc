@@ -49,6 +49,18 @@ namespace femp
     prm.declare_entry("Random seed", "1", Patterns::Integer(0),
                       "Seed of the packing; the same seed gives the same bed.");
     prm.leave_subsection();
+    prm.declare_entry(
+      "Initial bodies", "", Patterns::Anything(),
+      "Bodies of material points placed at the start besides the substrate "
+      "and the powder (flow scenes: a liquid column, a drop, a pool), "
+      "separated by ';'. Each is 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' "
+      "(lower and upper corner, m) or 'STATE ellipsoid: cx,cy[,cz] -> "
+      "ax,ay[,az] : T' (centre and semi-axes, m; equal semi-axes give a "
+      "circle or sphere), with STATE one of fluid, solid, powder and T the "
+      "temperature of its points, K (range (0, inf); the cells it fills take "
+      "the mean temperature of their points). A body must lie inside the "
+      "domain and must not overlap the powder layer; below the substrate "
+      "top it re-states the substrate's points. Empty (default): none.");
     prm.leave_subsection();
   }
 
@@ -70,7 +82,71 @@ namespace femp
     packing_fraction = prm.get_double("Packing fraction");
     seed             = prm.get_integer("Random seed");
     prm.leave_subsection();
+    const std::string list = prm.get("Initial bodies");
     prm.leave_subsection();
+    bodies.clear();
+    const std::string name = "Material points/Initial bodies";
+    const std::string form =
+      "each body must read 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' or "
+      "'STATE ellipsoid: centre -> semi-axes : T' with STATE fluid, solid or "
+      "powder, " + std::to_string(dim) + " coordinates per point (m) and T > 0 (K)";
+    const auto to_point = [&](const std::string &text, const std::string &body) {
+      const auto parts = Utilities::split_string_list(text, ',');
+      require(parts.size() == dim, name, body, form);
+      Point<dim> x;
+      for (int d = 0; d < dim; ++d)
+        {
+          try
+            {
+              x[d] = Utilities::string_to_double(parts[d]);
+            }
+          catch (...)
+            {
+              require(false, name, body, form);
+            }
+        }
+      return x;
+    };
+    for (const auto &body_text : Utilities::split_string_list(list, ';'))
+      {
+        if (body_text.empty())
+          continue;
+        const auto parts = Utilities::split_string_list(body_text, ':');
+        require(parts.size() == 3, name, body_text, form);
+        Body body;
+        body.text        = body_text;
+        const auto words = Utilities::split_string_list(parts[0], ' ');
+        std::vector<std::string> w;
+        for (const auto &x : words)
+          if (!x.empty())
+            w.push_back(x);
+        require(w.size() == 2 &&
+                  (w[0] == "fluid" || w[0] == "solid" || w[0] == "powder") &&
+                  (w[1] == "box" || w[1] == "ellipsoid"),
+                name, body_text, form);
+        body.state = w[0] == "fluid" ? fluid : (w[0] == "solid" ? solid : powder);
+        body.box   = w[1] == "box";
+        const auto arrow = parts[1].find("->");
+        require(arrow != std::string::npos, name, body_text, form);
+        body.a = to_point(parts[1].substr(0, arrow), body_text);
+        body.b = to_point(parts[1].substr(arrow + 2), body_text);
+        try
+          {
+            body.T = Utilities::string_to_double(parts[2]);
+          }
+        catch (...)
+          {
+            require(false, name, body_text, form);
+          }
+        require(body.T > 0, name, body_text, form);
+        for (int d = 0; d < dim; ++d)
+          require(body.box ? body.b[d] > body.a[d] : body.b[d] > 0, name,
+                  body_text,
+                  body.box ? "the upper corner must exceed the lower corner in "
+                             "every direction" :
+                             "the semi-axes must be positive (m)");
+        bodies.push_back(body);
+      }
     require(point_spacing > 0, "Material points/Point spacing", point_spacing,
             "it must be positive (m)");
     require(min_diameter > 0 && min_diameter <= max_diameter,
@@ -98,6 +174,44 @@ namespace femp
             "Material points/Powder layer/Layer thickness", layer_thickness,
             "the powder layer must fit below the top of the domain (at most " +
               num(hi - substrate_top) + " m)");
+    for (const auto &body : bodies)
+      {
+        Point<dim> lower = body.a, upper = body.b;
+        if (!body.box)
+          lower = body.a - body.b, upper = body.a + body.b;
+        std::string domain = "[";
+        for (int d = 0; d < dim; ++d)
+          domain += num(g.lower_corner[d]) + ", " + num(g.upper_corner[d]) +
+                    (d + 1 < dim ? "] x [" : "]");
+        for (int d = 0; d < dim; ++d)
+          require(lower[d] >= g.lower_corner[d] - 1e-12 * std::abs(g.lower_corner[d]) &&
+                    upper[d] <= g.upper_corner[d] + 1e-12 * std::abs(g.upper_corner[d]),
+                  "Material points/Initial bodies", body.text,
+                  "each body must lie inside the domain " + domain + " m");
+        require(layer_thickness <= 0 || lower[dim - 1] >= substrate_top + layer_thickness ||
+                  upper[dim - 1] <= substrate_top,
+                "Material points/Initial bodies", body.text,
+                "a body must not overlap the powder layer [" + num(substrate_top) +
+                  ", " + num(substrate_top + layer_thickness) + "] m (vertical)");
+      }
+  }
+
+
+  template <int dim>
+  bool
+  MaterialPoints<dim>::Parameters::Body::inside(const Point<dim> &p) const
+  {
+    if (box)
+      {
+        for (int d = 0; d < dim; ++d)
+          if (p[d] < a[d] || p[d] > b[d])
+            return false;
+        return true;
+      }
+    double r = 0;
+    for (int d = 0; d < dim; ++d)
+      r += (p[d] - a[d]) * (p[d] - a[d]) / (b[d] * b[d]);
+    return r < 1;
   }
 
 
@@ -216,9 +330,40 @@ namespace femp
           }
       }
 
+    // Initial bodies: their lattice points above the substrate top.
+    if (!prm.bodies.empty())
+      for (const auto idx : grid.owned_cells())
+        add_lattice_points(idx, std::numeric_limits<double>::infinity(),
+                           [this](const Point<dim> &p) {
+                             if (p[dim - 1] < prm.substrate_top)
+                               return false;
+                             for (const auto &b : prm.bodies)
+                               if (b.inside(p))
+                                 return true;
+                             return false;
+                           },
+                           points);
+
     insert_points(points, T0, [this](const Point<dim> &p) {
       return p[dim - 1] < prm.substrate_top ? solid : powder;
     });
+    if (prm.bodies.empty())
+      return;
+    // State and temperature of the points inside bodies (last body wins).
+    using P = PropertyIndex;
+    for (auto &particle : handler)
+      {
+        const Point<dim> p = particle.get_location();
+        for (auto b = prm.bodies.rbegin(); b != prm.bodies.rend(); ++b)
+          if (b->inside(p))
+            {
+              auto v                  = particle.get_properties();
+              v[P::state]             = b->state;
+              v[P::temperature]       = b->T;
+              v[P::peak_temperature]  = b->T;
+              break;
+            }
+      }
   }
 
 

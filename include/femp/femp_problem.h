@@ -22,6 +22,8 @@
 #include <femp/output.h>
 #include <femp/solid_stress.h>
 
+#include <array>
+#include <limits>
 #include <memory>
 
 namespace femp
@@ -72,6 +74,19 @@ namespace femp
       unsigned int pressure_matrix_builds = 0; ///< matrix + AMG setups
       unsigned long pressure_cg_iterations = 0; ///< total
       double       max_fluid_speed        = 0; ///< m/s, at the end
+      /// Fluid step limits, s: the smallest of each over the run, how many
+      /// sub-steps each governed (convective, viscous, capillary,
+      /// prescribed), and the sub-steps per temperature step.
+      struct FlowLimits
+      {
+        double convective = std::numeric_limits<double>::infinity();
+        double viscous    = std::numeric_limits<double>::infinity();
+        double capillary  = std::numeric_limits<double>::infinity();
+        double capillary_fraction = 1;
+        std::array<unsigned long, 4> governed{};
+        unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
+        unsigned int max_substeps = 0;
+      } flow_limits;
       /// Solid (if Physics/Solid stress): steps and final energies.
       unsigned int solid_steps = 0;
       typename SolidStress<dim>::Energies solid_energy;

@@ -76,6 +76,22 @@ namespace femp
       double       packing_fraction = 0.45;
       unsigned int seed             = 1;
 
+      /// An initial body (Material points/Initial bodies): a box from
+      /// @p a (lower corner) to @p b (upper corner), or an ellipsoid
+      /// (ellipse in 2D) with centre @p a and semi-axes @p b; its points
+      /// have state @p state and temperature @p T.
+      struct Body
+      {
+        State       state = fluid;
+        bool        box   = true;
+        Point<dim>  a, b;
+        double      T = 300;
+        std::string text; ///< as written, for messages
+        bool
+        inside(const Point<dim> &p) const;
+      };
+      std::vector<Body> bodies;
+
       static void
       declare_parameters(ParameterHandler &prm);
       void
@@ -90,7 +106,9 @@ namespace femp
                    const BackgroundGrid<dim> &grid);
 
     /// Fill the substrate block and the powder layer with points at the
-    /// initial temperature @p T0.
+    /// initial temperature @p T0, then the initial bodies: lattice points
+    /// inside a body (added above the substrate top, re-stated below it)
+    /// take its state and temperature (a later body overrides an earlier).
     void
     create(const double T0);
 
