@@ -325,14 +325,12 @@ namespace femp
             ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
       }
 
-    // 3. Points and FE nodes (eqs. 15-17).
-    const bool inside = mpm.g2p(nodes, dt);
-    fem.update_nodes(nodes, hourglass, constrained, dt);
-
-    // 4. MUSL: re-map the momenta, grid velocities.
+    // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the
+    // momenta (the points re-map in the same loop), grid velocities.
     for (int d = 0; d < dim; ++d)
       std::fill(nodes.momentum[d].begin(), nodes.momentum[d].end(), 0.);
-    mpm.p2g_momentum(nodes);
+    mpm.g2p(nodes, dt);
+    fem.update_nodes(nodes, hourglass, constrained, dt);
     fem.add_mass_momentum(nodes, false);
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(nodes.momentum[d]);
@@ -353,9 +351,10 @@ namespace femp
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) +
       fem.gravity_power(prm.gravity);
-    double sums[4] = {local_K, work, dt * local_ext, inside ? 0. : 1.};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 4), comm,
-                        ArrayView<double>(sums, 4));
+    double sums[5] = {local_K, work, dt * local_ext, mpm.point_lost() ? 1. : 0.,
+                      double(mpm.n_left_rank())};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 5), comm,
+                        ArrayView<double>(sums, 5));
     K = sums[0];
     W_int += sums[1];
     W_ext += sums[2];
@@ -366,7 +365,7 @@ namespace femp
         bool       found = false;
         if (blown)
           found = mpm.find_non_finite(where) || fem.find_non_finite(where);
-        else if (!inside)
+        else if (mpm.point_lost())
           where = mpm.escaped_point(), found = true;
         const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
         const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
@@ -376,12 +375,14 @@ namespace femp
         s << "solid: "
           << (blown ? "the solution became non-finite (unstable: check "
                       "'Solid/Time step' and 'Solid/Hourglass coefficient')" :
-                      "a material point left its cell (displacement larger "
-                      "than this version supports)")
+                      "a material point entered the finite-element zone or "
+                      "left the domain")
           << " at solid step " << steps << ", time " << t_solid + dt
           << " s, near x = " << where;
         throw std::runtime_error(s.str());
       }
+    if (sums[4] > 0) // a point entered a cell of another rank
+      mpm.resort();
   }
 
 
