@@ -49,19 +49,6 @@ namespace femp
             }
         }
     }
-
-    template <int dim>
-    inline void
-    weights(const double (&xi)[dim], double (&N)[1 << dim])
-    {
-      for (unsigned int a = 0; a < (1u << dim); ++a)
-        {
-          double n = 1;
-          for (int d = 0; d < dim; ++d)
-            n *= ((a >> d) & 1) ? xi[d] : 1 - xi[d];
-          N[a] = n;
-        }
-    }
   } // namespace
 
 
@@ -104,6 +91,18 @@ namespace femp
     eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
     auto &     handler = points.particle_handler();
     const auto h       = grid.h();
+    {
+      const std::size_t n = handler.n_locally_owned_particles();
+      for (int d = 0; d < dim; ++d)
+        x[d].reserve(n), v[d].reserve(n), corner[d].reserve(n);
+      if (apic)
+        for (auto &c : C)
+          c.reserve(n);
+      for (auto &s : sigma)
+        s.reserve(n);
+      mass.reserve(n), true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
+      eps_p.reserve(n), cell.reserve(n), node0.reserve(n), handle.reserve(n);
+    }
     for (auto it = handler.begin(); it != handler.end(); ++it)
       {
         const ArrayView<double> q = it->get_properties();
@@ -325,9 +324,9 @@ namespace femp
         acc[d] = nodes.force[d].data(); // f_I / m_I at this point
         mom[d] = nodes.momentum[d].data();
       }
-    kinetic = 0;
-    weight_momentum.fill(0.);
     const std::size_t n = mass.size();
+    for (int d = 0; d < dim; ++d)
+      xdot[d].resize(n);
     for (std::size_t p = 0; p < n; ++p)
       {
         double xi[dim], N[n_corners], dN[n_corners][dim];
@@ -350,25 +349,22 @@ namespace femp
                   ag[i] += N[a] * acc[i][I];
               }
           }
-        // New velocity, affine matrix and position.
+        // New velocity and affine matrix; the grid velocity at the point
+        // moves it at the end of the step (update_stresses()).
         double vp[dim];
         for (int i = 0; i < dim; ++i)
           {
             vp[i] = apic ? vg[i] : v[i][p] + dt * ag[i];
             v[i][p] = vp[i];
-            x[i][p] += dt * vg[i];
-            xi[i] = (x[i][p] - corner[i][p]) * ih;
+            xdot[i][p] = vg[i];
           }
-        // Re-map (MUSL) of the new momentum with the new weights.
-        weights<dim>(xi, N);
-        const double m  = mass[p];
-        double       v2 = 0, v0[dim], Ch[dim][dim];
+        // Re-map (MUSL) of the new momentum with the weights of the step
+        // (those of the P2G, so that the re-mapped nodal velocity of a node
+        // is a mean of point velocities with the node mass).
+        const double m = mass[p];
+        double       v0[dim], Ch[dim][dim];
         for (int i = 0; i < dim; ++i)
-          {
-            v2 += vp[i] * vp[i];
-            weight_momentum[i] += true_mass[p] * vp[i];
-            v0[i] = vp[i];
-          }
+          v0[i] = vp[i];
         if (apic)
           for (int i = 0; i < dim; ++i)
             for (int j = 0; j < dim; ++j)
@@ -376,9 +372,7 @@ namespace femp
                 C[i * dim + j][p] = Cn[i][j];
                 Ch[i][j]          = h * Cn[i][j];
                 v0[i] -= Ch[i][j] * xi[j];
-                v2 += Cn[i][j] * Cn[i][j] * h * h * xi[j] * (1 - xi[j]);
               }
-        kinetic += 0.5 * m * v2;
         for (unsigned int a = 0; a < n_corners; ++a)
           {
             const std::size_t I  = n0 + corner_offset[a];
@@ -412,6 +406,8 @@ namespace femp
     const std::size_t n    = mass.size();
     left_rank              = 0;
     lost                   = false;
+    kinetic                = 0;
+    weight_momentum.fill(0.);
     for (std::size_t p = 0; p < n; ++p)
       {
         double xi[dim], N[n_corners], dN[n_corners][dim];
@@ -453,6 +449,25 @@ namespace femp
           visc[p] =
             b1 * h * std::sqrt(mat.p_wave_modulus(Tn) * mass[p] / V) * trL / dt;
         volume[p] = V * (1 + trL);
+
+        // Move the point with the grid velocity of the step; kinetic energy
+        // (APIC: with the affine part at the new position) and momentum.
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            x[d][p] += dt * xdot[d][p];
+            v2 += v[d][p] * v[d][p];
+            weight_momentum[d] += true_mass[p] * v[d][p];
+          }
+        if (apic)
+          for (int j = 0; j < dim; ++j)
+            {
+              const double xj = (x[j][p] - corner[j][p]) * ih;
+              const double D  = h * h * xj * (1 - xj);
+              for (int i = 0; i < dim; ++i)
+                v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
+            }
+        kinetic += 0.5 * mass[p] * v2;
 
         // Cell crossing (see solid_mpm.h).
         bool inside = true;

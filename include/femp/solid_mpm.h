@@ -15,9 +15,15 @@
 //        m_I = sum N m_p, p_I = sum N m_p v_p(x_I),
 //        f_I = -sum V_p sigma_p grad N + sum N m_p g (+ fluid forces);
 //   2. p_I += dt f_I on the grid (with boundary conditions);
-//   3. G2P and position update x_p += dt sum N v_I, then (same loop)
+//   3. G2P of the new point velocity, then (same loop)
 //   4. P2G of the new point momentum (re-map), v_I = p_I / m_I;
-//   5. velocity gradient L_p = sum v_I (x) grad N and stress update (eq. 5).
+//   5. velocity gradient L_p = sum v_I (x) grad N and stress update (eq. 5);
+//      then the point moves, x_p += dt sum N v_I (grid velocities of 2).
+// All transfers of a step use the tents at the point's position at the
+// start of the step (the textbook MUSL): the re-map then divides by the node
+// masses of the same weights. (Re-mapping with the weights at the moved
+// position, as this code did before, gives nodes at a free surface that a
+// point leaves a momentum that does not match their mass.)
 // MUSL is chosen over USF/USL because the stress is computed from velocities
 // re-mapped from the updated points: nodes with a tiny mass share of a point
 // do not produce spurious strain rates (the classic USL instability), and it
@@ -42,7 +48,7 @@
 // of the cell plus fixed corner offsets, tent weights recomputed from the
 // local coordinate in registers (a cache of 2^dim (dim + 1) weights per
 // point would cost more memory traffic than the few multiplications).
-// Kinetic energy and gravity power are summed in the G2P loop.
+// Kinetic energy and gravity power are summed in the stress loop.
 //
 // The forces use sigma_p + q_p I, with the artificial bulk-viscosity
 // pressure q_p = b1 rho c h tr(D) of the last stress update (see
@@ -55,9 +61,7 @@
 // rank, SolidStress calls resort() after the step: write back, deal.II's
 // global sort (MaterialPoints::points_moved()), gather again. A point that
 // enters the finite-element zone or leaves the domain stops the run with a
-// message (the FE zone has no place for it). During the step in which a
-// point crosses, it keeps the tent functions of its old cell (extrapolated:
-// still a partition of unity and exact for linear fields).
+// message (the FE zone has no place for it).
 #ifndef femp_solid_mpm_h
 #define femp_solid_mpm_h
 
@@ -125,15 +129,16 @@ namespace femp
     void
     p2g(SolidNodeFields<dim> &nodes, const Tensor<1, dim> &gravity) const;
     /// Steps 3 and 4: velocity update (FLIP from the nodal accelerations in
-    /// nodes.force = f_I / m_I, or APIC from nodes.velocity), position
-    /// update x_p += dt sum N v_I, and re-map of the new point momenta into
-    /// nodes.momentum (partial sums; the caller zeroes it before).
+    /// nodes.force = f_I / m_I, or APIC from nodes.velocity) and re-map of
+    /// the new point momenta into nodes.momentum (partial sums; the caller
+    /// zeroes it before).
     void
     g2p(SolidNodeFields<dim> &nodes, const double dt);
     /// Step 5: stress update from node velocities; @p T_old and @p T_new are
     /// cell temperatures at the start and end of the step. Returns the
-    /// stress work sum V sigma : D dt of this rank. Then binds points that
-    /// left their cell to their new owned cell (see n_left_rank()).
+    /// stress work sum V sigma : D dt of this rank. Then moves the points by
+    /// the grid velocity of g2p() and binds points that left their cell to
+    /// their new owned cell (see n_left_rank()).
     double
     update_stresses(const SolidNodeFields<dim> &nodes,
                     const double                dt,
@@ -155,7 +160,7 @@ namespace femp
     }
 
     /// Kinetic energy of this rank's points, J (2D: J/m); APIC includes the
-    /// affine part. Summed in gather() and g2p().
+    /// affine part. Summed in gather() and update_stresses().
     double
     kinetic_energy() const
     {
@@ -206,6 +211,7 @@ namespace femp
 
     // Structure of arrays, one vector per component.
     std::array<std::vector<double>, dim>       x, v, corner;
+    std::array<std::vector<double>, dim>       xdot; ///< grid velocity at x_p
     std::array<std::vector<double>, dim * dim> C; ///< APIC, row-major, 1/s
     std::vector<double>                        mass, true_mass, volume;
     std::vector<double>                   visc; ///< viscous pressure q, Pa
