@@ -6,7 +6,7 @@ Usage:
   /usr/bin/python3 contrib/plot_danilovskaya.py history.csv profile.csv doc/
 
 Writes danilovskaya_history.png (sigma_x and T at probe A, the paper's
-Fig. 5: closed form, all-MPM, FEMP, all-FE) and danilovskaya_profile.png
+Fig. 5: closed form, all-MPM (APIC, the default, and FLIP), FEMP, all-FE) and danilovskaya_profile.png
 (spatial profiles at t = 1, the paper's Fig. 6). Quantities are
 nondimensional: S = sigma_x / (beta T0), theta = (T - T_ref) / T0.
 """
@@ -30,8 +30,9 @@ def main():
 
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     ax[0].plot(hist["t"], hist["S_exact"], "k-", label="closed form")
-    ax[0].plot(hist["t"], hist["S_mpm"], "b-", lw=1, label="all-MPM")
-    ax[0].plot(hist["t"], hist["S_femp"], "r--", lw=1, label="FEMP")
+    ax[0].plot(hist["t"], hist["S_mpm_flip"], "c-", lw=0.8, label="all-MPM, FLIP")
+    ax[0].plot(hist["t"], hist["S_mpm"], "b-", lw=1, label="all-MPM (APIC)")
+    ax[0].plot(hist["t"], hist["S_femp"], "r--", lw=1, label="FEMP (APIC)")
     ax[0].plot(hist["t"], hist["S_fe"], "g:", lw=1, label="all-FE")
     ax[0].set_xlabel("t (nondimensional)")
     ax[0].set_ylabel("S = sigma_x / (beta T0)")
@@ -49,7 +50,8 @@ def main():
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     x = prof["x"]
     ax[0].plot(x, prof["S_exact"], "k-", label="closed form")
-    ax[0].plot(x, prof["S_mpm"], "b-", lw=1, label="all-MPM")
+    ax[0].plot(x, prof["S_mpm_flip"], "c-", lw=0.8, label="all-MPM, FLIP")
+    ax[0].plot(x, prof["S_mpm"], "b-", lw=1, label="all-MPM (APIC)")
     ax[0].plot(x, prof["S_femp"], "r--", lw=1, label="FEMP (FE for x < 0.6)")
     ax[0].plot(x, prof["S_fe"], "g:", lw=1, label="all-FE")
     ax[0].axvline(0.6, color="grey", lw=0.5)

@@ -17,6 +17,17 @@ namespace femp
                       "size) is added to the stress in the nodal forces and "
                       "damps the ringing behind stress fronts; the stable step "
                       "shrinks by sqrt(1 + b1^2) - b1. Range [0, 1]; 0 is off.");
+    prm.declare_entry("Velocity transfer", "FLIP", Patterns::Selection("FLIP|APIC"),
+                      "How material points of the solid MPM exchange "
+                      "velocities with the grid nodes: FLIP (points add the "
+                      "nodal accelerations; keeps the solid energy balance) "
+                      "or APIC (affine particle-in-cell: points take the nodal "
+                      "velocities and carry their gradient C_p; with one point "
+                      "per cell it restores the nodal velocities exactly and "
+                      "is far less dispersive (case 3.1), but with several "
+                      "points per cell its transfers dissipate kinetic energy "
+                      "that the energy file does not book; see doc/solid.md). "
+                      "One of FLIP, APIC.");
     prm.enter_subsection("Material");
     prm.declare_entry("Young's modulus", "1.93e11", Patterns::Anything(),
                       "E(T), Pa: a constant or a table 'T1:E1, T2:E2, ...' "
@@ -48,6 +59,9 @@ namespace femp
   {
     prm.enter_subsection("Solid");
     bulk_viscosity = prm.get_double("Bulk viscosity");
+    velocity_transfer = prm.get("Velocity transfer") == "FLIP" ?
+                          VelocityTransfer::flip :
+                          VelocityTransfer::apic;
     prm.enter_subsection("Material");
     const std::string p = "Solid/Material/";
     youngs_modulus =
@@ -90,95 +104,19 @@ namespace femp
                 const double         T_new,
                 StressPoint &        state)
   {
+    // The array kernel of constitutive.h does the work (one code path for
+    // material points and finite elements).
+    double L[3][3], sv[6];
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j)
+        L[i][j] = L_dt[i][j];
+    sv[0] = state.sigma[0][0], sv[1] = state.sigma[1][1], sv[2] = state.sigma[2][2];
+    sv[3] = state.sigma[0][1], sv[4] = state.sigma[0][2], sv[5] = state.sigma[1][2];
     StressIncrement result;
-    if (T_new >= m.melt_temperature)
-      {
-        // Melted: no stress, no hardening memory.
-        state.sigma = SymmetricTensor<2, 3>();
-        state.eps_p = 0;
-        return result;
-      }
-
-    // Plain arrays in the hot path: s[i][j] full 3x3 copy of the stress.
-    double S[3][3];
-    for (unsigned int i = 0; i < 3; ++i)
-      for (unsigned int j = 0; j < 3; ++j)
-        S[i][j] = state.sigma[i][j];
-
-    // Objective rotation of the old stress (Jaumann, Hughes-Winget):
-    // R = (I - W/2)^-1 (I + W/2) = I + (W + W^2/2) / (1 + |w|^2/4) (Cayley),
-    // exactly orthogonal; W is the spin times the step.
-    const double w01 = 0.5 * (L_dt[0][1] - L_dt[1][0]);
-    const double w02 = 0.5 * (L_dt[0][2] - L_dt[2][0]);
-    const double w12 = 0.5 * (L_dt[1][2] - L_dt[2][1]);
-    if (w01 != 0 || w02 != 0 || w12 != 0)
-      {
-        const double W[3][3] = {{0, w01, w02}, {-w01, 0, w12}, {-w02, -w12, 0}};
-        const double f = 1. / (1 + 0.25 * (w01 * w01 + w02 * w02 + w12 * w12));
-        double       R[3][3];
-        for (unsigned int i = 0; i < 3; ++i)
-          for (unsigned int j = 0; j < 3; ++j)
-            {
-              double w2 = 0;
-              for (unsigned int k = 0; k < 3; ++k)
-                w2 += W[i][k] * W[k][j];
-              R[i][j] = (i == j ? 1. : 0.) + f * (W[i][j] + 0.5 * w2);
-            }
-        double RS[3][3];
-        for (unsigned int i = 0; i < 3; ++i)
-          for (unsigned int j = 0; j < 3; ++j)
-            RS[i][j] = R[i][0] * S[0][j] + R[i][1] * S[1][j] + R[i][2] * S[2][j];
-        for (unsigned int i = 0; i < 3; ++i)
-          for (unsigned int j = i; j < 3; ++j)
-            S[i][j] = S[j][i] =
-              RS[i][0] * R[j][0] + RS[i][1] * R[j][1] + RS[i][2] * R[j][2];
-      }
-
-    // Elastic predictor with the moduli at the new temperature. A point
-    // that solidified in this step starts stress-free at the solidus.
-    const double E      = m.youngs_modulus.value(T_new);
-    const double nu     = m.poisson_ratio;
-    const double mu     = E / (2 * (1 + nu));
-    const double lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
-    const double dth = m.expansion * (T_new - std::min(T_old, m.melt_temperature));
-    double       de[3][3];
-    for (unsigned int i = 0; i < 3; ++i)
-      for (unsigned int j = 0; j < 3; ++j)
-        de[i][j] = 0.5 * (L_dt[i][j] + L_dt[j][i]) - (i == j ? dth : 0.);
-    const double tr = de[0][0] + de[1][1] + de[2][2];
-    for (unsigned int i = 0; i < 3; ++i)
-      for (unsigned int j = 0; j < 3; ++j)
-        S[i][j] += 2 * mu * de[i][j] + (i == j ? lambda * tr : 0.);
-
-    // J2 radial return, linear isotropic hardening.
-    const double p = (S[0][0] + S[1][1] + S[2][2]) / 3;
-    for (unsigned int d = 0; d < 3; ++d)
-      S[d][d] -= p;
-    double ss = 0;
-    for (unsigned int i = 0; i < 3; ++i)
-      for (unsigned int j = 0; j < 3; ++j)
-        ss += S[i][j] * S[i][j];
-    const double q  = std::sqrt(1.5 * ss);
-    const double sy = m.yield_stress.value(T_new);
-    double       scale = 1;
-    if (q > sy) // cheap test first: the hardening term only raises sy
-      {
-        const double H   = m.plastic_modulus.value(T_new);
-        const double syh = sy + H * state.eps_p;
-        if (q > syh)
-          {
-            const double dg = (q - syh) / (3 * mu + H);
-            scale           = 1 - 3 * mu * dg / q;
-            state.eps_p += dg;
-            result.yielded           = true;
-            result.plastic_increment = dg;
-          }
-      }
-    SymmetricTensor<2, 3> sigma;
-    for (unsigned int i = 0; i < 3; ++i)
-      for (unsigned int j = i; j < 3; ++j)
-        sigma[i][j] = scale * S[i][j] + (i == j ? p : 0.);
-    state.sigma = sigma;
+    result.plastic_increment = update_stress_array(m, L, T_old, T_new, sv, state.eps_p);
+    result.yielded           = result.plastic_increment > 0;
+    state.sigma[0][0] = sv[0], state.sigma[1][1] = sv[1], state.sigma[2][2] = sv[2];
+    state.sigma[0][1] = sv[3], state.sigma[0][2] = sv[4], state.sigma[1][2] = sv[5];
     return result;
   }
 } // namespace femp

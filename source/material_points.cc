@@ -242,6 +242,10 @@ namespace femp
     if (dim == 2)
       names.push_back("stress_zz");
     names.push_back("viscous_pressure");
+    for (int i = 0; i < dim; ++i)
+      for (int j = 0; j < dim; ++j)
+        names.push_back(std::string("affine_velocity_") + char('x' + i) +
+                        char('x' + j));
     return names;
   }
 

@@ -416,15 +416,13 @@ namespace femp
         for (const auto n : active_nodes)
           ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
 
-    // Points: FLIP velocity and position; FE nodes: central difference.
-    const bool inside = mpm.g2p(nodes, dt);
-    const auto fe_energy = fem.update_nodes(dt);
-
-    // 4. MUSL: re-map the momenta, grid velocities.
+    // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
+    // momenta (in the same loop as G2P), grid velocities.
     for (int d = 0; d < dim; ++d)
       for (const auto n : active_nodes)
         nodes.momentum[d][n] = 0;
-    mpm.p2g_momentum(nodes);
+    mpm.g2p(nodes, dt);
+    const auto fe_energy = fem.update_nodes(dt);
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(nodes.momentum[d]);
     for (const auto &[t, n] : grid_transition)
@@ -447,9 +445,10 @@ namespace femp
     const double local_K   = mpm.kinetic_energy() + fe_energy[0];
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
-    double sums[4] = {local_K, work, dt * local_ext, inside ? 0. : 1.};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 4), comm,
-                        ArrayView<double>(sums, 4));
+    double sums[5] = {local_K, work, dt * local_ext, mpm.point_lost() ? 1. : 0.,
+                      double(mpm.n_left_rank())};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 5), comm,
+                        ArrayView<double>(sums, 5));
     K = sums[0];
     W_int += sums[1];
     W_ext += sums[2];
@@ -460,7 +459,7 @@ namespace femp
         bool       found = false;
         if (blown)
           found = mpm.find_non_finite(where) || fem.find_non_finite(where);
-        else if (!inside)
+        else if (mpm.point_lost())
           where = mpm.escaped_point(), found = true;
         const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
         const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
@@ -470,12 +469,14 @@ namespace femp
         s << "solid: "
           << (blown ? "the solution became non-finite (unstable: check "
                       "'Solid/Time step' and 'Solid/Hourglass coefficient')" :
-                      "a material point left its cell (displacement larger "
-                      "than this version supports)")
+                      "a material point entered the finite-element zone or "
+                      "left the domain")
           << " at solid step " << steps << ", time " << t_solid + dt
           << " s, near x = " << where;
         throw std::runtime_error(s.str());
       }
+    if (sums[4] > 0) // a point entered a cell of another rank
+      mpm.resort();
   }
 
 

@@ -14,18 +14,20 @@
 // evaluated there (theta = erfc(a); S from the erfcx forms).
 // Checks (VERIFICATION.md sec. 1, issue 3 item 6):
 //   T at the probe within 1 % of T0 (all t);
-//   sigma_x within 5 % of beta T0 for |t - x_A/c| > 5 h/c (checked for
-//   all-FE; printed for all-MPM and FEMP, which do not meet it);
+//   sigma_x within 5 % of beta T0 for |t - x_A/c| > 5 h/c;
 //   front arrival (S crossing the middle of the jump) within 2 h/c;
 //   jump S(x_A + 5h) - S(x_A - 5h) (times) within 0.15 of the exact one;
-//   FEMP vs all-MPM at the probe away from the front (printed);
-//   at t = 1, the stress step across the FE-MPM interface (cells at 0.59
-//   and 0.61 m) in FEMP differs from the exact step by no more than the
-//   discretization error of the all-MPM run there;
+//   FEMP vs all-MPM at the probe away from the front within 0.05 beta T0;
+//   interface continuity at t = 1 (cells at 0.59 m, FE, and 0.61 m, MPM):
+//   FEMP within 0.05 beta T0 of all-MPM in both cells, and the FEMP stress
+//   step across the interface within 0.05 beta T0 of the exact step;
 //   energy balance of the solid (no external work: stress work + kinetic
 //   energy change = 0).
 // Also printed: the oscillation amplitude behind the front, max |S - exact|
-// for t in [x_A + 5h, 2], in the all-FE and the all-MPM runs.
+// for t in [x_A + 5h, 2], in every run (for FEMP at A in its MPM part and at
+// x_B = 0.51 m in its FE part), and the
+// all-MPM run with the FLIP velocity transfer (not checked: it misses the
+// 5 % target; APIC is the default, see doc/solid.md).
 #include <femp/material_points.h>
 #include <femp/solid_stress.h>
 
@@ -70,6 +72,7 @@ namespace
   struct History
   {
     std::vector<double> t, S, theta;     // at the probe
+    std::vector<double> S_B;             // at x_B = 0.51 m (FE part of FEMP)
     double              S_left = 0, S_right = 0; // at 0.59 and 0.61 m, t = 1
     double              balance = 0, K_max = 0;
     std::vector<double> profile_S, profile_theta; // at the cell centres, t = 1
@@ -78,7 +81,9 @@ namespace
 
   /// fe_end: the FE zone is [0, fe_end] (0: none).
   History
-  run(const double fe_end, MPI_Comm comm)
+  run(const double fe_end, MPI_Comm comm,
+      const SolidMaterial::VelocityTransfer transfer =
+        SolidMaterial::VelocityTransfer::apic)
   {
     const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(5, h), h);
     BackgroundGrid<dim> grid(gp, comm);
@@ -108,6 +113,7 @@ namespace
     sm.density          = 1;
     sm.melt_temperature = 1e6;
     sm.bulk_viscosity   = 0.1;
+    sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;
     sp.safety_factor = 0.9;
     sp.roller_faces  = {"y-", "y+"};
@@ -121,7 +127,8 @@ namespace
 
     const std::vector<Point<dim>> probes = {Point<dim>(1.0 + 1e-9, 0.5 * h),
                                             Point<dim>(0.59, 0.5 * h),
-                                            Point<dim>(0.61, 0.5 * h)};
+                                            Point<dim>(0.61, 0.5 * h),
+                                            Point<dim>(0.5 + 1e-9, 0.5 * h)};
     History r;
     r.sizes = solid.sizes();
     const double       dt0 = 0.4 * heat.stable_time_step();
@@ -143,6 +150,7 @@ namespace
             r.t.push_back(solid.time());
             r.S.push_back(p[0][0] / 1e-3);
             r.theta.push_back((p[0][1] - 1.) / 1e-3);
+            r.S_B.push_back(p[3][0] / 1e-3);
             if (at_one)
               {
                 r.S_left = p[1][0] / 1e-3, r.S_right = p[2][0] / 1e-3;
@@ -174,6 +182,8 @@ main(int argc, char **argv)
 
   const History mpm  = run(0, comm);
 
+  const History flip =
+    run(0, comm, SolidMaterial::VelocityTransfer::flip);
   const History femp = run(0.6, comm);
   const History fe   = run(5, comm);
   if (argc > 1 && Utilities::MPI::this_mpi_process(comm) == 0)
@@ -181,23 +191,24 @@ main(int argc, char **argv)
       // History table for contrib/plot_danilovskaya.py: t, exact S, S of
       // all-MPM, FEMP, all-FE; exact theta, theta (all-MPM).
       std::ofstream f(argv[1]);
-      f << "t,S_exact,S_mpm,S_femp,S_fe,theta_exact,theta_mpm\n";
+      f << "t,S_exact,S_mpm,S_femp,S_fe,theta_exact,theta_mpm,S_mpm_flip\n";
       for (std::size_t i = 0; i < mpm.t.size(); ++i)
         f << mpm.t[i] << "," << S_exact(xA, mpm.t[i]) << "," << mpm.S[i] << ","
           << femp.S[i] << "," << fe.S[i] << "," << theta_exact(xA, mpm.t[i])
-          << "," << mpm.theta[i] << "\n";
+          << "," << mpm.theta[i] << "," << flip.S[i] << "\n";
       if (argc > 2)
         {
           // Profiles at t = 1 for Fig. 6.
           std::ofstream g(argv[2]);
-          g << "x,S_exact,S_mpm,S_femp,S_fe,theta_exact,theta_mpm,theta_femp\n";
+          g << "x,S_exact,S_mpm,S_femp,S_fe,theta_exact,theta_mpm,theta_femp,"
+               "S_mpm_flip\n";
           for (std::size_t i = 0; i < mpm.profile_S.size(); ++i)
             {
               const double x = (i + 0.5) * h;
               g << x << "," << S_exact(x, 1) << "," << mpm.profile_S[i] << ","
                 << femp.profile_S[i] << "," << fe.profile_S[i] << ","
                 << theta_exact(x, 1) << "," << mpm.profile_theta[i] << ","
-                << femp.profile_theta[i] << "\n";
+                << femp.profile_theta[i] << "," << flip.profile_S[i] << "\n";
             }
         }
     }
@@ -245,18 +256,8 @@ main(int argc, char **argv)
       const double exact = S_exact(xA, xA + d) - S_exact(xA, xA - d);
       const std::string n = names[k];
       checks.at_most(n + ": max |theta - exact| at the probe (T / T0)", err_T, 0.01);
-      // The issue's target is 0.05 for every discretization. The all-FE run
-      // meets it; with one point per cell the MPM (and so the FEMP probe,
-      // which lies in the MPM zone) rings more behind the front and does
-      // not: printed, not checked (see doc/solid.md), so that a change shows
-      // up in the output comparison.
-      if (k == 2)
-        checks.at_most(n + ": max |S - exact| away from the front (sigma / beta T0)",
-                       err_S, 0.05);
-      else
-        checks.print(n + ": max |S - exact| away from the front (sigma / beta "
-                         "T0; target 0.05 NOT met)",
-                     err_S, 2);
+      checks.at_most(n + ": max |S - exact| away from the front (sigma / beta T0)",
+                     err_S, 0.05);
       checks.at_most(n + ": |front arrival - x/c| (s)", std::abs(t_front - xA / c),
                      2 * h / c);
       checks.at_most(n + ": |jump - exact jump| over +-5h/c (beta T0)",
@@ -267,6 +268,37 @@ main(int argc, char **argv)
       behind[k] = beh;
     }
   (void)behind;
+  {
+    // All-MPM with the FLIP transfer, for comparison (printed only).
+    double err_S = 0, beh = 0;
+    for (std::size_t i = 0; i < flip.t.size(); ++i)
+      {
+        const double e = std::abs(flip.S[i] - S_exact(xA, flip.t[i]));
+        if (std::abs(flip.t[i] - xA / c) > 5 * h / c)
+          err_S = std::max(err_S, e);
+        if (flip.t[i] > xA / c + 5 * h / c)
+          beh = std::max(beh, e);
+      }
+    checks.print("all-MPM with FLIP: max |S - exact| away from the front", err_S, 2);
+    checks.print("all-MPM with FLIP: oscillation behind the front", beh, 2);
+  }
+
+  // Oscillation behind the front at x_B = 0.51 m, in the FE part of FEMP
+  // (the probe A lies in its MPM part), and in the other runs (printed).
+  {
+    const double xB = 0.51;
+    for (int k = 0; k < 3; ++k)
+      {
+        double beh = 0;
+        for (std::size_t i = 0; i < runs[k]->t.size(); ++i)
+          if (runs[k]->t[i] > xB / c + 5 * h / c)
+            beh = std::max(beh, std::abs(runs[k]->S_B[i] - S_exact(xB, runs[k]->t[i])));
+        checks.print(std::string(names[k]) + ": oscillation behind the front at "
+                                             "x = 0.51 m" +
+                       (k == 1 ? " (FE part)" : ""),
+                     beh, 2);
+      }
+  }
 
   // FEMP against all-MPM at the probe, away from the front.
   {
@@ -274,9 +306,8 @@ main(int argc, char **argv)
     for (std::size_t i = 0; i < std::min(mpm.t.size(), femp.t.size()); ++i)
       if (std::abs(mpm.t[i] - xA / c) > 5 * h / c)
         diff = std::max(diff, std::abs(mpm.S[i] - femp.S[i]));
-    checks.print("FEMP vs all-MPM: max |S difference| away from the front "
-                 "(target 0.05)",
-                 diff, 2);
+    checks.at_most("FEMP vs all-MPM: max |S difference| away from the front",
+                   diff, 0.05);
   }
 
   // Interface continuity at t = 1: cells at 0.59 (FE in FEMP) and 0.61 m.
@@ -294,9 +325,13 @@ main(int argc, char **argv)
     checks.print("t = 1: all-MPM S at 0.61 m", mpm.S_right, 3);
     checks.print("t = 1: all-MPM step across 0.6 m minus exact",
                  mpm_step - exact_step, 2);
-    checks.at_most("t = 1: |FEMP step across the interface - exact step| - "
-                   "all-MPM discretization error there",
-                   std::abs(femp_step - exact_step) - mpm_err, 0);
+    checks.print("t = 1: all-MPM max |S - exact| at 0.59, 0.61 m", mpm_err, 2);
+    checks.at_most("t = 1: |FEMP - all-MPM| at 0.59 m (FE in FEMP)",
+                   std::abs(femp.S_left - mpm.S_left), 0.05);
+    checks.at_most("t = 1: |FEMP - all-MPM| at 0.61 m (MPM in FEMP)",
+                   std::abs(femp.S_right - mpm.S_right), 0.05);
+    checks.at_most("t = 1: |FEMP step across the interface - exact step|",
+                   std::abs(femp_step - exact_step), 0.05);
   }
   return checks.exit_code();
 }

@@ -32,6 +32,8 @@
 
 #include <femp/input_checks.h>
 
+#include <cmath>
+
 namespace femp
 {
   using namespace dealii;
@@ -50,6 +52,16 @@ namespace femp
     /// computation (not stored), which damps the ringing behind stress
     /// fronts of the explicit scheme (von Neumann-Richtmyer, linear term).
     double          bulk_viscosity = 0.1;
+    /// Velocity transfer of the material points (SolidMPM, numerical):
+    /// FLIP (v_p += dt sum N a_I) or APIC (affine particle-in-cell, Jiang et
+    /// al. 2015: each point carries C_p = sum v_I (x) grad N; parameter
+    /// "Solid/Velocity transfer").
+    enum class VelocityTransfer
+    {
+      flip,
+      apic
+    };
+    VelocityTransfer velocity_transfer = VelocityTransfer::flip;
 
     /// Declares the entries of subsection "Solid/Material".
     static void
@@ -94,6 +106,96 @@ namespace femp
                 const double         T_old,
                 const double         T_new,
                 StressPoint &        state);
+
+  /// The same update on plain arrays, for point loops (SolidMPM): @p L_dt
+  /// row-major 3x3, @p s the stress {xx, yy, zz, xy, xz, yz}, @p eps_p the
+  /// equivalent plastic strain. Returns the plastic increment d_gamma (0 when
+  /// elastic). Cheap paths that are exact: the rotation is skipped when the
+  /// spin is below 1e-18 (it would change no stress digit), and the
+  /// hardening table is read only when the trial stress exceeds the initial
+  /// yield stress.
+  inline double
+  update_stress_array(const SolidMaterial &m,
+                      const double (&L_dt)[3][3],
+                      const double T_old,
+                      const double T_new,
+                      double (&s)[6],
+                      double &eps_p)
+  {
+    if (T_new >= m.melt_temperature)
+      {
+        for (auto &c : s)
+          c = 0;
+        eps_p = 0;
+        return 0;
+      }
+    double       xx = s[0], yy = s[1], zz = s[2], xy = s[3], xz = s[4], yz = s[5];
+    const double w01 = 0.5 * (L_dt[0][1] - L_dt[1][0]);
+    const double w02 = 0.5 * (L_dt[0][2] - L_dt[2][0]);
+    const double w12 = 0.5 * (L_dt[1][2] - L_dt[2][1]);
+    const double ww  = w01 * w01 + w02 * w02 + w12 * w12;
+    if (ww > 1e-36)
+      {
+        // R = I + f (W + W^2/2), f = 1 / (1 + |w|^2/4) (Cayley form of the
+        // Hughes-Winget rotation), sigma <- R sigma R^T.
+        const double W[3][3] = {{0, w01, w02}, {-w01, 0, w12}, {-w02, -w12, 0}};
+        const double f       = 1. / (1 + 0.25 * ww);
+        double       R[3][3];
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = 0; j < 3; ++j)
+            R[i][j] = (i == j ? 1. : 0.) +
+                      f * (W[i][j] + 0.5 * (W[i][0] * W[0][j] + W[i][1] * W[1][j] +
+                                            W[i][2] * W[2][j]));
+        const double S[3][3] = {{xx, xy, xz}, {xy, yy, yz}, {xz, yz, zz}};
+        double       RS[3][3];
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = 0; j < 3; ++j)
+            RS[i][j] = R[i][0] * S[0][j] + R[i][1] * S[1][j] + R[i][2] * S[2][j];
+        auto rsr = [&](const unsigned int i, const unsigned int j) {
+          return RS[i][0] * R[j][0] + RS[i][1] * R[j][1] + RS[i][2] * R[j][2];
+        };
+        xx = rsr(0, 0), yy = rsr(1, 1), zz = rsr(2, 2);
+        xy = rsr(0, 1), xz = rsr(0, 2), yz = rsr(1, 2);
+      }
+    // Elastic predictor with the moduli at the new temperature; a point that
+    // solidified in this step starts stress-free at the solidus.
+    const double E      = m.youngs_modulus.value(T_new);
+    const double nu     = m.poisson_ratio;
+    const double mu2    = E / (1 + nu);
+    const double lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
+    const double dth =
+      m.expansion * (T_new - (T_old < m.melt_temperature ? T_old : m.melt_temperature));
+    const double dxx = L_dt[0][0] - dth, dyy = L_dt[1][1] - dth,
+                 dzz = L_dt[2][2] - dth;
+    const double lt  = lambda * (dxx + dyy + dzz);
+    xx += mu2 * dxx + lt;
+    yy += mu2 * dyy + lt;
+    zz += mu2 * dzz + lt;
+    xy += 0.5 * mu2 * (L_dt[0][1] + L_dt[1][0]);
+    xz += 0.5 * mu2 * (L_dt[0][2] + L_dt[2][0]);
+    yz += 0.5 * mu2 * (L_dt[1][2] + L_dt[2][1]);
+    // J2 radial return, linear isotropic hardening.
+    const double p  = (xx + yy + zz) * (1. / 3);
+    xx -= p, yy -= p, zz -= p;
+    const double ss = xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
+    const double sy = m.yield_stress.value(T_new);
+    double       scale = 1, dg = 0;
+    if (1.5 * ss > sy * sy) // the hardening term only raises the yield stress
+      {
+        const double q   = std::sqrt(1.5 * ss);
+        const double H   = m.plastic_modulus.value(T_new);
+        const double syh = sy + H * eps_p;
+        if (q > syh)
+          {
+            dg    = (q - syh) / (1.5 * mu2 + H);
+            scale = 1 - 1.5 * mu2 * dg / q;
+            eps_p += dg;
+          }
+      }
+    s[0] = scale * xx + p, s[1] = scale * yy + p, s[2] = scale * zz + p;
+    s[3] = scale * xy, s[4] = scale * xz, s[5] = scale * yz;
+    return dg;
+  }
 
   /// von Mises equivalent stress q = sqrt(3/2 s:s), Pa.
   inline double

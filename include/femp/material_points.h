@@ -17,6 +17,8 @@
 //   then the equivalent plastic strain (-)
 //   2D only: then the out-of-plane stress sigma_zz (Pa; plane strain)
 //   then the solid's artificial viscous pressure q (Pa; see SolidMPM)
+//   then the dim x dim affine velocity matrix C_p of the solid's APIC
+//   transfer (1/s, row-major: C_xx, C_xy, [C_xz,] C_yx, ...; see SolidMPM)
 #ifndef femp_material_points_h
 #define femp_material_points_h
 
@@ -60,7 +62,10 @@ namespace femp
       /// Artificial bulk-viscosity pressure of the solid (SolidMPM).
       static constexpr unsigned int viscous_pressure =
         plastic_strain + 1 + (dim == 2 ? 1 : 0);
-      static constexpr unsigned int n_properties = viscous_pressure + 1;
+      /// APIC affine velocity matrix C_p of the solid, dim x dim row-major
+      /// (SolidMPM; zero with the FLIP transfer).
+      static constexpr unsigned int affine_velocity = viscous_pressure + 1;
+      static constexpr unsigned int n_properties = affine_velocity + dim * dim;
     };
 
     struct Parameters

@@ -12,26 +12,56 @@
 // Update variant: MUSL (modified update stress last), with the central
 // difference of eq. (10):
 //   1. P2G of mass, momentum and forces (eqs. 11-13):
-//        m_I = sum N m_p, p_I = sum N m_p v_p,
+//        m_I = sum N m_p, p_I = sum N m_p v_p(x_I),
 //        f_I = -sum V_p sigma_p grad N + sum N m_p g (+ fluid forces);
 //   2. p_I += dt f_I on the grid (with boundary conditions);
-//   3. G2P: v_p += dt sum N f_I / m_I (FLIP), x_p += dt sum N p_I / m_I;
-//   4. P2G of the new point momentum, v_I = p_I / m_I;
-//   5. velocity gradient L_p = sum v_I (x) grad N and stress update (eq. 5).
+//   3. G2P of the new point velocity, then (same loop)
+//   4. P2G of the new point momentum (re-map), v_I = p_I / m_I;
+//   5. velocity gradient L_p = sum v_I (x) grad N and stress update (eq. 5);
+//      then the point moves, x_p += dt sum N v_I (grid velocities of 2).
+// All transfers of a step use the tents at the point's position at the
+// start of the step (the textbook MUSL): the re-map then divides by the node
+// masses of the same weights. (Re-mapping with the weights at the moved
+// position, as this code did before, gives nodes at a free surface that a
+// point leaves a momentum that does not match their mass.)
 // MUSL is chosen over USF/USL because the stress is computed from velocities
 // re-mapped from the updated points: nodes with a tiny mass share of a point
 // do not produce spurious strain rates (the classic USL instability), and it
 // is the variant whose energy behaviour is best documented for explicit MPM.
-// The extra P2G of momentum costs about a sixth of a step.
+//
+// Velocity transfer ("Solid/Velocity transfer"):
+//   FLIP (default): v_p += dt sum N a_I, point velocity field v_p(x_I) = v_p;
+//   APIC (Jiang et al. 2015): v_p = sum N v_I,
+//         C_p = sum v_I (x) grad N (the B D^-1 form of APIC equals this for
+//         multilinear tents), v_p(x_I) = v_p + C_p (x_I - x_p).
+// With one point per cell and linear tents, APIC gives back the nodal
+// velocities exactly in the next P2G (for any point position in the cell),
+// so the MPM wave operator is that of the lumped-mass one-point FE; FLIP
+// smooths the nodal velocities by (1/4 1/2 1/4) in every round trip, which
+// made case 3.1 dispersive (doc/solid.md). The point kinetic energy of APIC
+// includes the affine part, 1/2 m_p (|v_p|^2 + C_p : C_p D_p), D_p = sum N
+// (x_I - x_p)(x_I - x_p)^T = diag(h^2 xi_d (1 - xi_d)), the kinetic energy
+// the point hands to the grid.
+//
+// Speed: one loop over the points per phase (P2G; G2P + move + re-map;
+// stress update), flat arrays per component, node indices by the first node
+// of the cell plus fixed corner offsets, tent weights recomputed from the
+// local coordinate in registers (a cache of 2^dim (dim + 1) weights per
+// point would cost more memory traffic than the few multiplications).
+// Kinetic energy and gravity power are summed in the stress loop.
+//
 // The forces use sigma_p + q_p I, with the artificial bulk-viscosity
 // pressure q_p = b1 rho c h tr(D) of the last stress update (see
 // SolidMaterial::bulk_viscosity), stored with the point.
 //
-// Points move with the solid velocity. They are not re-sorted into cells:
-// thermal-stress displacements are far below a cell (case 3.1: ~1e-3 h), so
-// every point stays in its cell; if one leaves its cell, the run stops with
-// a message naming the point position (moving points across cells is part of
-// the melt-flow work).
+// Cell crossing: after the stress update a point that left its cell is
+// bound to its new cell when that cell is owned by this rank (flat arrays
+// only; the ParticleHandler is updated by MaterialPoints::relocate_points()
+// when the state is written back). When a point enters a cell of another
+// rank, SolidStress calls resort() after the step: write back, deal.II's
+// global sort (MaterialPoints::points_moved()), gather again. A point that
+// enters the finite-element zone or leaves the domain stops the run with a
+// message (the FE zone has no place for it).
 #ifndef femp_solid_mpm_h
 #define femp_solid_mpm_h
 
@@ -78,42 +108,73 @@ namespace femp
 
     /// Copy the state of the solid points that lie in cells with
     /// @p excluded_cell[idx] == 0 into the flat arrays. Inertial masses are
-    /// multiplied by @p mass_scaling (gravity uses the true mass).
+    /// multiplied by @p mass_scaling (gravity uses the true mass). Points in
+    /// state fluid get zero stress, plastic strain, viscous pressure and
+    /// affine velocity.
     void
     gather(const std::vector<std::uint8_t> &excluded_cell,
            const double                      mass_scaling);
-    /// Write positions, velocities, stresses and plastic strains back to
-    /// the particles.
+    /// Write positions, velocities, stresses, plastic strains, volumes,
+    /// viscous pressures and affine velocities back to the particles, and
+    /// move points that changed cells to their new cells (collective).
     void
     scatter();
+    /// After a step in which some point (on any rank) entered a cell of
+    /// another rank: scatter, global sort, gather (collective).
+    void
+    resort();
 
     /// Step 1: add point mass, momentum and forces (internal and gravity) to
     /// the node fields (partial sums of this rank).
     void
     p2g(SolidNodeFields<dim> &nodes, const Tensor<1, dim> &gravity) const;
-    /// Step 3: FLIP velocity update from nodal accelerations (stored in
-    /// nodes.force as f_I / m_I) and position update from node velocities.
-    /// Returns false if a point left its cell (see header comment).
-    bool
-    g2p(const SolidNodeFields<dim> &nodes, const double dt);
-    /// Step 4: add point momentum to nodes.momentum (partial sums).
+    /// Steps 3 and 4: velocity update (FLIP from the nodal accelerations in
+    /// nodes.force = f_I / m_I, or APIC from nodes.velocity) and re-map of
+    /// the new point momenta into nodes.momentum (partial sums; the caller
+    /// zeroes it before).
     void
-    p2g_momentum(SolidNodeFields<dim> &nodes) const;
+    g2p(SolidNodeFields<dim> &nodes, const double dt);
     /// Step 5: stress update from node velocities; @p T_old and @p T_new are
     /// cell temperatures at the start and end of the step. Returns the
-    /// stress work sum V sigma : D dt of this rank.
+    /// stress work sum V sigma : D dt of this rank. Then moves the points by
+    /// the grid velocity of g2p() and binds points that left their cell to
+    /// their new owned cell (see n_left_rank()).
     double
     update_stresses(const SolidNodeFields<dim> &nodes,
                     const double                dt,
                     const std::vector<double> & T_old,
                     const std::vector<double> & T_new);
+    /// Points of this rank that entered a cell of another rank in the last
+    /// update_stresses() (resort() needed).
+    unsigned int
+    n_left_rank() const
+    {
+      return left_rank;
+    }
+    /// True if in the last update_stresses() a point entered the FE zone or
+    /// left the domain (the run must stop; see escaped_point()).
+    bool
+    point_lost() const
+    {
+      return lost;
+    }
 
-    /// Kinetic energy of this rank's points, J (2D: J/m).
+    /// Kinetic energy of this rank's points, J (2D: J/m); APIC includes the
+    /// affine part. Summed in gather() and update_stresses().
     double
-    kinetic_energy() const;
-    /// Work of gravity in a step of @p dt at the current velocities.
+    kinetic_energy() const
+    {
+      return kinetic;
+    }
+    /// Power of gravity at the current velocities, W.
     double
-    gravity_power(const Tensor<1, dim> &gravity) const;
+    gravity_power(const Tensor<1, dim> &gravity) const
+    {
+      double w = 0;
+      for (int d = 0; d < dim; ++d)
+        w += gravity[d] * weight_momentum[d];
+      return w;
+    }
     /// Number of points taking part (this rank).
     std::size_t
     n_points() const
@@ -132,7 +193,7 @@ namespace femp
     /// Position of the first point with a non-finite state, if any.
     bool
     find_non_finite(Point<dim> &where) const;
-    /// Position of a point that left its cell in the last g2p().
+    /// Position of a point that entered the FE zone or left the domain.
     const Point<dim> &
     escaped_point() const
     {
@@ -144,21 +205,36 @@ namespace femp
     const SolidMaterial &      mat;
     MaterialPoints<dim> &      points;
     static constexpr unsigned int n_corners = 1u << dim;
+    static constexpr unsigned int n_stress  = 6; // xx yy zz xy xz yz
     std::array<std::ptrdiff_t, n_corners> corner_offset;
+    bool                                  apic;
 
-    // Structure of arrays.
-    std::vector<std::array<double, dim>>            x, v, corner;
-    std::vector<double>                             mass, true_mass, volume;
-    std::vector<double>                             visc; ///< viscous pressure q, Pa
-    std::vector<std::uint32_t>                      cell, node0;
-    std::vector<StressPoint>                        stress;
+    // Structure of arrays, one vector per component.
+    std::array<std::vector<double>, dim>       x, v, corner;
+    std::array<std::vector<double>, dim>       xdot; ///< grid velocity at x_p
+    std::array<std::vector<double>, dim * dim> C; ///< APIC, row-major, 1/s
+    std::vector<double>                        mass, true_mass, volume;
+    std::vector<double>                   visc; ///< viscous pressure q, Pa
+    std::array<std::vector<double>, n_stress> sigma;
+    std::vector<double>                       eps_p;
+    std::vector<std::uint32_t>                cell, node0;
     std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
       handle;
-    Point<dim> escaped;
 
-    /// Tent weights and gradients of point @p p.
+    std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
+    double                    scaling = 1;
+    double                    kinetic = 0;
+    std::array<double, dim>   weight_momentum{}; ///< sum m_true v
+    bool                      moved_cell = false, lost = false;
+    unsigned int              left_rank  = 0;
+    Point<dim>                escaped;
+
+    /// Write the flat arrays back to the particles (no re-sorting).
     void
-    shape(const std::size_t p, double *N, double (*dN)[dim]) const;
+    write_back();
+    /// Kinetic energy and gravity momentum by a loop over the points.
+    void
+    sum_energies();
   };
 } // namespace femp
 
