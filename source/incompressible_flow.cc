@@ -288,22 +288,67 @@ namespace femp
   void
   IncompressibleFlow<dim>::classify_cells()
   {
-    using P           = typename MaterialPoints<dim>::PropertyIndex;
+    // One pass over the points of the occupied cells does both the cell
+    // classification and the P2G scatter of mass and momentum (a deal.II
+    // particles_in_cell() range per cell is the dominant cost of a pass).
+    using P            = typename MaterialPoints<dim>::PropertyIndex;
     const auto &status = grid.cell_status();
+    const double ih    = 1. / grid.h();
+    const auto & x0    = grid.origin();
     std::swap(type, type_old);
     for (std::size_t i = 0; i < type.size(); ++i)
       type[i] = status[i] == BackgroundGrid<dim>::outside ? outside : gas;
     fluid_cells.clear();
+    // Zero the whole node arrays: sum_shared_nodes() writes the partial sums
+    // of neighbour ranks also onto nodes that are not active here, and stale
+    // values there would re-enter the next sum (a memset, ~1 ns per node).
+    std::fill(mass.begin(), mass.end(), 0.);
+    for (int d = 0; d < dim; ++d)
+      std::fill(mom[d].begin(), mom[d].end(), 0.);
     const auto &handler = points.particle_handler();
     for (const auto &[idx, cell] : points.occupied_cells())
       {
-        bool any_fluid = false;
+        bool              any_fluid = false;
+        const auto        ijk       = grid.global_index(idx);
+        const std::size_t n0        = grid.first_node_of_cell(idx);
+        double *          nm[n_corners];
+        double *          nu[dim][n_corners];
+        for (unsigned int k = 0; k < n_corners; ++k)
+          {
+            nm[k] = &mass[n0 + corner_offset[k]];
+            for (int d = 0; d < dim; ++d)
+              nu[d][k] = &mom[d][n0 + corner_offset[k]];
+          }
         for (const auto &particle : handler.particles_in_cell(cell))
-          if (particle.get_properties()[P::state] == MaterialPoints<dim>::fluid)
-            {
-              any_fluid = true;
-              break;
-            }
+          {
+            const auto v = particle.get_properties();
+            if (v[P::state] != MaterialPoints<dim>::fluid)
+              continue;
+            any_fluid          = true;
+            const Point<dim> &x = particle.get_location();
+            // Tent weights of the 2^dim corners (product over directions).
+            double w[n_corners];
+            w[0] = v[P::mass];
+            for (int d = 0; d < dim; ++d)
+              {
+                const double xi = (x[d] - x0[d]) * ih - ijk[d];
+                const unsigned int half = 1u << d;
+                for (unsigned int k = 0; k < half; ++k)
+                  {
+                    w[k + half] = w[k] * xi;
+                    w[k] *= 1. - xi;
+                  }
+              }
+            double vel[dim];
+            for (int d = 0; d < dim; ++d)
+              vel[d] = v[P::velocity + d];
+            for (unsigned int k = 0; k < n_corners; ++k)
+              {
+                *nm[k] += w[k];
+                for (int d = 0; d < dim; ++d)
+                  *nu[d][k] += w[k] * vel[d];
+              }
+          }
         type[idx] = any_fluid ? fluid : solid;
         if (any_fluid)
           fluid_cells.push_back(idx);
@@ -315,10 +360,12 @@ namespace femp
       node_mark[n] = 0;
     active.clear();
     active_cell.clear();
-    const auto &nc = grid.n_cells();
+    const auto & nc        = grid.n_cells();
+    const double node_vol  = std::pow(0.5 * grid.h(), dim);
     for (const auto c : fluid_cells)
       {
-        const std::size_t n0 = grid.first_node_of_cell(c);
+        const std::size_t n0  = grid.first_node_of_cell(c);
+        const auto        ijc = grid.global_index(c);
         for (unsigned int k = 0; k < n_corners; ++k)
           {
             const std::size_t n = n0 + corner_offset[k];
@@ -329,11 +376,13 @@ namespace femp
             const std::size_t c0 = c + around_offset[k];
             active_cell.push_back(c0);
             // Node ijk equals the cell index of c0.
-            const auto   ijk = grid.global_index(c0);
             std::uint8_t fix = 0;
             for (int d = 0; d < dim; ++d)
-              if (ijk[d] == 0 || ijk[d] == int(nc[d]))
-                fix |= (1u << d);
+              {
+                const int i = ijc[d] + int((k >> d) & 1);
+                if (i == 0 || i == int(nc[d]))
+                  fix |= (1u << d);
+              }
             int n_fluid = 0;
             for (unsigned int j = 0; j < n_corners; ++j)
               {
@@ -343,7 +392,7 @@ namespace femp
                 n_fluid += (t == fluid);
               }
             node_fix[n] = fix;
-            volume[n]   = n_fluid * std::pow(0.5 * grid.h(), dim);
+            volume[n]   = n_fluid * node_vol;
           }
       }
   }
@@ -353,44 +402,8 @@ namespace femp
   void
   IncompressibleFlow<dim>::transfer_to_grid()
   {
-    using P            = typename MaterialPoints<dim>::PropertyIndex;
-    const double  ih   = 1. / grid.h();
-    const auto &  x0   = grid.origin();
-    auto &        handler = points.particle_handler();
-    // Zero the whole node arrays: sum_shared_nodes() writes the partial sums
-    // of neighbour ranks also onto nodes that are not active here, and stale
-    // values there would re-enter the next sum (a memset, ~1 ns per node).
-    std::fill(mass.begin(), mass.end(), 0.);
-    for (int d = 0; d < dim; ++d)
-      std::fill(mom[d].begin(), mom[d].end(), 0.);
-    for (const auto &[idx, cell] : points.occupied_cells())
-      {
-        if (type[idx] != fluid)
-          continue;
-        const auto        ijk = grid.global_index(idx);
-        const std::size_t n0  = grid.first_node_of_cell(idx);
-        for (const auto &particle : handler.particles_in_cell(cell))
-          {
-            const auto v = particle.get_properties();
-            if (v[P::state] != MaterialPoints<dim>::fluid)
-              continue;
-            const Point<dim> x = particle.get_location();
-            double           xi[dim];
-            for (int d = 0; d < dim; ++d)
-              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
-            const double m = v[P::mass];
-            for (unsigned int k = 0; k < n_corners; ++k)
-              {
-                double w = m;
-                for (int d = 0; d < dim; ++d)
-                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
-                const std::size_t n = n0 + corner_offset[k];
-                mass[n] += w;
-                for (int d = 0; d < dim; ++d)
-                  mom[d][n] += w * v[P::velocity + d];
-              }
-          }
-      }
+    // The scatter itself happened in classify_cells(); sum over ranks and
+    // divide.
     grid.sum_shared_nodes(mass);
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(mom[d]);
