@@ -65,8 +65,8 @@ main(int argc, char **argv)
   const auto walls = timer.get_summary_data(TimerOutput::total_wall_time);
   const auto &st   = scene.flow->statistics();
   pcout << "fluid cells " << st.n_fluid_cells << ", points " << n_points
-        << ", timed steps " << steps << ", matrix/AMG builds "
-        << st.matrix_rebuilds << ", CG iterations " << st.cg_iterations
+        << ", timed steps " << steps << ", matrix graph / AMG builds "
+        << st.matrix_rebuilds << " / " << st.amg_setups << ", CG iterations " << st.cg_iterations
         << " (incl. step 0)\n";
   const double per = 1e9 / (double(steps) * n_points);
   double       sum = 0;

@@ -722,31 +722,58 @@ namespace femp
         divergence[i] = div * scale;
       }
 
-    // Has the set of fluid cells (or of their neighbour types) changed?
-    bool changed = !have_matrix;
-    if (!changed)
+    // The matrix rows are the owned cells of a band: the cells within one
+    // of a fluid cell (near1, from surface_terms(); a band of two cells cost
+    // more in solves than it saved in setups in the 3D track). Rows of band cells that
+    // are not fluid are identity rows (decoupled, p = 0), so the numbering,
+    // the graph and the AMG hierarchy survive changes of the fluid set that
+    // stay inside the band:
+    //  - fluid set and neighbour types unchanged: only the diagonal (theta);
+    //  - changed inside the band: all values of the band rows are reset, the
+    //    old hierarchy keeps preconditioning the new matrix (an SPD
+    //    preconditioner of any SPD matrix) until a solve needs more than
+    //    2 n + 10 iterations, n those of the first solve after its setup
+    //    (ten CG iterations cost less than one ML setup in these scenes);
+    //  - a fluid cell outside the band: new band, graph and hierarchy.
+    bool set_changed = !have_matrix;
+    if (!set_changed)
       for (const auto c : fluid_cells)
         {
           if (type_old[c] != fluid)
             {
-              changed = true;
+              set_changed = true;
               break;
             }
-          for (int d = 0; d < dim && !changed; ++d)
-            changed = type_old[c + cs[d]] != type[c + cs[d]] ||
-                      type_old[c - cs[d]] != type[c - cs[d]];
-          if (changed)
+          for (int d = 0; d < dim && !set_changed; ++d)
+            set_changed = type_old[c + cs[d]] != type[c + cs[d]] ||
+                          type_old[c - cs[d]] != type[c - cs[d]];
+          if (set_changed)
             break;
         }
     // Cells that stopped being fluid also change the system.
-    if (!changed && have_matrix)
-      changed = fluid_cells.size() != owned_rows.n_elements();
-    changed = Utilities::MPI::logical_or(changed, comm);
+    if (!set_changed)
+      set_changed = fluid_cells.size() != n_fluid_rows;
+    set_changed = Utilities::MPI::logical_or(set_changed, comm);
+    n_fluid_rows = fluid_cells.size();
+    bool renumber = !have_matrix;
+    if (set_changed && !renumber)
+      for (const auto c : fluid_cells)
+        if (gid[c] < 0)
+          {
+            renumber = true;
+            break;
+          }
+    renumber = Utilities::MPI::logical_or(renumber, comm);
+    const auto &status = grid.cell_status();
 
-    if (changed)
+    if (renumber)
       {
         Section s(timer, "flow: pressure matrix setup");
-        const types::global_dof_index n_local = fluid_cells.size();
+        band.clear();
+        for (const auto c : grid.owned_cells())
+          if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
+            band.push_back(c);
+        const types::global_dof_index n_local = band.size();
         types::global_dof_index       offset  = 0;
         MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, comm);
         if (Utilities::MPI::this_mpi_process(comm) == 0)
@@ -754,8 +781,8 @@ namespace femp
         const types::global_dof_index n_total =
           Utilities::MPI::sum(n_local, comm);
         std::fill(gid.begin(), gid.end(), -1.);
-        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-          gid[fluid_cells[i]] = offset + i;
+        for (std::size_t i = 0; i < band.size(); ++i)
+          gid[band[i]] = offset + i;
         grid.update_ghosts(gid);
         owned_rows = IndexSet(n_total);
         owned_rows.add_range(offset, offset + n_local);
@@ -765,67 +792,92 @@ namespace femp
         // size check uses the min/max row of the range.)
         TrilinosWrappers::SparsityPattern sp(owned_rows, comm,
                                              n_local > 0 ? 2 * dim + 1 : 0);
-        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+        for (std::size_t i = 0; i < band.size(); ++i)
           {
-            const std::size_t c   = fluid_cells[i];
+            const std::size_t c   = band[i];
             const auto        row = offset + i;
             sp.add(row, row);
             for (int d = 0; d < dim; ++d)
               for (const std::ptrdiff_t o : {-cs[d], cs[d]})
-                if (type[c + o] == fluid)
+                if (gid[c + o] >= 0)
                   sp.add(row, types::global_dof_index(gid[c + o]));
           }
         sp.compress();
         matrix.reinit(sp);
-        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+        rhs.reinit(owned_rows, comm);
+        solution.reinit(owned_rows, comm);
+        ++stats.matrix_rebuilds;
+      }
+    const auto row_offset =
+      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+    if (set_changed)
+      {
+        // All values of the band rows: -1 between fluid cells, 0 for the
+        // other stored neighbours, identity rows outside the fluid.
+        Section s(timer, "flow: pressure matrix values");
+        for (std::size_t i = 0; i < band.size(); ++i)
           {
-            const std::size_t c    = fluid_cells[i];
-            const auto        row  = offset + i;
-            double            diag = 0;
+            const std::size_t       c   = band[i];
+            const auto              row = row_offset + i;
+            const bool              f   = type[c] == fluid;
+            types::global_dof_index cols[2 * dim + 1];
+            double                  vals[2 * dim + 1];
+            unsigned int            n = 0;
+            double                  diag = f ? 0. : 1.;
             for (int d = 0; d < dim; ++d)
-              for (const std::ptrdiff_t o : {-cs[d], cs[d]})
+              for (const int side : {0, 1})
                 {
-                  const auto t = type[c + o];
-                  if (t == fluid)
+                  const std::size_t e = side ? c + cs[d] : c - cs[d];
+                  const bool        ef = type[e] == fluid;
+                  if (f && ef)
+                    diag += 1;
+                  else if (f && type[e] == gas)
+                    diag += 1. / theta[2 * d + side][c];
+                  if (gid[e] >= 0)
                     {
-                      diag += 1;
-                      matrix.set(row, types::global_dof_index(gid[c + o]), -1.);
+                      cols[n] = types::global_dof_index(gid[e]);
+                      vals[n] = (f && ef) ? -1. : 0.;
+                      ++n;
                     }
                 }
+            cols[n] = row;
+            vals[n] = diag;
+            ++n;
+            matrix.set(row, n, cols, vals);
+          }
+        matrix.compress(VectorOperation::insert);
+      }
+    else
+      {
+        // Diagonal only: the free-surface faces contribute 1/theta
+        // (Dirichlet value at the interface, ghost-fluid method).
+        for (const auto c : fluid_cells)
+          {
+            double diag = 0;
+            for (int d = 0; d < dim; ++d)
+              for (const int side : {0, 1})
+                {
+                  const auto t = type[side ? c + cs[d] : c - cs[d]];
+                  if (t == fluid)
+                    diag += 1;
+                  else if (t == gas)
+                    diag += 1. / theta[2 * d + side][c];
+                }
+            const auto row = types::global_dof_index(gid[c]);
             matrix.set(row, row, diag);
           }
         matrix.compress(VectorOperation::insert);
-        rhs.reinit(owned_rows, comm);
-        solution.reinit(owned_rows, comm);
       }
-    // Diagonal, every step: the free-surface faces contribute 1/theta
-    // (Dirichlet value at the interface, ghost-fluid method); only these
-    // values change while the fluid set stays, and the AMG hierarchy of the
-    // last setup remains a good preconditioner.
-    {
-      const auto offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
-      for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-        {
-          const std::size_t c    = fluid_cells[i];
-          double            diag = 0;
-          for (int d = 0; d < dim; ++d)
-            for (const int side : {0, 1})
-              {
-                const auto t = type[side ? c + cs[d] : c - cs[d]];
-                if (t == fluid)
-                  diag += 1;
-                else if (t == gas)
-                  diag += 1. / theta[2 * d + side][c];
-              }
-          matrix.set(offset + i, offset + i, diag);
-        }
-      matrix.compress(VectorOperation::insert);
-    }
-    if (changed)
+    stats.n_fluid_cells = Utilities::MPI::sum(
+      static_cast<unsigned long>(fluid_cells.size()), comm);
+    const bool setup_amg =
+      renumber ||
+      (set_changed &&
+       stats.last_iterations > 2 * iterations_after_setup + 10);
+    if (setup_amg)
       {
         Section s(timer, "flow: AMG setup");
-        const types::global_dof_index n_total = owned_rows.size();
-        if (n_total > 0)
+        if (owned_rows.size() > 0)
           {
             TrilinosWrappers::PreconditionAMG::AdditionalData data;
             data.elliptic              = true;
@@ -835,16 +887,15 @@ namespace femp
             amg.initialize(matrix, data);
           }
         have_matrix = true;
-        ++stats.matrix_rebuilds;
-        stats.n_fluid_cells = n_total;
+        ++stats.amg_setups;
       }
-    if (owned_rows.size() == 0)
+    if (stats.n_fluid_cells == 0)
       return;
 
     Section s(timer, "flow: pressure solve");
-    const auto   offset = owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
     const double f      = -rho * h * h / dt;
     const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
+    rhs = 0; // identity rows of the band: p = 0
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
         double b = f * divergence[i];
@@ -856,11 +907,11 @@ namespace femp
                 if (type[side ? c + cs[d] : c - cs[d]] == gas)
                   b += p_surface[c] / theta[2 * d + side][c];
           }
-        rhs(offset + i) = b;
+        rhs(types::global_dof_index(gid[fluid_cells[i]])) = b;
       }
     rhs.compress(VectorOperation::insert);
-    // Warm start from the previous pressure (same numbering) scaled to dt.
-    if (changed)
+    // Warm start from the previous pressure (same numbering).
+    if (renumber)
       solution = 0;
     const double norm = rhs.l2_norm();
     if (norm == 0)
@@ -879,17 +930,19 @@ namespace femp
             msg << "Melt flow: the pressure CG solve did not converge in "
                 << e.last_step << " iterations (residual " << e.last_residual
                 << ", target " << control.tolerance() << ", "
-                << owned_rows.size() << " fluid cells).";
+                << stats.n_fluid_cells << " fluid cells).";
             throw std::runtime_error(msg.str());
           }
         stats.last_iterations = control.last_step();
+        if (setup_amg)
+          iterations_after_setup = std::max(1u, control.last_step());
         stats.cg_iterations += control.last_step();
         stats.max_iterations =
           std::max(stats.max_iterations, control.last_step());
       }
     std::fill(p_cell.begin(), p_cell.end(), 0.);
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-      p_cell[fluid_cells[i]] = solution(offset + i);
+      p_cell[fluid_cells[i]] = solution(types::global_dof_index(gid[fluid_cells[i]]));
     grid.update_ghosts(p_cell);
   }
 
