@@ -730,10 +730,10 @@ namespace femp
     // stay inside the band:
     //  - fluid set and neighbour types unchanged: only the diagonal (theta);
     //  - changed inside the band: all values of the band rows are reset, the
-    //    old hierarchy keeps preconditioning the new matrix (an SPD
-    //    preconditioner of any SPD matrix) until a solve needs more than
-    //    2 n + 10 iterations, n those of the first solve after its setup
-    //    (ten CG iterations cost less than one ML setup in these scenes);
+    //    old hierarchy keeps preconditioning the new matrix while CG
+    //    converges in at most n + 40 iterations, n those of the first
+    //    solve after its setup; else ML is set up again and the solve
+    //    repeated;
     //  - a fluid cell outside the band: new band, graph and hierarchy.
     bool set_changed = !have_matrix;
     if (!set_changed)
@@ -774,10 +774,13 @@ namespace femp
           if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
             band.push_back(c);
         const types::global_dof_index n_local = band.size();
-        types::global_dof_index       offset  = 0;
-        MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, comm);
+        // (types::global_dof_index is 32 bits in this deal.II build: the
+        // exscan goes through a 64-bit integer.)
+        std::uint64_t n_local64 = n_local, offset64 = 0;
+        MPI_Exscan(&n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM, comm);
         if (Utilities::MPI::this_mpi_process(comm) == 0)
-          offset = 0;
+          offset64 = 0;
+        const types::global_dof_index offset = offset64;
         const types::global_dof_index n_total =
           Utilities::MPI::sum(n_local, comm);
         std::fill(gid.begin(), gid.end(), -1.);
@@ -870,29 +873,33 @@ namespace femp
       }
     stats.n_fluid_cells = Utilities::MPI::sum(
       static_cast<unsigned long>(fluid_cells.size()), comm);
-    const bool setup_amg =
-      renumber ||
-      (set_changed &&
-       stats.last_iterations > 2 * iterations_after_setup + 10);
-    if (setup_amg)
-      {
-        Section s(timer, "flow: AMG setup");
-        if (owned_rows.size() > 0)
-          {
-            TrilinosWrappers::PreconditionAMG::AdditionalData data;
-            data.elliptic              = true;
-            data.higher_order_elements = false;
-            data.smoother_sweeps       = 2;
-            data.aggregation_threshold = 0.02;
-            amg.initialize(matrix, data);
-          }
-        have_matrix = true;
-        ++stats.amg_setups;
-      }
+    // ML keeps a reference to the matrix it was set up with: it gets its
+    // own copy, so that a kept hierarchy stays one fixed SPD operator while
+    // the values of the system matrix change (with the system matrix
+    // itself, the fine-level Chebyshev smoother would run with stale
+    // eigenvalue bounds and could stop being a preconditioner).
+    const auto setup_amg = [&]() {
+      Section s(timer, "flow: AMG setup");
+      if (owned_rows.size() > 0)
+        {
+          TrilinosWrappers::PreconditionAMG::AdditionalData data;
+          data.elliptic              = true;
+          data.higher_order_elements = false;
+          data.smoother_sweeps       = 2;
+          data.aggregation_threshold = 0.02;
+          amg_matrix.copy_from(matrix);
+          amg.initialize(amg_matrix, data);
+        }
+      have_matrix = true;
+      ++stats.amg_setups;
+    };
+    if (renumber)
+      setup_amg();
     if (stats.n_fluid_cells == 0)
       return;
 
-    Section s(timer, "flow: pressure solve");
+    std::optional<Section> solve_section;
+    solve_section.emplace(timer, "flow: pressure solve");
     const double f      = -rho * h * h / dt;
     const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
     rhs = 0; // identity rows of the band: p = 0
@@ -918,27 +925,55 @@ namespace femp
       solution = 0;
     else
       {
-        SolverControl control(prm.max_iterations, prm.solver_tolerance * norm);
-        SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
-        try
+        // With a hierarchy built for other matrix values CG may use at
+        // most n + 40 iterations (n: those of the first solve after the
+        // setup; 40 iterations cost about one ML setup in the 3D track,
+        // fewer than one in 2D); beyond, ML is set up again on the current
+        // matrix and the solve restarts from the same initial guess.
+        bool                          fresh = renumber;
+        unsigned int                  total = 0;
+        TrilinosWrappers::MPI::Vector guess;
+        if (!fresh)
+          guess = solution;
+        for (;;)
           {
-            cg.solve(matrix, solution, rhs, amg);
+            const unsigned int limit =
+              fresh ? prm.max_iterations :
+                      std::min(prm.max_iterations,
+                               iterations_after_setup + 40);
+            SolverControl control(limit, prm.solver_tolerance * norm);
+            SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
+            try
+              {
+                cg.solve(matrix, solution, rhs, amg);
+                total += control.last_step();
+                if (fresh)
+                  iterations_after_setup = std::max(1u, control.last_step());
+                break;
+              }
+            catch (const SolverControl::NoConvergence &e)
+              {
+                total += e.last_step;
+                if (fresh)
+                  {
+                    std::ostringstream msg;
+                    msg << "Melt flow: the pressure CG solve did not converge in "
+                        << e.last_step << " iterations (residual "
+                        << e.last_residual << ", target "
+                        << control.tolerance() << ", " << stats.n_fluid_cells
+                        << " fluid cells).";
+                    throw std::runtime_error(msg.str());
+                  }
+                solve_section.reset();
+                setup_amg();
+                solve_section.emplace(timer, "flow: pressure solve");
+                solution = guess;
+                fresh    = true;
+              }
           }
-        catch (const SolverControl::NoConvergence &e)
-          {
-            std::ostringstream msg;
-            msg << "Melt flow: the pressure CG solve did not converge in "
-                << e.last_step << " iterations (residual " << e.last_residual
-                << ", target " << control.tolerance() << ", "
-                << stats.n_fluid_cells << " fluid cells).";
-            throw std::runtime_error(msg.str());
-          }
-        stats.last_iterations = control.last_step();
-        if (setup_amg)
-          iterations_after_setup = std::max(1u, control.last_step());
-        stats.cg_iterations += control.last_step();
-        stats.max_iterations =
-          std::max(stats.max_iterations, control.last_step());
+        stats.last_iterations = total;
+        stats.cg_iterations += total;
+        stats.max_iterations = std::max(stats.max_iterations, total);
       }
     std::fill(p_cell.begin(), p_cell.end(), 0.);
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)

@@ -241,6 +241,7 @@ namespace femp
     unsigned int                      iterations_after_setup = 1;
     IndexSet                          owned_rows;
     TrilinosWrappers::SparseMatrix    matrix;
+    TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
     TrilinosWrappers::PreconditionAMG amg;
     TrilinosWrappers::MPI::Vector     solution, rhs;
     bool                              have_matrix = false;
