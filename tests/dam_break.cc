@@ -16,8 +16,8 @@
 // its 4 points, i.e. alpha >= 1/2); height = highest fluid point in the
 // first cell column plus half a point spacing.
 //
-// Result (doc/flow.md): the front is converged (a/16, a/32, a/64 within
-// ~1.5 %) and leads the experiment by 15-21 % for T >= 0.84 -- the known
+// Result (doc/flow.md): the front is converged (a/16 and a/32 within
+// 1.8 % and 0.8 % of a/64) and leads the experiment by 15-21 % for T >= 0.84 -- the known
 // lead of simulations over Martin & Moyce (slow gate release, the
 // experiment's front speed is also ~7 % lower). The 10 % target for the
 // front is NOT met: printed, not gated. The height is within 10 % of the
