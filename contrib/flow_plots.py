@@ -8,7 +8,10 @@ Usage: contrib/flow_plots.py OUTDIR DAM_BREAK_OUTPUT [DAM_BREAK_OUTPUT_2 ...]
 Each dam-break output is labelled with its file name. Droplet series come
 from build/tests/test_oscillating_droplet FRACTION R/h FILE.csv (shape
 measure S/S0 over t/T, T the analytic period of the 2D mode-2 oscillation);
-the plot shows them with the analytic exp(-gamma t) cos(2 pi t/T)."""
+the plot shows them with the analytic exp(-gamma t) cos(2 pi t/T).
+
+Each dam-break output is labelled with its file name, or with LABEL when
+given as PATH:LABEL. The band around the experiment is the issue's 10 %."""
 import re
 import sys
 
@@ -87,11 +90,15 @@ def main():
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
     first = True
     for path in args:
+        path, _, label = path.partition(":")
         front, height = parse_dam_break(path)
-        label = path.split("/")[-1]
+        label = label or path.split("/")[-1]
         if first:
             ax[0].plot([f[0] for f in front], [f[1] for f in front], "ko", label="Martin & Moyce 1952")
             ax[1].plot([h[0] for h in height], [h[1] for h in height], "ko", label="Martin & Moyce 1952")
+            for a, data in ((ax[0], front), (ax[1], height)):
+                a.fill_between([d[0] for d in data], [0.9 * d[1] for d in data],
+                               [1.1 * d[1] for d in data], color="0.85", label="experiment +-10 %")
             T = [0, 3.5]
             ax[0].plot(T, [1 + 2 * t for t in T], "k:", label="Ritter front 1 + 2T")
             first = False

@@ -439,8 +439,8 @@ namespace femp
         result.pressure_cg_iterations = st.cg_iterations;
         result.max_fluid_speed        = st.max_point_speed;
         pcout << "Melt flow: " << st.steps << " fluid steps, pressure matrix "
-              << "and AMG hierarchy built " << st.matrix_rebuilds
-              << " times, CG iterations " << st.cg_iterations << " in total ("
+              << "graph built " << st.matrix_rebuilds << " times, AMG "
+              << "hierarchy " << st.amg_setups << " times, CG iterations " << st.cg_iterations << " in total ("
               << std::setprecision(3)
               << double(st.cg_iterations) / std::max(1u, st.steps)
               << " per solve, at most " << st.max_iterations

@@ -8,8 +8,8 @@
 //   u* = (u + dt f/rho) / (1 + dt K_c (1-gamma)^2 / ((gamma^3 + eps0) rho)),
 // solves the pressure Poisson equation div(dt/rho grad p) = div u* on the
 // centres of the fluid cells (5-point/7-point stencil, CG + Trilinos ML
-// AMG whose hierarchy is reused while the set of fluid cells does not
-// change), corrects the nodal velocity u = u* - dt/rho grad p, and updates
+// AMG; rows over a band of cells round the fluid, so that the graph and the
+// hierarchy are reused while the fluid stays inside the band), corrects the nodal velocity u = u* - dt/rho grad p, and updates
 // the points with a FLIP/PIC blend before moving them with the nodal
 // velocity (explicit advection).
 //
@@ -125,7 +125,8 @@ namespace femp
     struct Statistics
     {
       unsigned int  steps            = 0;
-      unsigned int  matrix_rebuilds  = 0; ///< matrix + AMG hierarchy builds
+      unsigned int  matrix_rebuilds  = 0; ///< band numbering + matrix graph builds
+      unsigned int  amg_setups       = 0; ///< AMG hierarchy builds
       unsigned long cg_iterations    = 0; ///< total over all steps
       unsigned int  last_iterations  = 0;
       unsigned int  max_iterations   = 0;
@@ -258,8 +259,14 @@ namespace femp
     std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
     std::vector<double>                  divergence;  // per owned fluid cell
 
+    // Pressure system over a band of cells round the fluid (see
+    // pressure_solve()): owned band cells in row order.
+    std::vector<std::uint32_t>        band;
+    std::size_t                       n_fluid_rows = 0;
+    unsigned int                      iterations_after_setup = 1;
     IndexSet                          owned_rows;
     TrilinosWrappers::SparseMatrix    matrix;
+    TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
     TrilinosWrappers::PreconditionAMG amg;
     TrilinosWrappers::MPI::Vector     solution, rhs;
     bool                              have_matrix = false;
