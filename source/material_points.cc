@@ -428,11 +428,14 @@ namespace femp
     // with globally unique ids from an exclusive scan of the counts.
     std::stable_sort(points.begin(), points.end(),
                      [](const auto &a, const auto &b) { return a.first < b.first; });
-    const types::particle_index n_local = points.size();
-    types::particle_index       offset  = 0;
-    MPI_Exscan(&n_local, &offset, 1, MPI_UINT64_T, MPI_SUM, grid.communicator());
+    // (types::particle_index is 32 bits in this deal.II build: the scan
+    // goes through 64-bit integers, then the offset is narrowed.)
+    std::uint64_t n_local64 = points.size(), offset64 = 0;
+    MPI_Exscan(&n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM,
+               grid.communicator());
     if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
-      offset = 0;
+      offset64 = 0;
+    const types::particle_index offset = offset64;
 
     const double        h = grid.h();
     std::vector<double> props(PropertyIndex::n_properties, 0.);
