@@ -73,7 +73,9 @@ main(int argc, char **argv)
   mp.std_diameter    = 6e-6;
   mp.min_diameter    = 15e-6;
   mp.max_diameter    = 40e-6;
-  MaterialPoints<dim> points(mp, mat, grid);
+  // A thermal scene: points carry only the base block of properties.
+  MaterialPoints<dim> points(mp, mat, grid,
+                             MaterialPoints<dim>::PropertyIndex::n_used(false, false));
   timer.restart();
   points.create(300);
   const double t_points = timer.wall_time();

@@ -151,7 +151,13 @@ namespace femp
     }
     {
       TimerOutput::Scope t(timer, "setup: material points");
-      points = std::make_unique<MaterialPoints<dim>>(points_prm, material, *grid);
+      // Points carry only the property blocks of the physics switched on.
+      const bool affine =
+        solid_enabled && solid_material.velocity_transfer ==
+                           SolidMaterial::VelocityTransfer::apic;
+      points = std::make_unique<MaterialPoints<dim>>(
+        points_prm, material, *grid,
+        MaterialPoints<dim>::PropertyIndex::n_used(solid_enabled, affine));
       points->create(heat_prm.initial_temperature);
     }
     heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
@@ -296,7 +302,7 @@ namespace femp
                              (output_prm.write_points == "last" && last);
     output->write_fields(n, time, fields,
                          with_points ? &points->particle_handler() : nullptr,
-                         MaterialPoints<dim>::property_names());
+                         points->used_property_names());
     output->write_probe_lines(n, time, output_fields());
   }
 

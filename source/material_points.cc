@@ -218,16 +218,23 @@ namespace femp
   template <int dim>
   MaterialPoints<dim>::MaterialPoints(const Parameters &         prm,
                                       const Material &           material,
-                                      const BackgroundGrid<dim> &grid)
+                                      const BackgroundGrid<dim> &grid,
+                                      const unsigned int n_properties)
     : prm(prm)
+    , n_props(n_properties)
     , mat(material)
     , grid(grid)
-  {}
+  {
+    Assert(n_props == PropertyIndex::n_used(false, false) ||
+             n_props == PropertyIndex::n_used(true, false) ||
+             n_props == PropertyIndex::n_used(true, true),
+           ExcMessage("MaterialPoints: the property count must end a layout block"));
+  }
 
 
   template <int dim>
   std::vector<std::string>
-  MaterialPoints<dim>::property_names()
+  MaterialPoints<dim>::property_names(const unsigned int n)
   {
     std::vector<std::string> names = {
       "mass", "volume", "temperature", "state", "peak_temperature"};
@@ -246,6 +253,7 @@ namespace femp
       for (int j = 0; j < dim; ++j)
         names.push_back(std::string("affine_velocity_") + char('x' + i) +
                         char('x' + j));
+    names.resize(std::min<std::size_t>(n, names.size()));
     return names;
   }
 
@@ -254,7 +262,7 @@ namespace femp
   void
   MaterialPoints<dim>::create(const double T0)
   {
-    handler.initialize(grid.triangulation(), mapping, PropertyIndex::n_properties);
+    handler.initialize(grid.triangulation(), mapping, n_props);
 
     const double s  = prm.point_spacing;
     const double h  = grid.h();
@@ -438,7 +446,7 @@ namespace femp
     const types::particle_index offset = offset64;
 
     const double        h = grid.h();
-    std::vector<double> props(PropertyIndex::n_properties, 0.);
+    std::vector<double> props(n_props, 0.);
     const double        volume = std::pow(prm.point_spacing, dim);
     props[PropertyIndex::mass]             = mat.density * volume;
     props[PropertyIndex::volume]           = volume;
@@ -569,7 +577,7 @@ namespace femp
     const State                                    state)
   {
     handler.clear();
-    handler.initialize(grid.triangulation(), mapping, PropertyIndex::n_properties);
+    handler.initialize(grid.triangulation(), mapping, n_props);
     std::vector<std::pair<std::uint32_t, Point<dim>>> points;
     for (const auto idx : grid.owned_cells())
       add_lattice_points(idx, std::numeric_limits<double>::max(), inside, points);

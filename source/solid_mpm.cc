@@ -80,6 +80,10 @@ namespace femp
   {
     using P = typename MaterialPoints<dim>::PropertyIndex;
     apic     = mat.velocity_transfer == SolidMaterial::VelocityTransfer::apic;
+    AssertThrow(points.n_properties() >=
+                  P::n_used(true, apic),
+                ExcMessage("SolidMPM: the material points do not carry the "
+                           "solid (or APIC) properties"));
     excluded = excluded_cell;
     scaling  = mass_scaling;
     for (int d = 0; d < dim; ++d)
@@ -117,8 +121,9 @@ namespace femp
             q[P::viscous_pressure] = 0;
             if constexpr (dim == 2)
               q[P::stress_zz] = 0;
-            for (unsigned int c = 0; c < dim * dim; ++c)
-              q[P::affine_velocity + c] = 0;
+            if (apic)
+              for (unsigned int c = 0; c < dim * dim; ++c)
+                q[P::affine_velocity + c] = 0;
           }
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;

@@ -66,6 +66,17 @@ namespace femp
       /// (SolidMPM; zero with the FLIP transfer).
       static constexpr unsigned int affine_velocity = viscous_pressure + 1;
       static constexpr unsigned int n_properties = affine_velocity + dim * dim;
+      /// Number of properties of the layout blocks a scene uses: the base
+      /// block (up to the velocity), the solid block (stress, plastic
+      /// strain, [sigma_zz,] viscous pressure) and the APIC block (needs
+      /// the solid block). Points carry only these, so physics a scene
+      /// switches off costs no memory, bandwidth or output.
+      static constexpr unsigned int
+      n_used(const bool solid, const bool affine)
+      {
+        return affine ? n_properties :
+                        (solid ? affine_velocity : velocity + dim);
+      }
     };
 
     struct Parameters
@@ -106,9 +117,19 @@ namespace femp
       check(const typename BackgroundGrid<dim>::Parameters &grid) const;
     };
 
+    /// @p n_properties: how many properties each point carries
+    /// (PropertyIndex::n_used(); by default the whole layout).
     MaterialPoints(const Parameters &         prm,
                    const Material &           material,
-                   const BackgroundGrid<dim> &grid);
+                   const BackgroundGrid<dim> &grid,
+                   const unsigned int n_properties = PropertyIndex::n_properties);
+
+    /// Number of properties each point carries.
+    unsigned int
+    n_properties() const
+    {
+      return n_props;
+    }
 
     /// Fill the substrate block and the powder layer with points at the
     /// initial temperature @p T0, then the initial bodies: lattice points
@@ -191,12 +212,19 @@ namespace femp
     {
       return packing;
     }
-    /// Names of the properties, for output.
+    /// Names of the first @p n properties, for output.
     static std::vector<std::string>
-    property_names();
+    property_names(const unsigned int n = PropertyIndex::n_properties);
+    /// Names of the properties the points of this object carry.
+    std::vector<std::string>
+    used_property_names() const
+    {
+      return property_names(n_props);
+    }
 
   private:
     Parameters                      prm;
+    unsigned int                    n_props;
     const Material &                mat;
     const BackgroundGrid<dim> &     grid;
     MappingQ1<dim>                  mapping;
