@@ -114,7 +114,7 @@ namespace femp
   /// spin is below 1e-18 (it would change no stress digit), and the
   /// hardening table is read only when the trial stress exceeds the initial
   /// yield stress.
-  inline double
+  [[gnu::always_inline]] inline double
   update_stress_array(const SolidMaterial &m,
                       const double (&L_dt)[3][3],
                       const double T_old,
@@ -145,7 +145,9 @@ namespace femp
   /// The same with Young's modulus @p E = E(T_new) given by the caller (who
   /// needs it anyway, e.g. for the hourglass stiffness and the viscous
   /// pressure of an element), so that the table is read once per step.
-  inline double
+  /// Always inlined: the element and point loops keep L and the stress in
+  /// registers.
+  [[gnu::always_inline]] inline double
   update_stress_array(const SolidMaterial &m,
                       const double (&L_dt)[3][3],
                       const double T_old,
