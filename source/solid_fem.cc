@@ -642,19 +642,28 @@ namespace femp
               for (int i = 0; i < dim; ++i)
                 q[dim * al + i] += dt * Vc[hg_mask<dim>(al)][i];
             const double T_new = T_start[e] + w * (T_end[e] - T_start[e]);
-            Tensor<2, 3> L;
-            double       trL = 0;
+            // E(T_new) read once: the constitutive kernel (inline, on plain
+            // arrays), the hourglass stiffness and the viscous pressure.
+            E = mat.youngs_modulus.value(T_new);
+            double L[3][3] = {};
+            double trL     = 0;
             for (int i = 0; i < dim; ++i)
               {
                 for (int j = 0; j < dim; ++j)
                   L[i][j] = Bdt * Vc[1u << j][i];
                 trL += L[i][i];
               }
+            // Stress as {xx, yy, zz, xy, xz, yz} (the storage order of
+            // SymmetricTensor<2,3>, copied, no aliasing).
+            double sv[6] = {st.sigma[0][0], st.sigma[1][1], st.sigma[2][2],
+                            st.sigma[0][1], st.sigma[0][2], st.sigma[1][2]};
             double s_old[dim][dim];
             for (int i = 0; i < dim; ++i)
               for (int j = 0; j < dim; ++j)
                 s_old[i][j] = st.sigma[i][j];
-            update_stress(mat, L, T, T_new, st);
+            update_stress_array(mat, L, T, T_new, E, sv, st.eps_p);
+            st.sigma[0][0] = sv[0], st.sigma[1][1] = sv[1], st.sigma[2][2] = sv[2];
+            st.sigma[0][1] = sv[3], st.sigma[0][2] = sv[4], st.sigma[1][2] = sv[5];
             // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
             // summed in two independent chains.
             double sd = 0, so = 0;
@@ -668,7 +677,6 @@ namespace femp
             work += 0.5 * V * sw + V * visc[e] * trL;
             T        = T_new;
             T_cur[e] = T_new;
-            E        = mat.youngs_modulus.value(T);
             if (mat.bulk_viscosity > 0)
               visc[e] = vfac * std::sqrt(E) * trL;
           }

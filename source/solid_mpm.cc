@@ -432,6 +432,9 @@ namespace femp
     lost                   = false;
     kinetic                = 0;
     weight_momentum.fill(0.);
+    const double nu     = mat.poisson_ratio;
+    auto         E_cell = cell.empty() ? 0 : cell[0];
+    double       E      = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
     for (std::size_t p = 0; p < n; ++p)
       {
         double xi[dim], N[n_corners], dN[n_corners][dim];
@@ -453,8 +456,13 @@ namespace femp
         double s[n_stress], s_old[n_stress];
         for (unsigned int c = 0; c < n_stress; ++c)
           s[c] = s_old[c] = sigma[c][p];
-        const double Tn = T_new[cell[p]];
-        update_stress_array(mat, L, T_old[cell[p]], Tn, s, eps_p[p]);
+        // E(T) per cell: the points are sorted by cell, so the table is
+        // read once per cell run (kernel and viscous pressure share it).
+        const auto   cp = cell[p];
+        const double Tn = T_new[cp];
+        if (cp != E_cell)
+          E_cell = cp, E = mat.youngs_modulus.value(Tn);
+        update_stress_array(mat, L, T_old[cp], Tn, E, s, eps_p[p]);
         for (unsigned int c = 0; c < n_stress; ++c)
           sigma[c][p] = s[c];
         // Stress work of the step, sum (sigma_old + sigma_new)/2 : D dt
@@ -471,7 +479,8 @@ namespace femp
         work += 0.5 * V * w + V * visc[p] * trL;
         if (b1 > 0)
           visc[p] =
-            b1 * h * std::sqrt(mat.p_wave_modulus(Tn) * mass[p] / V) * trL / dt;
+            b1 * h * std::sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) * mass[p] / V) *
+            trL / dt;
         volume[p] = V * (1 + trL);
 
         // Move the point with the grid velocity of the step; kinetic energy

@@ -114,11 +114,45 @@ namespace femp
   /// spin is below 1e-18 (it would change no stress digit), and the
   /// hardening table is read only when the trial stress exceeds the initial
   /// yield stress.
+  [[gnu::always_inline]] inline double
+  update_stress_array(const SolidMaterial &m,
+                      const double (&L_dt)[3][3],
+                      const double T_old,
+                      const double T_new,
+                      const double E,
+                      double (&s)[6],
+                      double &eps_p);
+
   inline double
   update_stress_array(const SolidMaterial &m,
                       const double (&L_dt)[3][3],
                       const double T_old,
                       const double T_new,
+                      double (&s)[6],
+                      double &eps_p)
+  {
+    if (T_new >= m.melt_temperature)
+      {
+        for (auto &c : s)
+          c = 0;
+        eps_p = 0;
+        return 0;
+      }
+    return update_stress_array(m, L_dt, T_old, T_new, m.youngs_modulus.value(T_new),
+                               s, eps_p);
+  }
+
+  /// The same with Young's modulus @p E = E(T_new) given by the caller (who
+  /// needs it anyway, e.g. for the hourglass stiffness and the viscous
+  /// pressure of an element), so that the table is read once per step.
+  /// Always inlined: the element and point loops keep L and the stress in
+  /// registers.
+  [[gnu::always_inline]] inline double
+  update_stress_array(const SolidMaterial &m,
+                      const double (&L_dt)[3][3],
+                      const double T_old,
+                      const double T_new,
+                      const double E,
                       double (&s)[6],
                       double &eps_p)
   {
@@ -159,7 +193,6 @@ namespace femp
       }
     // Elastic predictor with the moduli at the new temperature; a point that
     // solidified in this step starts stress-free at the solidus.
-    const double E      = m.youngs_modulus.value(T_new);
     const double nu     = m.poisson_ratio;
     const double mu2    = E / (1 + nu);
     const double lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
