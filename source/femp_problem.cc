@@ -18,7 +18,14 @@ namespace femp
                       "Space dimension of the scene: 2 or 3.");
     prm.enter_subsection("Physics");
     prm.declare_entry("Heat transfer", "true", Patterns::Bool(),
-                      "Solve the temperature equation (1).");
+                      "Solve the temperature equation (1). false: the "
+                      "temperature stays frozen at 'Heat transfer/Initial "
+                      "temperature' (a number or a function of x, y, z) and "
+                      "nothing of the heat equation is computed; the flow "
+                      "still takes its Marangoni stress, recoil and Darcy "
+                      "damping from this field, and points still change "
+                      "state with it. The step is then 'Time stepping/Time "
+                      "step', or with melt flow and 0 the fluid step.");
     prm.declare_entry("Melt flow", "false", Patterns::Bool(),
                       "Solve the melt-pool flow (eqs. 3-4) of the fluid points "
                       "(subsection Melt flow): gravity, viscosity, Darcy "
@@ -89,6 +96,7 @@ namespace femp
   {
     prm.enter_subsection("Physics");
     melt_flow     = prm.get_bool("Melt flow");
+    heat_enabled  = prm.get_bool("Heat transfer");
     solid_enabled = prm.get_bool("Solid stress");
     require(!(melt_flow && solid_enabled), "Physics/Solid stress", "true",
             "the melt flow and the solid stress are verified separately but "
@@ -100,6 +108,8 @@ namespace femp
     points_prm.parse_parameters(prm);
     points_prm.check(grid_prm);
     heat_prm.parse_parameters(prm);
+    heat_prm.check(grid_prm.lower_corner, grid_prm.upper_corner,
+                   grid_prm.cell_size);
     flow_prm.parse_parameters(prm);
     if (melt_flow)
       flow_prm.check_time_step(grid_prm.cell_size, material.density);
@@ -119,7 +129,11 @@ namespace femp
       }
 
     // Checks that need several modules, still before any work.
-    if (time_prm.time_step > 0)
+    require(heat_enabled || melt_flow || time_prm.time_step > 0,
+            "Time stepping/Time step", time_prm.time_step,
+            "with 'Physics/Heat transfer = false' and no melt flow nothing "
+            "sets the step: prescribe it (s, > 0)");
+    if (time_prm.time_step > 0 && heat_enabled)
       {
         // Upper bound of the stable diffusion step of any cell full of
         // metal; the exact limit is checked again at every step.
@@ -162,6 +176,27 @@ namespace femp
     }
     heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
     heat->initialize();
+    if (!heat_enabled)
+      heat->freeze();
+    if (!heat_prm.initial_temperature_expression.empty())
+      {
+        // Points outside the initial bodies take the initial temperature
+        // at their position.
+        using P = typename MaterialPoints<dim>::PropertyIndex;
+        for (auto &particle : points->particle_handler())
+          {
+            const Point<dim> x = particle.get_location();
+            bool             in_body = false;
+            for (const auto &b : points_prm.bodies)
+              in_body = in_body || b.inside(x);
+            if (in_body)
+              continue;
+            auto         v         = particle.get_properties();
+            const double T0        = heat_prm.initial_temperature_at(x);
+            v[P::temperature]      = T0;
+            v[P::peak_temperature] = T0;
+          }
+      }
     if (!points_prm.bodies.empty())
       {
         // Cells of initial bodies take the mean temperature of their points.
@@ -235,6 +270,16 @@ namespace femp
   double
   FempProblem<dim>::choose_time_step(const unsigned int step, const double time)
   {
+    if (!heat_enabled)
+      {
+        // Frozen temperature: the prescribed step, else the fluid step.
+        const double dt =
+          time_prm.time_step > 0 ?
+            time_prm.time_step :
+            (flow_prm.time_step > 0 ? flow_prm.time_step :
+                                      flow->stable_time_step().min());
+        return std::min(dt, time_prm.end_time - time);
+      }
     const double stable =
       step == 0 ? heat->stable_time_step() : heat->last_stable_time_step();
     double dt = time_prm.time_step > 0 ? time_prm.time_step :
@@ -331,10 +376,11 @@ namespace femp
         //    inside HeatTransfer::advance().
 
         // 2. Temperature in fluid, solid and powder (eq. 1).
-        {
-          TimerOutput::Scope t(timer, "temperature step");
-          heat->advance(dt, time);
-        }
+        if (heat_enabled)
+          {
+            TimerOutput::Scope t(timer, "temperature step");
+            heat->advance(dt, time);
+          }
         {
           TimerOutput::Scope t(timer, "cells to points");
           points->cells_to_points(heat->temperature());
@@ -426,17 +472,22 @@ namespace femp
               << "; kinetic/internal " << e.kinetic / std::max(1e-300, std::abs(e.internal))
               << std::endl;
       }
-    pcout << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
-          << "): laser " << result.laser << ", surface losses "
-          << result.losses << " (evaporation " << e.evaporation
-          << ", convection " << e.convection << ", radiation " << e.radiation
-          << " at the start of each step), fixed faces " << result.boundary
-          << ", stored " << result.stored << "; balance error "
-          << std::abs(result.laser + result.boundary - result.losses -
-                      result.stored) /
-               std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
-                                         result.losses))
-          << std::endl;
+    if (!heat_enabled)
+      pcout << "Energy: heat transfer off (Physics/Heat transfer = false), "
+               "temperature frozen at its initial field"
+            << std::endl;
+    else
+      pcout << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
+            << "): laser " << result.laser << ", surface losses "
+            << result.losses << " (evaporation " << e.evaporation
+            << ", convection " << e.convection << ", radiation " << e.radiation
+            << " at the start of each step), fixed faces " << result.boundary
+            << ", stored " << result.stored << "; balance error "
+            << std::abs(result.laser + result.boundary - result.losses -
+                        result.stored) /
+                 std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
+                                           result.losses))
+            << std::endl;
     if (flow)
       {
         const auto &st                = flow->statistics();
@@ -513,15 +564,19 @@ namespace femp
     const auto &        old   = heat->metal_fraction();
     auto &              T     = heat->temperature();
     using P                   = typename MaterialPoints<dim>::PropertyIndex;
-    for (const auto &[idx, cell] : points->occupied_cells())
-      if (old[idx] <= 0 && alpha[idx] > 0)
-        {
-          double sum = 0, n = 0;
-          for (const auto &particle : points->particle_handler().particles_in_cell(cell))
-            sum += particle.get_properties()[P::temperature], ++n;
-          if (n > 0)
-            T[idx] = sum / n;
-        }
+    // (With a frozen temperature the field keeps its initial values.)
+    if (heat_enabled)
+      {
+      for (const auto &[idx, cell] : points->occupied_cells())
+        if (old[idx] <= 0 && alpha[idx] > 0)
+          {
+            double sum = 0, n = 0;
+            for (const auto &particle : points->particle_handler().particles_in_cell(cell))
+              sum += particle.get_properties()[P::temperature], ++n;
+            if (n > 0)
+              T[idx] = sum / n;
+          }
+      }
     grid->update_ghosts(T);
     heat->set_metal_fraction(alpha);
   }

@@ -8,6 +8,7 @@
 #include <femp/input_checks.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <type_traits>
 #include <limits>
 #include <sstream>
@@ -26,8 +27,16 @@ namespace femp
   HeatTransfer<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Heat transfer");
-    prm.declare_entry("Initial temperature", "300", Patterns::Double(0.),
-                      "Uniform initial temperature of all metal, K; range (0, inf).");
+    prm.declare_entry("Initial temperature", "300", Patterns::Anything(),
+                      "Initial temperature of the metal (and of the cells), K: "
+                      "a number (uniform), or a function of the position x, y "
+                      "(2D) or x, y, z (3D), in m, in the syntax of deal.II's "
+                      "FunctionParser (muparser; e.g. '1800 + 1000*x' or "
+                      "'if(y < 1e-5, 300, 1800)'). Its value must be finite "
+                      "and positive at every cell centre; range (0, inf). "
+                      "Points of 'Material points/Initial bodies' take the "
+                      "temperature of their body instead. With 'Physics/Heat "
+                      "transfer = false' this field stays frozen.");
     prm.declare_entry("Reference temperature", "300", Patterns::Double(0.),
                       "Ambient temperature T_ref for convection and radiation "
                       "losses, K; range (0, inf).");
@@ -77,7 +86,42 @@ namespace femp
   HeatTransfer<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Heat transfer");
-    initial_temperature     = prm.get_double("Initial temperature");
+    {
+      // A plain number, or a function expression of the position.
+      const std::string text = Utilities::trim(prm.get("Initial temperature"));
+      initial_temperature_expression.clear();
+      initial_function.reset();
+      char *     end   = nullptr;
+      const auto value = std::strtod(text.c_str(), &end);
+      if (!text.empty() && end == text.c_str() + text.size())
+        initial_temperature = value;
+      else
+        {
+          const std::string vars = dim == 2 ? "x,y" : "x,y,z"; // muparser list
+          const std::string allowed =
+            "it must be a number (K) or a function of the position " + vars +
+            " (m) in deal.II FunctionParser syntax, e.g. '1800 + 1000*x'";
+          require(!text.empty(), "Heat transfer/Initial temperature", "''",
+                  allowed);
+          auto f = std::make_shared<FunctionParser<dim>>(1);
+          try
+            {
+              f->initialize(vars, text, {});
+              // muparser reports unknown variables at the first evaluation.
+              const double v = f->value(Point<dim>());
+              (void)v;
+            }
+          catch (...)
+            {
+              throw InputError("Heat transfer/Initial temperature", text,
+                               allowed + "; this one does not parse (unknown "
+                                         "variable or syntax error)");
+            }
+          initial_temperature_expression = text;
+          initial_function                = f;
+          initial_temperature             = f->value(Point<dim>());
+        }
+    }
     reference_temperature   = prm.get_double("Reference temperature");
     convection_coefficient  = prm.get_double("Convection coefficient");
     emissivity              = prm.get_double("Emissivity");
@@ -100,12 +144,61 @@ namespace femp
         fixed_temperatures[face] = Utilities::string_to_double(kv[1]);
       }
     prm.leave_subsection();
-    require(initial_temperature > 0, "Heat transfer/Initial temperature",
-            initial_temperature, "it must be positive (K)");
+    if (initial_temperature_expression.empty())
+      require(initial_temperature > 0, "Heat transfer/Initial temperature",
+              initial_temperature, "it must be positive (K)");
     require(evaporation_temperature > 0, "Heat transfer/Evaporation temperature",
             evaporation_temperature, "it must be positive (K)");
     require(molar_mass > 0, "Heat transfer/Molar mass", molar_mass,
             "it must be positive (kg/mol)");
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::Parameters::initial_temperature_at(const Point<dim> &x) const
+  {
+    return initial_function ? initial_function->value(x) : initial_temperature;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::check(const Point<dim> &lower,
+                                       const Point<dim> &upper,
+                                       const double      h)
+  {
+    if (!initial_function)
+      return;
+    std::array<unsigned int, dim> n;
+    std::size_t                   total = 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        n[d] = std::max(1., std::round((upper[d] - lower[d]) / h));
+        total *= n[d];
+      }
+    for (std::size_t c = 0; c < total; ++c)
+      {
+        Point<dim>  x;
+        std::size_t rest = c;
+        for (int d = 0; d < dim; ++d)
+          {
+            x[d] = lower[d] + (rest % n[d] + 0.5) * h;
+            rest /= n[d];
+          }
+        const double T = initial_function->value(x);
+        if (!(std::isfinite(T) && T > 0))
+          {
+            std::ostringstream s;
+            s << "it must be finite and positive (K) at every cell centre; "
+                 "it is "
+              << T << " at x = (" << x << ") m";
+            throw InputError("Heat transfer/Initial temperature",
+                             initial_temperature_expression, s.str());
+          }
+        if (c == 0)
+          initial_temperature = T;
+      }
   }
 
 
@@ -126,8 +219,15 @@ namespace femp
   HeatTransfer<dim>::initialize()
   {
     T     = grid.make_field(prm.initial_temperature);
-    T_new = T;
     gamma = grid.make_field(mat.liquid_fraction(prm.initial_temperature));
+    if (!prm.initial_temperature_expression.empty())
+      for (std::size_t idx = 0; idx < T.size(); ++idx)
+        if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
+          {
+            T[idx]     = prm.initial_temperature_at(grid.cell_center(idx));
+            gamma[idx] = mat.liquid_fraction(T[idx]);
+          }
+    T_new = T;
     alpha = grid.make_field(0.);
     conductance   = grid.make_field(0.);
     capacity      = grid.make_field(1.);
@@ -198,6 +298,8 @@ namespace femp
   HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a)
   {
     alpha = a;
+    if (frozen)
+      return; // no heat equation: no surface lists, no properties
     // Surface cells: owned metal cells with a non-zero alpha gradient. At the
     // domain boundary alpha is extended with zero gradient, so the box faces
     // are not free surfaces.
@@ -462,6 +564,7 @@ namespace femp
   void
   HeatTransfer<dim>::advance(const double dt, const double time)
   {
+    Assert(!frozen, ExcMessage("advance() on a frozen temperature field"));
     // Properties: in 3D plane by plane just ahead of the sweep (pass B), so
     // that they are still in cache when the stencil reads them.
     const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();

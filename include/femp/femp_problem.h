@@ -109,6 +109,8 @@ namespace femp
     typename Output<dim>::Parameters          output_prm;
     double                                    melt_temperature;
     bool                                      melt_flow = false;
+    /// Physics/Heat transfer: false freezes the temperature field.
+    bool                                      heat_enabled = true;
     typename IncompressibleFlow<dim>::Parameters flow_prm;
     bool                                      solid_enabled = false;
     SolidMaterial                             solid_material;

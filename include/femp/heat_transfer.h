@@ -36,7 +36,12 @@ namespace femp
   public:
     struct Parameters
     {
+      /// Uniform initial temperature, K; with a function expression its
+      /// value at the lower corner of the domain (see check()).
       double initial_temperature   = 300.;
+      /// 'Initial temperature' given as a function of x, y (, z) (m);
+      /// empty when it is a plain number.
+      std::string initial_temperature_expression;
       double reference_temperature = 300.;
       double convection_coefficient = 10.;
       double emissivity             = 0.4;
@@ -53,6 +58,19 @@ namespace femp
       declare_parameters(ParameterHandler &prm);
       void
       parse_parameters(ParameterHandler &prm);
+      /// With a function expression for the initial temperature: evaluate
+      /// it at every cell centre of the box [lower, upper] with cells of
+      /// size h and refuse (InputError naming Heat transfer/Initial
+      /// temperature) a value that is not finite and positive; sets
+      /// initial_temperature to its value at the first cell.
+      void
+      check(const Point<dim> &lower, const Point<dim> &upper, const double h);
+      /// The initial temperature at @p x, K.
+      double
+      initial_temperature_at(const Point<dim> &x) const;
+
+    private:
+      std::shared_ptr<FunctionParser<dim>> initial_function;
     };
 
     /// Cumulative energies since initialize(), J (2D: J/m).
@@ -77,9 +95,24 @@ namespace femp
                  const Laser<dim> &         laser,
                  const BackgroundGrid<dim> &grid);
 
-    /// Allocate the fields, set T to the initial temperature, gamma from T.
+    /// Allocate the fields, set T to the initial temperature (a constant
+    /// or a function of the cell centre), gamma from T.
     void
     initialize();
+
+    /// Freeze the temperature: advance() must not be called any more
+    /// (Physics/Heat transfer = false), and set_metal_fraction() only stores
+    /// alpha (no surface lists, no properties: no cost for heat).
+    void
+    freeze()
+    {
+      frozen = true;
+    }
+    bool
+    is_frozen() const
+    {
+      return frozen;
+    }
 
     /// New metal fraction (owned cells and ghosts); rebuilds the list of
     /// surface cells and the |grad alpha| weights.
@@ -192,6 +225,7 @@ namespace femp
     };
     std::vector<FixedFace> fixed_faces;
 
+    bool         frozen = false;
     EnergyBudget budget;
     double       T_max          = 0;
     double       dt_stable_next = 0;
