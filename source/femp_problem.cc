@@ -199,8 +199,8 @@ namespace femp
       }
     if (!points_prm.bodies.empty())
       {
-        // Cells of initial bodies take the mean temperature of their points.
-        auto &T = heat->temperature();
+        // Cells of initial bodies take the mean temperature of their points
+        // (and the liquid fraction of that temperature).
         using P = typename MaterialPoints<dim>::PropertyIndex;
         for (const auto &[idx, cell] : points->occupied_cells())
           {
@@ -209,9 +209,9 @@ namespace femp
                  points->particle_handler().particles_in_cell(cell))
               sum += particle.get_properties()[P::temperature], ++n;
             if (n > 0)
-              T[idx] = sum / n;
+              heat->set_cell_temperature(idx, sum / n);
           }
-        grid->update_ghosts(T);
+        heat->update_ghosts();
       }
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
@@ -449,6 +449,7 @@ namespace femp
     result.laser    = e.laser;
     result.losses   = heat->total_losses();
     result.boundary = e.boundary;
+    result.advection = e.advection;
     result.stored   = heat->stored_enthalpy() - H0;
     result.n_points = points->n_global_points();
     {
@@ -485,6 +486,17 @@ namespace femp
             << ", stored " << result.stored << "; balance error "
             << std::abs(result.laser + result.boundary - result.losses -
                         result.stored) /
+                 std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
+                                           result.losses))
+            << std::endl;
+    if (heat_enabled && flow)
+      pcout << std::setprecision(6)
+            << "  with melt flow, energy created (J" << (dim == 2 ? "/m" : "")
+            << ") by the upwind convection of T " << result.advection
+            << " and by points moving between cells " << result.moved_points
+            << "; balance error with these counted as sources "
+            << std::abs(result.laser + result.boundary + result.advection +
+                        result.moved_points - result.losses - result.stored) /
                  std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
                                            result.losses))
             << std::endl;
@@ -560,9 +572,10 @@ namespace femp
     // Points changed cells: new alpha; cells that gained metal take the
     // mean temperature of their points (METHOD sec. 2).
     TimerOutput::Scope  scope(timer, "flow: alpha and new metal cells");
+    // Energy bookkeeping: the stored enthalpy before and after (collective).
+    const double        H_before = heat_enabled ? heat->stored_enthalpy() : 0.;
     std::vector<double> alpha = points->metal_fraction();
     const auto &        old   = heat->metal_fraction();
-    auto &              T     = heat->temperature();
     using P                   = typename MaterialPoints<dim>::PropertyIndex;
     // (With a frozen temperature the field keeps its initial values.)
     if (heat_enabled)
@@ -573,12 +586,17 @@ namespace femp
             double sum = 0, n = 0;
             for (const auto &particle : points->particle_handler().particles_in_cell(cell))
               sum += particle.get_properties()[P::temperature], ++n;
+            // gamma from T: a stale gamma (0 in a former gas cell) would
+            // take the latent heat of a hot arrival from its sensible heat
+            // at the next step (cooling it by up to L_m/c_m ~ 350 K).
             if (n > 0)
-              T[idx] = sum / n;
+              heat->set_cell_temperature(idx, sum / n);
           }
       }
-    grid->update_ghosts(T);
+    heat->update_ghosts();
     heat->set_metal_fraction(alpha);
+    if (heat_enabled)
+      result.moved_points += heat->stored_enthalpy() - H_before;
   }
 
   template class FempProblem<2>;

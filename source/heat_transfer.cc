@@ -686,6 +686,7 @@ namespace femp
 
     // Convection (only when a velocity field is present): first-order
     // upwind, no advective flux from gas or from outside the domain.
+    double e_advection = 0;
     if (velocity)
       for (const auto idx : grid.owned_cells())
         {
@@ -701,6 +702,7 @@ namespace femp
               rate += std::abs(u) * ih;
             }
           T_new[idx] += dt * conv;
+          e_advection += capacity[idx] * conv;
           // Convection and diffusion rates add up in this cell.
           double sumk = 0;
           for (int d = 0; d < dim; ++d)
@@ -768,6 +770,7 @@ namespace femp
       }
     budget.implicit_losses += e_implicit * V * dt;
     budget.boundary += e_boundary;
+    budget.advection += e_advection * V * dt;
 
     // Peak temperature over metal cells and finiteness: the box interior
     // holds owned cells and true ghost values, so its maximum over metal
@@ -906,14 +909,16 @@ namespace femp
   typename HeatTransfer<dim>::EnergyBudget
   HeatTransfer<dim>::energy_budget() const
   {
-    const double local[6] = {budget.laser,     budget.evaporation,
+    const double local[7] = {budget.laser,     budget.evaporation,
                              budget.convection, budget.radiation,
-                             budget.boundary,  budget.implicit_losses};
-    double       global[6];
-    Utilities::MPI::sum(ArrayView<const double>(local, 6),
+                             budget.boundary,  budget.implicit_losses,
+                             budget.advection};
+    double       global[7];
+    Utilities::MPI::sum(ArrayView<const double>(local, 7),
                         grid.communicator(),
-                        ArrayView<double>(global, 6));
-    return {global[0], global[1], global[2], global[3], global[4], global[5]};
+                        ArrayView<double>(global, 7));
+    return {global[0], global[1], global[2], global[3],
+            global[4], global[5], global[6]};
   }
 
 

@@ -67,6 +67,11 @@ namespace femp
       /// Energies over the run, J (2D: J/m): laser input, surface losses,
       /// heat in through fixed faces, change of stored enthalpy.
       double laser = 0, losses = 0, boundary = 0, stored = 0;
+      /// With melt flow: energy created by the upwind convection of T (not
+      /// conservative) and by points moving between cells (change of the
+      /// stored enthalpy when alpha and the new metal cells are updated),
+      /// J (2D: J/m); both are zero for a conservative scheme.
+      double advection = 0, moved_points = 0;
       types::particle_index n_points = 0;
       double                point_T_mean = 0; ///< mean point temperature, K
       // Melt flow (zero when Physics/Melt flow is false).

@@ -84,6 +84,9 @@ namespace femp
       /// Losses of the implicit (linearized) part of the step; included in
       /// total_losses().
       double implicit_losses = 0;
+      /// Created by the upwind convection term (sum of rho c dT V over the
+      /// cells): zero for a conservative scheme; not a loss, reported apart.
+      double advection = 0;
     };
 
     /// Total surface losses so far (global, collective), J (2D: J/m).
@@ -99,6 +102,24 @@ namespace femp
     /// or a function of the cell centre), gamma from T.
     void
     initialize();
+
+    /// Give the (owned) cell @p idx the temperature @p T_cell and the
+    /// liquid fraction gamma(T_cell) of the enthalpy relation: for cells that
+    /// gain metal from points (initial bodies, moved points), whose stored
+    /// gamma is stale. Call update_ghosts() after the last one.
+    void
+    set_cell_temperature(const std::size_t idx, const double T_cell)
+    {
+      T[idx]     = T_cell;
+      gamma[idx] = mat.liquid_fraction(T_cell);
+    }
+    /// Ghost values of T and gamma (collective).
+    void
+    update_ghosts()
+    {
+      grid.update_ghosts(T);
+      grid.update_ghosts(gamma);
+    }
 
     /// Freeze the temperature: advance() must not be called any more
     /// (Physics/Heat transfer = false), and set_metal_fraction() only stores
