@@ -299,7 +299,16 @@ namespace femp
   {
     alpha = a;
     if (frozen)
-      return; // no heat equation: no surface lists, no properties
+      {
+        // No heat equation: no surface lists, no properties; only the peak
+        // temperature over metal cells for the reports.
+        double Tmax = 0;
+        for (const auto idx : grid.owned_cells())
+          if (alpha[idx] > 0)
+            Tmax = std::max(Tmax, T[idx]);
+        T_max = Utilities::MPI::max(Tmax, grid.communicator());
+        return;
+      }
     // Surface cells: owned metal cells with a non-zero alpha gradient. At the
     // domain boundary alpha is extended with zero gradient, so the box faces
     // are not free surfaces.
