@@ -6,6 +6,7 @@
 #include <femp/solid_mpm.h>
 
 #include <cmath>
+#include <cstring>
 #include <type_traits>
 
 namespace femp
@@ -22,12 +23,13 @@ namespace femp
     /// Tent weights N and gradients dN of the 2^dim corners (corner a has
     /// bit d set when it is the upper node in direction d) at local
     /// coordinates xi, for cell size 1/ih.
-    template <int dim>
+    template <int dim, typename Number>
     inline void
-    tents(const double (&xi)[dim], const double ih, double (&N)[1 << dim],
-          double (&dN)[1 << dim][dim])
+    tents(const Number (&xi)[dim], const double ih, Number (&N)[1 << dim],
+          Number (&dN)[1 << dim][dim])
     {
-      double w[dim][2], g[2] = {-ih, ih};
+      Number w[dim][2];
+      double g[2] = {-ih, ih};
       for (int d = 0; d < dim; ++d)
         w[d][0] = 1 - xi[d], w[d][1] = xi[d];
       for (unsigned int a = 0; a < (1u << dim); ++a)
@@ -42,13 +44,38 @@ namespace femp
           else
             {
               const unsigned int b2 = (a >> 2) & 1;
-              const double       w12 = w[1][b1] * w[2][b2];
+              const Number       w12 = w[1][b1] * w[2][b2];
               N[a]     = w[0][b0] * w12;
               dN[a][0] = g[b0] * w12;
               dN[a][1] = w[0][b0] * g[b1] * w[2][b2];
               dN[a][2] = w[0][b0] * w[1][b1] * g[b2];
             }
         }
+    }
+
+    /// Lanes p[0..3] of @p a as one simd_double (a full block of
+    /// consecutive points: one vector load).
+    inline simd_double
+    simd_load(const std::vector<double> &a, const std::size_t (&p)[4],
+              const bool full)
+    {
+      simd_double r;
+      if (full)
+        std::memcpy(&r, &a[p[0]], sizeof(r));
+      else
+        r = simd_double{a[p[0]], a[p[1]], a[p[2]], a[p[3]]};
+      return r;
+    }
+    /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
+    inline void
+    simd_store(std::vector<double> &a, const std::size_t p0,
+               const unsigned int nl, const simd_double r)
+    {
+      if (nl == simd_lanes)
+        std::memcpy(&a[p0], &r, sizeof(r));
+      else
+        for (unsigned int l = 0; l < nl; ++l)
+          a[p0 + l] = r[l];
     }
   } // namespace
 
@@ -434,104 +461,145 @@ namespace femp
     weight_momentum.fill(0.);
     const double nu     = mat.poisson_ratio;
     auto         E_cell = cell.empty() ? 0 : cell[0];
-    double       E      = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
-    for (std::size_t p = 0; p < n; ++p)
+    double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
+    // Blocks of simd_lanes points, one point per lane of simd_double (GCC
+    // vector extension, see constitutive.h): shape functions, velocity
+    // gradient, constitutive update (update_stress_block), work, viscous
+    // pressure, volume and move in SIMD; a partial last block repeats its
+    // last point in the spare lanes and stores nothing from them. The sums
+    // (work, kinetic energy, momentum) are taken in point order and the
+    // arithmetic per point is that of the scalar formulation.
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    static_assert(W == 4, "the gathers below are written for 4 lanes");
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        double xi[dim], N[n_corners], dN[n_corners][dim];
+        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
+        const bool         full = nl == W;
+        std::size_t        pl[W];
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+        VD xi[dim], N[n_corners], dN[n_corners][dim];
         for (int d = 0; d < dim; ++d)
-          xi[d] = (x[d][p] - corner[d][p]) * ih;
+          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
         tents<dim>(xi, ih, N, dN);
-        double            L[3][3] = {};
-        const std::size_t n0      = node0[p];
+        StressBlock       sb;
+        VD(&L)[3][3] = sb.L;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            L[i][j] = VD{};
+        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                                   node0[pl[3]]};
         for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t I = n0 + corner_offset[a];
+            const std::ptrdiff_t o = corner_offset[a];
             for (int i = 0; i < dim; ++i)
               {
-                const double vi = vel[i][I] * dt;
+                const VD vi = VD{vel[i][n0[0] + o], vel[i][n0[1] + o],
+                                 vel[i][n0[2] + o], vel[i][n0[3] + o]} *
+                              dt;
                 for (int j = 0; j < dim; ++j)
                   L[i][j] += vi * dN[a][j];
               }
           }
-        double s[n_stress], s_old[n_stress];
+        VD s_old[n_stress];
         for (unsigned int c = 0; c < n_stress; ++c)
-          s[c] = s_old[c] = sigma[c][p];
+          sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
+        sb.eps_p = simd_load(eps_p, pl, full);
         // E(T) per cell: the points are sorted by cell, so the table is
         // read once per cell run (kernel and viscous pressure share it).
-        const auto   cp = cell[p];
-        const double Tn = T_new[cp];
-        if (cp != E_cell)
-          E_cell = cp, E = mat.youngs_modulus.value(Tn);
-        update_stress_array(mat, L, T_old[cp], Tn, E, s, eps_p[p]);
+        for (unsigned int l = 0; l < W; ++l)
+          {
+            const auto cp = cell[pl[l]];
+            if (cp != E_cell)
+              E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]);
+            sb.E[l]     = E_c;
+            sb.T_old[l] = T_old[cp];
+            sb.T_new[l] = T_new[cp];
+          }
+        update_stress_block(mat, sb);
         for (unsigned int c = 0; c < n_stress; ++c)
-          sigma[c][p] = s[c];
+          simd_store(sigma[c], p0, nl, sb.s[c]);
+        simd_store(eps_p, p0, nl, sb.eps_p);
         // Stress work of the step, sum (sigma_old + sigma_new)/2 : D dt
         // (in-plane components; plane strain has no zz strain).
-        double w = 0, trL = 0;
+        VD w = {}, trL = {};
         for (int i = 0; i < dim; ++i)
           {
             trL += L[i][i];
             for (int j = 0; j < dim; ++j)
-              w += (s_old[sidx(i, j)] + s[sidx(i, j)]) * L[i][j];
+              w += (s_old[sidx(i, j)] + sb.s[sidx(i, j)]) * L[i][j];
           }
         // Viscous pressure of the forces of this step, then the new one.
-        const double V = volume[p];
-        work += 0.5 * V * w + V * visc[p] * trL;
+        const VD V  = simd_load(volume, pl, full);
+        const VD q  = simd_load(visc, pl, full);
+        const VD wk = 0.5 * V * w + V * q * trL;
+        for (unsigned int l = 0; l < nl; ++l)
+          work += wk[l];
         if (b1 > 0)
-          visc[p] =
-            b1 * h * std::sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) * mass[p] / V) *
-            trL / dt;
-        volume[p] = V * (1 + trL);
+          simd_store(visc, p0, nl,
+                     b1 * h *
+                       simd_sqrt(sb.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) *
+                                 simd_load(mass, pl, full) / V) *
+                       trL / dt);
+        simd_store(volume, p0, nl, V * (1 + trL));
 
-        // Move the point with the grid velocity of the step; kinetic energy
-        // (APIC: with the affine part at the new position) and momentum.
-        double v2 = 0;
+        // Move the point with the grid velocity of the step.
         for (int d = 0; d < dim; ++d)
+          simd_store(x[d], p0, nl,
+                     simd_load(x[d], pl, full) + dt * simd_load(xdot[d], pl, full));
+        for (unsigned int l = 0; l < nl; ++l)
           {
-            x[d][p] += dt * xdot[d][p];
-            v2 += v[d][p] * v[d][p];
-            weight_momentum[d] += true_mass[p] * v[d][p];
-          }
-        if (apic)
-          for (int j = 0; j < dim; ++j)
-            {
-              const double xj = (x[j][p] - corner[j][p]) * ih;
-              const double D  = h * h * xj * (1 - xj);
-              for (int i = 0; i < dim; ++i)
-                v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
-            }
-        kinetic += 0.5 * mass[p] * v2;
+            const std::size_t p = p0 + l;
+            // Kinetic energy (APIC: with the affine part at the new
+            // position) and momentum.
+            double v2 = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                v2 += v[d][p] * v[d][p];
+                weight_momentum[d] += true_mass[p] * v[d][p];
+              }
+            if (apic)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const double xj = (x[j][p] - corner[j][p]) * ih;
+                  const double D  = h * h * xj * (1 - xj);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
+                }
+            kinetic += 0.5 * mass[p] * v2;
 
-        // Cell crossing (see solid_mpm.h).
-        bool inside = true;
-        for (int d = 0; d < dim; ++d)
-          inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
-        if (!inside)
-          {
-            Point<dim> xp;
+            // Cell crossing (see solid_mpm.h).
+            bool inside = true;
             for (int d = 0; d < dim; ++d)
-              xp[d] = x[d][p];
-            const auto ijk = grid.cell_of(xp);
-            if (!grid.in_domain(xp) ||
-                (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+              inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
+            if (!inside)
               {
-                if (!lost)
-                  escaped = xp;
-                lost = true;
-                continue;
+                Point<dim> xp;
+                for (int d = 0; d < dim; ++d)
+                  xp[d] = x[d][p];
+                const auto ijk = grid.cell_of(xp);
+                if (!grid.in_domain(xp) ||
+                    (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+                  {
+                    if (!lost)
+                      escaped = xp;
+                    lost = true;
+                    continue;
+                  }
+                const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
+                if (!grid.in_box(ijk) ||
+                    grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
+                  {
+                    ++left_rank;
+                    continue;
+                  }
+                cell[p]  = idx;
+                node0[p] = grid.first_node_of_cell(idx);
+                for (int d = 0; d < dim; ++d)
+                  corner[d][p] = grid.origin()[d] + ijk[d] * h;
+                moved_cell = true;
               }
-            const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
-            if (!grid.in_box(ijk) ||
-                grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
-              {
-                ++left_rank;
-                continue;
-              }
-            cell[p]  = idx;
-            node0[p] = grid.first_node_of_cell(idx);
-            for (int d = 0; d < dim; ++d)
-              corner[d][p] = grid.origin()[d] + ijk[d] * h;
-            moved_cell = true;
           }
       }
     return work;
