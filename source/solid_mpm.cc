@@ -295,53 +295,78 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       mom[d] = nodes.momentum[d].data(), frc[d] = nodes.force[d].data();
     const std::size_t n = mass.size();
+    // Blocks of simd_lanes points, one per lane of simd_double (see
+    // update_stresses()): the contributions of the points to their corner
+    // nodes are computed in SIMD, then added to the nodes lane by lane, in
+    // point order (the node sums are those of a scalar loop).
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
-    for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        double xi[dim], N[n_corners], dN[n_corners][dim];
+        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
+        const bool         full = nl == W;
+        std::size_t        pl[W];
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+        VD xi[dim], N[n_corners], dN[n_corners][dim];
         for (int d = 0; d < dim; ++d)
-          xi[d] = (x[d][p] - corner[d][p]) * ih;
+          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
         tents<dim>(xi, ih, N, dN);
-        const double m = mass[p], V = volume[p], mg = true_mass[p];
-        double       Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
+        const VD m = simd_load(mass, pl, full), V = simd_load(volume, pl, full),
+                 mg = simd_load(true_mass, pl, full);
+        VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
         for (int i = 0; i < dim; ++i)
           {
             for (int j = 0; j < dim; ++j)
-              Vs[i][j] = V * sigma[sidx(i, j)][p];
-            Vs[i][i] += V * visc[p];
+              Vs[i][j] = V * simd_load(sigma[sidx(i, j)], pl, full);
+            Vs[i][i] += V * simd_load(visc, pl, full);
             g[i]  = mg * gravity[i];
-            v0[i] = v[i][p];
+            v0[i] = simd_load(v[i], pl, full);
             for (int j = 0; j < dim; ++j)
-              Ch[i][j] = 0;
+              Ch[i][j] = VD{};
           }
         // APIC: v_p(x_I) = v_p + C_p (x_I - x_p), x_I - x_p = h (b - xi).
         if constexpr (A)
           for (int i = 0; i < dim; ++i)
             for (int j = 0; j < dim; ++j)
               {
-                Ch[i][j] = h * C[i * dim + j][p];
+                Ch[i][j] = h * simd_load(C[i * dim + j], pl, full);
                 v0[i] -= Ch[i][j] * xi[j];
               }
-        const std::size_t n0 = node0[p];
+        VD nmN[n_corners], nmom[n_corners][dim], nf[n_corners][dim];
         for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t I  = n0 + corner_offset[a];
-            const double      mN = m * N[a];
-            nm[I] += mN;
+            const VD mN = m * N[a];
+            nmN[a]      = mN;
             for (int i = 0; i < dim; ++i)
               {
-                double va = v0[i];
+                VD va = v0[i];
                 for (int j = 0; j < dim; ++j)
                   if ((a >> j) & 1)
                     va += Ch[i][j];
-                double f = g[i] * N[a];
+                VD f = g[i] * N[a];
                 for (int j = 0; j < dim; ++j)
                   f -= Vs[i][j] * dN[a][j];
-                mom[i][I] += mN * va;
-                frc[i][I] += f;
+                nmom[a][i] = mN * va;
+                nf[a][i]   = f;
+              }
+          }
+        for (unsigned int l = 0; l < nl; ++l)
+          {
+            const std::size_t n0 = node0[p0 + l];
+            for (unsigned int a = 0; a < n_corners; ++a)
+              {
+                const std::size_t I = n0 + corner_offset[a];
+                nm[I] += nmN[a][l];
+                for (int i = 0; i < dim; ++i)
+                  {
+                    mom[i][I] += nmom[a][i][l];
+                    frc[i][I] += nf[a][i][l];
+                  }
               }
           }
       }
@@ -369,68 +394,103 @@ namespace femp
     const std::size_t n = mass.size();
     for (int d = 0; d < dim; ++d)
       xdot[d].resize(n);
+    // Blocks of simd_lanes points as in p2g(): nodal values gathered lane
+    // by lane, the interpolation and the re-map contributions in SIMD, the
+    // re-map added to the nodes in point order.
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    static_assert(W == 4, "the gathers below are written for 4 lanes");
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
-    for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        double xi[dim], N[n_corners], dN[n_corners][dim];
+        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
+        const bool         full = nl == W;
+        std::size_t        pl[W];
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+        VD xi[dim], N[n_corners], dN[n_corners][dim];
         for (int d = 0; d < dim; ++d)
-          xi[d] = (x[d][p] - corner[d][p]) * ih;
+          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
         tents<dim>(xi, ih, N, dN);
-        const std::size_t n0 = node0[p];
-        double            vg[dim] = {}, ag[dim] = {}, Cn[dim][dim] = {};
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const std::size_t I = n0 + corner_offset[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                const double vi = vel[i][I];
-                vg[i] += N[a] * vi;
-                if constexpr (A)
-                  for (int j = 0; j < dim; ++j)
-                    Cn[i][j] += vi * dN[a][j];
-                else
-                  ag[i] += N[a] * acc[i][I];
-              }
-          }
+        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                                   node0[pl[3]]};
+        VD vg[dim] = {}, ag[dim] = {}, Cn[dim][dim] = {};
+        // Nodal values: one load and a broadcast when the four points lie
+        // in the same cell (the usual case: the points are sorted by cell).
+        auto interpolate = [&](auto &&nodal) {
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::ptrdiff_t o = corner_offset[a];
+              for (int i = 0; i < dim; ++i)
+                {
+                  const VD vi = nodal(vel[i], o);
+                  vg[i] += N[a] * vi;
+                  if constexpr (A)
+                    for (int j = 0; j < dim; ++j)
+                      Cn[i][j] += vi * dN[a][j];
+                  else
+                    ag[i] += N[a] * nodal(acc[i], o);
+                }
+            }
+        };
+        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+          interpolate([&](const double *f, const std::ptrdiff_t o) {
+            const double y = f[n0[0] + o];
+            return VD{y, y, y, y};
+          });
+        else
+          interpolate([&](const double *f, const std::ptrdiff_t o) {
+            return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o], f[n0[3] + o]};
+          });
         // New velocity and affine matrix; the grid velocity at the point
         // moves it at the end of the step (update_stresses()).
-        double vp[dim];
+        VD vp[dim];
         for (int i = 0; i < dim; ++i)
           {
-            vp[i] = apic ? vg[i] : v[i][p] + dt * ag[i];
-            v[i][p] = vp[i];
-            xdot[i][p] = vg[i];
+            vp[i] = apic ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
+            simd_store(v[i], p0, nl, vp[i]);
+            simd_store(xdot[i], p0, nl, vg[i]);
           }
         // Re-map (MUSL) of the new momentum with the weights of the step
         // (those of the P2G, so that the re-mapped nodal velocity of a node
         // is a mean of point velocities with the node mass).
-        const double m = mass[p];
-        double       v0[dim], Ch[dim][dim];
+        const VD m = simd_load(mass, pl, full);
+        VD       v0[dim], Ch[dim][dim];
         for (int i = 0; i < dim; ++i)
           v0[i] = vp[i];
         if constexpr (A)
           for (int i = 0; i < dim; ++i)
             for (int j = 0; j < dim; ++j)
               {
-                C[i * dim + j][p] = Cn[i][j];
-                Ch[i][j]          = h * Cn[i][j];
+                simd_store(C[i * dim + j], p0, nl, Cn[i][j]);
+                Ch[i][j] = h * Cn[i][j];
                 v0[i] -= Ch[i][j] * xi[j];
               }
+        VD nmom[n_corners][dim];
         for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t I  = n0 + corner_offset[a];
-            const double      mN = m * N[a];
+            const VD mN = m * N[a];
             for (int i = 0; i < dim; ++i)
               {
-                double va = v0[i];
+                VD va = v0[i];
                 if constexpr (A)
                   for (int j = 0; j < dim; ++j)
                     if ((a >> j) & 1)
                       va += Ch[i][j];
-                mom[i][I] += mN * va;
+                nmom[a][i] = mN * va;
+              }
+          }
+        for (unsigned int l = 0; l < nl; ++l)
+          {
+            const std::size_t n0l = node0[p0 + l];
+            for (unsigned int a = 0; a < n_corners; ++a)
+              {
+                const std::size_t I = n0l + corner_offset[a];
+                for (int i = 0; i < dim; ++i)
+                  mom[i][I] += nmom[a][i][l];
               }
           }
       }
@@ -490,18 +550,29 @@ namespace femp
             L[i][j] = VD{};
         const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
                                    node0[pl[3]]};
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const std::ptrdiff_t o = corner_offset[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                const VD vi = VD{vel[i][n0[0] + o], vel[i][n0[1] + o],
-                                 vel[i][n0[2] + o], vel[i][n0[3] + o]} *
-                              dt;
-                for (int j = 0; j < dim; ++j)
-                  L[i][j] += vi * dN[a][j];
-              }
-          }
+        // Nodal values: one load and a broadcast when the four points lie
+        // in the same cell (the usual case: the points are sorted by cell).
+        auto L_sum = [&](auto &&nodal) {
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::ptrdiff_t o = corner_offset[a];
+              for (int i = 0; i < dim; ++i)
+                {
+                  const VD vi = nodal(vel[i], o) * dt;
+                  for (int j = 0; j < dim; ++j)
+                    L[i][j] += vi * dN[a][j];
+                }
+            }
+        };
+        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+          L_sum([&](const double *f, const std::ptrdiff_t o) {
+            const double y = f[n0[0] + o];
+            return VD{y, y, y, y};
+          });
+        else
+          L_sum([&](const double *f, const std::ptrdiff_t o) {
+            return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o], f[n0[3] + o]};
+          });
         VD s_old[n_stress];
         for (unsigned int c = 0; c < n_stress; ++c)
           sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
