@@ -77,6 +77,65 @@ namespace femp
         for (unsigned int l = 0; l < nl; ++l)
           a[p0 + l] = r[l];
     }
+
+    /// The sums (x0 + x1) + (x2 + x3) of the lanes of @p a, @p b, @p c and
+    /// @p d, as the four lanes of one value.
+    inline simd_double
+    lane_sums(const simd_double a, const simd_double b, const simd_double c,
+              const simd_double d)
+    {
+      static_assert(simd_lanes == 4, "written for 4 lanes");
+      typedef long long index __attribute__((vector_size(32)));
+      const simd_double ab = __builtin_shuffle(a, b, index{0, 4, 2, 6}) +
+                             __builtin_shuffle(a, b, index{1, 5, 3, 7});
+      const simd_double cd = __builtin_shuffle(c, d, index{0, 4, 2, 6}) +
+                             __builtin_shuffle(c, d, index{1, 5, 3, 7});
+      return __builtin_shuffle(ab, cd, index{0, 1, 4, 5}) +
+             __builtin_shuffle(ab, cd, index{2, 3, 6, 7});
+    }
+
+    /// Adds the contributions @p c (n values per corner, one point per
+    /// lane) of a block of points to the corner nodes: fields[k][node0[l] +
+    /// offset[a]] += c[a][k][l]. When the four points lie in the same cell
+    /// (the usual case: points are sorted by cell) the lanes are summed
+    /// first and every node value is written once (the sum per node then
+    /// groups the block's points: a round-off-level reordering); otherwise
+    /// lane by lane in point order.
+    template <std::size_t n_corners, std::size_t n>
+    inline void
+    scatter_block(const simd_double (&c)[n_corners][n],
+                  const std::size_t (&node0)[simd_lanes], const unsigned int nl,
+                  const std::array<std::ptrdiff_t, n_corners> &offset,
+                  double *(&fields)[n])
+    {
+      if (nl == simd_lanes && node0[0] == node0[1] && node0[0] == node0[2] &&
+          node0[0] == node0[3])
+        {
+          static_assert((n_corners * n) % 4 == 0, "groups of four");
+          const simd_double *cf = &c[0][0];
+          double             s[n_corners * n];
+          for (unsigned int g = 0; g < n_corners * n; g += 4)
+            {
+              const simd_double r =
+                lane_sums(cf[g], cf[g + 1], cf[g + 2], cf[g + 3]);
+              std::memcpy(&s[g], &r, sizeof(r));
+            }
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::size_t I = node0[0] + offset[a];
+              for (unsigned int k = 0; k < n; ++k)
+                fields[k][I] += s[n * a + k];
+            }
+        }
+      else
+        for (unsigned int l = 0; l < nl; ++l)
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::size_t I = node0[l] + offset[a];
+              for (unsigned int k = 0; k < n; ++k)
+                fields[k][I] += c[a][k][l];
+            }
+    }
   } // namespace
 
 
@@ -295,10 +354,12 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       mom[d] = nodes.momentum[d].data(), frc[d] = nodes.force[d].data();
     const std::size_t n = mass.size();
+    double *          nodes_out[1 + 2 * dim] = {nm};
+    for (int d = 0; d < dim; ++d)
+      nodes_out[1 + d] = mom[d], nodes_out[1 + dim + d] = frc[d];
     // Blocks of simd_lanes points, one per lane of simd_double (see
     // update_stresses()): the contributions of the points to their corner
-    // nodes are computed in SIMD, then added to the nodes lane by lane, in
-    // point order (the node sums are those of a scalar loop).
+    // nodes are computed in SIMD, then added to the nodes (scatter_block).
     using VD               = simd_double;
     constexpr unsigned int W = simd_lanes;
     // The transfer is a compile-time constant inside the loop (measured:
@@ -337,11 +398,12 @@ namespace femp
                 Ch[i][j] = h * simd_load(C[i * dim + j], pl, full);
                 v0[i] -= Ch[i][j] * xi[j];
               }
-        VD nmN[n_corners], nmom[n_corners][dim], nf[n_corners][dim];
+        // Per corner: mass, momentum (dim), force (dim), as in nodes[].
+        VD c[n_corners][1 + 2 * dim];
         for (unsigned int a = 0; a < n_corners; ++a)
           {
             const VD mN = m * N[a];
-            nmN[a]      = mN;
+            c[a][0]     = mN;
             for (int i = 0; i < dim; ++i)
               {
                 VD va = v0[i];
@@ -351,24 +413,13 @@ namespace femp
                 VD f = g[i] * N[a];
                 for (int j = 0; j < dim; ++j)
                   f -= Vs[i][j] * dN[a][j];
-                nmom[a][i] = mN * va;
-                nf[a][i]   = f;
+                c[a][1 + i]       = mN * va;
+                c[a][1 + dim + i] = f;
               }
           }
-        for (unsigned int l = 0; l < nl; ++l)
-          {
-            const std::size_t n0 = node0[p0 + l];
-            for (unsigned int a = 0; a < n_corners; ++a)
-              {
-                const std::size_t I = n0 + corner_offset[a];
-                nm[I] += nmN[a][l];
-                for (int i = 0; i < dim; ++i)
-                  {
-                    mom[i][I] += nmom[a][i][l];
-                    frc[i][I] += nf[a][i][l];
-                  }
-              }
-          }
+        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                                   node0[pl[3]]};
+        scatter_block(c, n0, nl, corner_offset, nodes_out);
       }
     };
     if (apic)
@@ -483,16 +534,7 @@ namespace femp
                 nmom[a][i] = mN * va;
               }
           }
-        for (unsigned int l = 0; l < nl; ++l)
-          {
-            const std::size_t n0l = node0[p0 + l];
-            for (unsigned int a = 0; a < n_corners; ++a)
-              {
-                const std::size_t I = n0l + corner_offset[a];
-                for (int i = 0; i < dim; ++i)
-                  mom[i][I] += nmom[a][i][l];
-              }
-          }
+        scatter_block(nmom, n0, nl, corner_offset, mom);
       }
     };
     if (apic)
