@@ -102,7 +102,7 @@ namespace femp
     /// groups the block's points: a round-off-level reordering); otherwise
     /// lane by lane in point order.
     template <std::size_t n_corners, std::size_t n>
-    inline void
+    [[gnu::always_inline]] inline void
     scatter_block(const simd_double (&c)[n_corners][n],
                   const std::size_t (&node0)[simd_lanes], const unsigned int nl,
                   const std::array<std::ptrdiff_t, n_corners> &offset,
