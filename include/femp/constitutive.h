@@ -23,6 +23,11 @@
 // Stresses are always 3x3 (in 2D: plane strain, the out-of-plane stress
 // sigma_zz is carried as a state variable). Only deal.II tensors are used,
 // so this header stays light.
+//
+// update_stress_block: the same update for simd_lanes states at once (GCC
+// vector extension simd_double; the elastic path in SIMD, yielding or
+// melted lanes through a scalar fallback), for the FE element and MPM
+// point loops.
 #ifndef femp_constitutive_h
 #define femp_constitutive_h
 

@@ -32,7 +32,9 @@
 // same cube, so b_a and Gamma are compile-time constants: one fused loop per
 // element (gather velocities, L, constitutive update, stress work, viscous
 // pressure, internal + hourglass forces of the next step scattered to the
-// nodes) and one loop over the nodes.
+// nodes) and one loop over the nodes, the element loop in
+// SIMD blocks of simd_lanes elements (one per lane of simd_double, element
+// state stored per block, update_stress_block of constitutive.h).
 //
 // Transition nodes (METHOD sec. 4): FE nodes on a face of the zone that is
 // not a domain face (they touch grid cells outside the zone). They are
