@@ -10,6 +10,8 @@
 //
 //   build/contrib/solid_benchmark [cells per direction, default 32] [steps]
 //                                 [fe | mpm | constitutive: only that part]
+//   (constitutive: the scalar update_stress and the SIMD update_stress_block
+//   on the same states)
 //
 // Run on one core (no mpirun) with a Release build. Prints ns of process CPU
 // time per point-step and per element-step (the grid node work of a step is
@@ -105,13 +107,16 @@ namespace
   /// The constitutive update alone (eq. 5), as the FE calls it: ns per
   /// call over @p n states, with a velocity gradient of a heated element
   /// (thermal strain, spin) and a temperature rising by 1000 K.
+  std::vector<StressPoint> states;  // of constitutive_only()
+  std::vector<StressBlock> blocks;  // of constitutive_block()
+
   double
   constitutive_only(const unsigned int n, const unsigned int steps)
   {
     SolidMaterial sm;
     sm.melt_temperature = 1e6;
     sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
-    std::vector<StressPoint> states(n);
+    states.assign(n, StressPoint());
     double                   sum   = 0;
     const std::clock_t       start = std::clock();
     for (unsigned int s = 0; s < steps; ++s)
@@ -135,6 +140,56 @@ namespace
       std::cout << "";
     return cpu / steps / n * 1e9;
   }
+  /// The same states and loading through update_stress_block (the SIMD
+  /// kernel of the FE and MPM loops, simd_lanes states per call): ns per
+  /// state.
+  double
+  constitutive_block(const unsigned int n, const unsigned int steps)
+  {
+    SolidMaterial sm;
+    sm.melt_temperature = 1e6;
+    sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
+    constexpr unsigned int W = simd_lanes;
+    blocks.resize(n / W);
+    for (auto &b : blocks)
+      {
+        for (auto &c : b.s)
+          c = simd_double{};
+        b.eps_p = simd_double{};
+      }
+    double             sum   = 0;
+    const std::clock_t start = std::clock();
+    for (unsigned int s = 0; s < steps; ++s)
+      {
+        const double T0 = 300 + 1000. * s / steps, T1 = 300 + 1000. * (s + 1) / steps;
+        for (std::size_t k = 0; k < blocks.size(); ++k)
+          {
+            StressBlock &b = blocks[k];
+            for (unsigned int l = 0; l < W; ++l)
+              {
+                const unsigned int i = W * k + l;
+                const double       x = 1e-6 * (1 + (i % 7));
+                for (auto &row : b.L)
+                  for (auto &c : row)
+                    c[l] = 0;
+                b.L[0][0][l] = x;
+                b.L[0][1][l] = 0.3 * x;
+                b.L[1][0][l] = -0.1 * x;
+                b.L[1][1][l] = 0.5 * x;
+                b.L[2][2][l] = -0.2 * x;
+                b.T_old[l]   = T0 - 100. * (i % 5);
+                b.T_new[l]   = T1 - 100. * (i % 5);
+                b.E[l]       = sm.youngs_modulus.value(b.T_new[l]);
+              }
+            update_stress_block(sm, b);
+          }
+        sum += blocks[n / W / 2].s[0][0];
+      }
+    const double cpu = double(std::clock() - start) / CLOCKS_PER_SEC;
+    if (sum == 42) // keep the loop
+      std::cout << "";
+    return cpu / steps / (W * blocks.size()) * 1e9;
+  }
 } // namespace
 
 int
@@ -148,7 +203,28 @@ main(int argc, char **argv)
   if (only == "constitutive")
     {
       std::cout << "update_stress alone: "
-                << constitutive_only(n * n * n / 2, steps) << " ns per call\n";
+                << constitutive_only(n * n * n / 2, steps) << " ns per call\n"
+                << "update_stress_block (SIMD, " << simd_lanes
+                << " states per call): "
+                << constitutive_block(n * n * n / 2, steps) << " ns per state\n";
+      // The two kernels on the same states: the same arithmetic per state,
+      // so the stresses agree up to round-off (multiply-adds contracted
+      // differently by the compiler).
+      double diff = 0, smax = 0, eps_p = 0;
+      for (std::size_t k = 0; k < blocks.size(); ++k)
+        for (unsigned int l = 0; l < simd_lanes; ++l)
+          {
+            const StressPoint &st = states[simd_lanes * k + l];
+            eps_p = std::max(eps_p, st.eps_p);
+            for (unsigned int c = 0; c < 6; ++c)
+              {
+                smax = std::max(smax, std::abs(st.sigma.access_raw_entry(c)));
+                diff = std::max(diff, std::abs(st.sigma.access_raw_entry(c) -
+                                               blocks[k].s[c][l]));
+              }
+          }
+      std::cout << "max |sigma_block - sigma_scalar| / max |sigma| = "
+                << diff / smax << " (max eps_p " << eps_p << ")\n";
       return 0;
     }
   if (!only.empty())

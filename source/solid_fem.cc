@@ -124,9 +124,9 @@ namespace femp
     /// the corner index: upper side in direction d): x_m <- sum_a H_ma x_a
     /// with H_ma = prod_{d in m} s_a,d. Per stage (lo, hi) -> (lo + hi,
     /// hi - lo).
-    template <int dim>
+    template <int dim, typename Number>
     inline void
-    fwht(double (&x)[1u << dim][dim])
+    fwht(Number (&x)[1u << dim][dim])
     {
 #pragma GCC unroll 4
       for (int d = 0; d < dim; ++d)
@@ -135,16 +135,16 @@ namespace femp
           if (!((a >> d) & 1u))
             for (int i = 0; i < dim; ++i)
               {
-                const double lo = x[a][i], hi = x[a | (1u << d)][i];
+                const Number lo = x[a][i], hi = x[a | (1u << d)][i];
                 x[a][i]              = lo + hi;
                 x[a | (1u << d)][i] = hi - lo;
               }
     }
     /// Transposed transform: f_a = sum_m H_ma C_m; per stage (lo, hi) ->
     /// (lo - hi, lo + hi).
-    template <int dim>
+    template <int dim, typename Number>
     inline void
-    fwht_transpose(double (&x)[1u << dim][dim])
+    fwht_transpose(Number (&x)[1u << dim][dim])
     {
 #pragma GCC unroll 4
       for (int d = 0; d < dim; ++d)
@@ -153,10 +153,17 @@ namespace femp
           if (!((a >> d) & 1u))
             for (int i = 0; i < dim; ++i)
               {
-                const double lo = x[a][i], hi = x[a | (1u << d)][i];
+                const Number lo = x[a][i], hi = x[a | (1u << d)][i];
                 x[a][i]              = lo - hi;
                 x[a | (1u << d)][i] = lo + hi;
               }
+    }
+
+    /// Index of stress component (i, j) in {xx, yy, zz, xy, xz, yz}.
+    constexpr unsigned int
+    sidx(const unsigned int i, const unsigned int j)
+    {
+      return i == j ? i : 2 + i + j; // xy -> 3, xz -> 4, yz -> 5
     }
   } // namespace
 
@@ -313,9 +320,7 @@ namespace femp
     for (std::size_t e = 0; e < n_el; ++e)
       element_by_id.emplace_back(element_id[e], e);
     std::sort(element_by_id.begin(), element_by_id.end());
-    stress.assign(n_el, StressPoint());
-    modes.assign(n_el * n_hg * dim, 0.);
-    visc.assign(n_el, 0.);
+    blocks.assign((n_el + simd_lanes - 1) / simd_lanes, ElementBlock());
 
     // Lumped masses: element shares summed over ranks.
     force.zero_out_ghost_values();
@@ -399,7 +404,9 @@ namespace femp
     T_end.assign(n_el, 0.);
     new_temperatures(T);
     T_start = T_end;
-    T_cur   = T_end;
+    for (std::size_t b = 0; b < blocks.size(); ++b)
+      for (unsigned int l = 0; l < simd_lanes; ++l)
+        blocks[b].T[l] = T_end[std::min(simd_lanes * b + l, n_el - 1)];
 
     element_loop<false>(0, 1);
   }
@@ -617,91 +624,119 @@ namespace femp
     const double *vl   = vel.data();
     double        work = 0;
     const std::size_t n_el = element_id.size();
-    for (std::size_t e = 0; e < n_el; ++e)
+    // Blocks of simd_lanes elements, one element per lane of simd_double
+    // (GCC vector extension, see constitutive.h); a partial last block
+    // repeats its last element in the spare lanes and stores nothing from
+    // them. Per element the arithmetic is that of the scalar formulation,
+    // and the work and the nodal forces are summed in element order, so the
+    // results do not depend on the block size.
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    static_assert(W == 4, "the gathers below are written for 4 lanes");
+    for (std::size_t b = 0; b < blocks.size(); ++b)
       {
-        const std::uint32_t *c  = &conn[nc * e];
-        StressPoint &        st = stress[e];
+        const std::size_t  e0 = W * b;
+        const unsigned int nl = std::min<std::size_t>(W, n_el - e0);
+        std::size_t        el[W];
+        for (unsigned int l = 0; l < W; ++l)
+          el[l] = e0 + std::min(l, nl - 1);
+        ElementBlock &eb = blocks[b];
         // Walsh-Hadamard transforms over the corners: coefficient m of x is
         // sum_a (prod_{d in m} s_a,d) x_a, so the one-bit coefficients give
         // the velocity gradient (b_a = s_a B) and the coefficients with two
         // or more bits the hourglass modes q_alpha (Gamma = products of s).
-        double *q = &modes[n_hg * dim * e];
-        double  T = T_cur[e];
-        double E;
+        VD          E;
+        StressBlock sb;
+        for (unsigned int c = 0; c < 6; ++c)
+          sb.s[c] = eb.s[c];
         if constexpr (update)
           {
-            double Vc[nc][dim];
+            const std::uint32_t *c0 = &conn[nc * el[0]], *c1 = &conn[nc * el[1]],
+                                *c2 = &conn[nc * el[2]], *c3 = &conn[nc * el[3]];
+            VD Vc[nc][dim];
 #pragma GCC unroll 8
             for (unsigned int a = 0; a < nc; ++a)
               for (int i = 0; i < dim; ++i)
-                Vc[a][i] = vl[dim * c[a] + i];
+                Vc[a][i] = VD{vl[dim * c0[a] + i], vl[dim * c1[a] + i],
+                              vl[dim * c2[a] + i], vl[dim * c3[a] + i]};
             fwht<dim>(Vc);
             // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
             // element: q += dt Gamma_alpha . v (the same transform).
             for (unsigned int al = 0; al < n_hg; ++al)
               for (int i = 0; i < dim; ++i)
-                q[dim * al + i] += dt * Vc[hg_mask<dim>(al)][i];
-            const double T_new = T_start[e] + w * (T_end[e] - T_start[e]);
-            // E(T_new) read once: the constitutive kernel (inline, on plain
-            // arrays), the hourglass stiffness and the viscous pressure.
-            E = mat.youngs_modulus.value(T_new);
-            double L[3][3] = {};
-            double trL     = 0;
+                eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
+            // E(T_new) read once: the constitutive kernel, the hourglass
+            // stiffness and the viscous pressure.
+            const VD Ts = {T_start[el[0]], T_start[el[1]], T_start[el[2]],
+                           T_start[el[3]]};
+            const VD Te = {T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
+            sb.T_old    = eb.T;
+            sb.T_new    = Ts + w * (Te - Ts);
+            auto Ef     = [&](const unsigned int l) {
+              return mat.youngs_modulus.value(sb.T_new[l]);
+            };
+            sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+            sb.eps_p = eb.eps_p;
+            VD trL   = {};
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j)
+                sb.L[i][j] = i < dim && j < dim ? Bdt * Vc[1u << j][i] : VD{};
             for (int i = 0; i < dim; ++i)
-              {
-                for (int j = 0; j < dim; ++j)
-                  L[i][j] = Bdt * Vc[1u << j][i];
-                trL += L[i][i];
-              }
-            // Stress as {xx, yy, zz, xy, xz, yz} (the storage order of
-            // SymmetricTensor<2,3>, copied, no aliasing).
-            double sv[6] = {st.sigma[0][0], st.sigma[1][1], st.sigma[2][2],
-                            st.sigma[0][1], st.sigma[0][2], st.sigma[1][2]};
-            double s_old[dim][dim];
-            for (int i = 0; i < dim; ++i)
-              for (int j = 0; j < dim; ++j)
-                s_old[i][j] = st.sigma[i][j];
-            update_stress_array(mat, L, T, T_new, E, sv, st.eps_p);
-            st.sigma[0][0] = sv[0], st.sigma[1][1] = sv[1], st.sigma[2][2] = sv[2];
-            st.sigma[0][1] = sv[3], st.sigma[0][2] = sv[4], st.sigma[1][2] = sv[5];
+              trL += sb.L[i][i];
+            update_stress_block(mat, sb);
             // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
-            // summed in two independent chains.
-            double sd = 0, so = 0;
+            // summed in two independent chains; the new viscous pressure.
+            VD sd = {}, so = {};
             for (int i = 0; i < dim; ++i)
               {
-                sd += (s_old[i][i] + st.sigma[i][i]) * L[i][i];
+                sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
                 for (int j = i + 1; j < dim; ++j)
-                  so += (s_old[i][j] + st.sigma[i][j]) * (L[i][j] + L[j][i]);
+                  so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
+                        (sb.L[i][j] + sb.L[j][i]);
               }
-            const double sw = sd + so;
-            work += 0.5 * V * sw + V * visc[e] * trL;
-            T        = T_new;
-            T_cur[e] = T_new;
+            const VD sw = sd + so;
+            const VD wk = 0.5 * V * sw + V * eb.visc * trL;
+            for (unsigned int l = 0; l < nl; ++l)
+              work += wk[l];
             if (mat.bulk_viscosity > 0)
-              visc[e] = vfac * std::sqrt(E) * trL;
+              eb.visc = vfac * simd_sqrt(E) * trL;
+            for (unsigned int c = 0; c < 6; ++c)
+              eb.s[c] = sb.s[c];
+            eb.eps_p = sb.eps_p;
+            eb.T     = sb.T_new;
           }
         else
-          E = mat.youngs_modulus.value(T);
+          {
+            auto Ef = [&](const unsigned int l) {
+              return mat.youngs_modulus.value(eb.T[l]);
+            };
+            E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+          }
         // Forces of the next step as coefficients of the same transform:
         // gravity (m = 0), internal force -V sigma b_a with the viscous
         // pressure (one-bit m, eq. 9), hourglass -k Gamma q (the others);
         // the transposed transform gives the corner forces.
-        const double k = kfac * E;
-        double       C[nc][dim];
+        const VD k = kfac * E;
+        VD       C[nc][dim];
         for (unsigned int al = 0; al < n_hg; ++al)
           for (int i = 0; i < dim; ++i)
-            C[hg_mask<dim>(al)][i] = -k * q[dim * al + i];
+            C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
         for (int i = 0; i < dim; ++i)
           {
-            C[0][i] = mg[i];
+            C[0][i] = VD{} + mg[i];
             for (int j = 0; j < dim; ++j)
-              C[1u << j][i] = -VB * (st.sigma[i][j] + (i == j ? visc[e] : 0.));
+              C[1u << j][i] =
+                -VB * (sb.s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
           }
         fwht_transpose<dim>(C);
+        for (unsigned int l = 0; l < nl; ++l)
+          {
+            const std::uint32_t *c = &conn[nc * (e0 + l)];
 #pragma GCC unroll 8
-        for (unsigned int a = 0; a < nc; ++a)
-          for (int i = 0; i < dim; ++i)
-            F[dim * c[a] + i] += C[a][i];
+            for (unsigned int a = 0; a < nc; ++a)
+              for (int i = 0; i < dim; ++i)
+                F[dim * c[a] + i] += C[a][i][l];
+          }
       }
 
     // Hourglass forces of this rank's elements at the transition nodes
@@ -710,12 +745,13 @@ namespace femp
     if (kfac > 0)
       for (const auto &tc : tr_corners)
         {
-          const double *q = &modes[n_hg * dim * tc[0]];
-          const double  k = kfac * mat.youngs_modulus.value(T_cur[tc[0]]);
+          const ElementBlock &eb = blocks[tc[0] / simd_lanes];
+          const unsigned int  l  = tc[0] % simd_lanes;
+          const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
           for (int i = 0; i < dim; ++i)
             for (unsigned int al = 0; al < n_hg; ++al)
               tr_hg[dim * tc[2] + i] -=
-                k * hadamard(hg_mask<dim>(al), tc[1]) * q[dim * al + i];
+                k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
         }
     return work;
   }
@@ -731,10 +767,12 @@ namespace femp
     double energy = 0;
     for (std::size_t e = 0; e < element_id.size(); ++e)
       {
-        const double  k = hourglass_stiffness(T_cur[e], kappa);
-        const double *q = &modes[n_hg * dim * e];
-        for (unsigned int j = 0; j < n_hg * dim; ++j)
-          energy += 0.5 * k * q[j] * q[j];
+        const ElementBlock &eb = blocks[e / simd_lanes];
+        const unsigned int  l  = e % simd_lanes;
+        const double        k  = hourglass_stiffness(eb.T[l], kappa);
+        for (unsigned int al = 0; al < n_hg; ++al)
+          for (int i = 0; i < dim; ++i)
+            energy += 0.5 * k * eb.q[al][i][l] * eb.q[al][i][l];
       }
     return energy;
   }
@@ -759,8 +797,8 @@ namespace femp
                                      std::make_pair(id, std::uint32_t(0)));
     if (it == element_by_id.end() || it->first != id)
       return false;
-    sxx = stress[it->second].sigma[0][0];
-    T   = T_cur[it->second];
+    sxx = element_stress(it->second)[0][0];
+    T   = element_T(it->second);
     return true;
   }
 
@@ -789,8 +827,9 @@ namespace femp
       ra(want.size()), rb(want.size());
     for (std::size_t e = 0; e < element_id.size(); ++e)
       {
-        a[e] = stress[e].sigma[0][0];
-        b[e] = von_mises(stress[e].sigma);
+        const SymmetricTensor<2, 3> s = element_stress(e);
+        a[e]                          = s[0][0];
+        b[e]                          = von_mises(s);
       }
     back.export_to_ghosted_array(ArrayView<const double>(a), ArrayView<double>(ra));
     back.export_to_ghosted_array(ArrayView<const double>(b), ArrayView<double>(rb));
@@ -807,7 +846,7 @@ namespace femp
   SolidFEM<dim>::find_non_finite(Point<dim> &where) const
   {
     for (std::size_t e = 0; e < element_id.size(); ++e)
-      if (!std::isfinite(stress[e].sigma.norm()))
+      if (!std::isfinite(element_stress(e).norm()))
         {
           std::uint64_t r = element_id[e];
           for (int d = 0; d < dim; ++d)

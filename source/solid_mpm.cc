@@ -6,6 +6,7 @@
 #include <femp/solid_mpm.h>
 
 #include <cmath>
+#include <cstring>
 #include <type_traits>
 
 namespace femp
@@ -22,12 +23,13 @@ namespace femp
     /// Tent weights N and gradients dN of the 2^dim corners (corner a has
     /// bit d set when it is the upper node in direction d) at local
     /// coordinates xi, for cell size 1/ih.
-    template <int dim>
+    template <int dim, typename Number>
     inline void
-    tents(const double (&xi)[dim], const double ih, double (&N)[1 << dim],
-          double (&dN)[1 << dim][dim])
+    tents(const Number (&xi)[dim], const double ih, Number (&N)[1 << dim],
+          Number (&dN)[1 << dim][dim])
     {
-      double w[dim][2], g[2] = {-ih, ih};
+      Number w[dim][2];
+      double g[2] = {-ih, ih};
       for (int d = 0; d < dim; ++d)
         w[d][0] = 1 - xi[d], w[d][1] = xi[d];
       for (unsigned int a = 0; a < (1u << dim); ++a)
@@ -42,13 +44,97 @@ namespace femp
           else
             {
               const unsigned int b2 = (a >> 2) & 1;
-              const double       w12 = w[1][b1] * w[2][b2];
+              const Number       w12 = w[1][b1] * w[2][b2];
               N[a]     = w[0][b0] * w12;
               dN[a][0] = g[b0] * w12;
               dN[a][1] = w[0][b0] * g[b1] * w[2][b2];
               dN[a][2] = w[0][b0] * w[1][b1] * g[b2];
             }
         }
+    }
+
+    /// Lanes p[0..3] of @p a as one simd_double (a full block of
+    /// consecutive points: one vector load).
+    inline simd_double
+    simd_load(const std::vector<double> &a, const std::size_t (&p)[4],
+              const bool full)
+    {
+      simd_double r;
+      if (full)
+        std::memcpy(&r, &a[p[0]], sizeof(r));
+      else
+        r = simd_double{a[p[0]], a[p[1]], a[p[2]], a[p[3]]};
+      return r;
+    }
+    /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
+    inline void
+    simd_store(std::vector<double> &a, const std::size_t p0,
+               const unsigned int nl, const simd_double r)
+    {
+      if (nl == simd_lanes)
+        std::memcpy(&a[p0], &r, sizeof(r));
+      else
+        for (unsigned int l = 0; l < nl; ++l)
+          a[p0 + l] = r[l];
+    }
+
+    /// The sums (x0 + x1) + (x2 + x3) of the lanes of @p a, @p b, @p c and
+    /// @p d, as the four lanes of one value.
+    inline simd_double
+    lane_sums(const simd_double a, const simd_double b, const simd_double c,
+              const simd_double d)
+    {
+      static_assert(simd_lanes == 4, "written for 4 lanes");
+      typedef long long index __attribute__((vector_size(32)));
+      const simd_double ab = __builtin_shuffle(a, b, index{0, 4, 2, 6}) +
+                             __builtin_shuffle(a, b, index{1, 5, 3, 7});
+      const simd_double cd = __builtin_shuffle(c, d, index{0, 4, 2, 6}) +
+                             __builtin_shuffle(c, d, index{1, 5, 3, 7});
+      return __builtin_shuffle(ab, cd, index{0, 1, 4, 5}) +
+             __builtin_shuffle(ab, cd, index{2, 3, 6, 7});
+    }
+
+    /// Adds the contributions @p c (n values per corner, one point per
+    /// lane) of a block of points to the corner nodes: fields[k][node0[l] +
+    /// offset[a]] += c[a][k][l]. When the four points lie in the same cell
+    /// (the usual case: points are sorted by cell) the lanes are summed
+    /// first and every node value is written once (the sum per node then
+    /// groups the block's points: a round-off-level reordering); otherwise
+    /// lane by lane in point order.
+    template <std::size_t n_corners, std::size_t n>
+    [[gnu::always_inline]] inline void
+    scatter_block(const simd_double (&c)[n_corners][n],
+                  const std::size_t (&node0)[simd_lanes], const unsigned int nl,
+                  const std::array<std::ptrdiff_t, n_corners> &offset,
+                  double *(&fields)[n])
+    {
+      if (nl == simd_lanes && node0[0] == node0[1] && node0[0] == node0[2] &&
+          node0[0] == node0[3])
+        {
+          static_assert((n_corners * n) % 4 == 0, "groups of four");
+          const simd_double *cf = &c[0][0];
+          double             s[n_corners * n];
+          for (unsigned int g = 0; g < n_corners * n; g += 4)
+            {
+              const simd_double r =
+                lane_sums(cf[g], cf[g + 1], cf[g + 2], cf[g + 3]);
+              std::memcpy(&s[g], &r, sizeof(r));
+            }
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::size_t I = node0[0] + offset[a];
+              for (unsigned int k = 0; k < n; ++k)
+                fields[k][I] += s[n * a + k];
+            }
+        }
+      else
+        for (unsigned int l = 0; l < nl; ++l)
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::size_t I = node0[l] + offset[a];
+              for (unsigned int k = 0; k < n; ++k)
+                fields[k][I] += c[a][k][l];
+            }
     }
   } // namespace
 
@@ -268,55 +354,72 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       mom[d] = nodes.momentum[d].data(), frc[d] = nodes.force[d].data();
     const std::size_t n = mass.size();
+    double *          nodes_out[1 + 2 * dim] = {nm};
+    for (int d = 0; d < dim; ++d)
+      nodes_out[1 + d] = mom[d], nodes_out[1 + dim + d] = frc[d];
+    // Blocks of simd_lanes points, one per lane of simd_double (see
+    // update_stresses()): the contributions of the points to their corner
+    // nodes are computed in SIMD, then added to the nodes (scatter_block).
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
-    for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        double xi[dim], N[n_corners], dN[n_corners][dim];
+        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
+        const bool         full = nl == W;
+        std::size_t        pl[W];
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+        VD xi[dim], N[n_corners], dN[n_corners][dim];
         for (int d = 0; d < dim; ++d)
-          xi[d] = (x[d][p] - corner[d][p]) * ih;
+          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
         tents<dim>(xi, ih, N, dN);
-        const double m = mass[p], V = volume[p], mg = true_mass[p];
-        double       Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
+        const VD m = simd_load(mass, pl, full), V = simd_load(volume, pl, full),
+                 mg = simd_load(true_mass, pl, full);
+        VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
         for (int i = 0; i < dim; ++i)
           {
             for (int j = 0; j < dim; ++j)
-              Vs[i][j] = V * sigma[sidx(i, j)][p];
-            Vs[i][i] += V * visc[p];
+              Vs[i][j] = V * simd_load(sigma[sidx(i, j)], pl, full);
+            Vs[i][i] += V * simd_load(visc, pl, full);
             g[i]  = mg * gravity[i];
-            v0[i] = v[i][p];
+            v0[i] = simd_load(v[i], pl, full);
             for (int j = 0; j < dim; ++j)
-              Ch[i][j] = 0;
+              Ch[i][j] = VD{};
           }
         // APIC: v_p(x_I) = v_p + C_p (x_I - x_p), x_I - x_p = h (b - xi).
         if constexpr (A)
           for (int i = 0; i < dim; ++i)
             for (int j = 0; j < dim; ++j)
               {
-                Ch[i][j] = h * C[i * dim + j][p];
+                Ch[i][j] = h * simd_load(C[i * dim + j], pl, full);
                 v0[i] -= Ch[i][j] * xi[j];
               }
-        const std::size_t n0 = node0[p];
+        // Per corner: mass, momentum (dim), force (dim), as in nodes[].
+        VD c[n_corners][1 + 2 * dim];
         for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t I  = n0 + corner_offset[a];
-            const double      mN = m * N[a];
-            nm[I] += mN;
+            const VD mN = m * N[a];
+            c[a][0]     = mN;
             for (int i = 0; i < dim; ++i)
               {
-                double va = v0[i];
+                VD va = v0[i];
                 for (int j = 0; j < dim; ++j)
                   if ((a >> j) & 1)
                     va += Ch[i][j];
-                double f = g[i] * N[a];
+                VD f = g[i] * N[a];
                 for (int j = 0; j < dim; ++j)
                   f -= Vs[i][j] * dN[a][j];
-                mom[i][I] += mN * va;
-                frc[i][I] += f;
+                c[a][1 + i]       = mN * va;
+                c[a][1 + dim + i] = f;
               }
           }
+        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                                   node0[pl[3]]};
+        scatter_block(c, n0, nl, corner_offset, nodes_out);
       }
     };
     if (apic)
@@ -342,70 +445,96 @@ namespace femp
     const std::size_t n = mass.size();
     for (int d = 0; d < dim; ++d)
       xdot[d].resize(n);
+    // Blocks of simd_lanes points as in p2g(): nodal values gathered lane
+    // by lane, the interpolation and the re-map contributions in SIMD, the
+    // re-map added to the nodes in point order.
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    static_assert(W == 4, "the gathers below are written for 4 lanes");
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
-    for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        double xi[dim], N[n_corners], dN[n_corners][dim];
+        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
+        const bool         full = nl == W;
+        std::size_t        pl[W];
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+        VD xi[dim], N[n_corners], dN[n_corners][dim];
         for (int d = 0; d < dim; ++d)
-          xi[d] = (x[d][p] - corner[d][p]) * ih;
+          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
         tents<dim>(xi, ih, N, dN);
-        const std::size_t n0 = node0[p];
-        double            vg[dim] = {}, ag[dim] = {}, Cn[dim][dim] = {};
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const std::size_t I = n0 + corner_offset[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                const double vi = vel[i][I];
-                vg[i] += N[a] * vi;
-                if constexpr (A)
-                  for (int j = 0; j < dim; ++j)
-                    Cn[i][j] += vi * dN[a][j];
-                else
-                  ag[i] += N[a] * acc[i][I];
-              }
-          }
+        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                                   node0[pl[3]]};
+        VD vg[dim] = {}, ag[dim] = {}, Cn[dim][dim] = {};
+        // Nodal values: one load and a broadcast when the four points lie
+        // in the same cell (the usual case: the points are sorted by cell).
+        auto interpolate = [&](auto &&nodal) {
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::ptrdiff_t o = corner_offset[a];
+              for (int i = 0; i < dim; ++i)
+                {
+                  const VD vi = nodal(vel[i], o);
+                  vg[i] += N[a] * vi;
+                  if constexpr (A)
+                    for (int j = 0; j < dim; ++j)
+                      Cn[i][j] += vi * dN[a][j];
+                  else
+                    ag[i] += N[a] * nodal(acc[i], o);
+                }
+            }
+        };
+        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+          interpolate([&](const double *f, const std::ptrdiff_t o) {
+            const double y = f[n0[0] + o];
+            return VD{y, y, y, y};
+          });
+        else
+          interpolate([&](const double *f, const std::ptrdiff_t o) {
+            return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o], f[n0[3] + o]};
+          });
         // New velocity and affine matrix; the grid velocity at the point
         // moves it at the end of the step (update_stresses()).
-        double vp[dim];
+        VD vp[dim];
         for (int i = 0; i < dim; ++i)
           {
-            vp[i] = apic ? vg[i] : v[i][p] + dt * ag[i];
-            v[i][p] = vp[i];
-            xdot[i][p] = vg[i];
+            vp[i] = apic ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
+            simd_store(v[i], p0, nl, vp[i]);
+            simd_store(xdot[i], p0, nl, vg[i]);
           }
         // Re-map (MUSL) of the new momentum with the weights of the step
         // (those of the P2G, so that the re-mapped nodal velocity of a node
         // is a mean of point velocities with the node mass).
-        const double m = mass[p];
-        double       v0[dim], Ch[dim][dim];
+        const VD m = simd_load(mass, pl, full);
+        VD       v0[dim], Ch[dim][dim];
         for (int i = 0; i < dim; ++i)
           v0[i] = vp[i];
         if constexpr (A)
           for (int i = 0; i < dim; ++i)
             for (int j = 0; j < dim; ++j)
               {
-                C[i * dim + j][p] = Cn[i][j];
-                Ch[i][j]          = h * Cn[i][j];
+                simd_store(C[i * dim + j], p0, nl, Cn[i][j]);
+                Ch[i][j] = h * Cn[i][j];
                 v0[i] -= Ch[i][j] * xi[j];
               }
+        VD nmom[n_corners][dim];
         for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t I  = n0 + corner_offset[a];
-            const double      mN = m * N[a];
+            const VD mN = m * N[a];
             for (int i = 0; i < dim; ++i)
               {
-                double va = v0[i];
+                VD va = v0[i];
                 if constexpr (A)
                   for (int j = 0; j < dim; ++j)
                     if ((a >> j) & 1)
                       va += Ch[i][j];
-                mom[i][I] += mN * va;
+                nmom[a][i] = mN * va;
               }
           }
+        scatter_block(nmom, n0, nl, corner_offset, mom);
       }
     };
     if (apic)
@@ -434,104 +563,156 @@ namespace femp
     weight_momentum.fill(0.);
     const double nu     = mat.poisson_ratio;
     auto         E_cell = cell.empty() ? 0 : cell[0];
-    double       E      = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
-    for (std::size_t p = 0; p < n; ++p)
+    double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
+    // Blocks of simd_lanes points, one point per lane of simd_double (GCC
+    // vector extension, see constitutive.h): shape functions, velocity
+    // gradient, constitutive update (update_stress_block), work, viscous
+    // pressure, volume and move in SIMD; a partial last block repeats its
+    // last point in the spare lanes and stores nothing from them. The sums
+    // (work, kinetic energy, momentum) are taken in point order and the
+    // arithmetic per point is that of the scalar formulation.
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    static_assert(W == 4, "the gathers below are written for 4 lanes");
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        double xi[dim], N[n_corners], dN[n_corners][dim];
+        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
+        const bool         full = nl == W;
+        std::size_t        pl[W];
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+        VD xi[dim], N[n_corners], dN[n_corners][dim];
         for (int d = 0; d < dim; ++d)
-          xi[d] = (x[d][p] - corner[d][p]) * ih;
+          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
         tents<dim>(xi, ih, N, dN);
-        double            L[3][3] = {};
-        const std::size_t n0      = node0[p];
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const std::size_t I = n0 + corner_offset[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                const double vi = vel[i][I] * dt;
-                for (int j = 0; j < dim; ++j)
-                  L[i][j] += vi * dN[a][j];
-              }
-          }
-        double s[n_stress], s_old[n_stress];
+        StressBlock       sb;
+        VD(&L)[3][3] = sb.L;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            L[i][j] = VD{};
+        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                                   node0[pl[3]]};
+        // Nodal values: one load and a broadcast when the four points lie
+        // in the same cell (the usual case: the points are sorted by cell).
+        auto L_sum = [&](auto &&nodal) {
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              const std::ptrdiff_t o = corner_offset[a];
+              for (int i = 0; i < dim; ++i)
+                {
+                  const VD vi = nodal(vel[i], o) * dt;
+                  for (int j = 0; j < dim; ++j)
+                    L[i][j] += vi * dN[a][j];
+                }
+            }
+        };
+        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+          L_sum([&](const double *f, const std::ptrdiff_t o) {
+            const double y = f[n0[0] + o];
+            return VD{y, y, y, y};
+          });
+        else
+          L_sum([&](const double *f, const std::ptrdiff_t o) {
+            return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o], f[n0[3] + o]};
+          });
+        VD s_old[n_stress];
         for (unsigned int c = 0; c < n_stress; ++c)
-          s[c] = s_old[c] = sigma[c][p];
+          sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
+        sb.eps_p = simd_load(eps_p, pl, full);
         // E(T) per cell: the points are sorted by cell, so the table is
         // read once per cell run (kernel and viscous pressure share it).
-        const auto   cp = cell[p];
-        const double Tn = T_new[cp];
-        if (cp != E_cell)
-          E_cell = cp, E = mat.youngs_modulus.value(Tn);
-        update_stress_array(mat, L, T_old[cp], Tn, E, s, eps_p[p]);
+        for (unsigned int l = 0; l < W; ++l)
+          {
+            const auto cp = cell[pl[l]];
+            if (cp != E_cell)
+              E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]);
+            sb.E[l]     = E_c;
+            sb.T_old[l] = T_old[cp];
+            sb.T_new[l] = T_new[cp];
+          }
+        update_stress_block(mat, sb);
         for (unsigned int c = 0; c < n_stress; ++c)
-          sigma[c][p] = s[c];
+          simd_store(sigma[c], p0, nl, sb.s[c]);
+        simd_store(eps_p, p0, nl, sb.eps_p);
         // Stress work of the step, sum (sigma_old + sigma_new)/2 : D dt
         // (in-plane components; plane strain has no zz strain).
-        double w = 0, trL = 0;
+        VD w = {}, trL = {};
         for (int i = 0; i < dim; ++i)
           {
             trL += L[i][i];
             for (int j = 0; j < dim; ++j)
-              w += (s_old[sidx(i, j)] + s[sidx(i, j)]) * L[i][j];
+              w += (s_old[sidx(i, j)] + sb.s[sidx(i, j)]) * L[i][j];
           }
         // Viscous pressure of the forces of this step, then the new one.
-        const double V = volume[p];
-        work += 0.5 * V * w + V * visc[p] * trL;
+        const VD V  = simd_load(volume, pl, full);
+        const VD q  = simd_load(visc, pl, full);
+        const VD wk = 0.5 * V * w + V * q * trL;
+        for (unsigned int l = 0; l < nl; ++l)
+          work += wk[l];
         if (b1 > 0)
-          visc[p] =
-            b1 * h * std::sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) * mass[p] / V) *
-            trL / dt;
-        volume[p] = V * (1 + trL);
+          simd_store(visc, p0, nl,
+                     b1 * h *
+                       simd_sqrt(sb.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) *
+                                 simd_load(mass, pl, full) / V) *
+                       trL / dt);
+        simd_store(volume, p0, nl, V * (1 + trL));
 
-        // Move the point with the grid velocity of the step; kinetic energy
-        // (APIC: with the affine part at the new position) and momentum.
-        double v2 = 0;
+        // Move the point with the grid velocity of the step.
         for (int d = 0; d < dim; ++d)
+          simd_store(x[d], p0, nl,
+                     simd_load(x[d], pl, full) + dt * simd_load(xdot[d], pl, full));
+        for (unsigned int l = 0; l < nl; ++l)
           {
-            x[d][p] += dt * xdot[d][p];
-            v2 += v[d][p] * v[d][p];
-            weight_momentum[d] += true_mass[p] * v[d][p];
-          }
-        if (apic)
-          for (int j = 0; j < dim; ++j)
-            {
-              const double xj = (x[j][p] - corner[j][p]) * ih;
-              const double D  = h * h * xj * (1 - xj);
-              for (int i = 0; i < dim; ++i)
-                v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
-            }
-        kinetic += 0.5 * mass[p] * v2;
+            const std::size_t p = p0 + l;
+            // Kinetic energy (APIC: with the affine part at the new
+            // position) and momentum.
+            double v2 = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                v2 += v[d][p] * v[d][p];
+                weight_momentum[d] += true_mass[p] * v[d][p];
+              }
+            if (apic)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const double xj = (x[j][p] - corner[j][p]) * ih;
+                  const double D  = h * h * xj * (1 - xj);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
+                }
+            kinetic += 0.5 * mass[p] * v2;
 
-        // Cell crossing (see solid_mpm.h).
-        bool inside = true;
-        for (int d = 0; d < dim; ++d)
-          inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
-        if (!inside)
-          {
-            Point<dim> xp;
+            // Cell crossing (see solid_mpm.h).
+            bool inside = true;
             for (int d = 0; d < dim; ++d)
-              xp[d] = x[d][p];
-            const auto ijk = grid.cell_of(xp);
-            if (!grid.in_domain(xp) ||
-                (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+              inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
+            if (!inside)
               {
-                if (!lost)
-                  escaped = xp;
-                lost = true;
-                continue;
+                Point<dim> xp;
+                for (int d = 0; d < dim; ++d)
+                  xp[d] = x[d][p];
+                const auto ijk = grid.cell_of(xp);
+                if (!grid.in_domain(xp) ||
+                    (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+                  {
+                    if (!lost)
+                      escaped = xp;
+                    lost = true;
+                    continue;
+                  }
+                const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
+                if (!grid.in_box(ijk) ||
+                    grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
+                  {
+                    ++left_rank;
+                    continue;
+                  }
+                cell[p]  = idx;
+                node0[p] = grid.first_node_of_cell(idx);
+                for (int d = 0; d < dim; ++d)
+                  corner[d][p] = grid.origin()[d] + ijk[d] * h;
+                moved_cell = true;
               }
-            const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
-            if (!grid.in_box(ijk) ||
-                grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
-              {
-                ++left_rank;
-                continue;
-              }
-            cell[p]  = idx;
-            node0[p] = grid.first_node_of_cell(idx);
-            for (int d = 0; d < dim; ++d)
-              corner[d][p] = grid.origin()[d] + ijk[d] * h;
-            moved_cell = true;
           }
       }
     return work;

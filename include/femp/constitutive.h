@@ -23,6 +23,11 @@
 // Stresses are always 3x3 (in 2D: plane strain, the out-of-plane stress
 // sigma_zz is carried as a state variable). Only deal.II tensors are used,
 // so this header stays light.
+//
+// update_stress_block: the same update for simd_lanes states at once (GCC
+// vector extension simd_double; the elastic path in SIMD, yielding or
+// melted lanes through a scalar fallback), for the FE element and MPM
+// point loops.
 #ifndef femp_constitutive_h
 #define femp_constitutive_h
 
@@ -228,6 +233,136 @@ namespace femp
     s[0] = scale * xx + p, s[1] = scale * yy + p, s[2] = scale * zz + p;
     s[3] = scale * xy, s[4] = scale * xz, s[5] = scale * yz;
     return dg;
+  }
+
+  /// Lanes of the SIMD block kernels (update_stress_block, the FE element
+  /// and MPM point loops): 4 doubles, one AVX2 register.
+  constexpr unsigned int simd_lanes = 4;
+  /// simd_lanes doubles as one value (GCC vector extension: element-wise
+  /// arithmetic, comparisons give lane masks, mask ? a : b selects; one
+  /// AVX2 register with -march=native, two SSE2 registers without).
+  /// deal.II's VectorizedArray is not used: the Debian build of deal.II is
+  /// configured without vectorization (width 1).
+  typedef double simd_double __attribute__((vector_size(8 * simd_lanes)));
+
+  /// Element-wise square root.
+  inline simd_double
+  simd_sqrt(simd_double x)
+  {
+#if defined(__AVX__)
+    if constexpr (simd_lanes == 4)
+      return __builtin_ia32_sqrtpd256(x);
+#endif
+    for (unsigned int l = 0; l < simd_lanes; ++l)
+      x[l] = std::sqrt(x[l]);
+    return x;
+  }
+
+  /// simd_lanes stress states (lane l: one element or point), for
+  /// update_stress_block.
+  struct StressBlock
+  {
+    simd_double L[3][3];            ///< velocity gradient times the step
+    simd_double T_old, T_new, E;    ///< K, K, Pa (E = E(T_new))
+    simd_double s[6];               ///< in: old stress, out: new {xx..yz}
+    simd_double eps_p;              ///< in/out
+  };
+
+  /// update_stress_array() for simd_lanes states at once, with the same
+  /// arithmetic lane by lane (identical results up to the compiler's
+  /// contraction of multiply-adds): the elastic path (Hughes-Winget
+  /// rotation, computed for all lanes and kept where the spin is above
+  /// 1e-18; thermal strain, predictor, yield check) in SIMD; the rare lanes
+  /// that yield or melted take a scalar fallback (hardening table, radial
+  /// return). The tables of sigma_y are read per lane. Every lane must hold
+  /// finite data (pad a partial block with copies).
+  [[gnu::always_inline]] inline void
+  update_stress_block(const SolidMaterial &m, StressBlock &b)
+  {
+    using V             = simd_double;
+    const double nu     = m.poisson_ratio;
+    const V      Tm     = V{} + m.melt_temperature;
+    static_assert(simd_lanes == 4, "written for 4 lanes");
+    auto syf = [&](const unsigned int l) { return m.yield_stress.value(b.T_new[l]); };
+    const V sy = {syf(0), syf(1), syf(2), syf(3)};
+    V xx = b.s[0], yy = b.s[1], zz = b.s[2], xy = b.s[3], xz = b.s[4],
+      yz = b.s[5];
+    const V(&L)[3][3] = b.L;
+    const V w01       = 0.5 * (L[0][1] - L[1][0]);
+    const V w02       = 0.5 * (L[0][2] - L[2][0]);
+    const V w12       = 0.5 * (L[1][2] - L[2][1]);
+    const V ww        = w01 * w01 + w02 * w02 + w12 * w12;
+    {
+      // As update_stress_array(), written out: R = I + f (W + W^2/2),
+      // sigma <- R sigma R^T.
+      const V f   = 1. / (1 + 0.25 * ww);
+      const V R00 = 1. + f * (0. + 0.5 * (0. * 0. + w01 * -w01 + w02 * -w02));
+      const V R01 = 0. + f * (w01 + 0.5 * (0. * w01 + w01 * 0. + w02 * -w12));
+      const V R02 = 0. + f * (w02 + 0.5 * (0. * w02 + w01 * w12 + w02 * 0.));
+      const V R10 = 0. + f * (-w01 + 0.5 * (-w01 * 0. + 0. * -w01 + w12 * -w02));
+      const V R11 = 1. + f * (0. + 0.5 * (-w01 * w01 + 0. * 0. + w12 * -w12));
+      const V R12 = 0. + f * (w12 + 0.5 * (-w01 * w02 + 0. * w12 + w12 * 0.));
+      const V R20 = 0. + f * (-w02 + 0.5 * (-w02 * 0. + -w12 * -w01 + 0. * -w02));
+      const V R21 = 0. + f * (-w12 + 0.5 * (-w02 * w01 + -w12 * 0. + 0. * -w12));
+      const V R22 = 1. + f * (0. + 0.5 * (-w02 * w02 + -w12 * w12 + 0. * 0.));
+      const V R[3][3] = {{R00, R01, R02}, {R10, R11, R12}, {R20, R21, R22}};
+      const V S[3][3] = {{xx, xy, xz}, {xy, yy, yz}, {xz, yz, zz}};
+      V       RS[3][3];
+      for (unsigned int i = 0; i < 3; ++i)
+        for (unsigned int j = 0; j < 3; ++j)
+          RS[i][j] = R[i][0] * S[0][j] + R[i][1] * S[1][j] + R[i][2] * S[2][j];
+      auto rsr = [&](const unsigned int i, const unsigned int j) {
+        return RS[i][0] * R[j][0] + RS[i][1] * R[j][1] + RS[i][2] * R[j][2];
+      };
+      const auto spin = ww > 1e-36;
+      xx = spin ? rsr(0, 0) : xx, yy = spin ? rsr(1, 1) : yy;
+      zz = spin ? rsr(2, 2) : zz, xy = spin ? rsr(0, 1) : xy;
+      xz = spin ? rsr(0, 2) : xz, yz = spin ? rsr(1, 2) : yz;
+    }
+    const V mu2    = b.E / (1 + nu);
+    const V lambda = b.E * nu / ((1 + nu) * (1 - 2 * nu));
+    const V dth    = m.expansion * (b.T_new - (b.T_old < Tm ? b.T_old : Tm));
+    const V dxx = L[0][0] - dth, dyy = L[1][1] - dth, dzz = L[2][2] - dth;
+    const V lt  = lambda * (dxx + dyy + dzz);
+    xx += mu2 * dxx + lt;
+    yy += mu2 * dyy + lt;
+    zz += mu2 * dzz + lt;
+    xy += 0.5 * mu2 * (L[0][1] + L[1][0]);
+    xz += 0.5 * mu2 * (L[0][2] + L[2][0]);
+    yz += 0.5 * mu2 * (L[1][2] + L[2][1]);
+    const V p = (xx + yy + zz) * (1. / 3);
+    xx -= p, yy -= p, zz -= p;
+    const V    ss = xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
+    const auto melted = b.T_new >= Tm;
+    const auto flag   = melted | (1.5 * ss > sy * sy);
+    V          scale  = V{} + 1.;
+    // Scalar fallback: lanes above the initial yield stress (the hardening
+    // term only raises it) and melted lanes.
+    for (unsigned int l = 0; l < simd_lanes; ++l)
+      if (flag[l])
+        {
+          if (melted[l])
+            {
+              b.eps_p[l] = 0;
+              continue;
+            }
+          const double q   = std::sqrt(1.5 * ss[l]);
+          const double H   = m.plastic_modulus.value(b.T_new[l]);
+          const double syh = sy[l] + H * b.eps_p[l];
+          if (q > syh)
+            {
+              const double dg = (q - syh) / (1.5 * mu2[l] + H);
+              scale[l]        = 1 - 1.5 * mu2[l] * dg / q;
+              b.eps_p[l] += dg;
+            }
+        }
+    const V zero = {};
+    b.s[0] = melted ? zero : scale * xx + p;
+    b.s[1] = melted ? zero : scale * yy + p;
+    b.s[2] = melted ? zero : scale * zz + p;
+    b.s[3] = melted ? zero : scale * xy;
+    b.s[4] = melted ? zero : scale * xz;
+    b.s[5] = melted ? zero : scale * yz;
   }
 
   /// von Mises equivalent stress q = sqrt(3/2 s:s), Pa.

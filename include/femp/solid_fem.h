@@ -32,7 +32,9 @@
 // same cube, so b_a and Gamma are compile-time constants: one fused loop per
 // element (gather velocities, L, constitutive update, stress work, viscous
 // pressure, internal + hourglass forces of the next step scattered to the
-// nodes) and one loop over the nodes.
+// nodes) and one loop over the nodes, the element loop in
+// SIMD blocks of simd_lanes elements (one per lane of simd_double, element
+// state stored per block, update_stress_block of constitutive.h).
 //
 // Transition nodes (METHOD sec. 4): FE nodes on a face of the zone that is
 // not a domain face (they touch grid cells outside the zone). They are
@@ -226,12 +228,36 @@ namespace femp
 
     // Elements.
     std::vector<std::uint32_t> conn;      ///< n_corners local nodes each
-    std::vector<StressPoint>   stress;
-    std::vector<double>        visc;      ///< viscous pressure q, Pa
-    /// Hourglass mode amplitudes q_alpha,i = sum_a Gamma_alpha,a u_a,i,
-    /// n_hg * dim per element, advanced with the element's velocities.
-    std::vector<double>        modes;
-    std::vector<double>        T_start, T_end, T_cur;
+    /// State of simd_lanes consecutive elements (lane l: element
+    /// simd_lanes * block + l), so that the element loop loads and stores
+    /// whole SIMD registers; the lanes of the last block beyond the last
+    /// element are padding (they repeat the last element's data).
+    struct ElementBlock
+    {
+      simd_double s[6];  ///< Cauchy stress {xx, yy, zz, xy, xz, yz}, Pa
+      simd_double eps_p; ///< equivalent plastic strain, -
+      simd_double visc;  ///< viscous pressure q, Pa
+      simd_double T;     ///< temperature of the last step, K
+      /// Hourglass mode amplitudes q_alpha,i = sum_a Gamma_alpha,a u_a,i,
+      /// advanced with the element's velocities.
+      simd_double q[n_hg][dim];
+    };
+    std::vector<ElementBlock>  blocks;
+    std::vector<double>        T_start, T_end;
+    /// Stress tensor of element @p e.
+    SymmetricTensor<2, 3>
+    element_stress(const std::size_t e) const
+    {
+      SymmetricTensor<2, 3> s;
+      for (unsigned int c = 0; c < 6; ++c)
+        s.access_raw_entry(c) = blocks[e / simd_lanes].s[c][e % simd_lanes];
+      return s;
+    }
+    double
+    element_T(const std::size_t e) const
+    {
+      return blocks[e / simd_lanes].T[e % simd_lanes];
+    }
     std::vector<std::uint64_t> element_id; ///< lexicographic in the zone
     std::vector<std::pair<std::uint64_t, std::uint32_t>> element_by_id;
     std::size_t                off_rank = 0;
