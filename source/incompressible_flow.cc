@@ -38,6 +38,8 @@
 
 #include <cmath>
 #include <optional>
+#include <type_traits>
+#include <utility>
 #include <sstream>
 
 namespace femp
@@ -1177,9 +1179,12 @@ namespace femp
     const auto & nc   = grid.n_cells();
     const double beta = prm.flip_fraction;
     auto &       handler = points.particle_handler();
+    // The point loop is compiled twice (with and without the point
+    // shifting), so that the shifting costs nothing when it is off.
+    const auto loop = [&](auto shift_tag) {
+    constexpr bool shifting = decltype(shift_tag)::value;
     bool         moved   = false;
     double       umax    = 0;
-    const bool   shifting = prm.point_shifting > 0;
     for (const auto &[idx, cell] : points.occupied_cells())
       {
         if (type[idx] != fluid)
@@ -1187,7 +1192,7 @@ namespace femp
         const auto        ijk = grid.global_index(idx);
         const std::size_t n0  = grid.first_node_of_cell(idx);
         ShiftCell         sc;
-        if (shifting)
+        if constexpr (shifting)
           sc = shift_cell(idx);
         for (auto &particle : handler.particles_in_cell(cell))
           {
@@ -1215,7 +1220,7 @@ namespace femp
             bool     left   = false;
             Point<dim> ref;
             double   shift[dim] = {};
-            if (shifting)
+            if constexpr (shifting)
               {
                 double s2 = 0;
                 for (int d = 0; d < dim; ++d)
@@ -1232,7 +1237,7 @@ namespace femp
                 // Stay inside the domain (walls are free slip).
                 const double lo = x0[d] + 1e-9 * h;
                 const double hi = x0[d] + nc[d] * h - 1e-9 * h;
-                x[d] = std::min(std::max(x[d] + dx + shift[d], lo), hi);
+                x[d] = std::min(std::max(x[d] + (shifting ? dx + shift[d] : dx), lo), hi);
                 ref[d]          = (x[d] - x0[d]) * ih - ijk[d];
                 left            = left || ref[d] < 0 || ref[d] >= 1;
               }
@@ -1253,6 +1258,10 @@ namespace femp
             moved = moved || left;
           }
       }
+    return std::make_pair(moved, umax);
+    };
+    const auto [moved, umax] = prm.point_shifting > 0 ? loop(std::true_type()) :
+                                                      loop(std::false_type());
     stats.max_point_speed =
       std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
     if (Utilities::MPI::logical_or(moved, grid.communicator()))
