@@ -51,6 +51,9 @@ def plot_droplet(outdir, paths):
         header = open(path).readline()
         m = re.search(r"R/h = ([\d.]+), capillary step fraction ([\d.]+).*gamma T = ([\d.eE+-]+)", header)
         label = "femp R = %s h, step %s x capillary limit" % (m.group(1), m.group(2)) if m else path
+        k = re.search(r"point shifting ([\d.]+), curvature smoothing (\d+)", header)
+        if k:
+            label += ", A = %s, %s smoothing passes" % (k.group(1), k.group(2))
         if m:
             gamma_T = float(m.group(3))
         d = np.loadtxt(path, delimiter=",", skiprows=2)

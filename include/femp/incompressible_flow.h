@@ -61,6 +61,11 @@ namespace femp
       double         capillary_fraction = 0.5;
       /// Prescribed fluid step, s (0: automatic, the smallest limit).
       double         time_step = 0;
+      /// A of the point shifting delta x = -A h |u| dt grad(alpha) (Skillen
+      /// et al. form; 0: off; tangential only near the free surface).
+      double         point_shifting = 0;
+      /// Passes of the curvature smoothing along the surface (0: none).
+      unsigned int   curvature_smoothing = 0;
       double         surface_tension = 0;   ///< sigma, N/m (0: off)
       double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       double         recoil_coefficient = 0; ///< zeta_p (0: no recoil)
@@ -218,12 +223,33 @@ namespace femp
       return prm.surface_tension > 0 || prm.surface_tension_gradient != 0 ||
              prm.recoil_coefficient > 0;
     }
+    /// Average the capillary part of p_s over neighbouring surface cells
+    /// (Melt flow/Curvature smoothing passes).
+    void
+    smooth_capillary_pressure();
     void
     pressure_solve(const double dt);
     void
     correction(const double dt);
     void
     grid_to_points(const double dt);
+
+    /// Point shifting (doc/flow.md, "Point shifting"): the data of one
+    /// fluid cell for shift_of_point().
+    struct ShiftCell
+    {
+      std::array<double, (1u << dim)> alpha; ///< nodal alpha, mirrored at walls
+      bool                          near_surface = false;
+      std::array<double, dim>       normal{};     ///< unit, when near_surface
+    };
+    ShiftCell
+    shift_cell(const std::size_t cell) const;
+    /// Displacement of a point at reference coordinates @p xi of the cell
+    /// moving at @p speed during @p dt: -A h speed dt grad(alpha), its
+    /// normal component removed near the free surface, at most h/4.
+    void
+    shift_of_point(const ShiftCell &sc, const double *xi, const double speed,
+                   const double dt, double *dx) const;
 
     /// Wall conditions on the active nodes: no-slip next to solid cells,
     /// free slip (zero normal component) on the domain boundary.
@@ -246,6 +272,7 @@ namespace femp
     std::vector<double>                  type, type_old, gid, p_cell;
     std::vector<double>                  mass, volume;
     std::vector<double>                  alpha_node, alpha_cell, p_surface;
+    std::vector<double>                  p_capillary, surface_mark; // sigma div(n), 0/1
     std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
     std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
     static constexpr double theta_min = 0.05;
