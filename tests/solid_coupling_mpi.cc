@@ -119,6 +119,7 @@ main(int argc, char **argv)
   sm.expansion        = 1e-4;
   sm.density          = 1;
   sm.melt_temperature = 1e6;
+  if (getenv("APIC")) sm.velocity_transfer = SolidMaterial::VelocityTransfer::apic;
   typename SolidStress<dim>::Parameters sp;
   sp.fixed_faces  = {"y-"};
   sp.roller_faces = {"x-", "x+"};
@@ -174,6 +175,7 @@ main(int argc, char **argv)
   checks.print("kinetic energy / 1e-9", e.kinetic / 1e-9, 3);
   checks.print("hourglass energy / 1e-9", e.hourglass / 1e-9, 3);
   checks.print("external work / 1e-6", e.external / 1e-6, 4);
+  checks.print("transfer dissipation / 1e-9", e.transfer / 1e-9, 3);
   // Continuity: the stress steps across the interface (one cell apart) by
   // much less than its size in the block.
   checks.at_most("max |sigma_xx(0.35) - sigma_xx(0.45)| / max |sigma_xx|",
