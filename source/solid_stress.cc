@@ -76,7 +76,10 @@ namespace femp
                       "CSV file (in the output directory) with the solid "
                       "energies after every solid step: external work, stress "
                       "work, kinetic, hourglass, balance, kinetic/internal "
-                      "ratio; empty for none.");
+                      "ratio, hourglass-mode energy, and the booked "
+                      "exchanges: MPM transfer dissipation, kinetic energy "
+                      "removed by melting and added by solidification (J, "
+                      "2D: J/m; doc/solid.md); empty for none.");
     prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
                       "CSV file (in the output directory) with sigma_xx (Pa) "
                       "and T (K) at the probe points after every solid step.");
@@ -518,7 +521,8 @@ namespace femp
         D_transfer -= after[0] - sums[0];
         K = after[0] + sums[6];
         K_points = after[0];
-        check_point_count(after[1], n_points_global, "re-sorting");
+        check_point_count(after[1], n_points_global, "re-sorting",
+                          t_solid + dt);
       }
   }
 
@@ -554,14 +558,15 @@ namespace femp
   void
   SolidStress<dim>::check_point_count(const double       n_now,
                                       const double       n_expected,
-                                      const std::string &where) const
+                                      const std::string &where,
+                                      const double       time) const
   {
     if (n_now == n_expected)
       return;
     std::ostringstream s;
     s << "solid: " << n_expected - n_now
       << " material point(s) lost in " << where << " at solid step " << steps
-      << ", time " << t_solid << " s (" << n_expected << " expected, "
+      << ", time " << time << " s (" << n_expected << " expected, "
       << n_now
       << " found): a point left the solid without melting, e.g. into a cell "
          "of the finite-element zone that its rank does not see";
@@ -601,7 +606,8 @@ namespace femp
     check_point_count(sums[5], n_points_global - sums[0] + sums[1],
                       "the gather of the solid points (after " +
                         std::to_string(int(sums[0])) + " melted, " +
-                        std::to_string(int(sums[1])) + " solidified)");
+                        std::to_string(int(sums[1])) + " solidified)",
+                      t_solid);
     n_points_global = sums[5];
     // The points' kinetic energy changes by what the melted points took
     // out and the solidified ones brought (booked; any other change shows

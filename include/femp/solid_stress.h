@@ -40,9 +40,14 @@
 // steps. The last call of a run ends the solid exactly at the end time.
 //
 // Energies (global, J or J/m in 2D): external work (gravity, fluid forces),
-// stress work int sigma : D (internal), kinetic, hourglass; the balance
-// W_ext - (K - K_0) - W_int - E_HG and the ratio K / |W_int| (how far from
-// quasi-static a mass-scaled run is) go to a CSV file.
+// stress work int sigma : D (internal), kinetic, hourglass, the kinetic
+// energy lost in the MPM transfers (measured per step on the grid), and
+// the kinetic energy of points that melted (left the solid) or solidified
+// (entered it), found at each gather by particle id; the balance
+// W_ext - (K - K_0) - W_int - E_HG - D_transfer - K_melted + K_solidified
+// and the ratio K / |W_int| (how far from quasi-static a mass-scaled run
+// is) go to a CSV file. Every gather and re-sort also counts the solid
+// points globally and stops the run if one was lost.
 #ifndef femp_solid_stress_h
 #define femp_solid_stress_h
 
@@ -233,11 +238,13 @@ namespace femp
     /// the grid update (true); this rank's counted nodes.
     double
     grid_point_kinetic(const bool updated) const;
-    /// Stop with a diagnostic if @p n_now differs from @p n_expected.
+    /// Stop with a diagnostic (@p where, step, @p time) if @p n_now
+    /// differs from @p n_expected.
     void
     check_point_count(const double       n_now,
                       const double       n_expected,
-                      const std::string &where) const;
+                      const std::string &where,
+                      const double       time) const;
   };
 } // namespace femp
 
