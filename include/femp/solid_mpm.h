@@ -30,8 +30,8 @@
 // is the variant whose energy behaviour is best documented for explicit MPM.
 //
 // Velocity transfer ("Solid/Velocity transfer"):
-//   FLIP (default): v_p += dt sum N a_I, point velocity field v_p(x_I) = v_p;
-//   APIC (Jiang et al. 2015): v_p = sum N v_I,
+//   FLIP: v_p += dt sum N a_I, point velocity field v_p(x_I) = v_p;
+//   APIC (default; Jiang et al. 2015): v_p = sum N v_I,
 //         C_p = sum v_I (x) grad N (the B D^-1 form of APIC equals this for
 //         multilinear tents), v_p(x_I) = v_p + C_p (x_I - x_p).
 // With one point per cell and linear tents, APIC gives back the nodal
