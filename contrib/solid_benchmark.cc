@@ -5,8 +5,8 @@
 // 3D block heated by a slowly rising, non-uniform temperature field so that
 // the constitutive update does real work (thermal strain, plasticity at the
 // hot end). One run with every cell full of material points (2 x 2 x 2 per
-// cell), one with every cell a finite element; the MPM with the default
-// FLIP transfer, and sub-cycled also with APIC.
+// cell), one with every cell a finite element; the MPM with the FLIP
+// transfer, and sub-cycled also with APIC (the default transfer).
 //
 //   build/contrib/solid_benchmark [cells per direction, default 32] [steps]
 //                                 [fe | mpm | constitutive: only that part]

@@ -17,16 +17,18 @@ namespace femp
                       "size) is added to the stress in the nodal forces and "
                       "damps the ringing behind stress fronts; the stable step "
                       "shrinks by sqrt(1 + b1^2) - b1. Range [0, 1]; 0 is off.");
-    prm.declare_entry("Velocity transfer", "FLIP", Patterns::Selection("FLIP|APIC"),
+    prm.declare_entry("Velocity transfer", "APIC", Patterns::Selection("FLIP|APIC"),
                       "How material points of the solid MPM exchange "
-                      "velocities with the grid nodes: FLIP (points add the "
-                      "nodal accelerations; keeps the solid energy balance) "
-                      "or APIC (affine particle-in-cell: points take the nodal "
-                      "velocities and carry their gradient C_p; with one point "
-                      "per cell it restores the nodal velocities exactly and "
-                      "is far less dispersive (case 3.1), but with several "
-                      "points per cell its transfers dissipate kinetic energy "
-                      "that the energy file does not book; see doc/solid.md). "
+                      "velocities with the grid nodes: APIC (affine "
+                      "particle-in-cell: points take the nodal velocities and "
+                      "carry their gradient C_p; with one point per cell it "
+                      "restores the nodal velocities exactly and meets case "
+                      "3.1; with several points per cell its transfers "
+                      "dissipate kinetic energy, booked in the energy file) "
+                      "or FLIP (points add the nodal accelerations; smooths "
+                      "the nodal velocities, misses case 3.1; its booked "
+                      "transfer term is unreliable where nodes carry little "
+                      "point mass; see doc/solid.md). "
                       "One of FLIP, APIC.");
     prm.enter_subsection("Material");
     prm.declare_entry("Young's modulus", "1.93e11", Patterns::Anything(),

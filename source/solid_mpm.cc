@@ -5,6 +5,7 @@
 
 #include <femp/solid_mpm.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <type_traits>
@@ -251,6 +252,60 @@ namespace femp
     moved_cell = lost = false;
     left_rank         = 0;
     sum_energies();
+    member_ids.resize(handle.size());
+    for (std::size_t p = 0; p < handle.size(); ++p)
+      member_ids[p] = handle[p]->get_id();
+    std::sort(member_ids.begin(), member_ids.end());
+  }
+
+
+  template <int dim>
+  typename SolidMPM<dim>::Exchange
+  SolidMPM<dim>::exchange_since_gather() const
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    Exchange   e;
+    const auto h = grid.h(), ih = 1. / h;
+    for (const auto &particle : points.particle_handler())
+      {
+        const ArrayView<const double> q = particle.get_properties();
+        const bool member = std::binary_search(member_ids.begin(),
+                                               member_ids.end(),
+                                               particle.get_id());
+        const bool       solid = q[P::state] == MaterialPoints<dim>::solid;
+        const Point<dim> xp    = particle.get_location();
+        const auto       ijk   = grid.cell_of(xp);
+        const bool       out   = excluded[grid.local_index(ijk)];
+        if (member == (solid && !out))
+          continue;
+        if (member && solid) // now in a cell of the FE zone
+          {
+            if (e.n_lost == 0)
+              e.lost_at = xp;
+            e.n_lost += 1;
+            continue;
+          }
+        // Kinetic energy as the points had it in (or bring it to) the
+        // solid: inertial mass, APIC affine part with the tents of the cell.
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          v2 += q[P::velocity + d] * q[P::velocity + d];
+        if (apic)
+          for (int j = 0; j < dim; ++j)
+            {
+              const double xi = (xp[j] - grid.origin()[j]) * ih - ijk[j];
+              const double D  = h * h * xi * (1 - xi);
+              for (int i = 0; i < dim; ++i)
+                v2 += q[P::affine_velocity + i * dim + j] *
+                      q[P::affine_velocity + i * dim + j] * D;
+            }
+        const double k = 0.5 * q[P::mass] * scaling * v2;
+        if (member)
+          e.n_melted += 1, e.k_melted += k;
+        else
+          e.n_solidified += 1, e.k_solidified += k;
+      }
+    return e;
   }
 
 
@@ -664,23 +719,14 @@ namespace femp
         for (unsigned int l = 0; l < nl; ++l)
           {
             const std::size_t p = p0 + l;
-            // Kinetic energy (APIC: with the affine part at the new
-            // position) and momentum.
+            // Kinetic energy and momentum (APIC: the affine part is added
+            // after the cell crossing, with the tents of the new cell).
             double v2 = 0;
             for (int d = 0; d < dim; ++d)
               {
                 v2 += v[d][p] * v[d][p];
                 weight_momentum[d] += true_mass[p] * v[d][p];
               }
-            if (apic)
-              for (int j = 0; j < dim; ++j)
-                {
-                  const double xj = (x[j][p] - corner[j][p]) * ih;
-                  const double D  = h * h * xj * (1 - xj);
-                  for (int i = 0; i < dim; ++i)
-                    v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
-                }
-            kinetic += 0.5 * mass[p] * v2;
 
             // Cell crossing (see solid_mpm.h).
             bool inside = true;
@@ -713,6 +759,18 @@ namespace femp
                   corner[d][p] = grid.origin()[d] + ijk[d] * h;
                 moved_cell = true;
               }
+            // APIC: affine part with the tents of the cell that now holds
+            // the point (those of the next P2G). Points that left the rank
+            // are counted by the gather of resort().
+            if (apic)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const double xj = (x[j][p] - corner[j][p]) * ih;
+                  const double D  = h * h * xj * (1 - xj);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
+                }
+            kinetic += 0.5 * mass[p] * v2;
           }
       }
     return work;

@@ -76,7 +76,10 @@ namespace femp
                       "CSV file (in the output directory) with the solid "
                       "energies after every solid step: external work, stress "
                       "work, kinetic, hourglass, balance, kinetic/internal "
-                      "ratio; empty for none.");
+                      "ratio, hourglass-mode energy, and the booked "
+                      "exchanges: MPM transfer dissipation, kinetic energy "
+                      "removed by melting and added by solidification (J, "
+                      "2D: J/m; doc/solid.md); empty for none.");
     prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
                       "CSV file (in the output directory) with sigma_xx (Pa) "
                       "and T (K) at the probe points after every solid step.");
@@ -257,6 +260,26 @@ namespace femp
         if (active[n])
           active_nodes.push_back(n);
       tr_buffer.assign(SolidFEM<dim>::tr_width * fem.n_transition(), 0.);
+
+      // Nodes whose point kinetic energy this rank counts (see header).
+      std::vector<std::int32_t> tr_of(grid.n_local_nodes(), -1);
+      for (const auto &[t, n] : grid_transition)
+        tr_of[n] = t;
+      counted_nodes.clear();
+      for (const auto n : active_nodes)
+        {
+          std::array<int, dim> ijk;
+          std::size_t          r = n;
+          for (int d = dim - 1; d >= 0; --d)
+            {
+              ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
+              r %= ns[d];
+              ijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
+            }
+          if (grid.in_box(ijk) && grid.cell_status()[grid.local_index(ijk)] ==
+                                    BackgroundGrid<dim>::owned)
+            counted_nodes.emplace_back(n, tr_of[n]);
+        }
     }
 
     T_solid = T;
@@ -268,6 +291,9 @@ namespace femp
     K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
                                  comm);
     W_ext = W_int = 0;
+    D_transfer = K_melted = K_solidified = 0;
+    n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
+    K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
 
     if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
       {
@@ -278,7 +304,9 @@ namespace femp
             AssertThrow(*energy_out, ExcMessage("cannot write " + directory +
                                                 "/" + prm.energy_file));
             *energy_out << "time,step,external_work,internal_work,kinetic,"
-                           "hourglass,balance,kinetic_to_internal,hourglass_mode\n";
+                           "hourglass,balance,kinetic_to_internal,hourglass_mode,"
+                           "transfer_dissipation,removed_by_melting,"
+                           "added_by_solidification\n";
           }
         if (!prm.probe_file.empty() && !prm.probes.empty())
           {
@@ -301,9 +329,13 @@ namespace femp
                             const std::vector<double> &T,
                             const bool                 final)
   {
-    bool gathered = false;
     fem.new_temperatures(T);
     fem.set_external_forces(external_forces);
+    // Same decision on every rank (gather_points() is collective).
+    const bool gathered = t_solid < t * (1 - 1e-12) &&
+                          (final || t_solid + dt_solid <= t * (1 + 1e-12));
+    if (gathered)
+      gather_points();
     while (t_solid < t * (1 - 1e-12))
       {
         double t_next = t_solid + dt_solid;
@@ -312,11 +344,6 @@ namespace femp
             if (!final)
               break;
             t_next = t;
-          }
-        if (!gathered && !mpm_cells.empty())
-          {
-            mpm.gather(fem.zone_mask(), prm.mass_scaling);
-            gathered = true;
           }
         // Linear interpolation of the cell temperatures in [t_prev, t].
         const double w = t > t_prev ? (t_next - t_prev) / (t - t_prev) : 1.;
@@ -328,7 +355,7 @@ namespace femp
         t_solid = t_next;
         write_rows();
       }
-    if (gathered)
+    if (gathered) // collective
       mpm.scatter();
     for (const auto c : mpm_cells)
       T_prev[c] = T[c];
@@ -382,6 +409,9 @@ namespace femp
         grid.sum_shared_nodes(nodes.momentum[d]);
         grid.sum_shared_nodes(nodes.force[d]);
       }
+    // Transfer dissipation, P2G part: point kinetic energy at the start of
+    // the step minus that of the points' grid momenta.
+    double transfer = mpm.kinetic_energy() - grid_point_kinetic(false);
 
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
@@ -401,6 +431,9 @@ namespace femp
             nodes.velocity[d][n] = nodes.momentum[d][n] / m;
           }
       }
+    // G2P part (completed below): grid kinetic energy of the points' mass
+    // after the update (nodes.mass is still the point mass here).
+    transfer += grid_point_kinetic(true);
     for (const auto &[t, n] : grid_transition)
       {
         nodes.mass[n] = tr_buffer[W * t] + fem.transition_mass(t);
@@ -442,16 +475,18 @@ namespace femp
     ++steps;
 
     // Energies and the blow-up check (one reduction per step).
-    const double local_K   = mpm.kinetic_energy() + fe_energy[0];
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
-    double sums[5] = {local_K, work, dt * local_ext, mpm.point_lost() ? 1. : 0.,
-                      double(mpm.n_left_rank())};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 5), comm,
-                        ArrayView<double>(sums, 5));
-    K = sums[0];
+    double sums[7] = {mpm.kinetic_energy(), work, dt * local_ext,
+                      mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
+                      transfer, fe_energy[0]};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 7), comm,
+                        ArrayView<double>(sums, 7));
+    K = sums[0] + sums[6];
     W_int += sums[1];
     W_ext += sums[2];
+    D_transfer += sums[5] - sums[0]; // sums[0]: point kinetic energy now
+    K_points = sums[0];
     const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
     if (blown || sums[3] > 0)
       {
@@ -476,7 +511,111 @@ namespace femp
         throw std::runtime_error(s.str());
       }
     if (sums[4] > 0) // a point entered a cell of another rank
-      mpm.resort();
+      {
+        // Points that left a rank were not counted in sums[0]: count the
+        // kinetic energy again after the resort, and every point.
+        mpm.resort();
+        double after[2] = {mpm.kinetic_energy(), double(mpm.n_points())};
+        Utilities::MPI::sum(ArrayView<const double>(after, 2), comm,
+                            ArrayView<double>(after, 2));
+        D_transfer -= after[0] - sums[0];
+        K = after[0] + sums[6];
+        K_points = after[0];
+        check_point_count(after[1], n_points_global, "re-sorting",
+                          t_solid + dt);
+      }
+  }
+
+
+  template <int dim>
+  double
+  SolidStress<dim>::grid_point_kinetic(const bool updated) const
+  {
+    double k = 0;
+    for (const auto &[n, t] : counted_nodes)
+      {
+        const double m = nodes.mass[n];
+        if (m <= 0)
+          continue;
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          if (!updated)
+            v2 += (constrained[n] & (1u << d)) ?
+                    0. :
+                    nodes.momentum[d][n] * nodes.momentum[d][n] / (m * m);
+          else
+            {
+              const double v = t < 0 ? nodes.velocity[d][n] : tr_v[dim * t + d];
+              v2 += v * v;
+            }
+        k += 0.5 * m * v2;
+      }
+    return k;
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::check_point_count(const double       n_now,
+                                      const double       n_expected,
+                                      const std::string &where,
+                                      const double       time) const
+  {
+    if (n_now == n_expected)
+      return;
+    std::ostringstream s;
+    s << "solid: " << n_expected - n_now
+      << " material point(s) lost in " << where << " at solid step " << steps
+      << ", time " << time << " s (" << n_expected << " expected, "
+      << n_now
+      << " found): a point left the solid without melting, e.g. into a cell "
+         "of the finite-element zone that its rank does not see";
+    throw std::runtime_error(s.str());
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::gather_points()
+  {
+    typename SolidMPM<dim>::Exchange e;
+    if (!mpm_cells.empty())
+      {
+        e = mpm.exchange_since_gather();
+        mpm.gather(fem.zone_mask(), prm.mass_scaling);
+      }
+    double sums[7] = {e.n_melted,     e.n_solidified,         e.n_lost,
+                      e.k_melted,     e.k_solidified,         double(mpm.n_points()),
+                      mpm.kinetic_energy()};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 7), comm,
+                        ArrayView<double>(sums, 7));
+    if (sums[2] > 0)
+      {
+        const unsigned int me = Utilities::MPI::this_mpi_process(comm);
+        const unsigned int root =
+          Utilities::MPI::min(e.n_lost > 0 ? me : 1u << 30, comm);
+        Point<dim> where = e.lost_at;
+        MPI_Bcast(&where[0], dim, MPI_DOUBLE, root, comm);
+        std::ostringstream s;
+        s << "solid: " << sums[2]
+          << " material point(s) entered the finite-element zone before solid "
+             "step "
+          << steps + 1 << ", time " << t_solid << " s, e.g. at x = " << where;
+        throw std::runtime_error(s.str());
+      }
+    check_point_count(sums[5], n_points_global - sums[0] + sums[1],
+                      "the gather of the solid points (after " +
+                        std::to_string(int(sums[0])) + " melted, " +
+                        std::to_string(int(sums[1])) + " solidified)",
+                      t_solid);
+    n_points_global = sums[5];
+    // The points' kinetic energy changes by what the melted points took
+    // out and the solidified ones brought (booked; any other change shows
+    // in the balance).
+    K_melted += sums[3];
+    K_solidified += sums[4];
+    K += sums[6] - K_points;
+    K_points = sums[6];
   }
 
 
@@ -491,6 +630,9 @@ namespace femp
     e.initial_kinetic = K0;
     e.hourglass      = Utilities::MPI::sum(fem.hourglass_energy(false), comm);
     e.hourglass_mode = Utilities::MPI::sum(fem.hourglass_energy(true), comm);
+    e.transfer        = D_transfer;
+    e.melted          = K_melted;
+    e.solidified      = K_solidified;
     return e;
   }
 
@@ -583,7 +725,8 @@ namespace femp
                       << e.external << "," << e.internal << "," << e.kinetic
                       << "," << e.hourglass << "," << e.balance() << ","
                       << e.kinetic / std::max(std::abs(e.internal), 1e-300)
-                      << "," << e.hourglass_mode << "\n";
+                      << "," << e.hourglass_mode << "," << e.transfer << ","
+                      << e.melted << "," << e.solidified << "\n";
         if (probe_out)
           {
             *probe_out << std::setprecision(10) << t_solid;

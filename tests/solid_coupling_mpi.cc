@@ -174,18 +174,24 @@ main(int argc, char **argv)
   checks.print("kinetic energy / 1e-9", e.kinetic / 1e-9, 3);
   checks.print("hourglass energy / 1e-9", e.hourglass / 1e-9, 3);
   checks.print("external work / 1e-6", e.external / 1e-6, 4);
+  checks.print("transfer dissipation / stress work", e.transfer / e.internal, 2);
+  checks.print("transfer dissipation / 1e-9", e.transfer / 1e-9, 3);
   // Continuity: the stress steps across the interface (one cell apart) by
   // much less than its size in the block.
   checks.at_most("max |sigma_xx(0.35) - sigma_xx(0.45)| / max |sigma_xx|",
                  jump / scale, 0.3);
-  checks.at_most("energy balance / stress work", std::abs(e.balance() / e.internal),
-                 0.05);
+  checks.at_most("energy balance (transfer dissipation booked) / stress work",
+                 std::abs(e.balance() / e.internal), 0.05);
 
   // Melting and re-solidification of the points of one hot cell: lower the
   // solidus to 450 K, heat the cell at (0.85, 0.75) to 500 K (its points
-  // turn fluid and leave the solid), then cool it to just below the
-  // solidus: the points come back stress-free, so after one more solid step
-  // their stress is tiny, not the -0.06 Pa they carried before.
+  // turn fluid and leave the solid for one solid step), then cool it to
+  // just below the solidus: the points come back stress-free, so after a
+  // short step (1 % of a solid step) their stress is tiny, not the -0.06 Pa
+  // they carried before. (After a full step it is the elastic response to
+  // the strain rate with which the neighbours, relaxed into the molten
+  // cell, compress it: 0.16 of the former stress with APIC, 0.015 with
+  // FLIP, whose transfers smooth the nodal velocities; doc/solid.md.)
   {
     mat.solidus         = 450;
     sm.melt_temperature = 450;
@@ -201,7 +207,7 @@ main(int argc, char **argv)
         if (mine)
           T[grid.local_index(ijk)] = T_hot;
         points.cells_to_points(T);
-        t += solid.time_step();
+        t += (T_hot > 450 ? 1 : 0.01) * solid.time_step();
         solid.advance(t, T, true);
       }
     const double after = solid.probe({hot})[0][0];

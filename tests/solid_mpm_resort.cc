@@ -8,7 +8,10 @@
 // (SolidMPM::resort()). Checks, for FLIP and APIC: no point lost, every
 // point in the handler's cell that contains it, positions equal to the rigid
 // translation, zero stress (a uniform velocity has no gradient), velocity
-// unchanged. Runs on 1 and 2 ranks against one output.
+// unchanged. A third scene throws a block of points into the finite-element
+// zone in one step, beyond what its rank sees on two ranks: the run must
+// stop with a diagnostic (SolidStress counts the solid points at every
+// gather and re-sort). Runs on 1 and 2 ranks against one output.
 #include <femp/material_points.h>
 #include <femp/solid_stress.h>
 
@@ -118,6 +121,68 @@ namespace
     checks.at_most(name + ": max |v - u| / |u|", err_v / u.norm(), 1e-9);
     checks.at_most(name + ": max |sigma| / E", max_s / sm.youngs_modulus.value(300.), 1e-12);
   }
+
+  /// A block of points thrown in one solid step across 8 cells into the
+  /// finite-element zone (far beyond the ghost and padding layers of its
+  /// rank's box on two ranks, so that only the receiving rank sees where it
+  /// lands): the run must stop with a diagnostic at solid step 1, never
+  /// drop the points silently.
+  void
+  lost_points(Checks &checks, MPI_Comm comm)
+  {
+    const double h  = 0.1;
+    const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
+    BackgroundGrid<dim> grid(gp, comm);
+    grid.create();
+    Material mat = unit_material();
+    typename MaterialPoints<dim>::Parameters pp;
+    pp.point_spacing   = h / 2;
+    pp.layer_thickness = 0;
+    pp.subcells        = 2;
+    MaterialPoints<dim> points(pp, mat, grid);
+    points.create_region(
+      [](const Point<dim> &x) {
+        return x[0] > 0.3 && x[0] < 0.5 && x[1] > 0.5 && x[1] < 0.7;
+      },
+      300., MaterialPoints<dim>::solid);
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    const double dt = 0.01; // below the stable limit 0.03 s
+    for (auto &p : points.particle_handler())
+      {
+        p.get_properties()[P::velocity + 0] = 0.8 / dt;
+        p.get_properties()[P::velocity + 1] = -0.35 / dt;
+      }
+    SolidMaterial sm;
+    sm.youngs_modulus   = PiecewiseLinear(1.);
+    sm.density          = 1;
+    sm.melt_temperature = 1e6;
+    typename SolidStress<dim>::Parameters sp;
+    sp.energy_file = "";
+    sp.time_step   = dt;
+    typename SolidFEM<dim>::Parameters fp;
+    fp.enabled      = true;
+    fp.lower_corner = Point<dim>(1.0, 0);
+    fp.upper_corner = Point<dim>(1.6, 0.4);
+    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    std::vector<double> T = grid.make_field(300.);
+    solid.initialize(T, "");
+    bool stopped = false;
+    try
+      {
+        solid.advance(dt, T, false);
+        solid.advance(2 * dt, T, true);
+      }
+    catch (const std::exception &e)
+      {
+        const std::string what = e.what();
+        stopped = what.find("at solid step 1,") != std::string::npos;
+        if (Utilities::MPI::this_mpi_process(comm) == 0)
+          std::cerr << what << std::endl;
+      }
+    checks.in_range("points thrown into the FE zone: run stopped with a "
+                    "diagnostic at solid step 1 (1 = yes)",
+                    stopped, 1, 1);
+  }
 } // namespace
 
 int
@@ -128,5 +193,6 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   run(SolidMaterial::VelocityTransfer::flip, "FLIP", checks, comm);
   run(SolidMaterial::VelocityTransfer::apic, "APIC", checks, comm);
+  lost_points(checks, comm);
   return checks.exit_code();
 }

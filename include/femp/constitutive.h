@@ -66,7 +66,7 @@ namespace femp
       flip,
       apic
     };
-    VelocityTransfer velocity_transfer = VelocityTransfer::flip;
+    VelocityTransfer velocity_transfer = VelocityTransfer::apic;
 
     /// Declares the entries of subsection "Solid/Material".
     static void

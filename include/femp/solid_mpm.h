@@ -30,8 +30,8 @@
 // is the variant whose energy behaviour is best documented for explicit MPM.
 //
 // Velocity transfer ("Solid/Velocity transfer"):
-//   FLIP (default): v_p += dt sum N a_I, point velocity field v_p(x_I) = v_p;
-//   APIC (Jiang et al. 2015): v_p = sum N v_I,
+//   FLIP: v_p += dt sum N a_I, point velocity field v_p(x_I) = v_p;
+//   APIC (default; Jiang et al. 2015): v_p = sum N v_I,
 //         C_p = sum v_I (x) grad N (the B D^-1 form of APIC equals this for
 //         multilinear tents), v_p(x_I) = v_p + C_p (x_I - x_p).
 // With one point per cell and linear tents, APIC gives back the nodal
@@ -159,6 +159,21 @@ namespace femp
       return lost;
     }
 
+    /// Exchange with the melt since the last gather(), on this rank; call
+    /// before gather(). Points that took part in the last gather and are no
+    /// longer solid (melted) or lie in an excluded cell (entered the FE zone:
+    /// lost), and solid points outside excluded cells that did not take part
+    /// (solidified): their numbers and kinetic energies (inertial mass, APIC
+    /// with the affine part), and the position of one lost point.
+    struct Exchange
+    {
+      double     n_melted = 0, n_solidified = 0, n_lost = 0;
+      double     k_melted = 0, k_solidified = 0;
+      Point<dim> lost_at;
+    };
+    Exchange
+    exchange_since_gather() const;
+
     /// Kinetic energy of this rank's points, J (2D: J/m); APIC includes the
     /// affine part. Summed in gather() and update_stresses().
     double
@@ -228,6 +243,9 @@ namespace femp
     bool                      moved_cell = false, lost = false;
     unsigned int              left_rank  = 0;
     Point<dim>                escaped;
+
+    /// Particle ids of the points of the last gather(), sorted.
+    std::vector<types::particle_index> member_ids;
 
     /// Write the flat arrays back to the particles (no re-sorting).
     void

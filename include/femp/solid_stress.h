@@ -40,9 +40,14 @@
 // steps. The last call of a run ends the solid exactly at the end time.
 //
 // Energies (global, J or J/m in 2D): external work (gravity, fluid forces),
-// stress work int sigma : D (internal), kinetic, hourglass; the balance
-// W_ext - (K - K_0) - W_int - E_HG and the ratio K / |W_int| (how far from
-// quasi-static a mass-scaled run is) go to a CSV file.
+// stress work int sigma : D (internal), kinetic, hourglass, the kinetic
+// energy lost in the MPM transfers (measured per step on the grid), and
+// the kinetic energy of points that melted (left the solid) or solidified
+// (entered it), found at each gather by particle id; the balance
+// W_ext - (K - K_0) - W_int - E_HG - D_transfer - K_melted + K_solidified
+// and the ratio K / |W_int| (how far from quasi-static a mass-scaled run
+// is) go to a CSV file. Every gather and re-sort also counts the solid
+// points globally and stops the run if one was lost.
 #ifndef femp_solid_stress_h
 #define femp_solid_stress_h
 
@@ -100,10 +105,19 @@ namespace femp
       /// stiffness kappa = 0.05 even when control is off (stability studies:
       /// how large the zero-energy modes have grown).
       double hourglass_mode = 0;
+      /// Kinetic energy lost in the point-grid transfers (MPM: P2G of the
+      /// point momenta, incl. the projection onto the boundary conditions,
+      /// and G2P; measured per step as K_points - K_grid after P2G plus
+      /// K_grid - K_points after the grid update; FLIP can make it < 0).
+      double transfer = 0;
+      /// Kinetic energy of points that melted (left the solid) and of
+      /// points that solidified (entered it), summed over the run.
+      double melted = 0, solidified = 0;
       double
       balance() const
       {
-        return external - (kinetic - initial_kinetic) - internal - hourglass;
+        return external - (kinetic - initial_kinetic) - internal - hourglass -
+               transfer - melted + solidified;
       }
     };
 
@@ -197,6 +211,14 @@ namespace femp
     double                    t_solid = 0, t_prev = 0, dt_solid = 0;
     unsigned int              steps   = 0;
     double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
+    double D_transfer = 0, K_melted = 0, K_solidified = 0; // global
+    double K_points        = 0; ///< kinetic energy of the points (global)
+    double n_points_global = 0; ///< solid points after the last step
+    /// Grid nodes whose point kinetic energy this rank counts (each node
+    /// on one rank: the owner of the cell with the node as lower corner,
+    /// clamped at the upper domain faces), with their transition index or
+    /// -1.
+    std::vector<std::pair<std::uint32_t, std::int32_t>> counted_nodes;
     std::unique_ptr<std::ofstream> energy_out, probe_out;
 
     /// One solid step of size @p dt; @p w: weight of the step's end time
@@ -205,6 +227,24 @@ namespace femp
     step(const double dt, const double w);
     void
     write_rows();
+    /// Gather the points for a solid advance: book the kinetic energy of
+    /// melted and solidified points, and stop if a point was lost
+    /// (collective).
+    void
+    gather_points();
+    /// Kinetic energy of the points' share of the grid nodes (point-only
+    /// mass), from the momenta after P2G (@p updated false; components
+    /// with a boundary condition left out) or from the velocities after
+    /// the grid update (true); this rank's counted nodes.
+    double
+    grid_point_kinetic(const bool updated) const;
+    /// Stop with a diagnostic (@p where, step, @p time) if @p n_now
+    /// differs from @p n_expected.
+    void
+    check_point_count(const double       n_now,
+                      const double       n_expected,
+                      const std::string &where,
+                      const double       time) const;
   };
 } // namespace femp
 
