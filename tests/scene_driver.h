@@ -4,19 +4,25 @@
 
 #include <femp/femp_problem.h>
 
-#include <array>
+#include <string>
 #include <fstream>
 #include <iostream>
 
 namespace femp_test
 {
+  /// One parameter set on top of a scene file.
+  struct Override
+  {
+    std::string section, entry, value;
+  };
+
   /// Parse @p file, apply @p overrides ({subsection, entry, value}), and run
   /// the scene with std::cout silenced; returns the summary.
   template <int dim>
   typename femp::FempProblem<dim>::Summary
   run_scene(const std::string &file,
             MPI_Comm           comm,
-            const std::vector<std::array<std::string, 3>> &overrides = {})
+            const std::vector<Override> &overrides = {})
   {
     dealii::ParameterHandler prm;
     femp::declare_all_parameters(prm);
