@@ -67,6 +67,38 @@ namespace femp
         r = simd_double{a[p[0]], a[p[1]], a[p[2]], a[p[3]]};
       return r;
     }
+    /// A block of up to simd_lanes consecutive points starting at p0 (of n):
+    /// nl lanes in use, their indices pl (unused lanes repeat the last
+    /// point, so loads stay in range), full when every lane is used.
+    struct PointBlock
+    {
+      PointBlock(const std::size_t p0, const std::size_t n)
+        : nl(std::min<std::size_t>(simd_lanes, n - p0))
+        , full(nl == simd_lanes)
+      {
+        for (unsigned int l = 0; l < simd_lanes; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+      }
+      unsigned int nl;
+      bool         full;
+      std::size_t  pl[simd_lanes];
+    };
+
+    /// Local coordinates xi of the points of @p b in their cells (origin
+    /// @p corner, size 1/ih) and their tent weights and gradients.
+    template <int dim, typename Arrays>
+    inline void
+    block_tents(const Arrays &x, const Arrays &corner, const PointBlock &b,
+                const double ih, simd_double (&xi)[dim],
+                simd_double (&N)[1 << dim], simd_double (&dN)[1 << dim][dim])
+    {
+      for (int d = 0; d < dim; ++d)
+        xi[d] = (simd_load(x[d], b.pl, b.full) -
+                 simd_load(corner[d], b.pl, b.full)) *
+                ih;
+      tents<dim>(xi, ih, N, dN);
+    }
+
     /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
     inline void
     simd_store(std::vector<double> &a, const std::size_t p0,
@@ -423,15 +455,12 @@ namespace femp
       constexpr bool A = decltype(transfer)::value;
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
-        const bool         full = nl == W;
-        std::size_t        pl[W];
-        for (unsigned int l = 0; l < W; ++l)
-          pl[l] = p0 + std::min(l, nl - 1);
-        VD xi[dim], N[n_corners], dN[n_corners][dim];
-        for (int d = 0; d < dim; ++d)
-          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
-        tents<dim>(xi, ih, N, dN);
+        const PointBlock   blk(p0, n);
+        const unsigned int nl   = blk.nl;
+        const bool         full = blk.full;
+        const auto &       pl   = blk.pl;
+        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
         const VD m = simd_load(mass, pl, full), V = simd_load(volume, pl, full),
                  mg = simd_load(true_mass, pl, full);
         VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
@@ -512,15 +541,12 @@ namespace femp
       constexpr bool A = decltype(transfer)::value;
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
-        const bool         full = nl == W;
-        std::size_t        pl[W];
-        for (unsigned int l = 0; l < W; ++l)
-          pl[l] = p0 + std::min(l, nl - 1);
-        VD xi[dim], N[n_corners], dN[n_corners][dim];
-        for (int d = 0; d < dim; ++d)
-          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
-        tents<dim>(xi, ih, N, dN);
+        const PointBlock   blk(p0, n);
+        const unsigned int nl   = blk.nl;
+        const bool         full = blk.full;
+        const auto &       pl   = blk.pl;
+        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
         const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
                                    node0[pl[3]]};
         VD vg[dim] = {}, ag[dim] = {}, Cn[dim][dim] = {};
@@ -631,15 +657,12 @@ namespace femp
     static_assert(W == 4, "the gathers below are written for 4 lanes");
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        const unsigned int nl   = std::min<std::size_t>(W, n - p0);
-        const bool         full = nl == W;
-        std::size_t        pl[W];
-        for (unsigned int l = 0; l < W; ++l)
-          pl[l] = p0 + std::min(l, nl - 1);
-        VD xi[dim], N[n_corners], dN[n_corners][dim];
-        for (int d = 0; d < dim; ++d)
-          xi[d] = (simd_load(x[d], pl, full) - simd_load(corner[d], pl, full)) * ih;
-        tents<dim>(xi, ih, N, dN);
+        const PointBlock   blk(p0, n);
+        const unsigned int nl   = blk.nl;
+        const bool         full = blk.full;
+        const auto &       pl   = blk.pl;
+        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
         StressBlock       sb;
         VD(&L)[3][3] = sb.L;
         for (int i = 0; i < 3; ++i)
