@@ -633,25 +633,13 @@ namespace femp
     // nodes, node values mirrored at the domain boundary (walls are not
     // free surfaces).
     std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
-    const auto &nc = grid.n_cells();
     for (const auto c : grid.owned_cells())
       {
         if (near1[c] == 0)
           continue;
-        const auto        ijk = grid.global_index(c);
-        const std::size_t n0  = grid.first_node_of_cell(c);
-        double            a   = 0;
-        for (unsigned int k = 0; k < n_corners; ++k)
-          {
-            double f = 1;
-            for (int d = 0; d < dim; ++d)
-              {
-                const int i = ijk[d] + ((k >> d) & 1);
-                if (i == 0 || i == int(nc[d]))
-                  f *= 2;
-              }
-            a += f * alpha_node[n0 + corner_offset[k]];
-          }
+        double a = 0;
+        for (const double ak : corner_alpha(c))
+          a += ak;
         alpha_cell[c] = a / n_corners;
       }
     grid.update_ghosts(alpha_cell);
@@ -1287,14 +1275,13 @@ namespace femp
   // tangential to the surface is kept, so the liquid does not spread
   // outward. It changes positions only, not the point velocities.
   template <int dim>
-  typename IncompressibleFlow<dim>::ShiftCell
-  IncompressibleFlow<dim>::shift_cell(const std::size_t c) const
+  std::array<double, (1u << dim)>
+  IncompressibleFlow<dim>::corner_alpha(const std::size_t c) const
   {
-    ShiftCell         sc;
-    const auto &      nc  = grid.n_cells();
-    const auto &      cs  = grid.strides();
-    const auto        ijk = grid.global_index(c);
-    const std::size_t n0  = grid.first_node_of_cell(c);
+    const auto &                    nc  = grid.n_cells();
+    const auto                      ijk = grid.global_index(c);
+    const std::size_t               n0  = grid.first_node_of_cell(c);
+    std::array<double, (1u << dim)> a;
     for (unsigned int k = 0; k < n_corners; ++k)
       {
         double f = 1;
@@ -1304,8 +1291,19 @@ namespace femp
             if (i == 0 || i == int(nc[d]))
               f *= 2;
           }
-        sc.alpha[k] = f * alpha_node[n0 + corner_offset[k]];
+        a[k] = f * alpha_node[n0 + corner_offset[k]];
       }
+    return a;
+  }
+
+
+  template <int dim>
+  typename IncompressibleFlow<dim>::ShiftCell
+  IncompressibleFlow<dim>::shift_cell(const std::size_t c) const
+  {
+    ShiftCell         sc;
+    const auto &cs = grid.strides();
+    sc.alpha       = corner_alpha(c);
     for (const auto o : stencil)
       sc.near_surface = sc.near_surface || type[c + o] == gas;
     if (sc.near_surface)

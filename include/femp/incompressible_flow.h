@@ -244,6 +244,11 @@ namespace femp
     };
     ShiftCell
     shift_cell(const std::size_t cell) const;
+    /// Nodal alpha at the corners of @p cell, doubled per direction at
+    /// nodes on the domain boundary (where the node sum saw only half of
+    /// its cells): the mirror-wall value.
+    std::array<double, (1u << dim)>
+    corner_alpha(const std::size_t cell) const;
     /// Displacement of a point at reference coordinates @p xi of the cell
     /// moving at @p speed during @p dt: -A h speed dt grad(alpha), its
     /// normal component removed near the free surface, at most h/4.
