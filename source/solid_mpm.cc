@@ -25,7 +25,7 @@ namespace femp
     /// bit d set when it is the upper node in direction d) at local
     /// coordinates xi, for cell size 1/ih.
     template <int dim, typename Number>
-    inline void
+    [[gnu::always_inline]] inline void
     tents(const Number (&xi)[dim], const double ih, Number (&N)[1 << dim],
           Number (&dN)[1 << dim][dim])
     {
@@ -87,7 +87,7 @@ namespace femp
     /// Local coordinates xi of the points of @p b in their cells (origin
     /// @p corner, size 1/ih) and their tent weights and gradients.
     template <int dim, typename Arrays>
-    inline void
+    [[gnu::always_inline]] inline void
     block_tents(const Arrays &x, const Arrays &corner, const PointBlock &b,
                 const double ih, simd_double (&xi)[dim],
                 simd_double (&N)[1 << dim], simd_double (&dN)[1 << dim][dim])
@@ -169,6 +169,86 @@ namespace femp
                 fields[k][I] += c[a][k][l];
             }
     }
+
+    /// scatter_block() that also sums over the blocks of one cell: the
+    /// lane sums of consecutive one-cell blocks of the same cell (the points
+    /// are sorted by cell: 2 x 2 x 2 points per cell are two blocks) are
+    /// kept in @p acc and added to the nodes once per cell (flush()), every
+    /// node value of the cell written once. The sum per node then groups the
+    /// cell's points ((c0 + c1) + (c2 + c3)) + ((c4 + c5) + (c6 + c7)): a
+    /// round-off-level reordering. Mixed blocks go lane by lane in point
+    /// order.
+    template <std::size_t n_corners, std::size_t n>
+    struct CellScatter
+    {
+      static_assert((n_corners * n) % 4 == 0, "groups of four");
+      static constexpr unsigned int n_groups = n_corners * n / 4;
+      static constexpr std::size_t  none     = std::size_t(-1);
+
+      CellScatter(const std::array<std::ptrdiff_t, n_corners> &offset,
+                  double *(&fields)[n])
+        : offset(offset)
+        , fields(fields)
+      {}
+      ~CellScatter()
+      {
+        flush();
+      }
+
+      [[gnu::always_inline]] inline void
+      add(const simd_double (&c)[n_corners][n],
+          const std::size_t (&node0)[simd_lanes], const unsigned int nl)
+      {
+        if (nl == simd_lanes && node0[0] == node0[1] &&
+            node0[0] == node0[2] && node0[0] == node0[3])
+          {
+            const simd_double *cf = &c[0][0];
+            if (node0[0] == cell0)
+              for (unsigned int g = 0; g < n_groups; ++g)
+                acc[g] += lane_sums(cf[4 * g], cf[4 * g + 1], cf[4 * g + 2],
+                                    cf[4 * g + 3]);
+            else
+              {
+                flush();
+                cell0 = node0[0];
+                for (unsigned int g = 0; g < n_groups; ++g)
+                  acc[g] = lane_sums(cf[4 * g], cf[4 * g + 1], cf[4 * g + 2],
+                                     cf[4 * g + 3]);
+              }
+          }
+        else
+          {
+            flush();
+            for (unsigned int l = 0; l < nl; ++l)
+              for (unsigned int a = 0; a < n_corners; ++a)
+                {
+                  const std::size_t I = node0[l] + offset[a];
+                  for (unsigned int k = 0; k < n; ++k)
+                    fields[k][I] += c[a][k][l];
+                }
+          }
+      }
+      void
+      flush()
+      {
+        if (cell0 == none)
+          return;
+        double s[n_corners * n];
+        std::memcpy(s, acc, sizeof(s));
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t I = cell0 + offset[a];
+            for (unsigned int k = 0; k < n; ++k)
+              fields[k][I] += s[n * a + k];
+          }
+        cell0 = none;
+      }
+
+      const std::array<std::ptrdiff_t, n_corners> &offset;
+      double *(&fields)[n];
+      std::size_t cell0 = none;
+      simd_double acc[n_groups];
+    };
 
     /// P2G contributions of a block of points (one per lane) to its corner
     /// nodes (eqs. 11-13): per corner a, c[a] = {m N, m N v_p(x_I) (dim),
@@ -558,6 +638,7 @@ namespace femp
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
+      CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
         const PointBlock   blk(p0, n);
@@ -581,7 +662,7 @@ namespace femp
                      simd_load(visc, pl, full), sp, vp, Cp, h, gravity, c);
         const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
                                    node0[pl[3]]};
-        scatter_block(c, n0, nl, corner_offset, nodes_out);
+        out.add(c, n0, nl);
       }
     };
     if (apic)
@@ -617,6 +698,7 @@ namespace femp
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
+      CellScatter<n_corners, dim> remap(corner_offset, mom);
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
         const PointBlock   blk(p0, n);
@@ -694,7 +776,7 @@ namespace femp
                 nmom[a][i] = mN * va;
               }
           }
-        scatter_block(nmom, n0, nl, corner_offset, mom);
+        remap.add(nmom, n0, nl);
       }
     };
     if (apic)
@@ -753,6 +835,7 @@ namespace femp
     auto loop = [&](auto transfer, auto fused) {
       constexpr bool A = decltype(transfer)::value;
       constexpr bool F = decltype(fused)::value;
+      CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, next_out);
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
         const PointBlock   blk(p0, n);
@@ -839,15 +922,52 @@ namespace femp
 
         // Move the point with the grid velocity of the step (APIC: that is
         // the point velocity).
-        VD vp[dim];
+        VD vp[dim], xn[dim], cn[dim];
         for (int d = 0; d < dim; ++d)
           {
             vp[d] = simd_load(v[d], pl, full);
-            simd_store(x[d], p0, nl,
-                       simd_load(x[d], pl, full) +
-                         dt * (A ? vp[d] : simd_load(xdot[d], pl, full)));
+            xn[d] = simd_load(x[d], pl, full) +
+                    dt * (A ? vp[d] : simd_load(xdot[d], pl, full));
+            simd_store(x[d], p0, nl, xn[d]);
+            cn[d] = simd_load(corner[d], pl, full);
           }
+        VD Cp[dim * dim];
+        if constexpr (A)
+          for (unsigned int c = 0; c < dim * dim; ++c)
+            Cp[c] = simd_load(C[c], pl, full);
+        // Kinetic energy and momentum, the cell check: in SIMD when every
+        // point stays in its cell (the usual case; the sums are taken lane by
+        // lane in point order, the arithmetic per point that of the lane
+        // loop below).
+        auto in_cell = xn[0] >= cn[0] && xn[0] <= cn[0] + h;
+        for (int d = 1; d < dim; ++d)
+          in_cell = in_cell && xn[d] >= cn[d] && xn[d] <= cn[d] + h;
+        bool all_in = true;
+        for (unsigned int l = 0; l < W; ++l)
+          all_in = all_in && in_cell[l];
         bool crossed = false;
+        if (all_in)
+          {
+            VD v2 = {};
+            for (int d = 0; d < dim; ++d)
+              v2 += vp[d] * vp[d];
+            if constexpr (A)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const VD xj = (xn[j] - cn[j]) * ih;
+                  const VD D  = h * h * xj * (1 - xj);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += Cp[i * dim + j] * Cp[i * dim + j] * D;
+                }
+            const VD k = 0.5 * m * v2;
+            for (unsigned int l = 0; l < nl; ++l)
+              {
+                for (int d = 0; d < dim; ++d)
+                  weight_momentum[d] += mg[l] * vp[d][l];
+                kinetic += k[l];
+              }
+          }
+        else
         for (unsigned int l = 0; l < nl; ++l)
           {
             const std::size_t p = p0 + l;
@@ -914,17 +1034,21 @@ namespace femp
         if constexpr (F)
           {
             if (crossed)
-              for (unsigned int l = 0; l < W; ++l)
-                n0[l] = node0[pl[l]];
-            block_tents<dim>(x, corner, blk, ih, xi, N, dN);
-            VD Cp[dim * dim];
-            if constexpr (A)
-              for (unsigned int c = 0; c < dim * dim; ++c)
-                Cp[c] = simd_load(C[c], pl, full);
+              {
+                for (unsigned int l = 0; l < W; ++l)
+                  n0[l] = node0[pl[l]];
+                block_tents<dim>(x, corner, blk, ih, xi, N, dN);
+              }
+            else
+              {
+                for (int d = 0; d < dim; ++d)
+                  xi[d] = (xn[d] - cn[d]) * ih;
+                tents<dim>(xi, ih, N, dN);
+              }
             VD c[n_corners][1 + 2 * dim];
             p2g_block<A>(xi, N, dN, m, mg, V_new, q, sb.s, vp, Cp, h,
                          p2g_gravity, c);
-            scatter_block(c, n0, nl, corner_offset, next_out);
+            out.add(c, n0, nl);
           }
       }
     };
