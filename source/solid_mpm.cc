@@ -302,6 +302,63 @@ namespace femp
             }
         }
     }
+
+    /// The point arrays that the P2G reads (see SolidMPM).
+    template <int dim>
+    struct P2GInput
+    {
+      const std::array<std::vector<double>, dim> &      x, &corner, &v;
+      const std::array<std::vector<double>, dim * dim> &C;
+      const std::vector<double> &                      true_mass, &volume, &visc;
+      const std::array<std::vector<double>, 6> &       sigma;
+      const std::vector<std::uint32_t> &               node0;
+      const double                                     scaling, h;
+      const Tensor<1, dim> &                           gravity;
+    };
+
+    /// P2G (eqs. 11-13) of the blocks of points starting at p0 = b, b +
+    /// simd_lanes, ... < e (of n points) into @p out: the contributions of
+    /// a block in SIMD (p2g_block), then added to the nodes (CellScatter).
+    /// Not inlined: update_stresses() calls it for chunks of points that it
+    /// just updated (still in the L1 cache), and the two loop bodies
+    /// compiled apart keep their values in registers.
+    template <bool A, int dim, std::size_t n_corners>
+    [[gnu::noinline]] void
+    p2g_blocks(const P2GInput<dim> &in, const std::size_t b,
+               const std::size_t e, const std::size_t n,
+               CellScatter<n_corners, 1 + 2 * dim> &out)
+    {
+      using VD           = simd_double;
+      const double ih    = 1. / in.h;
+      for (std::size_t p0 = b; p0 < e; p0 += simd_lanes)
+        {
+          const PointBlock   blk(p0, n);
+          const bool         full = blk.full;
+          const auto &       pl   = blk.pl;
+          VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+          block_tents<dim>(in.x, in.corner, blk, ih, xi, N, dN);
+          const VD mg = simd_load(in.true_mass, pl, full),
+                   m  = mg * in.scaling;
+          VD sp[6], vp[dim], Cp[dim * dim];
+          for (unsigned int c = 0; c < 6; ++c)
+            sp[c] = simd_load(in.sigma[c], pl, full);
+          for (int i = 0; i < dim; ++i)
+            vp[i] = simd_load(in.v[i], pl, full);
+          if constexpr (A)
+            for (unsigned int c = 0; c < dim * dim; ++c)
+              Cp[c] = simd_load(in.C[c], pl, full);
+          // Per corner: mass, momentum (dim), force (dim).
+          VD c[n_corners][1 + 2 * dim];
+          p2g_block<A>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
+                       simd_load(in.visc, pl, full), sp, vp, Cp, in.h,
+                       in.gravity, c);
+          const std::size_t n0[simd_lanes] = {in.node0[pl[0]],
+                                              in.node0[pl[1]],
+                                              in.node0[pl[2]],
+                                              in.node0[pl[3]]};
+          out.add(c, n0, blk.nl);
+        }
+    }
   } // namespace
 
 
@@ -627,48 +684,22 @@ namespace femp
     have_gravity = true;
     p2g_gravity  = gravity;
 
-    const double      h = grid.h(), ih = 1. / h;
-    const std::size_t n = true_mass.size();
-    // Blocks of simd_lanes points, one per lane of simd_double (see
-    // update_stresses()): the contributions of the points to their corner
-    // nodes are computed in SIMD, then added to the nodes (scatter_block).
-    using VD               = simd_double;
-    constexpr unsigned int W = simd_lanes;
+    const std::size_t   n = true_mass.size();
+    const P2GInput<dim> in{x,      corner, v,     C,           true_mass,
+                           volume, visc,   sigma, node0,       scaling,
+                           grid.h(), gravity};
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
-    auto loop = [&](auto transfer) {
-      constexpr bool A = decltype(transfer)::value;
-      CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
-    for (std::size_t p0 = 0; p0 < n; p0 += W)
-      {
-        const PointBlock   blk(p0, n);
-        const unsigned int nl   = blk.nl;
-        const bool         full = blk.full;
-        const auto &       pl   = blk.pl;
-        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
-        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
-        const VD mg = simd_load(true_mass, pl, full), m = mg * scaling;
-        VD       sp[n_stress], vp[dim], Cp[dim * dim];
-        for (unsigned int c = 0; c < n_stress; ++c)
-          sp[c] = simd_load(sigma[c], pl, full);
-        for (int i = 0; i < dim; ++i)
-          vp[i] = simd_load(v[i], pl, full);
-        if constexpr (A)
-          for (unsigned int c = 0; c < dim * dim; ++c)
-            Cp[c] = simd_load(C[c], pl, full);
-        // Per corner: mass, momentum (dim), force (dim), as in nodes_out[].
-        VD c[n_corners][1 + 2 * dim];
-        p2g_block<A>(xi, N, dN, m, mg, simd_load(volume, pl, full),
-                     simd_load(visc, pl, full), sp, vp, Cp, h, gravity, c);
-        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
-                                   node0[pl[3]]};
-        out.add(c, n0, nl);
-      }
-    };
     if (apic)
-      loop(std::true_type());
+      {
+        CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
+        p2g_blocks<true>(in, 0, n, n, out);
+      }
     else
-      loop(std::false_type());
+      {
+        CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
+        p2g_blocks<false>(in, 0, n, n, out);
+      }
   }
 
 
@@ -836,7 +867,16 @@ namespace femp
       constexpr bool A = decltype(transfer)::value;
       constexpr bool F = decltype(fused)::value;
       CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, next_out);
-    for (std::size_t p0 = 0; p0 < n; p0 += W)
+      const P2GInput<dim> in{x,      corner, v,     C,     true_mass,
+                             volume, visc,   sigma, node0, scaling,
+                             h,      p2g_gravity};
+      // Chunks of points: stress update and move, then (fused) the P2G of
+      // the chunk's points, whose data are still in the L1 cache.
+      constexpr std::size_t chunk = 16 * W;
+    for (std::size_t c0 = 0; c0 < n; c0 += chunk)
+      {
+    const std::size_t c1 = std::min(n, c0 + chunk);
+    for (std::size_t p0 = c0; p0 < c1; p0 += W)
       {
         const PointBlock   blk(p0, n);
         const unsigned int nl   = blk.nl;
@@ -945,7 +985,6 @@ namespace femp
         bool all_in = true;
         for (unsigned int l = 0; l < W; ++l)
           all_in = all_in && in_cell[l];
-        bool crossed = false;
         if (all_in)
           {
             VD v2 = {};
@@ -1010,7 +1049,6 @@ namespace femp
                 for (int d = 0; d < dim; ++d)
                   corner[d][p] = grid.origin()[d] + ijk[d] * h;
                 moved_cell = true;
-                crossed    = true;
                 mark_cell_nodes(node0[p]);
               }
             // APIC: affine part with the tents of the cell that now holds
@@ -1027,29 +1065,9 @@ namespace femp
             kinetic += 0.5 * (true_mass[p] * scaling) * v2;
           }
 
-        // P2G of the next step (fused; the arithmetic of p2g()): the state
-        // just computed, the tents at the moved position in the cell that
-        // now holds the point. Points that left the rank or the domain add
-        // to their old cell's nodes; the buffer is then not used.
-        if constexpr (F)
-          {
-            if (crossed)
-              {
-                for (unsigned int l = 0; l < W; ++l)
-                  n0[l] = node0[pl[l]];
-                block_tents<dim>(x, corner, blk, ih, xi, N, dN);
-              }
-            else
-              {
-                for (int d = 0; d < dim; ++d)
-                  xi[d] = (xn[d] - cn[d]) * ih;
-                tents<dim>(xi, ih, N, dN);
-              }
-            VD c[n_corners][1 + 2 * dim];
-            p2g_block<A>(xi, N, dN, m, mg, V_new, q, sb.s, vp, Cp, h,
-                         p2g_gravity, c);
-            out.add(c, n0, nl);
-          }
+      }
+    if constexpr (F)
+      p2g_blocks<A>(in, c0, c1, n, out);
       }
     };
     if (apic && fuse)
