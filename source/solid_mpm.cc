@@ -840,8 +840,9 @@ namespace femp
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
     // run's sub-cycling), so that a run of one step per gather pays nothing
-    // for it. The buffer is zero here (p2g() consumed or cleared it).
-    const bool fuse = steps_since_gather > 0 && have_gravity;
+    // for it, nor a rank without points (no buffer). The buffer is zero
+    // here (p2g() consumed or cleared it).
+    const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity;
     ++steps_since_gather;
     double *   next_out[1 + 2 * dim];
     if (fuse)
@@ -876,6 +877,7 @@ namespace femp
     for (std::size_t c0 = 0; c0 < n; c0 += chunk)
       {
     const std::size_t c1 = std::min(n, c0 + chunk);
+    // (the block loop keeps its indentation of before the chunks)
     for (std::size_t p0 = c0; p0 < c1; p0 += W)
       {
         const PointBlock   blk(p0, n);
