@@ -128,50 +128,11 @@ namespace femp
     }
 
     /// Adds the contributions @p c (n values per corner, one point per
-    /// lane) of a block of points to the corner nodes: fields[k][node0[l] +
-    /// offset[a]] += c[a][k][l]. When the four points lie in the same cell
-    /// (the usual case: points are sorted by cell) the lanes are summed
-    /// first and every node value is written once (the sum per node then
-    /// groups the block's points: a round-off-level reordering); otherwise
-    /// lane by lane in point order.
-    template <std::size_t n_corners, std::size_t n>
-    [[gnu::always_inline]] inline void
-    scatter_block(const simd_double (&c)[n_corners][n],
-                  const std::size_t (&node0)[simd_lanes], const unsigned int nl,
-                  const std::array<std::ptrdiff_t, n_corners> &offset,
-                  double *(&fields)[n])
-    {
-      if (nl == simd_lanes && node0[0] == node0[1] && node0[0] == node0[2] &&
-          node0[0] == node0[3])
-        {
-          static_assert((n_corners * n) % 4 == 0, "groups of four");
-          const simd_double *cf = &c[0][0];
-          double             s[n_corners * n];
-          for (unsigned int g = 0; g < n_corners * n; g += 4)
-            {
-              const simd_double r =
-                lane_sums(cf[g], cf[g + 1], cf[g + 2], cf[g + 3]);
-              std::memcpy(&s[g], &r, sizeof(r));
-            }
-          for (unsigned int a = 0; a < n_corners; ++a)
-            {
-              const std::size_t I = node0[0] + offset[a];
-              for (unsigned int k = 0; k < n; ++k)
-                fields[k][I] += s[n * a + k];
-            }
-        }
-      else
-        for (unsigned int l = 0; l < nl; ++l)
-          for (unsigned int a = 0; a < n_corners; ++a)
-            {
-              const std::size_t I = node0[l] + offset[a];
-              for (unsigned int k = 0; k < n; ++k)
-                fields[k][I] += c[a][k][l];
-            }
-    }
-
-    /// scatter_block() that also sums over the blocks of one cell: the
-    /// lane sums of consecutive one-cell blocks of the same cell (the points
+    /// lane) of blocks of points to the corner nodes: fields[k][node0[l] +
+    /// offset[a]] += c[a][k][l]. When the four points of a block lie in the
+    /// same cell (the usual case: points are sorted by cell) the lanes are
+    /// summed first ((c0 + c1) + (c2 + c3)), and the lane sums of
+    /// consecutive one-cell blocks of the same cell (the points
     /// are sorted by cell: 2 x 2 x 2 points per cell are two blocks) are
     /// kept in @p acc and added to the nodes once per cell (flush()), every
     /// node value of the cell written once. The sum per node then groups the
