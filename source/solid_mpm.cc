@@ -25,7 +25,7 @@ namespace femp
     /// bit d set when it is the upper node in direction d) at local
     /// coordinates xi, for cell size 1/ih.
     template <int dim, typename Number>
-    inline void
+    [[gnu::always_inline]] inline void
     tents(const Number (&xi)[dim], const double ih, Number (&N)[1 << dim],
           Number (&dN)[1 << dim][dim])
     {
@@ -87,7 +87,7 @@ namespace femp
     /// Local coordinates xi of the points of @p b in their cells (origin
     /// @p corner, size 1/ih) and their tent weights and gradients.
     template <int dim, typename Arrays>
-    inline void
+    [[gnu::always_inline]] inline void
     block_tents(const Arrays &x, const Arrays &corner, const PointBlock &b,
                 const double ih, simd_double (&xi)[dim],
                 simd_double (&N)[1 << dim], simd_double (&dN)[1 << dim][dim])
@@ -128,46 +128,197 @@ namespace femp
     }
 
     /// Adds the contributions @p c (n values per corner, one point per
-    /// lane) of a block of points to the corner nodes: fields[k][node0[l] +
-    /// offset[a]] += c[a][k][l]. When the four points lie in the same cell
-    /// (the usual case: points are sorted by cell) the lanes are summed
-    /// first and every node value is written once (the sum per node then
-    /// groups the block's points: a round-off-level reordering); otherwise
-    /// lane by lane in point order.
+    /// lane) of blocks of points to the corner nodes: fields[k][node0[l] +
+    /// offset[a]] += c[a][k][l]. When the four points of a block lie in the
+    /// same cell (the usual case: points are sorted by cell) the lanes are
+    /// summed first ((c0 + c1) + (c2 + c3)), and the lane sums of
+    /// consecutive one-cell blocks of the same cell (the points
+    /// are sorted by cell: 2 x 2 x 2 points per cell are two blocks) are
+    /// kept in @p acc and added to the nodes once per cell (flush()), every
+    /// node value of the cell written once. The sum per node then groups the
+    /// cell's points ((c0 + c1) + (c2 + c3)) + ((c4 + c5) + (c6 + c7)): a
+    /// round-off-level reordering. Mixed blocks go lane by lane in point
+    /// order.
     template <std::size_t n_corners, std::size_t n>
-    [[gnu::always_inline]] inline void
-    scatter_block(const simd_double (&c)[n_corners][n],
-                  const std::size_t (&node0)[simd_lanes], const unsigned int nl,
-                  const std::array<std::ptrdiff_t, n_corners> &offset,
-                  double *(&fields)[n])
+    struct CellScatter
     {
-      if (nl == simd_lanes && node0[0] == node0[1] && node0[0] == node0[2] &&
-          node0[0] == node0[3])
+      static_assert((n_corners * n) % 4 == 0, "groups of four");
+      static constexpr unsigned int n_groups = n_corners * n / 4;
+      static constexpr std::size_t  none     = std::size_t(-1);
+
+      CellScatter(const std::array<std::ptrdiff_t, n_corners> &offset,
+                  double *(&fields)[n])
+        : offset(offset)
+        , fields(fields)
+      {}
+      ~CellScatter()
+      {
+        flush();
+      }
+
+      [[gnu::always_inline]] inline void
+      add(const simd_double (&c)[n_corners][n],
+          const std::size_t (&node0)[simd_lanes], const unsigned int nl)
+      {
+        if (nl == simd_lanes && node0[0] == node0[1] &&
+            node0[0] == node0[2] && node0[0] == node0[3])
+          {
+            const simd_double *cf = &c[0][0];
+            if (node0[0] == cell0)
+              for (unsigned int g = 0; g < n_groups; ++g)
+                acc[g] += lane_sums(cf[4 * g], cf[4 * g + 1], cf[4 * g + 2],
+                                    cf[4 * g + 3]);
+            else
+              {
+                flush();
+                cell0 = node0[0];
+                for (unsigned int g = 0; g < n_groups; ++g)
+                  acc[g] = lane_sums(cf[4 * g], cf[4 * g + 1], cf[4 * g + 2],
+                                     cf[4 * g + 3]);
+              }
+          }
+        else
+          {
+            flush();
+            for (unsigned int l = 0; l < nl; ++l)
+              for (unsigned int a = 0; a < n_corners; ++a)
+                {
+                  const std::size_t I = node0[l] + offset[a];
+                  for (unsigned int k = 0; k < n; ++k)
+                    fields[k][I] += c[a][k][l];
+                }
+          }
+      }
+      void
+      flush()
+      {
+        if (cell0 == none)
+          return;
+        double s[n_corners * n];
+        std::memcpy(s, acc, sizeof(s));
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t I = cell0 + offset[a];
+            for (unsigned int k = 0; k < n; ++k)
+              fields[k][I] += s[n * a + k];
+          }
+        cell0 = none;
+      }
+
+      const std::array<std::ptrdiff_t, n_corners> &offset;
+      double *(&fields)[n];
+      std::size_t cell0 = none;
+      simd_double acc[n_groups];
+    };
+
+    /// P2G contributions of a block of points (one per lane) to its corner
+    /// nodes (eqs. 11-13): per corner a, c[a] = {m N, m N v_p(x_I) (dim),
+    /// g m_true N - V (sigma + q I) grad N (dim)}. @p s: stress {xx yy zz
+    /// xy xz yz}; A (APIC): v_p(x_I) = v_p + C_p (x_I - x_p) with
+    /// x_I - x_p = h (b - xi), FLIP: v_p.
+    template <bool A, int dim, unsigned int n_corners>
+    [[gnu::always_inline]] inline void
+    p2g_block(const simd_double (&xi)[dim], const simd_double (&N)[n_corners],
+              const simd_double (&dN)[n_corners][dim], const simd_double m,
+              const simd_double mg, const simd_double V, const simd_double q,
+              const simd_double (&s)[6], const simd_double (&v)[dim],
+              const simd_double (&C)[dim * dim], const double h,
+              const Tensor<1, dim> &gravity,
+              simd_double (&c)[n_corners][1 + 2 * dim])
+    {
+      using VD = simd_double;
+      VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
+      for (int i = 0; i < dim; ++i)
         {
-          static_assert((n_corners * n) % 4 == 0, "groups of four");
-          const simd_double *cf = &c[0][0];
-          double             s[n_corners * n];
-          for (unsigned int g = 0; g < n_corners * n; g += 4)
+          for (int j = 0; j < dim; ++j)
+            Vs[i][j] = V * s[sidx(i, j)];
+          Vs[i][i] += V * q;
+          g[i]  = mg * gravity[i];
+          v0[i] = v[i];
+          for (int j = 0; j < dim; ++j)
+            Ch[i][j] = VD{};
+        }
+      if constexpr (A)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
             {
-              const simd_double r =
-                lane_sums(cf[g], cf[g + 1], cf[g + 2], cf[g + 3]);
-              std::memcpy(&s[g], &r, sizeof(r));
+              Ch[i][j] = h * C[i * dim + j];
+              v0[i] -= Ch[i][j] * xi[j];
             }
-          for (unsigned int a = 0; a < n_corners; ++a)
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          const VD mN = m * N[a];
+          c[a][0]     = mN;
+          for (int i = 0; i < dim; ++i)
             {
-              const std::size_t I = node0[0] + offset[a];
-              for (unsigned int k = 0; k < n; ++k)
-                fields[k][I] += s[n * a + k];
+              VD va = v0[i];
+              for (int j = 0; j < dim; ++j)
+                if ((a >> j) & 1)
+                  va += Ch[i][j];
+              VD f = g[i] * N[a];
+              for (int j = 0; j < dim; ++j)
+                f -= Vs[i][j] * dN[a][j];
+              c[a][1 + i]       = mN * va;
+              c[a][1 + dim + i] = f;
             }
         }
-      else
-        for (unsigned int l = 0; l < nl; ++l)
-          for (unsigned int a = 0; a < n_corners; ++a)
-            {
-              const std::size_t I = node0[l] + offset[a];
-              for (unsigned int k = 0; k < n; ++k)
-                fields[k][I] += c[a][k][l];
-            }
+    }
+
+    /// The point arrays that the P2G reads (see SolidMPM).
+    template <int dim>
+    struct P2GInput
+    {
+      const std::array<std::vector<double>, dim> &      x, &corner, &v;
+      const std::array<std::vector<double>, dim * dim> &C;
+      const std::vector<double> &                      true_mass, &volume, &visc;
+      const std::array<std::vector<double>, 6> &       sigma;
+      const std::vector<std::uint32_t> &               node0;
+      const double                                     scaling, h;
+      const Tensor<1, dim> &                           gravity;
+    };
+
+    /// P2G (eqs. 11-13) of the blocks of points starting at p0 = b, b +
+    /// simd_lanes, ... < e (of n points) into @p out: the contributions of
+    /// a block in SIMD (p2g_block), then added to the nodes (CellScatter).
+    /// Not inlined: update_stresses() calls it for chunks of points that it
+    /// just updated (still in the L1 cache), and the two loop bodies
+    /// compiled apart keep their values in registers.
+    template <bool A, int dim, std::size_t n_corners>
+    [[gnu::noinline]] void
+    p2g_blocks(const P2GInput<dim> &in, const std::size_t b,
+               const std::size_t e, const std::size_t n,
+               CellScatter<n_corners, 1 + 2 * dim> &out)
+    {
+      using VD           = simd_double;
+      const double ih    = 1. / in.h;
+      for (std::size_t p0 = b; p0 < e; p0 += simd_lanes)
+        {
+          const PointBlock   blk(p0, n);
+          const bool         full = blk.full;
+          const auto &       pl   = blk.pl;
+          VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+          block_tents<dim>(in.x, in.corner, blk, ih, xi, N, dN);
+          const VD mg = simd_load(in.true_mass, pl, full),
+                   m  = mg * in.scaling;
+          VD sp[6], vp[dim], Cp[dim * dim];
+          for (unsigned int c = 0; c < 6; ++c)
+            sp[c] = simd_load(in.sigma[c], pl, full);
+          for (int i = 0; i < dim; ++i)
+            vp[i] = simd_load(in.v[i], pl, full);
+          if constexpr (A)
+            for (unsigned int c = 0; c < dim * dim; ++c)
+              Cp[c] = simd_load(in.C[c], pl, full);
+          // Per corner: mass, momentum (dim), force (dim).
+          VD c[n_corners][1 + 2 * dim];
+          p2g_block<A>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
+                       simd_load(in.visc, pl, full), sp, vp, Cp, in.h,
+                       in.gravity, c);
+          const std::size_t n0[simd_lanes] = {in.node0[pl[0]],
+                                              in.node0[pl[1]],
+                                              in.node0[pl[2]],
+                                              in.node0[pl[3]]};
+          out.add(c, n0, blk.nl);
+        }
     }
   } // namespace
 
@@ -205,13 +356,21 @@ namespace femp
                            "solid (or APIC) properties"));
     excluded = excluded_cell;
     scaling  = mass_scaling;
+    // The P2G buffer of the fused pass: zero again, and its node list anew.
+    clear_next();
+    next_ready         = false;
+    steps_since_gather = 0;
+    for (const auto n : next_nodes)
+      node_mark[n] = 0;
+    next_nodes.clear();
+    node_mark.resize(grid.n_local_nodes(), 0);
     for (int d = 0; d < dim; ++d)
       x[d].clear(), v[d].clear(), corner[d].clear();
     for (auto &c : C)
       c.clear();
     for (auto &s : sigma)
       s.clear();
-    mass.clear(), true_mass.clear(), volume.clear(), visc.clear();
+    true_mass.clear(), volume.clear(), visc.clear();
     eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
     auto &     handler = points.particle_handler();
     const auto h       = grid.h();
@@ -224,7 +383,7 @@ namespace femp
           c.reserve(n);
       for (auto &s : sigma)
         s.reserve(n);
-      mass.reserve(n), true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
+      true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
       eps_p.reserve(n), cell.reserve(n), node0.reserve(n), handle.reserve(n);
     }
     for (auto it = handler.begin(); it != handler.end(); ++it)
@@ -261,7 +420,6 @@ namespace femp
           for (unsigned int c = 0; c < dim * dim; ++c)
             C[c].push_back(q[P::affine_velocity + c]);
         true_mass.push_back(q[P::mass]);
-        mass.push_back(q[P::mass] * mass_scaling);
         volume.push_back(q[P::volume]);
         visc.push_back(q[P::viscous_pressure]);
         cell.push_back(idx);
@@ -283,11 +441,39 @@ namespace femp
       }
     moved_cell = lost = false;
     left_rank         = 0;
+    for (std::size_t p = 0; p < node0.size(); ++p)
+      if (p == 0 || node0[p] != node0[p - 1])
+        mark_cell_nodes(node0[p]);
     sum_energies();
     member_ids.resize(handle.size());
     for (std::size_t p = 0; p < handle.size(); ++p)
       member_ids[p] = handle[p]->get_id();
     std::sort(member_ids.begin(), member_ids.end());
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::mark_cell_nodes(const std::size_t n0)
+  {
+    for (unsigned int a = 0; a < n_corners; ++a)
+      {
+        const std::size_t n = n0 + corner_offset[a];
+        if (!node_mark[n])
+          node_mark[n] = 1, next_nodes.push_back(n);
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::clear_next()
+  {
+    if (next_dirty)
+      for (auto &f : next)
+        for (const auto n : next_nodes)
+          f[n] = 0;
+    next_dirty = false;
   }
 
 
@@ -346,7 +532,7 @@ namespace femp
   SolidMPM<dim>::write_back()
   {
     using P = typename MaterialPoints<dim>::PropertyIndex;
-    for (std::size_t p = 0; p < mass.size(); ++p)
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
       {
         auto                    it = handle[p];
         const ArrayView<double> q  = it->get_properties();
@@ -409,7 +595,7 @@ namespace femp
     const double h = grid.h(), ih = 1. / h;
     kinetic        = 0;
     weight_momentum.fill(0.);
-    for (std::size_t p = 0; p < mass.size(); ++p)
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
       {
         double v2 = 0;
         for (int d = 0; d < dim; ++d)
@@ -425,7 +611,7 @@ namespace femp
               for (int i = 0; i < dim; ++i)
                 v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
             }
-        kinetic += 0.5 * mass[p] * v2;
+        kinetic += 0.5 * (true_mass[p] * scaling) * v2;
       }
   }
 
@@ -433,83 +619,48 @@ namespace femp
   template <int dim>
   void
   SolidMPM<dim>::p2g(SolidNodeFields<dim> &nodes,
-                     const Tensor<1, dim> &gravity) const
+                     const Tensor<1, dim> &gravity)
   {
-    const double h = grid.h(), ih = 1. / h;
-    double *     nm = nodes.mass.data();
-    double *     mom[dim], *frc[dim];
+    double *nodes_out[1 + 2 * dim] = {nodes.mass.data()};
     for (int d = 0; d < dim; ++d)
-      mom[d] = nodes.momentum[d].data(), frc[d] = nodes.force[d].data();
-    const std::size_t n = mass.size();
-    double *          nodes_out[1 + 2 * dim] = {nm};
-    for (int d = 0; d < dim; ++d)
-      nodes_out[1 + d] = mom[d], nodes_out[1 + dim + d] = frc[d];
-    // Blocks of simd_lanes points, one per lane of simd_double (see
-    // update_stresses()): the contributions of the points to their corner
-    // nodes are computed in SIMD, then added to the nodes (scatter_block).
-    using VD               = simd_double;
-    constexpr unsigned int W = simd_lanes;
+      nodes_out[1 + d]       = nodes.momentum[d].data(),
+      nodes_out[1 + dim + d] = nodes.force[d].data();
+    // Sums of the fused pass of the last update_stresses(): add them (the
+    // caller zeroed the nodes; a plain copy would not do for nodes it did
+    // not zero) and leave the buffer zero.
+    if (next_ready && gravity == p2g_gravity)
+      {
+        for (unsigned int k = 0; k < 1 + 2 * dim; ++k)
+          {
+            double *const out = nodes_out[k];
+            double *const buf = next[k].data();
+            for (const auto I : next_nodes)
+              out[I] += buf[I], buf[I] = 0;
+          }
+        next_ready = next_dirty = false;
+        return;
+      }
+    clear_next();
+    next_ready   = false;
+    have_gravity = true;
+    p2g_gravity  = gravity;
+
+    const std::size_t   n = true_mass.size();
+    const P2GInput<dim> in{x,      corner, v,     C,           true_mass,
+                           volume, visc,   sigma, node0,       scaling,
+                           grid.h(), gravity};
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
-    auto loop = [&](auto transfer) {
-      constexpr bool A = decltype(transfer)::value;
-    for (std::size_t p0 = 0; p0 < n; p0 += W)
-      {
-        const PointBlock   blk(p0, n);
-        const unsigned int nl   = blk.nl;
-        const bool         full = blk.full;
-        const auto &       pl   = blk.pl;
-        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
-        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
-        const VD m = simd_load(mass, pl, full), V = simd_load(volume, pl, full),
-                 mg = simd_load(true_mass, pl, full);
-        VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
-        for (int i = 0; i < dim; ++i)
-          {
-            for (int j = 0; j < dim; ++j)
-              Vs[i][j] = V * simd_load(sigma[sidx(i, j)], pl, full);
-            Vs[i][i] += V * simd_load(visc, pl, full);
-            g[i]  = mg * gravity[i];
-            v0[i] = simd_load(v[i], pl, full);
-            for (int j = 0; j < dim; ++j)
-              Ch[i][j] = VD{};
-          }
-        // APIC: v_p(x_I) = v_p + C_p (x_I - x_p), x_I - x_p = h (b - xi).
-        if constexpr (A)
-          for (int i = 0; i < dim; ++i)
-            for (int j = 0; j < dim; ++j)
-              {
-                Ch[i][j] = h * simd_load(C[i * dim + j], pl, full);
-                v0[i] -= Ch[i][j] * xi[j];
-              }
-        // Per corner: mass, momentum (dim), force (dim), as in nodes[].
-        VD c[n_corners][1 + 2 * dim];
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const VD mN = m * N[a];
-            c[a][0]     = mN;
-            for (int i = 0; i < dim; ++i)
-              {
-                VD va = v0[i];
-                for (int j = 0; j < dim; ++j)
-                  if ((a >> j) & 1)
-                    va += Ch[i][j];
-                VD f = g[i] * N[a];
-                for (int j = 0; j < dim; ++j)
-                  f -= Vs[i][j] * dN[a][j];
-                c[a][1 + i]       = mN * va;
-                c[a][1 + dim + i] = f;
-              }
-          }
-        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
-                                   node0[pl[3]]};
-        scatter_block(c, n0, nl, corner_offset, nodes_out);
-      }
-    };
     if (apic)
-      loop(std::true_type());
+      {
+        CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
+        p2g_blocks<true>(in, 0, n, n, out);
+      }
     else
-      loop(std::false_type());
+      {
+        CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
+        p2g_blocks<false>(in, 0, n, n, out);
+      }
   }
 
 
@@ -526,9 +677,9 @@ namespace femp
         acc[d] = nodes.force[d].data(); // f_I / m_I at this point
         mom[d] = nodes.momentum[d].data();
       }
-    const std::size_t n = mass.size();
-    for (int d = 0; d < dim; ++d)
-      xdot[d].resize(n);
+    const std::size_t n = true_mass.size();
+    for (int d = 0; d < dim; ++d) // FLIP only (APIC: the grid velocity is v)
+      xdot[d].resize(apic ? 0 : n);
     // Blocks of simd_lanes points as in p2g(): nodal values gathered lane
     // by lane, the interpolation and the re-map contributions in SIMD, the
     // re-map added to the nodes in point order.
@@ -539,6 +690,7 @@ namespace femp
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
+      CellScatter<n_corners, dim> remap(corner_offset, mom);
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
         const PointBlock   blk(p0, n);
@@ -582,14 +734,15 @@ namespace femp
         VD vp[dim];
         for (int i = 0; i < dim; ++i)
           {
-            vp[i] = apic ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
+            vp[i] = A ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
             simd_store(v[i], p0, nl, vp[i]);
-            simd_store(xdot[i], p0, nl, vg[i]);
+            if constexpr (!A)
+              simd_store(xdot[i], p0, nl, vg[i]);
           }
         // Re-map (MUSL) of the new momentum with the weights of the step
         // (those of the P2G, so that the re-mapped nodal velocity of a node
         // is a mean of point velocities with the node mass).
-        const VD m = simd_load(mass, pl, full);
+        const VD m = simd_load(true_mass, pl, full) * scaling;
         VD       v0[dim], Ch[dim][dim];
         for (int i = 0; i < dim; ++i)
           v0[i] = vp[i];
@@ -615,7 +768,7 @@ namespace femp
                 nmom[a][i] = mN * va;
               }
           }
-        scatter_block(nmom, n0, nl, corner_offset, mom);
+        remap.add(nmom, n0, nl);
       }
     };
     if (apic)
@@ -637,7 +790,7 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       vel[d] = nodes.velocity[d].data();
     double            work = 0;
-    const std::size_t n    = mass.size();
+    const std::size_t n    = true_mass.size();
     left_rank              = 0;
     lost                   = false;
     kinetic                = 0;
@@ -645,6 +798,23 @@ namespace femp
     const double nu     = mat.poisson_ratio;
     auto         E_cell = cell.empty() ? 0 : cell[0];
     double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
+    // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
+    // from the second step after a gather on (the benchmark's and a coupled
+    // run's sub-cycling), so that a run of one step per gather pays nothing
+    // for it, nor a rank without points (no buffer). The buffer is zero
+    // here (p2g() consumed or cleared it).
+    const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity;
+    ++steps_since_gather;
+    double *   next_out[1 + 2 * dim];
+    if (fuse)
+      {
+        for (unsigned int k = 0; k < 1 + 2 * dim; ++k)
+          {
+            next[k].resize(grid.n_local_nodes(), 0.);
+            next_out[k] = next[k].data();
+          }
+        next_dirty = true;
+      }
     // Blocks of simd_lanes points, one point per lane of simd_double (GCC
     // vector extension, see constitutive.h): shape functions, velocity
     // gradient, constitutive update (update_stress_block), work, viscous
@@ -655,7 +825,21 @@ namespace femp
     using VD               = simd_double;
     constexpr unsigned int W = simd_lanes;
     static_assert(W == 4, "the gathers below are written for 4 lanes");
-    for (std::size_t p0 = 0; p0 < n; p0 += W)
+    auto loop = [&](auto transfer, auto fused) {
+      constexpr bool A = decltype(transfer)::value;
+      constexpr bool F = decltype(fused)::value;
+      CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, next_out);
+      const P2GInput<dim> in{x,      corner, v,     C,     true_mass,
+                             volume, visc,   sigma, node0, scaling,
+                             h,      p2g_gravity};
+      // Chunks of points: stress update and move, then (fused) the P2G of
+      // the chunk's points, whose data are still in the L1 cache.
+      constexpr std::size_t chunk = 16 * W;
+    for (std::size_t c0 = 0; c0 < n; c0 += chunk)
+      {
+    const std::size_t c1 = std::min(n, c0 + chunk);
+    // (the block loop keeps its indentation of before the chunks)
+    for (std::size_t p0 = c0; p0 < c1; p0 += W)
       {
         const PointBlock   blk(p0, n);
         const unsigned int nl   = blk.nl;
@@ -668,8 +852,8 @@ namespace femp
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
             L[i][j] = VD{};
-        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
-                                   node0[pl[3]]};
+        std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
+                             node0[pl[3]]};
         // Nodal values: one load and a broadcast when the four points lie
         // in the same cell (the usual case: the points are sorted by cell).
         auto L_sum = [&](auto &&nodal) {
@@ -723,22 +907,69 @@ namespace femp
           }
         // Viscous pressure of the forces of this step, then the new one.
         const VD V  = simd_load(volume, pl, full);
-        const VD q  = simd_load(visc, pl, full);
+        const VD mg = simd_load(true_mass, pl, full), m = mg * scaling;
+        VD       q  = simd_load(visc, pl, full);
         const VD wk = 0.5 * V * w + V * q * trL;
         for (unsigned int l = 0; l < nl; ++l)
           work += wk[l];
         if (b1 > 0)
-          simd_store(visc, p0, nl,
-                     b1 * h *
-                       simd_sqrt(sb.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) *
-                                 simd_load(mass, pl, full) / V) *
-                       trL / dt);
-        simd_store(volume, p0, nl, V * (1 + trL));
+          {
+            q = b1 * h *
+                simd_sqrt(sb.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) * m /
+                          V) *
+                trL / dt;
+            simd_store(visc, p0, nl, q);
+          }
+        const VD V_new = V * (1 + trL);
+        simd_store(volume, p0, nl, V_new);
 
-        // Move the point with the grid velocity of the step.
+        // Move the point with the grid velocity of the step (APIC: that is
+        // the point velocity).
+        VD vp[dim], xn[dim], cn[dim];
         for (int d = 0; d < dim; ++d)
-          simd_store(x[d], p0, nl,
-                     simd_load(x[d], pl, full) + dt * simd_load(xdot[d], pl, full));
+          {
+            vp[d] = simd_load(v[d], pl, full);
+            xn[d] = simd_load(x[d], pl, full) +
+                    dt * (A ? vp[d] : simd_load(xdot[d], pl, full));
+            simd_store(x[d], p0, nl, xn[d]);
+            cn[d] = simd_load(corner[d], pl, full);
+          }
+        VD Cp[dim * dim];
+        if constexpr (A)
+          for (unsigned int c = 0; c < dim * dim; ++c)
+            Cp[c] = simd_load(C[c], pl, full);
+        // Kinetic energy and momentum, the cell check: in SIMD when every
+        // point stays in its cell (the usual case; the sums are taken lane by
+        // lane in point order, the arithmetic per point that of the lane
+        // loop below).
+        auto in_cell = xn[0] >= cn[0] && xn[0] <= cn[0] + h;
+        for (int d = 1; d < dim; ++d)
+          in_cell = in_cell && xn[d] >= cn[d] && xn[d] <= cn[d] + h;
+        bool all_in = true;
+        for (unsigned int l = 0; l < W; ++l)
+          all_in = all_in && in_cell[l];
+        if (all_in)
+          {
+            VD v2 = {};
+            for (int d = 0; d < dim; ++d)
+              v2 += vp[d] * vp[d];
+            if constexpr (A)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const VD xj = (xn[j] - cn[j]) * ih;
+                  const VD D  = h * h * xj * (1 - xj);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += Cp[i * dim + j] * Cp[i * dim + j] * D;
+                }
+            const VD k = 0.5 * m * v2;
+            for (unsigned int l = 0; l < nl; ++l)
+              {
+                for (int d = 0; d < dim; ++d)
+                  weight_momentum[d] += mg[l] * vp[d][l];
+                kinetic += k[l];
+              }
+          }
+        else
         for (unsigned int l = 0; l < nl; ++l)
           {
             const std::size_t p = p0 + l;
@@ -781,11 +1012,12 @@ namespace femp
                 for (int d = 0; d < dim; ++d)
                   corner[d][p] = grid.origin()[d] + ijk[d] * h;
                 moved_cell = true;
+                mark_cell_nodes(node0[p]);
               }
             // APIC: affine part with the tents of the cell that now holds
             // the point (those of the next P2G). Points that left the rank
             // are counted by the gather of resort().
-            if (apic)
+            if (A)
               for (int j = 0; j < dim; ++j)
                 {
                   const double xj = (x[j][p] - corner[j][p]) * ih;
@@ -793,9 +1025,23 @@ namespace femp
                   for (int i = 0; i < dim; ++i)
                     v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
                 }
-            kinetic += 0.5 * mass[p] * v2;
+            kinetic += 0.5 * (true_mass[p] * scaling) * v2;
           }
+
       }
+    if constexpr (F)
+      p2g_blocks<A>(in, c0, c1, n, out);
+      }
+    };
+    if (apic && fuse)
+      loop(std::true_type(), std::true_type());
+    else if (apic)
+      loop(std::true_type(), std::false_type());
+    else if (fuse)
+      loop(std::false_type(), std::true_type());
+    else
+      loop(std::false_type(), std::false_type());
+    next_ready = fuse && !lost && left_rank == 0;
     return work;
   }
 
@@ -806,7 +1052,7 @@ namespace femp
   {
     double       s = 0;
     unsigned int n = 0;
-    for (std::size_t p = 0; p < mass.size(); ++p)
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
       if (cell[p] == idx)
         s += sigma[0][p], ++n;
     return {n > 0 ? s / n : 0., n};
@@ -819,7 +1065,7 @@ namespace femp
                                    std::vector<double> &vm,
                                    std::vector<double> &count) const
   {
-    for (std::size_t p = 0; p < mass.size(); ++p)
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
       {
         SymmetricTensor<2, 3> s;
         for (unsigned int i = 0; i < 3; ++i)
@@ -836,7 +1082,7 @@ namespace femp
   bool
   SolidMPM<dim>::find_non_finite(Point<dim> &where) const
   {
-    for (std::size_t p = 0; p < mass.size(); ++p)
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
       {
         bool bad = false;
         for (unsigned int c = 0; c < n_stress; ++c)

@@ -43,12 +43,17 @@
 // (x_I - x_p)(x_I - x_p)^T = diag(h^2 xi_d (1 - xi_d)), the kinetic energy
 // the point hands to the grid.
 //
-// Speed: one loop over the points per phase (P2G; G2P + move + re-map;
-// stress update), flat arrays per component, node indices by the first node
-// of the cell plus fixed corner offsets, tent weights recomputed from the
-// local coordinate in registers (a cache of 2^dim (dim + 1) weights per
-// point would cost more memory traffic than the few multiplications).
-// Kinetic energy and gravity power are summed in the stress loop.
+// Speed: two passes over the points per step when sub-cycling: G2P + MUSL
+// re-map (steps 3-4), and the stress update (5) + move fused with the P2G
+// (1) of the next step, whose node sums wait in a buffer of SolidMPM until
+// p2g() hands them over (the P2G of a point needs only that point's state
+// after its stress update, so the fusion changes no arithmetic). The first
+// step after a gather() runs a separate P2G pass. Flat arrays per component,
+// node indices by the first node of the cell plus fixed corner offsets, tent
+// weights recomputed from the local coordinate in registers (a cache of
+// 2^dim (dim + 1) weights per point would cost more memory traffic than the
+// few multiplications). Kinetic energy and gravity power are summed in the
+// stress loop.
 //
 // The forces use sigma_p + q_p I, with the artificial bulk-viscosity
 // pressure q_p = b1 rho c h tr(D) of the last stress update (see
@@ -126,8 +131,10 @@ namespace femp
 
     /// Step 1: add point mass, momentum and forces (internal and gravity) to
     /// the node fields (partial sums of this rank).
+    /// When the last update_stresses() already computed these sums (fused
+    /// pass), they are added from its buffer.
     void
-    p2g(SolidNodeFields<dim> &nodes, const Tensor<1, dim> &gravity) const;
+    p2g(SolidNodeFields<dim> &nodes, const Tensor<1, dim> &gravity);
     /// Steps 3 and 4: velocity update (FLIP from the nodal accelerations in
     /// nodes.force = f_I / m_I, or APIC from nodes.velocity) and re-map of
     /// the new point momenta into nodes.momentum (partial sums; the caller
@@ -138,7 +145,9 @@ namespace femp
     /// cell temperatures at the start and end of the step. Returns the
     /// stress work sum V sigma : D dt of this rank. Then moves the points by
     /// the grid velocity of g2p() and binds points that left their cell to
-    /// their new owned cell (see n_left_rank()).
+    /// their new owned cell (see n_left_rank()). From the second step after
+    /// a gather() on, the same pass also computes the P2G sums of the next
+    /// step (with the gravity of the last p2g()) for the next p2g().
     double
     update_stresses(const SolidNodeFields<dim> &nodes,
                     const double                dt,
@@ -194,7 +203,7 @@ namespace femp
     std::size_t
     n_points() const
     {
-      return mass.size();
+      return true_mass.size();
     }
     /// Mean sigma_xx and number of points in cell @p idx (this rank).
     std::pair<double, unsigned int>
@@ -226,9 +235,10 @@ namespace femp
 
     // Structure of arrays, one vector per component.
     std::array<std::vector<double>, dim>       x, v, corner;
-    std::array<std::vector<double>, dim>       xdot; ///< grid velocity at x_p
+    /// Grid velocity at x_p (FLIP; with APIC it is v).
+    std::array<std::vector<double>, dim>       xdot;
     std::array<std::vector<double>, dim * dim> C; ///< APIC, row-major, 1/s
-    std::vector<double>                        mass, true_mass, volume;
+    std::vector<double>                        true_mass, volume;
     std::vector<double>                   visc; ///< viscous pressure q, Pa
     std::array<std::vector<double>, n_stress> sigma;
     std::vector<double>                       eps_p;
@@ -237,7 +247,7 @@ namespace femp
       handle;
 
     std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
-    double                    scaling = 1;
+    double                    scaling = 1; ///< inertial mass / true_mass
     double                    kinetic = 0;
     std::array<double, dim>   weight_momentum{}; ///< sum m_true v
     bool                      moved_cell = false, lost = false;
@@ -247,6 +257,25 @@ namespace femp
     /// Particle ids of the points of the last gather(), sorted.
     std::vector<types::particle_index> member_ids;
 
+    /// P2G sums of the next step from the fused pass of update_stresses():
+    /// mass, momentum (dim), force (dim) per node of the local box, zero
+    /// outside the nodes written (next_nodes, the corners of the cells that
+    /// hold points since the last gather(), marked in node_mark).
+    std::array<std::vector<double>, 1 + 2 * dim> next;
+    std::vector<std::uint32_t>                   next_nodes;
+    std::vector<std::uint8_t>                    node_mark;
+    bool                 next_ready = false; ///< next holds the next P2G
+    bool                 next_dirty = false; ///< next is not all zero
+    unsigned int         steps_since_gather = 0;
+    bool                 have_gravity       = false;
+    Tensor<1, dim>       p2g_gravity; ///< of the last p2g()
+
+    /// Marks the corners of the cell with first node @p n0 in next_nodes.
+    void
+    mark_cell_nodes(const std::size_t n0);
+    /// Zeroes next at next_nodes if it was written.
+    void
+    clear_next();
     /// Write the flat arrays back to the particles (no re-sorting).
     void
     write_back();
