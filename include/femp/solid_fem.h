@@ -226,8 +226,24 @@ namespace femp
     double               V = 0, bb = 0, mass_scale = 1;
     Tensor<1, dim>       g;
 
-    // Elements.
-    std::vector<std::uint32_t> conn;      ///< n_corners local nodes each
+    // Node box: the local nodes (owned and ghost) are numbered
+    // lexicographically in the bounding box of their structured indices
+    // (x fastest), box index n = sum_d (ijk_d - box_lo_d) box_stride_d;
+    // node data are flat arrays per component over the box (padded to a
+    // multiple of simd_lanes; slots without a local node stay zero). An
+    // x-row of elements then has its corner nodes at consecutive indices.
+    std::array<int, dim>         box_lo, box_n;
+    std::array<std::size_t, dim> box_stride;
+    std::size_t                  n_box = 0; ///< padded box size
+    bool                         multi_rank = false;
+
+    // Elements, in lexicographic order of their zone index (x fastest).
+    std::vector<std::uint32_t> conn; ///< n_corners box node indices each
+    /// Per block: box index of corner 0 of its first element if its
+    /// simd_lanes elements are consecutive in one x-row (their corners are
+    /// then simd_lanes consecutive nodes from there, loaded as vectors),
+    /// else -1 (corners gathered one by one through conn).
+    std::vector<std::int64_t> block_row;
     /// State of simd_lanes consecutive elements (lane l: element
     /// simd_lanes * block + l), so that the element loop loads and stores
     /// whole SIMD registers; the lanes of the last block beyond the last
@@ -265,16 +281,27 @@ namespace femp
     std::vector<std::uint32_t> grid_zone_cells;          ///< owned zone cells
     std::vector<double>        T_send;
 
-    // Nodes (owned, then ghosts).
-    std::size_t                n_owned = 0, n_local = 0;
-    std::vector<double>        vel; ///< dim per node
-    std::vector<double>        mass, inv_mass;
-    std::vector<std::uint8_t>  fix;      ///< bit d: velocity d fixed
-    std::vector<int>           node_tr;  ///< transition index or -1
-    std::vector<std::uint64_t> node_zone_id; ///< lexicographic node index
-    std::vector<double>        ext;      ///< external force, dim per node
-    std::vector<std::uint32_t> ext_nodes;
+    // Nodes (box numbering, see above).
+    std::size_t                n_owned = 0, n_local = 0; ///< DoFHandler's
+    std::vector<std::uint32_t> box_of;  ///< box index of local node ln
+    /// Local nodes whose force sums go over ranks: ghosts and owned nodes
+    /// that are ghosts elsewhere (empty on one rank).
+    std::vector<std::uint32_t> shared_nodes;
+    std::array<std::vector<double>, dim> vel;   ///< velocity, m/s
+    std::array<std::vector<double>, dim> frc;   ///< nodal force, N
+    std::array<std::vector<double>, dim> ext;   ///< external force, N
+    /// Per component: all bits set where the velocity is free, 0 where it
+    /// is fixed or no local node (masks the new velocity bitwise).
+    std::array<std::vector<std::int64_t>, dim> free_mask;
+    std::vector<double>        inv_mass;   ///< 0 at transition nodes
+    std::vector<double>        owned_mass; ///< lumped mass at owned nodes
+    std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
+    std::vector<std::uint32_t> ext_nodes;    ///< box indices
     double                     kinetic = 0;
+    /// Sums of the force components (@p f) of the shared nodes over ranks
+    /// (compress(add), update_ghost_values of the vector @p force).
+    void
+    sum_shared(std::array<std::vector<double>, dim> &f);
 
     // Transition nodes (global, every rank).
     std::vector<std::array<int, dim>> tr_ijk;
@@ -282,6 +309,8 @@ namespace femp
     std::vector<std::uint8_t>         tr_fix;
     /// (element, corner, transition index) of this rank's elements.
     std::vector<std::array<std::uint32_t, 3>> tr_corners;
+    /// (box index, transition index) of the local transition nodes.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> tr_local;
     std::vector<double>                       tr_hg; ///< partial f^HG
 
     std::vector<std::uint8_t> in_zone_cell;
@@ -289,6 +318,9 @@ namespace femp
     template <bool update>
     double
     element_loop(const double dt, const double w);
+    template <bool with_ext>
+    std::array<double, 2>
+    node_loop(const double dt);
     double
     hourglass_stiffness(const double T, const double kappa) const;
   };
