@@ -382,8 +382,8 @@ namespace femp
         vel[d].assign(n_box, 0.);
         frc[d].assign(n_box, 0.);
         ext[d].assign(n_box, 0.);
-        free_mask[d].assign(n_box, 0);
       }
+    fix.assign(n_box, 0xff);
     inv_mass.assign(n_box, 0.);
     owned_mass.assign(n_box, 0.);
     node_zone_id.assign(n_box, std::numeric_limits<std::uint64_t>::max());
@@ -448,9 +448,8 @@ namespace femp
     tr_local.clear();
     for (std::size_t ln = 0; ln < n_local; ++ln)
       {
-        const std::uint32_t n   = box_of[ln];
-        const auto          fix = fix_bits(node_ijk[ln]);
-        node_zone_id[n]         = zone_node_id(node_ijk[ln]);
+        const std::uint32_t n = box_of[ln];
+        node_zone_id[n]       = zone_node_id(node_ijk[ln]);
         const auto it =
           std::lower_bound(tr_id.begin(), tr_id.end(), node_zone_id[n]);
         const bool tr = it != tr_id.end() && *it == node_zone_id[n];
@@ -461,8 +460,7 @@ namespace femp
         // Transition nodes take their velocity from update_transition():
         // zero inverse mass, all components free (fixed ones are zero there).
         inv_mass[n] = tr ? 0. : 1. / mass[n];
-        for (int d = 0; d < dim; ++d)
-          free_mask[d][n] = (!tr && (fix & (1u << d))) ? 0 : ~std::int64_t(0);
+        fix[n]      = tr ? 0 : fix_bits(node_ijk[ln]);
       }
     std::sort(tr_local.begin(), tr_local.end());
     std::vector<int> box_tr(n_box, -1);
@@ -674,6 +672,7 @@ namespace femp
   {
     using VD = simd_double;
     typedef std::int64_t VI __attribute__((vector_size(sizeof(VD))));
+    typedef std::uint8_t VB __attribute__((vector_size(simd_lanes)));
     constexpr unsigned int W = simd_lanes;
     auto load = [](const auto *p) {
       std::conditional_t<std::is_same_v<std::decay_t<decltype(*p)>, double>, VD, VI> v;
@@ -685,13 +684,17 @@ namespace femp
     for (std::size_t n = 0; n < n_box; n += W)
       {
         const VD im = dt * load(&inv_mass[n]);
+        VB       fb;
+        std::memcpy(&fb, &fix[n], sizeof fb);
+        const VI fi = __builtin_convertvector(fb, VI);
         VD       v[dim];
         for (int d = 0; d < dim; ++d)
           {
             VD f = load(&frc[d][n]);
             if constexpr (with_ext)
               f += load(&ext[d][n]);
-            v[d] = VD(VI(load(&vel[d][n]) + im * f) & load(&free_mask[d][n]));
+            const VI free = (fi & (1 << d)) == 0;
+            v[d]          = VD(VI(load(&vel[d][n]) + im * f) & free);
             std::memcpy(&vel[d][n], &v[d], sizeof(VD));
             std::memcpy(&frc[d][n], &zero, sizeof(VD));
           }

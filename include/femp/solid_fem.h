@@ -290,9 +290,10 @@ namespace femp
     std::array<std::vector<double>, dim> vel;   ///< velocity, m/s
     std::array<std::vector<double>, dim> frc;   ///< nodal force, N
     std::array<std::vector<double>, dim> ext;   ///< external force, N
-    /// Per component: all bits set where the velocity is free, 0 where it
-    /// is fixed or no local node (masks the new velocity bitwise).
-    std::array<std::vector<std::int64_t>, dim> free_mask;
+    /// Bit d set: velocity component d fixed (zero); all bits at slots
+    /// without a local node. Clear at transition nodes (their velocity
+    /// comes from update_transition(), fixed components zero there).
+    std::vector<std::uint8_t>  fix;
     std::vector<double>        inv_mass;   ///< 0 at transition nodes
     std::vector<double>        owned_mass; ///< lumped mass at owned nodes
     std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
