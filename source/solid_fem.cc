@@ -762,8 +762,9 @@ namespace femp
     // (GCC vector extension, see constitutive.h); a partial last block
     // repeats its last element in the spare lanes and stores nothing from
     // them. Per element the arithmetic is that of the scalar formulation,
-    // and the work and the nodal forces are summed in element order, so the
-    // results do not depend on the block size.
+    // and the work is summed in element order. The nodal force sums are in
+    // lexicographic element order, the two elements of a block that share a
+    // node summed first (round-off against other orders).
     using VD               = simd_double;
     constexpr unsigned int W = simd_lanes;
     static_assert(W == 4, "the gathers below are written for 4 lanes");

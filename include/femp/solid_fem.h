@@ -7,12 +7,19 @@
 // on grid lines), cells of the grid's size h, so that every element covers
 // one background-grid cell and every FE node coincides with a grid node
 // (N_Ii = 1 at transition nodes). p4est partitions it independently of the
-// background grid. Nodes are numbered by a DoFHandler with FE_Q<dim>(1);
-// node data (velocity, lumped mass) live in flat arrays over
-// the locally relevant nodes (owned first, then ghosts, in the numbering of
-// the Utilities::MPI::Partitioner), nodal force sums over ranks go through a
-// LinearAlgebra::distributed::Vector (compress(add), update_ghost_values).
-// Element data (corner node indices, stress state, temperatures) are flat
+// background grid. A DoFHandler with FE_Q<dim>(1) defines the owned and
+// ghost nodes of a rank (the Utilities::MPI::Partitioner); the hot loops use
+// their own numbering: the local nodes are numbered lexicographically in
+// the bounding box of their structured indices (x fastest), node data
+// (velocity, force, inverse mass, fixed components) are one flat array per
+// component over that box, and the elements are processed in lexicographic
+// order, so that a block of simd_lanes elements of one x-row has its
+// corners at simd_lanes consecutive nodes (vector loads; the forces of the
+// block added as vectors, no two lanes on the same node). Nodal force sums
+// over ranks copy the shared nodes (ghosts and owned nodes that are ghosts
+// elsewhere) through a LinearAlgebra::distributed::Vector (compress(add),
+// update_ghost_values); nothing is copied on one rank.
+// Element data (corner box indices, stress state, temperatures) are flat
 // arrays. The temperature of an element is that of its grid cell (eq. 2):
 // the grid rank that owns the cell sends it, once per advance() (not per
 // solid step), through a Utilities::MPI::NoncontiguousPartitioner keyed by
@@ -31,8 +38,10 @@
 // with the hourglass energy 1/2 k sum q^2 per element. All elements are the
 // same cube, so b_a and Gamma are compile-time constants: one fused loop per
 // element (gather velocities, L, constitutive update, stress work, viscous
-// pressure, internal + hourglass forces of the next step scattered to the
-// nodes) and one loop over the nodes, the element loop in
+// pressure, internal + hourglass forces of the next step added to the
+// nodes) and one fused loop over the nodes (velocity update, zeroing the
+// force for the next element loop, energies), both in SIMD; the element
+// loop in
 // SIMD blocks of simd_lanes elements (one per lane of simd_double, element
 // state stored per block, update_stress_block of constitutive.h).
 //
