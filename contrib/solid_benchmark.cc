@@ -12,7 +12,8 @@
 //                                 [fe | mpm | apic | flip | constitutive:
 //                                  only that part]
 //   (constitutive: the scalar update_stress and the SIMD update_stress_block
-//   on the same states)
+//   on the same states; fe also prints the final energies and
+//   stress sums of both runs, to compare code versions)
 //
 // Run on one core (no mpirun) with a Release build. Prints ns of process CPU
 // time per point-step and per element-step (the grid node work of a step is
@@ -26,6 +27,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <sstream>
 
 using namespace dealii;
 using namespace femp;
@@ -38,7 +40,8 @@ namespace
   run(const unsigned int n, const unsigned int steps, const bool fe,
       const bool subcycled, double &n_objects,
       const SolidMaterial::VelocityTransfer transfer =
-        SolidMaterial::VelocityTransfer::flip)
+        SolidMaterial::VelocityTransfer::flip,
+      std::ostream *check = nullptr)
   {
     const double                      h = 1e-5;
     typename BackgroundGrid<dim>::Parameters gp;
@@ -103,6 +106,24 @@ namespace
     // Process CPU time, not wall time: on a shared machine the wall time
     // also counts the time other processes hold the core.
     const double cpu = double(std::clock() - start) / CLOCKS_PER_SEC;
+    if (check != nullptr)
+      {
+        // Final state (to compare code versions; not timed): energies and
+        // sums of sigma_xx and the von Mises stress over the cells.
+        const auto          e = solid.energies();
+        std::vector<double> sxx = grid.make_field(0.), vm = grid.make_field(0.);
+        solid.cell_stress_fields(sxx, vm);
+        double ssum = 0, vsum = 0;
+        for (const auto c : grid.owned_cells())
+          ssum += sxx[c], vsum += vm[c];
+        ssum = Utilities::MPI::sum(ssum, MPI_COMM_WORLD);
+        vsum = Utilities::MPI::sum(vsum, MPI_COMM_WORLD);
+        if (Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
+          *check << std::setprecision(12) << "  check: external " << e.external
+                 << " internal " << e.internal << " kinetic " << e.kinetic
+                 << " hourglass " << e.hourglass << " sum sigma_xx " << ssum
+                 << " sum von Mises " << vsum << "\n";
+      }
     return cpu / steps / n_objects * 1e9;
   }
   /// The constitutive update alone (eq. 5), as the FE calls it: ns per
@@ -250,12 +271,16 @@ main(int argc, char **argv)
     {
       const bool   fe = only == "fe";
       double       n_obj = 0;
-      const double a     = run(n, steps, fe, false, n_obj);
-      const double b     = run(n, steps, fe, true, n_obj);
+      std::ostringstream check;
+      const double       a = run(n, steps, fe, false, n_obj,
+                           SolidMaterial::VelocityTransfer::flip, fe ? &check : nullptr);
+      const double       b = run(n, steps, fe, true, n_obj,
+                           SolidMaterial::VelocityTransfer::flip, fe ? &check : nullptr);
       std::cout << std::setprecision(4) << (fe ? "FE: " : "MPM: ") << n_obj
                 << (fe ? " elements, " : " points, ") << a
                 << " ns per step (one advance() per step), " << b
-                << " ns per step (sub-cycled)\n";
+                << " ns per step (sub-cycled)\n"
+                << check.str();
       return 0;
     }
   const double       mpm  = run(n, steps, false, false, n_points);

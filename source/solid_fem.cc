@@ -11,6 +11,9 @@
 #include <femp/solid_fem.h>
 
 #include <algorithm>
+#include <cstring>
+#include <limits>
+#include <type_traits>
 #include <cmath>
 
 namespace femp
@@ -292,55 +295,125 @@ namespace femp
       force.reinit(std::make_shared<Utilities::MPI::Partitioner>(vo, vg, comm));
     }
 
-    // Elements and the structured index of each local node.
+    // Elements in lexicographic order of their zone index (x fastest), and
+    // the structured index of each local node.
     const double m_el = mat.density * V * mass_scaling / n_corners;
-    conn.clear(), element_id.clear();
     std::vector<std::array<int, dim>> node_ijk(n_local);
+    std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, n_corners>>>
+                                         cells;
     std::vector<types::global_dof_index> dofs(n_corners);
     off_rank = 0;
     for (const auto &cell : dof_handler.active_cell_iterators())
       if (cell->is_locally_owned())
         {
           const auto ijk = grid.cell_of(cell->center());
-          element_id.push_back(zone_cell_id(ijk));
           if (!grid.in_box(ijk) || grid.cell_status()[grid.local_index(ijk)] !=
                                      BackgroundGrid<dim>::owned)
             ++off_rank;
           cell->get_dof_indices(dofs);
+          std::array<std::uint32_t, n_corners> c;
           for (unsigned int a = 0; a < n_corners; ++a)
             {
-              const unsigned int ln = node_partitioner->global_to_local(dofs[a]);
-              conn.push_back(ln);
+              c[a] = node_partitioner->global_to_local(dofs[a]);
               for (int d = 0; d < dim; ++d)
-                node_ijk[ln][d] = ijk[d] + ((a >> d) & 1u);
+                node_ijk[c[a]][d] = ijk[d] + ((a >> d) & 1u);
             }
+          cells.emplace_back(zone_cell_id(ijk), c);
         }
-    const std::size_t n_el = element_id.size();
+    std::sort(cells.begin(), cells.end(),
+              [](const auto &a, const auto &b) { return a.first < b.first; });
+    const std::size_t n_el = cells.size();
+
+    // The node box: bounding box of the local nodes' structured indices.
+    multi_rank = Utilities::MPI::n_mpi_processes(comm) > 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        int lo = std::numeric_limits<int>::max(), hi = -1;
+        for (const auto &ijk : node_ijk)
+          lo = std::min(lo, ijk[d]), hi = std::max(hi, ijk[d]);
+        box_lo[d] = n_local > 0 ? lo : 0;
+        box_n[d]  = n_local > 0 ? hi - lo + 1 : 0;
+      }
+    std::size_t n_slots = 1;
+    for (int d = 0; d < dim; ++d)
+      box_stride[d] = n_slots, n_slots *= box_n[d];
+    n_box = (n_slots + simd_lanes - 1) / simd_lanes * simd_lanes;
+    auto box_index = [&](const std::array<int, dim> &ijk) {
+      std::size_t n = 0;
+      for (int d = 0; d < dim; ++d)
+        n += (ijk[d] - box_lo[d]) * box_stride[d];
+      return std::uint32_t(n);
+    };
+    box_of.resize(n_local);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      box_of[ln] = box_index(node_ijk[ln]);
+    AssertThrow(n_box < std::numeric_limits<std::uint32_t>::max(),
+                ExcMessage("FE node box too large for 32-bit node indices"));
+
+    conn.resize(n_corners * n_el);
+    element_id.resize(n_el);
+    for (std::size_t e = 0; e < n_el; ++e)
+      {
+        element_id[e] = cells[e].first;
+        for (unsigned int a = 0; a < n_corners; ++a)
+          conn[n_corners * e + a] = box_of[cells[e].second[a]];
+      }
     element_by_id.clear();
     for (std::size_t e = 0; e < n_el; ++e)
       element_by_id.emplace_back(element_id[e], e);
-    std::sort(element_by_id.begin(), element_by_id.end());
     blocks.assign((n_el + simd_lanes - 1) / simd_lanes, ElementBlock());
-
-    // Lumped masses: element shares summed over ranks.
-    force.zero_out_ghost_values();
-    force = 0.;
-    double *F = force.begin();
-    for (const auto ln : conn)
-      for (int d = 0; d < dim; ++d)
-        F[dim * ln + d] += m_el;
-    force.compress(VectorOperation::add);
-    force.update_ghost_values();
-    mass.resize(n_local), inv_mass.resize(n_local);
-    for (std::size_t ln = 0; ln < n_local; ++ln)
+    // Blocks of simd_lanes elements of one x-row: consecutive zone indices
+    // that do not wrap to the next row.
+    block_row.assign(blocks.size(), -1);
+    for (std::size_t b = 0; b < blocks.size(); ++b)
       {
-        mass[ln]     = F[dim * ln];
-        inv_mass[ln] = 1. / mass[ln];
+        const std::size_t e0 = simd_lanes * b;
+        if (e0 + simd_lanes > n_el)
+          continue;
+        const std::uint64_t id0 = element_id[e0];
+        if (element_id[e0 + simd_lanes - 1] == id0 + simd_lanes - 1 &&
+            id0 % zn[0] + simd_lanes <= std::uint64_t(zn[0]))
+          block_row[b] = conn[n_corners * e0];
       }
-    vel.assign(dim * n_local, 0.);
-    ext.assign(dim * n_local, 0.);
+
+    // Node arrays over the box.
+    for (int d = 0; d < dim; ++d)
+      {
+        vel[d].assign(n_box, 0.);
+        frc[d].assign(n_box, 0.);
+        ext[d].assign(n_box, 0.);
+      }
+    fix.assign(n_box, 0xff);
+    inv_mass.assign(n_box, 0.);
+    owned_mass.assign(n_box, 0.);
+    node_zone_id.assign(n_box, std::numeric_limits<std::uint64_t>::max());
     ext_nodes.clear();
     kinetic = 0;
+    if (multi_rank)
+      {
+        std::vector<std::uint32_t> s;
+        for (const auto &range : node_partitioner->import_indices())
+          for (unsigned int i = range.first; i < range.second; ++i)
+            s.push_back(i);
+        for (std::size_t ln = n_owned; ln < n_local; ++ln)
+          s.push_back(ln);
+        std::sort(s.begin(), s.end());
+        s.erase(std::unique(s.begin(), s.end()), s.end());
+        shared_nodes = s;
+      }
+    else
+      shared_nodes.clear();
+
+    // Lumped masses: element shares summed over ranks.
+    for (const auto n : conn)
+      for (int d = 0; d < dim; ++d)
+        frc[d][n] += m_el;
+    sum_shared(frc);
+    std::vector<double> mass(n_box, 0.);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      mass[box_of[ln]] = frc[0][box_of[ln]];
+    for (int d = 0; d < dim; ++d)
+      std::fill(frc[d].begin(), frc[d].end(), 0.);
 
     // Transition nodes, numbered on every rank in lexicographic order of
     // the zone's nodes.
@@ -372,22 +445,33 @@ namespace femp
     }
     tr_vel.assign(dim * tr_ijk.size(), 0.);
     tr_hg.assign(dim * tr_ijk.size(), 0.);
-    fix.resize(n_local), node_tr.resize(n_local), node_zone_id.resize(n_local);
+    tr_local.clear();
     for (std::size_t ln = 0; ln < n_local; ++ln)
       {
-        fix[ln]          = fix_bits(node_ijk[ln]);
-        node_zone_id[ln] = zone_node_id(node_ijk[ln]);
+        const std::uint32_t n = box_of[ln];
+        node_zone_id[n]       = zone_node_id(node_ijk[ln]);
         const auto it =
-          std::lower_bound(tr_id.begin(), tr_id.end(), node_zone_id[ln]);
-        node_tr[ln] =
-          (it != tr_id.end() && *it == node_zone_id[ln]) ? it - tr_id.begin() : -1;
+          std::lower_bound(tr_id.begin(), tr_id.end(), node_zone_id[n]);
+        const bool tr = it != tr_id.end() && *it == node_zone_id[n];
+        if (tr)
+          tr_local.emplace_back(n, it - tr_id.begin());
+        if (ln < n_owned)
+          owned_mass[n] = mass[n];
+        // Transition nodes take their velocity from update_transition():
+        // zero inverse mass, all components free (fixed ones are zero there).
+        inv_mass[n] = tr ? 0. : 1. / mass[n];
+        fix[n]      = tr ? 0 : fix_bits(node_ijk[ln]);
       }
+    std::sort(tr_local.begin(), tr_local.end());
+    std::vector<int> box_tr(n_box, -1);
+    for (const auto &[n, t] : tr_local)
+      box_tr[n] = t;
     tr_corners.clear();
     for (std::size_t e = 0; e < n_el; ++e)
       for (unsigned int a = 0; a < n_corners; ++a)
-        if (node_tr[conn[n_corners * e + a]] >= 0)
-          tr_corners.push_back(
-            {{std::uint32_t(e), a, std::uint32_t(node_tr[conn[n_corners * e + a]])}});
+        if (box_tr[conn[n_corners * e + a]] >= 0)
+          tr_corners.push_back({{std::uint32_t(e), a,
+                                 std::uint32_t(box_tr[conn[n_corners * e + a]])}});
 
     // Temperatures: the grid rank owning a zone cell sends it (eq. 2).
     grid_zone_cells.clear();
@@ -432,9 +516,9 @@ namespace femp
   {
     if (!prm.enabled || (f == nullptr && ext_nodes.empty()))
       return;
-    for (const auto ln : ext_nodes)
+    for (const auto n : ext_nodes)
       for (int d = 0; d < dim; ++d)
-        ext[dim * ln + d] = 0;
+        ext[d][n] = 0;
     ext_nodes.clear();
     if (f == nullptr)
       return;
@@ -475,10 +559,11 @@ namespace femp
           mine.push_back((*f)[d][n]);
       }
     const auto all = Utilities::MPI::all_gather(comm, mine);
-    // Owned FE nodes by zone node id.
+    // Local FE nodes (owned and ghost: every rank that updates a node adds
+    // the same external force after the sum over ranks) by zone node id.
     std::vector<std::pair<std::uint64_t, std::uint32_t>> ids;
-    for (std::size_t ln = 0; ln < n_owned; ++ln)
-      ids.emplace_back(node_zone_id[ln], ln);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      ids.emplace_back(node_zone_id[box_of[ln]], box_of[ln]);
     std::sort(ids.begin(), ids.end());
     for (const auto &v : all)
       for (std::size_t i = 0; i < v.size(); i += dim + 1)
@@ -488,12 +573,31 @@ namespace femp
             ids.begin(), ids.end(), std::make_pair(id, std::uint32_t(0)));
           if (it == ids.end() || it->first != id)
             continue;
-          if (std::find(ext_nodes.begin(), ext_nodes.end(), it->second) ==
-              ext_nodes.end())
-            ext_nodes.push_back(it->second);
+          ext_nodes.push_back(it->second);
           for (int d = 0; d < dim; ++d)
-            ext[dim * it->second + d] += v[i + 1 + d];
+            ext[d][it->second] += v[i + 1 + d];
         }
+    std::sort(ext_nodes.begin(), ext_nodes.end());
+    ext_nodes.erase(std::unique(ext_nodes.begin(), ext_nodes.end()),
+                    ext_nodes.end());
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::sum_shared(std::array<std::vector<double>, dim> &f)
+  {
+    if (!multi_rank)
+      return;
+    double *F = force.begin();
+    for (const auto ln : shared_nodes)
+      for (int d = 0; d < dim; ++d)
+        F[dim * ln + d] = f[d][box_of[ln]];
+    force.compress(VectorOperation::add);
+    force.update_ghost_values();
+    for (const auto ln : shared_nodes)
+      for (int d = 0; d < dim; ++d)
+        f[d][box_of[ln]] = F[dim * ln + d];
   }
 
 
@@ -501,14 +605,9 @@ namespace femp
   void
   SolidFEM<dim>::add_transition_partials(std::vector<double> &buf) const
   {
-    const double *F = force.begin();
-    for (std::size_t ln = 0; ln < n_local; ++ln)
-      if (node_tr[ln] >= 0)
-        {
-          const std::size_t t = node_tr[ln];
-          for (int d = 0; d < dim; ++d)
-            buf[tr_width * t + 1 + dim + d] += F[dim * ln + d] - tr_hg[dim * t + d];
-        }
+    for (const auto &[n, t] : tr_local)
+      for (int d = 0; d < dim; ++d)
+        buf[tr_width * t + 1 + dim + d] += frc[d][n] - tr_hg[dim * t + d];
     for (std::size_t t = 0; t < tr_ijk.size(); ++t)
       for (int d = 0; d < dim; ++d)
         buf[tr_width * t + 1 + 2 * dim + d] += tr_hg[dim * t + d];
@@ -552,40 +651,73 @@ namespace femp
   {
     if (!prm.enabled)
       return {{0., 0.}};
-    force.compress(VectorOperation::add);
-    double *F = force.begin();
-    for (const auto ln : ext_nodes)
+    // Element forces summed over ranks; velocities of the transition
+    // nodes (zero inverse mass below keeps them).
+    sum_shared(frc);
+    for (const auto &[n, t] : tr_local)
       for (int d = 0; d < dim; ++d)
-        F[dim * ln + d] += ext[dim * ln + d];
-    force.update_ghost_values();
-    double k = 0, p = 0;
-    for (std::size_t ln = 0; ln < n_local; ++ln)
+        vel[d][n] = tr_vel[dim * t + d];
+    return ext_nodes.empty() ? node_loop<false>(dt) : node_loop<true>(dt);
+  }
+
+
+  /// The node update over the box in SIMD: v <- v + dt (f + f_ext) / m
+  /// masked to zero in fixed components (eq. 10), the force zeroed for the
+  /// next element loop, kinetic energy and external power (gravity on the
+  /// unscaled mass, external forces) of the owned nodes.
+  template <int dim>
+  template <bool with_ext>
+  std::array<double, 2>
+  SolidFEM<dim>::node_loop(const double dt)
+  {
+    using VD = simd_double;
+    typedef std::int64_t VI __attribute__((vector_size(sizeof(VD))));
+    typedef std::uint8_t VB __attribute__((vector_size(simd_lanes)));
+    constexpr unsigned int W = simd_lanes;
+    auto load = [](const auto *p) {
+      std::conditional_t<std::is_same_v<std::decay_t<decltype(*p)>, double>, VD, VI> v;
+      std::memcpy(&v, p, sizeof v);
+      return v;
+    };
+    VD k = {}, p = {};
+    const VD zero = {};
+    for (std::size_t n = 0; n < n_box; n += W)
       {
-        double *v = &vel[dim * ln];
-        if (node_tr[ln] >= 0)
-          for (int d = 0; d < dim; ++d)
-            v[d] = tr_vel[dim * node_tr[ln] + d];
-        else
+        const VD im = dt * load(&inv_mass[n]);
+        VB       fb;
+        std::memcpy(&fb, &fix[n], sizeof fb);
+        const VI fi = __builtin_convertvector(fb, VI);
+        VD       v[dim];
+        for (int d = 0; d < dim; ++d)
           {
-            const double im = dt * inv_mass[ln];
-            for (int d = 0; d < dim; ++d)
-              v[d] = (fix[ln] & (1u << d)) ? 0. : v[d] + im * F[dim * ln + d];
+            VD f = load(&frc[d][n]);
+            if constexpr (with_ext)
+              f += load(&ext[d][n]);
+            const VI free = (fi & (1 << d)) == 0;
+            v[d]          = VD(VI(load(&vel[d][n]) + im * f) & free);
+            std::memcpy(&vel[d][n], &v[d], sizeof(VD));
+            std::memcpy(&frc[d][n], &zero, sizeof(VD));
           }
-        double v2 = 0, gv = 0, fv = 0;
+        VD v2 = {}, gv = {}, fv = {};
         for (int d = 0; d < dim; ++d)
           {
             v2 += v[d] * v[d];
             gv += g[d] * v[d];
-            fv += ext[dim * ln + d] * v[d];
+            if constexpr (with_ext)
+              fv += load(&ext[d][n]) * v[d];
           }
-        if (ln < n_owned)
-          {
-            k += 0.5 * mass[ln] * v2;
-            p += mass[ln] / mass_scale * gv + fv;
-          }
+        const VD m = load(&owned_mass[n]);
+        k += 0.5 * m * v2;
+        if constexpr (with_ext)
+          p += m / mass_scale * gv + (m > 0 ? fv : zero);
+        else
+          p += m / mass_scale * gv;
       }
-    kinetic = k;
-    return {{k, p}};
+    double ks = 0, ps = 0;
+    for (unsigned int l = 0; l < W; ++l)
+      ks += k[l], ps += p[l];
+    kinetic = ks;
+    return {{ks, ps}};
   }
 
 
@@ -618,21 +750,31 @@ namespace femp
     double                 mg[dim];
     for (int d = 0; d < dim; ++d)
       mg[d] = mat.density * V / nc * g[d];
-    force.zero_out_ghost_values();
-    double *F = force.begin();
-    std::fill(F, F + dim * n_local, 0.);
-    const double *vl   = vel.data();
-    double        work = 0;
+    // The node forces are zero here (zeroed by the node update, or at
+    // setup); the elements add theirs.
+    double       *F[dim];
+    const double *vl[dim];
+    for (int d = 0; d < dim; ++d)
+      F[d] = frc[d].data(), vl[d] = vel[d].data();
+    double work = 0;
     const std::size_t n_el = element_id.size();
     // Blocks of simd_lanes elements, one element per lane of simd_double
     // (GCC vector extension, see constitutive.h); a partial last block
     // repeats its last element in the spare lanes and stores nothing from
     // them. Per element the arithmetic is that of the scalar formulation,
-    // and the work and the nodal forces are summed in element order, so the
-    // results do not depend on the block size.
+    // and the work is summed in element order. The nodal force sums are in
+    // lexicographic element order, the two elements of a block that share a
+    // node summed first (round-off against other orders).
     using VD               = simd_double;
     constexpr unsigned int W = simd_lanes;
     static_assert(W == 4, "the gathers below are written for 4 lanes");
+    // Box offset of corner a (bit d: upper side in direction d) from corner 0.
+    auto row_offset = [&](const unsigned int a) {
+      std::size_t o = 0;
+      for (int d = 1; d < dim; ++d)
+        o += ((a >> d) & 1u) * box_stride[d];
+      return o;
+    };
     for (std::size_t b = 0; b < blocks.size(); ++b)
       {
         const std::size_t  e0 = W * b;
@@ -651,14 +793,32 @@ namespace femp
           sb.s[c] = eb.s[c];
         if constexpr (update)
           {
-            const std::uint32_t *c0 = &conn[nc * el[0]], *c1 = &conn[nc * el[1]],
-                                *c2 = &conn[nc * el[2]], *c3 = &conn[nc * el[3]];
             VD Vc[nc][dim];
+            if (block_row[b] >= 0)
+              // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
+              // row(a) + l, corner a + 1 node row(a) + l + 1.
+#pragma GCC unroll 4
+              for (unsigned int a = 0; a < nc; a += 2)
+                {
+                  const std::size_t r = block_row[b] + row_offset(a);
+                  for (int i = 0; i < dim; ++i)
+                    {
+                      std::memcpy(&Vc[a][i], vl[i] + r, sizeof(VD));
+                      std::memcpy(&Vc[a + 1][i], vl[i] + r + 1, sizeof(VD));
+                    }
+                }
+            else
+              {
+                const std::uint32_t *c0 = &conn[nc * el[0]],
+                                    *c1 = &conn[nc * el[1]],
+                                    *c2 = &conn[nc * el[2]],
+                                    *c3 = &conn[nc * el[3]];
 #pragma GCC unroll 8
-            for (unsigned int a = 0; a < nc; ++a)
-              for (int i = 0; i < dim; ++i)
-                Vc[a][i] = VD{vl[dim * c0[a] + i], vl[dim * c1[a] + i],
-                              vl[dim * c2[a] + i], vl[dim * c3[a] + i]};
+                for (unsigned int a = 0; a < nc; ++a)
+                  for (int i = 0; i < dim; ++i)
+                    Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
+                                  vl[i][c3[a]]};
+              }
             fwht<dim>(Vc);
             // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
             // element: q += dt Gamma_alpha . v (the same transform).
@@ -667,9 +827,18 @@ namespace femp
                 eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
             // E(T_new) read once: the constitutive kernel, the hourglass
             // stiffness and the viscous pressure.
-            const VD Ts = {T_start[el[0]], T_start[el[1]], T_start[el[2]],
-                           T_start[el[3]]};
-            const VD Te = {T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
+            VD Ts, Te;
+            if (nl == W)
+              {
+                std::memcpy(&Ts, &T_start[e0], sizeof(VD));
+                std::memcpy(&Te, &T_end[e0], sizeof(VD));
+              }
+            else
+              {
+                Ts = VD{T_start[el[0]], T_start[el[1]], T_start[el[2]],
+                        T_start[el[3]]};
+                Te = VD{T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
+              }
             sb.T_old    = eb.T;
             sb.T_new    = Ts + w * (Te - Ts);
             auto Ef     = [&](const unsigned int l) {
@@ -729,14 +898,34 @@ namespace femp
                 -VB * (sb.s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
           }
         fwht_transpose<dim>(C);
-        for (unsigned int l = 0; l < nl; ++l)
-          {
-            const std::uint32_t *c = &conn[nc * (e0 + l)];
-#pragma GCC unroll 8
-            for (unsigned int a = 0; a < nc; ++a)
+        if (block_row[b] >= 0)
+          // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1)
+          // get C_a from lane l at node l and C_a+1 at node l + 1, added as
+          // one vector (no two lanes write the same node) and the last one.
+#pragma GCC unroll 4
+          for (unsigned int a = 0; a < nc; a += 2)
+            {
+              const std::size_t r = block_row[b] + row_offset(a);
               for (int i = 0; i < dim; ++i)
-                F[dim * c[a] + i] += C[a][i][l];
-          }
+                {
+                  const VD hi = C[a + 1][i];
+                  const VD sh = __builtin_shufflevector(hi, VD{}, 4, 0, 1, 2);
+                  VD       f;
+                  std::memcpy(&f, F[i] + r, sizeof(VD));
+                  f += C[a][i] + sh;
+                  std::memcpy(F[i] + r, &f, sizeof(VD));
+                  F[i][r + W] += hi[W - 1];
+                }
+            }
+        else
+          for (unsigned int l = 0; l < nl; ++l)
+            {
+              const std::uint32_t *c = &conn[nc * (e0 + l)];
+#pragma GCC unroll 8
+              for (unsigned int a = 0; a < nc; ++a)
+                for (int i = 0; i < dim; ++i)
+                  F[i][c[a]] += C[a][i][l];
+            }
       }
 
     // Hourglass forces of this rank's elements at the transition nodes

@@ -7,12 +7,19 @@
 // on grid lines), cells of the grid's size h, so that every element covers
 // one background-grid cell and every FE node coincides with a grid node
 // (N_Ii = 1 at transition nodes). p4est partitions it independently of the
-// background grid. Nodes are numbered by a DoFHandler with FE_Q<dim>(1);
-// node data (velocity, lumped mass) live in flat arrays over
-// the locally relevant nodes (owned first, then ghosts, in the numbering of
-// the Utilities::MPI::Partitioner), nodal force sums over ranks go through a
-// LinearAlgebra::distributed::Vector (compress(add), update_ghost_values).
-// Element data (corner node indices, stress state, temperatures) are flat
+// background grid. A DoFHandler with FE_Q<dim>(1) defines the owned and
+// ghost nodes of a rank (the Utilities::MPI::Partitioner); the hot loops use
+// their own numbering: the local nodes are numbered lexicographically in
+// the bounding box of their structured indices (x fastest), node data
+// (velocity, force, inverse mass, fixed components) are one flat array per
+// component over that box, and the elements are processed in lexicographic
+// order, so that a block of simd_lanes elements of one x-row has its
+// corners at simd_lanes consecutive nodes (vector loads; the forces of the
+// block added as vectors, no two lanes on the same node). Nodal force sums
+// over ranks copy the shared nodes (ghosts and owned nodes that are ghosts
+// elsewhere) through a LinearAlgebra::distributed::Vector (compress(add),
+// update_ghost_values); nothing is copied on one rank.
+// Element data (corner box indices, stress state, temperatures) are flat
 // arrays. The temperature of an element is that of its grid cell (eq. 2):
 // the grid rank that owns the cell sends it, once per advance() (not per
 // solid step), through a Utilities::MPI::NoncontiguousPartitioner keyed by
@@ -31,8 +38,10 @@
 // with the hourglass energy 1/2 k sum q^2 per element. All elements are the
 // same cube, so b_a and Gamma are compile-time constants: one fused loop per
 // element (gather velocities, L, constitutive update, stress work, viscous
-// pressure, internal + hourglass forces of the next step scattered to the
-// nodes) and one loop over the nodes, the element loop in
+// pressure, internal + hourglass forces of the next step added to the
+// nodes) and one fused loop over the nodes (velocity update, zeroing the
+// force for the next element loop, energies), both in SIMD; the element
+// loop in
 // SIMD blocks of simd_lanes elements (one per lane of simd_double, element
 // state stored per block, update_stress_block of constitutive.h).
 //
@@ -226,8 +235,24 @@ namespace femp
     double               V = 0, bb = 0, mass_scale = 1;
     Tensor<1, dim>       g;
 
-    // Elements.
-    std::vector<std::uint32_t> conn;      ///< n_corners local nodes each
+    // Node box: the local nodes (owned and ghost) are numbered
+    // lexicographically in the bounding box of their structured indices
+    // (x fastest), box index n = sum_d (ijk_d - box_lo_d) box_stride_d;
+    // node data are flat arrays per component over the box (padded to a
+    // multiple of simd_lanes; slots without a local node stay zero). An
+    // x-row of elements then has its corner nodes at consecutive indices.
+    std::array<int, dim>         box_lo, box_n;
+    std::array<std::size_t, dim> box_stride;
+    std::size_t                  n_box = 0; ///< padded box size
+    bool                         multi_rank = false;
+
+    // Elements, in lexicographic order of their zone index (x fastest).
+    std::vector<std::uint32_t> conn; ///< n_corners box node indices each
+    /// Per block: box index of corner 0 of its first element if its
+    /// simd_lanes elements are consecutive in one x-row (their corners are
+    /// then simd_lanes consecutive nodes from there, loaded as vectors),
+    /// else -1 (corners gathered one by one through conn).
+    std::vector<std::int64_t> block_row;
     /// State of simd_lanes consecutive elements (lane l: element
     /// simd_lanes * block + l), so that the element loop loads and stores
     /// whole SIMD registers; the lanes of the last block beyond the last
@@ -265,16 +290,28 @@ namespace femp
     std::vector<std::uint32_t> grid_zone_cells;          ///< owned zone cells
     std::vector<double>        T_send;
 
-    // Nodes (owned, then ghosts).
-    std::size_t                n_owned = 0, n_local = 0;
-    std::vector<double>        vel; ///< dim per node
-    std::vector<double>        mass, inv_mass;
-    std::vector<std::uint8_t>  fix;      ///< bit d: velocity d fixed
-    std::vector<int>           node_tr;  ///< transition index or -1
-    std::vector<std::uint64_t> node_zone_id; ///< lexicographic node index
-    std::vector<double>        ext;      ///< external force, dim per node
-    std::vector<std::uint32_t> ext_nodes;
+    // Nodes (box numbering, see above).
+    std::size_t                n_owned = 0, n_local = 0; ///< DoFHandler's
+    std::vector<std::uint32_t> box_of;  ///< box index of local node ln
+    /// Local nodes whose force sums go over ranks: ghosts and owned nodes
+    /// that are ghosts elsewhere (empty on one rank).
+    std::vector<std::uint32_t> shared_nodes;
+    std::array<std::vector<double>, dim> vel;   ///< velocity, m/s
+    std::array<std::vector<double>, dim> frc;   ///< nodal force, N
+    std::array<std::vector<double>, dim> ext;   ///< external force, N
+    /// Bit d set: velocity component d fixed (zero); all bits at slots
+    /// without a local node. Clear at transition nodes (their velocity
+    /// comes from update_transition(), fixed components zero there).
+    std::vector<std::uint8_t>  fix;
+    std::vector<double>        inv_mass;   ///< 0 at transition nodes
+    std::vector<double>        owned_mass; ///< lumped mass at owned nodes
+    std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
+    std::vector<std::uint32_t> ext_nodes;    ///< box indices
     double                     kinetic = 0;
+    /// Sums of the force components (@p f) of the shared nodes over ranks
+    /// (compress(add), update_ghost_values of the vector @p force).
+    void
+    sum_shared(std::array<std::vector<double>, dim> &f);
 
     // Transition nodes (global, every rank).
     std::vector<std::array<int, dim>> tr_ijk;
@@ -282,6 +319,8 @@ namespace femp
     std::vector<std::uint8_t>         tr_fix;
     /// (element, corner, transition index) of this rank's elements.
     std::vector<std::array<std::uint32_t, 3>> tr_corners;
+    /// (box index, transition index) of the local transition nodes.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> tr_local;
     std::vector<double>                       tr_hg; ///< partial f^HG
 
     std::vector<std::uint8_t> in_zone_cell;
@@ -289,6 +328,9 @@ namespace femp
     template <bool update>
     double
     element_loop(const double dt, const double w);
+    template <bool with_ext>
+    std::array<double, 2>
+    node_loop(const double dt);
     double
     hourglass_stiffness(const double T, const double kappa) const;
   };
