@@ -108,6 +108,7 @@ namespace
     checks.print(name + ": solidified / stress work", e.solidified / scale, 2);
     checks.print(name + ": transfer dissipation / stress work",
                  e.transfer / scale, 2);
+    checks.print(name + ": re-map work / stress work", e.remap / scale, 2);
     const double without_melt = e.balance() + e.melted - e.solidified;
     checks.print(name + ": balance without the melt terms / stress work",
                  std::abs(without_melt) / scale, 1);
