@@ -78,8 +78,9 @@ namespace femp
                       "work, kinetic, hourglass, balance, kinetic/internal "
                       "ratio, hourglass-mode energy, and the booked "
                       "exchanges: MPM transfer dissipation, kinetic energy "
-                      "removed by melting and added by solidification (J, "
-                      "2D: J/m; doc/solid.md); empty for none.");
+                      "removed by melting and added by solidification, and "
+                      "the re-map work of the MUSL update (J, 2D: J/m; "
+                      "doc/solid.md); empty for none.");
     prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
                       "CSV file (in the output directory) with sigma_xx (Pa) "
                       "and T (K) at the probe points after every solid step.");
