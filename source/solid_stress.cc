@@ -78,8 +78,9 @@ namespace femp
                       "work, kinetic, hourglass, balance, kinetic/internal "
                       "ratio, hourglass-mode energy, and the booked "
                       "exchanges: MPM transfer dissipation, kinetic energy "
-                      "removed by melting and added by solidification (J, "
-                      "2D: J/m; doc/solid.md); empty for none.");
+                      "removed by melting and added by solidification, and "
+                      "the re-map work of the MUSL update (J, 2D: J/m; "
+                      "doc/solid.md); empty for none.");
     prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
                       "CSV file (in the output directory) with sigma_xx (Pa) "
                       "and T (K) at the probe points after every solid step.");
@@ -291,7 +292,7 @@ namespace femp
     K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
                                  comm);
     W_ext = W_int = 0;
-    D_transfer = K_melted = K_solidified = 0;
+    D_transfer = K_melted = K_solidified = W_remap = 0;
     n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
     K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
 
@@ -306,7 +307,7 @@ namespace femp
             *energy_out << "time,step,external_work,internal_work,kinetic,"
                            "hourglass,balance,kinetic_to_internal,hourglass_mode,"
                            "transfer_dissipation,removed_by_melting,"
-                           "added_by_solidification\n";
+                           "added_by_solidification,remap_work\n";
           }
         if (!prm.probe_file.empty() && !prm.probes.empty())
           {
@@ -385,6 +386,7 @@ namespace femp
     // rank, summed over all ranks in one reduction; every rank then holds
     // the totals and computes the same grid and FE velocities there.
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
+    double                 merge_loss = 0;
     if (fem.n_transition() > 0)
       {
         std::fill(tr_buffer.begin(), tr_buffer.end(), 0.);
@@ -401,6 +403,25 @@ namespace femp
         if (Utilities::MPI::n_mpi_processes(comm) > 1)
           MPI_Allreduce(MPI_IN_PLACE, tr_buffer.data(), tr_buffer.size(),
                         MPI_DOUBLE, MPI_SUM, comm);
+        // Merging at the transition nodes (booked with the transfer): the
+        // points' grid momentum and the FE node momentum become one
+        // velocity, an inelastic exchange that loses 1/2 mu |v_g - v_i|^2,
+        // mu = m_g m_FE / (m_g + m_FE). The buffer holds the global sums:
+        // counted on the first rank.
+        if (Utilities::MPI::this_mpi_process(comm) == 0)
+          for (std::size_t t = 0; t < fem.n_transition(); ++t)
+            {
+              const double mg = tr_buffer[W * t], mf = fem.transition_mass(t);
+              if (mg <= 0 || mf <= 0)
+                continue;
+              for (int d = 0; d < dim; ++d)
+                if (!(fem.transition_constraint(t) & (1u << d)))
+                  {
+                    const double dv = tr_buffer[W * t + 1 + d] / mg -
+                                      fem.transition_velocity(t)[d];
+                    merge_loss += 0.5 * mg * mf / (mg + mf) * dv * dv;
+                  }
+            }
         fem.update_transition(tr_buffer, dt, tr_v, tr_a);
       }
     grid.sum_shared_nodes(nodes.mass);
@@ -411,7 +432,8 @@ namespace femp
       }
     // Transfer dissipation, P2G part: point kinetic energy at the start of
     // the step minus that of the points' grid momenta.
-    double transfer = mpm.kinetic_energy() - grid_point_kinetic(false);
+    double transfer =
+      mpm.kinetic_energy() - grid_point_kinetic(false) + merge_loss;
 
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
@@ -462,6 +484,22 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         nodes.momentum[d][n] +=
           fem.transition_mass(t) * fem.transition_velocity(t)[d];
+    // Re-map work (booked, doc/solid.md "Energies"): the nodal forces f_I
+    // (= m_I times the acceleration in nodes.force) do the work
+    // dt f_I . (v_start + v_end) / 2 on the grid, but the step ends with the
+    // re-mapped velocities, and the stress rate sees those: the work of f_I
+    // on the velocity that the re-map takes back, dt/2 f_I . (v_I - v_remap),
+    // is energy the MUSL update creates (large at nodes with a small share
+    // of point mass, whose velocity jumps by dt f/m). Each node counted on
+    // one rank.
+    double remap_work = 0;
+    for (const auto &[n, t] : counted_nodes)
+      if (nodes.mass[n] > 0)
+        for (int d = 0; d < dim; ++d)
+          if (!(constrained[n] & (1u << d)))
+            remap_work += 0.5 * dt * nodes.mass[n] * nodes.force[d][n] *
+                          (nodes.velocity[d][n] -
+                           nodes.momentum[d][n] / nodes.mass[n]);
     for (const auto n : active_nodes)
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
@@ -477,15 +515,16 @@ namespace femp
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
-    double sums[7] = {mpm.kinetic_energy(), work, dt * local_ext,
+    double sums[8] = {mpm.kinetic_energy(), work, dt * local_ext,
                       mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
-                      transfer, fe_energy[0]};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 7), comm,
-                        ArrayView<double>(sums, 7));
+                      transfer, fe_energy[0], remap_work};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 8), comm,
+                        ArrayView<double>(sums, 8));
     K = sums[0] + sums[6];
     W_int += sums[1];
     W_ext += sums[2];
     D_transfer += sums[5] - sums[0]; // sums[0]: point kinetic energy now
+    W_remap += sums[7];
     K_points = sums[0];
     const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
     if (blown || sums[3] > 0)
@@ -631,6 +670,7 @@ namespace femp
     e.hourglass      = Utilities::MPI::sum(fem.hourglass_energy(false), comm);
     e.hourglass_mode = Utilities::MPI::sum(fem.hourglass_energy(true), comm);
     e.transfer        = D_transfer;
+    e.remap           = W_remap;
     e.melted          = K_melted;
     e.solidified      = K_solidified;
     return e;
@@ -726,7 +766,8 @@ namespace femp
                       << "," << e.hourglass << "," << e.balance() << ","
                       << e.kinetic / std::max(std::abs(e.internal), 1e-300)
                       << "," << e.hourglass_mode << "," << e.transfer << ","
-                      << e.melted << "," << e.solidified << "\n";
+                      << e.melted << "," << e.solidified << "," << e.remap
+                      << "\n";
         if (probe_out)
           {
             *probe_out << std::setprecision(10) << t_solid;

@@ -115,7 +115,7 @@ namespace femp
     /// @p excluded_cell[idx] == 0 into the flat arrays. Inertial masses are
     /// multiplied by @p mass_scaling (gravity uses the true mass). Points in
     /// state fluid get zero stress, plastic strain, viscous pressure and
-    /// affine velocity.
+    /// affine velocity, and (no melt flow runs with the solid) zero velocity.
     void
     gather(const std::vector<std::uint8_t> &excluded_cell,
            const double                      mass_scaling);
