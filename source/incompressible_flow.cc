@@ -27,7 +27,11 @@
 // - viscosity: explicit, from the Q1 stiffness of each fluid cell with the
 //   lumped nodal volume (cell-wise, so it is independent of the partition);
 // - G2P: v_p <- beta (v_p + sum w (u_new - u_old)) + (1 - beta) sum w u_new
-//   (FLIP fraction beta, default 0.95); points move with sum w u_new.
+//   (FLIP fraction beta, default 0.95); points move with sum w u_new;
+// - optional point shifting (SPH-type, -A h |u| dt grad alpha) and volume
+//   correction (positions moved by grad psi, lap psi = c (V_c/h^dim - 1),
+//   psi = 0 at the free surface; Melt flow/Volume correction), both off by
+//   default.
 #include <deal.II/base/mpi.h>
 #include <deal.II/lac/solver_cg.h>
 #include <deal.II/lac/solver_control.h>

@@ -11,7 +11,10 @@
 // AMG; rows over a band of cells round the fluid, so that the graph and the
 // hierarchy are reused while the fluid stays inside the band), corrects the nodal velocity u = u* - dt/rho grad p, and updates
 // the points with a FLIP/PIC blend before moving them with the nodal
-// velocity (explicit advection).
+// velocity (explicit advection). Optionally (Melt flow/Volume correction)
+// the points are also moved by grad(psi), lap(psi) = c (V_c/h^dim - 1) with
+// psi = 0 at the free surface, so that bunched points spread again and the
+// fluid volume of the cells is kept (doc/flow.md, "Volume correction").
 //
 // Surface tension enters through the free-surface condition: the Dirichlet
 // pressure on the faces between fluid and gas cells is the capillary
