@@ -27,7 +27,11 @@
 // - viscosity: explicit, from the Q1 stiffness of each fluid cell with the
 //   lumped nodal volume (cell-wise, so it is independent of the partition);
 // - G2P: v_p <- beta (v_p + sum w (u_new - u_old)) + (1 - beta) sum w u_new
-//   (FLIP fraction beta, default 0.95); points move with sum w u_new.
+//   (FLIP fraction beta, default 0.95); points move with sum w u_new;
+// - optional point shifting (SPH-type, -A h |u| dt grad alpha) and volume
+//   correction (positions moved by grad psi, lap psi = c (V_c/h^dim - 1),
+//   psi = 0 at the free surface; Melt flow/Volume correction), both off by
+//   default.
 #include <deal.II/base/mpi.h>
 #include <deal.II/lac/solver_cg.h>
 #include <deal.II/lac/solver_control.h>
@@ -113,6 +117,18 @@ namespace femp
                       "the capillary pressure of a free-surface cell by the "
                       "mean over the free-surface cells among its 3^dim "
                       "neighbours (see doc/flow.md); 0: none. Range [0, 4].");
+    prm.declare_entry("Volume correction", "0", Patterns::Double(0.),
+                      "Relaxation factor c of the volume correction: each "
+                      "step the fluid points move, besides their advection, "
+                      "by grad(psi), where lap(psi) = c (V_c/h^dim - 1) on the "
+                      "fluid cells (V_c the volume of the metal points in the "
+                      "cell; only the over-filled part in cells next to gas) "
+                      "with psi = 0 at the free surface, so that cells "
+                      "over-filled by bunched points push them apart and "
+                      "under-filled ones pull them in (at most h/4 per step; "
+                      "velocities unchanged). Keeps the fluid volume of the "
+                      "points (see doc/flow.md); dimensionless, 0 switches it "
+                      "off. Range [0, 1].");
     prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
                       "Surface tension coefficient sigma, N/m (0: no surface "
                       "tension); enters as the capillary pressure sigma div(n) "
@@ -151,6 +167,7 @@ namespace femp
     time_step        = prm.get_double("Time step");
     point_shifting   = prm.get_double("Point shifting");
     curvature_smoothing = prm.get_integer("Curvature smoothing");
+    volume_correction = prm.get_double("Volume correction");
     surface_tension  = prm.get_double("Surface tension");
     surface_tension_gradient =
       prm.get_double("Surface tension temperature derivative");
@@ -170,6 +187,9 @@ namespace femp
             "it must lie in (0, 1]");
     require(point_shifting >= 0 && point_shifting <= 10,
             "Melt flow/Point shifting", point_shifting, "it must lie in [0, 10]");
+    require(volume_correction >= 0 && volume_correction <= 1,
+            "Melt flow/Volume correction", volume_correction,
+            "it must lie in [0, 1]");
     require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
             "it must be non-negative (N/m)");
     require(capillary_fraction > 0 && capillary_fraction <= 1,
@@ -304,6 +324,11 @@ namespace femp
       }
     mass       = grid.make_node_field();
     volume     = grid.make_node_field();
+    if (prm.volume_correction > 0)
+      {
+        occupancy = grid.make_field(0.);
+        psi       = grid.make_field(0.);
+      }
     node_mark  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     node_fix   = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     for (int d = 0; d < dim; ++d)
@@ -383,9 +408,11 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       std::fill(mom[d].begin(), mom[d].end(), 0.);
     const auto &handler = points.particle_handler();
+    const bool  count_volume = prm.volume_correction > 0;
     for (const auto &[idx, cell] : points.occupied_cells())
       {
         bool              any_fluid = false;
+        double            V_cell    = 0;
         const auto        ijk       = grid.global_index(idx);
         const std::size_t n0        = grid.first_node_of_cell(idx);
         double *          nm[n_corners];
@@ -399,6 +426,8 @@ namespace femp
         for (const auto &particle : handler.particles_in_cell(cell))
           {
             const auto v = particle.get_properties();
+            if (count_volume)
+              V_cell += v[P::volume];
             if (v[P::state] != MaterialPoints<dim>::fluid)
               continue;
             any_fluid          = true;
@@ -427,6 +456,8 @@ namespace femp
               }
           }
         type[idx] = any_fluid ? fluid : solid;
+        if (count_volume)
+          occupancy[idx] = V_cell; // read only for fluid cells
         if (any_fluid)
           fluid_cells.push_back(idx);
       }
@@ -923,6 +954,8 @@ namespace femp
         matrix.reinit(sp);
         rhs.reinit(owned_rows, comm);
         solution.reinit(owned_rows, comm);
+        if (prm.volume_correction > 0)
+          psi_solution.reinit(owned_rows, comm);
         ++stats.matrix_rebuilds;
       }
     const auto row_offset =
@@ -1156,6 +1189,100 @@ namespace femp
   }
 
 
+  // Volume correction (doc/flow.md, "Volume correction"). The fluid points
+  // carry a fixed volume, but the advection with an only approximately
+  // divergence-free nodal velocity lets them bunch (up to 27 per cell
+  // instead of 4 in the dam break), and cells between the bunches empty:
+  // the area of the cells holding fluid shrinks and so does the metal
+  // fraction of the heat equation. This is the density-invariance
+  // ("volume") correction of incompressible SPH and PIC/FLIP solvers
+  // applied to the positions only: with e_c = V_c/h^dim - 1 the volume
+  // error of a fluid cell (V_c the volume of the metal points in it), solve
+  //   lap(psi) = c e_c  (psi = 0 at the free surface, zero flux into walls
+  //                      and solid cells)
+  // with the pressure matrix (A = -h^2 lap: A (psi/h^2) = -c e), and move
+  // each point by grad(psi), taken on the cell faces and interpolated
+  // linearly across the cell per direction (the lowest-order
+  // Raviart-Thomas field of the face values), so that its divergence in
+  // each cell is exactly c e_c: over-filled cells push their points apart,
+  // under-filled ones draw them in. Next to the free surface (a gas cell
+  // among the 3^dim neighbours) cells are partly filled by nature, so only
+  // the over-filled part (e_c > 0) counts there. The velocities are not
+  // changed (a velocity correction that the points keep over-expanded the
+  // dam break, doc/flow.md). The solve reuses the matrix and the AMG
+  // hierarchy of the pressure and its tolerance (with 1e-6 the 1- and
+  // 2-rank dam breaks drifted apart by 0.01 a in the late front: the flow
+  // amplifies round-off), and a solve that does not converge (a fluid region
+  // without free surface has a singular matrix and an inconsistent right
+  // hand side) skips the correction for that step (counted in the
+  // statistics).
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::volume_solve()
+  {
+    std::fill(psi.begin(), psi.end(), 0.);
+    if (stats.n_fluid_cells == 0)
+      return;
+    const double ihd = std::pow(1. / grid.h(), dim);
+    rhs              = 0;
+    for (const auto c : fluid_cells)
+      {
+        double e = occupancy[c] * ihd - 1;
+        if (e < 0)
+          for (const auto o : stencil)
+            if (type[c + o] == gas)
+              {
+                e = 0;
+                break;
+              }
+        rhs(types::global_dof_index(gid[c])) = -prm.volume_correction * e;
+      }
+    rhs.compress(VectorOperation::insert);
+    const double norm = rhs.l2_norm();
+    if (norm > 0)
+      {
+        SolverControl control(prm.max_iterations, prm.solver_tolerance * norm);
+        SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
+        psi_solution = 0;
+        try
+          {
+            cg.solve(matrix, psi_solution, rhs, amg);
+            stats.volume_iterations += control.last_step();
+          }
+        catch (const SolverControl::NoConvergence &e)
+          {
+            stats.volume_iterations += e.last_step;
+            ++stats.volume_skipped;
+            return; // psi = 0: no correction in this step
+          }
+        for (const auto c : fluid_cells)
+          psi[c] = psi_solution(types::global_dof_index(gid[c]));
+      }
+    grid.update_ghosts(psi);
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::volume_faces(const std::size_t c, double *G) const
+  {
+    const double h  = grid.h();
+    const auto & cs = grid.strides();
+    for (int d = 0; d < dim; ++d)
+      for (const int side : {0, 1})
+        {
+          const std::size_t e = side ? c + cs[d] : c - cs[d];
+          double            jump = 0; // psi(neighbour or ghost) - psi(c), /h^2
+          if (type[e] == fluid)
+            jump = psi[e] - psi[c];
+          else if (type[e] == gas)
+            jump = -psi[c] / theta[2 * d + side][c];
+          // d psi / d x_d on the face, m (psi = h^2 x the solution).
+          G[2 * d + side] = h * (side ? jump : -jump);
+        }
+  }
+
+
   template <int dim>
   void
   IncompressibleFlow<dim>::grid_to_points(const double dt)
@@ -1167,10 +1294,13 @@ namespace femp
     const auto & nc   = grid.n_cells();
     const double beta = prm.flip_fraction;
     auto &       handler = points.particle_handler();
-    // The point loop is compiled twice (with and without the point
-    // shifting), so that the shifting costs nothing when it is off.
-    const auto loop = [&](auto shift_tag) {
-    constexpr bool shifting = decltype(shift_tag)::value;
+    // The point loop is compiled four times (with and without the point
+    // shifting and the volume correction), so that either costs nothing
+    // when it is off.
+    const auto loop = [&](auto mode_tag) {
+    constexpr int  mode     = decltype(mode_tag)::value;
+    constexpr bool shifting = mode & 1;
+    constexpr bool volume_c = mode & 2;
     bool         moved   = false;
     double       umax    = 0;
     for (const auto &[idx, cell] : points.occupied_cells())
@@ -1182,6 +1312,9 @@ namespace femp
         ShiftCell         sc;
         if constexpr (shifting)
           sc = shift_cell(idx);
+        double G[2 * dim] = {};
+        if constexpr (volume_c)
+          volume_faces(idx, G);
         for (auto &particle : handler.particles_in_cell(cell))
           {
             const auto v = particle.get_properties();
@@ -1215,6 +1348,20 @@ namespace femp
                   s2 += vg[d] * vg[d];
                 shift_of_point(sc, xi, std::sqrt(s2), dt, shift);
               }
+            if constexpr (volume_c)
+              {
+                // grad(psi) across the cell, at most h/4.
+                double vc[dim], n2 = 0;
+                for (int d = 0; d < dim; ++d)
+                  {
+                    vc[d] = (1 - xi[d]) * G[2 * d] + xi[d] * G[2 * d + 1];
+                    n2 += vc[d] * vc[d];
+                  }
+                const double f =
+                  n2 > 0.0625 * h * h ? 0.25 * h / std::sqrt(n2) : 1.;
+                for (int d = 0; d < dim; ++d)
+                  shift[d] += f * vc[d];
+              }
             for (int d = 0; d < dim; ++d)
               {
                 v[P::velocity + d] =
@@ -1225,7 +1372,7 @@ namespace femp
                 // Stay inside the domain (walls are free slip).
                 const double lo = x0[d] + 1e-9 * h;
                 const double hi = x0[d] + nc[d] * h - 1e-9 * h;
-                x[d] = std::min(std::max(x[d] + (shifting ? dx + shift[d] : dx), lo), hi);
+                x[d] = std::min(std::max(x[d] + ((shifting || volume_c) ? dx + shift[d] : dx), lo), hi);
                 ref[d]          = (x[d] - x0[d]) * ih - ijk[d];
                 left            = left || ref[d] < 0 || ref[d] >= 1;
               }
@@ -1248,8 +1395,13 @@ namespace femp
       }
     return std::make_pair(moved, umax);
     };
-    const auto [moved, umax] = prm.point_shifting > 0 ? loop(std::true_type()) :
-                                                      loop(std::false_type());
+    const int  mode = (prm.point_shifting > 0 ? 1 : 0) +
+                     (prm.volume_correction > 0 ? 2 : 0);
+    const auto [moved, umax] =
+      mode == 0 ? loop(std::integral_constant<int, 0>()) :
+      mode == 1 ? loop(std::integral_constant<int, 1>()) :
+      mode == 2 ? loop(std::integral_constant<int, 2>()) :
+                  loop(std::integral_constant<int, 3>());
     stats.max_point_speed =
       std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
     if (Utilities::MPI::logical_or(moved, grid.communicator()))
@@ -1459,6 +1611,11 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         grid.update_ghosts(u_cell[d]);
     }
+    if (prm.volume_correction > 0)
+      {
+        Section s(timer, "flow: volume correction");
+        volume_solve();
+      }
     {
       Section s(timer, "flow: grid to points + advection");
       grid_to_points(dt);

@@ -8,6 +8,7 @@
 //
 // Usage: test_dam_break [cells per a = 16] [reference file | write=FILE | -]
 //                       [Melt flow/Point shifting A, default 2]
+//                       [Melt flow/Volume correction c, default 0.5]
 // With a reference file (tests/dam_break_a64.dat: the code's own curve at
 // a/64, written by "test_dam_break 64 write=FILE") the run is also compared
 // with that converged curve (regression at 1 %).
@@ -15,20 +16,24 @@
 // Measurement: front = rightmost fluid point plus half a point spacing (it
 // agrees within a cell with the end of the bottom cell row holding >= 2 of
 // its 4 points, i.e. alpha >= 1/2); height = highest fluid point in the
-// first cell column plus half a point spacing.
+// first cell column that is connected to the floor through that column
+// (gaps of at most one empty cell row), plus half a point spacing.
 //
-// Result (doc/flow.md), with point shifting A = 2 (Melt flow/Point
-// shifting; it keeps the points from bunching: fluid-cell area 0.94-0.95
-// of the column at the end instead of 0.91-0.98): the front is converged
-// (a/32 within 0.7 % of a/64) and leads the experiment by up to 20 % -- the
-// known lead of simulations over Martin & Moyce (slow gate release, the
-// experiment's front speed is also ~7 % lower). The 10 % target for the
-// front is NOT met: printed, not gated. The height is within 10 % of the
-// experiment up to t sqrt(g/a) = 2.7 (gated); over the whole tabulated
-// range it is within 7 % at a/64 but 19 % (a/32) and 29 % (a/16) off at
-// t sqrt(g/a) >= 3.06 (printed). Gated as before: the front lies between
-// 0.9 times the experiment and the inviscid shallow-water (Ritter) dry-bed
-// front Z = 1 + 2T, which no viscous flow can outrun.
+// Result (doc/flow.md), with point shifting A = 2 and the volume
+// correction c = 0.5 (Melt flow/Point shifting, Volume correction; they
+// keep the points from bunching: volume-based fluid area at the end 0.93-
+// 0.94 of the column instead of 0.84): the front is converged (a/32 within
+// 0.6 % of a/64) and leads the experiment by up to 20 % -- the known lead
+// of simulations over Martin & Moyce (slow gate release, the experiment's
+// front speed is also ~7 % lower). The 10 % target for the front is NOT
+// met: printed, not gated. The height is within 10 % of the experiment up
+// to t sqrt(g/a) = 2.7 (gated); over the whole tabulated range within 9 %
+// at a/32 (gated at 10 % from a/32 on) and a/64, 17 % at a/16 (printed).
+// a/32 vs a/64 heights: 1.5 % (target 1 %, not met; gated at 5 %). Gated
+// as before: the front lies between 0.9 times the experiment and the
+// inviscid shallow-water (Ritter) dry-bed front Z = 1 + 2T, which no
+// viscous flow can outrun. The fluid areas (cell count, volume-based,
+// sub-cell occupancy) and the correction's CG iterations go to stderr.
 #include "flow_tools.h"
 
 #include <fstream>
@@ -81,11 +86,42 @@ main(int argc, char **argv)
   // Point shifting (doc/flow.md) keeps the points evenly spread (without
   // it the area of the fluid cells shrank to 0.91 of the column at a/64).
   prm.point_shifting = argc > 3 ? std::atof(argv[3]) : 2.;
+  // Volume correction c = 0.5 (doc/flow.md): keeps the points from bunching
+  // into over-filled cells and emptying others (the fluid volume of the
+  // cells fell to 0.84 of the column at a/16 with shifting alone).
+  prm.volume_correction = argc > 4 ? std::atof(argv[4]) : 0.5;
   prm.gravity   = Tensor<1, dim>({0., -g});
   FlowScene<dim> scene(Point<dim>(width, 2.25 * a), h, rho,
                        [&](const Point<dim> &x) { return x[0] < a && x[1] < 2 * a; },
                        prm, comm);
   std::vector<double> t = {0}, z = {a}, H = {2 * a};
+  // Residual column height: the highest fluid point in the first cell
+  // column that is connected to the floor through that column (cell rows
+  // holding fluid points, gaps of at most one empty row), so that spray
+  // or a detached drop flying past the wall does not count.
+  const unsigned int  n_rows = static_cast<unsigned int>(std::ceil(2.25 * a / h - 1e-9));
+  std::vector<double> row_top(n_rows);
+  const auto          column_top = [&]() {
+    std::fill(row_top.begin(), row_top.end(), -1.);
+    for (const auto &p : scene.points->particle_handler())
+      {
+        const auto x = p.get_location();
+        if (x[0] < h)
+          {
+            const unsigned int j = std::min(n_rows - 1, unsigned(x[1] / h));
+            row_top[j]           = std::max(row_top[j], x[1]);
+          }
+      }
+    Utilities::MPI::max(row_top, comm, row_top);
+    double       top = 0;
+    unsigned int gap = 0;
+    for (unsigned int j = 0; j < n_rows && gap < 2; ++j)
+      if (row_top[j] >= 0)
+        top = row_top[j], gap = 0;
+      else
+        ++gap;
+    return top;
+  };
   double              time = 0;
   while (time < t_end)
     {
@@ -94,9 +130,7 @@ main(int argc, char **argv)
       time += dt;
       t.push_back(time);
       z.push_back(scene.max_over_points([](const Point<dim> &x, auto) { return x[0]; }) + s / 2);
-      H.push_back(scene.max_over_points([&](const Point<dim> &x, auto) {
-        return x[0] < h ? x[1] : 0.;
-      }) + s / 2);
+      H.push_back(column_top() + s / 2);
     }
 
   // Fluid area: cells holding a fluid point, against the column a x 2a
@@ -105,6 +139,30 @@ main(int argc, char **argv)
   for (const auto c : scene.grid.owned_cells())
     n_fluid += scene.flow->cell_type()[c] == IncompressibleFlow<dim>::fluid;
   n_fluid = Utilities::MPI::sum(n_fluid, comm);
+  // Volume-based fluid area: sum over cells of min(V_c/h^2, 1), V_c the
+  // volume of the points in the cell (1 when no cell is over-filled).
+  double clipped = 0;
+  {
+    std::map<std::pair<long, long>, double> V;
+    for (const auto &p : scene.points->particle_handler())
+      {
+        const auto x = p.get_location();
+        V[{long(std::floor(x[0] / h)), long(std::floor(x[1] / h))}] +=
+          p.get_properties()[MaterialPoints<dim>::PropertyIndex::volume];
+      }
+    for (const auto &[c, v] : V)
+      clipped += std::min(v / (h * h), 1.);
+    clipped = Utilities::MPI::sum(clipped, comm);
+  }
+  // The metal area of the heat equation: sub-cell occupancy (2 x 2
+  // sub-cells per cell, one point each when evenly spread).
+  double metal = 0;
+  {
+    const auto alpha = scene.points->metal_fraction();
+    for (const auto c : scene.grid.owned_cells())
+      metal += alpha[c];
+    metal = Utilities::MPI::sum(metal, comm);
+  }
 
   // Sampled curves at the tabulated times, for the reference comparison.
   std::vector<std::pair<double, double>> z_sim, h_sim;
@@ -150,15 +208,33 @@ main(int argc, char **argv)
   if (Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
     std::cerr << "fluid steps = " << scene.flow->statistics().steps
               << "\nfluid-cell area / column area 2a^2 at the end = "
-              << n_fluid * h * h / (2 * a * a) << std::endl;
+              << n_fluid * h * h / (2 * a * a)
+              << "\nvolume-based fluid area sum min(V_c/h^2, 1) / column area = "
+              << clipped * h * h / (2 * a * a)
+              << "\nmetal area (sub-cell occupancy, alpha of the heat "
+                 "equation) / column area at the end = "
+              << metal * h * h / (2 * a * a)
+              << "\nvolume correction: CG iterations "
+              << scene.flow->statistics().volume_iterations << ", skipped "
+              << scene.flow->statistics().volume_skipped << std::endl;
   checks.print("max relative front deviation from experiment (target 0.1, "
                "not met: not gated; worst at T = " +
                  std::to_string(T_front).substr(0, 4) + ")",
                std::round(err_front * 100) / 100, 2);
-  checks.print("max relative height deviation from experiment over the "
-               "tabulated range (target 0.1, not met: not gated; worst at "
-               "t sqrt(g/a) = " + std::to_string(T_height).substr(0, 4) + ")",
-               std::round(err_height * 100) / 100, 2);
+  // Over the whole range the 10 % target is met from a/32 on (with the
+  // volume correction: 0.08 at a/32, 0.09 at a/64); gated there. At a/16
+  // (0.18) it is printed only.
+  const std::string worst_height =
+    "worst at t sqrt(g/a) = " + std::to_string(T_height).substr(0, 4) + ")";
+  if (n_per_a >= 32)
+    checks.at_most("max relative height deviation from experiment over the "
+                   "tabulated range (" + worst_height,
+                   std::round(err_height * 100) / 100, 0.1);
+  else
+    checks.print("max relative height deviation from experiment over the "
+                 "tabulated range (target 0.1, not met at a/16: not gated; " +
+                   worst_height,
+                 std::round(err_height * 100) / 100, 2);
   checks.at_most("max relative height deviation from experiment for "
                  "t sqrt(g/a) <= 2.7",
                  std::round(err_height_early * 100) / 100, 0.1);
@@ -173,8 +249,8 @@ main(int argc, char **argv)
           std::ofstream out(reference.substr(6));
           out << "# dam break, the code's own curve at a/" << n_per_a
               << " (tests/dam_break.cc), Melt flow/Point shifting "
-              << prm.point_shifting
-              << "\n# front T Z, height t*sqrt(g/a) H\n"
+              << prm.point_shifting << ", Melt flow/Volume correction "
+              << prm.volume_correction << "\n# front T Z, height t*sqrt(g/a) H\n"
               << std::setprecision(6);
           for (const auto &[T, Z] : z_sim)
             out << "front " << T << ' ' << Z << '\n';
@@ -210,9 +286,14 @@ main(int argc, char **argv)
       checks.print("height points compared with the converged curve", nh);
       checks.at_most("max relative front deviation from the converged curve",
                      std::round(ez * 1000) / 1000, 0.01);
-      checks.print("max relative height deviation from the converged curve "
-                   "(target 0.01, not gated)",
-                   std::round(eh * 1000) / 1000, 2);
+      // Target 0.01 (issue): 0.014 measured; relative changes of 1e-6 in
+      // the shifting or correction coefficient move it within 0.014-0.033
+      // (the late heights are sensitive to round-off: one point spacing is
+      // 4.5 % of the last height at a/32), so the gate is 0.05 (was 0.16
+      // without the volume correction, then not gated).
+      checks.at_most("max relative height deviation from the converged curve "
+                     "(target 0.01, not met)",
+                     std::round(eh * 1000) / 1000, 0.05);
     }
   return checks.exit_code();
 }

@@ -11,7 +11,10 @@
 // AMG; rows over a band of cells round the fluid, so that the graph and the
 // hierarchy are reused while the fluid stays inside the band), corrects the nodal velocity u = u* - dt/rho grad p, and updates
 // the points with a FLIP/PIC blend before moving them with the nodal
-// velocity (explicit advection).
+// velocity (explicit advection). Optionally (Melt flow/Volume correction)
+// the points are also moved by grad(psi), lap(psi) = c (V_c/h^dim - 1) with
+// psi = 0 at the free surface, so that bunched points spread again and the
+// fluid volume of the cells is kept (doc/flow.md, "Volume correction").
 //
 // Surface tension enters through the free-surface condition: the Dirichlet
 // pressure on the faces between fluid and gas cells is the capillary
@@ -66,6 +69,10 @@ namespace femp
       double         point_shifting = 0;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int   curvature_smoothing = 0;
+      /// Relaxation c of the volume correction (0: off): the points move,
+      /// besides their advection, by grad(psi) with lap(psi) = c (V_c/h^dim
+      /// - 1), V_c the point volume in the cell (doc/flow.md).
+      double         volume_correction = 0;
       double         surface_tension = 0;   ///< sigma, N/m (0: off)
       double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       double         recoil_coefficient = 0; ///< zeta_p (0: no recoil)
@@ -139,6 +146,8 @@ namespace femp
       unsigned int  halvings         = 0; ///< steps redone as two halves
       double        max_point_speed  = 0; ///< m/s, after the last step
       unsigned long n_fluid_cells    = 0; ///< global, last step
+      unsigned long volume_iterations = 0; ///< CG, volume correction, total
+      unsigned int  volume_skipped   = 0; ///< volume solves not converged
     };
 
     IncompressibleFlow(const Parameters &         prm,
@@ -231,6 +240,17 @@ namespace femp
     pressure_solve(const double dt);
     void
     correction(const double dt);
+    /// Volume correction (Melt flow/Volume correction): solve
+    /// lap(psi) = c (V_c/h^dim - 1) on the fluid cells with psi = 0 at the
+    /// free surface (same matrix and preconditioner as the pressure), so
+    /// that grid_to_points() can move the points by grad(psi).
+    void
+    volume_solve();
+    /// Displacement grad(psi) normal to the 2 dim faces of @p cell (face
+    /// 2d+side, m): zero on walls and solid faces, the ghost-fluid value on
+    /// gas faces.
+    void
+    volume_faces(const std::size_t cell, double *G) const;
     void
     grid_to_points(const double dt);
 
@@ -276,6 +296,7 @@ namespace femp
 
     std::vector<double>                  type, type_old, gid, p_cell;
     std::vector<double>                  mass, volume;
+    std::vector<double>                  occupancy, psi; // point volume per cell, m^dim; psi/h^2
     std::vector<double>                  alpha_node, alpha_cell, p_surface;
     std::vector<double>                  p_capillary, surface_mark; // sigma div(n), 0/1
     std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
@@ -300,7 +321,7 @@ namespace femp
     TrilinosWrappers::SparseMatrix    matrix;
     TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
     TrilinosWrappers::PreconditionAMG amg;
-    TrilinosWrappers::MPI::Vector     solution, rhs;
+    TrilinosWrappers::MPI::Vector     solution, rhs, psi_solution;
     bool                              have_matrix = false;
 
     Statistics stats;
