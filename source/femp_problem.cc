@@ -517,6 +517,11 @@ namespace femp
               << "re-sorted in " << st.resorts << " steps, "
               << st.n_fluid_cells << " fluid cells and max speed "
               << st.max_point_speed << " m/s at the end" << std::endl;
+        if (st.volume_iterations > 0 || st.volume_skipped > 0)
+          pcout << "Melt flow volume correction: " << st.volume_iterations
+                << " CG iterations in total, " << st.volume_skipped
+                << " solves not converged (no correction in those steps)"
+                << std::endl;
         const auto &r = result.flow_limits;
         pcout << std::setprecision(4)
               << "Melt flow time step limits (smallest over the run): "
