@@ -211,6 +211,9 @@ namespace femp
     /// nodes of this rank's owned cells.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
     std::vector<double> tr_buffer, tr_v, tr_a;
+    /// Per transition node: FE velocity before the merge and the grid
+    /// (point) force, for the re-map work there.
+    std::vector<double> tr_u, tr_fgrid;
     const std::array<std::vector<double>, dim> *external_forces = nullptr;
     std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
     std::vector<double>       T_solid, T_prev, T_next;
@@ -218,7 +221,9 @@ namespace femp
     unsigned int              steps   = 0;
     double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
     double D_transfer = 0, K_melted = 0, K_solidified = 0; // global
-    double W_remap = 0; ///< re-map work of the MUSL update (global)
+    /// re-map work of the MUSL update, with the velocity jumps of the FE
+    /// node forces at the transition nodes (global)
+    double W_remap = 0;
     double K_points        = 0; ///< kinetic energy of the points (global)
     double n_points_global = 0; ///< solid points after the last step
     /// Grid nodes whose point kinetic energy this rank counts (each node
