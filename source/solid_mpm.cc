@@ -320,6 +320,28 @@ namespace femp
           out.add(c, n0, blk.nl);
         }
     }
+    /// APIC: adds point p's affine velocity term C_p : C_p D_p of the
+    /// kinetic energy to v2 (D_p per direction h^2 xi (1 - xi), xi the
+    /// position in the cell that the next P2G uses).
+    template <int dim>
+    inline void
+    add_affine_kinetic(
+      const std::array<std::vector<double>, dim> &      x,
+      const std::array<std::vector<double>, dim> &      corner,
+      const std::array<std::vector<double>, dim * dim> &C,
+      const std::size_t                                 p,
+      const double                                      h,
+      double &                                          v2)
+    {
+      const double ih = 1. / h;
+      for (int j = 0; j < dim; ++j)
+        {
+          const double xi = (x[j][p] - corner[j][p]) * ih;
+          const double D  = h * h * xi * (1 - xi);
+          for (int i = 0; i < dim; ++i)
+            v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
+        }
+    }
   } // namespace
 
 
@@ -597,7 +619,7 @@ namespace femp
   void
   SolidMPM<dim>::sum_energies()
   {
-    const double h = grid.h(), ih = 1. / h;
+    const double h = grid.h();
     kinetic        = 0;
     weight_momentum.fill(0.);
     for (std::size_t p = 0; p < true_mass.size(); ++p)
@@ -609,13 +631,7 @@ namespace femp
             weight_momentum[d] += true_mass[p] * v[d][p];
           }
         if (apic)
-          for (int j = 0; j < dim; ++j)
-            {
-              const double xi = (x[j][p] - corner[j][p]) * ih;
-              const double D  = h * h * xi * (1 - xi);
-              for (int i = 0; i < dim; ++i)
-                v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
-            }
+          add_affine_kinetic<dim>(x, corner, C, p, h, v2);
         kinetic += 0.5 * (true_mass[p] * scaling) * v2;
       }
   }
@@ -1023,13 +1039,7 @@ namespace femp
             // the point (those of the next P2G). Points that left the rank
             // are counted by the gather of resort().
             if (A)
-              for (int j = 0; j < dim; ++j)
-                {
-                  const double xj = (x[j][p] - corner[j][p]) * ih;
-                  const double D  = h * h * xj * (1 - xj);
-                  for (int i = 0; i < dim; ++i)
-                    v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
-                }
+              add_affine_kinetic<dim>(x, corner, C, p, h, v2);
             kinetic += 0.5 * (true_mass[p] * scaling) * v2;
           }
 
