@@ -33,8 +33,12 @@ namespace femp
                       "pressure.");
     prm.declare_entry("Solid stress", "false", Patterns::Bool(),
                       "Solve the thermal stress by MPM and FE (eqs. 5-17): "
-                      "subsections 'Solid' and 'Solid FEM'. Not yet together "
-                      "with Melt flow.");
+                      "subsections 'Solid' and 'Solid FEM'. With 'Melt flow' "
+                      "too, the flow moves the fluid points and the solid "
+                      "the solid points, and the fluid pressure and viscous "
+                      "forces on the faces to solid cells load the solid "
+                      "(doc/solid.md, 'Flow and solid together'); "
+                      "'Solid/Gravity' must then be the flow's gravity.");
     prm.leave_subsection();
     FempProblem<3>::TimeParameters::declare_parameters(prm);
     Material::declare_parameters(prm);
@@ -98,9 +102,6 @@ namespace femp
     melt_flow     = prm.get_bool("Melt flow");
     heat_enabled  = prm.get_bool("Heat transfer");
     solid_enabled = prm.get_bool("Solid stress");
-    require(!(melt_flow && solid_enabled), "Physics/Solid stress", "true",
-            "the melt flow and the solid stress are verified separately but "
-            "not yet run together; switch one of them off");
     prm.leave_subsection();
     time_prm.parse_parameters(prm);
     material.parse_parameters(prm);
@@ -126,6 +127,26 @@ namespace femp
         solid_prm.check(solid_material, grid_prm);
         fem_prm.parse_parameters(prm);
         fem_prm.check(grid_prm);
+        if (melt_flow)
+          {
+            // One body under one gravity: the fluid's weight reaches the
+            // solid through the fluid forces, the solid's own through
+            // Solid/Gravity.
+            bool same = true;
+            for (int d = 0; d < dim; ++d)
+              same = same && std::abs(solid_prm.gravity[d] -
+                                      flow_prm.gravity[d]) <=
+                               1e-12 * (1 + flow_prm.gravity.norm());
+            std::ostringstream v, allowed;
+            for (int d = 0; d < dim; ++d)
+              v << (d ? ", " : "") << solid_prm.gravity[d];
+            allowed << "with Physics/Melt flow = true it must be the flow's "
+                       "gravity (Melt flow/Gravity "
+                    << -flow_prm.gravity[dim - 1] << " m/s^2 downwards): ";
+            for (int d = 0; d < dim; ++d)
+              allowed << (d ? ", " : "") << flow_prm.gravity[d];
+            require(same, "Solid/Gravity", v.str(), allowed.str());
+          }
       }
 
     // Checks that need several modules, still before any work.
@@ -242,6 +263,16 @@ namespace femp
         solid = std::make_unique<SolidStress<dim>>(solid_prm, fem_prm,
                                                    solid_material, *grid,
                                                    *points);
+        if (flow)
+          {
+            // Flow and solid together (doc/solid.md): the flow owns the
+            // fluid points' velocities; its forces on the solid enter
+            // through the solid's external nodal forces.
+            solid->set_flow_owns_fluid_points(true);
+            for (int d = 0; d < dim; ++d)
+              fluid_force[d] = grid->make_node_field();
+            solid->set_external_nodal_forces(&fluid_force);
+          }
         solid->initialize(heat->temperature(), output_prm.directory);
       }
 
@@ -386,9 +417,16 @@ namespace femp
           points->cells_to_points(heat->temperature());
         }
 
-        // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4), sub-cycled.
+        // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4), sub-cycled;
+        //    with the solid, the fluid forces on it (eq. 13), held over
+        //    the solid sub-steps of step 4.
         if (melt_flow)
           flow_substeps(dt);
+        if (melt_flow && solid)
+          {
+            TimerOutput::Scope t(timer, "flow: forces on the solid");
+            flow->fluid_forces_on_solid(fluid_force);
+          }
 
         time += dt;
         ++step;

@@ -413,15 +413,17 @@ namespace femp
         const ArrayView<double> q = it->get_properties();
         if (q[P::state] == MaterialPoints<dim>::fluid)
           {
-            // Melted: no stress, no hardening memory, no momentum (the melt
-            // flow does not run with the solid, femp_problem.cc: a melted
-            // point is at rest; its kinetic energy was booked as removed
-            // by melting), so that it solidifies again stress-free and at
-            // rest (doc/solid.md "Melting and re-solidification").
+            // Melted: no stress, no hardening memory, no momentum (without
+            // the melt flow a melted point is at rest; its kinetic energy
+            // was booked as removed by melting), so that it solidifies
+            // again stress-free and at rest (doc/solid.md "Melting and
+            // re-solidification"). With the flow, its velocity is the
+            // flow's (doc/solid.md "Flow and solid together").
             for (unsigned int c = P::stress; c < P::stress + dim * (dim + 1) / 2; ++c)
               q[c] = 0;
-            for (int d = 0; d < dim; ++d)
-              q[P::velocity + d] = 0;
+            if (!flow_owns_fluid)
+              for (int d = 0; d < dim; ++d)
+                q[P::velocity + d] = 0;
             q[P::plastic_strain]   = 0;
             q[P::viscous_pressure] = 0;
             if constexpr (dim == 2)

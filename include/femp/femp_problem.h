@@ -2,9 +2,12 @@
 // step of the paper's sec. 2.6 (METHOD sec. 5):
 //   1. tag cells from the points, update alpha, gamma and properties;
 //   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1);
-//   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4; not yet built);
+//   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4), sub-cycled;
+//      with the solid, the fluid forces on the solid (pressure and viscous
+//      force on the faces to solid cells, eq. 13);
 //   4. solid by MPM + FE with transition-node coupling (SolidStress,
-//      eqs. 5-17), sub-cycled to the macro time;
+//      eqs. 5-17), sub-cycled to the macro time, loaded by those fluid
+//      forces held constant over its sub-steps;
 //   5. output, next step.
 #ifndef femp_femp_problem_h
 #define femp_femp_problem_h
@@ -101,6 +104,12 @@ namespace femp
     {
       return result;
     }
+    /// The material points after run() (tests read their stresses).
+    const MaterialPoints<dim> &
+    material_points() const
+    {
+      return *points;
+    }
 
   private:
     MPI_Comm           comm;
@@ -133,6 +142,8 @@ namespace femp
     flow_substeps(const double dt);
     std::unique_ptr<Output<dim>>         output;
     std::unique_ptr<SolidStress<dim>>    solid;
+    /// Fluid forces on the solid's grid nodes (flow and solid together).
+    std::array<std::vector<double>, dim> fluid_force;
     TimerOutput                          timer;
     Summary                              result;
 

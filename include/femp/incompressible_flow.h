@@ -210,6 +210,22 @@ namespace femp
       return stats;
     }
 
+    /// Forces of the fluid on the solid (eq. 13, "fluid forces"; doc/flow.md
+    /// "Flow and solid together") from the state of the last step, as nodal
+    /// forces on the background-grid nodes for
+    /// SolidStress::set_external_nodal_forces(): partial contributions of
+    /// this rank's fluid cells (the sum over ranks is the total), N (2D:
+    /// N/m). Pressure: on every face between a fluid cell and a solid cell,
+    /// the face pressure p_c + (h/2) s rho g_d (the cell-centre pressure
+    /// extrapolated with the wall-normal gradient rho g of a rigid wall; d
+    /// the face direction, s = +-1 its side), times the face area, pushing
+    /// into the solid, in equal shares on the face's 2^(dim-1) nodes.
+    /// Viscous: on each no-slip node (a node of a solid cell) the viscous
+    /// force -mu K u of each fluid cell (the reaction the wall supplies to
+    /// hold it). @p f is resized to the local node box and overwritten.
+    void
+    fluid_forces_on_solid(std::array<std::vector<double>, dim> &f) const;
+
   private:
     /// The step proper; redone as two halves (recursively, @p depth) when
     /// the new nodal speed would move a point more than a cell.

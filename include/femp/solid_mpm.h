@@ -115,10 +115,18 @@ namespace femp
     /// @p excluded_cell[idx] == 0 into the flat arrays. Inertial masses are
     /// multiplied by @p mass_scaling (gravity uses the true mass). Points in
     /// state fluid get zero stress, plastic strain, viscous pressure and
-    /// affine velocity, and (no melt flow runs with the solid) zero velocity.
+    /// affine velocity, and, unless the melt flow owns them
+    /// (set_flow_owns_fluid_points()), zero velocity.
     void
     gather(const std::vector<std::uint8_t> &excluded_cell,
            const double                      mass_scaling);
+    /// With the melt flow running beside the solid: gather() leaves the
+    /// velocity of fluid points alone (the flow owns it).
+    void
+    set_flow_owns_fluid_points(const bool b)
+    {
+      flow_owns_fluid = b;
+    }
     /// Write positions, velocities, stresses, plastic strains, volumes,
     /// viscous pressures and affine velocities back to the particles, and
     /// move points that changed cells to their new cells (collective).
@@ -251,6 +259,7 @@ namespace femp
     double                    kinetic = 0;
     std::array<double, dim>   weight_momentum{}; ///< sum m_true v
     bool                      moved_cell = false, lost = false;
+    bool                      flow_owns_fluid = false;
     unsigned int              left_rank  = 0;
     Point<dim>                escaped;
 

@@ -154,6 +154,14 @@ namespace femp
       external_forces = f;
     }
 
+    /// The melt flow runs beside the solid: fluid points keep their
+    /// velocity at the gather (SolidMPM::set_flow_owns_fluid_points()).
+    void
+    set_flow_owns_fluid_points(const bool b)
+    {
+      mpm.set_flow_owns_fluid_points(b);
+    }
+
     /// Solid step size in use, s.
     double
     time_step() const
