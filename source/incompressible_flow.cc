@@ -1626,54 +1626,41 @@ namespace femp
   template <int dim>
   void
   IncompressibleFlow<dim>::fluid_forces_on_solid(
-    std::array<std::vector<double>, dim> &f) const
+    std::array<std::vector<double>, 2 * dim * dim> &F) const
   {
-    // (Flow and solid together, doc/flow.md; a separate entry point, not
-    // part of the fluid step.)
-    for (int d = 0; d < dim; ++d)
+    // (Flow and solid together, doc/solid.md; a separate entry point, not
+    // part of the fluid step.) From the solid side, so that a fluid
+    // neighbour owned by another rank counts too: type, p_cell and u_cell
+    // carry ghost values.
+    for (auto &f : F)
       {
-        if (f[d].size() != grid.n_local_nodes())
-          f[d] = grid.make_node_field();
+        if (f.size() != grid.n_local())
+          f = grid.make_field(0.);
         else
-          std::fill(f[d].begin(), f[d].end(), 0.);
+          std::fill(f.begin(), f.end(), 0.);
       }
-    const auto & cs    = grid.strides();
-    const double h     = grid.h();
-    const double share = std::pow(h, dim - 1) / (n_corners / 2);
-    for (const auto c : fluid_cells)
+    if (stats.n_fluid_cells == 0) // global
+      return;
+    const auto & cs   = grid.strides();
+    const double h    = grid.h();
+    const double area = std::pow(h, dim - 1);
+    for (const auto c : grid.owned_cells())
       {
-        const std::size_t n0 = grid.first_node_of_cell(c);
-        // Pressure on the faces to solid cells.
+        if (type[c] != solid)
+          continue;
         for (int d = 0; d < dim; ++d)
           for (unsigned int side = 0; side < 2; ++side)
             {
-              const std::size_t nb = side ? c + cs[d] : c - cs[d];
-              if (type[nb] != solid)
+              const std::size_t n = side ? c + cs[d] : c - cs[d];
+              if (type[n] != fluid)
                 continue;
               const double s = side ? 1. : -1.;
-              const double p = p_cell[c] + 0.5 * h * s * rho * prm.gravity[d];
-              for (unsigned int k = 0; k < n_corners; ++k)
-                if (((k >> d) & 1) == side)
-                  f[d][n0 + corner_offset[k]] += s * p * share;
-            }
-        // Viscous reaction on the no-slip nodes of this cell.
-        if (prm.viscosity > 0)
-          for (unsigned int a = 0; a < n_corners; ++a)
-            {
-              const std::size_t c0   = c + around_offset[a];
-              bool              wall = false;
-              for (unsigned int j = 0; j < n_corners; ++j)
-                wall = wall || type[c0 - around_offset[j]] == solid;
-              if (!wall)
-                continue;
-              const std::size_t n = n0 + corner_offset[a];
-              for (int d = 0; d < dim; ++d)
-                {
-                  double Ku = 0;
-                  for (unsigned int b = 0; b < n_corners; ++b)
-                    Ku += stiffness[a][b] * u_new[d][n0 + corner_offset[b]];
-                  f[d][n] -= prm.viscosity * Ku;
-                }
+              const double p = p_cell[n] - 0.5 * h * s * rho * prm.gravity[d];
+              const unsigned int f = dim * (2 * d + side);
+              F[f + d][c] = -s * p * area;
+              for (int e = 0; e < dim; ++e)
+                if (e != d)
+                  F[f + e][c] = prm.viscosity * u_cell[e][n] / (0.5 * h) * area;
             }
       }
   }

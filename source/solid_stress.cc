@@ -455,6 +455,12 @@ namespace femp
                 nodes.velocity[d][n]                     = 0;
                 continue;
               }
+            if (m < small_mass) // off (0) without the melt flow
+              {
+                nodes.force[d][n]    = 0;
+                nodes.velocity[d][n] = nodes.momentum[d][n] / m;
+                continue;
+              }
             nodes.momentum[d][n] += dt * nodes.force[d][n];
             nodes.force[d][n] /= m;
             nodes.velocity[d][n] = nodes.momentum[d][n] / m;
@@ -648,14 +654,43 @@ namespace femp
 
   template <int dim>
   void
+  SolidStress<dim>::set_small_mass_cutoff(const double fraction)
+  {
+    small_mass = fraction * prm.mass_scaling * mat.density *
+                 std::pow(grid.h(), dim) / (1u << dim);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::find_state_changes()
+  {
+    // (Flow and solid together, doc/solid.md.) States change only in the
+    // temperature step; the flow changes velocities of fluid points only,
+    // so the exchange found here is what the next gather would have found,
+    // with the melted points' velocities as they left the solid. If the
+    // solid takes no step in this temperature step (its step longer than
+    // the temperature step), the next call finds the exchange again,
+    // relative to the same gather.
+    if (mpm_cells.empty())
+      return;
+    pending_exchange      = mpm.exchange_since_gather();
+    have_pending_exchange = true;
+  }
+
+
+  template <int dim>
+  void
   SolidStress<dim>::gather_points()
   {
     typename SolidMPM<dim>::Exchange e;
     if (!mpm_cells.empty())
       {
-        e = mpm.exchange_since_gather();
+        e = have_pending_exchange ? pending_exchange :
+                                    mpm.exchange_since_gather();
         mpm.gather(fem.zone_mask(), prm.mass_scaling);
       }
+    have_pending_exchange = false;
     double sums[7] = {e.n_melted,     e.n_solidified,         e.n_lost,
                       e.k_melted,     e.k_solidified,         double(mpm.n_points()),
                       mpm.kinetic_energy()};

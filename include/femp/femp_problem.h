@@ -142,8 +142,16 @@ namespace femp
     flow_substeps(const double dt);
     std::unique_ptr<Output<dim>>         output;
     std::unique_ptr<SolidStress<dim>>    solid;
-    /// Fluid forces on the solid's grid nodes (flow and solid together).
-    std::array<std::vector<double>, dim> fluid_force;
+    /// Fluid forces on the solid's grid nodes (flow and solid together),
+    /// and on the faces of the solid cells (per face and component).
+    std::array<std::vector<double>, dim>           fluid_force;
+    std::array<std::vector<double>, 2 * dim * dim> fluid_face_force;
+    /// Step 3 with the solid: the fluid forces on the faces of the solid
+    /// cells (IncompressibleFlow::fluid_forces_on_solid) to the faces' grid
+    /// nodes, weighted by the solid mass they hold, into fluid_force
+    /// (partial sums of this rank, summed by the solid).
+    void
+    fluid_forces_to_solid_nodes();
     TimerOutput                          timer;
     Summary                              result;
 

@@ -210,21 +210,23 @@ namespace femp
       return stats;
     }
 
-    /// Forces of the fluid on the solid (eq. 13, "fluid forces"; doc/flow.md
-    /// "Flow and solid together") from the state of the last step, as nodal
-    /// forces on the background-grid nodes for
-    /// SolidStress::set_external_nodal_forces(): partial contributions of
-    /// this rank's fluid cells (the sum over ranks is the total), N (2D:
-    /// N/m). Pressure: on every face between a fluid cell and a solid cell,
-    /// the face pressure p_c + (h/2) s rho g_d (the cell-centre pressure
-    /// extrapolated with the wall-normal gradient rho g of a rigid wall; d
-    /// the face direction, s = +-1 its side), times the face area, pushing
-    /// into the solid, in equal shares on the face's 2^(dim-1) nodes.
-    /// Viscous: on each no-slip node (a node of a solid cell) the viscous
-    /// force -mu K u of each fluid cell (the reaction the wall supplies to
-    /// hold it). @p f is resized to the local node box and overwritten.
+    /// Forces of the fluid on the faces of the solid cells (eq. 13, "fluid
+    /// forces"; doc/solid.md "Flow and solid together") from the state of
+    /// the last step: for every owned cell of type solid and each of its
+    /// faces to a fluid cell (owned or ghost),
+    ///  - pressure: the face pressure p_n - s (h/2) rho g_d (the centre
+    ///    pressure of the fluid neighbour extrapolated with the
+    ///    wall-normal gradient rho g of a rigid wall; d the face direction,
+    ///    s = +-1 the side of the fluid) times the face area, pushing into
+    ///    the solid;
+    ///  - viscous shear: mu u_t / (h/2) times the face area, u_t the
+    ///    tangential part of the neighbour's cell-centre velocity (no-slip
+    ///    wall, linear profile).
+    /// @p F[dim * (2 d + side) + e]: component e of the force through face
+    /// (d, side) (side 1: the upper face), one cell field over the local box
+    /// each (resized and overwritten), N (2D: N/m); zero elsewhere.
     void
-    fluid_forces_on_solid(std::array<std::vector<double>, dim> &f) const;
+    fluid_forces_on_solid(std::array<std::vector<double>, 2 * dim * dim> &F) const;
 
   private:
     /// The step proper; redone as two halves (recursively, @p depth) when

@@ -161,6 +161,24 @@ namespace femp
     {
       mpm.set_flow_owns_fluid_points(b);
     }
+    /// With the melt flow: grid nodes whose (inertial) mass is below
+    /// @p fraction of that of a node of a full cell, s rho h^dim / 2^dim,
+    /// take no force in the grid update (their velocity is their momentum
+    /// over their mass). Such nodes appear round solid fragments that
+    /// solidified at the positions where the flow left them (a point near
+    /// a cell face gives the opposite face's nodes a tiny mass but a full
+    /// shape-function gradient: the explicit update of those nodes is
+    /// unstable). 0 (default): off, the update is unchanged.
+    void
+    set_small_mass_cutoff(const double fraction);
+    /// With the melt flow: find the points that melted or solidified since
+    /// the last gather now, right after the temperature step changed their
+    /// states and before the flow changes the velocities of the melted
+    /// ones, so that `removed_by_melting` books the kinetic energy they had
+    /// in the solid; the next gather uses this instead of looking again
+    /// (local, no communication).
+    void
+    find_state_changes();
 
     /// Solid step size in use, s.
     double
@@ -240,6 +258,12 @@ namespace femp
     /// -1.
     std::vector<std::pair<std::uint32_t, std::int32_t>> counted_nodes;
     std::unique_ptr<std::ofstream> energy_out, probe_out;
+    /// State changes found by find_state_changes() for the next gather.
+    typename SolidMPM<dim>::Exchange pending_exchange;
+    bool                             have_pending_exchange = false;
+    /// Node mass below which the grid update applies no force (kg, 2D
+    /// kg/m; 0: off).
+    double small_mass = 0;
 
     /// One solid step of size @p dt; @p w: weight of the step's end time
     /// between the last two temperature fields.
