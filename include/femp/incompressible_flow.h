@@ -233,8 +233,8 @@ namespace femp
              prm.recoil_coefficient > 0;
     }
     /// Add the recoil pressure of the surface cells to p_s, from the
-    /// surface temperature of their neighbourhood (metal-weighted mean over
-    /// the surface cells among the 3^dim neighbours).
+    /// surface temperature of their neighbourhood (median over the surface
+    /// cells among the 3^dim neighbours).
     void
     add_recoil_pressure();
     /// Average the capillary part of p_s over neighbouring surface cells
