@@ -18,7 +18,9 @@
 //   by h^dim, averaged to cell centres; computed only near the fluid;
 // - p_s = sigma div(n) + recoil: n = -grad alpha/|grad alpha| at the nodes
 //   of a surface cell (pair-averaged differences of the cell values) and
-//   div(n) at its centre (edge-averaged differences);
+//   div(n) at its centre (edge-averaged differences); the recoil from the
+//   surface temperature round the cell (median over the surface cells
+//   among its 3^dim neighbours);
 // - Marangoni: traction dsigma/dT (grad T - (n.grad T) n) on the fluid-gas
 //   faces, weighted by |n_d|, spread to the face nodes;
 // - walls: zero normal velocity on the domain boundary (free slip) and zero
@@ -40,6 +42,7 @@
 #include <femp/incompressible_flow.h>
 #include <femp/input_checks.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <type_traits>
@@ -705,8 +708,6 @@ namespace femp
     if (prm.surface_tension_gradient != 0)
       for (int d = 0; d < dim; ++d)
         std::fill(surface_force[d].begin(), surface_force[d].end(), 0.);
-    const double R_gas = 8.314462618;
-    const double Tv    = prm.evaporation_temperature;
     for (const auto c : fluid_cells)
       {
         bool surface = false;
@@ -747,19 +748,10 @@ namespace femp
         double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
         p_capillary[c]  = ps;
         surface_mark[c] = 1;
-        if (!thermal)
-          {
-            p_surface[c] = ps;
-            continue;
-          }
-        const double T = (*temperature)[c];
-        if (prm.recoil_coefficient > 0 && T > 0)
-          ps += prm.recoil_coefficient * prm.ambient_pressure *
-                std::exp(prm.latent_heat_evaporation * prm.molar_mass *
-                         (T - Tv) / (R_gas * T * Tv));
-        p_surface[c] = ps;
+        p_surface[c]    = ps; // the recoil is added by add_recoil_pressure()
         if (prm.surface_tension_gradient == 0)
           continue;
+        const double T = (*temperature)[c];
         // Unit normal of the cell; grad T from metal neighbours.
         double nn = 0;
         for (int d = 0; d < dim; ++d)
@@ -797,8 +789,58 @@ namespace femp
     if (prm.surface_tension_gradient != 0)
       for (int d = 0; d < dim; ++d)
         grid.sum_shared_nodes(surface_force[d]);
+    if (prm.recoil_coefficient > 0 ||
+        (prm.curvature_smoothing > 0 && prm.surface_tension > 0))
+      grid.update_ghosts(surface_mark);
+    add_recoil_pressure();
     smooth_capillary_pressure();
     grid.update_ghosts(p_surface);
+  }
+
+
+  // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
+  // surface cell (doc/flow.md, "3D track with recoil"). T_s is the median
+  // of the cell temperatures over the surface cells among its 3^dim
+  // neighbours (itself included; the mean of the two middle values for an
+  // even count). The cell temperature of single surface cells has outliers:
+  // on the 3D track, surface cells at the top of melting powder grains
+  // reached 8,000-17,000 K next to cells at 4,500-6,000 K (fragments of
+  // 2-30 cells), and the exponential turned that into recoil jumps of
+  // 1e9-3e10 Pa between neighbouring cells, which blew the fragment apart
+  // at 300-5,000 m/s (the spikes of the convective limit). The median drops
+  // such a single-cell outlier, gives a fragment of a few cells one recoil
+  // pressure on its whole surface (no net force or internal drive, as for a
+  // uniformly hot droplet), and keeps the cell's own temperature where T is
+  // linear along a flat surface (in 2D wherever T is monotone along it); at
+  // a smooth temperature peak it takes about the value one cell away. Cost
+  // on the track: the recoil of surface cells above 4000 K is typically
+  // 0.3 (0.03-0.65) of the cell-wise value (the surface T varies by several
+  // hundred K per cell near the beam).
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::add_recoil_pressure()
+  {
+    if (prm.recoil_coefficient == 0)
+      return;
+    const double R_gas = 8.314462618;
+    const double Tv    = prm.evaporation_temperature;
+    const double a     = prm.latent_heat_evaporation * prm.molar_mass /
+                     (R_gas * Tv);
+    std::array<double, 27> Ts;
+    for (const auto c : fluid_cells)
+      {
+        if (surface_mark[c] == 0)
+          continue;
+        unsigned int n = 0;
+        for (const auto o : stencil)
+          if (surface_mark[c + o] != 0)
+            Ts[n++] = (*temperature)[c + o];
+        std::sort(Ts.begin(), Ts.begin() + n);
+        const double T = (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
+        if (T > 0)
+          p_surface[c] += prm.recoil_coefficient * prm.ambient_pressure *
+                          std::exp(a * (T - Tv) / T);
+      }
   }
 
 
@@ -818,7 +860,6 @@ namespace femp
   {
     if (prm.curvature_smoothing == 0 || prm.surface_tension == 0)
       return;
-    grid.update_ghosts(surface_mark);
     std::vector<double> smoothed(fluid_cells.size());
     for (unsigned int pass = 0; pass < prm.curvature_smoothing; ++pass)
       {

@@ -250,6 +250,11 @@ namespace femp
       return prm.surface_tension > 0 || prm.surface_tension_gradient != 0 ||
              prm.recoil_coefficient > 0;
     }
+    /// Add the recoil pressure of the surface cells to p_s, from the
+    /// surface temperature of their neighbourhood (median over the surface
+    /// cells among the 3^dim neighbours).
+    void
+    add_recoil_pressure();
     /// Average the capillary part of p_s over neighbouring surface cells
     /// (Melt flow/Curvature smoothing passes).
     void
