@@ -28,7 +28,9 @@ namespace femp
                       "Range [lower corner, upper corner].");
     prm.declare_entry("Sub-cell divisions", "2", Patterns::Integer(1, 4),
                       "Sub-cells per direction n used to compute the metal "
-                      "fraction alpha by occupation; range 1..4.");
+                      "fraction alpha by occupation (cells holding melt, i.e. "
+                      "a point that is or has been fluid, take the volume of "
+                      "their points instead); range 1..4.");
     prm.enter_subsection("Powder layer");
     prm.declare_entry("Layer thickness", "5e-5", Patterns::Double(0.),
                       "Thickness of the powder layer on the substrate, m; 0 for "
