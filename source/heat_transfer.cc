@@ -694,21 +694,42 @@ namespace femp
 
 
     // Convection (only when a velocity field is present): first-order
-    // upwind, no advective flux from gas or from outside the domain.
+    // upwind, no advective flux from gas or from outside the domain. In a
+    // partly filled cell (alpha < 1) the metal flowing in mixes with alpha
+    // of metal, so its temperature moves at the rate 1/alpha: the part
+    // (1/alpha - 1) is taken implicitly in the cell's own temperature
+    // (a convex mix of T* and the upwind values: no step limit); full cells
+    // are unchanged. With it, the alpha update from the points (which
+    // books the arriving volume at the cell's T) and the convection give
+    // the arriving metal the upwind temperature (doc/equations.md).
     double e_advection = 0;
     if (velocity)
       for (const auto idx : grid.owned_cells())
         {
           if (alpha[idx] <= 0)
             continue;
-          double conv = 0, rate = 0;
+          double conv = 0, rate = 0, r_up = 0, rT_up = 0;
           for (int d = 0; d < dim; ++d)
             {
               const double         u  = (*velocity)[d][idx];
               const std::ptrdiff_t s  = u > 0 ? -st[d] : st[d];
-              const double         dT = conductance[idx + s] > 0 ? T[idx] - T[idx + s] : 0.;
+              const bool           up = conductance[idx + s] > 0;
+              const double         dT = up ? T[idx] - T[idx + s] : 0.;
               conv -= std::abs(u) * dT * ih;
               rate += std::abs(u) * ih;
+              if (up)
+                {
+                  r_up += std::abs(u) * ih;
+                  rT_up += std::abs(u) * ih * T[idx + s];
+                }
+            }
+          if (alpha[idx] < 1 && r_up > 0)
+            {
+              // T_new = (T* + w sum r T_up) / (1 + w sum r), w = dt (1/alpha - 1)
+              const double w     = dt * (1. / alpha[idx] - 1);
+              const double Tstar = T_new[idx] + dt * conv;
+              const double Tmix  = (Tstar + w * rT_up) / (1 + w * r_up);
+              conv += (Tmix - Tstar) / dt;
             }
           T_new[idx] += dt * conv;
           e_advection += capacity[idx] * conv;

@@ -1,6 +1,7 @@
 // femp: material points on the background grid: creation of the substrate
 // and the powder layer (inserted cell by cell), metal fraction by sub-cell
-// occupation, and the cell-to-point temperature transfer (METHOD sec. 1-2).
+// occupation (by point volume in cells holding melt), and the cell-to-point
+// temperature transfer (METHOD sec. 1-2).
 #include <deal.II/base/mpi.h>
 
 #include <femp/input_checks.h>
@@ -27,7 +28,9 @@ namespace femp
                       "Range [lower corner, upper corner].");
     prm.declare_entry("Sub-cell divisions", "2", Patterns::Integer(1, 4),
                       "Sub-cells per direction n used to compute the metal "
-                      "fraction alpha by occupation; range 1..4.");
+                      "fraction alpha by occupation (cells holding melt, i.e. "
+                      "a point that is or has been fluid, take the volume of "
+                      "their points instead); range 1..4.");
     prm.enter_subsection("Powder layer");
     prm.declare_entry("Layer thickness", "5e-5", Patterns::Double(0.),
                       "Thickness of the powder layer on the substrate, m; 0 for "
@@ -497,10 +500,18 @@ namespace femp
   std::vector<double>
   MaterialPoints<dim>::metal_fraction() const
   {
+    // Sub-cell occupancy (METHOD sec. 2) everywhere, and, when some point
+    // is fluid, the volume of the points in the cells that hold a fluid
+    // point (see the header; doc/flow.md, "Volume-based alpha").
+    using P                = PropertyIndex;
     const unsigned int n   = prm.subcells;
     const double       ih  = n / grid.h();
     const auto &       x0  = grid.origin();
+    const double       Ts  = mat.solidus;
     std::vector<std::uint64_t> mask(grid.n_local(), 0);
+    std::vector<double>        volume(grid.n_local(), 0.);
+    std::vector<double>        fluid_cell(grid.n_local(), 0.);
+    bool                       any_fluid = false;
     for (const auto &particle : handler)
       {
         const Point<dim> p = particle.get_location();
@@ -515,15 +526,102 @@ namespace femp
             bit += m * std::min(std::max(sub - c * int(n), 0), int(n) - 1);
             m *= n;
           }
-        mask[grid.local_index(ijk)] |= (std::uint64_t(1) << bit);
+        const auto idx = grid.local_index(ijk);
+        mask[idx] |= (std::uint64_t(1) << bit);
+        const auto v = particle.get_properties();
+        volume[idx] += v[P::volume];
+        if (v[P::state] == fluid || v[P::peak_temperature] > Ts)
+          fluid_cell[idx] = 1, any_fluid = true;
       }
     const double        inv_nsub = 1. / std::pow(n, dim);
     std::vector<double> alpha(grid.n_local(), 0.);
     for (std::size_t i = 0; i < alpha.size(); ++i)
       alpha[i] = std::bitset<64>(mask[i]).count() * inv_nsub;
-    std::vector<double> &a = alpha;
-    grid.update_ghosts(a);
+    if (Utilities::MPI::logical_or(any_fluid, grid.communicator()))
+      volume_fraction_of_fluid_cells(volume, fluid_cell, alpha);
+    grid.update_ghosts(alpha);
     return alpha;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::volume_fraction_of_fluid_cells(
+    std::vector<double> &      v,
+    std::vector<double> &      is_fluid,
+    std::vector<double> &      alpha) const
+  {
+    // v: point volume per cell (owned cells), made a fraction of the cell
+    // volume; is_fluid: 1 in cells holding a fluid point. Excess volume
+    // (v > 1) of a fluid cell goes to its fluid face neighbours, first to
+    // fill their deficits (1 - v, in proportion), the rest in equal shares
+    // (they pass it on at the next sweep), until no fluid cell is over-full
+    // or max_sweeps is reached; each sweep conserves sum v exactly. The
+    // amounts depend only on the cell and its neighbours' values, so 1 and
+    // n ranks give the same alpha.
+    constexpr unsigned int max_sweeps = 32;
+    const double           inv_V      = 1. / std::pow(grid.h(), dim);
+    const auto &           cells      = grid.owned_cells();
+    const auto &           st         = grid.strides();
+    std::vector<std::uint32_t> fluid;
+    for (const auto idx : cells)
+      {
+        v[idx] *= inv_V;
+        if (is_fluid[idx] > 0)
+          fluid.push_back(idx);
+      }
+    grid.update_ghosts(is_fluid);
+    // Number of fluid face neighbours (padding cells are never fluid).
+    std::vector<double> n_fluid(grid.n_local(), 0.);
+    for (const auto idx : fluid)
+      for (int d = 0; d < dim; ++d)
+        n_fluid[idx] += is_fluid[idx - st[d]] + is_fluid[idx + st[d]];
+    grid.update_ghosts(n_fluid);
+    std::vector<double> deficit(grid.n_local(), 0.), v_new(fluid.size());
+    for (unsigned int sweep = 0; sweep < max_sweeps; ++sweep)
+      {
+        grid.update_ghosts(v);
+        double excess = 0;
+        for (const auto idx : fluid)
+          {
+            excess = std::max(excess, n_fluid[idx] > 0 ? v[idx] - 1 : 0.);
+            double D = 0;
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t s : {-st[d], st[d]})
+                if (is_fluid[idx + s] > 0)
+                  D += std::max(0., 1 - v[idx + s]);
+            deficit[idx] = D;
+          }
+        if (Utilities::MPI::max(excess, grid.communicator()) <= 1e-12)
+          break;
+        grid.update_ghosts(deficit);
+        for (std::size_t k = 0; k < fluid.size(); ++k)
+          {
+            const auto   idx = fluid[k];
+            const double own = std::max(0., 1 - v[idx]);
+            double       vc  = v[idx];
+            if (vc > 1 && n_fluid[idx] > 0)
+              vc = 1;
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t s : {-st[d], st[d]})
+                {
+                  const auto   nb = idx + s;
+                  const double E  = v[nb] - 1;
+                  if (is_fluid[nb] <= 0 || E <= 0)
+                    continue;
+                  const double D = deficit[nb];
+                  if (D > 0)
+                    vc += own * std::min(1., E / D);
+                  if (E > D)
+                    vc += (E - D) / n_fluid[nb];
+                }
+            v_new[k] = vc;
+          }
+        for (std::size_t k = 0; k < fluid.size(); ++k)
+          v[fluid[k]] = v_new[k];
+      }
+    for (const auto idx : fluid)
+      alpha[idx] = std::min(1., v[idx]);
   }
 
 

@@ -7,7 +7,8 @@
 //
 // Forward Euler in time; 5/7-point central differences with harmonic-mean
 // face conductivities; first-order upwind convection with a cell-centred
-// velocity (none unless a flow solver or a prescribed field provides one);
+// velocity (none unless a flow solver or a prescribed field provides one;
+// in partly filled cells at the rate 1/alpha, the part above 1 implicit);
 // latent heat by a local iteration per cell over the solid, mushy and liquid
 // branches of the enthalpy relation (METHOD sec. 2); surface losses and the
 // laser deposited through |grad alpha| with the density weighting above.

@@ -5,7 +5,8 @@
 // spherical grains; each region is filled with points on a global lattice of
 // the given spacing, inserted cell by cell. The metal fraction alpha of a
 // cell is the fraction of its n^dim sub-cells that hold at least one point
-// (ref. [11]); temperatures pass from cells to points after each thermal
+// (ref. [11]), and in cells holding melt (fluid points) the volume of its
+// points, kept where fluid points bunch (see metal_fraction()); temperatures pass from cells to points after each thermal
 // step, and from points to cells that just gained points.
 //
 // Property layout of each point (index: quantity, unit):
@@ -170,6 +171,15 @@ namespace femp
     }
 
     /// Metal fraction alpha per cell of the local box (ghosts exchanged).
+    /// Cells without a fluid point: sub-cell occupancy (the fraction of the
+    /// n^dim sub-cells holding a point, METHOD sec. 2). Cells holding a
+    /// fluid point: the volume of their points over the cell volume, with
+    /// the excess of over-full cells (points bunched by the flow) passed on
+    /// to fluid face neighbours that are not full, then min(1, .): the metal
+    /// volume of the melt is kept as the points keep it, where occupancy
+    /// lost it when points bunched (doc/flow.md, "Volume-based alpha").
+    /// On the point lattice with spacing h/n both rules give the same alpha.
+    /// Collective.
     std::vector<double>
     metal_fraction() const;
 
@@ -251,6 +261,13 @@ namespace femp
       const double                                       vertical_limit,
       const std::function<bool(const Point<dim> &)> &    keep,
       std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const;
+    /// metal_fraction() in cells with a fluid point: @p v the point volume
+    /// per owned cell (turned into a fraction, excess spread), @p is_fluid
+    /// 1 there (ghosts exchanged here); writes min(1, v) into @p alpha.
+    void
+    volume_fraction_of_fluid_cells(std::vector<double> &v,
+                                   std::vector<double> &is_fluid,
+                                   std::vector<double> &alpha) const;
     /// Insert (cell, position) pairs cell by cell at temperature @p T0.
     void
     insert_points(std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
