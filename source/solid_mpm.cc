@@ -99,6 +99,84 @@ namespace femp
       tents<dim>(xi, ih, N, dN);
     }
 
+    /// Local coordinates xi of the points of @p b in their cells (origin
+    /// @p corner, size 1/ih), without the tents.
+    template <int dim, typename Arrays>
+    [[gnu::always_inline]] inline void
+    block_xi(const Arrays &x, const Arrays &corner, const PointBlock &b,
+             const double ih, simd_double (&xi)[dim])
+    {
+      for (int d = 0; d < dim; ++d)
+        xi[d] = (simd_load(x[d], b.pl, b.full) -
+                 simd_load(corner[d], b.pl, b.full)) *
+                ih;
+    }
+
+    /// Tent weights N of the 2^dim corners at xi (the products of tents(),
+    /// without the gradients).
+    template <int dim>
+    [[gnu::always_inline]] inline void
+    weights(const simd_double (&xi)[dim], simd_double (&N)[1 << dim])
+    {
+      simd_double w[dim][2];
+      for (int d = 0; d < dim; ++d)
+        w[d][0] = 1 - xi[d], w[d][1] = xi[d];
+      for (unsigned int a = 0; a < (1u << dim); ++a)
+        {
+          const unsigned int b0 = a & 1, b1 = (a >> 1) & 1;
+          if constexpr (dim == 2)
+            N[a] = w[0][b0] * w[1][b1];
+          else
+            N[a] = w[0][b0] * (w[1][b1] * w[2][(a >> 2) & 1]);
+        }
+    }
+
+    /// Turns the values f[a] at the 2^dim corners of a cell (corner a: bit
+    /// d set for the upper node in direction d) into the coefficients of
+    /// their multilinear interpolant in monomial form, f(xi) = sum_S c[S]
+    /// prod_{d in S} xi_d (S a set of directions as a bit mask): per
+    /// direction d, c[S + d] -= c[S]. Sum N_a f_a and sum f_a grad N_a of
+    /// the points of a cell then cost a few multiply-adds per point on
+    /// coefficients shared by the cell (instead of 2^dim (dim + 1) per
+    /// value); the same polynomial, so the results agree up to round-off.
+    template <int dim>
+    [[gnu::always_inline]] inline void
+    monomial_coefficients(simd_double (&c)[1 << dim])
+    {
+      for (int d = 0; d < dim; ++d)
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if ((a >> d) & 1)
+            c[a] -= c[a ^ (1u << d)];
+    }
+
+    /// Value and gradient (with respect to xi) at xi of the multilinear
+    /// polynomial with monomial coefficients @p c (Horner form).
+    template <int dim>
+    [[gnu::always_inline]] inline void
+    multilinear(const simd_double (&c)[1 << dim], const simd_double (&xi)[dim],
+                simd_double &val, simd_double (&grad)[dim])
+    {
+      const simd_double x = xi[0], y = xi[1];
+      if constexpr (dim == 2)
+        {
+          const simd_double b = c[2] + c[3] * x;
+          val                 = (c[0] + c[1] * x) + y * b;
+          grad[0]             = c[1] + c[3] * y;
+          grad[1]             = b;
+        }
+      else
+        {
+          const simd_double z = xi[2];
+          const simd_double b = c[2] + c[3] * x, e = c[4] + c[5] * x,
+                            f = c[6] + c[7] * x;
+          const simd_double t = e + y * f;
+          val                 = ((c[0] + c[1] * x) + y * b) + z * t;
+          grad[0]             = (c[1] + c[3] * y) + z * (c[5] + c[7] * y);
+          grad[1]             = b + z * f;
+          grad[2]             = t;
+        }
+    }
+
     /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
     inline void
     simd_store(std::vector<double> &a, const std::size_t p0,
@@ -712,44 +790,73 @@ namespace femp
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
       CellScatter<n_corners, dim> remap(corner_offset, mom);
+      // Monomial coefficients of the nodal velocity (and FLIP: the nodal
+      // acceleration) of the cell of the last one-cell block; the blocks
+      // of a cell share them (the points are sorted by cell).
+      constexpr std::size_t none      = std::size_t(-1);
+      std::size_t           coef_cell = none;
+      VD                    cv[dim][n_corners], ca[dim][n_corners];
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
         const PointBlock   blk(p0, n);
         const unsigned int nl   = blk.nl;
         const bool         full = blk.full;
         const auto &       pl   = blk.pl;
-        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
-        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
+        VD                 xi[dim], N[n_corners];
+        block_xi<dim>(x, corner, blk, ih, xi);
+        weights<dim>(xi, N);
         const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
                                    node0[pl[3]]};
-        VD vg[dim] = {}, ag[dim] = {}, Cn[dim][dim] = {};
         // Nodal values: one load and a broadcast when the four points lie
-        // in the same cell (the usual case: the points are sorted by cell).
-        auto interpolate = [&](auto &&nodal) {
-          for (unsigned int a = 0; a < n_corners; ++a)
+        // in the same cell (the usual case: the points are sorted by cell),
+        // turned into monomial coefficients once per cell; mixed blocks
+        // gather lane by lane (the same coefficients per lane).
+        auto coefficients = [&](auto &&nodal) {
+          for (int i = 0; i < dim; ++i)
             {
-              const std::ptrdiff_t o = corner_offset[a];
-              for (int i = 0; i < dim; ++i)
+              for (unsigned int a = 0; a < n_corners; ++a)
                 {
-                  const VD vi = nodal(vel[i], o);
-                  vg[i] += N[a] * vi;
-                  if constexpr (A)
-                    for (int j = 0; j < dim; ++j)
-                      Cn[i][j] += vi * dN[a][j];
-                  else
-                    ag[i] += N[a] * nodal(acc[i], o);
+                  cv[i][a] = nodal(vel[i], corner_offset[a]);
+                  if constexpr (!A)
+                    ca[i][a] = nodal(acc[i], corner_offset[a]);
                 }
+              monomial_coefficients<dim>(cv[i]);
+              if constexpr (!A)
+                monomial_coefficients<dim>(ca[i]);
             }
         };
         if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
-          interpolate([&](const double *f, const std::ptrdiff_t o) {
-            const double y = f[n0[0] + o];
-            return VD{y, y, y, y};
-          });
+          {
+            if (n0[0] != coef_cell)
+              {
+                coefficients([&](const double *f, const std::ptrdiff_t o) {
+                  const double y = f[n0[0] + o];
+                  return VD{y, y, y, y};
+                });
+                coef_cell = n0[0];
+              }
+          }
         else
-          interpolate([&](const double *f, const std::ptrdiff_t o) {
-            return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o], f[n0[3] + o]};
-          });
+          {
+            coefficients([&](const double *f, const std::ptrdiff_t o) {
+              return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o],
+                        f[n0[3] + o]};
+            });
+            coef_cell = none;
+          }
+        // v_g = sum N_a v_a, C = sum v_a (x) grad N_a (the gradient of the
+        // interpolant), FLIP: a_g = sum N_a a_a.
+        VD vg[dim], ag[dim], Cn[dim][dim];
+        for (int i = 0; i < dim; ++i)
+          {
+            VD g[dim];
+            multilinear<dim>(cv[i], xi, vg[i], g);
+            if constexpr (A)
+              for (int j = 0; j < dim; ++j)
+                Cn[i][j] = ih * g[j];
+            else
+              multilinear<dim>(ca[i], xi, ag[i], g);
+          }
         // New velocity and affine matrix; the grid velocity at the point
         // moves it at the end of the step (update_stresses()).
         VD vp[dim];
@@ -856,6 +963,12 @@ namespace femp
       // Chunks of points: stress update and move, then (fused) the P2G of
       // the chunk's points, whose data are still in the L1 cache.
       constexpr std::size_t chunk = 16 * W;
+      // Monomial coefficients of the nodal velocity of the cell of the
+      // last one-cell block (see g2p()).
+      constexpr std::size_t none      = std::size_t(-1);
+      std::size_t           coef_cell = none;
+      VD                    cv[dim][n_corners];
+      const double          dt_ih = dt * ih;
     for (std::size_t c0 = 0; c0 < n; c0 += chunk)
       {
     const std::size_t c1 = std::min(n, c0 + chunk);
@@ -866,8 +979,8 @@ namespace femp
         const unsigned int nl   = blk.nl;
         const bool         full = blk.full;
         const auto &       pl   = blk.pl;
-        VD                 xi[dim], N[n_corners], dN[n_corners][dim];
-        block_tents<dim>(x, corner, blk, ih, xi, N, dN);
+        VD                 xi[dim];
+        block_xi<dim>(x, corner, blk, ih, xi);
         StressBlock       sb;
         VD(&L)[3][3] = sb.L;
         for (int i = 0; i < 3; ++i)
@@ -875,29 +988,45 @@ namespace femp
             L[i][j] = VD{};
         std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
                              node0[pl[3]]};
-        // Nodal values: one load and a broadcast when the four points lie
-        // in the same cell (the usual case: the points are sorted by cell).
-        auto L_sum = [&](auto &&nodal) {
-          for (unsigned int a = 0; a < n_corners; ++a)
+        // L dt = sum v_a (x) grad N_a dt, the gradient of the interpolant of
+        // the nodal velocities in monomial form (as in g2p()): nodal values
+        // loaded once and broadcast when the four points lie in the same
+        // cell (the usual case: the points are sorted by cell), their
+        // coefficients shared by the blocks of the cell.
+        auto coefficients = [&](auto &&nodal) {
+          for (int i = 0; i < dim; ++i)
             {
-              const std::ptrdiff_t o = corner_offset[a];
-              for (int i = 0; i < dim; ++i)
-                {
-                  const VD vi = nodal(vel[i], o) * dt;
-                  for (int j = 0; j < dim; ++j)
-                    L[i][j] += vi * dN[a][j];
-                }
+              for (unsigned int a = 0; a < n_corners; ++a)
+                cv[i][a] = nodal(vel[i], corner_offset[a]);
+              monomial_coefficients<dim>(cv[i]);
             }
         };
         if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
-          L_sum([&](const double *f, const std::ptrdiff_t o) {
-            const double y = f[n0[0] + o];
-            return VD{y, y, y, y};
-          });
+          {
+            if (n0[0] != coef_cell)
+              {
+                coefficients([&](const double *f, const std::ptrdiff_t o) {
+                  const double y = f[n0[0] + o];
+                  return VD{y, y, y, y};
+                });
+                coef_cell = n0[0];
+              }
+          }
         else
-          L_sum([&](const double *f, const std::ptrdiff_t o) {
-            return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o], f[n0[3] + o]};
-          });
+          {
+            coefficients([&](const double *f, const std::ptrdiff_t o) {
+              return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o],
+                        f[n0[3] + o]};
+            });
+            coef_cell = none;
+          }
+        for (int i = 0; i < dim; ++i)
+          {
+            VD val, g[dim];
+            multilinear<dim>(cv[i], xi, val, g);
+            for (int j = 0; j < dim; ++j)
+              L[i][j] = dt_ih * g[j];
+          }
         VD s_old[n_stress];
         for (unsigned int c = 0; c < n_stress; ++c)
           sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
