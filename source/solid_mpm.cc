@@ -177,6 +177,16 @@ namespace femp
         }
     }
 
+    /// 1 in the first @p nl lanes, 0 in the others.
+    inline simd_double
+    lane_mask(const unsigned int nl)
+    {
+      simd_double r = {};
+      for (unsigned int l = 0; l < nl; ++l)
+        r[l] = 1.;
+      return r;
+    }
+
     /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
     inline void
     simd_store(std::vector<double> &a, const std::size_t p0,
@@ -924,8 +934,12 @@ namespace femp
     kinetic                = 0;
     weight_momentum.fill(0.);
     const double nu     = mat.poisson_ratio;
+    // Viscous pressure q = b1 h sqrt(M m / V) tr(D), M = E M_per_E.
+    const double M_per_E = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    const double b1h = b1 * h, idt = 1. / dt;
     auto         E_cell = cell.empty() ? 0 : cell[0];
     double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
+    double       sy_c   = n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.;
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
     // run's sub-cycling), so that a run of one step per gather pays nothing
@@ -969,6 +983,9 @@ namespace femp
       std::size_t           coef_cell = none;
       VD                    cv[dim][n_corners];
       const double          dt_ih = dt * ih;
+      // Sums of the lanes of the blocks (lanes of a partial block that
+      // are not in use are masked by use); summed at the end.
+      VD work_v = {}, kinetic_v = {}, momentum_v[dim] = {};
     for (std::size_t c0 = 0; c0 < n; c0 += chunk)
       {
     const std::size_t c1 = std::min(n, c0 + chunk);
@@ -1031,18 +1048,34 @@ namespace femp
         for (unsigned int c = 0; c < n_stress; ++c)
           sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
         sb.eps_p = simd_load(eps_p, pl, full);
-        // E(T) per cell: the points are sorted by cell, so the table is
-        // read once per cell run (kernel and viscous pressure share it).
-        for (unsigned int l = 0; l < W; ++l)
+        // E(T) and sigma_y(T) per cell: the points are sorted by cell, so
+        // the tables are read once per cell run (kernel and viscous
+        // pressure share E); one-cell blocks broadcast the cell's values.
+        VD sy;
+        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
           {
-            const auto cp = cell[pl[l]];
+            const auto cp = cell[pl[0]];
             if (cp != E_cell)
-              E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]);
-            sb.E[l]     = E_c;
-            sb.T_old[l] = T_old[cp];
-            sb.T_new[l] = T_new[cp];
+              E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
+              sy_c = mat.yield_stress.value(T_new[cp]);
+            sb.E     = VD{} + E_c;
+            sb.T_old = VD{} + T_old[cp];
+            sb.T_new = VD{} + T_new[cp];
+            sy       = VD{} + sy_c;
           }
-        update_stress_block(mat, sb);
+        else
+          for (unsigned int l = 0; l < W; ++l)
+            {
+              const auto cp = cell[pl[l]];
+              if (cp != E_cell)
+                E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
+                sy_c = mat.yield_stress.value(T_new[cp]);
+              sb.E[l]     = E_c;
+              sb.T_old[l] = T_old[cp];
+              sb.T_new[l] = T_new[cp];
+              sy[l]       = sy_c;
+            }
+        update_stress_block(mat, sb, sy);
         for (unsigned int c = 0; c < n_stress; ++c)
           simd_store(sigma[c], p0, nl, sb.s[c]);
         simd_store(eps_p, p0, nl, sb.eps_p);
@@ -1059,15 +1092,11 @@ namespace femp
         const VD V  = simd_load(volume, pl, full);
         const VD mg = simd_load(true_mass, pl, full), m = mg * scaling;
         VD       q  = simd_load(visc, pl, full);
-        const VD wk = 0.5 * V * w + V * q * trL;
-        for (unsigned int l = 0; l < nl; ++l)
-          work += wk[l];
+        const VD use = full ? VD{} + 1. : lane_mask(nl);
+        work_v += use * (0.5 * V * w + V * q * trL);
         if (b1 > 0)
           {
-            q = b1 * h *
-                simd_sqrt(sb.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) * m /
-                          V) *
-                trL / dt;
+            q = b1h * simd_sqrt(sb.E * M_per_E * m / V) * trL * idt;
             simd_store(visc, p0, nl, q);
           }
         const VD V_new = V * (1 + trL);
@@ -1111,13 +1140,9 @@ namespace femp
                   for (int i = 0; i < dim; ++i)
                     v2 += Cp[i * dim + j] * Cp[i * dim + j] * D;
                 }
-            const VD k = 0.5 * m * v2;
-            for (unsigned int l = 0; l < nl; ++l)
-              {
-                for (int d = 0; d < dim; ++d)
-                  weight_momentum[d] += mg[l] * vp[d][l];
-                kinetic += k[l];
-              }
+            kinetic_v += use * (0.5 * m * v2);
+            for (int d = 0; d < dim; ++d)
+              momentum_v[d] += use * (mg * vp[d]);
           }
         else
         for (unsigned int l = 0; l < nl; ++l)
@@ -1176,6 +1201,11 @@ namespace femp
     if constexpr (F)
       p2g_blocks<A>(in, c0, c1, n, out);
       }
+      auto lanes = [](const VD a) { return (a[0] + a[1]) + (a[2] + a[3]); };
+      work += lanes(work_v);
+      kinetic += lanes(kinetic_v);
+      for (int d = 0; d < dim; ++d)
+        weight_momentum[d] += lanes(momentum_v[d]);
     };
     if (apic && fuse)
       loop(std::true_type(), std::true_type());
