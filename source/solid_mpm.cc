@@ -187,6 +187,27 @@ namespace femp
       return r;
     }
 
+    /// Software prefetch of the cache line that holds point @p q of each
+    /// array (rw 0: to read, 1: to write). The loops stream about 30 point
+    /// arrays at once, more than the hardware prefetchers follow.
+    template <int rw, typename Array>
+    [[gnu::always_inline]] inline void
+    prefetch(const Array &a, const std::size_t q)
+    {
+      __builtin_prefetch(a.data() + q, rw, 3);
+    }
+    template <int rw, typename Array, std::size_t k>
+    [[gnu::always_inline]] inline void
+    prefetch(const std::array<Array, k> &a, const std::size_t q)
+    {
+      for (const auto &c : a)
+        __builtin_prefetch(c.data() + q, rw, 3);
+    }
+    /// Points ahead of the block at which the loops prefetch: 2 cache lines
+    /// of doubles per array (measured on the benchmark: 16 points gave
+    /// 94 ns per APIC point-step, 32 points 99, 64 points 114, none 114).
+    constexpr std::size_t prefetch_distance = 16;
+
     /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
     inline void
     simd_store(std::vector<double> &a, const std::size_t p0,
@@ -812,6 +833,18 @@ namespace femp
         const unsigned int nl   = blk.nl;
         const bool         full = blk.full;
         const auto &       pl   = blk.pl;
+        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+          {
+            const std::size_t q = p0 + prefetch_distance;
+            prefetch<0>(x, q), prefetch<0>(corner, q);
+            prefetch<0>(true_mass, q);
+            if (q % 16 == 0)
+              prefetch<0>(node0, q);
+            if constexpr (A)
+              prefetch<1>(C, q), prefetch<1>(v, q);
+            else
+              prefetch<0>(v, q), prefetch<1>(xdot, q);
+          }
         VD                 xi[dim], N[n_corners];
         block_xi<dim>(x, corner, blk, ih, xi);
         weights<dim>(xi, N);
@@ -996,6 +1029,20 @@ namespace femp
         const unsigned int nl   = blk.nl;
         const bool         full = blk.full;
         const auto &       pl   = blk.pl;
+        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+          {
+            const std::size_t q = p0 + prefetch_distance;
+            prefetch<1>(x, q), prefetch<0>(corner, q);
+            prefetch<1>(sigma, q), prefetch<1>(eps_p, q);
+            prefetch<1>(volume, q), prefetch<1>(visc, q);
+            prefetch<0>(true_mass, q), prefetch<0>(v, q);
+            if (q % 16 == 0)
+              prefetch<0>(node0, q), prefetch<0>(cell, q);
+            if constexpr (A)
+              prefetch<0>(C, q);
+            else
+              prefetch<0>(xdot, q);
+          }
         VD                 xi[dim];
         block_xi<dim>(x, corner, blk, ih, xi);
         StressBlock       sb;
