@@ -277,14 +277,27 @@ namespace femp
   /// return). The tables of sigma_y are read per lane. Every lane must hold
   /// finite data (pad a partial block with copies).
   [[gnu::always_inline]] inline void
+  update_stress_block(const SolidMaterial &m, StressBlock &b,
+                      const simd_double sy);
+
+  [[gnu::always_inline]] inline void
   update_stress_block(const SolidMaterial &m, StressBlock &b)
+  {
+    static_assert(simd_lanes == 4, "written for 4 lanes");
+    auto syf = [&](const unsigned int l) { return m.yield_stress.value(b.T_new[l]); };
+    update_stress_block(m, b, simd_double{syf(0), syf(1), syf(2), syf(3)});
+  }
+
+  /// The same with the initial yield stress sy = sigma_y(T_new) of every
+  /// lane given by the caller (the MPM reads it once per cell: the points
+  /// of a cell share its temperature).
+  [[gnu::always_inline]] inline void
+  update_stress_block(const SolidMaterial &m, StressBlock &b,
+                      const simd_double sy)
   {
     using V             = simd_double;
     const double nu     = m.poisson_ratio;
     const V      Tm     = V{} + m.melt_temperature;
-    static_assert(simd_lanes == 4, "written for 4 lanes");
-    auto syf = [&](const unsigned int l) { return m.yield_stress.value(b.T_new[l]); };
-    const V sy = {syf(0), syf(1), syf(2), syf(3)};
     V xx = b.s[0], yy = b.s[1], zz = b.s[2], xy = b.s[3], xz = b.s[4],
       yz = b.s[5];
     const V(&L)[3][3] = b.L;

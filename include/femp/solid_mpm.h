@@ -52,8 +52,12 @@
 // node indices by the first node of the cell plus fixed corner offsets, tent
 // weights recomputed from the local coordinate in registers (a cache of
 // 2^dim (dim + 1) weights per point would cost more memory traffic than the
-// few multiplications). Kinetic energy and gravity power are summed in the
-// stress loop.
+// few multiplications). G2P and the velocity gradient of the stress update
+// evaluate the multilinear interpolant of the nodal velocities in monomial
+// form, with coefficients computed once per cell (the points are sorted by
+// cell), instead of summing tents times nodal values (the same polynomial:
+// equal up to round-off). The point arrays are prefetched a few points
+// ahead. Kinetic energy and gravity power are summed in the stress loop.
 //
 // The forces use sigma_p + q_p I, with the artificial bulk-viscosity
 // pressure q_p = b1 rho c h tr(D) of the last stress update (see
