@@ -1,5 +1,8 @@
 // femp: melt-pool size (length, width, depth) from the cell temperatures,
 // with the isotherm located by linear interpolation between cell centres.
+// Only melt connected to colder metal counts: liquid spatter flying through
+// the gas (melt cells with no path of melt cells to colder metal) is left
+// out, so a droplet above the bed does not stretch the pool's box.
 #include <deal.II/base/mpi.h>
 
 #include <femp/melt_pool.h>
@@ -23,6 +26,63 @@ namespace femp
     std::array<double, dim> lo, hi;
     lo.fill(big);
     hi.fill(-big);
+    const MPI_Comm comm = grid.communicator();
+    const auto melt = [&](const std::size_t i) {
+      return alpha[i] > 0 && T[i] >= T_melt;
+    };
+    const auto face_neighbours = [&](const std::size_t idx, auto &&f) {
+      const auto ijk = grid.global_index(idx);
+      for (int d = 0; d < dim; ++d)
+        {
+          if (ijk[d] > 0)
+            f(idx - st[d]);
+          if (ijk[d] < int(n[d]) - 1)
+            f(idx + st[d]);
+        }
+    };
+
+    // The pool: melt cells connected through melt face neighbours to a melt
+    // cell that touches colder metal. Seeds first, then grow: local sweeps
+    // until nothing changes on this rank, a ghost exchange, and again until
+    // no rank changes. With no seed at all (everything molten) every melt
+    // cell counts.
+    std::vector<double> in_pool(alpha.size(), 0.);
+    unsigned int        n_seeds = 0;
+    for (const auto idx : grid.owned_cells())
+      if (melt(idx))
+        face_neighbours(idx, [&](const std::size_t nb) {
+          if (alpha[nb] > 0 && T[nb] < T_melt && in_pool[idx] == 0)
+            {
+              in_pool[idx] = 1;
+              ++n_seeds;
+            }
+        });
+    if (Utilities::MPI::sum(n_seeds, comm) == 0)
+      for (const auto idx : grid.owned_cells())
+        in_pool[idx] = melt(idx) ? 1 : 0;
+    else
+      for (;;)
+        {
+          grid.update_ghosts(in_pool);
+          unsigned int added = 0;
+          for (bool changed = true; changed;)
+            {
+              changed = false;
+              for (const auto idx : grid.owned_cells())
+                if (in_pool[idx] == 0 && melt(idx))
+                  face_neighbours(idx, [&](const std::size_t nb) {
+                    if (in_pool[nb] != 0 && in_pool[idx] == 0)
+                      {
+                        in_pool[idx] = 1;
+                        changed      = true;
+                        ++added;
+                      }
+                  });
+            }
+          if (Utilities::MPI::sum(added, comm) == 0)
+            break;
+        }
+
     double volume = 0, Tmax = -big;
     for (const auto idx : grid.owned_cells())
       {
@@ -30,7 +90,7 @@ namespace femp
           continue;
         const double Tc = T[idx];
         Tmax = std::max(Tmax, Tc);
-        if (Tc < T_melt)
+        if (Tc < T_melt || in_pool[idx] == 0)
           continue;
         volume += std::pow(h, dim);
         const auto       ijk = grid.global_index(idx);
@@ -60,7 +120,6 @@ namespace femp
           }
       }
     MeltPoolSize r;
-    const MPI_Comm comm = grid.communicator();
     for (int d = 0; d < dim; ++d)
       {
         lo[d] = Utilities::MPI::min(lo[d], comm);

@@ -5,6 +5,8 @@
 //   length: extent along x of the isotherm,
 //   width:  extent along y (3D) of the isotherm (2D: equal to the length),
 //   depth:  reference top surface height minus the lowest crossing.
+// The pool is the melt connected to colder metal (spatter in the gas is
+// not counted); where nothing is colder, all melt counts.
 #ifndef femp_melt_pool_h
 #define femp_melt_pool_h
 
