@@ -720,17 +720,7 @@ namespace femp
                   continue;
                 const Point<dim> &x = particle.get_location();
                 double            w[n_corners];
-                w[0] = v[P::mass] / (0.5 * m_ref);
-                for (int d = 0; d < dim; ++d)
-                  {
-                    const double       xi   = (x[d] - x0[d]) * ih - ijk[d];
-                    const unsigned int half = 1u << d;
-                    for (unsigned int k = 0; k < half; ++k)
-                      {
-                        w[k + half] = w[k] * xi;
-                        w[k] *= 1. - xi;
-                      }
-                  }
+                tent_weights<dim>(x, x0, ih, ijk, v[P::mass] / (0.5 * m_ref), w);
                 for (unsigned int k = 0; k < n_corners; ++k)
                   share[k] += w[k];
               }

@@ -437,17 +437,7 @@ namespace femp
             const Point<dim> &x = particle.get_location();
             // Tent weights of the 2^dim corners (product over directions).
             double w[n_corners];
-            w[0] = v[P::mass];
-            for (int d = 0; d < dim; ++d)
-              {
-                const double xi = (x[d] - x0[d]) * ih - ijk[d];
-                const unsigned int half = 1u << d;
-                for (unsigned int k = 0; k < half; ++k)
-                  {
-                    w[k + half] = w[k] * xi;
-                    w[k] *= 1. - xi;
-                  }
-              }
+            tent_weights<dim>(x, x0, ih, ijk, v[P::mass], w);
             double vel[dim];
             for (int d = 0; d < dim; ++d)
               vel[d] = v[P::velocity + d];

@@ -299,6 +299,29 @@ namespace femp
     std::vector<std::vector<std::uint32_t>> shared_nodes;
     mutable std::vector<std::vector<double>> node_send, node_recv;
   };
+
+  /// Tent (multilinear) weights of the 2^dim corners of cell @p ijk for a
+  /// point at @p x, each times @p scale: corner k has bit d set for the
+  /// upper node in direction d (the order of first_node_of_cell() plus the
+  /// corner offsets). @p x0 is the grid origin and @p ih = 1/h.
+  template <int dim, typename PointType>
+  inline void
+  tent_weights(const PointType &x, const PointType &x0, const double ih,
+               const std::array<int, dim> &ijk, const double scale,
+               double (&w)[1u << dim])
+  {
+    w[0] = scale;
+    for (int d = 0; d < dim; ++d)
+      {
+        const double       xi   = (x[d] - x0[d]) * ih - ijk[d];
+        const unsigned int half = 1u << d;
+        for (unsigned int k = 0; k < half; ++k)
+          {
+            w[k + half] = w[k] * xi;
+            w[k] *= 1. - xi;
+          }
+      }
+  }
 } // namespace femp
 
 #endif
