@@ -202,6 +202,7 @@ namespace
                 b.T_old[l]   = T0 - 100. * (i % 5);
                 b.T_new[l]   = T1 - 100. * (i % 5);
                 b.E[l]       = sm.youngs_modulus.value(b.T_new[l]);
+                b.E_old[l]   = sm.youngs_modulus.value(b.T_old[l]);
               }
             update_stress_block(sm, b);
           }

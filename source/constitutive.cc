@@ -34,7 +34,11 @@ namespace femp
     prm.declare_entry("Young's modulus", "1.93e11", Patterns::Anything(),
                       "E(T), Pa: a constant or a table 'T1:E1, T2:E2, ...' "
                       "(K : Pa, T increasing, held constant outside). Every "
-                      "value must be positive.");
+                      "value must be positive. The elasticity is of total "
+                      "form (sigma = C(T) : eps_e), so the stress falls with "
+                      "E: in scenes that melt the substrate give a table that "
+                      "falls to a small value at the solidus (doc/solid.md "
+                      "\"Material data of 316L\").");
     prm.declare_entry("Plastic modulus", "1e9", Patterns::Anything(),
                       "Linear isotropic hardening modulus H(T) = d sigma_y / "
                       "d eps_p, Pa: a constant or a table as for Young's "

@@ -270,9 +270,10 @@ namespace femp
             // through the solid's external nodal forces.
             solid->set_flow_owns_fluid_points(true);
             // Fragments that solidify where the flow left them: no force
-            // on nodes with less than 5 % of a full node's mass (stability
-            // estimate and choice: doc/solid.md).
-            solid->set_small_mass_cutoff(0.05);
+            // on nodes with less than `Solid/Small mass cutoff` (default
+            // 5 %) of a full node's mass (stability estimate and choice:
+            // doc/solid.md).
+            solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
             for (int d = 0; d < dim; ++d)
               fluid_force[d] = grid->make_node_field();
             solid->set_external_nodal_forces(&fluid_force);

@@ -845,6 +845,10 @@ namespace femp
               return mat.youngs_modulus.value(sb.T_new[l]);
             };
             sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+            auto Eo  = [&](const unsigned int l) {
+              return mat.youngs_modulus.value(sb.T_old[l]);
+            };
+            sb.E_old = VD{Eo(0), Eo(1), Eo(2), Eo(3)};
             sb.eps_p = eb.eps_p;
             VD trL   = {};
             for (int i = 0; i < 3; ++i)

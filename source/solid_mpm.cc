@@ -974,6 +974,7 @@ namespace femp
     const double b1h = b1 * h, idt = 1. / dt;
     auto         E_cell = cell.empty() ? 0 : cell[0];
     double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
+    double       Eo_c   = n > 0 ? mat.youngs_modulus.value(T_old[E_cell]) : 0.;
     double       sy_c   = n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.;
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
@@ -1097,17 +1098,20 @@ namespace femp
         for (unsigned int c = 0; c < n_stress; ++c)
           sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
         sb.eps_p = simd_load(eps_p, pl, full);
-        // E(T) and sigma_y(T) per cell: the points are sorted by cell, so
-        // the tables are read once per cell run (kernel and viscous
-        // pressure share E); one-cell blocks broadcast the cell's values.
+        // E(T_new), E(T_old) and sigma_y(T_new) per cell: the points are
+        // sorted by cell, so the tables are read once per cell run (kernel
+        // and viscous pressure share E); one-cell blocks broadcast the
+        // cell's values.
         VD sy;
         if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
           {
             const auto cp = cell[pl[0]];
             if (cp != E_cell)
               E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
+              Eo_c = mat.youngs_modulus.value(T_old[cp]),
               sy_c = mat.yield_stress.value(T_new[cp]);
             sb.E     = VD{} + E_c;
+            sb.E_old = VD{} + Eo_c;
             sb.T_old = VD{} + T_old[cp];
             sb.T_new = VD{} + T_new[cp];
             sy       = VD{} + sy_c;
@@ -1118,8 +1122,10 @@ namespace femp
               const auto cp = cell[pl[l]];
               if (cp != E_cell)
                 E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
+                Eo_c = mat.youngs_modulus.value(T_old[cp]),
                 sy_c = mat.yield_stress.value(T_new[cp]);
               sb.E[l]     = E_c;
+              sb.E_old[l] = Eo_c;
               sb.T_old[l] = T_old[cp];
               sb.T_new[l] = T_new[cp];
               sy[l]       = sy_c;

@@ -62,6 +62,16 @@ namespace femp
                       "grows by sqrt(s). Only for quasi-static scenes: watch "
                       "the kinetic-to-internal energy ratio in the energy "
                       "file (it should stay well below 0.1). Range [1, inf).");
+    prm.declare_entry("Small mass cutoff", "0.05", Patterns::Double(),
+                      "Used only with the melt flow (Physics/Melt flow and "
+                      "Solid stress both true): grid nodes whose inertial "
+                      "mass is below this fraction of a full cell's node "
+                      "(rho h^dim / 2^dim times the mass scaling) take no "
+                      "force in the solid's grid update, so that points left "
+                      "by the flow near a cell face (solidified fragments) do "
+                      "not make the explicit update unstable; 0 is off. "
+                      "Dimensionless, range [0, 1) (doc/solid.md \"Small "
+                      "node masses\").");
     prm.declare_entry("Gravity", "0, 0, 0", Patterns::Anything(),
                       "Gravitational acceleration, m/s^2 (dim components).");
     prm.declare_entry("Fixed faces", "", Patterns::Anything(),
@@ -100,6 +110,7 @@ namespace femp
     time_step     = prm.get_double("Time step");
     safety_factor = prm.get_double("Safety factor");
     mass_scaling  = prm.get_double("Mass scaling factor");
+    small_mass_cutoff = prm.get_double("Small mass cutoff");
     const Point<dim> g = parse_point<dim>(prm.get("Gravity"), "Solid/Gravity");
     for (int d = 0; d < dim; ++d)
       gravity[d] = g[d];
@@ -114,6 +125,9 @@ namespace femp
     prm.leave_subsection();
     require(safety_factor > 0, "Solid/Safety factor", safety_factor,
             "it must lie in (0, 1]");
+    require(small_mass_cutoff >= 0 && small_mass_cutoff < 1,
+            "Solid/Small mass cutoff", small_mass_cutoff,
+            "it must lie in [0, 1) (a fraction of a full node's mass)");
   }
 
 

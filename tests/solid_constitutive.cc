@@ -11,7 +11,14 @@
 //    which never yields under J2;
 // 4. rigid rotation (spin only) of a general stress through 2 pi: the
 //    invariants are unchanged and the stress returns to its start;
-// 5. a melted point carries no stress and re-solidifies stress-free.
+// 5. a melted point carries no stress and re-solidifies stress-free;
+// 6. fully constrained block heated to the solidus with a Young's modulus
+//    that falls to 1/200 there (total-form elasticity, constitutive.h):
+//    sigma = -E(T) alpha dT/(1-2nu) at every step (the rate form would give
+//    -alpha/(1-2nu) int E dT, 1.6 times that peak at the solidus, all of it
+//    released in the step that melts the point), and
+//    the stress goes continuously to almost zero: no jump at melting
+//    (issue 3); the scalar and the SIMD kernels agree.
 #include <deal.II/base/mpi.h>
 
 #include <femp/constitutive.h>
@@ -215,6 +222,66 @@ main(int argc, char **argv)
                              std::abs(s.sigma[1][1] - 0.5),
                              std::abs(s.sigma[2][2] - 0.5)}),
                    1e-12);
+  }
+  // 6. Stress released with E(T) towards the solidus.
+  {
+    SolidMaterial m;
+    m.youngs_modulus   = PiecewiseLinear::parse("300:200, 900:100, 1000:1", "E");
+    m.yield_stress     = PiecewiseLinear(1e30);
+    m.plastic_modulus  = PiecewiseLinear(0.);
+    m.poisson_ratio    = 0.3;
+    m.expansion        = 1e-3;
+    m.melt_temperature = 1000;
+    const double f     = m.expansion / (1 - 2 * m.poisson_ratio);
+    StressPoint  s;
+    StressBlock  b{};
+    for (unsigned int l = 0; l < simd_lanes; ++l)
+      b.E_old[l] = b.E[l] = 1; // set per step below
+    double err = 0, err_simd = 0, peak = 0, jump = 0, sigma_prev = 0,
+           at_solidus = 0;
+    for (unsigned int i = 0; i < 710; ++i)
+      {
+        const double T0 = 300. + i, T1 = T0 + 1;
+        update_stress(m, Tensor<2, 3>(), T0, T1, s);
+        for (unsigned int l = 0; l < simd_lanes; ++l)
+          {
+            b.T_old[l] = T0, b.T_new[l] = T1;
+            b.E_old[l] = m.youngs_modulus.value(T0);
+            b.E[l]     = m.youngs_modulus.value(T1);
+          }
+        update_stress_block(m, b);
+        const double sigma = s.sigma[0][0];
+        if (T1 < m.melt_temperature)
+          {
+            const double exact = -m.youngs_modulus.value(T1) * f * (T1 - 300);
+            err = worst(err, std::abs(sigma - exact) / std::abs(exact));
+            at_solidus = sigma;
+          }
+        else
+          err = worst(err, s.sigma.norm());
+        for (unsigned int c = 0; c < 3; ++c)
+          err_simd = worst(err_simd, std::abs(b.s[c][0] - s.sigma[c][c]));
+        peak       = std::max(peak, std::abs(sigma));
+        jump       = std::max(jump, std::abs(sigma - sigma_prev));
+        sigma_prev = sigma;
+      }
+    checks.at_most("softening to the solidus: max relative error of sigma = "
+                   "-E(T) alpha dT/(1-2nu) (0 when melted)",
+                   err, 1e-12);
+    checks.at_most("softening to the solidus: SIMD kernel vs scalar, max "
+                   "|difference| / peak",
+                   err_simd / peak, 1e-12);
+    checks.print("softening to the solidus: peak |sigma| / (E(300) alpha / "
+                 "(1-2nu) 1 K)",
+                 peak / (200 * f), 4);
+    // The closed form at 999 K: E(999) = 1.99, 1.99 * 699 / 60000 = 0.0232
+    // of the peak (at 900 K, E = 100: 100 * 600); that is also the largest
+    // one-step change, the one at melting (the ramp itself: at most 0.0115).
+    checks.at_most("softening to the solidus: |sigma| at 999 K / peak",
+                   std::abs(at_solidus) / peak, 0.025);
+    checks.at_most("softening to the solidus: largest change in a 1 K step "
+                   "(melting included) / peak",
+                   jump / peak, 0.025);
   }
   return checks.exit_code();
 }

@@ -7,11 +7,21 @@
 //   D_e = D - D_p - alpha dT/dt I       (thermal strain rate beta T', with
 //                                        beta = 3 kappa alpha, i.e. the
 //                                        thermal stress modulus)
-//   sigma^Jaumann = C(T) : D_e
+//   sigma^Jaumann = C(T) : D_e + (E'(T) T' / E(T)) sigma
+// The last term makes the elasticity of total form, sigma = C(T) : eps_e
+// with the elastic strain eps_e as the state (free energy 1/2 eps_e : C(T) :
+// eps_e): when E falls with temperature the stress falls with it (in the
+// update: sigma <- sigma E(T_new)/E(T_old) before the increment; Poisson's
+// ratio is constant, so C(T_new) C(T_old)^-1 = E(T_new)/E(T_old)). With an
+// E(T) table that falls to a small value at the solidus the stress of a
+// heated point goes continuously to (almost) zero before it melts (issue 3;
+// doc/solid.md "Constitutive model"). The pure rate form without that term
+// would keep the pressure built at low temperature.
 // Objective update: sigma* = R sigma R^T with the Hughes-Winget rotation
 // R = (I - W dt/2)^-1 (I + W dt/2) (exactly orthogonal, so a rigid rotation
 // leaves the invariants unchanged), then the elastic predictor with the
-// moduli at the new temperature, then J2 radial return with linear
+// moduli at the new temperature (the old stress first scaled by
+// E(T_new)/E(T_old), see above), then J2 radial return with linear
 // isotropic hardening:
 //   f = q - (sigma_y(T) + H(T) eps_p),  q = sqrt(3/2 s:s),
 //   d_gamma = f / (3 mu + H),  s <- s (1 - 3 mu d_gamma / q_trial).
@@ -124,6 +134,7 @@ namespace femp
                       const double (&L_dt)[3][3],
                       const double T_old,
                       const double T_new,
+                      const double E_old,
                       const double E,
                       double (&s)[6],
                       double &eps_p);
@@ -143,20 +154,21 @@ namespace femp
         eps_p = 0;
         return 0;
       }
-    return update_stress_array(m, L_dt, T_old, T_new, m.youngs_modulus.value(T_new),
-                               s, eps_p);
+    return update_stress_array(m, L_dt, T_old, T_new, m.youngs_modulus.value(T_old),
+                               m.youngs_modulus.value(T_new), s, eps_p);
   }
 
-  /// The same with Young's modulus @p E = E(T_new) given by the caller (who
-  /// needs it anyway, e.g. for the hourglass stiffness and the viscous
-  /// pressure of an element), so that the table is read once per step.
-  /// Always inlined: the element and point loops keep L and the stress in
-  /// registers.
+  /// The same with Young's moduli @p E_old = E(T_old) and @p E = E(T_new)
+  /// given by the caller (who needs E anyway, e.g. for the hourglass
+  /// stiffness and the viscous pressure of an element), so that the table
+  /// is read once per step. Always inlined: the element and point loops
+  /// keep L and the stress in registers.
   [[gnu::always_inline]] inline double
   update_stress_array(const SolidMaterial &m,
                       const double (&L_dt)[3][3],
                       const double T_old,
                       const double T_new,
+                      const double E_old,
                       const double E,
                       double (&s)[6],
                       double &eps_p)
@@ -168,7 +180,11 @@ namespace femp
         eps_p = 0;
         return 0;
       }
-    double       xx = s[0], yy = s[1], zz = s[2], xy = s[3], xz = s[4], yz = s[5];
+    // Total-form elasticity: the elastic strain is kept, the stress follows
+    // E (exactly 1 for a constant E).
+    const double r  = E / E_old;
+    double       xx = r * s[0], yy = r * s[1], zz = r * s[2], xy = r * s[3],
+                 xz = r * s[4], yz = r * s[5];
     const double w01 = 0.5 * (L_dt[0][1] - L_dt[1][0]);
     const double w02 = 0.5 * (L_dt[0][2] - L_dt[2][0]);
     const double w12 = 0.5 * (L_dt[1][2] - L_dt[2][1]);
@@ -264,6 +280,7 @@ namespace femp
   {
     simd_double L[3][3];            ///< velocity gradient times the step
     simd_double T_old, T_new, E;    ///< K, K, Pa (E = E(T_new))
+    simd_double E_old;              ///< E(T_old), Pa
     simd_double s[6];               ///< in: old stress, out: new {xx..yz}
     simd_double eps_p;              ///< in/out
   };
@@ -274,7 +291,8 @@ namespace femp
   /// rotation, computed for all lanes and kept where the spin is above
   /// 1e-18; thermal strain, predictor, yield check) in SIMD; the rare lanes
   /// that yield or melted take a scalar fallback (hardening table, radial
-  /// return). The tables of sigma_y are read per lane. Every lane must hold
+  /// return). The tables of sigma_y are read per lane; the caller sets E
+  /// and E_old of every lane. Every lane must hold
   /// finite data (pad a partial block with copies).
   [[gnu::always_inline]] inline void
   update_stress_block(const SolidMaterial &m, StressBlock &b,
@@ -298,8 +316,11 @@ namespace femp
     using V             = simd_double;
     const double nu     = m.poisson_ratio;
     const V      Tm     = V{} + m.melt_temperature;
-    V xx = b.s[0], yy = b.s[1], zz = b.s[2], xy = b.s[3], xz = b.s[4],
-      yz = b.s[5];
+    // Total-form elasticity (see the top of this file): r = 1 exactly for a
+    // constant E.
+    const V r = b.E / b.E_old;
+    V xx = r * b.s[0], yy = r * b.s[1], zz = r * b.s[2], xy = r * b.s[3],
+      xz = r * b.s[4], yz = r * b.s[5];
     const V(&L)[3][3] = b.L;
     const V w01       = 0.5 * (L[0][1] - L[1][0]);
     const V w02       = 0.5 * (L[0][2] - L[2][0]);

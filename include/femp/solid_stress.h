@@ -77,6 +77,10 @@ namespace femp
       double                   time_step     = 0;
       double                   safety_factor = 0.5;
       double                   mass_scaling  = 1;
+      /// With the melt flow only: nodes whose inertial mass is below this
+      /// fraction of a full cell's node take no force (doc/solid.md "Small
+      /// node masses"), -.
+      double                   small_mass_cutoff = 0.05;
       Tensor<1, dim>           gravity;
       std::vector<std::string> fixed_faces, roller_faces;
       std::string              energy_file = "solid_energy.csv";
