@@ -9,9 +9,12 @@
 // transfer, and sub-cycled also with APIC (the default transfer).
 //
 //   build/contrib/solid_benchmark [cells per direction, default 32] [steps]
-//                                 [fe | mpm | apic | flip | constitutive:
+//                                 [fe | mpm | apic | flip | mpmcheck |
+//                                  constitutive:
 //                                  only that part]
-//   (constitutive: the scalar update_stress and the SIMD update_stress_block
+//   (mpmcheck: the final energies and stress sums of the sub-cycled MPM
+//   runs, FLIP and APIC, not timed, to compare code versions;
+//   constitutive: the scalar update_stress and the SIMD update_stress_block
 //   on the same states; fe also prints the final energies and
 //   stress sums of both runs, to compare code versions)
 //
@@ -248,6 +251,18 @@ main(int argc, char **argv)
           }
       std::cout << "max |sigma_block - sigma_scalar| / max |sigma| = "
                 << diff / smax << " (max eps_p " << eps_p << ")\n";
+      return 0;
+    }
+  if (only == "mpmcheck")
+    {
+      // Final state of the MPM runs (FLIP and APIC sub-cycled; not timed),
+      // to compare code versions.
+      using VT     = SolidMaterial::VelocityTransfer;
+      double             n_obj = 0;
+      std::ostringstream check;
+      run(n, steps, false, true, n_obj, VT::flip, &check);
+      run(n, steps, false, true, n_obj, VT::apic, &check);
+      std::cout << "MPM FLIP, APIC, sub-cycled:\n" << check.str();
       return 0;
     }
   if (only == "mpm" || only == "apic" || only == "flip")

@@ -54,43 +54,79 @@ namespace femp
         }
     }
 
-    /// Lanes p[0..3] of @p a as one simd_double (a full block of
-    /// consecutive points: one vector load).
-    inline simd_double
-    simd_load(const std::vector<double> &a, const std::size_t (&p)[4],
+    /// Lanes of the point loops: mpm_lanes_3d in 3D (8 with AVX-512: a
+    /// block is then the 2 x 2 x 2 points of a cell), simd_lanes (4) in 2D
+    /// (2 x 2 points per cell).
+    template <int dim>
+    constexpr unsigned int point_lanes = dim == 3 ? mpm_lanes_3d : simd_lanes;
+
+    /// Lanes p[0..W-1] of @p a as one vector (a full block of consecutive
+    /// points: one vector load).
+    template <std::size_t W>
+    inline typename SimdOf<W>::type
+    simd_load(const std::vector<double> &a, const std::size_t (&p)[W],
               const bool full)
     {
-      simd_double r;
+      typename SimdOf<W>::type r;
       if (full)
         std::memcpy(&r, &a[p[0]], sizeof(r));
       else
-        r = simd_double{a[p[0]], a[p[1]], a[p[2]], a[p[3]]};
+        for (unsigned int l = 0; l < W; ++l)
+          r[l] = a[p[l]];
       return r;
     }
-    /// A block of up to simd_lanes consecutive points starting at p0 (of n):
-    /// nl lanes in use, their indices pl (unused lanes repeat the last
-    /// point, so loads stay in range), full when every lane is used.
+    /// A block of up to W consecutive points starting at p0 (of n): nl
+    /// lanes in use, their indices pl (unused lanes repeat the last point,
+    /// so loads stay in range), full when every lane is used.
+    template <unsigned int W>
     struct PointBlock
     {
       PointBlock(const std::size_t p0, const std::size_t n)
-        : nl(std::min<std::size_t>(simd_lanes, n - p0))
-        , full(nl == simd_lanes)
+        : nl(std::min<std::size_t>(W, n - p0))
+        , full(nl == W)
       {
-        for (unsigned int l = 0; l < simd_lanes; ++l)
+        for (unsigned int l = 0; l < W; ++l)
           pl[l] = p0 + std::min(l, nl - 1);
       }
       unsigned int nl;
       bool         full;
-      std::size_t  pl[simd_lanes];
+      std::size_t  pl[W];
     };
+
+    /// True when the W lanes of @p n0 are equal (the points of the block
+    /// lie in one cell).
+    template <std::size_t W>
+    inline bool
+    one_cell(const std::size_t (&n0)[W])
+    {
+      bool r = true;
+      for (unsigned int l = 1; l < W; ++l)
+        r = r && n0[l] == n0[0];
+      return r;
+    }
+
+    /// Lanes of @p a summed as a tree: (a0 + a1) + (a2 + a3), and for 8
+    /// lanes the sum of the two halves so formed.
+    template <typename VD>
+    inline double
+    lane_total(const VD a)
+    {
+      static_assert(simd_width<VD> == 4 || simd_width<VD> == 8, "4 or 8");
+      const double lo = (a[0] + a[1]) + (a[2] + a[3]);
+      if constexpr (simd_width<VD> == 8)
+        return lo + ((a[4] + a[5]) + (a[6] + a[7]));
+      else
+        return lo;
+    }
 
     /// Local coordinates xi of the points of @p b in their cells (origin
     /// @p corner, size 1/ih) and their tent weights and gradients.
-    template <int dim, typename Arrays>
+    template <int dim, typename Arrays, unsigned int W,
+              typename VD = typename SimdOf<W>::type>
     [[gnu::always_inline]] inline void
-    block_tents(const Arrays &x, const Arrays &corner, const PointBlock &b,
-                const double ih, simd_double (&xi)[dim],
-                simd_double (&N)[1 << dim], simd_double (&dN)[1 << dim][dim])
+    block_tents(const Arrays &x, const Arrays &corner, const PointBlock<W> &b,
+                const double ih, VD (&xi)[dim], VD (&N)[1 << dim],
+                VD (&dN)[1 << dim][dim])
     {
       for (int d = 0; d < dim; ++d)
         xi[d] = (simd_load(x[d], b.pl, b.full) -
@@ -101,10 +137,11 @@ namespace femp
 
     /// Local coordinates xi of the points of @p b in their cells (origin
     /// @p corner, size 1/ih), without the tents.
-    template <int dim, typename Arrays>
+    template <int dim, typename Arrays, unsigned int W,
+              typename VD = typename SimdOf<W>::type>
     [[gnu::always_inline]] inline void
-    block_xi(const Arrays &x, const Arrays &corner, const PointBlock &b,
-             const double ih, simd_double (&xi)[dim])
+    block_xi(const Arrays &x, const Arrays &corner, const PointBlock<W> &b,
+             const double ih, VD (&xi)[dim])
     {
       for (int d = 0; d < dim; ++d)
         xi[d] = (simd_load(x[d], b.pl, b.full) -
@@ -114,11 +151,11 @@ namespace femp
 
     /// Tent weights N of the 2^dim corners at xi (the products of tents(),
     /// without the gradients).
-    template <int dim>
+    template <int dim, typename VD>
     [[gnu::always_inline]] inline void
-    weights(const simd_double (&xi)[dim], simd_double (&N)[1 << dim])
+    weights(const VD (&xi)[dim], VD (&N)[1 << dim])
     {
-      simd_double w[dim][2];
+      VD w[dim][2];
       for (int d = 0; d < dim; ++d)
         w[d][0] = 1 - xi[d], w[d][1] = xi[d];
       for (unsigned int a = 0; a < (1u << dim); ++a)
@@ -139,9 +176,9 @@ namespace femp
     /// the points of a cell then cost a few multiply-adds per point on
     /// coefficients shared by the cell (instead of 2^dim (dim + 1) per
     /// value); the same polynomial, so the results agree up to round-off.
-    template <int dim>
+    template <int dim, typename VD>
     [[gnu::always_inline]] inline void
-    monomial_coefficients(simd_double (&c)[1 << dim])
+    monomial_coefficients(VD (&c)[1 << dim])
     {
       for (int d = 0; d < dim; ++d)
         for (unsigned int a = 0; a < (1u << dim); ++a)
@@ -151,25 +188,25 @@ namespace femp
 
     /// Value and gradient (with respect to xi) at xi of the multilinear
     /// polynomial with monomial coefficients @p c (Horner form).
-    template <int dim>
+    template <int dim, typename VD>
     [[gnu::always_inline]] inline void
-    multilinear(const simd_double (&c)[1 << dim], const simd_double (&xi)[dim],
-                simd_double &val, simd_double (&grad)[dim])
+    multilinear(const VD (&c)[1 << dim], const VD (&xi)[dim], VD &val,
+                VD (&grad)[dim])
     {
-      const simd_double x = xi[0], y = xi[1];
+      const VD x = xi[0], y = xi[1];
       if constexpr (dim == 2)
         {
-          const simd_double b = c[2] + c[3] * x;
+          const VD b = c[2] + c[3] * x;
           val                 = (c[0] + c[1] * x) + y * b;
           grad[0]             = c[1] + c[3] * y;
           grad[1]             = b;
         }
       else
         {
-          const simd_double z = xi[2];
-          const simd_double b = c[2] + c[3] * x, e = c[4] + c[5] * x,
+          const VD z = xi[2];
+          const VD b = c[2] + c[3] * x, e = c[4] + c[5] * x,
                             f = c[6] + c[7] * x;
-          const simd_double t = e + y * f;
+          const VD t = e + y * f;
           val                 = ((c[0] + c[1] * x) + y * b) + z * t;
           grad[0]             = (c[1] + c[3] * y) + z * (c[5] + c[7] * y);
           grad[1]             = b + z * f;
@@ -178,10 +215,11 @@ namespace femp
     }
 
     /// 1 in the first @p nl lanes, 0 in the others.
-    inline simd_double
+    template <typename VD>
+    inline VD
     lane_mask(const unsigned int nl)
     {
-      simd_double r = {};
+      VD r = {};
       for (unsigned int l = 0; l < nl; ++l)
         r[l] = 1.;
       return r;
@@ -209,31 +247,59 @@ namespace femp
     constexpr std::size_t prefetch_distance = 16;
 
     /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
+    template <typename VD>
     inline void
     simd_store(std::vector<double> &a, const std::size_t p0,
-               const unsigned int nl, const simd_double r)
+               const unsigned int nl, const VD r)
     {
-      if (nl == simd_lanes)
+      if (nl == simd_width<VD>)
         std::memcpy(&a[p0], &r, sizeof(r));
       else
         for (unsigned int l = 0; l < nl; ++l)
           a[p0 + l] = r[l];
     }
 
-    /// The sums (x0 + x1) + (x2 + x3) of the lanes of @p a, @p b, @p c and
-    /// @p d, as the four lanes of one value.
-    inline simd_double
-    lane_sums(const simd_double a, const simd_double b, const simd_double c,
-              const simd_double d)
+    /// The sums (x0 + x1) + (x2 + x3) of the lanes of @p c[0..3], as the
+    /// four lanes of one value; for 8 lanes, the sums ((x0 + x1) + (x2 +
+    /// x3)) + ((x4 + x5) + (x6 + x7)) of the lanes of @p c[0..7] (the
+    /// grouping that two 4-lane blocks summed in turn give).
+    template <typename VD>
+    [[gnu::always_inline]] inline VD
+    lane_sums(const VD *c)
     {
-      static_assert(simd_lanes == 4, "written for 4 lanes");
-      typedef long long index __attribute__((vector_size(32)));
-      const simd_double ab = __builtin_shuffle(a, b, index{0, 4, 2, 6}) +
-                             __builtin_shuffle(a, b, index{1, 5, 3, 7});
-      const simd_double cd = __builtin_shuffle(c, d, index{0, 4, 2, 6}) +
-                             __builtin_shuffle(c, d, index{1, 5, 3, 7});
-      return __builtin_shuffle(ab, cd, index{0, 1, 4, 5}) +
-             __builtin_shuffle(ab, cd, index{2, 3, 6, 7});
+      if constexpr (simd_width<VD> == 4)
+        {
+          typedef long long index __attribute__((vector_size(32)));
+          const VD ab = __builtin_shuffle(c[0], c[1], index{0, 4, 2, 6}) +
+                        __builtin_shuffle(c[0], c[1], index{1, 5, 3, 7});
+          const VD cd = __builtin_shuffle(c[2], c[3], index{0, 4, 2, 6}) +
+                        __builtin_shuffle(c[2], c[3], index{1, 5, 3, 7});
+          return __builtin_shuffle(ab, cd, index{0, 1, 4, 5}) +
+                 __builtin_shuffle(ab, cd, index{2, 3, 6, 7});
+        }
+      else
+        {
+          static_assert(simd_width<VD> == 8, "4 or 8 lanes");
+          typedef long long index __attribute__((vector_size(64)));
+          // Pairs of neighbouring lanes, then pairs of pairs (each half),
+          // then the two halves.
+          VD p[4];
+          for (unsigned int k = 0; k < 4; ++k)
+            p[k] = __builtin_shuffle(c[2 * k], c[2 * k + 1],
+                                     index{0, 8, 2, 10, 4, 12, 6, 14}) +
+                   __builtin_shuffle(c[2 * k], c[2 * k + 1],
+                                     index{1, 9, 3, 11, 5, 13, 7, 15});
+          const VD q0 = __builtin_shuffle(p[0], p[1],
+                                          index{0, 1, 8, 9, 4, 5, 12, 13}) +
+                        __builtin_shuffle(p[0], p[1],
+                                          index{2, 3, 10, 11, 6, 7, 14, 15});
+          const VD q1 = __builtin_shuffle(p[2], p[3],
+                                          index{0, 1, 8, 9, 4, 5, 12, 13}) +
+                        __builtin_shuffle(p[2], p[3],
+                                          index{2, 3, 10, 11, 6, 7, 14, 15});
+          return __builtin_shuffle(q0, q1, index{0, 1, 2, 3, 8, 9, 10, 11}) +
+                 __builtin_shuffle(q0, q1, index{4, 5, 6, 7, 12, 13, 14, 15});
+        }
     }
 
     /// Adds the contributions @p c (n values per corner, one point per
@@ -248,11 +314,12 @@ namespace femp
     /// cell's points ((c0 + c1) + (c2 + c3)) + ((c4 + c5) + (c6 + c7)): a
     /// round-off-level reordering. Mixed blocks go lane by lane in point
     /// order.
-    template <std::size_t n_corners, std::size_t n>
+    template <std::size_t n_corners, std::size_t n, unsigned int W>
     struct CellScatter
     {
-      static_assert((n_corners * n) % 4 == 0, "groups of four");
-      static constexpr unsigned int n_groups = n_corners * n / 4;
+      using VD = typename SimdOf<W>::type;
+      static_assert((n_corners * n) % W == 0, "groups of W");
+      static constexpr unsigned int n_groups = n_corners * n / W;
       static constexpr std::size_t  none     = std::size_t(-1);
 
       CellScatter(const std::array<std::ptrdiff_t, n_corners> &offset,
@@ -266,24 +333,21 @@ namespace femp
       }
 
       [[gnu::always_inline]] inline void
-      add(const simd_double (&c)[n_corners][n],
-          const std::size_t (&node0)[simd_lanes], const unsigned int nl)
+      add(const VD (&c)[n_corners][n], const std::size_t (&node0)[W],
+          const unsigned int nl)
       {
-        if (nl == simd_lanes && node0[0] == node0[1] &&
-            node0[0] == node0[2] && node0[0] == node0[3])
+        if (nl == W && one_cell(node0))
           {
-            const simd_double *cf = &c[0][0];
+            const VD *cf = &c[0][0];
             if (node0[0] == cell0)
               for (unsigned int g = 0; g < n_groups; ++g)
-                acc[g] += lane_sums(cf[4 * g], cf[4 * g + 1], cf[4 * g + 2],
-                                    cf[4 * g + 3]);
+                acc[g] += lane_sums(cf + W * g);
             else
               {
                 flush();
                 cell0 = node0[0];
                 for (unsigned int g = 0; g < n_groups; ++g)
-                  acc[g] = lane_sums(cf[4 * g], cf[4 * g + 1], cf[4 * g + 2],
-                                     cf[4 * g + 3]);
+                  acc[g] = lane_sums(cf + W * g);
               }
           }
         else
@@ -317,7 +381,7 @@ namespace femp
       const std::array<std::ptrdiff_t, n_corners> &offset;
       double *(&fields)[n];
       std::size_t cell0 = none;
-      simd_double acc[n_groups];
+      VD          acc[n_groups];
     };
 
     /// P2G contributions of a block of points (one per lane) to its corner
@@ -325,17 +389,14 @@ namespace femp
     /// g m_true N - V (sigma + q I) grad N (dim)}. @p s: stress {xx yy zz
     /// xy xz yz}; A (APIC): v_p(x_I) = v_p + C_p (x_I - x_p) with
     /// x_I - x_p = h (b - xi), FLIP: v_p.
-    template <bool A, int dim, unsigned int n_corners>
+    template <bool A, int dim, unsigned int n_corners, typename VD>
     [[gnu::always_inline]] inline void
-    p2g_block(const simd_double (&xi)[dim], const simd_double (&N)[n_corners],
-              const simd_double (&dN)[n_corners][dim], const simd_double m,
-              const simd_double mg, const simd_double V, const simd_double q,
-              const simd_double (&s)[6], const simd_double (&v)[dim],
-              const simd_double (&C)[dim * dim], const double h,
-              const Tensor<1, dim> &gravity,
-              simd_double (&c)[n_corners][1 + 2 * dim])
+    p2g_block(const VD (&xi)[dim], const VD (&N)[n_corners],
+              const VD (&dN)[n_corners][dim], const VD m, const VD mg,
+              const VD V, const VD q, const VD (&s)[6], const VD (&v)[dim],
+              const VD (&C)[dim * dim], const double h,
+              const Tensor<1, dim> &gravity, VD (&c)[n_corners][1 + 2 * dim])
     {
-      using VD = simd_double;
       VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
       for (int i = 0; i < dim; ++i)
         {
@@ -387,7 +448,7 @@ namespace femp
     };
 
     /// P2G (eqs. 11-13) of the blocks of points starting at p0 = b, b +
-    /// simd_lanes, ... < e (of n points) into @p out: the contributions of
+    /// W, ... < e (of n points) into @p out: the contributions of
     /// a block in SIMD (p2g_block), then added to the nodes (CellScatter).
     /// Not inlined: update_stresses() calls it for chunks of points that it
     /// just updated (still in the L1 cache), and the two loop bodies
@@ -396,13 +457,14 @@ namespace femp
     [[gnu::noinline]] void
     p2g_blocks(const P2GInput<dim> &in, const std::size_t b,
                const std::size_t e, const std::size_t n,
-               CellScatter<n_corners, 1 + 2 * dim> &out)
+               CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> &out)
     {
-      using VD           = simd_double;
+      constexpr unsigned int W  = point_lanes<dim>;
+      using VD                  = typename SimdOf<W>::type;
       const double ih    = 1. / in.h;
-      for (std::size_t p0 = b; p0 < e; p0 += simd_lanes)
+      for (std::size_t p0 = b; p0 < e; p0 += W)
         {
-          const PointBlock   blk(p0, n);
+          const PointBlock<W> blk(p0, n);
           const bool         full = blk.full;
           const auto &       pl   = blk.pl;
           VD                 xi[dim], N[n_corners], dN[n_corners][dim];
@@ -422,10 +484,9 @@ namespace femp
           p2g_block<A>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
                        simd_load(in.visc, pl, full), sp, vp, Cp, in.h,
                        in.gravity, c);
-          const std::size_t n0[simd_lanes] = {in.node0[pl[0]],
-                                              in.node0[pl[1]],
-                                              in.node0[pl[2]],
-                                              in.node0[pl[3]]};
+          std::size_t n0[W];
+          for (unsigned int l = 0; l < W; ++l)
+            n0[l] = in.node0[pl[l]];
           out.add(c, n0, blk.nl);
         }
     }
@@ -785,12 +846,14 @@ namespace femp
     // 7-20 % faster than a run-time branch per point).
     if (apic)
       {
-        CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
+        CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> out(
+          corner_offset, nodes_out);
         p2g_blocks<true>(in, 0, n, n, out);
       }
     else
       {
-        CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, nodes_out);
+        CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> out(
+          corner_offset, nodes_out);
         p2g_blocks<false>(in, 0, n, n, out);
       }
   }
@@ -812,17 +875,16 @@ namespace femp
     const std::size_t n = true_mass.size();
     for (int d = 0; d < dim; ++d) // FLIP only (APIC: the grid velocity is v)
       xdot[d].resize(apic ? 0 : n);
-    // Blocks of simd_lanes points as in p2g(): nodal values gathered lane
+    // Blocks of W points as in p2g(): nodal values gathered lane
     // by lane, the interpolation and the re-map contributions in SIMD, the
     // re-map added to the nodes in point order.
-    using VD               = simd_double;
-    constexpr unsigned int W = simd_lanes;
-    static_assert(W == 4, "the gathers below are written for 4 lanes");
+    constexpr unsigned int W = point_lanes<dim>;
+    using VD                 = typename SimdOf<W>::type;
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
       constexpr bool A = decltype(transfer)::value;
-      CellScatter<n_corners, dim> remap(corner_offset, mom);
+      CellScatter<n_corners, dim, W> remap(corner_offset, mom);
       // Monomial coefficients of the nodal velocity (and FLIP: the nodal
       // acceleration) of the cell of the last one-cell block; the blocks
       // of a cell share them (the points are sorted by cell).
@@ -831,7 +893,7 @@ namespace femp
       VD                    cv[dim][n_corners], ca[dim][n_corners];
     for (std::size_t p0 = 0; p0 < n; p0 += W)
       {
-        const PointBlock   blk(p0, n);
+        const PointBlock<W> blk(p0, n);
         const unsigned int nl   = blk.nl;
         const bool         full = blk.full;
         const auto &       pl   = blk.pl;
@@ -850,8 +912,9 @@ namespace femp
         VD                 xi[dim], N[n_corners];
         block_xi<dim>(x, corner, blk, ih, xi);
         weights<dim>(xi, N);
-        const std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
-                                   node0[pl[3]]};
+        std::size_t n0[W];
+        for (unsigned int l = 0; l < W; ++l)
+          n0[l] = node0[pl[l]];
         // Nodal values: one load and a broadcast when the four points lie
         // in the same cell (the usual case: the points are sorted by cell),
         // turned into monomial coefficients once per cell; mixed blocks
@@ -870,13 +933,12 @@ namespace femp
                 monomial_coefficients<dim>(ca[i]);
             }
         };
-        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+        if (one_cell(n0))
           {
             if (n0[0] != coef_cell)
               {
                 coefficients([&](const double *f, const std::ptrdiff_t o) {
-                  const double y = f[n0[0] + o];
-                  return VD{y, y, y, y};
+                  return VD{} + f[n0[0] + o];
                 });
                 coef_cell = n0[0];
               }
@@ -884,8 +946,10 @@ namespace femp
         else
           {
             coefficients([&](const double *f, const std::ptrdiff_t o) {
-              return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o],
-                        f[n0[3] + o]};
+              VD r;
+              for (unsigned int l = 0; l < W; ++l)
+                r[l] = f[n0[l] + o];
+              return r;
             });
             coef_cell = none;
           }
@@ -993,20 +1057,19 @@ namespace femp
           }
         next_dirty = true;
       }
-    // Blocks of simd_lanes points, one point per lane of simd_double (GCC
+    // Blocks of W points (point_lanes), one point per lane of a vector (GCC
     // vector extension, see constitutive.h): shape functions, velocity
     // gradient, constitutive update (update_stress_block), work, viscous
     // pressure, volume and move in SIMD; a partial last block repeats its
     // last point in the spare lanes and stores nothing from them. The sums
     // (work, kinetic energy, momentum) are taken in point order and the
     // arithmetic per point is that of the scalar formulation.
-    using VD               = simd_double;
-    constexpr unsigned int W = simd_lanes;
-    static_assert(W == 4, "the gathers below are written for 4 lanes");
+    constexpr unsigned int W = point_lanes<dim>;
+    using VD                 = typename SimdOf<W>::type;
     auto loop = [&](auto transfer, auto fused) {
       constexpr bool A = decltype(transfer)::value;
       constexpr bool F = decltype(fused)::value;
-      CellScatter<n_corners, 1 + 2 * dim> out(corner_offset, next_out);
+      CellScatter<n_corners, 1 + 2 * dim, W> out(corner_offset, next_out);
       const P2GInput<dim> in{x,      corner, v,     C,     true_mass,
                              volume, visc,   sigma, node0, scaling,
                              h,      p2g_gravity};
@@ -1028,7 +1091,7 @@ namespace femp
     // (the block loop keeps its indentation of before the chunks)
     for (std::size_t p0 = c0; p0 < c1; p0 += W)
       {
-        const PointBlock   blk(p0, n);
+        const PointBlock<W> blk(p0, n);
         const unsigned int nl   = blk.nl;
         const bool         full = blk.full;
         const auto &       pl   = blk.pl;
@@ -1048,13 +1111,14 @@ namespace femp
           }
         VD                 xi[dim];
         block_xi<dim>(x, corner, blk, ih, xi);
-        StressBlock       sb;
+        StressBlockOf<VD> sb;
         VD(&L)[3][3] = sb.L;
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
             L[i][j] = VD{};
-        std::size_t n0[W] = {node0[pl[0]], node0[pl[1]], node0[pl[2]],
-                             node0[pl[3]]};
+        std::size_t n0[W];
+        for (unsigned int l = 0; l < W; ++l)
+          n0[l] = node0[pl[l]];
         // L dt = sum v_a (x) grad N_a dt, the gradient of the interpolant of
         // the nodal velocities in monomial form (as in g2p()): nodal values
         // loaded once and broadcast when the four points lie in the same
@@ -1068,13 +1132,12 @@ namespace femp
               monomial_coefficients<dim>(cv[i]);
             }
         };
-        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+        if (one_cell(n0))
           {
             if (n0[0] != coef_cell)
               {
                 coefficients([&](const double *f, const std::ptrdiff_t o) {
-                  const double y = f[n0[0] + o];
-                  return VD{y, y, y, y};
+                  return VD{} + f[n0[0] + o];
                 });
                 coef_cell = n0[0];
               }
@@ -1082,8 +1145,10 @@ namespace femp
         else
           {
             coefficients([&](const double *f, const std::ptrdiff_t o) {
-              return VD{f[n0[0] + o], f[n0[1] + o], f[n0[2] + o],
-                        f[n0[3] + o]};
+              VD r;
+              for (unsigned int l = 0; l < W; ++l)
+                r[l] = f[n0[l] + o];
+              return r;
             });
             coef_cell = none;
           }
@@ -1103,7 +1168,7 @@ namespace femp
         // and viscous pressure share E); one-cell blocks broadcast the
         // cell's values.
         VD sy;
-        if (n0[0] == n0[1] && n0[0] == n0[2] && n0[0] == n0[3])
+        if (one_cell(n0))
           {
             const auto cp = cell[pl[0]];
             if (cp != E_cell)
@@ -1147,7 +1212,7 @@ namespace femp
         const VD V  = simd_load(volume, pl, full);
         const VD mg = simd_load(true_mass, pl, full), m = mg * scaling;
         VD       q  = simd_load(visc, pl, full);
-        const VD use = full ? VD{} + 1. : lane_mask(nl);
+        const VD use = full ? VD{} + 1. : lane_mask<VD>(nl);
         work_v += use * (0.5 * V * w + V * q * trL);
         if (b1 > 0)
           {
@@ -1256,11 +1321,10 @@ namespace femp
     if constexpr (F)
       p2g_blocks<A>(in, c0, c1, n, out);
       }
-      auto lanes = [](const VD a) { return (a[0] + a[1]) + (a[2] + a[3]); };
-      work += lanes(work_v);
-      kinetic += lanes(kinetic_v);
+      work += lane_total(work_v);
+      kinetic += lane_total(kinetic_v);
       for (int d = 0; d < dim; ++d)
-        weight_momentum[d] += lanes(momentum_v[d]);
+        weight_momentum[d] += lane_total(momentum_v[d]);
     };
     if (apic && fuse)
       loop(std::true_type(), std::true_type());

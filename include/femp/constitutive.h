@@ -252,40 +252,71 @@ namespace femp
   }
 
   /// Lanes of the SIMD block kernels (update_stress_block, the FE element
-  /// and MPM point loops): 4 doubles, one AVX2 register.
+  /// loop, the 2D MPM point loops): 4 doubles, one AVX2 register.
   constexpr unsigned int simd_lanes = 4;
-  /// simd_lanes doubles as one value (GCC vector extension: element-wise
-  /// arithmetic, comparisons give lane masks, mask ? a : b selects; one
-  /// AVX2 register with -march=native, two SSE2 registers without).
+  /// W doubles as one value (GCC vector extension: element-wise
+  /// arithmetic, comparisons give lane masks, mask ? a : b selects; with
+  /// -march=native one AVX2 register for W = 4, one AVX-512 register for
+  /// W = 8; emulated by narrower registers where the machine has none).
   /// deal.II's VectorizedArray is not used: the Debian build of deal.II is
   /// configured without vectorization (width 1).
-  typedef double simd_double __attribute__((vector_size(8 * simd_lanes)));
+  template <unsigned int W>
+  struct SimdOf
+  {
+    typedef double type __attribute__((vector_size(8 * W)));
+  };
+  /// simd_lanes doubles as one value.
+  typedef SimdOf<simd_lanes>::type simd_double;
+  /// Lanes of the 3D MPM point loops: 8 (a block is the 2 x 2 x 2 points of
+  /// a cell) where the compiler targets AVX-512, else 4. The results do not
+  /// depend on it beyond round-off (the node sums of a cell are grouped the
+  /// same way; only the lane sums of the energies are taken in another
+  /// order). FEMP_MPM_LANES_3D (4 or 8) overrides the choice, to compare.
+#if defined(FEMP_MPM_LANES_3D)
+  constexpr unsigned int mpm_lanes_3d = FEMP_MPM_LANES_3D;
+#elif defined(__AVX512F__)
+  constexpr unsigned int mpm_lanes_3d = 8;
+#else
+  constexpr unsigned int mpm_lanes_3d = 4;
+#endif
+
+  /// Number of lanes of a GCC vector type.
+  template <typename V>
+  constexpr unsigned int simd_width = sizeof(V) / sizeof(double);
 
   /// Element-wise square root.
-  inline simd_double
-  simd_sqrt(simd_double x)
+  template <typename V>
+  inline V
+  simd_sqrt(V x)
   {
+#if defined(__AVX512F__)
+    if constexpr (simd_width<V> == 8)
+      return __builtin_ia32_sqrtpd512_mask(x, x, -1, 4);
+#endif
 #if defined(__AVX__)
-    if constexpr (simd_lanes == 4)
+    if constexpr (simd_width<V> == 4)
       return __builtin_ia32_sqrtpd256(x);
 #endif
-    for (unsigned int l = 0; l < simd_lanes; ++l)
+    for (unsigned int l = 0; l < simd_width<V>; ++l)
       x[l] = std::sqrt(x[l]);
     return x;
   }
 
-  /// simd_lanes stress states (lane l: one element or point), for
+  /// simd_width<V> stress states (lane l: one element or point), for
   /// update_stress_block.
-  struct StressBlock
+  template <typename V>
+  struct StressBlockOf
   {
-    simd_double L[3][3];            ///< velocity gradient times the step
-    simd_double T_old, T_new, E;    ///< K, K, Pa (E = E(T_new))
-    simd_double E_old;              ///< E(T_old), Pa
-    simd_double s[6];               ///< in: old stress, out: new {xx..yz}
-    simd_double eps_p;              ///< in/out
+    V L[3][3];         ///< velocity gradient times the step
+    V T_old, T_new, E; ///< K, K, Pa (E = E(T_new))
+    V E_old;           ///< E(T_old), Pa
+    V s[6];            ///< in: old stress, out: new {xx..yz}
+    V eps_p;           ///< in/out
   };
+  /// simd_lanes stress states.
+  typedef StressBlockOf<simd_double> StressBlock;
 
-  /// update_stress_array() for simd_lanes states at once, with the same
+  /// update_stress_array() for simd_width<V> states at once, with the same
   /// arithmetic lane by lane (identical results up to the compiler's
   /// contraction of multiply-adds): the elastic path (Hughes-Winget
   /// rotation, computed for all lanes and kept where the spin is above
@@ -294,27 +325,31 @@ namespace femp
   /// return). The tables of sigma_y are read per lane; the caller sets E
   /// and E_old of every lane. Every lane must hold
   /// finite data (pad a partial block with copies).
+  template <typename V>
   [[gnu::always_inline]] inline void
-  update_stress_block(const SolidMaterial &m, StressBlock &b,
-                      const simd_double sy);
+  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b,
+                      const V sy);
 
+  template <typename V>
   [[gnu::always_inline]] inline void
-  update_stress_block(const SolidMaterial &m, StressBlock &b)
+  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b)
   {
-    static_assert(simd_lanes == 4, "written for 4 lanes");
-    auto syf = [&](const unsigned int l) { return m.yield_stress.value(b.T_new[l]); };
-    update_stress_block(m, b, simd_double{syf(0), syf(1), syf(2), syf(3)});
+    V sy;
+    for (unsigned int l = 0; l < simd_width<V>; ++l)
+      sy[l] = m.yield_stress.value(b.T_new[l]);
+    update_stress_block(m, b, sy);
   }
 
   /// The same with the initial yield stress sy = sigma_y(T_new) of every
   /// lane given by the caller (the MPM reads it once per cell: the points
   /// of a cell share its temperature).
+  template <typename V>
   [[gnu::always_inline]] inline void
-  update_stress_block(const SolidMaterial &m, StressBlock &b,
-                      const simd_double sy)
+  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b,
+                      const V sy)
   {
-    using V             = simd_double;
-    const double nu     = m.poisson_ratio;
+    constexpr unsigned int W  = simd_width<V>;
+    const double           nu = m.poisson_ratio;
     const V      Tm     = V{} + m.melt_temperature;
     // Total-form elasticity (see the top of this file): r = 1 exactly for a
     // constant E.
@@ -372,7 +407,7 @@ namespace femp
     V          scale  = V{} + 1.;
     // Scalar fallback: lanes above the initial yield stress (the hardening
     // term only raises it) and melted lanes.
-    for (unsigned int l = 0; l < simd_lanes; ++l)
+    for (unsigned int l = 0; l < W; ++l)
       if (flag[l])
         {
           if (melted[l])
