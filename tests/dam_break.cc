@@ -9,31 +9,47 @@
 // Usage: test_dam_break [cells per a = 16] [reference file | write=FILE | -]
 //                       [Melt flow/Point shifting A, default 2]
 //                       [Melt flow/Volume correction c, default 0.5]
+//                       [floor: slip (default) | noslip] [Courant number]
 // With a reference file (tests/dam_break_a64.dat: the code's own curve at
 // a/64, written by "test_dam_break 64 write=FILE") the run is also compared
-// with that converged curve (regression at 1 %).
+// with that converged curve (target 1 %). "noslip" puts a row of solid
+// cells (rigid, no-slip for the flow) under the column; it and the Courant
+// number (default 0.25) serve the checks of the front lead in doc/flow.md.
 //
 // Measurement: front = rightmost fluid point plus half a point spacing (it
 // agrees within a cell with the end of the bottom cell row holding >= 2 of
-// its 4 points, i.e. alpha >= 1/2); height = highest fluid point in the
-// first cell column that is connected to the floor through that column
-// (gaps of at most one empty cell row), plus half a point spacing.
+// its 4 points, i.e. alpha >= 1/2); height = the level where the smoothed
+// volume density of the points in a strip of width 2h along the wall falls
+// to 1/2 (see column_height() for why; it reads evenly spread points
+// exactly and moves continuously, where the earlier highest point in the
+// first cell column jumped by a point spacing). The same level on a strip
+// along the floor (a front that ignores a leading film thinner than
+// ~0.6 h) goes to the log.
 //
 // Result (doc/flow.md), with point shifting A = 2 and the volume
-// correction c = 0.5 (Melt flow/Point shifting, Volume correction; they
-// keep the points from bunching: volume-based fluid area at the end 0.93-
-// 0.94 of the column instead of 0.84): the front is converged (a/32 within
-// 0.6 % of a/64) and leads the experiment by up to 20 % -- the known lead
-// of simulations over Martin & Moyce (slow gate release, the experiment's
-// front speed is also ~7 % lower). The 10 % target for the front is NOT
-// met: printed, not gated. The height is within 10 % of the experiment up
-// to t sqrt(g/a) = 2.7 (gated); over the whole tabulated range within 9 %
-// at a/32 (gated at 10 % from a/32 on) and a/64, 17 % at a/16 (printed).
-// a/32 vs a/64 heights: 1.5 % (target 1 %, not met; gated at 5 %). Gated
-// as before: the front lies between 0.9 times the experiment and the
-// inviscid shallow-water (Ritter) dry-bed front Z = 1 + 2T, which no
-// viscous flow can outrun. The fluid areas (cell count, volume-based,
-// sub-cell occupancy) and the correction's CG iterations go to stderr.
+// correction c = 0.5 (Melt flow/Point shifting, Volume correction): the
+// front is converged (a/32 within 0.6 % of a/64) and leads the experiment
+// by up to 20 % (T = 1.19); without a film thinner than 0.6 h 15 / 18 /
+// 21 % at a/16 / 32 / 64 (so not the film); with a no-slip
+// floor 9 % at a/16 but 11 % at a/32 (the floor's grid-scale friction
+// shrinks with h); halving the time step moves it by 1 %. The 10 % target
+// for the front is NOT met: printed, not gated (the known lead of
+// simulations over Martin & Moyce: slow gate release, doc/flow.md). The
+// height is within 10 % of the experiment up to t sqrt(g/a) = 2.7 (gated)
+// and over the whole tabulated range at a/32 (9 %) and a/64 (8 %) (gated
+// at 10 % from a/32 on), 14 % at a/16 (printed). a/32 vs a/64 heights: 1.5 %
+// (1.7 % on 2 ranks; target 1 %, not met; gated at 3 %: the round-off
+// scatter of the late sloshing heights is 1.1-1.9 % at a/32, up to 2.3 %
+// at a/64); 1.0 %
+// before the surge hits the far wall (t sqrt(g/a) <= 2.21; gated at 1.5 %). Gated as before: the front lies
+// between 0.9 times the experiment and the inviscid shallow-water
+// (Ritter) dry-bed front Z = 1 + 2T, which no viscous flow can outrun. The
+// fluid areas (cell count, volume-based, seen by the grid) and the
+// correction's CG iterations go to stderr: the points keep their volume
+// exactly; the volume-based area 0.93-0.94 is the +-1 point noise of
+// interior cells (over- and under-filled alike), the area the grid sees
+// (interior cells + clipped fill of the surface cells) is 0.993, 1.001,
+// 0.999 at a/16, a/32, a/64.
 #include "flow_tools.h"
 
 #include <fstream>
@@ -91,37 +107,103 @@ main(int argc, char **argv)
   // cells fell to 0.84 of the column at a/16 with shifting alone).
   prm.volume_correction = argc > 4 ? std::atof(argv[4]) : 0.5;
   prm.gravity   = Tensor<1, dim>({0., -g});
-  FlowScene<dim> scene(Point<dim>(width, 2.25 * a), h, rho,
+  // Optional: the time-step's Courant number, and a no-slip floor (a row of
+  // solid cells under the column: the flow treats solid cells as rigid
+  // no-slip walls), both for the checks of the front lead in doc/flow.md.
+  if (argc > 6)
+    prm.cfl = std::atof(argv[6]);
+  const bool no_slip_floor = argc > 5 && std::string(argv[5]) == "noslip";
+  AssertThrow(argc <= 5 || no_slip_floor || std::string(argv[5]) == "slip",
+              ExcMessage("floor must be slip or noslip, not " + std::string(argv[5])));
+  const double   y0 = no_slip_floor ? h : 0.; // the floor
+  FlowScene<dim> scene(Point<dim>(width, 2.25 * a + y0), h, rho,
                        [&](const Point<dim> &x) { return x[0] < a && x[1] < 2 * a; },
                        prm, comm);
-  std::vector<double> t = {0}, z = {a}, H = {2 * a};
-  // Residual column height: the highest fluid point in the first cell
-  // column that is connected to the floor through that column (cell rows
-  // holding fluid points, gaps of at most one empty row), so that spray
-  // or a detached drop flying past the wall does not count.
-  const unsigned int  n_rows = static_cast<unsigned int>(std::ceil(2.25 * a / h - 1e-9));
-  std::vector<double> row_top(n_rows);
-  const auto          column_top = [&]() {
-    std::fill(row_top.begin(), row_top.end(), -1.);
+  if (no_slip_floor)
+    {
+      scene.flow.reset();
+      scene.points_prm.substrate_top = y0;
+      typename MaterialPoints<dim>::Parameters::Body column;
+      column.a = Point<dim>(0., y0);
+      column.b = Point<dim>(a, 2 * a + y0);
+      scene.points_prm.bodies.push_back(column);
+      scene.points = std::make_unique<MaterialPoints<dim>>(scene.points_prm,
+                                                           scene.material, scene.grid);
+      scene.points->create(300.);
+      scene.flow = std::make_unique<IncompressibleFlow<dim>>(prm, scene.material,
+                                                             scene.grid, *scene.points);
+    }
+  std::vector<double> t = {0}, z = {a}, H = {2 * a}, z_film = {a};
+
+  // Smoothed volume density of the fluid points in a strip of width 2h
+  // along a wall (direction d across it, the wall at x_d = 0 or y0),
+  // sampled every h/8 along the wall:
+  //   rho(l) = sum_p V_p w(x_d) K(l - x_l) / h,
+  // w = max(0, 1 - x_d/(2h)) across the strip (with its mirror image in
+  // the wall: a tent of half-width 2h centred on the wall),
+  // K(r) = max(0, 1 - |r|/h)/h along it, plus the mirror images in the
+  // walls at both ends, so that evenly spread points (spacing h/2) give
+  // rho = 1 inside and exactly 1/2 at the edge of their volumes.
+  const double dy       = h / 8;
+  const auto   is_fluid = [](const auto &p) {
+    return p.get_properties()[MaterialPoints<dim>::PropertyIndex::state] ==
+           MaterialPoints<dim>::fluid;
+  };
+  const auto strip_density = [&](const unsigned int d, const double length) {
+    const unsigned int  l = 1 - d;
+    std::vector<double> rho_s(static_cast<std::size_t>(std::ceil(length / dy - 1e-9)) + 1);
     for (const auto &p : scene.points->particle_handler())
       {
-        const auto x = p.get_location();
-        if (x[0] < h)
+        auto x = p.get_location();
+        x[1] -= y0;
+        if (x[d] < 2 * h && is_fluid(p))
           {
-            const unsigned int j = std::min(n_rows - 1, unsigned(x[1] / h));
-            row_top[j]           = std::max(row_top[j], x[1]);
+            const double w = p.get_properties()[MaterialPoints<dim>::PropertyIndex::volume] *
+                             (1 - x[d] / (2 * h)) / (h * h);
+            const long k0 = std::max(0L, long(std::floor((x[l] - h) / dy)));
+            const long k1 = std::min(long(rho_s.size()) - 1, long(std::ceil((x[l] + h) / dy)));
+            for (long k = k0; k <= k1; ++k)
+              rho_s[k] += w * (std::max(0., 1 - std::abs(k * dy - x[l]) / h) +
+                               std::max(0., 1 - (k * dy + x[l]) / h) +
+                               std::max(0., 1 - (2 * length - k * dy - x[l]) / h));
           }
       }
-    Utilities::MPI::max(row_top, comm, row_top);
-    double       top = 0;
+    Utilities::MPI::sum(rho_s, comm, rho_s);
+    return rho_s;
+  };
+  // The level where rho falls to 1/2 for the last time before a gap of
+  // more than 2h with rho < 1/2 (spray, a detached drop), the crossing
+  // interpolated linearly between the samples.
+  const auto level = [&](const std::vector<double> &rho_s) {
+    long         wet = -1;
     unsigned int gap = 0;
-    for (unsigned int j = 0; j < n_rows && gap < 2; ++j)
-      if (row_top[j] >= 0)
-        top = row_top[j], gap = 0;
+    for (std::size_t k = 0; k < rho_s.size() && gap <= 16; ++k)
+      if (rho_s[k] >= 0.5)
+        wet = k, gap = 0;
       else
         ++gap;
-    return top;
+    if (wet < 0)
+      return 0.;
+    if (wet + 1 >= long(rho_s.size()))
+      return wet * dy;
+    return wet * dy + (rho_s[wet] - 0.5) / (rho_s[wet] - rho_s[wet + 1]) * dy;
   };
+  // Residual column height at the wall: the level of the wall strip
+  // (x < 2h). Why this measure (the experiment reads the water level at
+  // the wall): the free-slip wall is a symmetry plane, so the surface meets
+  // it with zero slope and a strip of width O(h) sees the level at x = 0
+  // up to O(h^2); rho moves continuously with the points (a point enters
+  // and leaves the strip and the kernel with zero weight), so the level
+  // does not jump by a point spacing when the top point moves off the wall
+  // as the earlier measure (highest point in the first cell column plus
+  // s/2; one spacing is 4.5 % of the last height at a/32) did; and the
+  // half-density level reads the surface, not the volume, so points spread
+  // a few per cent apart inside the column (they are: a volume count of
+  // the strip read 5 % low) do not lower it.
+  const auto column_height = [&]() { return level(strip_density(0, 2.25 * a)); };
+  // Diagnostic front (log only): the level of the floor strip (y < 2h),
+  // which ignores a leading film thinner than ~0.6 h (rho < 1/2).
+  const auto film_front = [&]() { return level(strip_density(1, width)); };
   double              time = 0;
   while (time < t_end)
     {
@@ -129,8 +211,11 @@ main(int argc, char **argv)
       scene.flow->step(dt);
       time += dt;
       t.push_back(time);
-      z.push_back(scene.max_over_points([](const Point<dim> &x, auto) { return x[0]; }) + s / 2);
-      H.push_back(column_top() + s / 2);
+      z.push_back(scene.max_over_points([](const Point<dim> &x, auto v) {
+        return v[MaterialPoints<dim>::PropertyIndex::state] == MaterialPoints<dim>::fluid ? x[0] : 0.;
+      }) + s / 2);
+      z_film.push_back(film_front());
+      H.push_back(column_height());
     }
 
   // Fluid area: cells holding a fluid point, against the column a x 2a
@@ -141,18 +226,38 @@ main(int argc, char **argv)
   n_fluid = Utilities::MPI::sum(n_fluid, comm);
   // Volume-based fluid area: sum over cells of min(V_c/h^2, 1), V_c the
   // volume of the points in the cell (1 when no cell is over-filled).
-  double clipped = 0;
+  // Split into the interior cells (all 3 x 3 neighbours inside the box hold
+  // a point) and the surface cells: the over-filling of interior cells is
+  // the +-1 point noise of a disordered (not lattice) arrangement, balanced
+  // by as many under-filled interior cells, which the flow treats as full
+  // all the same. So the fluid area the grid sees is the number of
+  // interior cells plus the clipped fill of the surface cells.
+  double clipped = 0, grid_area = 0, excess_interior = 0, deficit_interior = 0;
   {
-    std::map<std::pair<long, long>, double> V;
+    const long          nx = std::lround(width / h), ny = std::lround(2.25 * a / h);
+    std::vector<double> V(nx * ny);
     for (const auto &p : scene.points->particle_handler())
+      if (is_fluid(p))
       {
         const auto x = p.get_location();
-        V[{long(std::floor(x[0] / h)), long(std::floor(x[1] / h))}] +=
-          p.get_properties()[MaterialPoints<dim>::PropertyIndex::volume];
+        const long i = std::min(nx - 1, long(x[0] / h)), j = std::min(ny - 1, long((x[1] - y0) / h));
+        V[j * nx + i] += p.get_properties()[MaterialPoints<dim>::PropertyIndex::volume] / (h * h);
       }
-    for (const auto &[c, v] : V)
-      clipped += std::min(v / (h * h), 1.);
-    clipped = Utilities::MPI::sum(clipped, comm);
+    Utilities::MPI::sum(V, comm, V);
+    for (long j = 0; j < ny; ++j)
+      for (long i = 0; i < nx; ++i)
+        if (V[j * nx + i] > 0)
+          {
+            bool interior = true;
+            for (long jj = std::max(0L, j - 1); jj <= std::min(ny - 1, j + 1); ++jj)
+              for (long ii = std::max(0L, i - 1); ii <= std::min(nx - 1, i + 1); ++ii)
+                interior = interior && V[jj * nx + ii] > 0;
+            const double v = V[j * nx + i];
+            clipped += std::min(v, 1.);
+            grid_area += interior ? 1. : std::min(v, 1.);
+            excess_interior += interior ? std::max(v - 1, 0.) : 0.;
+            deficit_interior += interior ? std::max(1 - v, 0.) : 0.;
+          }
   }
   // The metal area of the heat equation: sub-cell occupancy (2 x 2
   // sub-cells per cell, one point each when evenly spread).
@@ -200,17 +305,30 @@ main(int argc, char **argv)
                    std::round(hs * 100) / 100, 3);
     }
   checks.print("tabulated front points compared", n_front);
+  // The front without a leading film thinner than ~0.6 h, to the log.
+  double err_film = 0;
+  for (unsigned int i = 0; i < n_front; ++i)
+    err_film = std::max(err_film, std::abs(interpolate(t, z_film, front[i].first / std::sqrt(2 * g / a)) / a -
+                                           front[i].second) / front[i].second);
   // The step count and the final fluid area go to the log (stderr), not to
   // the compared output: with point shifting on, a relative change of 1e-12
   // in the shifting coefficient (or the order of a parallel sum) moves them
   // by one step and 0.01 (measured at a/32), like any round-off in this
   // splashing flow; the gated figures above are far from their limits.
   if (Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
-    std::cerr << "fluid steps = " << scene.flow->statistics().steps
+    std::cerr << "max relative deviation from experiment of the front where the "
+                 "floor film is thicker than ~0.6 h (rho = 1/2 on the floor strip) = "
+              << err_film
+              << "\nfluid steps = " << scene.flow->statistics().steps
               << "\nfluid-cell area / column area 2a^2 at the end = "
               << n_fluid * h * h / (2 * a * a)
               << "\nvolume-based fluid area sum min(V_c/h^2, 1) / column area = "
               << clipped * h * h / (2 * a * a)
+              << " (interior cells: over-filling " << excess_interior * h * h / (2 * a * a)
+              << ", under-filling " << deficit_interior * h * h / (2 * a * a)
+              << ")\nfluid area seen by the grid (interior cells + clipped "
+                 "fill of the surface cells) / column area = "
+              << grid_area * h * h / (2 * a * a)
               << "\nmetal area (sub-cell occupancy, alpha of the heat "
                  "equation) / column area at the end = "
               << metal * h * h / (2 * a * a)
@@ -222,8 +340,8 @@ main(int argc, char **argv)
                  std::to_string(T_front).substr(0, 4) + ")",
                std::round(err_front * 100) / 100, 2);
   // Over the whole range the 10 % target is met from a/32 on (with the
-  // volume correction: 0.08 at a/32, 0.09 at a/64); gated there. At a/16
-  // (0.18) it is printed only.
+  // volume correction: 0.09 at a/32, 0.08 at a/64); gated there. At a/16
+  // (0.14) it is printed only.
   const std::string worst_height =
     "worst at t sqrt(g/a) = " + std::to_string(T_height).substr(0, 4) + ")";
   if (n_per_a >= 32)
@@ -279,21 +397,42 @@ main(int argc, char **argv)
       for (const auto &[T, Z] : z_sim)
         if (z_ref.count(T))
           ez = std::max(ez, std::abs(Z - z_ref[T]) / z_ref[T]), ++nz;
+      double eh_early = 0;
       for (const auto &[T, H] : h_sim)
         if (h_ref.count(T))
-          eh = std::max(eh, std::abs(H - h_ref[T]) / h_ref[T]), ++nh;
+          {
+            const double e = std::abs(H - h_ref[T]) / h_ref[T];
+            eh = std::max(eh, e), ++nh;
+            if (T <= 2.21)
+              eh_early = std::max(eh_early, e);
+          }
       checks.print("front points compared with the converged curve", nz);
       checks.print("height points compared with the converged curve", nh);
       checks.at_most("max relative front deviation from the converged curve",
                      std::round(ez * 1000) / 1000, 0.01);
-      // Target 0.01 (issue): 0.014 measured; relative changes of 1e-6 in
-      // the shifting or correction coefficient move it within 0.014-0.033
-      // (the late heights are sensitive to round-off: one point spacing is
-      // 4.5 % of the last height at a/32), so the gate is 0.05 (was 0.16
-      // without the volume correction, then not gated).
+      // Target 0.01 (issue): 0.015 measured, not met. It is at the
+      // round-off scatter of the late heights: with the smooth height
+      // measure, relative changes of 1e-6 in the shifting or correction
+      // coefficient move it within 0.011-0.019 at a/32, and the a/64 curve
+      // itself by up to 0.023 (t sqrt(g/a) = 4.2; after the surge hits the
+      // far wall at t sqrt(g/a) ~ 2.5 the sloshing amplifies round-off).
+      // So the gate is 0.03 (it was 0.05 with the highest-point measure,
+      // whose scatter was 0.014-0.033). Before the surge reaches the far
+      // wall (t sqrt(g/a) <= 2.21) a/32 and a/64 agree within 0.010
+      // (0.009-0.010 under the same perturbations): gated at 0.015.
+      // Printed rounded up to 0.01: with the continuous height measure
+      // the round-off difference between 1 and 2 ranks shows in the late
+      // heights (0.015 on 1 rank, 0.017 on 2); the exact figure goes to
+      // the log.
+      checks.at_most("max relative height deviation from the converged curve, "
+                     "rounded up to 0.01 (target 0.01, not met)",
+                     std::ceil(eh * 100) / 100, 0.03);
+      if (Utilities::MPI::this_mpi_process(comm) == 0)
+        std::cerr << "max relative height deviation from the converged curve = " << eh
+                  << ", for t sqrt(g/a) <= 2.21: " << eh_early << std::endl;
       checks.at_most("max relative height deviation from the converged curve "
-                     "(target 0.01, not met)",
-                     std::round(eh * 1000) / 1000, 0.05);
+                     "for t sqrt(g/a) <= 2.21 (before the surge hits the far wall)",
+                     std::round(eh_early * 1000) / 1000, 0.015);
     }
   return checks.exit_code();
 }
