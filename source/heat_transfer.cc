@@ -64,9 +64,14 @@ namespace femp
     prm.declare_entry("Laser deposition", "first surface",
                       Patterns::Selection("first surface|gradient"),
                       "How the laser's surface flux q enters the cells. 'first "
-                      "surface': in each vertical column of cells, q/h goes "
-                      "into the topmost cell with alpha >= 1/2, where the beam "
-                      "first meets metal (absorbed power = eta P). 'gradient': "
+                      "surface': in each vertical column of cells, q goes into "
+                      "the surface cells where the beam first meets metal "
+                      "(from the cell below the topmost one with alpha >= 1/2 "
+                      "upward), shared in proportion to the loss weight "
+                      "w |grad alpha| so that laser and surface losses act on "
+                      "the same cells (absorbed power = eta P; q/h into the "
+                      "topmost alpha >= 1/2 cell where the column has no "
+                      "surface cell there). 'gradient': "
                       "q 2 rho c/(rho_m c_m + rho_g c_g) |grad alpha| in every "
                       "surface cell, as written in eq. (1); in a powder bed "
                       "this heats every grain surface under the beam, also "
@@ -211,6 +216,12 @@ namespace femp
     , mat(material)
     , laser(laser)
     , grid(grid)
+    , evap_pref(prm.evaporation_coefficient * prm.latent_heat_evaporation *
+                prm.molar_mass /
+                std::sqrt(2 * M_PI * prm.molar_mass * gas_constant) *
+                prm.ambient_pressure)
+    , evap_exp(prm.latent_heat_evaporation * prm.molar_mass /
+               (gas_constant * prm.evaporation_temperature))
   {}
 
 
@@ -437,12 +448,6 @@ namespace femp
   {
     const double Tref  = prm.reference_temperature;
     const double Tref4 = Tref * Tref * Tref * Tref;
-    const double evap_pref =
-      prm.evaporation_coefficient * prm.latent_heat_evaporation *
-      prm.molar_mass / std::sqrt(2 * M_PI * prm.molar_mass * gas_constant) *
-      prm.ambient_pressure;
-    const double evap_exp = prm.latent_heat_evaporation * prm.molar_mass /
-                            (gas_constant * prm.evaporation_temperature);
     // Evaporation; exp() of exponents below -40 (relative 4e-18 of the flux
     // at T_v) is skipped.
     const double exponent = evap_exp * (T - prm.evaporation_temperature) / T;
@@ -973,14 +978,20 @@ namespace femp
       enthalpy ? a * mat.density * mat.specific_heat.min_value() +
                    (1 - a) * mat.gas_density * mat.gas_specific_heat :
                  rc;
+    // Start from the guess, or without the enthalpy tables from the
+    // linearization about Tc (one Newton step; exact for the convection
+    // part, within round-off for cold cells, whose loss is nearly linear).
     double       slope = 0;
     const double f0    = f(Tc, slope);
     const double Tfar  = Tc - f0 / c_min;
     double       lo = std::min(Tc, Tfar) - 1e-9, hi = std::max(Tc, Tfar) + 1e-9;
     lo              = std::max(lo, 1e-3 * Tc);
-    double       T  = std::clamp(guess, lo, hi);
-    const double tol =
-      1e-12 * (std::abs(H0) + std::abs(dH) + std::abs(f0)) + 1e-300;
+    double       T  = std::clamp(enthalpy ? guess : Tc - f0 / slope, lo, hi);
+    // Residual tolerance (J/m^3): the loss is booked at the T returned, so
+    // the balance holds to this residual per cell.
+    const double tol = 1e-12 * (std::abs(H0) + c_min * Tc + std::abs(dH) +
+                                std::abs(f0)) +
+                       1e-300;
     for (unsigned int it = 0; it < 100; ++it)
       {
         const double r = f(T, slope);

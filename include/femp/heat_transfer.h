@@ -221,6 +221,9 @@ namespace femp
     const Material &           mat;
     const Laser<dim> &         laser;
     const BackgroundGrid<dim> &grid;
+    /// Evaporation flux constants: q_evap = evap_pref / sqrt(T)
+    /// exp(evap_exp (T - T_v) / T).
+    const double evap_pref, evap_exp;
 
     std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
     std::vector<std::uint8_t>  is_source;
