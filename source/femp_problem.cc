@@ -532,7 +532,7 @@ namespace femp
             << "): laser " << result.laser << ", surface losses "
             << result.losses << " (evaporation " << e.evaporation
             << ", convection " << e.convection << ", radiation " << e.radiation
-            << " at the start of each step), fixed faces " << result.boundary
+            << " at the end of each step), fixed faces " << result.boundary
             << ", stored " << result.stored << "; balance error "
             << std::abs(result.laser + result.boundary - result.losses -
                         result.stored) /

@@ -5,13 +5,17 @@
 //     - [q_evap(T) + h (T - T_ref) + sigma_SB eps (T^4 - T_ref^4)]
 //       * 2 rho c / (rho_m c_m + rho_g c_g) |grad alpha| + q_laser
 //
-// Forward Euler in time; 5/7-point central differences with harmonic-mean
+// Forward Euler in time, except the surface losses, which are taken fully
+// implicitly in the cells that carry them (a local Newton iteration per
+// surface cell); 5/7-point central differences with harmonic-mean
 // face conductivities; first-order upwind convection with a cell-centred
 // velocity (none unless a flow solver or a prescribed field provides one;
 // in partly filled cells at the rate 1/alpha, the part above 1 implicit);
 // latent heat by a local iteration per cell over the solid, mushy and liquid
 // branches of the enthalpy relation (METHOD sec. 2); surface losses and the
-// laser deposited through |grad alpha| with the density weighting above.
+// laser deposited through |grad alpha| with the density weighting above (the
+// default 'first surface' laser only into the cells where the vertical beam
+// first meets metal, shared in proportion to that weight).
 // Cells without metal (alpha = 0) are not solved and carry no flux.
 #ifndef femp_heat_transfer_h
 #define femp_heat_transfer_h
@@ -82,9 +86,6 @@ namespace femp
       double convection  = 0; ///< lost by surface convection
       double radiation   = 0; ///< lost by radiation
       double boundary    = 0; ///< entered through fixed-temperature faces
-      /// Losses of the implicit (linearized) part of the step; included in
-      /// total_losses().
-      double implicit_losses = 0;
       /// Created by the upwind convection term (sum of rho c dT V over the
       /// cells): zero for a conservative scheme; not a loss, reported apart.
       double advection = 0;
@@ -220,6 +221,9 @@ namespace femp
     const Material &           mat;
     const Laser<dim> &         laser;
     const BackgroundGrid<dim> &grid;
+    /// Evaporation flux constants: q_evap = evap_pref / sqrt(T)
+    /// exp(evap_exp (T - T_v) / T).
+    const double evap_pref, evap_exp;
 
     std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
     std::vector<std::uint8_t>  is_source;
@@ -227,7 +231,9 @@ namespace femp
     std::vector<std::size_t>   flagged_rows;
     /// Per x-row of the local box: 1 if any cell of the row holds metal.
     std::vector<std::uint8_t>  row_has_metal;
-    std::vector<double> laser_density, loss_coefficient;
+    /// Laser density of the last step, W/m^3; surface-loss weight
+    /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
+    std::vector<double> laser_density, loss_weight;
     const std::array<std::vector<double>, dim> *velocity = nullptr;
     std::array<std::vector<double>, dim>        prescribed;
 
@@ -237,8 +243,15 @@ namespace femp
       double        grad_alpha;  ///< |grad alpha|, 1/m
     };
     std::vector<SurfaceCell> surface;
-    /// Owned cells where the vertical beam first meets metal.
-    std::vector<std::uint32_t> first_surface;
+    /// Owned cells where the vertical beam first meets metal, with their
+    /// share (1/m) of the column's flux q: the cell gets q * share per volume,
+    /// the shares of a column sum to 1/h.
+    struct LaserCell
+    {
+      std::uint32_t index;
+      double        share;
+    };
+    std::vector<LaserCell> first_surface;
 
     struct FixedFace
     {
@@ -276,14 +289,30 @@ namespace femp
     /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
     double
     enthalpy_density(const double a, const double T) const;
-    /// Solve the local enthalpy equation of one cell (see advance()).
+    /// Surface loss flux q_evap + q_conv + q_rad at @p T (W/m^2), its parts
+    /// and its derivative dq/dT.
+    void
+    surface_loss(const double T,
+                 double &     q_evap,
+                 double &     q_conv,
+                 double &     q_rad,
+                 double &     dq_dT) const;
+    /// New temperature of a cell with metal fraction @p a that starts from
+    /// @p Tc, gamma @p gc and receives the explicit enthalpy change @p dH
+    /// (J/m^3) and loses dtW q(T) with the loss q at the new temperature
+    /// (fully implicit; dtW = dt w |grad alpha|): solves
+    ///   H(T) - H(Tc) + dtW q(T) = dH,
+    /// with the enthalpy H of the tables (latent heat included) if
+    /// @p enthalpy, else H(T) - H(Tc) = rc (T - Tc).
     double
-    solve_enthalpy(const double a,
-                   const double Tc,
-                   const double gc,
-                   const double dH,
-                   const double implicit_coefficient,
-                   const double guess) const;
+    solve_cell(const double a,
+               const double Tc,
+               const double gc,
+               const double rc,
+               const double dH,
+               const double dtW,
+               const bool   enthalpy,
+               const double guess) const;
     double
     heat_capacity(const double T, const double a) const
     {
