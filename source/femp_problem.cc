@@ -248,7 +248,10 @@ namespace femp
                                                          *grid, *points, &timer);
         flow->set_liquid_fraction(&heat->liquid_fraction());
         flow->set_temperature(&heat->temperature());
-        heat->set_velocity(&flow->cell_velocity());
+        // Heat moves with the flow either on the points (taken when they
+        // change cells, flow_substeps()) or by upwind convection of T.
+        if (heat_prm.advection_by_melt_flow == "upwind")
+          heat->set_velocity(&flow->cell_velocity());
       }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
     {
@@ -632,6 +635,19 @@ namespace femp
     std::vector<double> alpha = points->metal_fraction();
     const auto &        old   = heat->metal_fraction();
     using P                   = typename MaterialPoints<dim>::PropertyIndex;
+    if (heat_enabled && heat_prm.advection_by_melt_flow == "points")
+      {
+        // The points carry the heat: every cell whose points came from
+        // cells at other temperatures takes their mean specific enthalpy
+        // (cells that gained metal included).
+        const auto mean_e = points->volume_mean_over_points(
+          heat->temperature(),
+          [this](const double T) { return heat->specific_enthalpy(T); });
+        heat->set_metal_fraction(alpha);
+        heat->take_point_enthalpy(mean_e);
+        result.moved_points += heat->stored_enthalpy() - H_before;
+        return;
+      }
     // (With a frozen temperature the field keeps its initial values.)
     if (heat_enabled)
       {

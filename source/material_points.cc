@@ -649,6 +649,40 @@ namespace femp
   }
 
   template <int dim>
+  std::vector<std::pair<std::uint32_t, double>>
+  MaterialPoints<dim>::volume_mean_over_points(
+    const std::vector<double> &          T,
+    const std::function<double(double)> &e) const
+  {
+    // Only cells where some point brought another temperature need the
+    // sums; a comparison per point finds them (~1 ns), e is evaluated
+    // only there.
+    using P = PropertyIndex;
+    std::vector<std::pair<std::uint32_t, double>> mean;
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      {
+        const double Tc  = T[occupied[c].first];
+        bool         any = false;
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          any = any || point_properties[k][P::temperature] != Tc;
+        if (!any)
+          continue;
+        const double ec = e(Tc);
+        double       sv = 0, se = 0;
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          {
+            const double *const v  = point_properties[k];
+            const double        Tp = v[P::temperature];
+            sv += v[P::volume];
+            se += v[P::volume] * (Tp != Tc ? e(Tp) - ec : 0.);
+          }
+        if (sv > 0)
+          mean.emplace_back(occupied[c].first, ec + se / sv);
+      }
+    return mean;
+  }
+
+  template <int dim>
   std::vector<double>
   MaterialPoints<dim>::zone_tags() const
   {

@@ -27,8 +27,10 @@
 #include <femp/laser.h>
 #include <femp/material.h>
 
+#include <cstdint>
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace femp
@@ -58,6 +60,9 @@ namespace femp
       std::map<std::string, double> fixed_temperatures;
       std::string                   laser_deposition = "first surface";
       std::string                   prescribed_velocity;
+      /// 'points' (metal carries its enthalpy on the points) or 'upwind'
+      /// (upwind convection of T with the flow's cell velocity).
+      std::string advection_by_melt_flow = "points";
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -141,6 +146,21 @@ namespace femp
     /// surface cells and the |grad alpha| weights.
     void
     set_metal_fraction(const std::vector<double> &alpha);
+
+    /// Specific enthalpy of the metal at @p T_cell, J/kg: C(T) + L_m
+    /// gamma(T), C the antiderivative of c_m (the relation of the
+    /// phase-change iteration).
+    double
+    specific_enthalpy(const double T_cell) const;
+
+    /// Heat carried by the points: each listed (owned) cell's metal takes
+    /// the given mean specific enthalpy (J/kg) of the points now in it
+    /// (MaterialPoints::volume_mean_over_points()); T and gamma follow from
+    /// the enthalpy relation. Call after set_metal_fraction() with the new
+    /// alpha. Ghosts are updated (collective).
+    void
+    take_point_enthalpy(
+      const std::vector<std::pair<std::uint32_t, double>> &mean_e);
 
     /// Cell-centred velocity, one array per direction over the local box
     /// (with ghosts); nullptr switches convection off.

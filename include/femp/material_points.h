@@ -189,6 +189,17 @@ namespace femp
     void
     cells_to_points(const std::vector<double> &T);
 
+    /// Heat carried by the points (Heat transfer/Advection by melt flow =
+    /// points): for each owned cell holding a point whose temperature
+    /// differs from the cell's @p T, the pair (cell index, volume-weighted
+    /// mean of @p e over the cell's points), e evaluated at each point's
+    /// temperature (the temperature of the cell it came from). Cells whose
+    /// points all have the cell's temperature are left out: their mean is
+    /// e(T) of the cell.
+    std::vector<std::pair<std::uint32_t, double>>
+    volume_mean_over_points(const std::vector<double> &         T,
+                            const std::function<double(double)> &e) const;
+
     /// Zone tag per cell of the local box, from the states of its points:
     /// 0 gas (no points), 1 powder, 2 solid, 3 fluid (any fluid point).
     std::vector<double>
