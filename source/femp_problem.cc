@@ -567,7 +567,8 @@ namespace femp
               << double(st.cg_iterations) / std::max(1u, st.steps)
               << " per solve, at most " << st.max_iterations
               << "), " << st.halvings << " steps redone as halves, points "
-              << "re-sorted in " << st.resorts << " steps, "
+              << "re-sorted in " << st.resorts << " steps (" << st.global_sorts
+              << " with deal.II's global sort), "
               << st.n_fluid_cells << " fluid cells and max speed "
               << st.max_point_speed << " m/s at the end" << std::endl;
         if (st.volume_iterations > 0 || st.volume_skipped > 0)

@@ -412,10 +412,25 @@ namespace femp
       std::fill(mom[d].begin(), mom[d].end(), 0.);
     const auto &handler = points.particle_handler();
     const bool  count_volume = prm.volume_correction > 0;
-    for (const auto &[idx, cell] : points.occupied_cells())
+    const auto &occupied     = points.occupied_cells();
+    for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-        bool              any_fluid = false;
-        double            V_cell    = 0;
+        // Cells without a fluid point (powder, substrate) are found from
+        // the cached property arrays; only fluid cells need the positions.
+        const auto &[idx, cell] = occupied[c];
+        bool        any_fluid   = false;
+        double      V_cell      = 0;
+        for (const double *v : points.cell_point_properties(c))
+          {
+            V_cell += v[P::volume];
+            any_fluid = any_fluid || v[P::state] == MaterialPoints<dim>::fluid;
+          }
+        type[idx] = any_fluid ? fluid : solid;
+        if (count_volume)
+          occupancy[idx] = V_cell; // read only for fluid cells
+        if (!any_fluid)
+          continue;
+        fluid_cells.push_back(idx);
         const auto        ijk       = grid.global_index(idx);
         const std::size_t n0        = grid.first_node_of_cell(idx);
         double *          nm[n_corners];
@@ -429,11 +444,8 @@ namespace femp
         for (const auto &particle : handler.particles_in_cell(cell))
           {
             const auto v = particle.get_properties();
-            if (count_volume)
-              V_cell += v[P::volume];
             if (v[P::state] != MaterialPoints<dim>::fluid)
               continue;
-            any_fluid          = true;
             const Point<dim> &x = particle.get_location();
             // Tent weights of the 2^dim corners (product over directions).
             double w[n_corners];
@@ -448,11 +460,6 @@ namespace femp
                   *nu[d][k] += w[k] * vel[d];
               }
           }
-        type[idx] = any_fluid ? fluid : solid;
-        if (count_volume)
-          occupancy[idx] = V_cell; // read only for fluid cells
-        if (any_fluid)
-          fluid_cells.push_back(idx);
       }
     grid.update_ghosts(type);
 
@@ -1325,6 +1332,9 @@ namespace femp
     const auto & nc   = grid.n_cells();
     const double beta = prm.flip_fraction;
     auto &       handler = points.particle_handler();
+    // Cells where a point left (increasing): only their points are checked
+    // by the re-sort, not every point of the powder and the substrate.
+    std::vector<std::uint32_t> left_cells;
     // The point loop is compiled four times (with and without the point
     // shifting and the volume correction), so that either costs nothing
     // when it is off.
@@ -1346,6 +1356,7 @@ namespace femp
         double G[2 * dim] = {};
         if constexpr (volume_c)
           volume_faces(idx, G);
+        bool cell_left = false;
         for (auto &particle : handler.particles_in_cell(cell))
           {
             const auto v = particle.get_properties();
@@ -1421,8 +1432,11 @@ namespace femp
             particle.set_location(x);
             if (!left)
               particle.set_reference_location(ref);
-            moved = moved || left;
+            cell_left = cell_left || left;
           }
+        if (cell_left)
+          left_cells.push_back(idx);
+        moved = moved || cell_left;
       }
     return std::make_pair(moved, umax);
     };
@@ -1438,10 +1452,15 @@ namespace femp
     if (Utilities::MPI::logical_or(moved, grid.communicator()))
       {
         Section s(timer, "flow: re-sort points");
-        // Points that stayed on their rank are moved cell by cell; a point
-        // that left the rank needs deal.II's global sort of all points.
-        if (!points.relocate_points())
-          points.points_moved();
+        // Points are moved cell by cell, to a neighbour rank where their new
+        // cell is a ghost cell; only a point beyond the ghost layer (not
+        // possible with the one-cell step limit) needs deal.II's global sort
+        // of all points.
+        if (!points.relocate_points(&left_cells))
+          {
+            points.points_moved();
+            ++stats.global_sorts;
+          }
         ++stats.resorts;
       }
   }

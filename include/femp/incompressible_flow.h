@@ -143,6 +143,9 @@ namespace femp
       unsigned int  last_iterations  = 0;
       unsigned int  max_iterations   = 0;
       unsigned int  resorts          = 0; ///< steps in which points changed cell
+      /// of these, steps that needed deal.II's sort of all points (~0.5 us
+      /// per point): a point beyond the ghost layer
+      unsigned int  global_sorts     = 0;
       unsigned int  halvings         = 0; ///< steps redone as two halves
       double        max_point_speed  = 0; ///< m/s, after the last step
       unsigned long n_fluid_cells    = 0; ///< global, last step
