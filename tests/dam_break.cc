@@ -40,7 +40,7 @@
 // 1.29, +5 / +6 %, gated at 10 %; the lead there is a nearly constant
 // offset of 0.27-0.29 in T (~15 ms), printed. The
 // height is within 10 % of the experiment up to t sqrt(g/a) = 2.7 (gated)
-// and over the whole tabulated range at a/32 (9 %) and a/64 (8 %) (gated
+// and over the whole tabulated range at a/32 (8 %) and a/64 (9 %) (gated
 // at 10 % from a/32 on), 14 % at a/16 (printed). a/32 vs a/64 heights: 1.5 %
 // (1.7 % on 2 ranks; target 1 %, not met; gated at 3 %: the round-off
 // scatter of the late sloshing heights is 1.1-1.9 % at a/32, up to 2.3 %
@@ -344,7 +344,7 @@ main(int argc, char **argv)
                  std::to_string(T_front).substr(0, 4) + ")",
                std::round(err_front * 100) / 100, 2);
   // Over the whole range the 10 % target is met from a/32 on (with the
-  // volume correction: 0.09 at a/32, 0.08 at a/64); gated there. At a/16
+  // volume correction: 0.08 at a/32, 0.09 at a/64); gated there. At a/16
   // (0.14) it is printed only.
   const std::string worst_height =
     "worst at t sqrt(g/a) = " + std::to_string(T_height).substr(0, 4) + ")";
