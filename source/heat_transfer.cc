@@ -1042,11 +1042,9 @@ namespace femp
         if (alpha[idx] <= 0)
           continue;
         const double Tc = T[idx];
-        const double gc = mat.liquid_fraction(Tc);
-        const double dH =
-          rho * (e - mat.specific_heat.antiderivative(Tc) -
-                 mat.latent_heat_fusion * gc);
-        set_cell_temperature(idx, solve_cell(1., Tc, gc, 0., dH, 0., true, Tc));
+        const double dH = rho * (e - specific_enthalpy(Tc));
+        set_cell_temperature(idx, solve_cell(1., Tc, mat.liquid_fraction(Tc),
+                                             0., dH, 0., true, Tc));
       }
     update_ghosts();
   }
