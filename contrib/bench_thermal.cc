@@ -10,11 +10,11 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/timer.h>
 
-#include <femp/background_grid.h>
-#include <femp/heat_transfer.h>
-#include <femp/laser.h>
-#include <femp/material.h>
-#include <femp/material_points.h>
+#include <femp/grid/background_grid.h>
+#include <femp/heat/heat_transfer.h>
+#include <femp/heat/laser.h>
+#include <femp/base/material.h>
+#include <femp/grid/material_points.h>
 
 #include <algorithm>
 #include <ctime>

@@ -23,8 +23,8 @@
 // included in both: it is part of what a step costs).
 #include <deal.II/base/mpi.h>
 
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include <ctime>
 #include <cmath>

@@ -3,8 +3,8 @@
 #ifndef femp_flow_tools_h
 #define femp_flow_tools_h
 
-#include <femp/incompressible_flow.h>
-#include <femp/material_points.h>
+#include <femp/flow/incompressible_flow.h>
+#include <femp/grid/material_points.h>
 
 #include "test_tools.h"
 

@@ -22,8 +22,8 @@
 // stored enthalpy is conserved to round-off; a mean of temperatures there
 // would create or destroy latent heat.
 
-#include <femp/heat_transfer.h>
-#include <femp/material_points.h>
+#include <femp/heat/heat_transfer.h>
+#include <femp/grid/material_points.h>
 
 #include "test_tools.h"
 

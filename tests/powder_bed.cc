@@ -3,8 +3,8 @@
 // the layer, and the packing fraction reached is printed. Also checks the
 // material-point fill of a bed on the grid: point count against the grain
 // and substrate volumes, and the metal fraction alpha of full cells.
-#include <femp/material_points.h>
-#include <femp/powder_bed.h>
+#include <femp/grid/material_points.h>
+#include <femp/grid/powder_bed.h>
 
 #include "test_tools.h"
 

@@ -8,7 +8,7 @@
 // isotherm T_m = 4, h = 0.05. Half domain (y >= 0, symmetry plane y = 0);
 // far faces held at T0; no latent heat, no losses. The simulated pool
 // length, width and depth at t = 1 must be within 5 % of the closed form.
-#include <femp/melt_pool.h>
+#include <femp/heat/melt_pool.h>
 
 #include "test_tools.h"
 

@@ -3,7 +3,7 @@
 // 120 um jump at 12 m/s with the laser off, 60 um on at 1 m/s, then off.
 // Checks the beam position and on/off state along the path, and that the
 // absorbed energy equals eta P times the time the laser is on (1 %).
-#include <femp/laser.h>
+#include <femp/heat/laser.h>
 
 #include "scene_driver.h"
 #include "test_tools.h"

@@ -2,7 +2,7 @@
 #ifndef femp_scene_driver_h
 #define femp_scene_driver_h
 
-#include <femp/femp_problem.h>
+#include <femp/app/femp_problem.h>
 
 #include <string>
 #include <fstream>

@@ -21,7 +21,7 @@
 //    (issue 3); the scalar and the SIMD kernels agree.
 #include <deal.II/base/mpi.h>
 
-#include <femp/constitutive.h>
+#include <femp/solid/constitutive.h>
 
 #include "test_tools.h"
 

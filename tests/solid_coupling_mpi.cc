@@ -15,8 +15,8 @@
 // a horizontal part) puts FE elements on ranks that do not own their grid
 // cells; it is run on all ranks and again on one rank alone
 // (MPI_COMM_SELF), and the results must agree to round-off.
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include "test_tools.h"
 

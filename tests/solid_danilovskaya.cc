@@ -28,8 +28,8 @@
 // x_B = 0.51 m in its FE part), and the
 // all-MPM run with the FLIP velocity transfer (not checked: it misses the
 // 5 % target; APIC is the default, see doc/solid.md).
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include "test_tools.h"
 

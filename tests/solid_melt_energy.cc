@@ -23,8 +23,8 @@
 // 3.0).
 // Runs on 1 and 2 ranks against one output. Optional argument: a directory
 // for the energy files of both runs.
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include "test_tools.h"
 

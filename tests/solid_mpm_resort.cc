@@ -12,8 +12,8 @@
 // zone in one step, beyond what its rank sees on two ranks: the run must
 // stop with a diagnostic (SolidStress counts the solid points at every
 // gather and re-sort). Runs on 1 and 2 ranks against one output.
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include "test_tools.h"
 

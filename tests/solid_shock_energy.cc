@@ -27,8 +27,8 @@
 // "nomelt", "free" (no boundary conditions), "b1=<bulk viscosity>",
 // "sf=<safety factor>", "hg=<hourglass coefficient>", "ztop=<top of the
 // FE zone, m>", and a directory for the energy file (any other argument).
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include "test_tools.h"
 

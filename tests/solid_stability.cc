@@ -12,8 +12,8 @@
 // 2. A solid step above the elastic limit (forced past the input check)
 //    blows up; the run must stop with a message naming the solid step and
 //    the location instead of carrying non-finite values.
-#include <femp/material_points.h>
-#include <femp/solid_stress.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
 
 #include "test_tools.h"
 

@@ -6,10 +6,10 @@
 
 #include <deal.II/base/mpi.h>
 
-#include <femp/background_grid.h>
-#include <femp/heat_transfer.h>
-#include <femp/laser.h>
-#include <femp/material.h>
+#include <femp/grid/background_grid.h>
+#include <femp/heat/heat_transfer.h>
+#include <femp/heat/laser.h>
+#include <femp/base/material.h>
 
 #include <cmath>
 #include <iomanip>

@@ -1,0 +1,357 @@
+// femp: melt-pool flow by the improved incompressible material point method
+// (paper sec. 2.3, eqs. 3-4; METHOD sec. 3; ref. [11]).
+//
+// Fluid material points carry mass and velocity; each fluid step maps them
+// to the nodes of the background grid (P2G, bilinear/trilinear tent
+// weights), predicts the nodal velocity with gravity, viscosity (explicit)
+// and the Darcy damping of the mushy zone (implicit),
+//   u* = (u + dt f/rho) / (1 + dt K_c (1-gamma)^2 / ((gamma^3 + eps0) rho)),
+// solves the pressure Poisson equation div(dt/rho grad p) = div u* on the
+// centres of the fluid cells (5-point/7-point stencil, CG + Trilinos ML
+// AMG; rows over a band of cells round the fluid, so that the graph and the
+// hierarchy are reused while the fluid stays inside the band), corrects the nodal velocity u = u* - dt/rho grad p, and updates
+// the points with a FLIP/PIC blend before moving them with the nodal
+// velocity (explicit advection). Optionally (Melt flow/Volume correction)
+// the points are also moved by grad(psi), lap(psi) = c (V_c/h^dim - 1) with
+// psi = 0 at the free surface, so that bunched points spread again and the
+// fluid volume of the cells is kept (doc/flow.md, "Volume correction").
+//
+// Surface tension enters through the free-surface condition: the Dirichlet
+// pressure on the faces between fluid and gas cells is the capillary
+// pressure p_s = sigma div(n) (n the outward normal of the smoothed metal
+// fraction alpha, METHOD sec. 3), the sharp-interface form of the CSF term
+// sigma kappa n |grad alpha| of eq. (3); the recoil pressure
+// p_r = zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] adds to it. The Marangoni
+// stress dsigma/dT (grad T - (n.grad T) n) is a traction on the faces
+// between fluid and gas cells, each face weighted by |n_d| so that the
+// staircase of faces carries the area of the smoothed interface; it is
+// spread to the face's nodes.
+#ifndef femp_incompressible_flow_h
+#define femp_incompressible_flow_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/tensor.h>
+#include <deal.II/base/timer.h>
+#include <deal.II/lac/trilinos_precondition.h>
+#include <deal.II/lac/trilinos_sparse_matrix.h>
+#include <deal.II/lac/trilinos_vector.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/base/material.h>
+#include <femp/grid/material_points.h>
+
+#include <array>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class IncompressibleFlow
+  {
+  public:
+    struct Parameters
+    {
+      double         viscosity = 6e-3; ///< mu, Pa s
+      Tensor<1, dim> gravity;          ///< g, m/s^2 (default: -9.81 vertical)
+      double         darcy_constant = 1e8;  ///< K_c, kg/(m^3 s)
+      double         darcy_epsilon  = 1e-3; ///< eps0, -
+      double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
+      double         cfl            = 0.25; ///< convective Courant number
+      /// Fraction of the capillary limit used by the automatic step (the
+      /// surface tension is explicit; see doc/flow.md, oscillating droplet).
+      double         capillary_fraction = 0.5;
+      /// Prescribed fluid step, s (0: automatic, the smallest limit).
+      double         time_step = 0;
+      /// A of the point shifting delta x = -A h |u| dt grad(alpha) (Skillen
+      /// et al. form; 0: off; tangential only near the free surface).
+      double         point_shifting = 0;
+      /// Passes of the curvature smoothing along the surface (0: none).
+      unsigned int   curvature_smoothing = 0;
+      /// Relaxation c of the volume correction (0: off): the points move,
+      /// besides their advection, by grad(psi) with lap(psi) = c (V_c/h^dim
+      /// - 1), V_c the point volume in the cell (doc/flow.md).
+      double         volume_correction = 0;
+      double         surface_tension = 0;   ///< sigma, N/m (0: off)
+      double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      double         recoil_coefficient = 0; ///< zeta_p (0: no recoil)
+      // Evaporation data for the recoil pressure (from Heat transfer, not
+      // declared in Melt flow): L_v J/kg, M kg/mol, T_v K, p0 Pa.
+      double latent_heat_evaporation = 7.41e6;
+      double evaporation_temperature = 3090.;
+      double molar_mass              = 0.0558;
+      double ambient_pressure        = 101325.;
+      double         solver_tolerance = 1e-10; ///< relative CG residual
+      unsigned int   max_iterations   = 1000;
+
+      Parameters();
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Refuse (InputError naming Melt flow/Time step) a prescribed step
+      /// above the viscous or the capillary limit of cells of size @p h
+      /// and density @p rho; called before any work.
+      void
+      check_time_step(const double h, const double rho) const;
+    };
+
+    /// Cell classes used by the flow (cell_type()).
+    enum CellType : int
+    {
+      gas     = 0, ///< no metal point: free surface beyond, p = 0
+      solid   = 1, ///< metal points but none fluid: rigid, no-slip
+      fluid   = 2, ///< at least one fluid point: pressure unknown
+      outside = 3  ///< beyond the domain: free-slip wall
+    };
+
+    /// Stable step limits, s (each is reported by the caller).
+    struct StepLimits
+    {
+      double convective; ///< cfl h / max(u_max, sqrt(|g| h))
+      double viscous;    ///< h^2 rho / (2 dim mu)
+      double capillary;  ///< sqrt(rho h^3 / (2 pi sigma))
+      double capillary_fraction = 1; ///< of the capillary limit, automatic step
+      /// The automatic step: min(convective, viscous, fraction x capillary).
+      double
+      min() const
+      {
+        return std::min(std::min(convective, viscous),
+                        capillary_fraction * capillary);
+      }
+      /// Which limit gives min(): 0 convective, 1 viscous, 2 capillary.
+      unsigned int
+      governing() const
+      {
+        const double m = min();
+        return m == convective ? 0 : (m == viscous ? 1 : 2);
+      }
+    };
+
+    /// The viscous and capillary limits of cells of size @p h (no
+    /// convective limit: infinity).
+    static StepLimits
+    material_limits(const Parameters &prm, const double h, const double rho);
+
+    struct Statistics
+    {
+      unsigned int  steps            = 0;
+      unsigned int  matrix_rebuilds  = 0; ///< band numbering + matrix graph builds
+      unsigned int  amg_setups       = 0; ///< AMG hierarchy builds
+      unsigned long cg_iterations    = 0; ///< total over all steps
+      unsigned int  last_iterations  = 0;
+      unsigned int  max_iterations   = 0;
+      unsigned int  resorts          = 0; ///< steps in which points changed cell
+      /// of these, steps that needed deal.II's sort of all points (~0.5 us
+      /// per point): a point beyond the ghost layer
+      unsigned int  global_sorts     = 0;
+      unsigned int  halvings         = 0; ///< steps redone as two halves
+      double        max_point_speed  = 0; ///< m/s, after the last step
+      unsigned long n_fluid_cells    = 0; ///< global, last step
+      unsigned long volume_iterations = 0; ///< CG, volume correction, total
+      unsigned int  volume_skipped   = 0; ///< volume solves not converged
+    };
+
+    IncompressibleFlow(const Parameters &         prm,
+                       const Material &           material,
+                       const BackgroundGrid<dim> &grid,
+                       MaterialPoints<dim> &      points,
+                       TimerOutput *              timer = nullptr);
+
+    /// Liquid fraction gamma per cell of the local box (ghost values
+    /// needed) for the Darcy term; nullptr (default): gamma = 1 everywhere.
+    void
+    set_liquid_fraction(const std::vector<double> *gamma);
+
+    /// Cell temperature (ghost values needed), K, for the Marangoni stress
+    /// and the recoil pressure; required when either is switched on.
+    void
+    set_temperature(const std::vector<double> *T);
+
+    /// Limits from the current point velocities (collective).
+    StepLimits
+    stable_time_step() const;
+
+    /// One fluid step of length @p dt. Refuses a step above the viscous or
+    /// capillary limit; a step whose new nodal speed would move points more
+    /// than a cell is redone as two halves (at most 2^20 pieces); stops with
+    /// a diagnostic when the solution becomes non-finite.
+    void
+    step(const double dt);
+
+    /// Pressure per cell of the local box (ghosts exchanged), Pa; zero
+    /// outside fluid cells.
+    const std::vector<double> &
+    pressure() const
+    {
+      return p_cell;
+    }
+    /// Capillary pressure p_s = sigma div(n) of the free-surface cells
+    /// (ghosts exchanged), Pa; zero elsewhere or when sigma = 0.
+    const std::vector<double> &
+    surface_pressure() const
+    {
+      return p_surface;
+    }
+    /// Cell type per cell of the local box (as double, ghosts exchanged).
+    const std::vector<double> &
+    cell_type() const
+    {
+      return type;
+    }
+    /// Cell-centred fluid velocity (mean of the nodes of fluid cells, zero
+    /// elsewhere, ghosts exchanged), for HeatTransfer::set_velocity().
+    const std::array<std::vector<double>, dim> &
+    cell_velocity() const
+    {
+      return u_cell;
+    }
+    const Statistics &
+    statistics() const
+    {
+      return stats;
+    }
+
+    /// Forces of the fluid on the faces of the solid cells (eq. 13, "fluid
+    /// forces"; doc/solid.md "Flow and solid together") from the state of
+    /// the last step: for every owned cell of type solid and each of its
+    /// faces to a fluid cell (owned or ghost),
+    ///  - pressure: the face pressure p_n - s (h/2) rho g_d (the centre
+    ///    pressure of the fluid neighbour extrapolated with the
+    ///    wall-normal gradient rho g of a rigid wall; d the face direction,
+    ///    s = +-1 the side of the fluid) times the face area, pushing into
+    ///    the solid;
+    ///  - viscous shear: mu u_t / (h/2) times the face area, u_t the
+    ///    tangential part of the neighbour's cell-centre velocity (no-slip
+    ///    wall, linear profile).
+    /// @p F[dim * (2 d + side) + e]: component e of the force through face
+    /// (d, side) (side 1: the upper face), one cell field over the local box
+    /// each (resized and overwritten), N (2D: N/m); zero elsewhere.
+    void
+    fluid_forces_on_solid(std::array<std::vector<double>, 2 * dim * dim> &F) const;
+
+  private:
+    /// The step proper; redone as two halves (recursively, @p depth) when
+    /// the new nodal speed would move a point more than a cell.
+    void
+    advance(const double dt, const unsigned int depth);
+    void
+    classify_cells();
+    void
+    transfer_to_grid();
+    void
+    predictor(const double dt);
+    /// Smoothed alpha, the interface position theta on free-surface faces,
+    /// and (when on) normals, capillary + recoil pressure and the Marangoni
+    /// nodal forces of the surface cells.
+    void
+    surface_terms();
+    bool
+    has_surface_terms() const
+    {
+      return prm.surface_tension > 0 || prm.surface_tension_gradient != 0 ||
+             prm.recoil_coefficient > 0;
+    }
+    /// Add the recoil pressure of the surface cells to p_s, from the
+    /// surface temperature of their neighbourhood (median over the surface
+    /// cells among the 3^dim neighbours).
+    void
+    add_recoil_pressure();
+    /// Average the capillary part of p_s over neighbouring surface cells
+    /// (Melt flow/Curvature smoothing passes).
+    void
+    smooth_capillary_pressure();
+    void
+    pressure_solve(const double dt);
+    void
+    correction(const double dt);
+    /// Volume correction (Melt flow/Volume correction): solve
+    /// lap(psi) = c (V_c/h^dim - 1) on the fluid cells with psi = 0 at the
+    /// free surface (same matrix and preconditioner as the pressure), so
+    /// that grid_to_points() can move the points by grad(psi).
+    void
+    volume_solve();
+    /// Displacement grad(psi) normal to the 2 dim faces of @p cell (face
+    /// 2d+side, m): zero on walls and solid faces, the ghost-fluid value on
+    /// gas faces.
+    void
+    volume_faces(const std::size_t cell, double *G) const;
+    void
+    grid_to_points(const double dt);
+
+    /// Point shifting (doc/flow.md, "Point shifting"): the data of one
+    /// fluid cell for shift_of_point().
+    struct ShiftCell
+    {
+      std::array<double, (1u << dim)> alpha; ///< nodal alpha, mirrored at walls
+      bool                          near_surface = false;
+      std::array<double, dim>       normal{};     ///< unit, when near_surface
+    };
+    ShiftCell
+    shift_cell(const std::size_t cell) const;
+    /// Nodal alpha at the corners of @p cell, doubled per direction at
+    /// nodes on the domain boundary (where the node sum saw only half of
+    /// its cells): the mirror-wall value.
+    std::array<double, (1u << dim)>
+    corner_alpha(const std::size_t cell) const;
+    /// Displacement of a point at reference coordinates @p xi of the cell
+    /// moving at @p speed during @p dt: -A h speed dt grad(alpha), its
+    /// normal component removed near the free surface, at most h/4.
+    void
+    shift_of_point(const ShiftCell &sc, const double *xi, const double speed,
+                   const double dt, double *dx) const;
+
+    /// Wall conditions on the active nodes: no-slip next to solid cells,
+    /// free slip (zero normal component) on the domain boundary.
+    void
+    apply_boundary_conditions(std::array<std::vector<double>, dim> &u) const;
+
+    Parameters                 prm;
+    const double               rho;
+    const BackgroundGrid<dim> &grid;
+    MaterialPoints<dim> &      points;
+    TimerOutput *              timer;
+    const std::vector<double> *gamma = nullptr;
+    const std::vector<double> *temperature = nullptr;
+
+    static constexpr unsigned int n_corners = 1u << dim;
+    std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
+    std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
+    std::array<std::array<double, n_corners>, n_corners> stiffness; // Q1 Laplace
+
+    std::vector<double>                  type, type_old, gid, p_cell;
+    std::vector<double>                  mass, volume;
+    std::vector<double>                  occupancy, psi; // point volume per cell, m^dim; psi/h^2
+    std::vector<double>                  alpha_node, alpha_cell, p_surface;
+    std::vector<double>                  p_capillary, surface_mark; // sigma div(n), 0/1
+    std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
+    std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
+    static constexpr double theta_min = 0.05;
+    std::vector<double>         near1, near2; // cells near the fluid (0/1)
+    std::vector<std::ptrdiff_t> stencil;      // 3^dim neighbourhood offsets
+    std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
+    std::vector<std::uint32_t>           active;      // nodes of fluid cells
+    std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
+    std::vector<std::uint8_t>            node_mark;   // in active
+    std::vector<std::uint8_t>            node_fix;    // bit d: u_d = 0
+    std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
+    std::vector<double>                  divergence;  // per owned fluid cell
+
+    // Pressure system over a band of cells round the fluid (see
+    // pressure_solve()): owned band cells in row order.
+    std::vector<std::uint32_t>        band;
+    std::size_t                       n_fluid_rows = 0;
+    unsigned int                      iterations_after_setup = 1;
+    IndexSet                          owned_rows;
+    TrilinosWrappers::SparseMatrix    matrix;
+    TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
+    TrilinosWrappers::PreconditionAMG amg;
+    TrilinosWrappers::MPI::Vector     solution, rhs, psi_solution;
+    bool                              have_matrix = false;
+
+    Statistics stats;
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,317 @@
+// femp: the material points (METHOD sec. 1-2) on the background grid,
+// carried by deal.II's Particles::ParticleHandler.
+//
+// A scene builds a substrate block and a powder layer of randomly packed
+// spherical grains; each region is filled with points on a global lattice of
+// the given spacing, inserted cell by cell. The metal fraction alpha of a
+// cell is the fraction of its n^dim sub-cells that hold at least one point
+// (ref. [11]), and in cells holding melt (fluid points) the volume of its
+// points, kept where fluid points bunch (see metal_fraction()); temperatures pass from cells to points after each thermal
+// step, and from points to cells that just gained points.
+//
+// Property layout of each point (index: quantity, unit):
+//   0 mass (kg; 2D: kg/m)        1 volume (m^3; 2D: m^2)
+//   2 temperature (K)            3 state (0 powder, 1 solid, 2 fluid)
+//   4 peak temperature (K), the melt history
+//   5 .. 5+dim-1 velocity (m/s)
+//   then dim(dim+1)/2 Cauchy stress components (Pa; xx, yy, [zz], xy, [xz, yz])
+//   then the equivalent plastic strain (-)
+//   2D only: then the out-of-plane stress sigma_zz (Pa; plane strain)
+//   then the solid's artificial viscous pressure q (Pa; see SolidMPM)
+//   then the dim x dim affine velocity matrix C_p of the solid's APIC
+//   transfer (1/s, row-major: C_xx, C_xy, [C_xz,] C_yx, ...; see SolidMPM)
+#ifndef femp_material_points_h
+#define femp_material_points_h
+
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/fe/mapping_q1.h>
+#include <deal.II/particles/particle_handler.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/base/material.h>
+
+#include <functional>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class MaterialPoints
+  {
+  public:
+    enum State
+    {
+      powder = 0,
+      solid  = 1,
+      fluid  = 2
+    };
+
+    struct PropertyIndex
+    {
+      static constexpr unsigned int mass             = 0;
+      static constexpr unsigned int volume           = 1;
+      static constexpr unsigned int temperature      = 2;
+      static constexpr unsigned int state            = 3;
+      static constexpr unsigned int peak_temperature = 4;
+      static constexpr unsigned int velocity         = 5;
+      static constexpr unsigned int stress           = 5 + dim;
+      static constexpr unsigned int plastic_strain   = 5 + dim + dim * (dim + 1) / 2;
+      /// 2D only (plane strain): out-of-plane stress sigma_zz.
+      static constexpr unsigned int stress_zz        = plastic_strain + 1;
+      /// Artificial bulk-viscosity pressure of the solid (SolidMPM).
+      static constexpr unsigned int viscous_pressure =
+        plastic_strain + 1 + (dim == 2 ? 1 : 0);
+      /// APIC affine velocity matrix C_p of the solid, dim x dim row-major
+      /// (SolidMPM; zero with the FLIP transfer).
+      static constexpr unsigned int affine_velocity = viscous_pressure + 1;
+      static constexpr unsigned int n_properties = affine_velocity + dim * dim;
+      /// Number of properties of the layout blocks a scene uses: the base
+      /// block (up to the velocity), the solid block (stress, plastic
+      /// strain, [sigma_zz,] viscous pressure) and the APIC block (needs
+      /// the solid block). Points carry only these, so physics a scene
+      /// switches off costs no memory, bandwidth or output.
+      static constexpr unsigned int
+      n_used(const bool solid, const bool affine)
+      {
+        return affine ? n_properties :
+                        (solid ? affine_velocity : velocity + dim);
+      }
+    };
+
+    struct Parameters
+    {
+      double       point_spacing    = 4e-6;
+      double       substrate_top    = 1.5e-4;
+      unsigned int subcells         = 2;
+      double       layer_thickness  = 5e-5;
+      double       mean_diameter    = 30e-6;
+      double       std_diameter     = 8e-6;
+      double       min_diameter     = 15e-6;
+      double       max_diameter     = 45e-6;
+      double       packing_fraction = 0.45;
+      unsigned int seed             = 1;
+
+      /// An initial body (Material points/Initial bodies): a box from
+      /// @p a (lower corner) to @p b (upper corner), or an ellipsoid
+      /// (ellipse in 2D) with centre @p a and semi-axes @p b; its points
+      /// have state @p state and temperature @p T.
+      struct Body
+      {
+        State       state = fluid;
+        bool        box   = true;
+        Point<dim>  a, b;
+        double      T = 300;
+        std::string text; ///< as written, for messages
+        bool
+        inside(const Point<dim> &p) const;
+      };
+      std::vector<Body> bodies;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Checks against the grid that need both parameter sets.
+      void
+      check(const typename BackgroundGrid<dim>::Parameters &grid) const;
+    };
+
+    /// @p n_properties: how many properties each point carries
+    /// (PropertyIndex::n_used(); by default the whole layout).
+    MaterialPoints(const Parameters &         prm,
+                   const Material &           material,
+                   const BackgroundGrid<dim> &grid,
+                   const unsigned int n_properties = PropertyIndex::n_properties);
+
+    /// Number of properties each point carries.
+    unsigned int
+    n_properties() const
+    {
+      return n_props;
+    }
+
+    /// Fill the substrate block and the powder layer with points at the
+    /// initial temperature @p T0, then the initial bodies: lattice points
+    /// inside a body (added above the substrate top, re-stated below it)
+    /// take its state and temperature (a later body overrides an earlier).
+    void
+    create(const double T0);
+
+    /// Fill the owned cells with points on the lattice of the given spacing
+    /// where @p inside is true, all in state @p state at temperature @p T0
+    /// (flow test bodies: a water column, a droplet, a pool). Replaces any
+    /// points created before.
+    void
+    create_region(const std::function<bool(const Point<dim> &)> &inside,
+                  const double T0, const State state);
+
+    /// After point positions changed so that some point left its cell:
+    /// move points to their new cells and ranks and refresh the list of
+    /// occupied cells (deal.II's sort costs ~0.5 us per point, so call it
+    /// only when needed).
+    void
+    points_moved();
+
+    /// Cheaper alternative to points_moved() when every point moved at most
+    /// into the ghost layer: moves each point that left its cell into its
+    /// new owned cell (remove + insert, cost per moved point), or sends it
+    /// to the rank that owns its new (ghost) cell, and refreshes the list
+    /// of occupied cells. Collective; returns false, changing nothing, when
+    /// on some rank a point went beyond the ghost layer (then call
+    /// points_moved()).
+    /// With @p from (local flat indices of owned occupied cells, increasing)
+    /// only the points of these cells are checked: the cells where the
+    /// caller saw a point leave (the flow's fluid cells, not every point).
+    /// The list of occupied cells and the property cache are refreshed for
+    /// the cells that lost or gained points only (same order of points as a
+    /// full rebuild, so results do not change).
+    bool
+    relocate_points(const std::vector<std::uint32_t> *from = nullptr);
+
+    /// Property arrays of the points of occupied_cells()[@p c], in the
+    /// order of the handler's particles_in_cell() (valid until points are
+    /// inserted, removed or re-sorted): a pointer loop instead of deal.II's
+    /// iterator range (~20 ns per point) where only properties are read.
+    ArrayView<double *const>
+    cell_point_properties(const std::size_t c) const
+    {
+      return {point_properties.data() + cell_begin[c],
+              cell_begin[c + 1] - cell_begin[c]};
+    }
+
+    /// Owned cells that hold points: (flat index, cell iterator).
+    const std::vector<
+      std::pair<std::uint32_t, typename Triangulation<dim>::active_cell_iterator>> &
+    occupied_cells() const
+    {
+      return occupied;
+    }
+
+    /// Metal fraction alpha per cell of the local box (ghosts exchanged).
+    /// Cells without a fluid point: sub-cell occupancy (the fraction of the
+    /// n^dim sub-cells holding a point, METHOD sec. 2). Cells holding a
+    /// fluid point: the volume of their points over the cell volume, with
+    /// the excess of over-full cells (points bunched by the flow) passed on
+    /// to fluid face neighbours that are not full, then min(1, .): the metal
+    /// volume of the melt is kept as the points keep it, where occupancy
+    /// lost it when points bunched (doc/flow.md, "Volume-based alpha").
+    /// On the point lattice with spacing h/n both rules give the same alpha.
+    /// Collective.
+    std::vector<double>
+    metal_fraction() const;
+
+    /// Points take the temperature of their cell; states and melt history
+    /// follow (powder or solid -> fluid above the solidus, fluid -> solid at
+    /// or below it).
+    void
+    cells_to_points(const std::vector<double> &T);
+
+    /// Heat carried by the points (Heat transfer/Advection by melt flow =
+    /// points): for each owned cell holding a point whose temperature
+    /// differs from the cell's @p T, the pair (cell index, volume-weighted
+    /// mean of @p e over the cell's points), e evaluated at each point's
+    /// temperature (the temperature of the cell it came from). Cells whose
+    /// points all have the cell's temperature are left out: their mean is
+    /// e(T) of the cell.
+    std::vector<std::pair<std::uint32_t, double>>
+    volume_mean_over_points(const std::vector<double> &         T,
+                            const std::function<double(double)> &e) const;
+
+    /// Zone tag per cell of the local box, from the states of its points:
+    /// 0 gas (no points), 1 powder, 2 solid, 3 fluid (any fluid point).
+    std::vector<double>
+    zone_tags() const;
+
+    const Particles::ParticleHandler<dim> &
+    particle_handler() const
+    {
+      return handler;
+    }
+    /// Write access for the flow and solid solvers, which update velocities,
+    /// positions and stresses (call points_moved() after a point left its
+    /// cell).
+    Particles::ParticleHandler<dim> &
+    particle_handler()
+    {
+      return handler;
+    }
+    types::particle_index
+    n_global_points() const
+    {
+      return handler.n_global_particles();
+    }
+    unsigned int
+    n_powder_grains() const
+    {
+      return n_grains;
+    }
+    double
+    achieved_packing_fraction() const
+    {
+      return packing;
+    }
+    /// Names of the first @p n properties, for output.
+    static std::vector<std::string>
+    property_names(const unsigned int n = PropertyIndex::n_properties);
+    /// Names of the properties the points of this object carry.
+    std::vector<std::string>
+    used_property_names() const
+    {
+      return property_names(n_props);
+    }
+
+  private:
+    Parameters                      prm;
+    unsigned int                    n_props;
+    const Material &                mat;
+    const BackgroundGrid<dim> &     grid;
+    MappingQ1<dim>                  mapping;
+    Particles::ParticleHandler<dim> handler;
+    // Owned cells that hold points: flat index and iterator.
+    std::vector<std::pair<std::uint32_t,
+                          typename Triangulation<dim>::active_cell_iterator>>
+                 occupied;
+    // Property arrays of the points in the pool, grouped by occupied cell:
+    // points of occupied[c] are point_properties[cell_begin[c] ..
+    // cell_begin[c+1]).
+    std::vector<double *>      point_properties;
+    std::vector<std::uint32_t> cell_begin;
+    void
+    cache_point_handles();
+    /// Rebuild occupied (and the pointer cache) from the handler.
+    void
+    index_occupied_cells();
+    /// After points moved between owned cells by remove and insert (no
+    /// property-pool growth): refresh occupied and the pointer cache for
+    /// the cells in @p changed (increasing) only, keeping the cached
+    /// pointers of the other cells; a full rebuild if the pool moved.
+    void
+    refresh_occupied_cells(const std::vector<std::uint32_t> &changed);
+    /// Append the lattice points of owned cell @p idx below
+    /// @p vertical_limit that @p keep accepts (all if empty).
+    void
+    add_lattice_points(
+      const std::uint32_t                                idx,
+      const double                                       vertical_limit,
+      const std::function<bool(const Point<dim> &)> &    keep,
+      std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const;
+    /// metal_fraction() in cells with a fluid point: @p v the point volume
+    /// per owned cell (turned into a fraction, excess spread), @p is_fluid
+    /// 1 there (ghosts exchanged here); writes min(1, v) into @p alpha.
+    void
+    volume_fraction_of_fluid_cells(std::vector<double> &v,
+                                   std::vector<double> &is_fluid,
+                                   std::vector<double> &alpha) const;
+    /// Insert (cell, position) pairs cell by cell at temperature @p T0.
+    void
+    insert_points(std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
+                  const double                                       T0,
+                  const std::function<State(const Point<dim> &)> &   state_of);
+    unsigned int n_grains = 0;
+    double       packing  = 0;
+  };
+} // namespace femp
+
+#endif

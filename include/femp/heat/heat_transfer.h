@@ -1,0 +1,345 @@
+// femp: HeatTransfer<dim>, the temperature equation (1) of the paper on the
+// cell centres of the background grid:
+//
+//   rho c DT/Dt = div(lambda grad T) - alpha rho_m L_m Dgamma/Dt
+//     - [q_evap(T) + h (T - T_ref) + sigma_SB eps (T^4 - T_ref^4)]
+//       * 2 rho c / (rho_m c_m + rho_g c_g) |grad alpha| + q_laser
+//
+// Forward Euler in time, except the surface losses, which are taken fully
+// implicitly in the cells that carry them (a local Newton iteration per
+// surface cell); 5/7-point central differences with harmonic-mean
+// face conductivities; first-order upwind convection with a cell-centred
+// velocity (none unless a flow solver or a prescribed field provides one;
+// in partly filled cells at the rate 1/alpha, the part above 1 implicit);
+// latent heat by a local iteration per cell over the solid, mushy and liquid
+// branches of the enthalpy relation (METHOD sec. 2); surface losses and the
+// laser deposited through |grad alpha| with the density weighting above (the
+// default 'first surface' laser only into the cells where the vertical beam
+// first meets metal, shared in proportion to that weight).
+// Cells without metal (alpha = 0) are not solved and carry no flux.
+#ifndef femp_heat_transfer_h
+#define femp_heat_transfer_h
+
+#include <deal.II/base/function_parser.h>
+#include <deal.II/base/parameter_handler.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/heat/laser.h>
+#include <femp/base/material.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <utility>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class HeatTransfer
+  {
+  public:
+    struct Parameters
+    {
+      /// Uniform initial temperature, K; with a function expression its
+      /// value at the lower corner of the domain (see check()).
+      double initial_temperature   = 300.;
+      /// 'Initial temperature' given as a function of x, y (, z) (m);
+      /// empty when it is a plain number.
+      std::string initial_temperature_expression;
+      double reference_temperature = 300.;
+      double convection_coefficient = 10.;
+      double emissivity             = 0.4;
+      double evaporation_coefficient = 0.82;
+      double latent_heat_evaporation = 7.41e6;
+      double evaporation_temperature = 3090.;
+      double molar_mass              = 0.0558;
+      double ambient_pressure        = 101325.;
+      std::map<std::string, double> fixed_temperatures;
+      std::string                   laser_deposition = "first surface";
+      std::string                   prescribed_velocity;
+      /// 'points' (metal carries its enthalpy on the points) or 'upwind'
+      /// (upwind convection of T with the flow's cell velocity).
+      std::string advection_by_melt_flow = "points";
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// With a function expression for the initial temperature: evaluate
+      /// it at every cell centre of the box [lower, upper] with cells of
+      /// size h and refuse (InputError naming Heat transfer/Initial
+      /// temperature) a value that is not finite and positive; sets
+      /// initial_temperature to its value at the first cell.
+      void
+      check(const Point<dim> &lower, const Point<dim> &upper, const double h);
+      /// The initial temperature at @p x, K.
+      double
+      initial_temperature_at(const Point<dim> &x) const;
+
+    private:
+      std::shared_ptr<FunctionParser<dim>> initial_function;
+    };
+
+    /// Cumulative energies since initialize(), J (2D: J/m).
+    struct EnergyBudget
+    {
+      double laser       = 0; ///< deposited by the laser
+      double evaporation = 0; ///< lost by evaporation
+      double convection  = 0; ///< lost by surface convection
+      double radiation   = 0; ///< lost by radiation
+      double boundary    = 0; ///< entered through fixed-temperature faces
+      /// Created by the upwind convection term (sum of rho c dT V over the
+      /// cells): zero for a conservative scheme; not a loss, reported apart.
+      double advection = 0;
+    };
+
+    /// Total surface losses so far (global, collective), J (2D: J/m).
+    double
+    total_losses() const;
+
+    HeatTransfer(const Parameters &         prm,
+                 const Material &           material,
+                 const Laser<dim> &         laser,
+                 const BackgroundGrid<dim> &grid);
+
+    /// Allocate the fields, set T to the initial temperature (a constant
+    /// or a function of the cell centre), gamma from T.
+    void
+    initialize();
+
+    /// Give the (owned) cell @p idx the temperature @p T_cell and the
+    /// liquid fraction gamma(T_cell) of the enthalpy relation: for cells that
+    /// gain metal from points (initial bodies, moved points), whose stored
+    /// gamma is stale. Call update_ghosts() after the last one.
+    void
+    set_cell_temperature(const std::size_t idx, const double T_cell)
+    {
+      T[idx]     = T_cell;
+      gamma[idx] = mat.liquid_fraction(T_cell);
+    }
+    /// Ghost values of T and gamma (collective).
+    void
+    update_ghosts()
+    {
+      grid.update_ghosts(T);
+      grid.update_ghosts(gamma);
+    }
+
+    /// Freeze the temperature: advance() must not be called any more
+    /// (Physics/Heat transfer = false), and set_metal_fraction() only stores
+    /// alpha (no surface lists, no properties: no cost for heat).
+    void
+    freeze()
+    {
+      frozen = true;
+    }
+    bool
+    is_frozen() const
+    {
+      return frozen;
+    }
+
+    /// New metal fraction (owned cells and ghosts); rebuilds the list of
+    /// surface cells and the |grad alpha| weights.
+    void
+    set_metal_fraction(const std::vector<double> &alpha);
+
+    /// Specific enthalpy of the metal at @p T_cell, J/kg: C(T) + L_m
+    /// gamma(T), C the antiderivative of c_m (the relation of the
+    /// phase-change iteration).
+    double
+    specific_enthalpy(const double T_cell) const;
+
+    /// Heat carried by the points: each listed (owned) cell's metal takes
+    /// the given mean specific enthalpy (J/kg) of the points now in it
+    /// (MaterialPoints::volume_mean_over_points()); T and gamma follow from
+    /// the enthalpy relation. Call after set_metal_fraction() with the new
+    /// alpha. Ghosts are updated (collective).
+    void
+    take_point_enthalpy(
+      const std::vector<std::pair<std::uint32_t, double>> &mean_e);
+
+    /// Cell-centred velocity, one array per direction over the local box
+    /// (with ghosts); nullptr switches convection off.
+    void
+    set_velocity(const std::array<std::vector<double>, dim> *velocity);
+
+    /// Largest stable step for the current state (global), s: diffusion and
+    /// convection, without safety factor.
+    double
+    stable_time_step();
+
+    /// Advance T and gamma by one forward-Euler step of size @p dt from time
+    /// @p time. Throws if the state turns non-finite.
+    void
+    advance(const double dt, const double time);
+
+    const std::vector<double> &
+    temperature() const
+    {
+      return T;
+    }
+    std::vector<double> &
+    temperature()
+    {
+      return T;
+    }
+    const std::vector<double> &
+    liquid_fraction() const
+    {
+      return gamma;
+    }
+    const std::vector<double> &
+    metal_fraction() const
+    {
+      return alpha;
+    }
+    /// Laser flux density deposited per volume in the last step, W/m^3.
+    const std::vector<double> &
+    laser_source() const
+    {
+      return laser_density;
+    }
+    /// Cumulative energies, summed over all ranks (collective call).
+    EnergyBudget
+    energy_budget() const;
+    /// Global stored enthalpy relative to T_ref (J, or J/m in 2D):
+    /// sum V [alpha rho_m (int c_m dT + L_m gamma) + (1-alpha) rho_g c_g dT].
+    double
+    stored_enthalpy() const;
+    /// Global maximum temperature over metal cells after the last step.
+    double
+    max_temperature() const
+    {
+      return T_max;
+    }
+    /// Stable step found during the last advance() (before safety factor).
+    double
+    last_stable_time_step() const
+    {
+      return dt_stable_next;
+    }
+    const Material &
+    material() const
+    {
+      return mat;
+    }
+
+    /// Number of cells that needed the phase-change iteration in the last
+    /// step (local), for timing reports.
+    std::size_t
+    n_phase_change_cells() const
+    {
+      return n_phase_cells;
+    }
+
+  private:
+    Parameters                 prm;
+    const Material &           mat;
+    const Laser<dim> &         laser;
+    const BackgroundGrid<dim> &grid;
+    /// Evaporation flux constants: q_evap = evap_pref / sqrt(T)
+    /// exp(evap_exp (T - T_v) / T).
+    const double evap_pref, evap_exp;
+
+    std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
+    std::vector<std::uint8_t>  is_source;
+    std::vector<std::uint32_t> source_cells;
+    std::vector<std::size_t>   flagged_rows;
+    /// Per x-row of the local box: 1 if any cell of the row holds metal.
+    std::vector<std::uint8_t>  row_has_metal;
+    /// Laser density of the last step, W/m^3; surface-loss weight
+    /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
+    std::vector<double> laser_density, loss_weight;
+    const std::array<std::vector<double>, dim> *velocity = nullptr;
+    std::array<std::vector<double>, dim>        prescribed;
+
+    struct SurfaceCell
+    {
+      std::uint32_t index;
+      double        grad_alpha;  ///< |grad alpha|, 1/m
+    };
+    std::vector<SurfaceCell> surface;
+    /// Owned cells where the vertical beam first meets metal, with their
+    /// share (1/m) of the column's flux q: the cell gets q * share per volume,
+    /// the shares of a column sum to 1/h.
+    struct LaserCell
+    {
+      std::uint32_t index;
+      double        share;
+    };
+    std::vector<LaserCell> first_surface;
+
+    struct FixedFace
+    {
+      std::uint32_t index;
+      double        value;
+    };
+    std::vector<FixedFace> fixed_faces;
+
+    bool         frozen = false;
+    EnergyBudget budget;
+    double       T_max          = 0;
+    double       dt_stable_next = 0;
+    std::size_t  n_phase_cells  = 0;
+
+    void
+    compute_properties();
+    /// Properties of the flat index range [begin, end) of the box.
+    void
+    compute_properties(const std::size_t begin, const std::size_t end);
+    /// True if a cell going from @p Tc to @p Tn needs the local enthalpy
+    /// iteration: it may change phase, or c(T) varies over a large step.
+    bool
+    needs_local_solve(const double Tc,
+                      const double Tn,
+                      const double g,
+                      const double rhoL,
+                      const bool   variable_c) const
+    {
+      const bool phase = rhoL > 0 && !((Tn < mat.solidus && g == 0.) ||
+                                       (Tn > mat.liquidus && g == 1.));
+      return phase || (variable_c && std::abs(Tn - Tc) > 1.);
+    }
+    void
+    compute_surface_sources(const double dt, const double time);
+    /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
+    double
+    enthalpy_density(const double a, const double T) const;
+    /// Surface loss flux q_evap + q_conv + q_rad at @p T (W/m^2), its parts
+    /// and its derivative dq/dT.
+    void
+    surface_loss(const double T,
+                 double &     q_evap,
+                 double &     q_conv,
+                 double &     q_rad,
+                 double &     dq_dT) const;
+    /// New temperature of a cell with metal fraction @p a that starts from
+    /// @p Tc, gamma @p gc and receives the explicit enthalpy change @p dH
+    /// (J/m^3) and loses dtW q(T) with the loss q at the new temperature
+    /// (fully implicit; dtW = dt w |grad alpha|): solves
+    ///   H(T) - H(Tc) + dtW q(T) = dH,
+    /// with the enthalpy H of the tables (latent heat included) if
+    /// @p enthalpy, else H(T) - H(Tc) = rc (T - Tc).
+    double
+    solve_cell(const double a,
+               const double Tc,
+               const double gc,
+               const double rc,
+               const double dH,
+               const double dtW,
+               const bool   enthalpy,
+               const double guess) const;
+    double
+    heat_capacity(const double T, const double a) const
+    {
+      return a * mat.density * mat.specific_heat.value(T) +
+             (1 - a) * mat.gas_density * mat.gas_specific_heat;
+    }
+  };
+} // namespace femp
+
+#endif

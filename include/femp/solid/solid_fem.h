@@ -1,0 +1,339 @@
+// femp: SolidFEM<dim>, explicit finite elements for the constant-solid zone
+// (paper eqs. 6-10, METHOD sec. 4): 8-node hexahedra (4-node quadrilaterals
+// in 2D, plane strain), one-point quadrature, Flanagan-Belytschko hourglass
+// control, lumped mass, central difference; transition nodes (eqs. 14-17).
+//
+// Mesh: its own parallel::distributed::Triangulation of the FE zone (a box
+// on grid lines), cells of the grid's size h, so that every element covers
+// one background-grid cell and every FE node coincides with a grid node
+// (N_Ii = 1 at transition nodes). p4est partitions it independently of the
+// background grid. A DoFHandler with FE_Q<dim>(1) defines the owned and
+// ghost nodes of a rank (the Utilities::MPI::Partitioner); the hot loops use
+// their own numbering: the local nodes are numbered lexicographically in
+// the bounding box of their structured indices (x fastest), node data
+// (velocity, force, inverse mass, fixed components) are one flat array per
+// component over that box, and the elements are processed in lexicographic
+// order, so that a block of simd_lanes elements of one x-row has its
+// corners at simd_lanes consecutive nodes (vector loads; the forces of the
+// block added as vectors, no two lanes on the same node). Nodal force sums
+// over ranks copy the shared nodes (ghosts and owned nodes that are ghosts
+// elsewhere) through a LinearAlgebra::distributed::Vector (compress(add),
+// update_ghost_values); nothing is copied on one rank.
+// Element data (corner box indices, stress state, temperatures) are flat
+// arrays. The temperature of an element is that of its grid cell (eq. 2):
+// the grid rank that owns the cell sends it, once per advance() (not per
+// solid step), through a Utilities::MPI::NoncontiguousPartitioner keyed by
+// the cell's lexicographic index in the zone.
+//
+// Element (undeformed cube of side h, small-displacement geometry; the
+// Jaumann spin is still taken from the velocity gradient):
+//   b_a = grad N_a(centre) = s_a / (2^(dim-1) h),  s_a in {-1, 1}^dim,
+//   f_a^int = -V sigma b_a                                   (eq. 9)
+// Hourglass (Flanagan-Belytschko, stiffness form): for a rectangular element
+// the hourglass base vectors Gamma (xy, yz, xz, xyz products of s_a; one in
+// 2D) are orthogonal to the linear field, so gamma = Gamma and
+//   q_alpha,i = sum_a Gamma_alpha,a u_a,i,
+//   f_a,i^HG = -k sum_alpha Gamma_alpha,a q_alpha,i,
+//   k = kappa M(T) V (sum_a |b_a|^2) / 2^dim,  M = P-wave modulus,
+// with the hourglass energy 1/2 k sum q^2 per element. All elements are the
+// same cube, so b_a and Gamma are compile-time constants: one fused loop per
+// element (gather velocities, L, constitutive update, stress work, viscous
+// pressure, internal + hourglass forces of the next step added to the
+// nodes) and one fused loop over the nodes (velocity update, zeroing the
+// force for the next element loop, energies), both in SIMD; the element
+// loop in
+// SIMD blocks of simd_lanes elements (one per lane of simd_double, element
+// state stored per block, update_stress_block of constitutive.h).
+//
+// Transition nodes (METHOD sec. 4): FE nodes on a face of the zone that is
+// not a domain face (they touch grid cells outside the zone). They are
+// numbered globally from geometry (every rank knows all of them); see
+// solid_stress.h for the exchange of their sums.
+#ifndef femp_solid_fem_h
+#define femp_solid_fem_h
+
+#include <deal.II/base/mpi_noncontiguous_partitioner.h>
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/partitioner.h>
+#include <deal.II/base/point.h>
+#include <deal.II/distributed/tria.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/lac/la_parallel_vector.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/solid/constitutive.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class SolidFEM
+  {
+  public:
+    struct Parameters
+    {
+      bool       enabled = false;
+      Point<dim> lower_corner;
+      Point<dim> upper_corner;
+      double     hourglass_coefficient = 0.1;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Zone corners on grid lines and inside the domain.
+      void
+      check(const typename BackgroundGrid<dim>::Parameters &grid) const;
+    };
+
+    static constexpr unsigned int n_corners = 1u << dim;
+    static constexpr unsigned int n_hg      = dim == 2 ? 1 : 4;
+    /// Doubles per transition node in the exchange buffer: grid mass, grid
+    /// momentum (dim), force without hourglass (dim), hourglass force (dim).
+    static constexpr unsigned int tr_width = 1 + 3 * dim;
+
+    SolidFEM(const Parameters &         prm,
+             const BackgroundGrid<dim> &grid,
+             const SolidMaterial &      material);
+
+    /// Build the FE triangulation, node numbering, element arrays, lumped
+    /// masses (times @p mass_scaling), the transition nodes and the initial
+    /// forces. @p face_bits[f]: velocity components fixed on domain face f
+    /// (x-, x+, y-, ...). @p T: grid cell temperatures at time 0.
+    void
+    setup(const double                          mass_scaling,
+          const std::array<std::uint8_t, 2 * dim> &face_bits,
+          const Tensor<1, dim> &                gravity,
+          const std::vector<double> &           T);
+
+    /// 1 for cells of the grid's local box inside the FE zone.
+    const std::vector<std::uint8_t> &
+    zone_mask() const
+    {
+      return in_zone_cell;
+    }
+    std::size_t
+    n_elements() const
+    {
+      return conn.size() / n_corners;
+    }
+    /// Owned elements whose grid cell is not owned by this rank.
+    std::size_t
+    n_elements_off_rank() const
+    {
+      return off_rank;
+    }
+
+    /// Start of an advance(): the grid cell temperatures @p T at its end time
+    /// become the elements' end temperatures (the old ones the start).
+    /// Collective.
+    void
+    new_temperatures(const std::vector<double> &T);
+    /// External nodal forces of the grid (partial sums of this rank over the
+    /// nodes of its owned cells) at FE nodes that are not transition nodes
+    /// go to the FE nodes; nullptr for none. Collective.
+    void
+    set_external_forces(const std::array<std::vector<double>, dim> *f);
+
+    // ---- transition nodes ------------------------------------------------
+    std::size_t
+    n_transition() const
+    {
+      return tr_ijk.size();
+    }
+    /// Global structured node index of transition node @p t.
+    const std::array<int, dim> &
+    transition_node(const std::size_t t) const
+    {
+      return tr_ijk[t];
+    }
+    /// FE mass (scaled, all elements) and velocity of transition node @p t.
+    double
+    transition_mass(const std::size_t t) const
+    {
+      return tr_mass[t];
+    }
+    const double *
+    transition_velocity(const std::size_t t) const
+    {
+      return &tr_vel[dim * t];
+    }
+    std::uint8_t
+    transition_constraint(const std::size_t t) const
+    {
+      return tr_fix[t];
+    }
+    /// Add this rank's FE partial sums (force without hourglass, hourglass
+    /// force) at the transition nodes into @p buffer (tr_width per node).
+    void
+    add_transition_partials(std::vector<double> &buffer) const;
+    /// From the global sums in @p buffer: the grid velocity v_I and
+    /// acceleration a_I of each transition node (eqs. 14-16; written to
+    /// @p v_grid and @p a_grid, dim per node), and the new FE velocity
+    /// v_I + dt f^HG / m_i (eq. 17) kept for every transition node.
+    void
+    update_transition(const std::vector<double> &buffer,
+                      const double               dt,
+                      std::vector<double> &      v_grid,
+                      std::vector<double> &      a_grid);
+
+    /// Central-difference node update (eq. 10): sums of the element forces
+    /// over ranks, new velocities of all local FE nodes
+    /// (transition nodes from update_transition()). Returns {kinetic
+    /// energy, external power} of the owned nodes.
+    std::array<double, 2>
+    update_nodes(const double dt);
+    /// Fused element loop: stress update over the step @p dt with the
+    /// temperature interpolated at weight @p w between the start and end
+    /// temperatures of the advance() (eq. 5), then the element forces of
+    /// the next step. Returns the stress work of this rank's elements.
+    double
+    update_elements(const double dt, const double w);
+
+    /// Kinetic energy of the owned nodes (from the last update_nodes()).
+    double
+    kinetic_energy() const
+    {
+      return kinetic;
+    }
+    /// Hourglass energy 1/2 k sum q^2 with the scene's kappa, or with the
+    /// reference kappa = 0.05 if @p reference (mode amplitude measure).
+    double
+    hourglass_energy(const bool reference) const;
+
+    /// sigma_xx (Pa) and temperature (K) of the owned element containing
+    /// @p x, or false if none.
+    bool
+    probe(const Point<dim> &x, double &sigma_xx, double &T) const;
+    /// sigma_xx and von Mises stress of the zone cells of the grid's local
+    /// box (at owned cells; other entries untouched). Collective.
+    void
+    cell_stress_fields(std::vector<double> &sigma_xx,
+                       std::vector<double> &von_mises) const;
+    bool
+    find_non_finite(Point<dim> &where) const;
+
+  private:
+    Parameters                 prm;
+    const BackgroundGrid<dim> &grid;
+    const SolidMaterial &      mat;
+    MPI_Comm                   comm;
+
+    parallel::distributed::Triangulation<dim> tria;
+    FE_Q<dim>                                 fe;
+    DoFHandler<dim>                           dof_handler;
+    std::shared_ptr<const Utilities::MPI::Partitioner> node_partitioner;
+    LinearAlgebra::distributed::Vector<double>         force; ///< dim per node
+
+    std::array<int, dim> zlo, zn; ///< zone: first cell index, cells
+    double               V = 0, bb = 0, mass_scale = 1;
+    Tensor<1, dim>       g;
+
+    // Node box: the local nodes (owned and ghost) are numbered
+    // lexicographically in the bounding box of their structured indices
+    // (x fastest), box index n = sum_d (ijk_d - box_lo_d) box_stride_d;
+    // node data are flat arrays per component over the box (padded to a
+    // multiple of simd_lanes; slots without a local node stay zero). An
+    // x-row of elements then has its corner nodes at consecutive indices.
+    std::array<int, dim>         box_lo, box_n;
+    std::array<std::size_t, dim> box_stride;
+    std::size_t                  n_box = 0; ///< padded box size
+    bool                         multi_rank = false;
+
+    // Elements, in lexicographic order of their zone index (x fastest).
+    std::vector<std::uint32_t> conn; ///< n_corners box node indices each
+    /// Per block: box index of corner 0 of its first element if its
+    /// simd_lanes elements are consecutive in one x-row (their corners are
+    /// then simd_lanes consecutive nodes from there, loaded as vectors),
+    /// else -1 (corners gathered one by one through conn).
+    std::vector<std::int64_t> block_row;
+    /// State of simd_lanes consecutive elements (lane l: element
+    /// simd_lanes * block + l), so that the element loop loads and stores
+    /// whole SIMD registers; the lanes of the last block beyond the last
+    /// element are padding (they repeat the last element's data).
+    struct ElementBlock
+    {
+      simd_double s[6];  ///< Cauchy stress {xx, yy, zz, xy, xz, yz}, Pa
+      simd_double eps_p; ///< equivalent plastic strain, -
+      simd_double visc;  ///< viscous pressure q, Pa
+      simd_double T;     ///< temperature of the last step, K
+      /// Hourglass mode amplitudes q_alpha,i = sum_a Gamma_alpha,a u_a,i,
+      /// advanced with the element's velocities.
+      simd_double q[n_hg][dim];
+    };
+    std::vector<ElementBlock>  blocks;
+    std::vector<double>        T_start, T_end;
+    /// Stress tensor of element @p e.
+    SymmetricTensor<2, 3>
+    element_stress(const std::size_t e) const
+    {
+      SymmetricTensor<2, 3> s;
+      for (unsigned int c = 0; c < 6; ++c)
+        s.access_raw_entry(c) = blocks[e / simd_lanes].s[c][e % simd_lanes];
+      return s;
+    }
+    double
+    element_T(const std::size_t e) const
+    {
+      return blocks[e / simd_lanes].T[e % simd_lanes];
+    }
+    std::vector<std::uint64_t> element_id; ///< lexicographic in the zone
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> element_by_id;
+    std::size_t                off_rank = 0;
+    Utilities::MPI::NoncontiguousPartitioner T_exchange; ///< grid -> FE
+    std::vector<std::uint32_t> grid_zone_cells;          ///< owned zone cells
+    std::vector<double>        T_send;
+
+    // Nodes (box numbering, see above).
+    std::size_t                n_owned = 0, n_local = 0; ///< DoFHandler's
+    std::vector<std::uint32_t> box_of;  ///< box index of local node ln
+    /// Local nodes whose force sums go over ranks: ghosts and owned nodes
+    /// that are ghosts elsewhere (empty on one rank).
+    std::vector<std::uint32_t> shared_nodes;
+    std::array<std::vector<double>, dim> vel;   ///< velocity, m/s
+    std::array<std::vector<double>, dim> frc;   ///< nodal force, N
+    std::array<std::vector<double>, dim> ext;   ///< external force, N
+    /// Bit d set: velocity component d fixed (zero); all bits at slots
+    /// without a local node. Clear at transition nodes (their velocity
+    /// comes from update_transition(), fixed components zero there).
+    std::vector<std::uint8_t>  fix;
+    std::vector<double>        inv_mass;   ///< 0 at transition nodes
+    std::vector<double>        owned_mass; ///< lumped mass at owned nodes
+    std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
+    std::vector<std::uint32_t> ext_nodes;    ///< box indices
+    double                     kinetic = 0;
+    /// Sums of the force components (@p f) of the shared nodes over ranks
+    /// (compress(add), update_ghost_values of the vector @p force).
+    void
+    sum_shared(std::array<std::vector<double>, dim> &f);
+
+    // Transition nodes (global, every rank).
+    std::vector<std::array<int, dim>> tr_ijk;
+    std::vector<double>               tr_mass, tr_vel;
+    std::vector<std::uint8_t>         tr_fix;
+    /// (element, corner, transition index) of this rank's elements.
+    std::vector<std::array<std::uint32_t, 3>> tr_corners;
+    /// (box index, transition index) of the local transition nodes.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> tr_local;
+    std::vector<double>                       tr_hg; ///< partial f^HG
+
+    std::vector<std::uint8_t> in_zone_cell;
+
+    template <bool update>
+    double
+    element_loop(const double dt, const double w);
+    template <bool with_ext>
+    std::array<double, 2>
+    node_loop(const double dt);
+    double
+    hourglass_stiffness(const double T, const double kappa) const;
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,301 @@
+// femp: SolidMPM<dim>, the explicit material point method for the fusible
+// solid (paper eqs. 11-13, METHOD sec. 4).
+//
+// Points of state 'solid' outside the finite-element zone take part. Their
+// state is copied from the ParticleHandler into flat arrays (structure of
+// arrays) at the start of a solid advance and written back at its end, so
+// that the hot loops touch no iterator. Transfers use trilinear (bilinear in
+// 2D) tent functions of the cell that holds the point; node indices come
+// from index arithmetic on the background grid (first node of the cell plus
+// fixed corner offsets).
+//
+// Update variant: MUSL (modified update stress last), with the central
+// difference of eq. (10):
+//   1. P2G of mass, momentum and forces (eqs. 11-13):
+//        m_I = sum N m_p, p_I = sum N m_p v_p(x_I),
+//        f_I = -sum V_p sigma_p grad N + sum N m_p g (+ fluid forces);
+//   2. p_I += dt f_I on the grid (with boundary conditions);
+//   3. G2P of the new point velocity, then (same loop)
+//   4. P2G of the new point momentum (re-map), v_I = p_I / m_I;
+//   5. velocity gradient L_p = sum v_I (x) grad N and stress update (eq. 5);
+//      then the point moves, x_p += dt sum N v_I (grid velocities of 2).
+// All transfers of a step use the tents at the point's position at the
+// start of the step (the textbook MUSL): the re-map then divides by the node
+// masses of the same weights. (Re-mapping with the weights at the moved
+// position, as this code did before, gives nodes at a free surface that a
+// point leaves a momentum that does not match their mass.)
+// MUSL is chosen over USF/USL because the stress is computed from velocities
+// re-mapped from the updated points: nodes with a tiny mass share of a point
+// do not produce spurious strain rates (the classic USL instability), and it
+// is the variant whose energy behaviour is best documented for explicit MPM.
+//
+// Velocity transfer ("Solid/Velocity transfer"):
+//   FLIP: v_p += dt sum N a_I, point velocity field v_p(x_I) = v_p;
+//   APIC (default; Jiang et al. 2015): v_p = sum N v_I,
+//         C_p = sum v_I (x) grad N (the B D^-1 form of APIC equals this for
+//         multilinear tents), v_p(x_I) = v_p + C_p (x_I - x_p).
+// With one point per cell and linear tents, APIC gives back the nodal
+// velocities exactly in the next P2G (for any point position in the cell),
+// so the MPM wave operator is that of the lumped-mass one-point FE; FLIP
+// smooths the nodal velocities by (1/4 1/2 1/4) in every round trip, which
+// made case 3.1 dispersive (doc/solid.md). The point kinetic energy of APIC
+// includes the affine part, 1/2 m_p (|v_p|^2 + C_p : C_p D_p), D_p = sum N
+// (x_I - x_p)(x_I - x_p)^T = diag(h^2 xi_d (1 - xi_d)), the kinetic energy
+// the point hands to the grid.
+//
+// Speed: two passes over the points per step when sub-cycling: G2P + MUSL
+// re-map (steps 3-4), and the stress update (5) + move fused with the P2G
+// (1) of the next step, whose node sums wait in a buffer of SolidMPM until
+// p2g() hands them over (the P2G of a point needs only that point's state
+// after its stress update, so the fusion changes no arithmetic). The first
+// step after a gather() runs a separate P2G pass. Flat arrays per component,
+// node indices by the first node of the cell plus fixed corner offsets, tent
+// weights recomputed from the local coordinate in registers (a cache of
+// 2^dim (dim + 1) weights per point would cost more memory traffic than the
+// few multiplications). G2P and the velocity gradient of the stress update
+// evaluate the multilinear interpolant of the nodal velocities in monomial
+// form, with coefficients computed once per cell (the points are sorted by
+// cell), instead of summing tents times nodal values (the same polynomial:
+// equal up to round-off). The point arrays are prefetched a few points
+// ahead. Kinetic energy and gravity power are summed in the stress loop.
+//
+// The forces use sigma_p + q_p I, with the artificial bulk-viscosity
+// pressure q_p = b1 rho c h tr(D) of the last stress update (see
+// SolidMaterial::bulk_viscosity), stored with the point.
+//
+// Cell crossing: after the stress update a point that left its cell is
+// bound to its new cell when that cell is owned by this rank (flat arrays
+// only; the ParticleHandler is updated by MaterialPoints::relocate_points()
+// when the state is written back). When a point enters a cell of another
+// rank, SolidStress calls resort() after the step: write back, deal.II's
+// global sort (MaterialPoints::points_moved()), gather again. A point that
+// enters the finite-element zone or leaves the domain stops the run with a
+// message (the FE zone has no place for it).
+#ifndef femp_solid_mpm_h
+#define femp_solid_mpm_h
+
+#include <deal.II/base/tensor.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/solid/constitutive.h>
+#include <femp/grid/material_points.h>
+
+#include <array>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  /// Node fields of the solid on the background grid (local node box).
+  template <int dim>
+  struct SolidNodeFields
+  {
+    std::vector<double>                 mass;
+    std::array<std::vector<double>, dim> momentum, force, velocity;
+
+    void
+    resize(const std::size_t n)
+    {
+      mass.assign(n, 0.);
+      for (int d = 0; d < dim; ++d)
+        {
+          momentum[d].assign(n, 0.);
+          force[d].assign(n, 0.);
+          velocity[d].assign(n, 0.);
+        }
+    }
+  };
+
+  template <int dim>
+  class SolidMPM
+  {
+  public:
+    SolidMPM(const BackgroundGrid<dim> &grid,
+             const SolidMaterial &      material,
+             MaterialPoints<dim> &      points);
+
+    /// Copy the state of the solid points that lie in cells with
+    /// @p excluded_cell[idx] == 0 into the flat arrays. Inertial masses are
+    /// multiplied by @p mass_scaling (gravity uses the true mass). Points in
+    /// state fluid get zero stress, plastic strain, viscous pressure and
+    /// affine velocity, and, unless the melt flow owns them
+    /// (set_flow_owns_fluid_points()), zero velocity.
+    void
+    gather(const std::vector<std::uint8_t> &excluded_cell,
+           const double                      mass_scaling);
+    /// With the melt flow running beside the solid: gather() leaves the
+    /// velocity of fluid points alone (the flow owns it).
+    void
+    set_flow_owns_fluid_points(const bool b)
+    {
+      flow_owns_fluid = b;
+    }
+    /// Write positions, velocities, stresses, plastic strains, volumes,
+    /// viscous pressures and affine velocities back to the particles, and
+    /// move points that changed cells to their new cells (collective).
+    void
+    scatter();
+    /// After a step in which some point (on any rank) entered a cell of
+    /// another rank: scatter, global sort, gather (collective).
+    void
+    resort();
+
+    /// Step 1: add point mass, momentum and forces (internal and gravity) to
+    /// the node fields (partial sums of this rank).
+    /// When the last update_stresses() already computed these sums (fused
+    /// pass), they are added from its buffer.
+    void
+    p2g(SolidNodeFields<dim> &nodes, const Tensor<1, dim> &gravity);
+    /// Steps 3 and 4: velocity update (FLIP from the nodal accelerations in
+    /// nodes.force = f_I / m_I, or APIC from nodes.velocity) and re-map of
+    /// the new point momenta into nodes.momentum (partial sums; the caller
+    /// zeroes it before).
+    void
+    g2p(SolidNodeFields<dim> &nodes, const double dt);
+    /// Step 5: stress update from node velocities; @p T_old and @p T_new are
+    /// cell temperatures at the start and end of the step. Returns the
+    /// stress work sum V sigma : D dt of this rank. Then moves the points by
+    /// the grid velocity of g2p() and binds points that left their cell to
+    /// their new owned cell (see n_left_rank()). From the second step after
+    /// a gather() on, the same pass also computes the P2G sums of the next
+    /// step (with the gravity of the last p2g()) for the next p2g().
+    double
+    update_stresses(const SolidNodeFields<dim> &nodes,
+                    const double                dt,
+                    const std::vector<double> & T_old,
+                    const std::vector<double> & T_new);
+    /// Points of this rank that entered a cell of another rank in the last
+    /// update_stresses() (resort() needed).
+    unsigned int
+    n_left_rank() const
+    {
+      return left_rank;
+    }
+    /// True if in the last update_stresses() a point entered the FE zone or
+    /// left the domain (the run must stop; see escaped_point()).
+    bool
+    point_lost() const
+    {
+      return lost;
+    }
+
+    /// Exchange with the melt since the last gather(), on this rank; call
+    /// before gather(). Points that took part in the last gather and are no
+    /// longer solid (melted) or lie in an excluded cell (entered the FE zone:
+    /// lost), and solid points outside excluded cells that did not take part
+    /// (solidified): their numbers and kinetic energies (inertial mass, APIC
+    /// with the affine part), and the position of one lost point.
+    struct Exchange
+    {
+      double     n_melted = 0, n_solidified = 0, n_lost = 0;
+      double     k_melted = 0, k_solidified = 0;
+      Point<dim> lost_at;
+    };
+    Exchange
+    exchange_since_gather() const;
+
+    /// Kinetic energy of this rank's points, J (2D: J/m); APIC includes the
+    /// affine part. Summed in gather() and update_stresses().
+    double
+    kinetic_energy() const
+    {
+      return kinetic;
+    }
+    /// Power of gravity at the current velocities, W.
+    double
+    gravity_power(const Tensor<1, dim> &gravity) const
+    {
+      double w = 0;
+      for (int d = 0; d < dim; ++d)
+        w += gravity[d] * weight_momentum[d];
+      return w;
+    }
+    /// Number of points taking part (this rank).
+    std::size_t
+    n_points() const
+    {
+      return true_mass.size();
+    }
+    /// Mean sigma_xx and number of points in cell @p idx (this rank).
+    std::pair<double, unsigned int>
+    cell_stress_xx(const std::size_t idx) const;
+    /// Add sigma_xx and the von Mises stress of every point to its cell
+    /// (sums) and count the points per cell.
+    void
+    add_cell_stresses(std::vector<double> &sxx,
+                      std::vector<double> &vm,
+                      std::vector<double> &count) const;
+    /// Position of the first point with a non-finite state, if any.
+    bool
+    find_non_finite(Point<dim> &where) const;
+    /// Position of a point that entered the FE zone or left the domain.
+    const Point<dim> &
+    escaped_point() const
+    {
+      return escaped;
+    }
+
+  private:
+    const BackgroundGrid<dim> &grid;
+    const SolidMaterial &      mat;
+    MaterialPoints<dim> &      points;
+    static constexpr unsigned int n_corners = 1u << dim;
+    static constexpr unsigned int n_stress  = 6; // xx yy zz xy xz yz
+    std::array<std::ptrdiff_t, n_corners> corner_offset;
+    bool                                  apic;
+
+    // Structure of arrays, one vector per component.
+    std::array<std::vector<double>, dim>       x, v, corner;
+    /// Grid velocity at x_p (FLIP; with APIC it is v).
+    std::array<std::vector<double>, dim>       xdot;
+    std::array<std::vector<double>, dim * dim> C; ///< APIC, row-major, 1/s
+    std::vector<double>                        true_mass, volume;
+    std::vector<double>                   visc; ///< viscous pressure q, Pa
+    std::array<std::vector<double>, n_stress> sigma;
+    std::vector<double>                       eps_p;
+    std::vector<std::uint32_t>                cell, node0;
+    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+      handle;
+
+    std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
+    double                    scaling = 1; ///< inertial mass / true_mass
+    double                    kinetic = 0;
+    std::array<double, dim>   weight_momentum{}; ///< sum m_true v
+    bool                      moved_cell = false, lost = false;
+    bool                      flow_owns_fluid = false;
+    unsigned int              left_rank  = 0;
+    Point<dim>                escaped;
+
+    /// Particle ids of the points of the last gather(), sorted.
+    std::vector<types::particle_index> member_ids;
+
+    /// P2G sums of the next step from the fused pass of update_stresses():
+    /// mass, momentum (dim), force (dim) per node of the local box, zero
+    /// outside the nodes written (next_nodes, the corners of the cells that
+    /// hold points since the last gather(), marked in node_mark).
+    std::array<std::vector<double>, 1 + 2 * dim> next;
+    std::vector<std::uint32_t>                   next_nodes;
+    std::vector<std::uint8_t>                    node_mark;
+    bool                 next_ready = false; ///< next holds the next P2G
+    bool                 next_dirty = false; ///< next is not all zero
+    unsigned int         steps_since_gather = 0;
+    bool                 have_gravity       = false;
+    Tensor<1, dim>       p2g_gravity; ///< of the last p2g()
+
+    /// Marks the corners of the cell with first node @p n0 in next_nodes.
+    void
+    mark_cell_nodes(const std::size_t n0);
+    /// Zeroes next at next_nodes if it was written.
+    void
+    clear_next();
+    /// Write the flat arrays back to the particles (no re-sorting).
+    void
+    write_back();
+    /// Kinetic energy and gravity momentum by a loop over the points.
+    void
+    sum_energies();
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,299 @@
+// femp: SolidStress<dim>, the solid step of the macro step (METHOD sec. 4-5,
+// paper eqs. 5-17): material points (SolidMPM) and finite elements
+// (SolidFEM) coupled through the background-grid nodes, sub-cycled against
+// the temperature step.
+//
+// Coupling (eqs. 14-17). The FE mesh is its own triangulation, aligned
+// with the grid (solid_fem.h), so a transition node i coincides with a grid
+// node I and N_Ii = 1. The two meshes are partitioned independently: the
+// rank owning an FE element need not own the grid cells around its
+// transition nodes. Each step:
+//   1. point mass, momentum and forces to the grid (eqs. 11-13), partial
+//      sums of this rank, on the grid nodes of MPM cells only;
+//   2. one MPI_Allreduce of a buffer over all transition nodes (numbered
+//      globally from geometry): this rank's partial grid mass, momentum and
+//      force there (before the grid's shared-node sum), its FE elements'
+//      internal force without hourglass part (eq. 9, gravity included) and
+//      its hourglass force. Every rank then has the totals and computes the
+//      same grid velocity and acceleration at every transition node
+//      (m = m_grid + m_FE, p = p_grid + m_FE v_i + dt f, eq. 14-16) and the
+//      new FE velocity v_i = v_I + dt f_i^HG / m_i (eq. 17, hourglass force
+//      added back locally);
+//   3. grid momentum update elsewhere (MPM nodes), FE central-difference
+//      update elsewhere (FE nodes, eq. 10; nodal sums over ranks through
+//      deal.II's distributed vector); points: FLIP velocity and position;
+//   4. MUSL re-map of the point momenta; at transition nodes the FE momentum
+//      m_FE v_i (known on every rank) is added;
+//   5. stresses at points (grid velocities) and, in one fused element loop,
+//      at Gauss points (FE node velocities) together with the element forces
+//      of the next step; eq. 5 with the cell temperatures of eq. 2.
+// Interior FE nodes never touch the grid: the FE costs no per-step work on
+// grid nodes. Without material points the grid work of a step is empty.
+// Time stepping. The solid keeps its own time t_s and step
+//   dt_s = C h / (sqrt(dim) c),  c = sqrt(M_max / (s rho)),
+// (C: safety factor; M_max: largest P-wave modulus of the E(T) table;
+// s: mass-scaling factor). advance(t) is called after every temperature
+// step and takes whole solid steps up to t; the cell temperatures of each
+// sub-step are interpolated linearly between the temperature fields of the
+// last two calls, so both orders work: several solid steps inside one
+// temperature step, or (case 3.1) one solid step spanning many temperature
+// steps. The last call of a run ends the solid exactly at the end time.
+//
+// Energies (global, J or J/m in 2D): external work (gravity, fluid forces),
+// stress work int sigma : D (internal), kinetic, hourglass, the kinetic
+// energy lost in the MPM transfers (measured per step on the grid), and
+// the kinetic energy of points that melted (left the solid) or solidified
+// (entered it), found at each gather by particle id; the balance
+// W_ext - (K - K_0) - W_int - E_HG - D_transfer - K_melted + K_solidified
+// and the ratio K / |W_int| (how far from quasi-static a mass-scaled run
+// is) go to a CSV file. Every gather and re-sort also counts the solid
+// points globally and stops the run if one was lost.
+#ifndef femp_solid_stress_h
+#define femp_solid_stress_h
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/solid/constitutive.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_fem.h>
+#include <femp/solid/solid_mpm.h>
+
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class SolidStress
+  {
+  public:
+    struct Parameters
+    {
+      double                   time_step     = 0;
+      double                   safety_factor = 0.5;
+      double                   mass_scaling  = 1;
+      /// With the melt flow only: nodes whose inertial mass is below this
+      /// fraction of a full cell's node take no force (doc/solid.md "Small
+      /// node masses"), -.
+      double                   small_mass_cutoff = 0.05;
+      Tensor<1, dim>           gravity;
+      std::vector<std::string> fixed_faces, roller_faces;
+      std::string              energy_file = "solid_energy.csv";
+      std::string              probe_file  = "solid_probes.csv";
+      std::vector<Point<dim>>  probes;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Checks that need the material and the grid: the prescribed step
+      /// against the elastic limit.
+      void
+      check(const SolidMaterial &                           m,
+            const typename BackgroundGrid<dim>::Parameters &g) const;
+      /// Largest stable step h / (sqrt(dim) c), s.
+      double
+      stable_limit(const SolidMaterial &m, const double h) const;
+    };
+
+    struct Energies
+    {
+      double external = 0, internal = 0, kinetic = 0, hourglass = 0;
+      double initial_kinetic = 0;
+      /// Energy of the hourglass modes measured with the reference
+      /// stiffness kappa = 0.05 even when control is off (stability studies:
+      /// how large the zero-energy modes have grown).
+      double hourglass_mode = 0;
+      /// Kinetic energy lost in the point-grid transfers (MPM: P2G of the
+      /// point momenta, incl. the projection onto the boundary conditions,
+      /// and G2P; measured per step as K_points - K_grid after P2G plus
+      /// K_grid - K_points after the grid update; FLIP can make it < 0).
+      double transfer = 0;
+      /// Kinetic energy of points that melted (left the solid) and of
+      /// points that solidified (entered it), summed over the run.
+      double melted = 0, solidified = 0;
+      /// Work of the nodal forces on the part of the updated grid velocity
+      /// that the MUSL re-map takes back, dt/2 f_I . (v_I - v_remap,I),
+      /// summed over the steps: energy the MPM update creates (> 0) or
+      /// destroys, a numerical error of MUSL, booked so that the balance
+      /// tests the rest (doc/solid.md "Energies").
+      double remap = 0;
+      double
+      balance() const
+      {
+        return external + remap - (kinetic - initial_kinetic) - internal -
+               hourglass - transfer - melted + solidified;
+      }
+    };
+
+    SolidStress(const Parameters &                     prm,
+                const typename SolidFEM<dim>::Parameters &fem_prm,
+                const SolidMaterial &                  material,
+                const BackgroundGrid<dim> &            grid,
+                MaterialPoints<dim> &                  points);
+
+    /// Set up the FE zone, boundary flags and the temperature history from
+    /// the cell temperatures @p T at time 0. @p directory receives the CSV
+    /// files (empty: none written).
+    void
+    initialize(const std::vector<double> &T, const std::string &directory);
+
+    /// Advance the solid to @p t (see header comment) given the cell
+    /// temperatures @p T at @p t; @p final ends exactly at @p t.
+    void
+    advance(const double t, const std::vector<double> &T, const bool final);
+
+    /// Entry point for the melt-flow solver: nodal forces on the background
+    /// grid nodes (one array per direction over the local node box; partial
+    /// contributions of this rank, summed over ranks with the solid's own),
+    /// held constant over the solid sub-steps; nullptr for none.
+    void
+    set_external_nodal_forces(const std::array<std::vector<double>, dim> *f)
+    {
+      external_forces = f;
+    }
+
+    /// The melt flow runs beside the solid: fluid points keep their
+    /// velocity at the gather (SolidMPM::set_flow_owns_fluid_points()).
+    void
+    set_flow_owns_fluid_points(const bool b)
+    {
+      mpm.set_flow_owns_fluid_points(b);
+    }
+    /// With the melt flow: grid nodes whose (inertial) mass is below
+    /// @p fraction of that of a node of a full cell, s rho h^dim / 2^dim,
+    /// take no force in the grid update (their velocity is their momentum
+    /// over their mass). Such nodes appear round solid fragments that
+    /// solidified at the positions where the flow left them (a point near
+    /// a cell face gives the opposite face's nodes a tiny mass but a full
+    /// shape-function gradient: the explicit update of those nodes is
+    /// unstable). 0 (default): off, the update is unchanged.
+    void
+    set_small_mass_cutoff(const double fraction);
+    /// With the melt flow: find the points that melted or solidified since
+    /// the last gather now, right after the temperature step changed their
+    /// states and before the flow changes the velocities of the melted
+    /// ones, so that `removed_by_melting` books the kinetic energy they had
+    /// in the solid; the next gather uses this instead of looking again
+    /// (local, no communication).
+    void
+    find_state_changes();
+
+    /// Solid step size in use, s.
+    double
+    time_step() const
+    {
+      return dt_solid;
+    }
+    double
+    time() const
+    {
+      return t_solid;
+    }
+    unsigned int
+    n_steps() const
+    {
+      return steps;
+    }
+    /// Global energies (collective).
+    Energies
+    energies() const;
+    /// sigma_xx (Pa) and temperature (K) at the cell holding each probe
+    /// point (element stress, or the mean over the cell's points; collective).
+    std::vector<std::array<double, 2>>
+    probe(const std::vector<Point<dim>> &x) const;
+    /// Cell fields over the local box for output: sigma_xx and the von
+    /// Mises stress (Pa) of the element of a cell, or the mean over its
+    /// solid points; 0 in cells without solid.
+    void
+    cell_stress_fields(std::vector<double> &sigma_xx,
+                       std::vector<double> &von_mises) const;
+    /// FE elements whose grid cell is owned by another rank (global; the
+    /// two meshes are partitioned independently).
+    double
+    fe_elements_off_rank() const;
+    /// Number of material points and finite elements in the solid (global).
+    std::array<double, 2>
+    sizes() const;
+
+  private:
+    Parameters                 prm;
+    const SolidMaterial &      mat;
+    const BackgroundGrid<dim> &grid;
+    MPI_Comm                   comm;
+    SolidMPM<dim>              mpm;
+    SolidFEM<dim>              fem;
+
+    SolidNodeFields<dim>                  nodes;
+    /// Grid nodes of this rank's owned cells outside the FE zone plus the
+    /// transition nodes among its owned-cell nodes: the only grid nodes a
+    /// solid step touches.
+    std::vector<std::uint32_t> active_nodes;
+    /// Owned cells outside the FE zone (the only cells whose temperature
+    /// the points need; none: no gather of the points at all).
+    std::vector<std::uint32_t> mpm_cells;
+    /// (transition index, local grid node) for transition nodes among the
+    /// nodes of this rank's owned cells.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
+    std::vector<double> tr_buffer, tr_v, tr_a;
+    /// Per transition node: FE velocity before the merge and the grid
+    /// (point) force, for the re-map work there.
+    std::vector<double> tr_u, tr_fgrid;
+    const std::array<std::vector<double>, dim> *external_forces = nullptr;
+    std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
+    std::vector<double>       T_solid, T_prev, T_next;
+    double                    t_solid = 0, t_prev = 0, dt_solid = 0;
+    unsigned int              steps   = 0;
+    double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
+    double D_transfer = 0, K_melted = 0, K_solidified = 0; // global
+    /// re-map work of the MUSL update, with the velocity jumps of the FE
+    /// node forces at the transition nodes (global)
+    double W_remap = 0;
+    double K_points        = 0; ///< kinetic energy of the points (global)
+    double n_points_global = 0; ///< solid points after the last step
+    /// Grid nodes whose point kinetic energy this rank counts (each node
+    /// on one rank: the owner of the cell with the node as lower corner,
+    /// clamped at the upper domain faces), with their transition index or
+    /// -1.
+    std::vector<std::pair<std::uint32_t, std::int32_t>> counted_nodes;
+    std::unique_ptr<std::ofstream> energy_out, probe_out;
+    /// State changes found by find_state_changes() for the next gather.
+    typename SolidMPM<dim>::Exchange pending_exchange;
+    bool                             have_pending_exchange = false;
+    /// Node mass below which the grid update applies no force (kg, 2D
+    /// kg/m; 0: off).
+    double small_mass = 0;
+
+    /// One solid step of size @p dt; @p w: weight of the step's end time
+    /// between the last two temperature fields.
+    void
+    step(const double dt, const double w);
+    void
+    write_rows();
+    /// Gather the points for a solid advance: book the kinetic energy of
+    /// melted and solidified points, and stop if a point was lost
+    /// (collective).
+    void
+    gather_points();
+    /// Kinetic energy of the points' share of the grid nodes (point-only
+    /// mass), from the momenta after P2G (@p updated false; components
+    /// with a boundary condition left out) or from the velocities after
+    /// the grid update (true); this rank's counted nodes.
+    double
+    grid_point_kinetic(const bool updated) const;
+    /// Stop with a diagnostic (@p where, step, @p time) if @p n_now
+    /// differs from @p n_expected.
+    void
+    check_point_count(const double       n_now,
+                      const double       n_expected,
+                      const std::string &where,
+                      const double       time) const;
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,79 @@
+// femp: thermophysical material data (eq. 1 coefficients), parameters and
+// their validation.
+#include <femp/base/material.h>
+
+namespace femp
+{
+  void
+  Material::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Material");
+    prm.declare_entry("Density", "7955", Patterns::Double(),
+                      "Metal density rho_m, kg/m^3; range (0, inf). Default: "
+                      "316L stainless steel (Kim 1975).");
+    prm.declare_entry("Specific heat", "300:426.6, 1670:608.6, 1730:770.4",
+                      Patterns::Anything(),
+                      "Metal specific heat c_m(T), J/(kg K), > 0: a number, or "
+                      "'T1:c1, T2:c2, ...' piecewise linear in T (K), held "
+                      "constant outside. Default: 316L (Kim 1975).");
+    prm.declare_entry("Thermal conductivity",
+                      "300:5.378, 1670:26.9, 1730:16.28, 3000:20.45",
+                      Patterns::Anything(),
+                      "Metal thermal conductivity lambda_m(T), W/(m K), > 0: "
+                      "a number or a 'T:value' table as for the specific heat. "
+                      "Default: 316L (Kim 1975).");
+    prm.declare_entry("Solidus temperature", "1670", Patterns::Double(),
+                      "Solidus T_s, K; range (0, liquidus).");
+    prm.declare_entry("Liquidus temperature", "1730", Patterns::Double(),
+                      "Liquidus T_l, K; range (solidus, inf). The liquid "
+                      "fraction rises linearly from T_s to T_l.");
+    prm.declare_entry("Latent heat of fusion", "2.68e5", Patterns::Double(),
+                      "L_m, J/kg; range [0, inf).");
+    prm.declare_entry("Gas density", "1.6", Patterns::Double(),
+                      "Ambient gas density rho_g, kg/m^3; range [0, inf). "
+                      "Enters partially filled cells and the surface weighting "
+                      "2 rho c/(rho_m c_m + rho_g c_g) of eq. (1).");
+    prm.declare_entry("Gas specific heat", "520", Patterns::Double(),
+                      "Ambient gas specific heat c_g, J/(kg K); range [0, inf).");
+    prm.declare_entry("Gas thermal conductivity", "0.018", Patterns::Double(),
+                      "Ambient gas conductivity lambda_g, W/(m K); range [0, "
+                      "inf). Cells without metal are not solved.");
+    prm.leave_subsection();
+  }
+
+
+  void
+  Material::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Material");
+    density = prm.get_double("Density");
+    specific_heat =
+      PiecewiseLinear::parse(prm.get("Specific heat"), "Material/Specific heat");
+    conductivity = PiecewiseLinear::parse(prm.get("Thermal conductivity"),
+                                          "Material/Thermal conductivity");
+    solidus            = prm.get_double("Solidus temperature");
+    liquidus           = prm.get_double("Liquidus temperature");
+    latent_heat_fusion = prm.get_double("Latent heat of fusion");
+    gas_density        = prm.get_double("Gas density");
+    gas_specific_heat  = prm.get_double("Gas specific heat");
+    gas_conductivity   = prm.get_double("Gas thermal conductivity");
+    prm.leave_subsection();
+
+    require(density > 0, "Material/Density", density, "it must be positive (kg/m^3)");
+    require(specific_heat.min_value() > 0, "Material/Specific heat",
+            specific_heat.min_value(), "every specific heat must be positive (J/(kg K))");
+    require(conductivity.min_value() > 0, "Material/Thermal conductivity",
+            conductivity.min_value(), "every conductivity must be positive (W/(m K))");
+    require(solidus > 0, "Material/Solidus temperature", solidus,
+            "it must be positive (K)");
+    require(liquidus > solidus, "Material/Liquidus temperature", liquidus,
+            "it must exceed the solidus temperature " + num(solidus) + " K");
+    require(latent_heat_fusion >= 0, "Material/Latent heat of fusion",
+            latent_heat_fusion, "it must be non-negative (J/kg)");
+    require(gas_density >= 0, "Material/Gas density", gas_density, "it must be non-negative");
+    require(gas_specific_heat >= 0, "Material/Gas specific heat", gas_specific_heat,
+            "it must be non-negative");
+    require(gas_conductivity >= 0, "Material/Gas thermal conductivity",
+            gas_conductivity, "it must be non-negative");
+  }
+} // namespace femp

@@ -1,0 +1,988 @@
+// femp: material points on the background grid: creation of the substrate
+// and the powder layer (inserted cell by cell), metal fraction by sub-cell
+// occupation (by point volume in cells holding melt), and the cell-to-point
+// temperature transfer (METHOD sec. 1-2).
+#include <deal.II/base/mpi.h>
+
+#include <femp/base/input_checks.h>
+#include <femp/grid/material_points.h>
+#include <femp/grid/powder_bed.h>
+
+#include <bitset>
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <map>
+#include <cmath>
+
+namespace femp
+{
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Material points");
+    prm.declare_entry("Point spacing", "4e-6", Patterns::Double(0.),
+                      "Spacing of the lattice on which material points are "
+                      "placed, m; range (0, cell size / sub-cell divisions].");
+    prm.declare_entry("Substrate top", "1.5e-4", Patterns::Double(),
+                      "Vertical coordinate (z in 3D, y in 2D) of the top of the "
+                      "substrate block, m; the block fills the domain below it. "
+                      "Range [lower corner, upper corner].");
+    prm.declare_entry("Sub-cell divisions", "2", Patterns::Integer(1, 4),
+                      "Sub-cells per direction n used to compute the metal "
+                      "fraction alpha by occupation (cells holding melt, i.e. "
+                      "a point that is or has been fluid, take the volume of "
+                      "their points instead); range 1..4.");
+    prm.enter_subsection("Powder layer");
+    prm.declare_entry("Layer thickness", "5e-5", Patterns::Double(0.),
+                      "Thickness of the powder layer on the substrate, m; 0 for "
+                      "no powder. Range [0, upper corner - substrate top].");
+    prm.declare_entry("Mean grain diameter", "30e-6", Patterns::Double(0.),
+                      "Mean diameter of the normally distributed grain sizes, m.");
+    prm.declare_entry("Grain diameter deviation", "8e-6", Patterns::Double(0.),
+                      "Standard deviation of the grain diameters, m; range [0, inf).");
+    prm.declare_entry("Minimum grain diameter", "15e-6", Patterns::Double(0.),
+                      "Smallest grain diameter, m (the distribution is "
+                      "truncated); range (0, maximum].");
+    prm.declare_entry("Maximum grain diameter", "45e-6", Patterns::Double(0.),
+                      "Largest grain diameter, m; also capped by the layer "
+                      "thickness. Range [minimum, inf).");
+    prm.declare_entry("Packing fraction", "0.45", Patterns::Double(0., 0.64),
+                      "Target volume fraction of grains in the layer; random "
+                      "sequential addition reaches about 0.3-0.45 (3D). Range "
+                      "(0, 0.64].");
+    prm.declare_entry("Random seed", "1", Patterns::Integer(0),
+                      "Seed of the packing; the same seed gives the same bed.");
+    prm.leave_subsection();
+    prm.declare_entry(
+      "Initial bodies", "", Patterns::Anything(),
+      "Bodies of material points placed at the start besides the substrate "
+      "and the powder (flow scenes: a liquid column, a drop, a pool), "
+      "separated by ';'. Each is 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' "
+      "(lower and upper corner, m) or 'STATE ellipsoid: cx,cy[,cz] -> "
+      "ax,ay[,az] : T' (centre and semi-axes, m; equal semi-axes give a "
+      "circle or sphere), with STATE one of fluid, solid, powder and T the "
+      "temperature of its points, K (range (0, inf); the cells it fills take "
+      "the mean temperature of their points). A body must lie inside the "
+      "domain and must not overlap the powder layer; below the substrate "
+      "top it re-states the substrate's points. Empty (default): none.");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Material points");
+    point_spacing = prm.get_double("Point spacing");
+    substrate_top = prm.get_double("Substrate top");
+    subcells      = prm.get_integer("Sub-cell divisions");
+    prm.enter_subsection("Powder layer");
+    layer_thickness  = prm.get_double("Layer thickness");
+    mean_diameter    = prm.get_double("Mean grain diameter");
+    std_diameter     = prm.get_double("Grain diameter deviation");
+    min_diameter     = prm.get_double("Minimum grain diameter");
+    max_diameter     = prm.get_double("Maximum grain diameter");
+    packing_fraction = prm.get_double("Packing fraction");
+    seed             = prm.get_integer("Random seed");
+    prm.leave_subsection();
+    const std::string list = prm.get("Initial bodies");
+    prm.leave_subsection();
+    bodies.clear();
+    const std::string name = "Material points/Initial bodies";
+    const std::string form =
+      "each body must read 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' or "
+      "'STATE ellipsoid: centre -> semi-axes : T' with STATE fluid, solid or "
+      "powder, " + std::to_string(dim) + " coordinates per point (m) and T > 0 (K)";
+    const auto to_point = [&](const std::string &text, const std::string &body) {
+      const auto parts = Utilities::split_string_list(text, ',');
+      require(parts.size() == dim, name, body, form);
+      Point<dim> x;
+      for (int d = 0; d < dim; ++d)
+        {
+          try
+            {
+              x[d] = Utilities::string_to_double(parts[d]);
+            }
+          catch (...)
+            {
+              require(false, name, body, form);
+            }
+        }
+      return x;
+    };
+    for (const auto &body_text : Utilities::split_string_list(list, ';'))
+      {
+        if (body_text.empty())
+          continue;
+        const auto parts = Utilities::split_string_list(body_text, ':');
+        require(parts.size() == 3, name, body_text, form);
+        Body body;
+        body.text        = body_text;
+        const auto words = Utilities::split_string_list(parts[0], ' ');
+        std::vector<std::string> w;
+        for (const auto &x : words)
+          if (!x.empty())
+            w.push_back(x);
+        require(w.size() == 2 &&
+                  (w[0] == "fluid" || w[0] == "solid" || w[0] == "powder") &&
+                  (w[1] == "box" || w[1] == "ellipsoid"),
+                name, body_text, form);
+        body.state = w[0] == "fluid" ? fluid : (w[0] == "solid" ? solid : powder);
+        body.box   = w[1] == "box";
+        const auto arrow = parts[1].find("->");
+        require(arrow != std::string::npos, name, body_text, form);
+        body.a = to_point(parts[1].substr(0, arrow), body_text);
+        body.b = to_point(parts[1].substr(arrow + 2), body_text);
+        try
+          {
+            body.T = Utilities::string_to_double(parts[2]);
+          }
+        catch (...)
+          {
+            require(false, name, body_text, form);
+          }
+        require(body.T > 0, name, body_text, form);
+        for (int d = 0; d < dim; ++d)
+          require(body.box ? body.b[d] > body.a[d] : body.b[d] > 0, name,
+                  body_text,
+                  body.box ? "the upper corner must exceed the lower corner in "
+                             "every direction" :
+                             "the semi-axes must be positive (m)");
+        bodies.push_back(body);
+      }
+    require(point_spacing > 0, "Material points/Point spacing", point_spacing,
+            "it must be positive (m)");
+    require(min_diameter > 0 && min_diameter <= max_diameter,
+            "Material points/Powder layer/Minimum grain diameter", min_diameter,
+            "it must be positive and not exceed the maximum grain diameter");
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::check(
+    const typename BackgroundGrid<dim>::Parameters &g) const
+  {
+    require(point_spacing <= g.cell_size / subcells * (1 + 1e-9),
+            "Material points/Point spacing", point_spacing,
+            "it must not exceed cell size / sub-cell divisions = " +
+              num(g.cell_size / subcells) +
+              " m, so that every sub-cell of a full cell holds a point");
+    const double lo = g.lower_corner[dim - 1], hi = g.upper_corner[dim - 1];
+    require(substrate_top >= lo && substrate_top <= hi,
+            "Material points/Substrate top", substrate_top,
+            "it must lie in the vertical extent of the domain [" +
+              num(lo) + ", " + num(hi) + "] m");
+    require(substrate_top + layer_thickness <= hi * (1 + 1e-12),
+            "Material points/Powder layer/Layer thickness", layer_thickness,
+            "the powder layer must fit below the top of the domain (at most " +
+              num(hi - substrate_top) + " m)");
+    for (const auto &body : bodies)
+      {
+        Point<dim> lower = body.a, upper = body.b;
+        if (!body.box)
+          lower = body.a - body.b, upper = body.a + body.b;
+        std::string domain = "[";
+        for (int d = 0; d < dim; ++d)
+          domain += num(g.lower_corner[d]) + ", " + num(g.upper_corner[d]) +
+                    (d + 1 < dim ? "] x [" : "]");
+        for (int d = 0; d < dim; ++d)
+          require(lower[d] >= g.lower_corner[d] - 1e-12 * std::abs(g.lower_corner[d]) &&
+                    upper[d] <= g.upper_corner[d] + 1e-12 * std::abs(g.upper_corner[d]),
+                  "Material points/Initial bodies", body.text,
+                  "each body must lie inside the domain " + domain + " m");
+        require(layer_thickness <= 0 || lower[dim - 1] >= substrate_top + layer_thickness ||
+                  upper[dim - 1] <= substrate_top,
+                "Material points/Initial bodies", body.text,
+                "a body must not overlap the powder layer [" + num(substrate_top) +
+                  ", " + num(substrate_top + layer_thickness) + "] m (vertical)");
+      }
+  }
+
+
+  template <int dim>
+  bool
+  MaterialPoints<dim>::Parameters::Body::inside(const Point<dim> &p) const
+  {
+    if (box)
+      {
+        for (int d = 0; d < dim; ++d)
+          if (p[d] < a[d] || p[d] > b[d])
+            return false;
+        return true;
+      }
+    double r = 0;
+    for (int d = 0; d < dim; ++d)
+      r += (p[d] - a[d]) * (p[d] - a[d]) / (b[d] * b[d]);
+    return r < 1;
+  }
+
+
+  template <int dim>
+  MaterialPoints<dim>::MaterialPoints(const Parameters &         prm,
+                                      const Material &           material,
+                                      const BackgroundGrid<dim> &grid,
+                                      const unsigned int n_properties)
+    : prm(prm)
+    , n_props(n_properties)
+    , mat(material)
+    , grid(grid)
+  {
+    Assert(n_props == PropertyIndex::n_used(false, false) ||
+             n_props == PropertyIndex::n_used(true, false) ||
+             n_props == PropertyIndex::n_used(true, true),
+           ExcMessage("MaterialPoints: the property count must end a layout block"));
+  }
+
+
+  template <int dim>
+  std::vector<std::string>
+  MaterialPoints<dim>::property_names(const unsigned int n)
+  {
+    std::vector<std::string> names = {
+      "mass", "volume", "temperature", "state", "peak_temperature"};
+    for (int d = 0; d < dim; ++d)
+      names.push_back(std::string("velocity_") + char('x' + d));
+    const char *s2[] = {"stress_xx", "stress_yy", "stress_xy"};
+    const char *s3[] = {"stress_xx", "stress_yy", "stress_zz",
+                        "stress_xy", "stress_xz", "stress_yz"};
+    for (int i = 0; i < dim * (dim + 1) / 2; ++i)
+      names.push_back(dim == 2 ? s2[i] : s3[i]);
+    names.push_back("plastic_strain");
+    if (dim == 2)
+      names.push_back("stress_zz");
+    names.push_back("viscous_pressure");
+    for (int i = 0; i < dim; ++i)
+      for (int j = 0; j < dim; ++j)
+        names.push_back(std::string("affine_velocity_") + char('x' + i) +
+                        char('x' + j));
+    names.resize(std::min<std::size_t>(n, names.size()));
+    return names;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::create(const double T0)
+  {
+    handler.initialize(grid.triangulation(), mapping, n_props);
+
+    const double s  = prm.point_spacing;
+    const double h  = grid.h();
+    const auto & x0 = grid.origin();
+
+    // Points per owned cell, as (flat index, position), gathered first.
+    std::vector<std::pair<std::uint32_t, Point<dim>>> points;
+
+    // Substrate block: the lattice below the substrate top.
+    for (const auto idx : grid.owned_cells())
+      add_lattice_points(idx, prm.substrate_top, nullptr, points);
+
+    // Powder layer: the same bed on every rank; keep points of owned cells.
+    if (prm.layer_thickness > 0)
+      {
+        PowderBedSpec spec;
+        spec.dim = dim;
+        for (int d = 0; d < dim; ++d)
+          {
+            spec.lower[d] = x0[d];
+            spec.upper[d] = x0[d] + grid.n_cells()[d] * h;
+          }
+        spec.lower[dim - 1]    = prm.substrate_top;
+        spec.upper[dim - 1]    = prm.substrate_top + prm.layer_thickness;
+        spec.mean_diameter     = prm.mean_diameter;
+        spec.std_diameter      = prm.std_diameter;
+        spec.min_diameter      = prm.min_diameter;
+        spec.max_diameter      = prm.max_diameter;
+        spec.packing_fraction  = prm.packing_fraction;
+        spec.seed              = prm.seed;
+        const PowderBed bed    = pack_powder_bed(spec);
+        n_grains               = bed.grains.size();
+        packing                = bed.achieved_packing_fraction;
+        for (const auto &g : bed.grains)
+          {
+            std::array<long, dim> first, last;
+            for (int d = 0; d < dim; ++d)
+              {
+                const double lo = std::max(g.center[d] - g.radius, spec.lower[d]);
+                const double hi = std::min(g.center[d] + g.radius,
+                                           x0[d] + grid.n_cells()[d] * h);
+                first[d] = static_cast<long>(std::ceil((lo - x0[d]) / s - 0.5));
+                last[d]  = static_cast<long>(std::ceil((hi - x0[d]) / s - 0.5)) - 1;
+              }
+            std::array<long, dim> i = first;
+            bool                  done = false;
+            for (int d = 0; d < dim; ++d)
+              done = done || last[d] < first[d];
+            while (!done)
+              {
+                Point<dim> p;
+                double     r2 = 0;
+                for (int d = 0; d < dim; ++d)
+                  {
+                    p[d] = x0[d] + (i[d] + 0.5) * s;
+                    r2 += (p[d] - g.center[d]) * (p[d] - g.center[d]);
+                  }
+                if (r2 <= g.radius * g.radius && p[dim - 1] >= prm.substrate_top)
+                  {
+                    const auto ijk = grid.cell_of(p);
+                    if (grid.in_box(ijk))
+                      {
+                        const auto idx = grid.local_index(ijk);
+                        if (grid.cell_status()[idx] == BackgroundGrid<dim>::owned)
+                          points.emplace_back(idx, p);
+                      }
+                  }
+                int d = 0;
+                for (; d < dim; ++d)
+                  {
+                    if (++i[d] <= last[d])
+                      break;
+                    i[d] = first[d];
+                  }
+                done = (d == dim);
+              }
+          }
+      }
+
+    // Initial bodies: their lattice points above the substrate top.
+    if (!prm.bodies.empty())
+      for (const auto idx : grid.owned_cells())
+        add_lattice_points(idx, std::numeric_limits<double>::infinity(),
+                           [this](const Point<dim> &p) {
+                             if (p[dim - 1] < prm.substrate_top)
+                               return false;
+                             for (const auto &b : prm.bodies)
+                               if (b.inside(p))
+                                 return true;
+                             return false;
+                           },
+                           points);
+
+    insert_points(points, T0, [this](const Point<dim> &p) {
+      return p[dim - 1] < prm.substrate_top ? solid : powder;
+    });
+    if (prm.bodies.empty())
+      return;
+    // State and temperature of the points inside bodies (last body wins).
+    using P = PropertyIndex;
+    for (auto &particle : handler)
+      {
+        const Point<dim> p = particle.get_location();
+        for (auto b = prm.bodies.rbegin(); b != prm.bodies.rend(); ++b)
+          if (b->inside(p))
+            {
+              auto v                  = particle.get_properties();
+              v[P::state]             = b->state;
+              v[P::temperature]       = b->T;
+              v[P::peak_temperature]  = b->T;
+              break;
+            }
+      }
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::add_lattice_points(
+    const std::uint32_t                                idx,
+    const double                                       vertical_limit,
+    const std::function<bool(const Point<dim> &)> &    keep,
+    std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const
+  {
+    // Global lattice x = x0 + (i + 1/2) s; the points of cell idx below
+    // vertical_limit (and accepted by keep, if given).
+    const double s   = prm.point_spacing;
+    const double h   = grid.h();
+    const auto & x0  = grid.origin();
+    const auto   ijk = grid.global_index(idx);
+    std::array<long, dim> first, last;
+    for (int d = 0; d < dim; ++d)
+      {
+        double lo = ijk[d] * h, hi = (ijk[d] + 1) * h;
+        if (d == dim - 1)
+          hi = std::min(hi, vertical_limit - x0[d]);
+        first[d] = static_cast<long>(std::ceil(lo / s - 0.5));
+        last[d]  = static_cast<long>(std::ceil(hi / s - 0.5)) - 1;
+        if (last[d] < first[d])
+          return;
+      }
+    std::array<long, dim> i = first;
+    while (true)
+      {
+        Point<dim> p;
+        for (int d = 0; d < dim; ++d)
+          p[d] = x0[d] + (i[d] + 0.5) * s;
+        if (!keep || keep(p))
+          points.emplace_back(idx, p);
+        int d = 0;
+        for (; d < dim; ++d)
+          {
+            if (++i[d] <= last[d])
+              break;
+            i[d] = first[d];
+          }
+        if (d == dim)
+          return;
+      }
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::insert_points(
+    std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
+    const double                                       T0,
+    const std::function<State(const Point<dim> &)> &   state_of)
+  {
+    // Insert cell by cell (stable sort keeps the lattice order in a cell),
+    // with globally unique ids from an exclusive scan of the counts.
+    std::stable_sort(points.begin(), points.end(),
+                     [](const auto &a, const auto &b) { return a.first < b.first; });
+    // (types::particle_index is 32 bits in this deal.II build: the scan
+    // goes through 64-bit integers, then the offset is narrowed.)
+    std::uint64_t n_local64 = points.size(), offset64 = 0;
+    MPI_Exscan(&n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM,
+               grid.communicator());
+    if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
+      offset64 = 0;
+    const types::particle_index offset = offset64;
+
+    const double        h = grid.h();
+    std::vector<double> props(n_props, 0.);
+    const double        volume = std::pow(prm.point_spacing, dim);
+    props[PropertyIndex::mass]             = mat.density * volume;
+    props[PropertyIndex::volume]           = volume;
+    props[PropertyIndex::temperature]      = T0;
+    props[PropertyIndex::peak_temperature] = T0;
+    handler.reserve(points.size());
+    occupied.clear();
+    for (std::size_t n = 0; n < points.size(); ++n)
+      {
+        const auto  idx  = points[n].first;
+        const auto &cell = grid.cell_iterator(idx);
+        if (occupied.empty() || occupied.back().first != idx)
+          occupied.emplace_back(idx, cell);
+        const Point<dim> &p = points[n].second;
+        Point<dim>        ref;
+        const Point<dim>  v0 = cell->vertex(0);
+        for (int d = 0; d < dim; ++d)
+          ref[d] = (p[d] - v0[d]) / h;
+        props[PropertyIndex::state] = state_of(p);
+        handler.insert_particle(p, ref, offset + n, cell,
+                                ArrayView<const double>(props));
+      }
+    handler.update_cached_numbers();
+    cache_point_handles();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::cache_point_handles()
+  {
+    // Where the properties of the points of each occupied cell live in the
+    // property pool, so that the per-step loops write them directly (a
+    // particles_in_cell() range per cell costs ~20 ns per point). Valid
+    // until points are inserted, removed or re-sorted: call again then.
+    point_properties.clear();
+    cell_begin.assign(1, 0);
+    for (const auto &[idx, cell] : occupied)
+      {
+        for (auto &particle : handler.particles_in_cell(cell))
+          point_properties.push_back(particle.get_properties().data());
+        cell_begin.push_back(point_properties.size());
+      }
+  }
+
+
+  template <int dim>
+  std::vector<double>
+  MaterialPoints<dim>::metal_fraction() const
+  {
+    // Sub-cell occupancy (METHOD sec. 2) everywhere, and, when some point
+    // is fluid, the volume of the points in the cells that hold a fluid
+    // point (see the header; doc/flow.md, "Volume-based alpha").
+    using P                = PropertyIndex;
+    const unsigned int n   = prm.subcells;
+    const double       ih  = n / grid.h();
+    const auto &       x0  = grid.origin();
+    const double       Ts  = mat.solidus;
+    std::vector<std::uint64_t> mask(grid.n_local(), 0);
+    std::vector<double>        volume(grid.n_local(), 0.);
+    std::vector<double>        fluid_cell(grid.n_local(), 0.);
+    bool                       any_fluid = false;
+    for (const auto &particle : handler)
+      {
+        const Point<dim> p = particle.get_location();
+        std::array<int, dim> ijk;
+        unsigned int         bit = 0, m = 1;
+        for (int d = 0; d < dim; ++d)
+          {
+            const int sub = static_cast<int>(std::floor((p[d] - x0[d]) * ih));
+            const int c   = std::min(std::max(sub / int(n), 0),
+                                   int(grid.n_cells()[d]) - 1);
+            ijk[d] = c;
+            bit += m * std::min(std::max(sub - c * int(n), 0), int(n) - 1);
+            m *= n;
+          }
+        const auto idx = grid.local_index(ijk);
+        mask[idx] |= (std::uint64_t(1) << bit);
+        const auto v = particle.get_properties();
+        volume[idx] += v[P::volume];
+        if (v[P::state] == fluid || v[P::peak_temperature] > Ts)
+          fluid_cell[idx] = 1, any_fluid = true;
+      }
+    const double        inv_nsub = 1. / std::pow(n, dim);
+    std::vector<double> alpha(grid.n_local(), 0.);
+    for (std::size_t i = 0; i < alpha.size(); ++i)
+      alpha[i] = std::bitset<64>(mask[i]).count() * inv_nsub;
+    if (Utilities::MPI::logical_or(any_fluid, grid.communicator()))
+      volume_fraction_of_fluid_cells(volume, fluid_cell, alpha);
+    grid.update_ghosts(alpha);
+    return alpha;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::volume_fraction_of_fluid_cells(
+    std::vector<double> &      v,
+    std::vector<double> &      is_fluid,
+    std::vector<double> &      alpha) const
+  {
+    // v: point volume per cell (owned cells), made a fraction of the cell
+    // volume; is_fluid: 1 in cells holding a fluid point. Excess volume
+    // (v > 1) of a fluid cell goes to its fluid face neighbours, first to
+    // fill their deficits (1 - v, in proportion), the rest in equal shares
+    // (they pass it on at the next sweep), until no fluid cell is over-full
+    // or max_sweeps is reached; each sweep conserves sum v exactly. The
+    // amounts depend only on the cell and its neighbours' values, so 1 and
+    // n ranks give the same alpha.
+    constexpr unsigned int max_sweeps = 32;
+    const double           inv_V      = 1. / std::pow(grid.h(), dim);
+    const auto &           cells      = grid.owned_cells();
+    const auto &           st         = grid.strides();
+    std::vector<std::uint32_t> fluid;
+    for (const auto idx : cells)
+      {
+        v[idx] *= inv_V;
+        if (is_fluid[idx] > 0)
+          fluid.push_back(idx);
+      }
+    grid.update_ghosts(is_fluid);
+    // Number of fluid face neighbours (padding cells are never fluid).
+    std::vector<double> n_fluid(grid.n_local(), 0.);
+    for (const auto idx : fluid)
+      for (int d = 0; d < dim; ++d)
+        n_fluid[idx] += is_fluid[idx - st[d]] + is_fluid[idx + st[d]];
+    grid.update_ghosts(n_fluid);
+    std::vector<double> deficit(grid.n_local(), 0.), v_new(fluid.size());
+    for (unsigned int sweep = 0; sweep < max_sweeps; ++sweep)
+      {
+        grid.update_ghosts(v);
+        double excess = 0;
+        for (const auto idx : fluid)
+          {
+            excess = std::max(excess, n_fluid[idx] > 0 ? v[idx] - 1 : 0.);
+            double D = 0;
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t s : {-st[d], st[d]})
+                if (is_fluid[idx + s] > 0)
+                  D += std::max(0., 1 - v[idx + s]);
+            deficit[idx] = D;
+          }
+        if (Utilities::MPI::max(excess, grid.communicator()) <= 1e-12)
+          break;
+        grid.update_ghosts(deficit);
+        for (std::size_t k = 0; k < fluid.size(); ++k)
+          {
+            const auto   idx = fluid[k];
+            const double own = std::max(0., 1 - v[idx]);
+            double       vc  = v[idx];
+            if (vc > 1 && n_fluid[idx] > 0)
+              vc = 1;
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t s : {-st[d], st[d]})
+                {
+                  const auto   nb = idx + s;
+                  const double E  = v[nb] - 1;
+                  if (is_fluid[nb] <= 0 || E <= 0)
+                    continue;
+                  const double D = deficit[nb];
+                  if (D > 0)
+                    vc += own * std::min(1., E / D);
+                  if (E > D)
+                    vc += (E - D) / n_fluid[nb];
+                }
+            v_new[k] = vc;
+          }
+        for (std::size_t k = 0; k < fluid.size(); ++k)
+          v[fluid[k]] = v_new[k];
+      }
+    for (const auto idx : fluid)
+      alpha[idx] = std::min(1., v[idx]);
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::cells_to_points(const std::vector<double> &T)
+  {
+    using P         = PropertyIndex;
+    const double Ts = mat.solidus;
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      {
+        const double Tc = T[occupied[c].first];
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          {
+            double *const v   = point_properties[k];
+            v[P::temperature] = Tc;
+            if (Tc > v[P::peak_temperature])
+              v[P::peak_temperature] = Tc;
+            if (Tc > Ts)
+              v[P::state] = fluid;
+            else if (v[P::state] == fluid)
+              v[P::state] = solid;
+          }
+      }
+  }
+
+  template <int dim>
+  std::vector<std::pair<std::uint32_t, double>>
+  MaterialPoints<dim>::volume_mean_over_points(
+    const std::vector<double> &          T,
+    const std::function<double(double)> &e) const
+  {
+    // Only cells where some point brought another temperature need the
+    // sums; a comparison per point finds them (~1 ns), e is evaluated
+    // only there.
+    using P = PropertyIndex;
+    std::vector<std::pair<std::uint32_t, double>> mean;
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      {
+        const double Tc  = T[occupied[c].first];
+        bool         any = false;
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          any = any || point_properties[k][P::temperature] != Tc;
+        if (!any)
+          continue;
+        const double ec = e(Tc);
+        double       sv = 0, se = 0;
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          {
+            const double *const v  = point_properties[k];
+            const double        Tp = v[P::temperature];
+            sv += v[P::volume];
+            se += v[P::volume] * (Tp != Tc ? e(Tp) - ec : 0.);
+          }
+        if (sv > 0)
+          mean.emplace_back(occupied[c].first, ec + se / sv);
+      }
+    return mean;
+  }
+
+  template <int dim>
+  std::vector<double>
+  MaterialPoints<dim>::zone_tags() const
+  {
+    std::vector<double> zone(grid.n_local(), 0.);
+    for (const auto &[idx, cell] : occupied)
+      {
+        bool any_fluid = false, any_powder = false;
+        for (const auto &particle : handler.particles_in_cell(cell))
+          {
+            const auto state = particle.get_properties()[PropertyIndex::state];
+            any_fluid        = any_fluid || state == fluid;
+            any_powder       = any_powder || state == powder;
+          }
+        zone[idx] = any_fluid ? 3 : (any_powder ? 1 : 2);
+      }
+    return zone;
+  }
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::create_region(
+    const std::function<bool(const Point<dim> &)> &inside,
+    const double                                   T0,
+    const State                                    state)
+  {
+    handler.clear();
+    handler.initialize(grid.triangulation(), mapping, n_props);
+    std::vector<std::pair<std::uint32_t, Point<dim>>> points;
+    for (const auto idx : grid.owned_cells())
+      add_lattice_points(idx, std::numeric_limits<double>::max(), inside, points);
+    insert_points(points, T0, [state](const Point<dim> &) { return state; });
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::index_occupied_cells()
+  {
+    // Owned cells that hold points, and where their properties live; after
+    // points were inserted, removed or re-sorted.
+    occupied.clear();
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto &cell = grid.cell_iterator(idx);
+        if (handler.n_particles_in_cell(cell) > 0)
+          occupied.emplace_back(idx, cell);
+      }
+    cache_point_handles();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::points_moved()
+  {
+    handler.sort_particles_into_subdomains_and_cells();
+    index_occupied_cells();
+  }
+
+
+  template <int dim>
+  bool
+  MaterialPoints<dim>::relocate_points(const std::vector<std::uint32_t> *from)
+  {
+    struct Move
+    {
+      Point<dim>            location, reference;
+      types::particle_index id;
+      std::uint32_t         cell;
+      std::vector<double>   properties;
+    };
+    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+                      to_remove;
+    std::vector<Move> moves;
+    bool              local = true;
+    const double      h     = grid.h();
+    std::vector<std::uint32_t> changed;
+    // Points whose new cell is a ghost cell go to its owner: per rank,
+    // (x, id, properties) of each point, n_send doubles each.
+    const unsigned int                     n_send = dim + 1 + n_props;
+    std::map<unsigned int, std::vector<double>> outgoing;
+    auto scan_cell = [&](const std::uint32_t idx,
+                         const typename Triangulation<dim>::active_cell_iterator &cell) {
+        const auto own   = grid.global_index(idx);
+        auto       range = handler.particles_in_cell(cell);
+        for (auto it = range.begin(); it != range.end(); ++it)
+          {
+            const Point<dim> x   = it->get_location();
+            const auto       ijk = grid.cell_of(x);
+            if (ijk == own)
+              continue;
+            if (!grid.in_box(ijk) ||
+                grid.cell_status()[grid.local_index(ijk)] ==
+                  BackgroundGrid<dim>::outside)
+              {
+                local = false;
+                break;
+              }
+            if (grid.cell_status()[grid.local_index(ijk)] ==
+                BackgroundGrid<dim>::ghost)
+              {
+                // To the owner of the ghost cell.
+                auto &buffer =
+                  outgoing[grid.cell_iterator(grid.local_index(ijk))->subdomain_id()];
+                for (int d = 0; d < dim; ++d)
+                  buffer.push_back(x[d]);
+                buffer.push_back(static_cast<double>(it->get_id()));
+                const auto p = it->get_properties();
+                buffer.insert(buffer.end(), p.begin(), p.end());
+                if (changed.empty() || changed.back() != idx)
+                  changed.push_back(idx);
+                to_remove.push_back(it);
+                continue;
+              }
+            Move m;
+            m.location = x;
+            m.cell     = grid.local_index(ijk);
+            m.id       = it->get_id();
+            for (int d = 0; d < dim; ++d)
+              m.reference[d] = (x[d] - grid.origin()[d]) / h - ijk[d];
+            const auto p = it->get_properties();
+            m.properties.assign(p.begin(), p.end());
+            if (changed.empty() || changed.back() != idx)
+              changed.push_back(idx);
+            changed.push_back(m.cell);
+            moves.push_back(std::move(m));
+            to_remove.push_back(it);
+          }
+    };
+    if (from)
+      {
+        for (const auto idx : *from)
+          if (local)
+            scan_cell(idx, grid.cell_iterator(idx));
+      }
+    else
+      for (const auto &[idx, cell] : occupied)
+        if (local)
+          scan_cell(idx, cell);
+    // One reduction for both: did a point go beyond the ghost layer
+    // anywhere, does any rank send points?
+    const std::array<unsigned int, 2> flags{{!local ? 1u : 0u,
+                                             outgoing.empty() ? 0u : 1u}};
+    std::array<unsigned int, 2>       any;
+    Utilities::MPI::max(ArrayView<const unsigned int>(flags.data(), 2),
+                        grid.communicator(),
+                        ArrayView<unsigned int>(any.data(), 2));
+    if (any[0] != 0)
+      return false;
+    // One by one, last first (so that the iterators of the earlier points of
+    // a cell stay valid), and the cached numbers updated once at the end:
+    // remove_particles() would update them as well, and each update loops
+    // over every point (12 % of the 3D track's run time when done twice).
+    for (auto it = to_remove.rbegin(); it != to_remove.rend(); ++it)
+      handler.remove_particle(*it);
+    for (const auto &m : moves)
+      handler.insert_particle(m.location, m.reference, m.id,
+                              grid.cell_iterator(m.cell),
+                              ArrayView<const double>(m.properties));
+    // Points from neighbour ranks (in the order of the sending ranks), into
+    // their owned cells here.
+    std::map<unsigned int, std::vector<double>> incoming;
+    if (any[1] != 0)
+      incoming = Utilities::MPI::some_to_some(grid.communicator(), outgoing);
+    for (const auto &[rank, buffer] : incoming)
+      for (std::size_t k = 0; k + n_send <= buffer.size(); k += n_send)
+        {
+          Point<dim> x, ref;
+          for (int d = 0; d < dim; ++d)
+            x[d] = buffer[k + d];
+          const auto ijk = grid.cell_of(x);
+          const auto idx = grid.local_index(ijk);
+          AssertThrow(grid.in_box(ijk) &&
+                        grid.cell_status()[idx] == BackgroundGrid<dim>::owned,
+                      ExcMessage("a point sent to this rank is not in one of "
+                                 "its cells"));
+          for (int d = 0; d < dim; ++d)
+            ref[d] = (x[d] - grid.origin()[d]) / h - ijk[d];
+          handler.insert_particle(
+            x, ref, static_cast<types::particle_index>(buffer[k + dim]),
+            grid.cell_iterator(idx),
+            ArrayView<const double>(buffer.data() + k + dim + 1, n_props));
+          changed.push_back(idx);
+        }
+    // The handler's cached numbers (points per rank, largest id, most points
+    // in a cell) loop over every point: only when points changed rank. Moves
+    // within a rank keep the counts and the ids (the most points per cell is
+    // only used for serialization, which femp does not do).
+    if (any[1] != 0)
+      handler.update_cached_numbers();
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    refresh_occupied_cells(changed);
+    return true;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::refresh_occupied_cells(
+    const std::vector<std::uint32_t> &changed)
+  {
+    // The cached pointers of cells outside 'changed' stay valid when the
+    // property pool did not move: removed points free slots that the
+    // inserted ones take, so the pool does not grow. Check on one
+    // unchanged cell (a moved pool moves every slot); otherwise rebuild.
+    std::size_t c_check = 0;
+    {
+      std::size_t k = 0;
+      while (c_check < occupied.size())
+        {
+          const auto idx = occupied[c_check].first;
+          while (k < changed.size() && changed[k] < idx)
+            ++k;
+          if (k == changed.size() || changed[k] != idx)
+            break;
+          ++c_check;
+        }
+    }
+    if (c_check < occupied.size())
+      {
+        const auto range = handler.particles_in_cell(occupied[c_check].second);
+        if (range.begin() == range.end() ||
+            range.begin()->get_properties().data() !=
+              point_properties[cell_begin[c_check]])
+          {
+            index_occupied_cells();
+            return;
+          }
+      }
+    // Merge the old occupied list with the changed cells (both increasing).
+    decltype(occupied)         new_occupied;
+    std::vector<double *>      new_pointers;
+    std::vector<std::uint32_t> new_begin(1, 0);
+    new_occupied.reserve(occupied.size() + changed.size());
+    new_pointers.reserve(point_properties.size());
+    std::size_t c = 0, k = 0;
+    while (c < occupied.size() || k < changed.size())
+      {
+        const std::uint32_t io = c < occupied.size() ?
+                                   occupied[c].first :
+                                   std::numeric_limits<std::uint32_t>::max();
+        const std::uint32_t ik = k < changed.size() ?
+                                   changed[k] :
+                                   std::numeric_limits<std::uint32_t>::max();
+        if (ik <= io)
+          {
+            // A changed cell: ask the handler (also when it was occupied).
+            const auto &cell = grid.cell_iterator(ik);
+            if (handler.n_particles_in_cell(cell) > 0)
+              {
+                new_occupied.emplace_back(ik, cell);
+                for (auto &particle : handler.particles_in_cell(cell))
+                  new_pointers.push_back(particle.get_properties().data());
+                new_begin.push_back(new_pointers.size());
+              }
+            ++k;
+            if (ik == io)
+              ++c;
+          }
+        else
+          {
+            new_occupied.push_back(occupied[c]);
+            new_pointers.insert(new_pointers.end(),
+                                point_properties.begin() + cell_begin[c],
+                                point_properties.begin() + cell_begin[c + 1]);
+            new_begin.push_back(new_pointers.size());
+            ++c;
+          }
+      }
+    occupied.swap(new_occupied);
+    point_properties.swap(new_pointers);
+    cell_begin.swap(new_begin);
+#ifdef DEBUG
+    // Debug builds: the refreshed lists must equal a full rebuild, and the
+    // handler's point count must be current.
+    {
+      std::size_t n = 0;
+      for (auto it = handler.begin(); it != handler.end(); ++it)
+        ++n;
+      Assert(n == handler.n_locally_owned_particles(),
+             ExcMessage("stale point count of the particle handler"));
+      const auto o = occupied;
+      const auto p = point_properties;
+      const auto b = cell_begin;
+      index_occupied_cells();
+      Assert(o.size() == occupied.size() && p == point_properties &&
+               b == cell_begin,
+             ExcMessage("refreshed point cache differs from a rebuild"));
+      for (std::size_t i = 0; i < o.size(); ++i)
+        Assert(o[i].first == occupied[i].first,
+               ExcMessage("refreshed occupied list differs from a rebuild"));
+    }
+#endif
+  }
+
+
+  template class MaterialPoints<2>;
+  template class MaterialPoints<3>;
+} // namespace femp

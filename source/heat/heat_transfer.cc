@@ -1,0 +1,1105 @@
+// femp: HeatTransfer<dim>, the temperature equation (1) on the background
+// grid: diffusion, upwind convection, latent heat, surface losses and the
+// laser source. See include/femp/heat/heat_transfer.h for the discretization.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/heat/heat_transfer.h>
+#include <femp/base/input_checks.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <type_traits>
+#include <limits>
+#include <sstream>
+
+namespace femp
+{
+  namespace
+  {
+    constexpr double stefan_boltzmann = 5.670374419e-8; // W/(m^2 K^4)
+    constexpr double gas_constant     = 8.314462618;    // J/(mol K)
+  } // namespace
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Heat transfer");
+    prm.declare_entry("Initial temperature", "300", Patterns::Anything(),
+                      "Initial temperature of the metal (and of the cells), K: "
+                      "a number (uniform), or a function of the position x, y "
+                      "(2D) or x, y, z (3D), in m, in the syntax of deal.II's "
+                      "FunctionParser (muparser; e.g. '1800 + 1000*x' or "
+                      "'if(y < 1e-5, 300, 1800)'). Its value must be finite "
+                      "and positive at every cell centre; range (0, inf). "
+                      "Points of 'Material points/Initial bodies' take the "
+                      "temperature of their body instead. With 'Physics/Heat "
+                      "transfer = false' this field stays frozen.");
+    prm.declare_entry("Reference temperature", "300", Patterns::Double(0.),
+                      "Ambient temperature T_ref for convection and radiation "
+                      "losses, K; range (0, inf).");
+    prm.declare_entry("Convection coefficient", "10", Patterns::Double(0.),
+                      "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
+    prm.declare_entry("Emissivity", "0.4", Patterns::Double(0., 1.),
+                      "Surface emissivity eps for radiation losses; range [0, 1].");
+    prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
+                      "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
+                      "evaporative cooling off; range [0, 1].");
+    prm.declare_entry("Latent heat of evaporation", "7.41e6", Patterns::Double(0.),
+                      "L_v, J/kg; range [0, inf).");
+    prm.declare_entry("Evaporation temperature", "3090", Patterns::Double(0.),
+                      "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
+    prm.declare_entry("Molar mass", "0.0558", Patterns::Double(0.),
+                      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
+    prm.declare_entry("Ambient pressure", "101325", Patterns::Double(0.),
+                      "Ambient pressure p_0, Pa; range [0, inf).");
+    prm.declare_entry("Fixed temperatures", "",
+                      Patterns::Map(Patterns::Selection("x-|x+|y-|y+|z-|z+"),
+                                    Patterns::Double(0.)),
+                      "Faces of the domain box held at a fixed temperature, as "
+                      "'face: T' pairs, e.g. 'z-: 300' (faces x-, x+, y-, y+, "
+                      "z-, z+; K). All other faces are insulated.");
+    prm.declare_entry("Laser deposition", "first surface",
+                      Patterns::Selection("first surface|gradient"),
+                      "How the laser's surface flux q enters the cells. 'first "
+                      "surface': in each vertical column of cells, q goes into "
+                      "the surface cells where the beam first meets metal "
+                      "(from the cell below the topmost one with alpha >= 1/2 "
+                      "upward), shared in proportion to the loss weight "
+                      "w |grad alpha| so that laser and surface losses act on "
+                      "the same cells (absorbed power = eta P; q/h into the "
+                      "topmost alpha >= 1/2 cell where the column has no "
+                      "surface cell there). 'gradient': "
+                      "q 2 rho c/(rho_m c_m + rho_g c_g) |grad alpha| in every "
+                      "surface cell, as written in eq. (1); in a powder bed "
+                      "this heats every grain surface under the beam, also "
+                      "shadowed ones, and absorbs more than eta P.");
+    prm.declare_entry("Advection by melt flow", "points",
+                      Patterns::Selection("points|upwind"),
+                      "How heat moves with the melt flow. 'points': the metal "
+                      "carries its enthalpy on the material points; when "
+                      "points change cells, a cell's metal takes the "
+                      "volume-weighted mean specific enthalpy C(T) + L_m "
+                      "gamma(T) of the points now in it, each at the "
+                      "temperature of the cell it came from (donor-cell "
+                      "upwind transport by the points themselves; conserves "
+                      "energy up to the difference between the grid's metal "
+                      "volume alpha h^dim and the points' volume). 'upwind': "
+                      "first-order upwind convection u . grad T of the cell "
+                      "temperature with the cell velocity of the flow (not "
+                      "conservative: metal moved between cells at different "
+                      "temperatures creates or destroys up to ~20 % of the "
+                      "laser energy in the 3D track, doc/verification.md). "
+                      "No effect without Physics/Melt flow.");
+    prm.declare_entry("Prescribed velocity", "",
+                      Patterns::Anything(),
+                      "Optional steady velocity field for the convection term, "
+                      "m/s, as dim expressions in x, y, z separated by ';' "
+                      "(e.g. '0.1; 0; 0'). Empty: no convection unless a flow "
+                      "solver provides a velocity.");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Heat transfer");
+    {
+      // A plain number, or a function expression of the position.
+      const std::string text = Utilities::trim(prm.get("Initial temperature"));
+      initial_temperature_expression.clear();
+      initial_function.reset();
+      char *     end   = nullptr;
+      const auto value = std::strtod(text.c_str(), &end);
+      if (!text.empty() && end == text.c_str() + text.size())
+        initial_temperature = value;
+      else
+        {
+          const std::string vars = dim == 2 ? "x,y" : "x,y,z"; // muparser list
+          const std::string allowed =
+            "it must be a number (K) or a function of the position " + vars +
+            " (m) in deal.II FunctionParser syntax, e.g. '1800 + 1000*x'";
+          require(!text.empty(), "Heat transfer/Initial temperature", "''",
+                  allowed);
+          auto f = std::make_shared<FunctionParser<dim>>(1);
+          try
+            {
+              f->initialize(vars, text, {});
+              // muparser reports unknown variables at the first evaluation.
+              const double v = f->value(Point<dim>());
+              (void)v;
+            }
+          catch (...)
+            {
+              throw InputError("Heat transfer/Initial temperature", text,
+                               allowed + "; this one does not parse (unknown "
+                                         "variable or syntax error)");
+            }
+          initial_temperature_expression = text;
+          initial_function                = f;
+          initial_temperature             = f->value(Point<dim>());
+        }
+    }
+    reference_temperature   = prm.get_double("Reference temperature");
+    convection_coefficient  = prm.get_double("Convection coefficient");
+    emissivity              = prm.get_double("Emissivity");
+    evaporation_coefficient = prm.get_double("Evaporation coefficient");
+    latent_heat_evaporation = prm.get_double("Latent heat of evaporation");
+    evaporation_temperature = prm.get_double("Evaporation temperature");
+    molar_mass              = prm.get_double("Molar mass");
+    ambient_pressure        = prm.get_double("Ambient pressure");
+    laser_deposition        = prm.get("Laser deposition");
+    prescribed_velocity     = Utilities::trim(prm.get("Prescribed velocity"));
+    advection_by_melt_flow  = prm.get("Advection by melt flow");
+    fixed_temperatures.clear();
+    for (const auto &entry :
+         Utilities::split_string_list(prm.get("Fixed temperatures"), ','))
+      {
+        const auto kv = Utilities::split_string_list(entry, ':');
+        const std::string face = kv[0];
+        require((face[0] - 'x') < dim, "Heat transfer/Fixed temperatures",
+                entry, "in " + std::to_string(dim) + "D only faces of the first " +
+                         std::to_string(dim) + " directions exist");
+        fixed_temperatures[face] = Utilities::string_to_double(kv[1]);
+      }
+    prm.leave_subsection();
+    if (initial_temperature_expression.empty())
+      require(initial_temperature > 0, "Heat transfer/Initial temperature",
+              initial_temperature, "it must be positive (K)");
+    require(evaporation_temperature > 0, "Heat transfer/Evaporation temperature",
+            evaporation_temperature, "it must be positive (K)");
+    require(molar_mass > 0, "Heat transfer/Molar mass", molar_mass,
+            "it must be positive (kg/mol)");
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::Parameters::initial_temperature_at(const Point<dim> &x) const
+  {
+    return initial_function ? initial_function->value(x) : initial_temperature;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::check(const Point<dim> &lower,
+                                       const Point<dim> &upper,
+                                       const double      h)
+  {
+    if (!initial_function)
+      return;
+    std::array<unsigned int, dim> n;
+    std::size_t                   total = 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        n[d] = std::max(1., std::round((upper[d] - lower[d]) / h));
+        total *= n[d];
+      }
+    for (std::size_t c = 0; c < total; ++c)
+      {
+        Point<dim>  x;
+        std::size_t rest = c;
+        for (int d = 0; d < dim; ++d)
+          {
+            x[d] = lower[d] + (rest % n[d] + 0.5) * h;
+            rest /= n[d];
+          }
+        const double T = initial_function->value(x);
+        if (!(std::isfinite(T) && T > 0))
+          {
+            std::ostringstream s;
+            s << "it must be finite and positive (K) at every cell centre; "
+                 "it is "
+              << T << " at x = (" << x << ") m";
+            throw InputError("Heat transfer/Initial temperature",
+                             initial_temperature_expression, s.str());
+          }
+        if (c == 0)
+          initial_temperature = T;
+      }
+  }
+
+
+  template <int dim>
+  HeatTransfer<dim>::HeatTransfer(const Parameters &         prm,
+                                  const Material &           material,
+                                  const Laser<dim> &         laser,
+                                  const BackgroundGrid<dim> &grid)
+    : prm(prm)
+    , mat(material)
+    , laser(laser)
+    , grid(grid)
+    , evap_pref(prm.evaporation_coefficient * prm.latent_heat_evaporation *
+                prm.molar_mass /
+                std::sqrt(2 * M_PI * prm.molar_mass * gas_constant) *
+                prm.ambient_pressure)
+    , evap_exp(prm.latent_heat_evaporation * prm.molar_mass /
+               (gas_constant * prm.evaporation_temperature))
+  {}
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::initialize()
+  {
+    T     = grid.make_field(prm.initial_temperature);
+    gamma = grid.make_field(mat.liquid_fraction(prm.initial_temperature));
+    if (!prm.initial_temperature_expression.empty())
+      for (std::size_t idx = 0; idx < T.size(); ++idx)
+        if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
+          {
+            T[idx]     = prm.initial_temperature_at(grid.cell_center(idx));
+            gamma[idx] = mat.liquid_fraction(T[idx]);
+          }
+    T_new = T;
+    alpha = grid.make_field(0.);
+    conductance   = grid.make_field(0.);
+    capacity      = grid.make_field(1.);
+    is_source.assign(grid.n_local(), 0);
+    source        = grid.make_field(0.);
+    laser_density = grid.make_field(0.);
+    loss_weight   = grid.make_field(0.);
+    budget        = EnergyBudget();
+
+    // Fixed-temperature faces: owned cells touching them.
+    fixed_faces.clear();
+    const auto &n = grid.n_cells();
+    for (const auto &[face, value] : prm.fixed_temperatures)
+      {
+        const int  d     = face[0] - 'x';
+        const bool upper = face[1] == '+';
+        for (const auto idx : grid.owned_cells())
+          {
+            const auto ijk = grid.global_index(idx);
+            if (ijk[d] == (upper ? int(n[d]) - 1 : 0))
+              fixed_faces.push_back({idx, value});
+          }
+      }
+
+    if (!prm.prescribed_velocity.empty())
+      {
+        auto exprs = Utilities::split_string_list(prm.prescribed_velocity, ';');
+        require(exprs.size() == static_cast<std::size_t>(dim),
+                "Heat transfer/Prescribed velocity", prm.prescribed_velocity,
+                "it must hold " + std::to_string(dim) +
+                  " expressions separated by ';'");
+        FunctionParser<dim> f(dim);
+        try
+          {
+            f.initialize(dim == 2 ? "x,y" : "x,y,z", exprs, {});
+          }
+        catch (...)
+          {
+            throw InputError("Heat transfer/Prescribed velocity",
+                             prm.prescribed_velocity,
+                             "the expressions must be valid functions of x, y (, z)");
+          }
+        for (int d = 0; d < dim; ++d)
+          prescribed[d] = grid.make_field(0.);
+        for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
+          if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
+            {
+              const auto c = grid.cell_center(idx);
+              for (int d = 0; d < dim; ++d)
+                prescribed[d][idx] = f.value(c, d);
+            }
+        velocity = &prescribed;
+      }
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::set_velocity(
+    const std::array<std::vector<double>, dim> *v)
+  {
+    velocity = v;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a)
+  {
+    alpha = a;
+    if (frozen)
+      {
+        // No heat equation: no surface lists, no properties; only the peak
+        // temperature over metal cells for the reports.
+        double Tmax = 0;
+        for (const auto idx : grid.owned_cells())
+          if (alpha[idx] > 0)
+            Tmax = std::max(Tmax, T[idx]);
+        T_max = Utilities::MPI::max(Tmax, grid.communicator());
+        return;
+      }
+    // Surface cells: owned metal cells with a non-zero alpha gradient. At the
+    // domain boundary alpha is extended with zero gradient, so the box faces
+    // are not free surfaces.
+    surface.clear();
+    const auto & st = grid.strides();
+    const auto & n  = grid.n_cells();
+    const double h  = grid.h();
+    for (const auto idx : grid.owned_cells())
+      {
+        if (alpha[idx] <= 0)
+          continue;
+        const auto ijk = grid.global_index(idx);
+        Tensor<1, dim> g;
+        for (int d = 0; d < dim; ++d)
+          {
+            const double am = ijk[d] > 0 ? alpha[idx - st[d]] : alpha[idx];
+            const double ap =
+              ijk[d] < int(n[d]) - 1 ? alpha[idx + st[d]] : alpha[idx];
+            g[d] = (ap - am) / (2 * h);
+          }
+        const double norm = g.norm();
+        if (norm > 1e-12 / h)
+          surface.push_back({idx, norm});
+      }
+
+    // First-surface cells: per vertical column, the topmost cell with
+    // alpha >= 1/2 over all ranks (one reduction per change of alpha). The
+    // beam meets metal in the surface cells from the one below it upward
+    // (a flat surface through a half-filled cell spreads |grad alpha| over
+    // that cell and the full one below). The column's flux is shared among
+    // them in proportion to the loss weight w |grad alpha| (w with c_m at
+    // T_ref), so that the laser and the surface losses act on the same
+    // cells with the same weights and a partly filled cell gets per unit
+    // heat capacity what its part of the surface gets; the shares of a
+    // column sum to 1/h, the absorbed power stays eta P. A column without
+    // surface cells there (a metal top at the box face) gives q/h to its
+    // topmost cell with alpha >= 1/2, as before.
+    const unsigned int n_columns = dim == 3 ? n[0] * n[1] : n[0];
+    std::vector<int>   top(n_columns, -1);
+    for (const auto idx : grid.owned_cells())
+      if (alpha[idx] >= 0.5)
+        {
+          const auto   ijk = grid.global_index(idx);
+          const auto   col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+          top[col]         = std::max(top[col], ijk[dim - 1]);
+        }
+    MPI_Allreduce(MPI_IN_PLACE, top.data(), n_columns, MPI_INT, MPI_MAX,
+                  grid.communicator());
+    const double rho_c_ref =
+      mat.density * mat.specific_heat.value(prm.reference_temperature);
+    const double rho_g_c_g = mat.gas_density * mat.gas_specific_heat;
+    auto         weight    = [&](const SurfaceCell &sc) {
+      const double a = alpha[sc.index];
+      return 2 * (a * rho_c_ref + (1 - a) * rho_g_c_g) /
+             (rho_c_ref + rho_g_c_g) * sc.grad_alpha;
+    };
+    auto column_of = [&](const std::uint32_t idx, int &k) {
+      const auto ijk = grid.global_index(idx);
+      k              = ijk[dim - 1];
+      return dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+    };
+    std::vector<double> column_weight(n_columns, 0.);
+    for (const auto &sc : surface)
+      {
+        int        k;
+        const auto col = column_of(sc.index, k);
+        if (k >= top[col] - 1)
+          column_weight[col] += weight(sc);
+      }
+    MPI_Allreduce(MPI_IN_PLACE, column_weight.data(), n_columns, MPI_DOUBLE,
+                  MPI_SUM, grid.communicator());
+    first_surface.clear();
+    for (const auto &sc : surface)
+      {
+        int        k;
+        const auto col = column_of(sc.index, k);
+        if (k >= top[col] - 1 && column_weight[col] > 0)
+          first_surface.push_back(
+            {sc.index, weight(sc) / (column_weight[col] * h)});
+      }
+    for (const auto idx : grid.owned_cells())
+      {
+        int        k;
+        const auto col = column_of(idx, k);
+        if (top[col] == k && !(column_weight[col] > 0))
+          first_surface.push_back({idx, 1. / h});
+      }
+    // Stale values of cells that left the lists.
+    std::fill(laser_density.begin(), laser_density.end(), 0.);
+    std::fill(loss_weight.begin(), loss_weight.end(), 0.);
+
+    // Rows of the box interior that hold metal (owned or ghost); rows of gas
+    // only are skipped by the per-step passes: their conductance is zero
+    // (set by the full property pass below) and their temperature unused.
+    {
+      const auto &size = grid.box_size();
+      const int   ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
+      row_has_metal.assign(std::size_t(ny) * nz, 0);
+      for (std::size_t idx = 0; idx < alpha.size(); ++idx)
+        if (alpha[idx] > 0)
+          row_has_metal[idx / size[0]] = 1;
+      compute_properties();
+    }
+
+    // All cells with sparse sources, once each, in increasing order.
+    source_cells.clear();
+    for (const auto &sc : surface)
+      source_cells.push_back(sc.index);
+    for (const auto &lc : first_surface)
+      source_cells.push_back(lc.index);
+    for (const auto &f : fixed_faces)
+      source_cells.push_back(f.index);
+    std::sort(source_cells.begin(), source_cells.end());
+    source_cells.erase(std::unique(source_cells.begin(), source_cells.end()),
+                       source_cells.end());
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::surface_loss(const double T,
+                                  double &     q_evap,
+                                  double &     q_conv,
+                                  double &     q_rad,
+                                  double &     dq_dT) const
+  {
+    const double Tref  = prm.reference_temperature;
+    const double Tref4 = Tref * Tref * Tref * Tref;
+    // Evaporation; exp() of exponents below -40 (relative 4e-18 of the flux
+    // at T_v) is skipped.
+    const double exponent = evap_exp * (T - prm.evaporation_temperature) / T;
+    q_evap = (evap_pref > 0 && exponent > -40) ?
+               evap_pref / std::sqrt(T) * std::exp(exponent) :
+               0.;
+    q_conv = prm.convection_coefficient * (T - Tref);
+    q_rad  = stefan_boltzmann * prm.emissivity * (T * T * T * T - Tref4);
+    dq_dT  = q_evap * (evap_exp * prm.evaporation_temperature / (T * T) -
+                      0.5 / T) +
+            prm.convection_coefficient +
+            4 * stefan_boltzmann * prm.emissivity * T * T * T;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::compute_surface_sources(const double dt, const double time)
+  {
+    const double V = std::pow(grid.h(), dim);
+    Point<dim>   axis;
+    double       power    = 0;
+    const bool   laser_on = laser.position(time, axis, power);
+    const bool   gradient_mode = prm.laser_deposition == "gradient";
+    const double rho_g_c_g = mat.gas_density * mat.gas_specific_heat;
+    double       e_laser   = 0;
+    // Loss weights w |grad alpha| at T^n; the losses themselves are taken
+    // at the new temperature in advance() (pass C).
+    for (const auto &s : surface)
+      {
+        const double Tc = T[s.index];
+        const double a  = alpha[s.index];
+        const double rho_c_m = mat.density * mat.specific_heat.value(Tc);
+        const double w  = 2 * heat_capacity(Tc, a) / (rho_c_m + rho_g_c_g);
+        const double wg = w * s.grad_alpha;
+        double q_laser = 0;
+        if (laser_on && gradient_mode)
+          {
+            const Point<dim> c  = grid.cell_center(s.index);
+            double           r2 = 0;
+            for (int d = 0; d < dim - 1; ++d)
+              r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
+            q_laser = laser.flux(r2, power) * wg;
+          }
+        laser_density[s.index] = q_laser;
+        source[s.index]        = q_laser;
+        loss_weight[s.index]   = wg;
+        e_laser += q_laser;
+      }
+    if (!gradient_mode)
+      for (const auto &lc : first_surface)
+        {
+          if (!laser_on)
+            {
+              laser_density[lc.index] = 0;
+              continue;
+            }
+          const Point<dim> c  = grid.cell_center(lc.index);
+          double           r2 = 0;
+          for (int d = 0; d < dim - 1; ++d)
+            r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
+          const double q = laser.flux(r2, power) * lc.share;
+          laser_density[lc.index] = q;
+          source[lc.index] += q;
+          e_laser += q;
+        }
+    budget.laser += e_laser * V * dt;
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::stable_time_step()
+  {
+    compute_properties();
+    const auto & st  = grid.strides();
+    const double ih2 = 1. / (grid.h() * grid.h());
+    double       rate_max = 0;
+    for (const auto idx : grid.owned_cells())
+      {
+        const double a = alpha[idx];
+        if (a <= 0)
+          continue;
+        const double kc   = conductance[idx];
+        double       sumk = 0;
+        for (int d = 0; d < dim; ++d)
+          for (const std::ptrdiff_t s : {-st[d], st[d]})
+            {
+              const double kn = conductance[idx + s];
+              sumk += kn > 0 ? 2 * kc * kn / (kc + kn) : 0.;
+            }
+        double rate = sumk * ih2 / capacity[idx];
+        if (velocity)
+          for (int d = 0; d < dim; ++d)
+            rate += std::abs((*velocity)[d][idx]) / grid.h();
+        rate_max = std::max(rate_max, rate);
+      }
+    for (const auto &f : fixed_faces)
+      rate_max = std::max(rate_max,
+                          4 * conductance[f.index] * ih2 / capacity[f.index]);
+    rate_max = Utilities::MPI::max(rate_max, grid.communicator());
+    return rate_max > 0 ? 1. / rate_max : std::numeric_limits<double>::max();
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::compute_properties()
+  {
+    compute_properties(0, T.size());
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::compute_properties(const std::size_t begin,
+                                        const std::size_t end)
+  {
+    // Pass A: conductivity (zero in gas cells and in the padding, which
+    // blocks their faces) and heat capacity of every cell of the box.
+    const std::uint8_t *status   = grid.cell_status().data();
+    const double        rho_g_cg = mat.gas_density * mat.gas_specific_heat;
+    const double        k_g      = mat.gas_conductivity;
+    const double        rho_m    = mat.density;
+    const double *      Tp = T.data(), *ap = alpha.data();
+    double *            kp = conductance.data(), *cp = capacity.data();
+    if (!mat.conductivity.has_padded_segments() ||
+        !mat.specific_heat.has_padded_segments())
+      {
+        // Long tables: scalar lookups.
+        for (std::size_t idx = begin; idx < end; ++idx)
+          {
+            const double a     = ap[idx];
+            const double metal = (a > 0 && status[idx] != 0) ? 1. : 0.;
+            kp[idx] = metal * (a * mat.conductivity.value(Tp[idx]) + (1 - a) * k_g);
+            cp[idx] = metal * (a * rho_m * mat.specific_heat.value(Tp[idx]) +
+                               (1 - a) * rho_g_cg) +
+                      (1 - metal);
+          }
+        return;
+      }
+    const auto k_m = mat.conductivity.segments();
+    const auto c_m = mat.specific_heat.segments();
+    // Short tables (the usual case) unroll to 4 segments, others to 8.
+    auto sweep = [&](auto nk, auto nc) {
+      constexpr unsigned int NK = decltype(nk)::value, NC = decltype(nc)::value;
+#pragma omp simd
+      for (std::size_t idx = begin; idx < end; ++idx)
+        {
+          const double a     = ap[idx];
+          const double metal = (a > 0) & (status[idx] != 0) ? 1. : 0.;
+          const double Tc    = Tp[idx];
+          kp[idx] = metal * (a * k_m.template eval<NK>(Tc) + (1 - a) * k_g);
+          cp[idx] = metal * (a * rho_m * c_m.template eval<NC>(Tc) +
+                             (1 - a) * rho_g_cg) +
+                    (1 - metal); // 1 in gas and padding: never used for heat
+        }
+    };
+    using four  = std::integral_constant<unsigned int, 4>;
+    using eight = std::integral_constant<unsigned int, PiecewiseLinear::max_segments>;
+    if (k_m.n <= 4 && c_m.n <= 4)
+      sweep(four(), four());
+    else if (k_m.n <= 4)
+      sweep(four(), eight());
+    else if (c_m.n <= 4)
+      sweep(eight(), four());
+    else
+      sweep(eight(), eight());
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::advance(const double dt, const double time)
+  {
+    Assert(!frozen, ExcMessage("advance() on a frozen temperature field"));
+    // Properties: in 3D plane by plane just ahead of the sweep (pass B), so
+    // that they are still in cache when the stencil reads them.
+    const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();
+    const std::size_t row_len = grid.box_size()[0];
+    auto properties_of_plane = [&](const std::size_t first_row,
+                                   const std::size_t n_rows) {
+      for (std::size_t r = first_row; r < first_row + n_rows; ++r)
+        if (row_has_metal[r])
+          compute_properties(r * row_len, (r + 1) * row_len);
+    };
+    const std::size_t rows_per_plane = dim == 3 ? plane / row_len : 0;
+    if (dim == 3)
+      properties_of_plane(0, 2 * rows_per_plane);
+    else
+      properties_of_plane(0, row_has_metal.size());
+    compute_surface_sources(dt, time);
+
+    const auto & st   = grid.strides();
+    const auto & size = grid.box_size();
+    const double h    = grid.h();
+    const double ih   = 1. / h;
+    const double ih2  = ih * ih;
+    const double V    = std::pow(h, dim);
+    const double Ts   = mat.solidus;
+    const double Tl   = mat.liquidus;
+    const double rhoL = mat.density * mat.latent_heat_fusion;
+    const bool   variable_c = !mat.specific_heat.is_constant();
+
+    double rate_max = 0;
+
+    // Pass B: conduction on whole x-rows of the box interior, branch-free
+    // so that it vectorizes; gas and padding cells have zero conductance and
+    // keep their value. Rows where a cell may need the phase-change
+    // iteration are flagged for pass D.
+    const double  *Tp = T.data(), *kp = conductance.data(), *cp = capacity.data(),
+                  *gp = gamma.data();
+    double        *Tn = T_new.data();
+    const std::ptrdiff_t sy = dim > 1 ? st[1] : 0, sz = dim > 2 ? st[2] : 0;
+    const int            ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
+    const int            j0 = dim > 1 ? 1 : 0, k0 = dim > 2 ? 1 : 0;
+    flagged_rows.clear();
+    const bool has_latent = rhoL > 0;
+    double     box_max = -std::numeric_limits<double>::max(), box_bad = 0;
+    for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
+      {
+      if (dim == 3)
+        properties_of_plane((kk + 1) * rows_per_plane, rows_per_plane);
+      for (int jj = j0; jj < ny - 1; ++jj)
+        {
+          if (!row_has_metal[(jj * sy + kk * sz) / row_len])
+            continue; // gas only: nothing changes
+          const std::size_t row = jj * sy + kk * sz;
+          double row_rate = 0, row_max = 0, row_bad = 0, row_flags = 0;
+#pragma omp simd reduction(max : row_rate, row_max) reduction(+ : row_bad, row_flags)
+          for (int ii = 1; ii < size[0] - 1; ++ii)
+            {
+              const std::size_t i  = row + ii;
+              const double      Tc = Tp[i], kc = kp[i];
+              // harmonic mean 2 k_c k_n / (k_c + k_n), zero if either is zero
+              const double kxm = kp[i - 1], kxp = kp[i + 1];
+              const double fxm = 2 * kc * kxm / (kc + kxm + 1e-300);
+              const double fxp = 2 * kc * kxp / (kc + kxp + 1e-300);
+              double flux = fxm * (Tp[i - 1] - Tc) + fxp * (Tp[i + 1] - Tc);
+              double sumk = fxm + fxp;
+              if constexpr (dim > 1)
+                {
+                  const double kym = kp[i - sy], kyp = kp[i + sy];
+                  const double fym = 2 * kc * kym / (kc + kym + 1e-300);
+                  const double fyp = 2 * kc * kyp / (kc + kyp + 1e-300);
+                  flux += fym * (Tp[i - sy] - Tc) + fyp * (Tp[i + sy] - Tc);
+                  sumk += fym + fyp;
+                }
+              if constexpr (dim > 2)
+                {
+                  const double kzm = kp[i - sz], kzp = kp[i + sz];
+                  const double fzm = 2 * kc * kzm / (kc + kzm + 1e-300);
+                  const double fzp = 2 * kc * kzp / (kc + kzp + 1e-300);
+                  flux += fzm * (Tp[i - sz] - Tc) + fzp * (Tp[i + sz] - Tc);
+                  sumk += fzm + fzp;
+                }
+              const double inv_c = 1. / cp[i];
+              const double Tnew  = Tc + dt * ih2 * flux * inv_c;
+              Tn[i]              = Tnew;
+              const double rate  = sumk * ih2 * inv_c;
+              row_rate           = rate > row_rate ? rate : row_rate;
+              // metal cells only: gas may keep a stale T after points moved
+              row_max = (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
+              row_bad += Tnew - Tnew; // NaN if Tnew is not finite
+              // Flag: a cell may change phase (unless clearly solid or
+              // clearly liquid) or, with c(T) tables, takes a large step.
+              const double g     = gp[i];
+              const bool   solid = (Tnew < Ts) & (g == 0.);
+              const bool   liquid = (Tnew > Tl) & (g == 1.);
+              const bool   phase = has_latent & !(solid | liquid);
+              const bool   large = variable_c & (std::abs(Tnew - Tc) > 1.);
+              row_flags += (phase | large) ? 1. : 0.;
+            }
+          const bool needs_phase = row_flags > 0;
+          box_max = std::max(box_max, row_max);
+          box_bad += row_bad;
+          rate_max = std::max(rate_max, row_rate);
+          if (needs_phase)
+            flagged_rows.push_back(row);
+        }
+      }
+
+    // Fixed-temperature faces: the face value sits h/2 from the cell centre.
+    double e_boundary = 0;
+    for (const auto &f : fixed_faces)
+      if (alpha[f.index] > 0)
+        {
+          const double k = conductance[f.index];
+          const double q = 2 * k * (f.value - T[f.index]) * ih2;
+          source[f.index] += q;
+          e_boundary += q * V * dt;
+          rate_max = std::max(rate_max, 4 * k * ih2 / capacity[f.index]);
+        }
+
+
+    // Convection (only when a velocity field is present): first-order
+    // upwind, no advective flux from gas or from outside the domain. In a
+    // partly filled cell (alpha < 1) the metal flowing in mixes with alpha
+    // of metal, so its temperature moves at the rate 1/alpha: the part
+    // (1/alpha - 1) is taken implicitly in the cell's own temperature
+    // (a convex mix of T* and the upwind values: no step limit); full cells
+    // are unchanged. With it, the alpha update from the points (which
+    // books the arriving volume at the cell's T) and the convection give
+    // the arriving metal the upwind temperature (doc/equations.md).
+    double e_advection = 0;
+    if (velocity)
+      for (const auto idx : grid.owned_cells())
+        {
+          if (alpha[idx] <= 0)
+            continue;
+          double conv = 0, rate = 0, r_up = 0, rT_up = 0;
+          for (int d = 0; d < dim; ++d)
+            {
+              const double         u  = (*velocity)[d][idx];
+              const std::ptrdiff_t s  = u > 0 ? -st[d] : st[d];
+              const bool           up = conductance[idx + s] > 0;
+              const double         dT = up ? T[idx] - T[idx + s] : 0.;
+              conv -= std::abs(u) * dT * ih;
+              rate += std::abs(u) * ih;
+              if (up)
+                {
+                  r_up += std::abs(u) * ih;
+                  rT_up += std::abs(u) * ih * T[idx + s];
+                }
+            }
+          if (alpha[idx] < 1 && r_up > 0)
+            {
+              // T_new = (T* + w sum r T_up) / (1 + w sum r), w = dt (1/alpha - 1)
+              const double w     = dt * (1. / alpha[idx] - 1);
+              const double Tstar = T_new[idx] + dt * conv;
+              const double Tmix  = (Tstar + w * rT_up) / (1 + w * r_up);
+              conv += (Tmix - Tstar) / dt;
+            }
+          T_new[idx] += dt * conv;
+          e_advection += capacity[idx] * conv;
+          // Convection and diffusion rates add up in this cell.
+          double sumk = 0;
+          for (int d = 0; d < dim; ++d)
+            for (const std::ptrdiff_t s : {-st[d], st[d]})
+              {
+                const double kn = conductance[idx + s], kc = conductance[idx];
+                sumk += kn > 0 ? 2 * kc * kn / (kc + kn) : 0.;
+              }
+          rate_max = std::max(rate_max, rate + sumk * ih2 / capacity[idx]);
+        }
+
+    // Pass C: cells with sparse sources (laser, surface losses, fixed
+    // faces). The surface loss q(T) w |grad alpha| is taken at the new
+    // temperature (fully implicit, a local Newton iteration): a cell heated
+    // from cold in one step meets the evaporation of the temperature it
+    // reaches, not the one it starts from (a linearization about T^n let
+    // the first steps of the 3D track heat powder tops to 8000 K and
+    // more). The loss is booked at the new temperature, so the energy
+    // stays balanced exactly.
+    std::size_t nphase = 0;
+    double      e_evap = 0, e_conv = 0, e_rad = 0;
+    for (const auto idx : source_cells)
+      {
+        const double Tc  = T[idx];
+        const double rc  = capacity[idx];
+        const double dH  = (T_new[idx] - Tc) * rc + dt * source[idx];
+        const double W   = loss_weight[idx];
+        double       Tnew = Tc + dH / rc;
+        if (W > 0)
+          Tnew = solve_cell(alpha[idx], Tc, gamma[idx], rc, dH, dt * W,
+                            false, Tnew);
+        if (needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
+          {
+            ++nphase;
+            Tnew = solve_cell(alpha[idx], Tc, gamma[idx], rc, dH, dt * W,
+                              true, Tnew);
+          }
+        if (W > 0)
+          {
+            double qe, qc, qr, dq;
+            surface_loss(Tnew, qe, qc, qr, dq);
+            e_evap += qe * W;
+            e_conv += qc * W;
+            e_rad += qr * W;
+          }
+        T_new[idx]   = Tnew;
+        gamma[idx]   = mat.liquid_fraction(Tnew);
+        is_source[idx] = 1;
+      }
+
+    // Pass D: the local enthalpy iteration in flagged rows (not for source
+    // cells, done above): find T with
+    //   H(T) = H(T^n) + dH,  H = a rho_m (C(T) + L gamma(T)) + (1-a) rho_g c_g T,
+    // C the antiderivative of c_m; exact bookkeeping of c(T) and latent heat.
+    const auto &status = grid.cell_status();
+    for (const std::size_t row : flagged_rows)
+      for (int ii = 1; ii < size[0] - 1; ++ii)
+        {
+          const std::size_t idx = row + ii;
+          if (is_source[idx] || alpha[idx] <= 0 ||
+              status[idx] != BackgroundGrid<dim>::owned)
+            continue;
+          const double Tc = T[idx];
+          double       Tnew = T_new[idx];
+          if (!needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
+            continue;
+          ++nphase;
+          const double dH = (Tnew - Tc) * capacity[idx];
+          Tnew = solve_cell(alpha[idx], Tc, gamma[idx], capacity[idx], dH, 0.,
+                            true, Tnew);
+          T_new[idx] = Tnew;
+          gamma[idx] = mat.liquid_fraction(Tnew);
+        }
+
+    // Reset the sparse sources.
+    for (const auto idx : source_cells)
+      {
+        source[idx]    = 0;
+        is_source[idx] = 0;
+      }
+    budget.evaporation += e_evap * V * dt;
+    budget.convection += e_conv * V * dt;
+    budget.radiation += e_rad * V * dt;
+    budget.boundary += e_boundary;
+    budget.advection += e_advection * V * dt;
+
+    // Peak temperature over metal cells and finiteness: the box interior
+    // holds owned cells and true ghost values, so its maximum over metal
+    // cells is the global one.
+    // Cells changed after pass B (sources, phase change) are added here.
+    double Tmax = box_max;
+    for (const auto idx : source_cells)
+      if (alpha[idx] > 0)
+        Tmax = std::max(Tmax, T_new[idx]);
+    for (const std::size_t row : flagged_rows)
+      for (int ii = 1; ii < size[0] - 1; ++ii)
+        if (alpha[row + ii] > 0)
+          Tmax = std::max(Tmax, T_new[row + ii]);
+    bool finite = std::isfinite(box_bad) && std::isfinite(Tmax);
+    for (const auto idx : source_cells)
+      finite = finite && std::isfinite(T_new[idx]);
+    if (!finite)
+      Tmax = std::numeric_limits<double>::infinity();
+
+    std::swap(T, T_new);
+    grid.update_ghosts(T);
+    grid.update_ghosts(gamma);
+    n_phase_cells = nphase;
+
+    const double local[2] = {Tmax, rate_max};
+    double       global[2];
+    Utilities::MPI::max(ArrayView<const double>(local, 2),
+                        grid.communicator(),
+                        ArrayView<double>(global, 2));
+    T_max          = global[0];
+    dt_stable_next = global[1] > 0 ? 1. / global[1] :
+                                     std::numeric_limits<double>::max();
+
+    if (!std::isfinite(T_max))
+      {
+        // Find where it went wrong, for the diagnostic.
+        std::ostringstream where;
+        for (const auto idx : grid.owned_cells())
+          if (!std::isfinite(T[idx]))
+            {
+              where << " First non-finite temperature on rank "
+                    << Utilities::MPI::this_mpi_process(grid.communicator())
+                    << " in the cell at " << grid.cell_center(idx) << " m.";
+              break;
+            }
+        AssertThrow(false,
+                    ExcMessage("The temperature became non-finite at time " +
+                               num(time + dt) + " s (step size " + num(dt) +
+                               " s)." + where.str() +
+                               " The step may exceed the stable limit, or a "
+                               "surface loss (evaporation) may be too stiff."));
+      }
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::enthalpy_density(const double a, const double T) const
+  {
+    return a * mat.density *
+             (mat.specific_heat.antiderivative(T) +
+              mat.latent_heat_fusion * mat.liquid_fraction(T)) +
+           (1 - a) * mat.gas_density * mat.gas_specific_heat * T;
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::solve_cell(const double a,
+                                const double Tc,
+                                const double gc,
+                                const double rc,
+                                const double dH,
+                                const double dtW,
+                                const bool   enthalpy,
+                                const double guess) const
+  {
+    // f(T) = H(T) - H(Tc) + dtW q(T) - dH, increasing in T (q grows with T
+    // below ~2 L_v M/R, 1e5 K for steel). With the sensible part only,
+    // H(T) - H(Tc) = rc (T - Tc).
+    const double H0 = enthalpy ? a * mat.density *
+                                     (mat.specific_heat.antiderivative(Tc) +
+                                      mat.latent_heat_fusion * gc) +
+                                   (1 - a) * mat.gas_density *
+                                     mat.gas_specific_heat * Tc :
+                                 0.;
+    auto f = [&](const double T, double &slope) {
+      double qe = 0, qc = 0, qr = 0, dq = 0;
+      if (dtW > 0)
+        surface_loss(T, qe, qc, qr, dq);
+      if (enthalpy)
+        {
+          slope = a * mat.density *
+                    (mat.specific_heat.value(T) +
+                     ((T > mat.solidus && T < mat.liquidus) ?
+                        mat.latent_heat_fusion / (mat.liquidus - mat.solidus) :
+                        0.)) +
+                  (1 - a) * mat.gas_density * mat.gas_specific_heat +
+                  dtW * std::max(0., dq);
+          return enthalpy_density(a, T) - H0 + dtW * (qe + qc + qr) - dH;
+        }
+      slope = rc + dtW * std::max(0., dq);
+      return rc * (T - Tc) + dtW * (qe + qc + qr) - dH;
+    };
+    // Bracket: the slope is at least c_min, so the root lies between Tc and
+    // Tc - f(Tc)/c_min; temperatures stay positive.
+    const double c_min =
+      enthalpy ? a * mat.density * mat.specific_heat.min_value() +
+                   (1 - a) * mat.gas_density * mat.gas_specific_heat :
+                 rc;
+    // Start from the guess, or without the enthalpy tables from the
+    // linearization about Tc (one Newton step; exact for the convection
+    // part, within round-off for cold cells, whose loss is nearly linear).
+    double       slope = 0;
+    const double f0    = f(Tc, slope);
+    const double Tfar  = Tc - f0 / c_min;
+    double       lo = std::min(Tc, Tfar) - 1e-9, hi = std::max(Tc, Tfar) + 1e-9;
+    lo              = std::max(lo, 1e-3 * Tc);
+    double       T  = std::clamp(enthalpy ? guess : Tc - f0 / slope, lo, hi);
+    // Residual tolerance (J/m^3): the loss is booked at the T returned, so
+    // the balance holds to this residual per cell.
+    const double tol = 1e-12 * (std::abs(H0) + c_min * Tc + std::abs(dH) +
+                                std::abs(f0)) +
+                       1e-300;
+    for (unsigned int it = 0; it < 100; ++it)
+      {
+        const double r = f(T, slope);
+        if (std::abs(r) <= tol)
+          break;
+        (r > 0 ? hi : lo) = T;
+        double next = T - r / slope;
+        if (!(next > lo && next < hi))
+          next = 0.5 * (lo + hi);
+        if (hi - lo < 1e-12 * std::abs(T))
+          break;
+        T = next;
+      }
+    return T;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::take_point_enthalpy(
+    const std::vector<std::pair<std::uint32_t, double>> &mean_e)
+  {
+    // Each listed cell's metal gets the mean specific enthalpy e (J/kg,
+    // e(T) = C(T) + L_m gamma(T)) of its points: T from e(T) = mean, the
+    // same enthalpy relation as the phase-change iteration (a = 1: the gas
+    // part of a partly filled cell is not carried by points).
+    const double rho = mat.density;
+    for (const auto &[idx, e] : mean_e)
+      {
+        if (alpha[idx] <= 0)
+          continue;
+        const double Tc = T[idx];
+        const double dH = rho * (e - specific_enthalpy(Tc));
+        set_cell_temperature(idx, solve_cell(1., Tc, mat.liquid_fraction(Tc),
+                                             0., dH, 0., true, Tc));
+      }
+    update_ghosts();
+  }
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::specific_enthalpy(const double T_cell) const
+  {
+    return mat.specific_heat.antiderivative(T_cell) +
+           mat.latent_heat_fusion * mat.liquid_fraction(T_cell);
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::stored_enthalpy() const
+  {
+    const double Tref = prm.reference_temperature;
+    const double V    = std::pow(grid.h(), dim);
+    double       H    = 0;
+    for (const auto idx : grid.owned_cells())
+      {
+        const double a = alpha[idx];
+        if (a <= 0)
+          continue;
+        H += enthalpy_density(a, T[idx]) - enthalpy_density(a, Tref) +
+             a * mat.density * mat.latent_heat_fusion *
+               (gamma[idx] - mat.liquid_fraction(T[idx]));
+      }
+    return Utilities::MPI::sum(H * V, grid.communicator());
+  }
+
+  template <int dim>
+  typename HeatTransfer<dim>::EnergyBudget
+  HeatTransfer<dim>::energy_budget() const
+  {
+    const double local[6] = {budget.laser,     budget.evaporation,
+                             budget.convection, budget.radiation,
+                             budget.boundary,  budget.advection};
+    double       global[6];
+    Utilities::MPI::sum(ArrayView<const double>(local, 6),
+                        grid.communicator(),
+                        ArrayView<double>(global, 6));
+    return {global[0], global[1], global[2], global[3], global[4], global[5]};
+  }
+
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::total_losses() const
+  {
+    const auto e = energy_budget();
+    return e.evaporation + e.convection + e.radiation;
+  }
+
+  template class HeatTransfer<2>;
+  template class HeatTransfer<3>;
+} // namespace femp

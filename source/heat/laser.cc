@@ -1,0 +1,157 @@
+// femp: Gaussian laser source of eq. (1) and its scan path (segments read
+// from the prm file or from a scan-path file).
+#include <femp/base/input_checks.h>
+#include <femp/heat/laser.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace femp
+{
+  template <int dim>
+  void
+  Laser<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Laser");
+    prm.declare_entry("Power", "200", Patterns::Double(0.),
+                      "Laser power P, W (in 2D: W per m of depth); range [0, inf).");
+    prm.declare_entry("Absorptivity", "0.35", Patterns::Double(0., 1.),
+                      "Absorbed fraction eta of the laser power; range [0, 1].");
+    prm.declare_entry("Beam radius", "20e-6", Patterns::Double(0.),
+                      "1/e^2 radius r_b of the Gaussian beam, m; range (0, inf).");
+    prm.declare_entry("Scan speed", "2", Patterns::Double(0.),
+                      "Speed of the beam along the line from 'Start point' to "
+                      "'End point', m/s; range (0, inf).");
+    prm.declare_entry("Start point", "1e-4, 2e-4, 0", Patterns::List(Patterns::Double(), 1, 3),
+                      "Horizontal position of the beam axis at the start time, "
+                      "m (the vertical coordinate is ignored).");
+    prm.declare_entry("End point", "9e-4, 2e-4, 0", Patterns::List(Patterns::Double(), 1, 3),
+                      "Horizontal position where the line scan ends and the "
+                      "laser switches off, m.");
+    prm.declare_entry("Start time", "0", Patterns::Double(0.),
+                      "Time at which the laser switches on, s; range [0, inf).");
+    prm.declare_entry("Scan path file", "", Patterns::Anything(),
+                      "Optional file that replaces the single line: one segment "
+                      "per line, 'x0 y0 x1 y1 speed power' (3D) or 'x0 x1 speed "
+                      "power' (2D), m, m/s, W; power 0 moves the beam with the "
+                      "laser off. Segments follow each other in time from "
+                      "'Start time'. Lines starting with # are comments. A "
+                      "relative path is relative to the working directory.");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  Laser<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Laser");
+    power          = prm.get_double("Power");
+    absorptivity   = prm.get_double("Absorptivity");
+    beam_radius    = prm.get_double("Beam radius");
+    scan_speed     = prm.get_double("Scan speed");
+    start_point    = parse_point<dim>(prm.get("Start point"), "Laser/Start point");
+    end_point      = parse_point<dim>(prm.get("End point"), "Laser/End point");
+    start_time     = prm.get_double("Start time");
+    scan_path_file = prm.get("Scan path file");
+    prm.leave_subsection();
+    require(beam_radius > 0, "Laser/Beam radius", beam_radius,
+            "it must be positive (m)");
+    require(scan_speed > 0, "Laser/Scan speed", scan_speed,
+            "it must be positive (m/s)");
+  }
+
+
+  template <int dim>
+  Laser<dim>::Laser(const Parameters &p)
+    : prm(p)
+    , inv_rb2(1. / (p.beam_radius * p.beam_radius))
+  {
+    double t = prm.start_time;
+    auto   add = [&](Point<dim> a, Point<dim> b, double speed, double power) {
+      a[dim - 1] = b[dim - 1] = 0;
+      const double len = a.distance(b);
+      path.push_back({a, b, speed, power, t, t + len / speed});
+      t += len / speed;
+    };
+    if (prm.scan_path_file.empty())
+      add(prm.start_point, prm.end_point, prm.scan_speed, prm.power);
+    else
+      {
+        std::ifstream in(prm.scan_path_file);
+        require(static_cast<bool>(in), "Laser/Scan path file", prm.scan_path_file,
+                "the file cannot be opened");
+        std::string line;
+        unsigned    line_no = 0;
+        while (std::getline(in, line))
+          {
+            ++line_no;
+            const auto first = line.find_first_not_of(" \t\r");
+            if (first == std::string::npos || line[first] == '#')
+              continue;
+            std::istringstream s(line);
+            Point<dim>         a, b;
+            double             speed = 0, power = -1;
+            for (int d = 0; d < dim - 1; ++d)
+              s >> a[d];
+            for (int d = 0; d < dim - 1; ++d)
+              s >> b[d];
+            s >> speed >> power;
+            require(!s.fail() && speed > 0 && power >= 0,
+                    "Laser/Scan path file",
+                    prm.scan_path_file + ", line " + std::to_string(line_no) +
+                      ": '" + line + "'",
+                    "each line must hold " + std::to_string(2 * (dim - 1) + 2) +
+                      " numbers: start and end coordinates (m), a positive "
+                      "speed (m/s) and a non-negative power (W)");
+            add(a, b, speed, power);
+          }
+        require(!path.empty(), "Laser/Scan path file", prm.scan_path_file,
+                "it must contain at least one segment");
+      }
+  }
+
+
+  template <int dim>
+  void
+  Laser<dim>::check_path_inside(const Point<dim> &lower,
+                                const Point<dim> &upper) const
+  {
+    const std::string name = prm.scan_path_file.empty() ?
+                               std::string("Laser/End point") :
+                               std::string("Laser/Scan path file");
+    for (const auto &s : path)
+      for (const auto &p : {s.start, s.end})
+        for (int d = 0; d < dim - 1; ++d)
+          {
+            std::ostringstream v;
+            v << p;
+            require(p[d] >= lower[d] && p[d] <= upper[d],
+                    name,
+                    v.str(),
+                    "the scan path must stay inside the horizontal extent of "
+                    "the domain (coordinate " + std::to_string(d) + " in [" +
+                      num(lower[d]) + ", " +
+                      num(upper[d]) + "] m)");
+          }
+  }
+
+
+  template <int dim>
+  bool
+  Laser<dim>::position(const double t, Point<dim> &axis, double &power) const
+  {
+    for (const auto &s : path)
+      if (t >= s.t_begin && t < s.t_end)
+        {
+          const double w = (t - s.t_begin) / (s.t_end - s.t_begin);
+          axis           = s.start + w * (s.end - s.start);
+          power          = s.power;
+          return s.power > 0;
+        }
+    return false;
+  }
+
+  template class Laser<2>;
+  template class Laser<3>;
+} // namespace femp

@@ -1,0 +1,1059 @@
+// femp: explicit finite elements of the constant-solid zone (paper eqs.
+// 6-10) on their own parallel::distributed::Triangulation: one-point
+// hexahedra/quadrilaterals with Flanagan-Belytschko hourglass forces, lumped
+// mass, central difference, transition nodes (eqs. 14-17); see solid_fem.h.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/mpi_noncontiguous_partitioner.templates.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/grid/grid_generator.h>
+
+#include <femp/base/input_checks.h>
+#include <femp/solid/solid_fem.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+#include <cmath>
+
+namespace femp
+{
+  template <int dim>
+  void
+  SolidFEM<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Solid FEM");
+    prm.declare_entry("Use finite elements", "false", Patterns::Bool(),
+                      "Discretize the constant-solid zone below by finite "
+                      "elements (FEMP). If false, all solid is material "
+                      "points (all-MPM).");
+    prm.declare_entry("Zone lower corner", "0, 0, 0", Patterns::Anything(),
+                      "Lower corner of the box of the finite-element zone, m "
+                      "(dim coordinates). It must lie on grid lines inside the "
+                      "domain. Points inside the zone carry temperature only.");
+    prm.declare_entry("Zone upper corner", "0, 0, 0", Patterns::Anything(),
+                      "Upper corner of the finite-element zone, m (dim "
+                      "coordinates); on grid lines, inside the domain, above "
+                      "the lower corner in every direction.");
+    prm.declare_entry("Hourglass coefficient", "0.1", Patterns::Double(),
+                      "kappa of the Flanagan-Belytschko hourglass stiffness "
+                      "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
+                      "switches hourglass control off (for stability studies "
+                      "only).");
+    prm.leave_subsection();
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Solid FEM");
+    enabled      = prm.get_bool("Use finite elements");
+    hourglass_coefficient = prm.get_double("Hourglass coefficient");
+    if (enabled)
+      {
+        lower_corner = parse_point<dim>(prm.get("Zone lower corner"),
+                                        "Solid FEM/Zone lower corner");
+        upper_corner = parse_point<dim>(prm.get("Zone upper corner"),
+                                        "Solid FEM/Zone upper corner");
+      }
+    prm.leave_subsection();
+    require(hourglass_coefficient >= 0 && hourglass_coefficient <= 1,
+            "Solid FEM/Hourglass coefficient", hourglass_coefficient,
+            "it must lie in [0, 1]");
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::Parameters::check(
+    const typename BackgroundGrid<dim>::Parameters &g) const
+  {
+    if (!enabled)
+      return;
+    for (int d = 0; d < dim; ++d)
+      {
+        for (int c = 0; c < 2; ++c)
+          {
+            const double x    = c == 0 ? lower_corner[d] : upper_corner[d];
+            const double r    = (x - g.lower_corner[d]) / g.cell_size;
+            const std::string name =
+              std::string("Solid FEM/Zone ") + (c == 0 ? "lower" : "upper") +
+              " corner";
+            require(std::abs(r - std::round(r)) < 1e-6, name, x,
+                    "every coordinate must lie on a grid line (lower corner "
+                    "of the domain plus a whole number of cells)");
+            require(x >= g.lower_corner[d] - 1e-12 * g.cell_size &&
+                      x <= g.upper_corner[d] + 1e-12 * g.cell_size,
+                    name, x, "it must lie inside the domain");
+          }
+        require(upper_corner[d] > lower_corner[d], "Solid FEM/Zone upper corner",
+                upper_corner[d],
+                "it must exceed the lower corner in every direction");
+      }
+  }
+
+
+  namespace
+  {
+    /// s_a,d = +-1: sign of corner a (bit d set: upper side) in direction d.
+    constexpr double
+    sgn(const unsigned int a, const unsigned int d)
+    {
+      return ((a >> d) & 1u) ? 1. : -1.;
+    }
+    /// H_ma = prod_{d in m} s_a,d: the transform's matrix (see fwht).
+    constexpr double
+    hadamard(const unsigned int m, const unsigned int a)
+    {
+      double h = 1;
+      for (unsigned int d = 0; d < 3; ++d)
+        if ((m >> d) & 1u)
+          h *= sgn(a, d);
+      return h;
+    }
+    /// Flanagan-Belytschko hourglass base vector alpha as a transform index
+    /// (a product of two or more s_d: xy in 2D; xy, xz, yz, xyz in 3D).
+    template <int dim>
+    constexpr unsigned int
+    hg_mask(const unsigned int al)
+    {
+      return dim == 2 ? 3u : (al == 0 ? 3u : al == 1 ? 5u : al == 2 ? 6u : 7u);
+    }
+
+
+    /// In-place Walsh-Hadamard transform over the 2^dim corners (bit d of
+    /// the corner index: upper side in direction d): x_m <- sum_a H_ma x_a
+    /// with H_ma = prod_{d in m} s_a,d. Per stage (lo, hi) -> (lo + hi,
+    /// hi - lo).
+    template <int dim, typename Number>
+    inline void
+    fwht(Number (&x)[1u << dim][dim])
+    {
+#pragma GCC unroll 4
+      for (int d = 0; d < dim; ++d)
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if (!((a >> d) & 1u))
+            for (int i = 0; i < dim; ++i)
+              {
+                const Number lo = x[a][i], hi = x[a | (1u << d)][i];
+                x[a][i]              = lo + hi;
+                x[a | (1u << d)][i] = hi - lo;
+              }
+    }
+    /// Transposed transform: f_a = sum_m H_ma C_m; per stage (lo, hi) ->
+    /// (lo - hi, lo + hi).
+    template <int dim, typename Number>
+    inline void
+    fwht_transpose(Number (&x)[1u << dim][dim])
+    {
+#pragma GCC unroll 4
+      for (int d = 0; d < dim; ++d)
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if (!((a >> d) & 1u))
+            for (int i = 0; i < dim; ++i)
+              {
+                const Number lo = x[a][i], hi = x[a | (1u << d)][i];
+                x[a][i]              = lo - hi;
+                x[a | (1u << d)][i] = lo + hi;
+              }
+    }
+
+    /// Index of stress component (i, j) in {xx, yy, zz, xy, xz, yz}.
+    constexpr unsigned int
+    sidx(const unsigned int i, const unsigned int j)
+    {
+      return i == j ? i : 2 + i + j; // xy -> 3, xz -> 4, yz -> 5
+    }
+  } // namespace
+
+
+  template <int dim>
+  SolidFEM<dim>::SolidFEM(const Parameters &         prm,
+                          const BackgroundGrid<dim> &grid,
+                          const SolidMaterial &      material)
+    : prm(prm)
+    , grid(grid)
+    , mat(material)
+    , comm(grid.communicator())
+    , tria(grid.communicator())
+    , fe(1)
+  {}
+
+
+  template <int dim>
+  double
+  SolidFEM<dim>::hourglass_stiffness(const double T, const double kappa) const
+  {
+    return kappa * mat.p_wave_modulus(T) * V * bb / n_corners;
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::setup(const double                             mass_scaling,
+                       const std::array<std::uint8_t, 2 * dim> &face_bits,
+                       const Tensor<1, dim> &                   gravity,
+                       const std::vector<double> &              T)
+  {
+    mass_scale     = mass_scaling;
+    g              = gravity;
+    const double h = grid.h();
+    V              = std::pow(h, dim);
+    const double b = 1. / (std::pow(2., dim - 1) * h);
+    bb             = n_corners * dim * b * b;
+    in_zone_cell.assign(grid.n_local(), 0);
+    if (!prm.enabled)
+      return;
+    const auto &N = grid.n_cells();
+    for (int d = 0; d < dim; ++d)
+      {
+        zlo[d] = static_cast<int>(
+          std::round((prm.lower_corner[d] - grid.origin()[d]) / h));
+        zn[d] = static_cast<int>(
+          std::round((prm.upper_corner[d] - prm.lower_corner[d]) / h));
+      }
+    auto in_zone = [&](const std::array<int, dim> &ijk) {
+      for (int d = 0; d < dim; ++d)
+        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
+          return false;
+      return true;
+    };
+    auto zone_cell_id = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * zn[d] + (ijk[d] - zlo[d]);
+      return id;
+    };
+    auto zone_node_id = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
+      return id;
+    };
+    // A zone node on a zone face that is not a domain face.
+    auto is_transition = [&](const std::array<int, dim> &ijk) {
+      for (int d = 0; d < dim; ++d)
+        if ((ijk[d] == zlo[d] && zlo[d] > 0) ||
+            (ijk[d] == zlo[d] + zn[d] && zlo[d] + zn[d] < int(N[d])))
+          return true;
+      return false;
+    };
+    auto fix_bits = [&](const std::array<int, dim> &ijk) {
+      std::uint8_t f = 0;
+      for (int d = 0; d < dim; ++d)
+        {
+          if (ijk[d] == 0)
+            f |= face_bits[2 * d];
+          if (ijk[d] == int(N[d]))
+            f |= face_bits[2 * d + 1];
+        }
+      return f;
+    };
+    for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
+      if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
+        in_zone_cell[idx] = in_zone(grid.global_index(idx));
+
+    // The FE triangulation: coarse blocks of 2^r cells (largest r <= 3 that
+    // divides every cell count), refined r times; p4est partitions it.
+    unsigned int r = 3;
+    for (; r > 0; --r)
+      {
+        bool ok = true;
+        for (int d = 0; d < dim; ++d)
+          ok = ok && zn[d] % (1 << r) == 0;
+        if (ok)
+          break;
+      }
+    std::vector<unsigned int> reps(dim);
+    for (int d = 0; d < dim; ++d)
+      reps[d] = zn[d] >> r;
+    tria.clear();
+    GridGenerator::subdivided_hyper_rectangle(tria, reps, prm.lower_corner,
+                                              prm.upper_corner);
+    tria.refine_global(r);
+    dof_handler.reinit(tria);
+    dof_handler.distribute_dofs(fe);
+    const IndexSet &owned  = dof_handler.locally_owned_dofs();
+    IndexSet        ghosts;
+    DoFTools::extract_locally_active_dofs(dof_handler, ghosts);
+    ghosts.subtract_set(owned);
+    node_partitioner =
+      std::make_shared<Utilities::MPI::Partitioner>(owned, ghosts, comm);
+    n_owned = owned.n_elements();
+    n_local = n_owned + ghosts.n_elements();
+    {
+      IndexSet vo(dim * dof_handler.n_dofs()), vg(dim * dof_handler.n_dofs());
+      if (n_owned > 0)
+        vo.add_range(dim * owned.nth_index_in_set(0),
+                     dim * (owned.nth_index_in_set(n_owned - 1) + 1));
+      for (const auto i : ghosts)
+        vg.add_range(dim * i, dim * i + dim);
+      force.reinit(std::make_shared<Utilities::MPI::Partitioner>(vo, vg, comm));
+    }
+
+    // Elements in lexicographic order of their zone index (x fastest), and
+    // the structured index of each local node.
+    const double m_el = mat.density * V * mass_scaling / n_corners;
+    std::vector<std::array<int, dim>> node_ijk(n_local);
+    std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, n_corners>>>
+                                         cells;
+    std::vector<types::global_dof_index> dofs(n_corners);
+    off_rank = 0;
+    for (const auto &cell : dof_handler.active_cell_iterators())
+      if (cell->is_locally_owned())
+        {
+          const auto ijk = grid.cell_of(cell->center());
+          if (!grid.in_box(ijk) || grid.cell_status()[grid.local_index(ijk)] !=
+                                     BackgroundGrid<dim>::owned)
+            ++off_rank;
+          cell->get_dof_indices(dofs);
+          std::array<std::uint32_t, n_corners> c;
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              c[a] = node_partitioner->global_to_local(dofs[a]);
+              for (int d = 0; d < dim; ++d)
+                node_ijk[c[a]][d] = ijk[d] + ((a >> d) & 1u);
+            }
+          cells.emplace_back(zone_cell_id(ijk), c);
+        }
+    std::sort(cells.begin(), cells.end(),
+              [](const auto &a, const auto &b) { return a.first < b.first; });
+    const std::size_t n_el = cells.size();
+
+    // The node box: bounding box of the local nodes' structured indices.
+    multi_rank = Utilities::MPI::n_mpi_processes(comm) > 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        int lo = std::numeric_limits<int>::max(), hi = -1;
+        for (const auto &ijk : node_ijk)
+          lo = std::min(lo, ijk[d]), hi = std::max(hi, ijk[d]);
+        box_lo[d] = n_local > 0 ? lo : 0;
+        box_n[d]  = n_local > 0 ? hi - lo + 1 : 0;
+      }
+    std::size_t n_slots = 1;
+    for (int d = 0; d < dim; ++d)
+      box_stride[d] = n_slots, n_slots *= box_n[d];
+    n_box = (n_slots + simd_lanes - 1) / simd_lanes * simd_lanes;
+    auto box_index = [&](const std::array<int, dim> &ijk) {
+      std::size_t n = 0;
+      for (int d = 0; d < dim; ++d)
+        n += (ijk[d] - box_lo[d]) * box_stride[d];
+      return std::uint32_t(n);
+    };
+    box_of.resize(n_local);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      box_of[ln] = box_index(node_ijk[ln]);
+    AssertThrow(n_box < std::numeric_limits<std::uint32_t>::max(),
+                ExcMessage("FE node box too large for 32-bit node indices"));
+
+    conn.resize(n_corners * n_el);
+    element_id.resize(n_el);
+    for (std::size_t e = 0; e < n_el; ++e)
+      {
+        element_id[e] = cells[e].first;
+        for (unsigned int a = 0; a < n_corners; ++a)
+          conn[n_corners * e + a] = box_of[cells[e].second[a]];
+      }
+    element_by_id.clear();
+    for (std::size_t e = 0; e < n_el; ++e)
+      element_by_id.emplace_back(element_id[e], e);
+    blocks.assign((n_el + simd_lanes - 1) / simd_lanes, ElementBlock());
+    // Blocks of simd_lanes elements of one x-row: consecutive zone indices
+    // that do not wrap to the next row.
+    block_row.assign(blocks.size(), -1);
+    for (std::size_t b = 0; b < blocks.size(); ++b)
+      {
+        const std::size_t e0 = simd_lanes * b;
+        if (e0 + simd_lanes > n_el)
+          continue;
+        const std::uint64_t id0 = element_id[e0];
+        if (element_id[e0 + simd_lanes - 1] == id0 + simd_lanes - 1 &&
+            id0 % zn[0] + simd_lanes <= std::uint64_t(zn[0]))
+          block_row[b] = conn[n_corners * e0];
+      }
+
+    // Node arrays over the box.
+    for (int d = 0; d < dim; ++d)
+      {
+        vel[d].assign(n_box, 0.);
+        frc[d].assign(n_box, 0.);
+        ext[d].assign(n_box, 0.);
+      }
+    fix.assign(n_box, 0xff);
+    inv_mass.assign(n_box, 0.);
+    owned_mass.assign(n_box, 0.);
+    node_zone_id.assign(n_box, std::numeric_limits<std::uint64_t>::max());
+    ext_nodes.clear();
+    kinetic = 0;
+    if (multi_rank)
+      {
+        std::vector<std::uint32_t> s;
+        for (const auto &range : node_partitioner->import_indices())
+          for (unsigned int i = range.first; i < range.second; ++i)
+            s.push_back(i);
+        for (std::size_t ln = n_owned; ln < n_local; ++ln)
+          s.push_back(ln);
+        std::sort(s.begin(), s.end());
+        s.erase(std::unique(s.begin(), s.end()), s.end());
+        shared_nodes = s;
+      }
+    else
+      shared_nodes.clear();
+
+    // Lumped masses: element shares summed over ranks.
+    for (const auto n : conn)
+      for (int d = 0; d < dim; ++d)
+        frc[d][n] += m_el;
+    sum_shared(frc);
+    std::vector<double> mass(n_box, 0.);
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      mass[box_of[ln]] = frc[0][box_of[ln]];
+    for (int d = 0; d < dim; ++d)
+      std::fill(frc[d].begin(), frc[d].end(), 0.);
+
+    // Transition nodes, numbered on every rank in lexicographic order of
+    // the zone's nodes.
+    std::vector<std::uint64_t> tr_id;
+    tr_ijk.clear(), tr_mass.clear(), tr_fix.clear();
+    {
+      std::array<int, dim> ijk;
+      std::uint64_t        n_nodes = 1;
+      for (int d = 0; d < dim; ++d)
+        n_nodes *= zn[d] + 1;
+      for (std::uint64_t id = 0; id < n_nodes; ++id)
+        {
+          std::uint64_t r = id;
+          for (int d = 0; d < dim; ++d)
+            {
+              ijk[d] = zlo[d] + int(r % (zn[d] + 1));
+              r /= zn[d] + 1;
+            }
+          if (!is_transition(ijk))
+            continue;
+          tr_id.push_back(id);
+          tr_ijk.push_back(ijk);
+          tr_fix.push_back(fix_bits(ijk));
+          unsigned int n_adj = 1; // adjacent zone elements
+          for (int d = 0; d < dim; ++d)
+            n_adj *= (ijk[d] > zlo[d]) + (ijk[d] < zlo[d] + zn[d]);
+          tr_mass.push_back(n_adj * m_el);
+        }
+    }
+    tr_vel.assign(dim * tr_ijk.size(), 0.);
+    tr_hg.assign(dim * tr_ijk.size(), 0.);
+    tr_local.clear();
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      {
+        const std::uint32_t n = box_of[ln];
+        node_zone_id[n]       = zone_node_id(node_ijk[ln]);
+        const auto it =
+          std::lower_bound(tr_id.begin(), tr_id.end(), node_zone_id[n]);
+        const bool tr = it != tr_id.end() && *it == node_zone_id[n];
+        if (tr)
+          tr_local.emplace_back(n, it - tr_id.begin());
+        if (ln < n_owned)
+          owned_mass[n] = mass[n];
+        // Transition nodes take their velocity from update_transition():
+        // zero inverse mass, all components free (fixed ones are zero there).
+        inv_mass[n] = tr ? 0. : 1. / mass[n];
+        fix[n]      = tr ? 0 : fix_bits(node_ijk[ln]);
+      }
+    std::sort(tr_local.begin(), tr_local.end());
+    std::vector<int> box_tr(n_box, -1);
+    for (const auto &[n, t] : tr_local)
+      box_tr[n] = t;
+    tr_corners.clear();
+    for (std::size_t e = 0; e < n_el; ++e)
+      for (unsigned int a = 0; a < n_corners; ++a)
+        if (box_tr[conn[n_corners * e + a]] >= 0)
+          tr_corners.push_back({{std::uint32_t(e), a,
+                                 std::uint32_t(box_tr[conn[n_corners * e + a]])}});
+
+    // Temperatures: the grid rank owning a zone cell sends it (eq. 2).
+    grid_zone_cells.clear();
+    std::vector<types::global_dof_index> send_ids, recv_ids(element_id.begin(),
+                                                            element_id.end());
+    for (const auto c : grid.owned_cells())
+      if (in_zone_cell[c])
+        {
+          grid_zone_cells.push_back(c);
+          send_ids.push_back(zone_cell_id(grid.global_index(c)));
+        }
+    T_exchange.reinit(send_ids, recv_ids, comm);
+    T_send.resize(grid_zone_cells.size());
+    T_end.assign(n_el, 0.);
+    new_temperatures(T);
+    T_start = T_end;
+    for (std::size_t b = 0; b < blocks.size(); ++b)
+      for (unsigned int l = 0; l < simd_lanes; ++l)
+        blocks[b].T[l] = T_end[std::min(simd_lanes * b + l, n_el - 1)];
+
+    element_loop<false>(0, 1);
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::new_temperatures(const std::vector<double> &T)
+  {
+    if (!prm.enabled)
+      return;
+    T_start = T_end;
+    for (std::size_t i = 0; i < grid_zone_cells.size(); ++i)
+      T_send[i] = T[grid_zone_cells[i]];
+    T_exchange.export_to_ghosted_array(ArrayView<const double>(T_send),
+                                       ArrayView<double>(T_end));
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_external_forces(const std::array<std::vector<double>, dim> *f)
+  {
+    if (!prm.enabled || (f == nullptr && ext_nodes.empty()))
+      return;
+    for (const auto n : ext_nodes)
+      for (int d = 0; d < dim; ++d)
+        ext[d][n] = 0;
+    ext_nodes.clear();
+    if (f == nullptr)
+      return;
+    // Grid nodes of owned cells inside the zone, not transition nodes (those
+    // get the grid's forces through the grid): (zone node id, force).
+    std::vector<double> mine;
+    const auto &        lo = grid.box_lower();
+    const auto &        ns = grid.node_strides();
+    for (const auto n : grid.owned_cell_nodes())
+      {
+        std::array<int, dim> ijk;
+        std::size_t          r = n;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
+            r %= ns[d];
+          }
+        bool          in = true, nonzero = false;
+        std::uint64_t id = 0;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            in = in && ijk[d] >= zlo[d] && ijk[d] <= zlo[d] + zn[d];
+            id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
+          }
+        for (int d = 0; d < dim; ++d)
+          nonzero = nonzero || (*f)[d][n] != 0;
+        if (!in || !nonzero)
+          continue;
+        bool tr = false;
+        for (int d = 0; d < dim; ++d)
+          tr = tr || (ijk[d] == zlo[d] && zlo[d] > 0) ||
+               (ijk[d] == zlo[d] + zn[d] &&
+                zlo[d] + zn[d] < int(grid.n_cells()[d]));
+        if (tr)
+          continue;
+        mine.push_back(double(id));
+        for (int d = 0; d < dim; ++d)
+          mine.push_back((*f)[d][n]);
+      }
+    const auto all = Utilities::MPI::all_gather(comm, mine);
+    // Local FE nodes (owned and ghost: every rank that updates a node adds
+    // the same external force after the sum over ranks) by zone node id.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> ids;
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      ids.emplace_back(node_zone_id[box_of[ln]], box_of[ln]);
+    std::sort(ids.begin(), ids.end());
+    for (const auto &v : all)
+      for (std::size_t i = 0; i < v.size(); i += dim + 1)
+        {
+          const auto id = std::uint64_t(v[i]);
+          const auto it = std::lower_bound(
+            ids.begin(), ids.end(), std::make_pair(id, std::uint32_t(0)));
+          if (it == ids.end() || it->first != id)
+            continue;
+          ext_nodes.push_back(it->second);
+          for (int d = 0; d < dim; ++d)
+            ext[d][it->second] += v[i + 1 + d];
+        }
+    std::sort(ext_nodes.begin(), ext_nodes.end());
+    ext_nodes.erase(std::unique(ext_nodes.begin(), ext_nodes.end()),
+                    ext_nodes.end());
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::sum_shared(std::array<std::vector<double>, dim> &f)
+  {
+    if (!multi_rank)
+      return;
+    double *F = force.begin();
+    for (const auto ln : shared_nodes)
+      for (int d = 0; d < dim; ++d)
+        F[dim * ln + d] = f[d][box_of[ln]];
+    force.compress(VectorOperation::add);
+    force.update_ghost_values();
+    for (const auto ln : shared_nodes)
+      for (int d = 0; d < dim; ++d)
+        f[d][box_of[ln]] = F[dim * ln + d];
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::add_transition_partials(std::vector<double> &buf) const
+  {
+    for (const auto &[n, t] : tr_local)
+      for (int d = 0; d < dim; ++d)
+        buf[tr_width * t + 1 + dim + d] += frc[d][n] - tr_hg[dim * t + d];
+    for (std::size_t t = 0; t < tr_ijk.size(); ++t)
+      for (int d = 0; d < dim; ++d)
+        buf[tr_width * t + 1 + 2 * dim + d] += tr_hg[dim * t + d];
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::update_transition(const std::vector<double> &buf,
+                                   const double               dt,
+                                   std::vector<double> &      v_grid,
+                                   std::vector<double> &      a_grid)
+  {
+    v_grid.resize(dim * tr_ijk.size());
+    a_grid.resize(dim * tr_ijk.size());
+    for (std::size_t t = 0; t < tr_ijk.size(); ++t)
+      {
+        const double *b = &buf[tr_width * t];
+        const double  m = b[0] + tr_mass[t];
+        for (int d = 0; d < dim; ++d)
+          {
+            double &v = tr_vel[dim * t + d];
+            if (tr_fix[t] & (1u << d))
+              {
+                v_grid[dim * t + d] = a_grid[dim * t + d] = v = 0;
+                continue;
+              }
+            const double f = b[1 + dim + d];
+            const double p = b[1 + d] + tr_mass[t] * v + dt * f;
+            a_grid[dim * t + d] = f / m;
+            v_grid[dim * t + d] = p / m;
+            v = p / m + dt * b[1 + 2 * dim + d] / tr_mass[t];
+          }
+      }
+  }
+
+
+  template <int dim>
+  std::array<double, 2>
+  SolidFEM<dim>::update_nodes(const double dt)
+  {
+    if (!prm.enabled)
+      return {{0., 0.}};
+    // Element forces summed over ranks; velocities of the transition
+    // nodes (zero inverse mass below keeps them).
+    sum_shared(frc);
+    for (const auto &[n, t] : tr_local)
+      for (int d = 0; d < dim; ++d)
+        vel[d][n] = tr_vel[dim * t + d];
+    return ext_nodes.empty() ? node_loop<false>(dt) : node_loop<true>(dt);
+  }
+
+
+  /// The node update over the box in SIMD: v <- v + dt (f + f_ext) / m
+  /// masked to zero in fixed components (eq. 10), the force zeroed for the
+  /// next element loop, kinetic energy and external power (gravity on the
+  /// unscaled mass, external forces) of the owned nodes.
+  template <int dim>
+  template <bool with_ext>
+  std::array<double, 2>
+  SolidFEM<dim>::node_loop(const double dt)
+  {
+    using VD = simd_double;
+    typedef std::int64_t VI __attribute__((vector_size(sizeof(VD))));
+    typedef std::uint8_t VB __attribute__((vector_size(simd_lanes)));
+    constexpr unsigned int W = simd_lanes;
+    auto load = [](const auto *p) {
+      std::conditional_t<std::is_same_v<std::decay_t<decltype(*p)>, double>, VD, VI> v;
+      std::memcpy(&v, p, sizeof v);
+      return v;
+    };
+    VD k = {}, p = {};
+    const VD zero = {};
+    for (std::size_t n = 0; n < n_box; n += W)
+      {
+        const VD im = dt * load(&inv_mass[n]);
+        VB       fb;
+        std::memcpy(&fb, &fix[n], sizeof fb);
+        const VI fi = __builtin_convertvector(fb, VI);
+        VD       v[dim];
+        for (int d = 0; d < dim; ++d)
+          {
+            VD f = load(&frc[d][n]);
+            if constexpr (with_ext)
+              f += load(&ext[d][n]);
+            const VI free = (fi & (1 << d)) == 0;
+            v[d]          = VD(VI(load(&vel[d][n]) + im * f) & free);
+            std::memcpy(&vel[d][n], &v[d], sizeof(VD));
+            std::memcpy(&frc[d][n], &zero, sizeof(VD));
+          }
+        VD v2 = {}, gv = {}, fv = {};
+        for (int d = 0; d < dim; ++d)
+          {
+            v2 += v[d] * v[d];
+            gv += g[d] * v[d];
+            if constexpr (with_ext)
+              fv += load(&ext[d][n]) * v[d];
+          }
+        const VD m = load(&owned_mass[n]);
+        k += 0.5 * m * v2;
+        if constexpr (with_ext)
+          p += m / mass_scale * gv + (m > 0 ? fv : zero);
+        else
+          p += m / mass_scale * gv;
+      }
+    double ks = 0, ps = 0;
+    for (unsigned int l = 0; l < W; ++l)
+      ks += k[l], ps += p[l];
+    kinetic = ks;
+    return {{ks, ps}};
+  }
+
+
+  template <int dim>
+  double
+  SolidFEM<dim>::update_elements(const double dt, const double w)
+  {
+    if (!prm.enabled)
+      return 0;
+    return element_loop<true>(dt, w);
+  }
+
+
+  template <int dim>
+  template <bool update>
+  double
+  SolidFEM<dim>::element_loop(const double dt, const double w)
+  {
+    constexpr unsigned int nc = n_corners;
+    const double           h  = grid.h();
+    const double           B  = 1. / (std::pow(2., dim - 1) * h);
+    const double           Bdt   = B * dt;
+    const double           VB    = V * B;
+    const double           nu    = mat.poisson_ratio;
+    const double           mfac  = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    const double           kfac  = prm.hourglass_coefficient * mfac * V * bb / nc;
+    const double           vfac  = mat.bulk_viscosity * h *
+                          std::sqrt(mfac * mat.density * mass_scale) /
+                          (dt > 0 ? dt : 1.);
+    double                 mg[dim];
+    for (int d = 0; d < dim; ++d)
+      mg[d] = mat.density * V / nc * g[d];
+    // The node forces are zero here (zeroed by the node update, or at
+    // setup); the elements add theirs.
+    double       *F[dim];
+    const double *vl[dim];
+    for (int d = 0; d < dim; ++d)
+      F[d] = frc[d].data(), vl[d] = vel[d].data();
+    double work = 0;
+    const std::size_t n_el = element_id.size();
+    // Blocks of simd_lanes elements, one element per lane of simd_double
+    // (GCC vector extension, see constitutive.h); a partial last block
+    // repeats its last element in the spare lanes and stores nothing from
+    // them. Per element the arithmetic is that of the scalar formulation,
+    // and the work is summed in element order. The nodal force sums are in
+    // lexicographic element order, the two elements of a block that share a
+    // node summed first (round-off against other orders).
+    using VD               = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    static_assert(W == 4, "the gathers below are written for 4 lanes");
+    // Box offset of corner a (bit d: upper side in direction d) from corner 0.
+    auto row_offset = [&](const unsigned int a) {
+      std::size_t o = 0;
+      for (int d = 1; d < dim; ++d)
+        o += ((a >> d) & 1u) * box_stride[d];
+      return o;
+    };
+    for (std::size_t b = 0; b < blocks.size(); ++b)
+      {
+        const std::size_t  e0 = W * b;
+        const unsigned int nl = std::min<std::size_t>(W, n_el - e0);
+        std::size_t        el[W];
+        for (unsigned int l = 0; l < W; ++l)
+          el[l] = e0 + std::min(l, nl - 1);
+        ElementBlock &eb = blocks[b];
+        // Walsh-Hadamard transforms over the corners: coefficient m of x is
+        // sum_a (prod_{d in m} s_a,d) x_a, so the one-bit coefficients give
+        // the velocity gradient (b_a = s_a B) and the coefficients with two
+        // or more bits the hourglass modes q_alpha (Gamma = products of s).
+        VD          E;
+        StressBlock sb;
+        for (unsigned int c = 0; c < 6; ++c)
+          sb.s[c] = eb.s[c];
+        if constexpr (update)
+          {
+            VD Vc[nc][dim];
+            if (block_row[b] >= 0)
+              // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
+              // row(a) + l, corner a + 1 node row(a) + l + 1.
+#pragma GCC unroll 4
+              for (unsigned int a = 0; a < nc; a += 2)
+                {
+                  const std::size_t r = block_row[b] + row_offset(a);
+                  for (int i = 0; i < dim; ++i)
+                    {
+                      std::memcpy(&Vc[a][i], vl[i] + r, sizeof(VD));
+                      std::memcpy(&Vc[a + 1][i], vl[i] + r + 1, sizeof(VD));
+                    }
+                }
+            else
+              {
+                const std::uint32_t *c0 = &conn[nc * el[0]],
+                                    *c1 = &conn[nc * el[1]],
+                                    *c2 = &conn[nc * el[2]],
+                                    *c3 = &conn[nc * el[3]];
+#pragma GCC unroll 8
+                for (unsigned int a = 0; a < nc; ++a)
+                  for (int i = 0; i < dim; ++i)
+                    Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
+                                  vl[i][c3[a]]};
+              }
+            fwht<dim>(Vc);
+            // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
+            // element: q += dt Gamma_alpha . v (the same transform).
+            for (unsigned int al = 0; al < n_hg; ++al)
+              for (int i = 0; i < dim; ++i)
+                eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
+            // E(T_new) read once: the constitutive kernel, the hourglass
+            // stiffness and the viscous pressure.
+            VD Ts, Te;
+            if (nl == W)
+              {
+                std::memcpy(&Ts, &T_start[e0], sizeof(VD));
+                std::memcpy(&Te, &T_end[e0], sizeof(VD));
+              }
+            else
+              {
+                Ts = VD{T_start[el[0]], T_start[el[1]], T_start[el[2]],
+                        T_start[el[3]]};
+                Te = VD{T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
+              }
+            sb.T_old    = eb.T;
+            sb.T_new    = Ts + w * (Te - Ts);
+            auto Ef     = [&](const unsigned int l) {
+              return mat.youngs_modulus.value(sb.T_new[l]);
+            };
+            sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+            auto Eo  = [&](const unsigned int l) {
+              return mat.youngs_modulus.value(sb.T_old[l]);
+            };
+            sb.E_old = VD{Eo(0), Eo(1), Eo(2), Eo(3)};
+            sb.eps_p = eb.eps_p;
+            VD trL   = {};
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j)
+                sb.L[i][j] = i < dim && j < dim ? Bdt * Vc[1u << j][i] : VD{};
+            for (int i = 0; i < dim; ++i)
+              trL += sb.L[i][i];
+            update_stress_block(mat, sb);
+            // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
+            // summed in two independent chains; the new viscous pressure.
+            VD sd = {}, so = {};
+            for (int i = 0; i < dim; ++i)
+              {
+                sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
+                for (int j = i + 1; j < dim; ++j)
+                  so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
+                        (sb.L[i][j] + sb.L[j][i]);
+              }
+            const VD sw = sd + so;
+            const VD wk = 0.5 * V * sw + V * eb.visc * trL;
+            for (unsigned int l = 0; l < nl; ++l)
+              work += wk[l];
+            if (mat.bulk_viscosity > 0)
+              eb.visc = vfac * simd_sqrt(E) * trL;
+            for (unsigned int c = 0; c < 6; ++c)
+              eb.s[c] = sb.s[c];
+            eb.eps_p = sb.eps_p;
+            eb.T     = sb.T_new;
+          }
+        else
+          {
+            auto Ef = [&](const unsigned int l) {
+              return mat.youngs_modulus.value(eb.T[l]);
+            };
+            E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+          }
+        // Forces of the next step as coefficients of the same transform:
+        // gravity (m = 0), internal force -V sigma b_a with the viscous
+        // pressure (one-bit m, eq. 9), hourglass -k Gamma q (the others);
+        // the transposed transform gives the corner forces.
+        const VD k = kfac * E;
+        VD       C[nc][dim];
+        for (unsigned int al = 0; al < n_hg; ++al)
+          for (int i = 0; i < dim; ++i)
+            C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
+        for (int i = 0; i < dim; ++i)
+          {
+            C[0][i] = VD{} + mg[i];
+            for (int j = 0; j < dim; ++j)
+              C[1u << j][i] =
+                -VB * (sb.s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
+          }
+        fwht_transpose<dim>(C);
+        if (block_row[b] >= 0)
+          // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1)
+          // get C_a from lane l at node l and C_a+1 at node l + 1, added as
+          // one vector (no two lanes write the same node) and the last one.
+#pragma GCC unroll 4
+          for (unsigned int a = 0; a < nc; a += 2)
+            {
+              const std::size_t r = block_row[b] + row_offset(a);
+              for (int i = 0; i < dim; ++i)
+                {
+                  const VD hi = C[a + 1][i];
+                  const VD sh = __builtin_shufflevector(hi, VD{}, 4, 0, 1, 2);
+                  VD       f;
+                  std::memcpy(&f, F[i] + r, sizeof(VD));
+                  f += C[a][i] + sh;
+                  std::memcpy(F[i] + r, &f, sizeof(VD));
+                  F[i][r + W] += hi[W - 1];
+                }
+            }
+        else
+          for (unsigned int l = 0; l < nl; ++l)
+            {
+              const std::uint32_t *c = &conn[nc * (e0 + l)];
+#pragma GCC unroll 8
+              for (unsigned int a = 0; a < nc; ++a)
+                for (int i = 0; i < dim; ++i)
+                  F[i][c[a]] += C[a][i][l];
+            }
+      }
+
+    // Hourglass forces of this rank's elements at the transition nodes
+    // (kept out of the grid's force, added back locally, eq. 17).
+    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
+    if (kfac > 0)
+      for (const auto &tc : tr_corners)
+        {
+          const ElementBlock &eb = blocks[tc[0] / simd_lanes];
+          const unsigned int  l  = tc[0] % simd_lanes;
+          const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
+          for (int i = 0; i < dim; ++i)
+            for (unsigned int al = 0; al < n_hg; ++al)
+              tr_hg[dim * tc[2] + i] -=
+                k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
+        }
+    return work;
+  }
+
+
+  template <int dim>
+  double
+  SolidFEM<dim>::hourglass_energy(const bool reference) const
+  {
+    const double kappa = reference ? 0.05 : prm.hourglass_coefficient;
+    if (kappa == 0 || !prm.enabled)
+      return 0;
+    double energy = 0;
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      {
+        const ElementBlock &eb = blocks[e / simd_lanes];
+        const unsigned int  l  = e % simd_lanes;
+        const double        k  = hourglass_stiffness(eb.T[l], kappa);
+        for (unsigned int al = 0; al < n_hg; ++al)
+          for (int i = 0; i < dim; ++i)
+            energy += 0.5 * k * eb.q[al][i][l] * eb.q[al][i][l];
+      }
+    return energy;
+  }
+
+
+  template <int dim>
+  bool
+  SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
+  {
+    if (!prm.enabled)
+      return false;
+    const auto    ijk = grid.cell_of(x);
+    std::uint64_t id  = 0;
+    for (int d = dim - 1; d >= 0; --d)
+      {
+        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
+          return false;
+        id = id * zn[d] + (ijk[d] - zlo[d]);
+      }
+    const auto it = std::lower_bound(element_by_id.begin(),
+                                     element_by_id.end(),
+                                     std::make_pair(id, std::uint32_t(0)));
+    if (it == element_by_id.end() || it->first != id)
+      return false;
+    sxx = element_stress(it->second)[0][0];
+    T   = element_T(it->second);
+    return true;
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::cell_stress_fields(std::vector<double> &sxx,
+                                    std::vector<double> &vm) const
+  {
+    if (!prm.enabled)
+      return;
+    // Element stresses to the grid ranks owning their cells.
+    std::vector<types::global_dof_index> have(element_id.begin(),
+                                              element_id.end()),
+      want;
+    for (const auto c : grid_zone_cells)
+      {
+        const auto    ijk = grid.global_index(c);
+        std::uint64_t id  = 0;
+        for (int d = dim - 1; d >= 0; --d)
+          id = id * zn[d] + (ijk[d] - zlo[d]);
+        want.push_back(id);
+      }
+    Utilities::MPI::NoncontiguousPartitioner back(have, want, comm);
+    std::vector<double> a(element_id.size()), b(element_id.size()),
+      ra(want.size()), rb(want.size());
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      {
+        const SymmetricTensor<2, 3> s = element_stress(e);
+        a[e]                          = s[0][0];
+        b[e]                          = von_mises(s);
+      }
+    back.export_to_ghosted_array(ArrayView<const double>(a), ArrayView<double>(ra));
+    back.export_to_ghosted_array(ArrayView<const double>(b), ArrayView<double>(rb));
+    for (std::size_t i = 0; i < want.size(); ++i)
+      {
+        sxx[grid_zone_cells[i]] = ra[i];
+        vm[grid_zone_cells[i]]  = rb[i];
+      }
+  }
+
+
+  template <int dim>
+  bool
+  SolidFEM<dim>::find_non_finite(Point<dim> &where) const
+  {
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      if (!std::isfinite(element_stress(e).norm()))
+        {
+          std::uint64_t r = element_id[e];
+          for (int d = 0; d < dim; ++d)
+            {
+              where[d] = grid.origin()[d] +
+                         (zlo[d] + double(r % zn[d]) + 0.5) * grid.h();
+              r /= zn[d];
+            }
+          return true;
+        }
+    return false;
+  }
+
+
+  template class SolidFEM<2>;
+  template class SolidFEM<3>;
+} // namespace femp

@@ -1,0 +1,1398 @@
+// femp: explicit MPM for the fusible solid, MUSL variant with FLIP or APIC
+// velocity transfer (paper eqs. 11-13; see solid_mpm.h for the algorithm,
+// the choice of variant and the cell-crossing rules).
+#include <deal.II/base/mpi.h>
+
+#include <femp/solid/solid_mpm.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <type_traits>
+
+namespace femp
+{
+  namespace
+  {
+    /// Index of stress component (i, j) in {xx, yy, zz, xy, xz, yz}.
+    constexpr unsigned int
+    sidx(const unsigned int i, const unsigned int j)
+    {
+      return i == j ? i : 2 + i + j; // xy -> 3, xz -> 4, yz -> 5
+    }
+
+    /// Tent weights N and gradients dN of the 2^dim corners (corner a has
+    /// bit d set when it is the upper node in direction d) at local
+    /// coordinates xi, for cell size 1/ih.
+    template <int dim, typename Number>
+    [[gnu::always_inline]] inline void
+    tents(const Number (&xi)[dim], const double ih, Number (&N)[1 << dim],
+          Number (&dN)[1 << dim][dim])
+    {
+      Number w[dim][2];
+      double g[2] = {-ih, ih};
+      for (int d = 0; d < dim; ++d)
+        w[d][0] = 1 - xi[d], w[d][1] = xi[d];
+      for (unsigned int a = 0; a < (1u << dim); ++a)
+        {
+          const unsigned int b0 = a & 1, b1 = (a >> 1) & 1;
+          if constexpr (dim == 2)
+            {
+              N[a]     = w[0][b0] * w[1][b1];
+              dN[a][0] = g[b0] * w[1][b1];
+              dN[a][1] = w[0][b0] * g[b1];
+            }
+          else
+            {
+              const unsigned int b2 = (a >> 2) & 1;
+              const Number       w12 = w[1][b1] * w[2][b2];
+              N[a]     = w[0][b0] * w12;
+              dN[a][0] = g[b0] * w12;
+              dN[a][1] = w[0][b0] * g[b1] * w[2][b2];
+              dN[a][2] = w[0][b0] * w[1][b1] * g[b2];
+            }
+        }
+    }
+
+    /// Lanes of the point loops: mpm_lanes_3d in 3D (8 with AVX-512: a
+    /// block is then the 2 x 2 x 2 points of a cell), simd_lanes (4) in 2D
+    /// (2 x 2 points per cell).
+    template <int dim>
+    constexpr unsigned int point_lanes = dim == 3 ? mpm_lanes_3d : simd_lanes;
+
+    /// Lanes p[0..W-1] of @p a as one vector (a full block of consecutive
+    /// points: one vector load).
+    template <std::size_t W>
+    inline typename SimdOf<W>::type
+    simd_load(const std::vector<double> &a, const std::size_t (&p)[W],
+              const bool full)
+    {
+      typename SimdOf<W>::type r;
+      if (full)
+        std::memcpy(&r, &a[p[0]], sizeof(r));
+      else
+        for (unsigned int l = 0; l < W; ++l)
+          r[l] = a[p[l]];
+      return r;
+    }
+    /// A block of up to W consecutive points starting at p0 (of n): nl
+    /// lanes in use, their indices pl (unused lanes repeat the last point,
+    /// so loads stay in range), full when every lane is used.
+    template <unsigned int W>
+    struct PointBlock
+    {
+      PointBlock(const std::size_t p0, const std::size_t n)
+        : nl(std::min<std::size_t>(W, n - p0))
+        , full(nl == W)
+      {
+        for (unsigned int l = 0; l < W; ++l)
+          pl[l] = p0 + std::min(l, nl - 1);
+      }
+      unsigned int nl;
+      bool         full;
+      std::size_t  pl[W];
+    };
+
+    /// True when the W lanes of @p n0 are equal (the points of the block
+    /// lie in one cell).
+    template <std::size_t W>
+    inline bool
+    one_cell(const std::size_t (&n0)[W])
+    {
+      bool r = true;
+      for (unsigned int l = 1; l < W; ++l)
+        r = r && n0[l] == n0[0];
+      return r;
+    }
+
+    /// Lanes of @p a summed as a tree: (a0 + a1) + (a2 + a3), and for 8
+    /// lanes the sum of the two halves so formed.
+    template <typename VD>
+    inline double
+    lane_total(const VD a)
+    {
+      static_assert(simd_width<VD> == 4 || simd_width<VD> == 8, "4 or 8");
+      const double lo = (a[0] + a[1]) + (a[2] + a[3]);
+      if constexpr (simd_width<VD> == 8)
+        return lo + ((a[4] + a[5]) + (a[6] + a[7]));
+      else
+        return lo;
+    }
+
+    /// Local coordinates xi of the points of @p b in their cells (origin
+    /// @p corner, size 1/ih) and their tent weights and gradients.
+    template <int dim, typename Arrays, unsigned int W,
+              typename VD = typename SimdOf<W>::type>
+    [[gnu::always_inline]] inline void
+    block_tents(const Arrays &x, const Arrays &corner, const PointBlock<W> &b,
+                const double ih, VD (&xi)[dim], VD (&N)[1 << dim],
+                VD (&dN)[1 << dim][dim])
+    {
+      for (int d = 0; d < dim; ++d)
+        xi[d] = (simd_load(x[d], b.pl, b.full) -
+                 simd_load(corner[d], b.pl, b.full)) *
+                ih;
+      tents<dim>(xi, ih, N, dN);
+    }
+
+    /// Local coordinates xi of the points of @p b in their cells (origin
+    /// @p corner, size 1/ih), without the tents.
+    template <int dim, typename Arrays, unsigned int W,
+              typename VD = typename SimdOf<W>::type>
+    [[gnu::always_inline]] inline void
+    block_xi(const Arrays &x, const Arrays &corner, const PointBlock<W> &b,
+             const double ih, VD (&xi)[dim])
+    {
+      for (int d = 0; d < dim; ++d)
+        xi[d] = (simd_load(x[d], b.pl, b.full) -
+                 simd_load(corner[d], b.pl, b.full)) *
+                ih;
+    }
+
+    /// Tent weights N of the 2^dim corners at xi (the products of tents(),
+    /// without the gradients).
+    template <int dim, typename VD>
+    [[gnu::always_inline]] inline void
+    weights(const VD (&xi)[dim], VD (&N)[1 << dim])
+    {
+      VD w[dim][2];
+      for (int d = 0; d < dim; ++d)
+        w[d][0] = 1 - xi[d], w[d][1] = xi[d];
+      for (unsigned int a = 0; a < (1u << dim); ++a)
+        {
+          const unsigned int b0 = a & 1, b1 = (a >> 1) & 1;
+          if constexpr (dim == 2)
+            N[a] = w[0][b0] * w[1][b1];
+          else
+            N[a] = w[0][b0] * (w[1][b1] * w[2][(a >> 2) & 1]);
+        }
+    }
+
+    /// Turns the values f[a] at the 2^dim corners of a cell (corner a: bit
+    /// d set for the upper node in direction d) into the coefficients of
+    /// their multilinear interpolant in monomial form, f(xi) = sum_S c[S]
+    /// prod_{d in S} xi_d (S a set of directions as a bit mask): per
+    /// direction d, c[S + d] -= c[S]. Sum N_a f_a and sum f_a grad N_a of
+    /// the points of a cell then cost a few multiply-adds per point on
+    /// coefficients shared by the cell (instead of 2^dim (dim + 1) per
+    /// value); the same polynomial, so the results agree up to round-off.
+    template <int dim, typename VD>
+    [[gnu::always_inline]] inline void
+    monomial_coefficients(VD (&c)[1 << dim])
+    {
+      for (int d = 0; d < dim; ++d)
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          if ((a >> d) & 1)
+            c[a] -= c[a ^ (1u << d)];
+    }
+
+    /// Value and gradient (with respect to xi) at xi of the multilinear
+    /// polynomial with monomial coefficients @p c (Horner form).
+    template <int dim, typename VD>
+    [[gnu::always_inline]] inline void
+    multilinear(const VD (&c)[1 << dim], const VD (&xi)[dim], VD &val,
+                VD (&grad)[dim])
+    {
+      const VD x = xi[0], y = xi[1];
+      if constexpr (dim == 2)
+        {
+          const VD b = c[2] + c[3] * x;
+          val                 = (c[0] + c[1] * x) + y * b;
+          grad[0]             = c[1] + c[3] * y;
+          grad[1]             = b;
+        }
+      else
+        {
+          const VD z = xi[2];
+          const VD b = c[2] + c[3] * x, e = c[4] + c[5] * x,
+                            f = c[6] + c[7] * x;
+          const VD t = e + y * f;
+          val                 = ((c[0] + c[1] * x) + y * b) + z * t;
+          grad[0]             = (c[1] + c[3] * y) + z * (c[5] + c[7] * y);
+          grad[1]             = b + z * f;
+          grad[2]             = t;
+        }
+    }
+
+    /// 1 in the first @p nl lanes, 0 in the others.
+    template <typename VD>
+    inline VD
+    lane_mask(const unsigned int nl)
+    {
+      VD r = {};
+      for (unsigned int l = 0; l < nl; ++l)
+        r[l] = 1.;
+      return r;
+    }
+
+    /// Software prefetch of the cache line that holds point @p q of each
+    /// array (rw 0: to read, 1: to write). The loops stream about 30 point
+    /// arrays at once, more than the hardware prefetchers follow.
+    template <int rw, typename Array>
+    [[gnu::always_inline]] inline void
+    prefetch(const Array &a, const std::size_t q)
+    {
+      __builtin_prefetch(a.data() + q, rw, 3);
+    }
+    template <int rw, typename Array, std::size_t k>
+    [[gnu::always_inline]] inline void
+    prefetch(const std::array<Array, k> &a, const std::size_t q)
+    {
+      for (const auto &c : a)
+        __builtin_prefetch(c.data() + q, rw, 3);
+    }
+    /// Points ahead of the block at which the loops prefetch: 2 cache lines
+    /// of doubles per array (measured on the benchmark: 16 points gave
+    /// 94 ns per APIC point-step, 32 points 99, 64 points 114, none 114).
+    constexpr std::size_t prefetch_distance = 16;
+
+    /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
+    template <typename VD>
+    inline void
+    simd_store(std::vector<double> &a, const std::size_t p0,
+               const unsigned int nl, const VD r)
+    {
+      if (nl == simd_width<VD>)
+        std::memcpy(&a[p0], &r, sizeof(r));
+      else
+        for (unsigned int l = 0; l < nl; ++l)
+          a[p0 + l] = r[l];
+    }
+
+    /// The sums (x0 + x1) + (x2 + x3) of the lanes of @p c[0..3], as the
+    /// four lanes of one value; for 8 lanes, the sums ((x0 + x1) + (x2 +
+    /// x3)) + ((x4 + x5) + (x6 + x7)) of the lanes of @p c[0..7] (the
+    /// grouping that two 4-lane blocks summed in turn give).
+    template <typename VD>
+    [[gnu::always_inline]] inline VD
+    lane_sums(const VD *c)
+    {
+      if constexpr (simd_width<VD> == 4)
+        {
+          typedef long long index __attribute__((vector_size(32)));
+          const VD ab = __builtin_shuffle(c[0], c[1], index{0, 4, 2, 6}) +
+                        __builtin_shuffle(c[0], c[1], index{1, 5, 3, 7});
+          const VD cd = __builtin_shuffle(c[2], c[3], index{0, 4, 2, 6}) +
+                        __builtin_shuffle(c[2], c[3], index{1, 5, 3, 7});
+          return __builtin_shuffle(ab, cd, index{0, 1, 4, 5}) +
+                 __builtin_shuffle(ab, cd, index{2, 3, 6, 7});
+        }
+      else
+        {
+          static_assert(simd_width<VD> == 8, "4 or 8 lanes");
+          typedef long long index __attribute__((vector_size(64)));
+          // Pairs of neighbouring lanes, then pairs of pairs (each half),
+          // then the two halves.
+          VD p[4];
+          for (unsigned int k = 0; k < 4; ++k)
+            p[k] = __builtin_shuffle(c[2 * k], c[2 * k + 1],
+                                     index{0, 8, 2, 10, 4, 12, 6, 14}) +
+                   __builtin_shuffle(c[2 * k], c[2 * k + 1],
+                                     index{1, 9, 3, 11, 5, 13, 7, 15});
+          const VD q0 = __builtin_shuffle(p[0], p[1],
+                                          index{0, 1, 8, 9, 4, 5, 12, 13}) +
+                        __builtin_shuffle(p[0], p[1],
+                                          index{2, 3, 10, 11, 6, 7, 14, 15});
+          const VD q1 = __builtin_shuffle(p[2], p[3],
+                                          index{0, 1, 8, 9, 4, 5, 12, 13}) +
+                        __builtin_shuffle(p[2], p[3],
+                                          index{2, 3, 10, 11, 6, 7, 14, 15});
+          return __builtin_shuffle(q0, q1, index{0, 1, 2, 3, 8, 9, 10, 11}) +
+                 __builtin_shuffle(q0, q1, index{4, 5, 6, 7, 12, 13, 14, 15});
+        }
+    }
+
+    /// Adds the contributions @p c (n values per corner, one point per
+    /// lane) of blocks of points to the corner nodes: fields[k][node0[l] +
+    /// offset[a]] += c[a][k][l]. When the four points of a block lie in the
+    /// same cell (the usual case: points are sorted by cell) the lanes are
+    /// summed first ((c0 + c1) + (c2 + c3)), and the lane sums of
+    /// consecutive one-cell blocks of the same cell (the points
+    /// are sorted by cell: 2 x 2 x 2 points per cell are two blocks) are
+    /// kept in @p acc and added to the nodes once per cell (flush()), every
+    /// node value of the cell written once. The sum per node then groups the
+    /// cell's points ((c0 + c1) + (c2 + c3)) + ((c4 + c5) + (c6 + c7)): a
+    /// round-off-level reordering. Mixed blocks go lane by lane in point
+    /// order.
+    template <std::size_t n_corners, std::size_t n, unsigned int W>
+    struct CellScatter
+    {
+      using VD = typename SimdOf<W>::type;
+      static_assert((n_corners * n) % W == 0, "groups of W");
+      static constexpr unsigned int n_groups = n_corners * n / W;
+      static constexpr std::size_t  none     = std::size_t(-1);
+
+      CellScatter(const std::array<std::ptrdiff_t, n_corners> &offset,
+                  double *(&fields)[n])
+        : offset(offset)
+        , fields(fields)
+      {}
+      ~CellScatter()
+      {
+        flush();
+      }
+
+      [[gnu::always_inline]] inline void
+      add(const VD (&c)[n_corners][n], const std::size_t (&node0)[W],
+          const unsigned int nl)
+      {
+        if (nl == W && one_cell(node0))
+          {
+            const VD *cf = &c[0][0];
+            if (node0[0] == cell0)
+              for (unsigned int g = 0; g < n_groups; ++g)
+                acc[g] += lane_sums(cf + W * g);
+            else
+              {
+                flush();
+                cell0 = node0[0];
+                for (unsigned int g = 0; g < n_groups; ++g)
+                  acc[g] = lane_sums(cf + W * g);
+              }
+          }
+        else
+          {
+            flush();
+            for (unsigned int l = 0; l < nl; ++l)
+              for (unsigned int a = 0; a < n_corners; ++a)
+                {
+                  const std::size_t I = node0[l] + offset[a];
+                  for (unsigned int k = 0; k < n; ++k)
+                    fields[k][I] += c[a][k][l];
+                }
+          }
+      }
+      void
+      flush()
+      {
+        if (cell0 == none)
+          return;
+        double s[n_corners * n];
+        std::memcpy(s, acc, sizeof(s));
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t I = cell0 + offset[a];
+            for (unsigned int k = 0; k < n; ++k)
+              fields[k][I] += s[n * a + k];
+          }
+        cell0 = none;
+      }
+
+      const std::array<std::ptrdiff_t, n_corners> &offset;
+      double *(&fields)[n];
+      std::size_t cell0 = none;
+      VD          acc[n_groups];
+    };
+
+    /// P2G contributions of a block of points (one per lane) to its corner
+    /// nodes (eqs. 11-13): per corner a, c[a] = {m N, m N v_p(x_I) (dim),
+    /// g m_true N - V (sigma + q I) grad N (dim)}. @p s: stress {xx yy zz
+    /// xy xz yz}; A (APIC): v_p(x_I) = v_p + C_p (x_I - x_p) with
+    /// x_I - x_p = h (b - xi), FLIP: v_p.
+    template <bool A, int dim, unsigned int n_corners, typename VD>
+    [[gnu::always_inline]] inline void
+    p2g_block(const VD (&xi)[dim], const VD (&N)[n_corners],
+              const VD (&dN)[n_corners][dim], const VD m, const VD mg,
+              const VD V, const VD q, const VD (&s)[6], const VD (&v)[dim],
+              const VD (&C)[dim * dim], const double h,
+              const Tensor<1, dim> &gravity, VD (&c)[n_corners][1 + 2 * dim])
+    {
+      VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
+      for (int i = 0; i < dim; ++i)
+        {
+          for (int j = 0; j < dim; ++j)
+            Vs[i][j] = V * s[sidx(i, j)];
+          Vs[i][i] += V * q;
+          g[i]  = mg * gravity[i];
+          v0[i] = v[i];
+          for (int j = 0; j < dim; ++j)
+            Ch[i][j] = VD{};
+        }
+      if constexpr (A)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            {
+              Ch[i][j] = h * C[i * dim + j];
+              v0[i] -= Ch[i][j] * xi[j];
+            }
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          const VD mN = m * N[a];
+          c[a][0]     = mN;
+          for (int i = 0; i < dim; ++i)
+            {
+              VD va = v0[i];
+              for (int j = 0; j < dim; ++j)
+                if ((a >> j) & 1)
+                  va += Ch[i][j];
+              VD f = g[i] * N[a];
+              for (int j = 0; j < dim; ++j)
+                f -= Vs[i][j] * dN[a][j];
+              c[a][1 + i]       = mN * va;
+              c[a][1 + dim + i] = f;
+            }
+        }
+    }
+
+    /// The point arrays that the P2G reads (see SolidMPM).
+    template <int dim>
+    struct P2GInput
+    {
+      const std::array<std::vector<double>, dim> &      x, &corner, &v;
+      const std::array<std::vector<double>, dim * dim> &C;
+      const std::vector<double> &                      true_mass, &volume, &visc;
+      const std::array<std::vector<double>, 6> &       sigma;
+      const std::vector<std::uint32_t> &               node0;
+      const double                                     scaling, h;
+      const Tensor<1, dim> &                           gravity;
+    };
+
+    /// P2G (eqs. 11-13) of the blocks of points starting at p0 = b, b +
+    /// W, ... < e (of n points) into @p out: the contributions of
+    /// a block in SIMD (p2g_block), then added to the nodes (CellScatter).
+    /// Not inlined: update_stresses() calls it for chunks of points that it
+    /// just updated (still in the L1 cache), and the two loop bodies
+    /// compiled apart keep their values in registers.
+    template <bool A, int dim, std::size_t n_corners>
+    [[gnu::noinline]] void
+    p2g_blocks(const P2GInput<dim> &in, const std::size_t b,
+               const std::size_t e, const std::size_t n,
+               CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> &out)
+    {
+      constexpr unsigned int W  = point_lanes<dim>;
+      using VD                  = typename SimdOf<W>::type;
+      const double ih    = 1. / in.h;
+      for (std::size_t p0 = b; p0 < e; p0 += W)
+        {
+          const PointBlock<W> blk(p0, n);
+          const bool         full = blk.full;
+          const auto &       pl   = blk.pl;
+          VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+          block_tents<dim>(in.x, in.corner, blk, ih, xi, N, dN);
+          const VD mg = simd_load(in.true_mass, pl, full),
+                   m  = mg * in.scaling;
+          VD sp[6], vp[dim], Cp[dim * dim];
+          for (unsigned int c = 0; c < 6; ++c)
+            sp[c] = simd_load(in.sigma[c], pl, full);
+          for (int i = 0; i < dim; ++i)
+            vp[i] = simd_load(in.v[i], pl, full);
+          if constexpr (A)
+            for (unsigned int c = 0; c < dim * dim; ++c)
+              Cp[c] = simd_load(in.C[c], pl, full);
+          // Per corner: mass, momentum (dim), force (dim).
+          VD c[n_corners][1 + 2 * dim];
+          p2g_block<A>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
+                       simd_load(in.visc, pl, full), sp, vp, Cp, in.h,
+                       in.gravity, c);
+          std::size_t n0[W];
+          for (unsigned int l = 0; l < W; ++l)
+            n0[l] = in.node0[pl[l]];
+          out.add(c, n0, blk.nl);
+        }
+    }
+    /// APIC: adds point p's affine velocity term C_p : C_p D_p of the
+    /// kinetic energy to v2 (D_p per direction h^2 xi (1 - xi), xi the
+    /// position in the cell that the next P2G uses).
+    template <int dim>
+    inline void
+    add_affine_kinetic(
+      const std::array<std::vector<double>, dim> &      x,
+      const std::array<std::vector<double>, dim> &      corner,
+      const std::array<std::vector<double>, dim * dim> &C,
+      const std::size_t                                 p,
+      const double                                      h,
+      double &                                          v2)
+    {
+      const double ih = 1. / h;
+      for (int j = 0; j < dim; ++j)
+        {
+          const double xi = (x[j][p] - corner[j][p]) * ih;
+          const double D  = h * h * xi * (1 - xi);
+          for (int i = 0; i < dim; ++i)
+            v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
+        }
+    }
+  } // namespace
+
+
+  template <int dim>
+  SolidMPM<dim>::SolidMPM(const BackgroundGrid<dim> &grid,
+                          const SolidMaterial &      material,
+                          MaterialPoints<dim> &      points)
+    : grid(grid)
+    , mat(material)
+    , points(points)
+    , apic(material.velocity_transfer == SolidMaterial::VelocityTransfer::apic)
+  {
+    const auto &s = grid.node_strides();
+    for (unsigned int a = 0; a < n_corners; ++a)
+      {
+        corner_offset[a] = 0;
+        for (int d = 0; d < dim; ++d)
+          if (a & (1u << d))
+            corner_offset[a] += s[d];
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::gather(const std::vector<std::uint8_t> &excluded_cell,
+                        const double                     mass_scaling)
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    apic     = mat.velocity_transfer == SolidMaterial::VelocityTransfer::apic;
+    AssertThrow(points.n_properties() >=
+                  P::n_used(true, apic),
+                ExcMessage("SolidMPM: the material points do not carry the "
+                           "solid (or APIC) properties"));
+    excluded = excluded_cell;
+    scaling  = mass_scaling;
+    // The P2G buffer of the fused pass: zero again, and its node list anew.
+    clear_next();
+    next_ready         = false;
+    steps_since_gather = 0;
+    for (const auto n : next_nodes)
+      node_mark[n] = 0;
+    next_nodes.clear();
+    node_mark.resize(grid.n_local_nodes(), 0);
+    for (int d = 0; d < dim; ++d)
+      x[d].clear(), v[d].clear(), corner[d].clear();
+    for (auto &c : C)
+      c.clear();
+    for (auto &s : sigma)
+      s.clear();
+    true_mass.clear(), volume.clear(), visc.clear();
+    eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
+    auto &     handler = points.particle_handler();
+    const auto h       = grid.h();
+    {
+      const std::size_t n = handler.n_locally_owned_particles();
+      for (int d = 0; d < dim; ++d)
+        x[d].reserve(n), v[d].reserve(n), corner[d].reserve(n);
+      if (apic)
+        for (auto &c : C)
+          c.reserve(n);
+      for (auto &s : sigma)
+        s.reserve(n);
+      true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
+      eps_p.reserve(n), cell.reserve(n), node0.reserve(n), handle.reserve(n);
+    }
+    for (auto it = handler.begin(); it != handler.end(); ++it)
+      {
+        const ArrayView<double> q = it->get_properties();
+        if (q[P::state] == MaterialPoints<dim>::fluid)
+          {
+            // Melted: no stress, no hardening memory, no momentum (without
+            // the melt flow a melted point is at rest; its kinetic energy
+            // was booked as removed by melting), so that it solidifies
+            // again stress-free and at rest (doc/solid.md "Melting and
+            // re-solidification"). With the flow, its velocity is the
+            // flow's (doc/solid.md "Flow and solid together").
+            for (unsigned int c = P::stress; c < P::stress + dim * (dim + 1) / 2; ++c)
+              q[c] = 0;
+            if (!flow_owns_fluid)
+              for (int d = 0; d < dim; ++d)
+                q[P::velocity + d] = 0;
+            q[P::plastic_strain]   = 0;
+            q[P::viscous_pressure] = 0;
+            if constexpr (dim == 2)
+              q[P::stress_zz] = 0;
+            if (apic)
+              for (unsigned int c = 0; c < dim * dim; ++c)
+                q[P::affine_velocity + c] = 0;
+          }
+        if (q[P::state] != MaterialPoints<dim>::solid)
+          continue;
+        const Point<dim> p   = it->get_location();
+        const auto       ijk = grid.cell_of(p);
+        const auto       idx = grid.local_index(ijk);
+        if (excluded[idx])
+          continue;
+        for (int d = 0; d < dim; ++d)
+          {
+            x[d].push_back(p[d]);
+            v[d].push_back(q[P::velocity + d]);
+            corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+          }
+        if (apic)
+          for (unsigned int c = 0; c < dim * dim; ++c)
+            C[c].push_back(q[P::affine_velocity + c]);
+        true_mass.push_back(q[P::mass]);
+        volume.push_back(q[P::volume]);
+        visc.push_back(q[P::viscous_pressure]);
+        cell.push_back(idx);
+        node0.push_back(grid.first_node_of_cell(idx));
+        if constexpr (dim == 2)
+          {
+            sigma[0].push_back(q[P::stress + 0]);
+            sigma[1].push_back(q[P::stress + 1]);
+            sigma[2].push_back(q[P::stress_zz]);
+            sigma[3].push_back(q[P::stress + 2]);
+            sigma[4].push_back(0.);
+            sigma[5].push_back(0.);
+          }
+        else
+          for (unsigned int c = 0; c < n_stress; ++c) // same order
+            sigma[c].push_back(q[P::stress + c]);
+        eps_p.push_back(q[P::plastic_strain]);
+        handle.push_back(it);
+      }
+    moved_cell = lost = false;
+    left_rank         = 0;
+    for (std::size_t p = 0; p < node0.size(); ++p)
+      if (p == 0 || node0[p] != node0[p - 1])
+        mark_cell_nodes(node0[p]);
+    sum_energies();
+    member_ids.resize(handle.size());
+    for (std::size_t p = 0; p < handle.size(); ++p)
+      member_ids[p] = handle[p]->get_id();
+    std::sort(member_ids.begin(), member_ids.end());
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::mark_cell_nodes(const std::size_t n0)
+  {
+    for (unsigned int a = 0; a < n_corners; ++a)
+      {
+        const std::size_t n = n0 + corner_offset[a];
+        if (!node_mark[n])
+          node_mark[n] = 1, next_nodes.push_back(n);
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::clear_next()
+  {
+    if (next_dirty)
+      for (auto &f : next)
+        for (const auto n : next_nodes)
+          f[n] = 0;
+    next_dirty = false;
+  }
+
+
+  template <int dim>
+  typename SolidMPM<dim>::Exchange
+  SolidMPM<dim>::exchange_since_gather() const
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    Exchange   e;
+    const auto h = grid.h(), ih = 1. / h;
+    for (const auto &particle : points.particle_handler())
+      {
+        const ArrayView<const double> q = particle.get_properties();
+        const bool member = std::binary_search(member_ids.begin(),
+                                               member_ids.end(),
+                                               particle.get_id());
+        const bool       solid = q[P::state] == MaterialPoints<dim>::solid;
+        const Point<dim> xp    = particle.get_location();
+        const auto       ijk   = grid.cell_of(xp);
+        const bool       out   = excluded[grid.local_index(ijk)];
+        if (member == (solid && !out))
+          continue;
+        if (member && solid) // now in a cell of the FE zone
+          {
+            if (e.n_lost == 0)
+              e.lost_at = xp;
+            e.n_lost += 1;
+            continue;
+          }
+        // Kinetic energy as the points had it in (or bring it to) the
+        // solid: inertial mass, APIC affine part with the tents of the cell.
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          v2 += q[P::velocity + d] * q[P::velocity + d];
+        if (apic)
+          for (int j = 0; j < dim; ++j)
+            {
+              const double xi = (xp[j] - grid.origin()[j]) * ih - ijk[j];
+              const double D  = h * h * xi * (1 - xi);
+              for (int i = 0; i < dim; ++i)
+                v2 += q[P::affine_velocity + i * dim + j] *
+                      q[P::affine_velocity + i * dim + j] * D;
+            }
+        const double k = 0.5 * q[P::mass] * scaling * v2;
+        if (member)
+          e.n_melted += 1, e.k_melted += k;
+        else
+          e.n_solidified += 1, e.k_solidified += k;
+      }
+    return e;
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::write_back()
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      {
+        auto                    it = handle[p];
+        const ArrayView<double> q  = it->get_properties();
+        Point<dim>              xp;
+        for (int d = 0; d < dim; ++d)
+          {
+            xp[d]              = x[d][p];
+            q[P::velocity + d] = v[d][p];
+          }
+        it->set_location(xp);
+        if constexpr (dim == 2)
+          {
+            q[P::stress + 0] = sigma[0][p];
+            q[P::stress + 1] = sigma[1][p];
+            q[P::stress + 2] = sigma[3][p];
+            q[P::stress_zz]  = sigma[2][p];
+          }
+        else
+          for (unsigned int c = 0; c < n_stress; ++c)
+            q[P::stress + c] = sigma[c][p];
+        if (apic)
+          for (unsigned int c = 0; c < dim * dim; ++c)
+            q[P::affine_velocity + c] = C[c][p];
+        q[P::plastic_strain]   = eps_p[p];
+        q[P::volume]           = volume[p];
+        q[P::viscous_pressure] = visc[p];
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::scatter()
+  {
+    write_back();
+    // Points bound to new cells of this rank: move them in the handler
+    // (cell by cell; deal.II's global sort only if that fails).
+    if (Utilities::MPI::logical_or(moved_cell, grid.communicator()))
+      if (!points.relocate_points())
+        points.points_moved();
+    moved_cell = false;
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::resort()
+  {
+    write_back();
+    points.points_moved();
+    const std::vector<std::uint8_t> mask = excluded;
+    gather(mask, scaling);
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::sum_energies()
+  {
+    const double h = grid.h();
+    kinetic        = 0;
+    weight_momentum.fill(0.);
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      {
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            v2 += v[d][p] * v[d][p];
+            weight_momentum[d] += true_mass[p] * v[d][p];
+          }
+        if (apic)
+          add_affine_kinetic<dim>(x, corner, C, p, h, v2);
+        kinetic += 0.5 * (true_mass[p] * scaling) * v2;
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::p2g(SolidNodeFields<dim> &nodes,
+                     const Tensor<1, dim> &gravity)
+  {
+    double *nodes_out[1 + 2 * dim] = {nodes.mass.data()};
+    for (int d = 0; d < dim; ++d)
+      nodes_out[1 + d]       = nodes.momentum[d].data(),
+      nodes_out[1 + dim + d] = nodes.force[d].data();
+    // Sums of the fused pass of the last update_stresses(): add them (the
+    // caller zeroed the nodes; a plain copy would not do for nodes it did
+    // not zero) and leave the buffer zero.
+    if (next_ready && gravity == p2g_gravity)
+      {
+        for (unsigned int k = 0; k < 1 + 2 * dim; ++k)
+          {
+            double *const out = nodes_out[k];
+            double *const buf = next[k].data();
+            for (const auto I : next_nodes)
+              out[I] += buf[I], buf[I] = 0;
+          }
+        next_ready = next_dirty = false;
+        return;
+      }
+    clear_next();
+    next_ready   = false;
+    have_gravity = true;
+    p2g_gravity  = gravity;
+
+    const std::size_t   n = true_mass.size();
+    const P2GInput<dim> in{x,      corner, v,     C,           true_mass,
+                           volume, visc,   sigma, node0,       scaling,
+                           grid.h(), gravity};
+    // The transfer is a compile-time constant inside the loop (measured:
+    // 7-20 % faster than a run-time branch per point).
+    if (apic)
+      {
+        CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> out(
+          corner_offset, nodes_out);
+        p2g_blocks<true>(in, 0, n, n, out);
+      }
+    else
+      {
+        CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> out(
+          corner_offset, nodes_out);
+        p2g_blocks<false>(in, 0, n, n, out);
+      }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::g2p(SolidNodeFields<dim> &nodes, const double dt)
+  {
+    const double  h = grid.h(), ih = 1. / h;
+    const double *vel[dim], *acc[dim];
+    double *      mom[dim];
+    for (int d = 0; d < dim; ++d)
+      {
+        vel[d] = nodes.velocity[d].data();
+        acc[d] = nodes.force[d].data(); // f_I / m_I at this point
+        mom[d] = nodes.momentum[d].data();
+      }
+    const std::size_t n = true_mass.size();
+    for (int d = 0; d < dim; ++d) // FLIP only (APIC: the grid velocity is v)
+      xdot[d].resize(apic ? 0 : n);
+    // Blocks of W points as in p2g(): nodal values gathered lane
+    // by lane, the interpolation and the re-map contributions in SIMD, the
+    // re-map added to the nodes in point order.
+    constexpr unsigned int W = point_lanes<dim>;
+    using VD                 = typename SimdOf<W>::type;
+    // The transfer is a compile-time constant inside the loop (measured:
+    // 7-20 % faster than a run-time branch per point).
+    auto loop = [&](auto transfer) {
+      constexpr bool A = decltype(transfer)::value;
+      CellScatter<n_corners, dim, W> remap(corner_offset, mom);
+      // Monomial coefficients of the nodal velocity (and FLIP: the nodal
+      // acceleration) of the cell of the last one-cell block; the blocks
+      // of a cell share them (the points are sorted by cell).
+      constexpr std::size_t none      = std::size_t(-1);
+      std::size_t           coef_cell = none;
+      VD                    cv[dim][n_corners], ca[dim][n_corners];
+    for (std::size_t p0 = 0; p0 < n; p0 += W)
+      {
+        const PointBlock<W> blk(p0, n);
+        const unsigned int nl   = blk.nl;
+        const bool         full = blk.full;
+        const auto &       pl   = blk.pl;
+        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+          {
+            const std::size_t q = p0 + prefetch_distance;
+            prefetch<0>(x, q), prefetch<0>(corner, q);
+            prefetch<0>(true_mass, q);
+            if (q % 16 == 0)
+              prefetch<0>(node0, q);
+            if constexpr (A)
+              prefetch<1>(C, q), prefetch<1>(v, q);
+            else
+              prefetch<0>(v, q), prefetch<1>(xdot, q);
+          }
+        VD                 xi[dim], N[n_corners];
+        block_xi<dim>(x, corner, blk, ih, xi);
+        weights<dim>(xi, N);
+        std::size_t n0[W];
+        for (unsigned int l = 0; l < W; ++l)
+          n0[l] = node0[pl[l]];
+        // Nodal values: one load and a broadcast when the four points lie
+        // in the same cell (the usual case: the points are sorted by cell),
+        // turned into monomial coefficients once per cell; mixed blocks
+        // gather lane by lane (the same coefficients per lane).
+        auto coefficients = [&](auto &&nodal) {
+          for (int i = 0; i < dim; ++i)
+            {
+              for (unsigned int a = 0; a < n_corners; ++a)
+                {
+                  cv[i][a] = nodal(vel[i], corner_offset[a]);
+                  if constexpr (!A)
+                    ca[i][a] = nodal(acc[i], corner_offset[a]);
+                }
+              monomial_coefficients<dim>(cv[i]);
+              if constexpr (!A)
+                monomial_coefficients<dim>(ca[i]);
+            }
+        };
+        if (one_cell(n0))
+          {
+            if (n0[0] != coef_cell)
+              {
+                coefficients([&](const double *f, const std::ptrdiff_t o) {
+                  return VD{} + f[n0[0] + o];
+                });
+                coef_cell = n0[0];
+              }
+          }
+        else
+          {
+            coefficients([&](const double *f, const std::ptrdiff_t o) {
+              VD r;
+              for (unsigned int l = 0; l < W; ++l)
+                r[l] = f[n0[l] + o];
+              return r;
+            });
+            coef_cell = none;
+          }
+        // v_g = sum N_a v_a, C = sum v_a (x) grad N_a (the gradient of the
+        // interpolant), FLIP: a_g = sum N_a a_a.
+        VD vg[dim], ag[dim], Cn[dim][dim];
+        for (int i = 0; i < dim; ++i)
+          {
+            VD g[dim];
+            multilinear<dim>(cv[i], xi, vg[i], g);
+            if constexpr (A)
+              for (int j = 0; j < dim; ++j)
+                Cn[i][j] = ih * g[j];
+            else
+              multilinear<dim>(ca[i], xi, ag[i], g);
+          }
+        // New velocity and affine matrix; the grid velocity at the point
+        // moves it at the end of the step (update_stresses()).
+        VD vp[dim];
+        for (int i = 0; i < dim; ++i)
+          {
+            vp[i] = A ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
+            simd_store(v[i], p0, nl, vp[i]);
+            if constexpr (!A)
+              simd_store(xdot[i], p0, nl, vg[i]);
+          }
+        // Re-map (MUSL) of the new momentum with the weights of the step
+        // (those of the P2G, so that the re-mapped nodal velocity of a node
+        // is a mean of point velocities with the node mass).
+        const VD m = simd_load(true_mass, pl, full) * scaling;
+        VD       v0[dim], Ch[dim][dim];
+        for (int i = 0; i < dim; ++i)
+          v0[i] = vp[i];
+        if constexpr (A)
+          for (int i = 0; i < dim; ++i)
+            for (int j = 0; j < dim; ++j)
+              {
+                simd_store(C[i * dim + j], p0, nl, Cn[i][j]);
+                Ch[i][j] = h * Cn[i][j];
+                v0[i] -= Ch[i][j] * xi[j];
+              }
+        VD nmom[n_corners][dim];
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const VD mN = m * N[a];
+            for (int i = 0; i < dim; ++i)
+              {
+                VD va = v0[i];
+                if constexpr (A)
+                  for (int j = 0; j < dim; ++j)
+                    if ((a >> j) & 1)
+                      va += Ch[i][j];
+                nmom[a][i] = mN * va;
+              }
+          }
+        remap.add(nmom, n0, nl);
+      }
+    };
+    if (apic)
+      loop(std::true_type());
+    else
+      loop(std::false_type());
+  }
+
+
+  template <int dim>
+  double
+  SolidMPM<dim>::update_stresses(const SolidNodeFields<dim> &nodes,
+                                 const double                dt,
+                                 const std::vector<double> & T_old,
+                                 const std::vector<double> & T_new)
+  {
+    const double  b1 = mat.bulk_viscosity, h = grid.h(), ih = 1. / h;
+    const double *vel[dim];
+    for (int d = 0; d < dim; ++d)
+      vel[d] = nodes.velocity[d].data();
+    double            work = 0;
+    const std::size_t n    = true_mass.size();
+    left_rank              = 0;
+    lost                   = false;
+    kinetic                = 0;
+    weight_momentum.fill(0.);
+    const double nu     = mat.poisson_ratio;
+    // Viscous pressure q = b1 h sqrt(M m / V) tr(D), M = E M_per_E.
+    const double M_per_E = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    const double b1h = b1 * h, idt = 1. / dt;
+    auto         E_cell = cell.empty() ? 0 : cell[0];
+    double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
+    double       Eo_c   = n > 0 ? mat.youngs_modulus.value(T_old[E_cell]) : 0.;
+    double       sy_c   = n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.;
+    // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
+    // from the second step after a gather on (the benchmark's and a coupled
+    // run's sub-cycling), so that a run of one step per gather pays nothing
+    // for it, nor a rank without points (no buffer). The buffer is zero
+    // here (p2g() consumed or cleared it).
+    const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity;
+    ++steps_since_gather;
+    double *   next_out[1 + 2 * dim];
+    if (fuse)
+      {
+        for (unsigned int k = 0; k < 1 + 2 * dim; ++k)
+          {
+            next[k].resize(grid.n_local_nodes(), 0.);
+            next_out[k] = next[k].data();
+          }
+        next_dirty = true;
+      }
+    // Blocks of W points (point_lanes), one point per lane of a vector (GCC
+    // vector extension, see constitutive.h): shape functions, velocity
+    // gradient, constitutive update (update_stress_block), work, viscous
+    // pressure, volume and move in SIMD; a partial last block repeats its
+    // last point in the spare lanes and stores nothing from them. The sums
+    // (work, kinetic energy, momentum) are taken in point order and the
+    // arithmetic per point is that of the scalar formulation.
+    constexpr unsigned int W = point_lanes<dim>;
+    using VD                 = typename SimdOf<W>::type;
+    auto loop = [&](auto transfer, auto fused) {
+      constexpr bool A = decltype(transfer)::value;
+      constexpr bool F = decltype(fused)::value;
+      CellScatter<n_corners, 1 + 2 * dim, W> out(corner_offset, next_out);
+      const P2GInput<dim> in{x,      corner, v,     C,     true_mass,
+                             volume, visc,   sigma, node0, scaling,
+                             h,      p2g_gravity};
+      // Chunks of points: stress update and move, then (fused) the P2G of
+      // the chunk's points, whose data are still in the L1 cache.
+      constexpr std::size_t chunk = 16 * W;
+      // Monomial coefficients of the nodal velocity of the cell of the
+      // last one-cell block (see g2p()).
+      constexpr std::size_t none      = std::size_t(-1);
+      std::size_t           coef_cell = none;
+      VD                    cv[dim][n_corners];
+      const double          dt_ih = dt * ih;
+      // Sums of the lanes of the blocks (lanes of a partial block that
+      // are not in use are masked by use); summed at the end.
+      VD work_v = {}, kinetic_v = {}, momentum_v[dim] = {};
+    for (std::size_t c0 = 0; c0 < n; c0 += chunk)
+      {
+    const std::size_t c1 = std::min(n, c0 + chunk);
+    // (the block loop keeps its indentation of before the chunks)
+    for (std::size_t p0 = c0; p0 < c1; p0 += W)
+      {
+        const PointBlock<W> blk(p0, n);
+        const unsigned int nl   = blk.nl;
+        const bool         full = blk.full;
+        const auto &       pl   = blk.pl;
+        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+          {
+            const std::size_t q = p0 + prefetch_distance;
+            prefetch<1>(x, q), prefetch<0>(corner, q);
+            prefetch<1>(sigma, q), prefetch<1>(eps_p, q);
+            prefetch<1>(volume, q), prefetch<1>(visc, q);
+            prefetch<0>(true_mass, q), prefetch<0>(v, q);
+            if (q % 16 == 0)
+              prefetch<0>(node0, q), prefetch<0>(cell, q);
+            if constexpr (A)
+              prefetch<0>(C, q);
+            else
+              prefetch<0>(xdot, q);
+          }
+        VD                 xi[dim];
+        block_xi<dim>(x, corner, blk, ih, xi);
+        StressBlockOf<VD> sb;
+        VD(&L)[3][3] = sb.L;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            L[i][j] = VD{};
+        std::size_t n0[W];
+        for (unsigned int l = 0; l < W; ++l)
+          n0[l] = node0[pl[l]];
+        // L dt = sum v_a (x) grad N_a dt, the gradient of the interpolant of
+        // the nodal velocities in monomial form (as in g2p()): nodal values
+        // loaded once and broadcast when the four points lie in the same
+        // cell (the usual case: the points are sorted by cell), their
+        // coefficients shared by the blocks of the cell.
+        auto coefficients = [&](auto &&nodal) {
+          for (int i = 0; i < dim; ++i)
+            {
+              for (unsigned int a = 0; a < n_corners; ++a)
+                cv[i][a] = nodal(vel[i], corner_offset[a]);
+              monomial_coefficients<dim>(cv[i]);
+            }
+        };
+        if (one_cell(n0))
+          {
+            if (n0[0] != coef_cell)
+              {
+                coefficients([&](const double *f, const std::ptrdiff_t o) {
+                  return VD{} + f[n0[0] + o];
+                });
+                coef_cell = n0[0];
+              }
+          }
+        else
+          {
+            coefficients([&](const double *f, const std::ptrdiff_t o) {
+              VD r;
+              for (unsigned int l = 0; l < W; ++l)
+                r[l] = f[n0[l] + o];
+              return r;
+            });
+            coef_cell = none;
+          }
+        for (int i = 0; i < dim; ++i)
+          {
+            VD val, g[dim];
+            multilinear<dim>(cv[i], xi, val, g);
+            for (int j = 0; j < dim; ++j)
+              L[i][j] = dt_ih * g[j];
+          }
+        VD s_old[n_stress];
+        for (unsigned int c = 0; c < n_stress; ++c)
+          sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
+        sb.eps_p = simd_load(eps_p, pl, full);
+        // E(T_new), E(T_old) and sigma_y(T_new) per cell: the points are
+        // sorted by cell, so the tables are read once per cell run (kernel
+        // and viscous pressure share E); one-cell blocks broadcast the
+        // cell's values.
+        VD sy;
+        if (one_cell(n0))
+          {
+            const auto cp = cell[pl[0]];
+            if (cp != E_cell)
+              E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
+              Eo_c = mat.youngs_modulus.value(T_old[cp]),
+              sy_c = mat.yield_stress.value(T_new[cp]);
+            sb.E     = VD{} + E_c;
+            sb.E_old = VD{} + Eo_c;
+            sb.T_old = VD{} + T_old[cp];
+            sb.T_new = VD{} + T_new[cp];
+            sy       = VD{} + sy_c;
+          }
+        else
+          for (unsigned int l = 0; l < W; ++l)
+            {
+              const auto cp = cell[pl[l]];
+              if (cp != E_cell)
+                E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
+                Eo_c = mat.youngs_modulus.value(T_old[cp]),
+                sy_c = mat.yield_stress.value(T_new[cp]);
+              sb.E[l]     = E_c;
+              sb.E_old[l] = Eo_c;
+              sb.T_old[l] = T_old[cp];
+              sb.T_new[l] = T_new[cp];
+              sy[l]       = sy_c;
+            }
+        update_stress_block(mat, sb, sy);
+        for (unsigned int c = 0; c < n_stress; ++c)
+          simd_store(sigma[c], p0, nl, sb.s[c]);
+        simd_store(eps_p, p0, nl, sb.eps_p);
+        // Stress work of the step, sum (sigma_old + sigma_new)/2 : D dt
+        // (in-plane components; plane strain has no zz strain).
+        VD w = {}, trL = {};
+        for (int i = 0; i < dim; ++i)
+          {
+            trL += L[i][i];
+            for (int j = 0; j < dim; ++j)
+              w += (s_old[sidx(i, j)] + sb.s[sidx(i, j)]) * L[i][j];
+          }
+        // Viscous pressure of the forces of this step, then the new one.
+        const VD V  = simd_load(volume, pl, full);
+        const VD mg = simd_load(true_mass, pl, full), m = mg * scaling;
+        VD       q  = simd_load(visc, pl, full);
+        const VD use = full ? VD{} + 1. : lane_mask<VD>(nl);
+        work_v += use * (0.5 * V * w + V * q * trL);
+        if (b1 > 0)
+          {
+            q = b1h * simd_sqrt(sb.E * M_per_E * m / V) * trL * idt;
+            simd_store(visc, p0, nl, q);
+          }
+        const VD V_new = V * (1 + trL);
+        simd_store(volume, p0, nl, V_new);
+
+        // Move the point with the grid velocity of the step (APIC: that is
+        // the point velocity).
+        VD vp[dim], xn[dim], cn[dim];
+        for (int d = 0; d < dim; ++d)
+          {
+            vp[d] = simd_load(v[d], pl, full);
+            xn[d] = simd_load(x[d], pl, full) +
+                    dt * (A ? vp[d] : simd_load(xdot[d], pl, full));
+            simd_store(x[d], p0, nl, xn[d]);
+            cn[d] = simd_load(corner[d], pl, full);
+          }
+        VD Cp[dim * dim];
+        if constexpr (A)
+          for (unsigned int c = 0; c < dim * dim; ++c)
+            Cp[c] = simd_load(C[c], pl, full);
+        // Kinetic energy and momentum, the cell check: in SIMD when every
+        // point stays in its cell (the usual case; the sums are taken lane by
+        // lane in point order, the arithmetic per point that of the lane
+        // loop below).
+        auto in_cell = xn[0] >= cn[0] && xn[0] <= cn[0] + h;
+        for (int d = 1; d < dim; ++d)
+          in_cell = in_cell && xn[d] >= cn[d] && xn[d] <= cn[d] + h;
+        bool all_in = true;
+        for (unsigned int l = 0; l < W; ++l)
+          all_in = all_in && in_cell[l];
+        if (all_in)
+          {
+            VD v2 = {};
+            for (int d = 0; d < dim; ++d)
+              v2 += vp[d] * vp[d];
+            if constexpr (A)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const VD xj = (xn[j] - cn[j]) * ih;
+                  const VD D  = h * h * xj * (1 - xj);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += Cp[i * dim + j] * Cp[i * dim + j] * D;
+                }
+            kinetic_v += use * (0.5 * m * v2);
+            for (int d = 0; d < dim; ++d)
+              momentum_v[d] += use * (mg * vp[d]);
+          }
+        else
+        for (unsigned int l = 0; l < nl; ++l)
+          {
+            const std::size_t p = p0 + l;
+            // Kinetic energy and momentum (APIC: the affine part is added
+            // after the cell crossing, with the tents of the new cell).
+            double v2 = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                v2 += v[d][p] * v[d][p];
+                weight_momentum[d] += true_mass[p] * v[d][p];
+              }
+
+            // Cell crossing (see solid_mpm.h).
+            bool inside = true;
+            for (int d = 0; d < dim; ++d)
+              inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
+            if (!inside)
+              {
+                Point<dim> xp;
+                for (int d = 0; d < dim; ++d)
+                  xp[d] = x[d][p];
+                const auto ijk = grid.cell_of(xp);
+                if (!grid.in_domain(xp) ||
+                    (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+                  {
+                    if (!lost)
+                      escaped = xp;
+                    lost = true;
+                    continue;
+                  }
+                const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
+                if (!grid.in_box(ijk) ||
+                    grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
+                  {
+                    ++left_rank;
+                    continue;
+                  }
+                cell[p]  = idx;
+                node0[p] = grid.first_node_of_cell(idx);
+                for (int d = 0; d < dim; ++d)
+                  corner[d][p] = grid.origin()[d] + ijk[d] * h;
+                moved_cell = true;
+                mark_cell_nodes(node0[p]);
+              }
+            // APIC: affine part with the tents of the cell that now holds
+            // the point (those of the next P2G). Points that left the rank
+            // are counted by the gather of resort().
+            if (A)
+              add_affine_kinetic<dim>(x, corner, C, p, h, v2);
+            kinetic += 0.5 * (true_mass[p] * scaling) * v2;
+          }
+
+      }
+    if constexpr (F)
+      p2g_blocks<A>(in, c0, c1, n, out);
+      }
+      work += lane_total(work_v);
+      kinetic += lane_total(kinetic_v);
+      for (int d = 0; d < dim; ++d)
+        weight_momentum[d] += lane_total(momentum_v[d]);
+    };
+    if (apic && fuse)
+      loop(std::true_type(), std::true_type());
+    else if (apic)
+      loop(std::true_type(), std::false_type());
+    else if (fuse)
+      loop(std::false_type(), std::true_type());
+    else
+      loop(std::false_type(), std::false_type());
+    next_ready = fuse && !lost && left_rank == 0;
+    return work;
+  }
+
+
+  template <int dim>
+  std::pair<double, unsigned int>
+  SolidMPM<dim>::cell_stress_xx(const std::size_t idx) const
+  {
+    double       s = 0;
+    unsigned int n = 0;
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      if (cell[p] == idx)
+        s += sigma[0][p], ++n;
+    return {n > 0 ? s / n : 0., n};
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::add_cell_stresses(std::vector<double> &sxx,
+                                   std::vector<double> &vm,
+                                   std::vector<double> &count) const
+  {
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      {
+        SymmetricTensor<2, 3> s;
+        for (unsigned int i = 0; i < 3; ++i)
+          for (unsigned int j = i; j < 3; ++j)
+            s[i][j] = sigma[sidx(i, j)][p];
+        sxx[cell[p]] += sigma[0][p];
+        vm[cell[p]] += von_mises(s);
+        count[cell[p]] += 1;
+      }
+  }
+
+
+  template <int dim>
+  bool
+  SolidMPM<dim>::find_non_finite(Point<dim> &where) const
+  {
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      {
+        bool bad = false;
+        for (unsigned int c = 0; c < n_stress; ++c)
+          bad = bad || !std::isfinite(sigma[c][p]);
+        for (int d = 0; d < dim; ++d)
+          bad = bad || !std::isfinite(v[d][p]) || !std::isfinite(x[d][p]);
+        if (bad)
+          {
+            for (int d = 0; d < dim; ++d)
+              where[d] = corner[d][p] + 0.5 * grid.h();
+            return true;
+          }
+      }
+    return false;
+  }
+
+
+  template class SolidMPM<2>;
+  template class SolidMPM<3>;
+} // namespace femp
