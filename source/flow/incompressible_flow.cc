@@ -34,10 +34,10 @@
 //   correction (positions moved by grad psi, lap psi = c (V_c/h^dim - 1),
 //   psi = 0 at the free surface; Melt flow/Volume correction), both off by
 //   default.
+// The free surface (alpha, theta, capillary, recoil and Marangoni terms) is
+// in FreeSurface (free_surface.cc), the pressure system and its solvers in
+// PressureSolver (pressure_solver.cc).
 #include <deal.II/base/mpi.h>
-#include <deal.II/lac/solver_cg.h>
-#include <deal.II/lac/solver_control.h>
-#include <deal.II/lac/trilinos_sparsity_pattern.h>
 
 #include <femp/flow/incompressible_flow.h>
 #include <femp/base/input_checks.h>
@@ -53,16 +53,7 @@ namespace femp
 {
   namespace
   {
-    /// A timer section when a timer is given.
-    struct Section
-    {
-      Section(TimerOutput *t, const char *name)
-      {
-        if (t)
-          scope.emplace(*t, name);
-      }
-      std::optional<TimerOutput::Scope> scope;
-    };
+    using flow_cells::Section;
   } // namespace
 
   template <int dim>
@@ -115,11 +106,6 @@ namespace femp
                       "most h/4 per step), which keeps the points evenly "
                       "spread (see doc/flow.md); dimensionless, 0 switches it "
                       "off. Range [0, 10].");
-    prm.declare_entry("Curvature smoothing", "0", Patterns::Integer(0, 4),
-                      "Passes of the curvature smoothing: each pass replaces "
-                      "the capillary pressure of a free-surface cell by the "
-                      "mean over the free-surface cells among its 3^dim "
-                      "neighbours (see doc/flow.md); 0: none. Range [0, 4].");
     prm.declare_entry("Volume correction", "0", Patterns::Double(0.),
                       "Relaxation factor c of the volume correction: each "
                       "step the fluid points move, besides their advection, "
@@ -132,24 +118,8 @@ namespace femp
                       "velocities unchanged). Keeps the fluid volume of the "
                       "points (see doc/flow.md); dimensionless, 0 switches it "
                       "off. Range [0, 1].");
-    prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
-                      "Surface tension coefficient sigma, N/m (0: no surface "
-                      "tension); enters as the capillary pressure sigma div(n) "
-                      "at the free surface. Range [0, inf).");
-    prm.declare_entry("Surface tension temperature derivative", "0",
-                      Patterns::Double(),
-                      "dsigma/dT of the Marangoni stress, N/(m K) (negative "
-                      "for most metals; 0: no Marangoni stress). Range any "
-                      "real number.");
-    prm.declare_entry("Recoil coefficient", "0", Patterns::Double(0., 1.),
-                      "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
-                      "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
-                      "L_v, M, T_v, p0 from the Heat transfer subsection. "
-                      "Range [0, 1].");
-    prm.declare_entry("Solver tolerance", "1e-10", Patterns::Double(0.),
-                      "Relative residual of the pressure CG solve; range (0, 1e-2].");
-    prm.declare_entry("Maximum iterations", "1000", Patterns::Integer(1),
-                      "Most CG iterations per pressure solve; range [1, inf).");
+    FreeSurface<dim>::Parameters::declare_parameters(prm);
+    PressureSolver<dim>::Parameters::declare_parameters(prm);
     prm.leave_subsection();
   }
 
@@ -169,14 +139,17 @@ namespace femp
     capillary_fraction = prm.get_double("Capillary step fraction");
     time_step        = prm.get_double("Time step");
     point_shifting   = prm.get_double("Point shifting");
-    curvature_smoothing = prm.get_integer("Curvature smoothing");
     volume_correction = prm.get_double("Volume correction");
-    surface_tension  = prm.get_double("Surface tension");
-    surface_tension_gradient =
-      prm.get_double("Surface tension temperature derivative");
-    recoil_coefficient = prm.get_double("Recoil coefficient");
-    solver_tolerance = prm.get_double("Solver tolerance");
-    max_iterations   = prm.get_integer("Maximum iterations");
+    typename FreeSurface<dim>::Parameters surface;
+    surface.parse_parameters(prm);
+    surface_tension          = surface.surface_tension;
+    surface_tension_gradient = surface.surface_tension_gradient;
+    recoil_coefficient       = surface.recoil_coefficient;
+    curvature_smoothing      = surface.curvature_smoothing;
+    typename PressureSolver<dim>::Parameters solver;
+    solver.parse_parameters(prm);
+    solver_tolerance = solver.solver_tolerance;
+    max_iterations   = solver.max_iterations;
     prm.leave_subsection();
     require(viscosity >= 0, "Melt flow/Viscosity", viscosity,
             "it must be non-negative (Pa s)");
@@ -193,17 +166,41 @@ namespace femp
     require(volume_correction >= 0 && volume_correction <= 1,
             "Melt flow/Volume correction", volume_correction,
             "it must lie in [0, 1]");
-    require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
-            "it must be non-negative (N/m)");
     require(capillary_fraction > 0 && capillary_fraction <= 1,
             "Melt flow/Capillary step fraction", capillary_fraction,
             "it must lie in (0, 1]");
     require(time_step >= 0, "Melt flow/Time step", time_step,
             "it must be non-negative (s; 0: automatic)");
-    require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
-            "Melt flow/Solver tolerance", solver_tolerance,
-            "it must lie in (0, 1e-2]");
   }
+
+
+  template <int dim>
+  typename FreeSurface<dim>::Parameters
+  IncompressibleFlow<dim>::Parameters::surface_parameters() const
+  {
+    typename FreeSurface<dim>::Parameters s;
+    s.surface_tension          = surface_tension;
+    s.surface_tension_gradient = surface_tension_gradient;
+    s.recoil_coefficient       = recoil_coefficient;
+    s.curvature_smoothing      = curvature_smoothing;
+    s.latent_heat_evaporation  = latent_heat_evaporation;
+    s.evaporation_temperature  = evaporation_temperature;
+    s.molar_mass               = molar_mass;
+    s.ambient_pressure         = ambient_pressure;
+    return s;
+  }
+
+
+  template <int dim>
+  typename PressureSolver<dim>::Parameters
+  IncompressibleFlow<dim>::Parameters::solver_parameters() const
+  {
+    typename PressureSolver<dim>::Parameters s;
+    s.solver_tolerance = solver_tolerance;
+    s.max_iterations   = max_iterations;
+    return s;
+  }
+
 
 
   template <int dim>
@@ -259,20 +256,12 @@ namespace femp
     , grid(grid)
     , points(points)
     , timer(timer)
+    , corner_offset(flow_cells::corner_offsets(grid, true))
+    , around_offset(flow_cells::corner_offsets(grid, false))
+    , stencil(flow_cells::neighbourhood(grid))
+    , surface(prm.surface_parameters(), grid, points)
+    , pressure_solver(prm.solver_parameters(), grid, prm.volume_correction > 0, timer)
   {
-    const auto &ns = grid.node_strides();
-    const auto &cs = grid.strides();
-    for (unsigned int c = 0; c < n_corners; ++c)
-      {
-        corner_offset[c] = 0;
-        around_offset[c] = 0;
-        for (int d = 0; d < dim; ++d)
-          if ((c >> d) & 1)
-            {
-              corner_offset[c] += ns[d];
-              around_offset[c] += cs[d];
-            }
-      }
     // Q1 stiffness int grad N_a . grad N_b over a cell of size h
     // (2-point Gauss rule per direction, exact for Q1).
     const double h   = grid.h();
@@ -303,28 +292,7 @@ namespace femp
 
     type       = grid.make_field(outside);
     type_old   = grid.make_field(-1.);
-    gid        = grid.make_field(-1.);
     p_cell     = grid.make_field(0.);
-    p_surface  = grid.make_field(0.);
-    p_capillary  = grid.make_field(0.);
-    surface_mark = grid.make_field(0.);
-    alpha_cell = grid.make_field(0.);
-    alpha_node = grid.make_node_field();
-    for (int d = 0; d < dim; ++d)
-      surface_force[d] = grid.make_node_field();
-    for (int f = 0; f < 2 * dim; ++f)
-      theta[f] = grid.make_field(0.5);
-    near1 = grid.make_field();
-    near2 = grid.make_field();
-    // Offsets of the 3^dim cells around a cell.
-    for (unsigned int k = 0; k < std::pow(3, dim); ++k)
-      {
-        std::ptrdiff_t o = 0;
-        unsigned int   r = k;
-        for (int d = 0; d < dim; ++d, r /= 3)
-          o += (int(r % 3) - 1) * cs[d];
-        stencil.push_back(o);
-      }
     mass       = grid.make_node_field();
     volume     = grid.make_node_field();
     if (prm.volume_correction > 0)
@@ -357,7 +325,7 @@ namespace femp
   void
   IncompressibleFlow<dim>::set_temperature(const std::vector<double> *T)
   {
-    temperature = T;
+    surface.set_temperature(T);
   }
 
 
@@ -386,6 +354,16 @@ namespace femp
     limits.convective =
       prm.cfl * h / std::max(umax, std::sqrt(prm.gravity.norm() * h) + 1e-300);
     return limits;
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::particles_to_grid()
+  {
+    Section section(timer, "flow: transfer to grid");
+    classify_cells();
+    transfer_to_grid();
   }
 
 
@@ -538,6 +516,8 @@ namespace femp
   void
   IncompressibleFlow<dim>::predictor(const double dt)
   {
+    Section section(timer, "flow: predictor");
+    const auto &surface_force = surface.marangoni_force();
     // Viscous force -mu K u per fluid cell, summed over ranks.
     const bool viscous = prm.viscosity > 0;
     if (viscous)
@@ -593,307 +573,30 @@ namespace femp
     apply_boundary_conditions(u_new);
   }
 
-
   template <int dim>
   void
-  IncompressibleFlow<dim>::surface_terms()
+  IncompressibleFlow<dim>::update_free_surface()
   {
-    const bool thermal =
-      prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
-    AssertThrow(!thermal || temperature != nullptr,
-                ExcMessage("Melt flow: Marangoni stress and recoil pressure "
-                           "need the temperature (set_temperature())."));
-    using P          = typename MaterialPoints<dim>::PropertyIndex;
-    const double h   = grid.h();
-    const double ih  = 1. / h;
-    const double ihd = std::pow(ih, dim);
-    const auto & x0  = grid.origin();
-    const auto & cs  = grid.strides();
-    // Only cells near the fluid need alpha: near1 = within one cell of a
-    // fluid cell (alpha_cell is used there), near2 = within two (their
-    // points contribute to the nodes of near1 cells). Marked from the fluid
-    // cells of the local box; near1 of ghosts comes from their owners.
-    const auto &status = grid.cell_status();
-    std::fill(near1.begin(), near1.end(), 0.);
-    std::fill(near2.begin(), near2.end(), 0.);
-    for (std::size_t c = 0; c < type.size(); ++c)
-      if (type[c] == fluid)
-        for (const auto o : stencil)
-          {
-            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
-            if (e >= 0 && std::size_t(e) < near1.size())
-              near1[e] = 1;
-          }
-    grid.update_ghosts(near1);
-    for (std::size_t c = 0; c < near1.size(); ++c)
-      if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
-        for (const auto o : stencil)
-          {
-            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
-            if (e >= 0 && std::size_t(e) < near2.size())
-              near2[e] = 1;
-          }
-    // alpha at nodes: volume of the metal points near the fluid, tent
-    // weights.
-    std::fill(alpha_node.begin(), alpha_node.end(), 0.);
-    const auto &handler = points.particle_handler();
-    for (const auto &[idx, cell] : points.occupied_cells())
-      {
-        if (near2[idx] == 0)
-          continue;
-        const auto        ijk = grid.global_index(idx);
-        const std::size_t n0  = grid.first_node_of_cell(idx);
-        for (const auto &particle : handler.particles_in_cell(cell))
-          {
-            const Point<dim> x = particle.get_location();
-            double           xi[dim];
-            for (int d = 0; d < dim; ++d)
-              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
-            const double V = particle.get_properties()[P::volume] * ihd;
-            for (unsigned int k = 0; k < n_corners; ++k)
-              {
-                double w = V;
-                for (int d = 0; d < dim; ++d)
-                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
-                alpha_node[n0 + corner_offset[k]] += w;
-              }
-          }
-      }
-    grid.sum_shared_nodes(alpha_node);
-    // Smoothed alpha at the owned near1 cell centres: mean of the cell's
-    // nodes, node values mirrored at the domain boundary (walls are not
-    // free surfaces).
-    std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
-    for (const auto c : grid.owned_cells())
-      {
-        if (near1[c] == 0)
-          continue;
-        double a = 0;
-        for (const double ak : corner_alpha(c))
-          a += ak;
-        alpha_cell[c] = a / n_corners;
-      }
-    grid.update_ghosts(alpha_cell);
-
-    // Free-surface position on each fluid-gas face: where the smoothed
-    // alpha, linear between the two cell centres, is 1/2; theta is its
-    // distance from the fluid cell centre in units of h, in
-    // [theta_min, 1] (1/2 for a fluid cell filled to its face).
-    for (int f = 0; f < 2 * dim; ++f)
-      std::fill(theta[f].begin(), theta[f].end(), 0.5);
-    for (const auto c : fluid_cells)
-      for (int d = 0; d < dim; ++d)
-        for (const int side : {0, 1})
-          {
-            const std::size_t g = side ? c + cs[d] : c - cs[d];
-            if (type[g] != gas)
-              continue;
-            const double ac = alpha_cell[c], ag = alpha_cell[g];
-            const double th = ac > ag ? (ac - 0.5) / (ac - ag) : theta_min;
-            theta[2 * d + side][c] = std::min(std::max(th, theta_min), 1.);
-          }
-    for (int f = 0; f < 2 * dim; ++f)
-      grid.update_ghosts(theta[f]);
-    if (!has_surface_terms())
-      return;
-
-    // Surface cells (owned fluid cells with a gas face): p_s = sigma div(n)
-    // + p_recoil(T), and the Marangoni traction on their gas faces.
-    std::fill(p_surface.begin(), p_surface.end(), 0.);
-    std::fill(p_capillary.begin(), p_capillary.end(), 0.);
-    std::fill(surface_mark.begin(), surface_mark.end(), 0.);
-    if (prm.surface_tension_gradient != 0)
-      for (int d = 0; d < dim; ++d)
-        std::fill(surface_force[d].begin(), surface_force[d].end(), 0.);
-    for (const auto c : fluid_cells)
-      {
-        bool surface = false;
-        for (int d = 0; d < dim; ++d)
-          surface = surface || type[c + cs[d]] == gas || type[c - cs[d]] == gas;
-        if (!surface)
-          continue;
-        double div = 0;
-        double nc[dim] = {};
-        for (unsigned int k = 0; k < n_corners; ++k)
-          {
-            // Node k of cell c; the cell above it is c0.
-            const std::size_t c0 = c + around_offset[k];
-            double            g[dim], norm = 0;
-            for (int d = 0; d < dim; ++d)
-              {
-                g[d] = 0;
-                for (unsigned int j = 0; j < n_corners; ++j)
-                  if (!((j >> d) & 1))
-                    {
-                      const std::size_t up = c0 - around_offset[j];
-                      const std::size_t lo = up - cs[d];
-                      // Outside the domain alpha has zero gradient.
-                      if (status[up] != BackgroundGrid<dim>::outside &&
-                          status[lo] != BackgroundGrid<dim>::outside)
-                        g[d] += alpha_cell[up] - alpha_cell[lo];
-                    }
-                norm += g[d] * g[d];
-              }
-            norm = std::sqrt(norm);
-            if (norm > 1e-8)
-              for (int d = 0; d < dim; ++d)
-                {
-                  div -= (((k >> d) & 1) ? 1. : -1.) * g[d] / norm;
-                  nc[d] -= g[d] / norm;
-                }
-          }
-        double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
-        p_capillary[c]  = ps;
-        surface_mark[c] = 1;
-        p_surface[c]    = ps; // the recoil is added by add_recoil_pressure()
-        if (prm.surface_tension_gradient == 0)
-          continue;
-        const double T = (*temperature)[c];
-        // Unit normal of the cell; grad T from metal neighbours.
-        double nn = 0;
-        for (int d = 0; d < dim; ++d)
-          nn += nc[d] * nc[d];
-        nn = std::sqrt(nn);
-        if (nn < 1e-12)
-          continue;
-        double gT[dim], ndotg = 0;
-        for (int d = 0; d < dim; ++d)
-          {
-            nc[d] /= nn;
-            const bool   m = type[c - cs[d]] == fluid || type[c - cs[d]] == solid;
-            const bool   p = type[c + cs[d]] == fluid || type[c + cs[d]] == solid;
-            const double Tm = m ? (*temperature)[c - cs[d]] : T;
-            const double Tp = p ? (*temperature)[c + cs[d]] : T;
-            gT[d] = (m && p) ? (Tp - Tm) / (2 * h) : (Tp - Tm) / h;
-            ndotg += nc[d] * gT[d];
-          }
-        const double face = std::pow(h, dim - 1) / (1u << (dim - 1));
-        for (int d = 0; d < dim; ++d)
-          for (const int side : {0, 1})
-            {
-              const std::ptrdiff_t o = side ? cs[d] : -cs[d];
-              if (type[c + o] != gas)
-                continue;
-              const double w = prm.surface_tension_gradient * face * std::abs(nc[d]);
-              const std::size_t n0 = grid.first_node_of_cell(c);
-              for (unsigned int k = 0; k < n_corners; ++k)
-                if ((int((k >> d) & 1)) == side)
-                  for (int e = 0; e < dim; ++e)
-                    surface_force[e][n0 + corner_offset[k]] +=
-                      w * (gT[e] - ndotg * nc[e]);
-            }
-      }
-    if (prm.surface_tension_gradient != 0)
-      for (int d = 0; d < dim; ++d)
-        grid.sum_shared_nodes(surface_force[d]);
-    if (prm.recoil_coefficient > 0 ||
-        (prm.curvature_smoothing > 0 && prm.surface_tension > 0))
-      grid.update_ghosts(surface_mark);
-    add_recoil_pressure();
-    smooth_capillary_pressure();
-    grid.update_ghosts(p_surface);
+    Section section(timer, "flow: free surface");
+    surface.update(type, fluid_cells);
   }
 
 
-  // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
-  // surface cell (doc/flow.md, "3D track with recoil"). T_s is the median
-  // of the cell temperatures over the surface cells among its 3^dim
-  // neighbours (itself included; the mean of the two middle values for an
-  // even count). The cell temperature of single surface cells has outliers:
-  // on the 3D track, surface cells at the top of melting powder grains
-  // reached 8,000-17,000 K next to cells at 4,500-6,000 K (fragments of
-  // 2-30 cells), and the exponential turned that into recoil jumps of
-  // 1e9-3e10 Pa between neighbouring cells, which blew the fragment apart
-  // at 300-5,000 m/s (the spikes of the convective limit). The median drops
-  // such a single-cell outlier, gives a fragment of a few cells one recoil
-  // pressure on its whole surface (no net force or internal drive, as for a
-  // uniformly hot droplet), and keeps the cell's own temperature where T is
-  // linear along a flat surface (in 2D wherever T is monotone along it); at
-  // a smooth temperature peak it takes about the value one cell away. Cost
-  // on the track: the recoil of surface cells above 4000 K is typically
-  // 0.3 (0.03-0.65) of the cell-wise value (the surface T varies by several
-  // hundred K per cell near the beam).
   template <int dim>
-  void
-  IncompressibleFlow<dim>::add_recoil_pressure()
+  typename PressureSolver<dim>::FluidCells
+  IncompressibleFlow<dim>::fluid_cell_set() const
   {
-    if (prm.recoil_coefficient == 0)
-      return;
-    const double R_gas = 8.314462618;
-    const double Tv    = prm.evaporation_temperature;
-    const double a     = prm.latent_heat_evaporation * prm.molar_mass /
-                     (R_gas * Tv);
-    std::array<double, 27> Ts;
-    for (const auto c : fluid_cells)
-      {
-        if (surface_mark[c] == 0)
-          continue;
-        unsigned int n = 0;
-        for (const auto o : stencil)
-          if (surface_mark[c + o] != 0)
-            Ts[n++] = (*temperature)[c + o];
-        std::sort(Ts.begin(), Ts.begin() + n);
-        const double T = (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
-        if (T > 0)
-          p_surface[c] += prm.recoil_coefficient * prm.ambient_pressure *
-                          std::exp(a * (T - Tv) / T);
-      }
-  }
-
-
-  // Curvature smoothing: the curvature div(n) of the smoothed alpha at a
-  // staircase surface is noisy from cell to cell (at a round drop of
-  // R = 20 h the capillary pressure of single surface cells ranged from 0.13
-  // to 2.5 sigma/R). Each pass replaces the capillary part of p_s of every
-  // surface cell by the mean over the surface cells among its 3^dim
-  // neighbours (itself included), i.e. the curvature is averaged along the
-  // interface over about three cells per pass, the usual remedy of
-  // convolved-CSF schemes (smoothed curvature; cf. the height-function and
-  // smoothing comparisons of Cummins, Francois and Kothe 2005). The recoil
-  // part is not smoothed.
-  template <int dim>
-  void
-  IncompressibleFlow<dim>::smooth_capillary_pressure()
-  {
-    if (prm.curvature_smoothing == 0 || prm.surface_tension == 0)
-      return;
-    std::vector<double> smoothed(fluid_cells.size());
-    for (unsigned int pass = 0; pass < prm.curvature_smoothing; ++pass)
-      {
-        grid.update_ghosts(p_capillary);
-        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-          {
-            const std::size_t c = fluid_cells[i];
-            if (surface_mark[c] == 0)
-              continue;
-            double sum = 0, n = 0;
-            for (const auto o : stencil)
-              if (surface_mark[c + o] != 0)
-                sum += p_capillary[c + o], n += 1;
-            smoothed[i] = sum / n;
-          }
-        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-          {
-            const std::size_t c = fluid_cells[i];
-            if (surface_mark[c] == 0)
-              continue;
-            p_surface[c] += smoothed[i] - p_capillary[c];
-            p_capillary[c] = smoothed[i];
-          }
-      }
+    return {type, type_old, fluid_cells, surface.near_fluid(),
+            surface.interface_position()};
   }
 
 
   template <int dim>
   void
-  IncompressibleFlow<dim>::pressure_solve(const double dt)
+  IncompressibleFlow<dim>::velocity_divergence()
   {
-    const MPI_Comm comm = grid.communicator();
-    const double   h    = grid.h();
-    const auto &   cs   = grid.strides();
-
     // Divergence of u* at the owned fluid cells.
-    const double scale = 1. / (h * (1u << (dim - 1)));
+    const double scale = 1. / (grid.h() * (1u << (dim - 1)));
     divergence.resize(fluid_cells.size());
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
@@ -904,282 +607,47 @@ namespace femp
             div += (((k >> d) & 1) ? 1. : -1.) * u_new[d][n0 + corner_offset[k]];
         divergence[i] = div * scale;
       }
-
-    // The matrix rows are the owned cells of a band: the cells within one
-    // of a fluid cell (near1, from surface_terms(); a band of two cells cost
-    // more in solves than it saved in setups in the 3D track). Rows of band cells that
-    // are not fluid are identity rows (decoupled, p = 0), so the numbering,
-    // the graph and the AMG hierarchy survive changes of the fluid set that
-    // stay inside the band:
-    //  - fluid set and neighbour types unchanged: only the diagonal (theta);
-    //  - changed inside the band: all values of the band rows are reset, the
-    //    old hierarchy keeps preconditioning the new matrix while CG
-    //    converges in at most n + 40 iterations, n those of the first
-    //    solve after its setup; else ML is set up again and the solve
-    //    repeated;
-    //  - a fluid cell outside the band: new band, graph and hierarchy.
-    bool set_changed = !have_matrix;
-    if (!set_changed)
-      for (const auto c : fluid_cells)
-        {
-          if (type_old[c] != fluid)
-            {
-              set_changed = true;
-              break;
-            }
-          for (int d = 0; d < dim && !set_changed; ++d)
-            set_changed = type_old[c + cs[d]] != type[c + cs[d]] ||
-                          type_old[c - cs[d]] != type[c - cs[d]];
-          if (set_changed)
-            break;
-        }
-    // Cells that stopped being fluid also change the system.
-    if (!set_changed)
-      set_changed = fluid_cells.size() != n_fluid_rows;
-    set_changed = Utilities::MPI::logical_or(set_changed, comm);
-    n_fluid_rows = fluid_cells.size();
-    bool renumber = !have_matrix;
-    if (set_changed && !renumber)
-      for (const auto c : fluid_cells)
-        if (gid[c] < 0)
-          {
-            renumber = true;
-            break;
-          }
-    renumber = Utilities::MPI::logical_or(renumber, comm);
-    const auto &status = grid.cell_status();
-
-    if (renumber)
-      {
-        Section s(timer, "flow: pressure matrix setup");
-        band.clear();
-        for (const auto c : grid.owned_cells())
-          if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
-            band.push_back(c);
-        const types::global_dof_index n_local = band.size();
-        // (types::global_dof_index is 32 bits in this deal.II build: the
-        // exscan goes through a 64-bit integer.)
-        std::uint64_t n_local64 = n_local, offset64 = 0;
-        MPI_Exscan(&n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM, comm);
-        if (Utilities::MPI::this_mpi_process(comm) == 0)
-          offset64 = 0;
-        const types::global_dof_index offset = offset64;
-        const types::global_dof_index n_total =
-          Utilities::MPI::sum(n_local, comm);
-        std::fill(gid.begin(), gid.end(), -1.);
-        for (std::size_t i = 0; i < band.size(); ++i)
-          gid[band[i]] = offset + i;
-        grid.update_ghosts(gid);
-        owned_rows = IndexSet(n_total);
-        owned_rows.add_range(offset, offset + n_local);
-        owned_rows.compress();
-
-        // (An empty row range must ask for 0 entries per row: Epetra's
-        // size check uses the min/max row of the range.)
-        TrilinosWrappers::SparsityPattern sp(owned_rows, comm,
-                                             n_local > 0 ? 2 * dim + 1 : 0);
-        for (std::size_t i = 0; i < band.size(); ++i)
-          {
-            const std::size_t c   = band[i];
-            const auto        row = offset + i;
-            sp.add(row, row);
-            for (int d = 0; d < dim; ++d)
-              for (const std::ptrdiff_t o : {-cs[d], cs[d]})
-                if (gid[c + o] >= 0)
-                  sp.add(row, types::global_dof_index(gid[c + o]));
-          }
-        sp.compress();
-        matrix.reinit(sp);
-        rhs.reinit(owned_rows, comm);
-        solution.reinit(owned_rows, comm);
-        if (prm.volume_correction > 0)
-          psi_solution.reinit(owned_rows, comm);
-        ++stats.matrix_rebuilds;
-      }
-    const auto row_offset =
-      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
-    if (set_changed)
-      {
-        // All values of the band rows: -1 between fluid cells, 0 for the
-        // other stored neighbours, identity rows outside the fluid.
-        Section s(timer, "flow: pressure matrix values");
-        for (std::size_t i = 0; i < band.size(); ++i)
-          {
-            const std::size_t       c   = band[i];
-            const auto              row = row_offset + i;
-            const bool              f   = type[c] == fluid;
-            types::global_dof_index cols[2 * dim + 1];
-            double                  vals[2 * dim + 1];
-            unsigned int            n = 0;
-            double                  diag = f ? 0. : 1.;
-            for (int d = 0; d < dim; ++d)
-              for (const int side : {0, 1})
-                {
-                  const std::size_t e = side ? c + cs[d] : c - cs[d];
-                  const bool        ef = type[e] == fluid;
-                  if (f && ef)
-                    diag += 1;
-                  else if (f && type[e] == gas)
-                    diag += 1. / theta[2 * d + side][c];
-                  if (gid[e] >= 0)
-                    {
-                      cols[n] = types::global_dof_index(gid[e]);
-                      vals[n] = (f && ef) ? -1. : 0.;
-                      ++n;
-                    }
-                }
-            cols[n] = row;
-            vals[n] = diag;
-            ++n;
-            matrix.set(row, n, cols, vals);
-          }
-        matrix.compress(VectorOperation::insert);
-      }
-    else
-      {
-        // Diagonal only: the free-surface faces contribute 1/theta
-        // (Dirichlet value at the interface, ghost-fluid method).
-        for (const auto c : fluid_cells)
-          {
-            double diag = 0;
-            for (int d = 0; d < dim; ++d)
-              for (const int side : {0, 1})
-                {
-                  const auto t = type[side ? c + cs[d] : c - cs[d]];
-                  if (t == fluid)
-                    diag += 1;
-                  else if (t == gas)
-                    diag += 1. / theta[2 * d + side][c];
-                }
-            const auto row = types::global_dof_index(gid[c]);
-            matrix.set(row, row, diag);
-          }
-        matrix.compress(VectorOperation::insert);
-      }
-    stats.n_fluid_cells = Utilities::MPI::sum(
-      static_cast<unsigned long>(fluid_cells.size()), comm);
-    // ML keeps a reference to the matrix it was set up with: it gets its
-    // own copy, so that a kept hierarchy stays one fixed SPD operator while
-    // the values of the system matrix change (with the system matrix
-    // itself, the fine-level Chebyshev smoother would run with stale
-    // eigenvalue bounds and could stop being a preconditioner).
-    const auto setup_amg = [&]() {
-      Section s(timer, "flow: AMG setup");
-      if (owned_rows.size() > 0)
-        {
-          TrilinosWrappers::PreconditionAMG::AdditionalData data;
-          data.elliptic              = true;
-          data.higher_order_elements = false;
-          data.smoother_sweeps       = 2;
-          data.aggregation_threshold = 0.02;
-          amg_matrix.copy_from(matrix);
-          amg.initialize(amg_matrix, data);
-        }
-      have_matrix = true;
-      ++stats.amg_setups;
-    };
-    // A new hierarchy whenever the set of fluid cells changed. Keeping one
-    // across set changes inside the band (tried until 2026-11-24) cost more
-    // than it saved: in the 0.2 ms 3D track the stale hierarchy needed 50
-    // CG iterations per solve on average and failed its limit in 1509 of
-    // 1917 steps (then set up anyway), against 7 with a fresh one; the
-    // track took 19.5 s against about 14 s. With the same set only the
-    // free-surface diagonal 1/theta changed, and the kept hierarchy is
-    // tried first (below).
-    const bool new_hierarchy = renumber || set_changed;
-    if (new_hierarchy)
-      setup_amg();
-    if (stats.n_fluid_cells == 0)
-      return;
-
-    std::optional<Section> solve_section;
-    solve_section.emplace(timer, "flow: pressure solve");
-    const double f      = -rho * h * h / dt;
-    const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
-    rhs = 0; // identity rows of the band: p = 0
-    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-      {
-        double b = f * divergence[i];
-        if (capillary)
-          {
-            const std::size_t c = fluid_cells[i];
-            for (int d = 0; d < dim; ++d)
-              for (const int side : {0, 1})
-                if (type[side ? c + cs[d] : c - cs[d]] == gas)
-                  b += p_surface[c] / theta[2 * d + side][c];
-          }
-        rhs(types::global_dof_index(gid[fluid_cells[i]])) = b;
-      }
-    rhs.compress(VectorOperation::insert);
-    // Warm start from the previous pressure (same numbering).
-    if (renumber)
-      solution = 0;
-    const double norm = rhs.l2_norm();
-    if (norm == 0)
-      solution = 0;
-    else
-      {
-        // With a hierarchy built for other matrix values CG may use at
-        // most n + 40 iterations (n: those of the first solve after the
-        // setup; 40 iterations cost about one ML setup in the 3D track,
-        // fewer than one in 2D); beyond, ML is set up again on the current
-        // matrix and the solve restarts from the same initial guess.
-        bool                          fresh = new_hierarchy;
-        unsigned int                  total = 0;
-        TrilinosWrappers::MPI::Vector guess;
-        if (!fresh)
-          guess = solution;
-        for (;;)
-          {
-            const unsigned int limit =
-              fresh ? prm.max_iterations :
-                      std::min(prm.max_iterations,
-                               iterations_after_setup + 40);
-            SolverControl control(limit, prm.solver_tolerance * norm);
-            SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
-            try
-              {
-                cg.solve(matrix, solution, rhs, amg);
-                total += control.last_step();
-                if (fresh)
-                  iterations_after_setup = std::max(1u, control.last_step());
-                break;
-              }
-            catch (const SolverControl::NoConvergence &e)
-              {
-                total += e.last_step;
-                if (fresh)
-                  {
-                    std::ostringstream msg;
-                    msg << "Melt flow: the pressure CG solve did not converge in "
-                        << e.last_step << " iterations (residual "
-                        << e.last_residual << ", target "
-                        << control.tolerance() << ", " << stats.n_fluid_cells
-                        << " fluid cells).";
-                    throw std::runtime_error(msg.str());
-                  }
-                solve_section.reset();
-                setup_amg();
-                solve_section.emplace(timer, "flow: pressure solve");
-                solution = guess;
-                fresh    = true;
-              }
-          }
-        stats.last_iterations = total;
-        stats.cg_iterations += total;
-        stats.max_iterations = std::max(stats.max_iterations, total);
-      }
-    std::fill(p_cell.begin(), p_cell.end(), 0.);
-    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
-      p_cell[fluid_cells[i]] = solution(types::global_dof_index(gid[fluid_cells[i]]));
-    grid.update_ghosts(p_cell);
   }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::pressure_solve(const double dt)
+  {
+    velocity_divergence();
+    const auto cells     = fluid_cell_set();
+    const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
+    pressure_solver.update_system(cells);
+    pressure_solver.solve_pressure(cells, divergence, surface.surface_pressure(),
+                            capillary, rho, dt, p_cell);
+    copy_solver_statistics();
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::copy_solver_statistics()
+  {
+    const auto &s          = pressure_solver.statistics();
+    stats.matrix_rebuilds   = s.matrix_rebuilds;
+    stats.amg_setups        = s.amg_setups;
+    stats.cg_iterations     = s.cg_iterations;
+    stats.last_iterations   = s.last_iterations;
+    stats.max_iterations    = s.max_iterations;
+    stats.n_fluid_cells     = s.n_fluid_cells;
+    stats.volume_iterations = s.volume_iterations;
+    stats.volume_skipped    = s.volume_skipped;
+  }
+
 
 
   template <int dim>
   void
   IncompressibleFlow<dim>::correction(const double dt)
   {
+    Section      section(timer, "flow: correction");
+    const auto & theta     = surface.interface_position();
+    const auto & p_surface = surface.surface_pressure();
     const double h  = grid.h();
     const auto & cs = grid.strides();
     const double f  = dt / (rho * h);
@@ -1267,14 +735,15 @@ namespace femp
   void
   IncompressibleFlow<dim>::volume_solve()
   {
-    std::fill(psi.begin(), psi.end(), 0.);
-    if (stats.n_fluid_cells == 0)
+    if (prm.volume_correction == 0)
       return;
+    Section      section(timer, "flow: volume correction");
     const double ihd = std::pow(1. / grid.h(), dim);
-    rhs              = 0;
-    for (const auto c : fluid_cells)
+    volume_source.resize(fluid_cells.size());
+    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
-        double e = occupancy[c] * ihd - 1;
+        const auto c = fluid_cells[i];
+        double     e = occupancy[c] * ihd - 1;
         if (e < 0)
           for (const auto o : stencil)
             if (type[c + o] == gas)
@@ -1282,37 +751,19 @@ namespace femp
                 e = 0;
                 break;
               }
-        rhs(types::global_dof_index(gid[c])) = -prm.volume_correction * e;
+        volume_source[i] = -prm.volume_correction * e;
       }
-    rhs.compress(VectorOperation::insert);
-    const double norm = rhs.l2_norm();
-    if (norm > 0)
-      {
-        SolverControl control(prm.max_iterations, prm.solver_tolerance * norm);
-        SolverCG<TrilinosWrappers::MPI::Vector> cg(control);
-        psi_solution = 0;
-        try
-          {
-            cg.solve(matrix, psi_solution, rhs, amg);
-            stats.volume_iterations += control.last_step();
-          }
-        catch (const SolverControl::NoConvergence &e)
-          {
-            stats.volume_iterations += e.last_step;
-            ++stats.volume_skipped;
-            return; // psi = 0: no correction in this step
-          }
-        for (const auto c : fluid_cells)
-          psi[c] = psi_solution(types::global_dof_index(gid[c]));
-      }
-    grid.update_ghosts(psi);
+    pressure_solver.solve_volume(fluid_cell_set(), volume_source, psi);
+    copy_solver_statistics();
   }
+
 
 
   template <int dim>
   void
   IncompressibleFlow<dim>::volume_faces(const std::size_t c, double *G) const
   {
+    const auto & theta = surface.interface_position();
     const double h  = grid.h();
     const auto & cs = grid.strides();
     for (int d = 0; d < dim; ++d)
@@ -1334,6 +785,7 @@ namespace femp
   void
   IncompressibleFlow<dim>::grid_to_points(const double dt)
   {
+    Section section(timer, "flow: grid to points + advection");
     using P           = typename MaterialPoints<dim>::PropertyIndex;
     const double h    = grid.h();
     const double ih   = 1. / h;
@@ -1484,29 +936,6 @@ namespace femp
   // gradient of the grid's bilinear alpha; next to the free surface (a gas
   // cell among the 3^dim cells round the point's cell) only its component
   // tangential to the surface is kept, so the liquid does not spread
-  // outward. It changes positions only, not the point velocities.
-  template <int dim>
-  std::array<double, (1u << dim)>
-  IncompressibleFlow<dim>::corner_alpha(const std::size_t c) const
-  {
-    const auto &                    nc  = grid.n_cells();
-    const auto                      ijk = grid.global_index(c);
-    const std::size_t               n0  = grid.first_node_of_cell(c);
-    std::array<double, (1u << dim)> a;
-    for (unsigned int k = 0; k < n_corners; ++k)
-      {
-        double f = 1;
-        for (int d = 0; d < dim; ++d)
-          {
-            const int i = ijk[d] + ((k >> d) & 1);
-            if (i == 0 || i == int(nc[d]))
-              f *= 2;
-          }
-        a[k] = f * alpha_node[n0 + corner_offset[k]];
-      }
-    return a;
-  }
-
 
   template <int dim>
   typename IncompressibleFlow<dim>::ShiftCell
@@ -1514,15 +943,16 @@ namespace femp
   {
     ShiftCell         sc;
     const auto &cs = grid.strides();
-    sc.alpha       = corner_alpha(c);
+    sc.alpha       = surface.corner_alpha(c);
     for (const auto o : stencil)
       sc.near_surface = sc.near_surface || type[c + o] == gas;
     if (sc.near_surface)
       {
         // Outward normal -grad(alpha~) at the cell centre (central
         // differences; zero gradient across the domain boundary).
-        const auto &status = grid.cell_status();
-        double      norm   = 0;
+        const auto &status     = grid.cell_status();
+        const auto &alpha_cell = surface.alpha_at_cells();
+        double      norm       = 0;
         for (int d = 0; d < dim; ++d)
           {
             const std::size_t lo = c - cs[d], up = c + cs[d];
@@ -1600,87 +1030,80 @@ namespace femp
     advance(dt, 0);
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::advance(const double dt, const unsigned int depth)
   {
-    {
-      Section s(timer, "flow: transfer to grid");
-      classify_cells();
-      transfer_to_grid();
-    }
-    {
-      Section s(timer, "flow: free surface");
-      surface_terms();
-    }
-    {
-      Section s(timer, "flow: predictor");
-      predictor(dt);
-    }
-    pressure_solve(dt);
-    {
-      Section s(timer, "flow: correction");
-      correction(dt);
-    }
+    particles_to_grid();   // P2G: cell classes, nodal mass and momentum
+    update_free_surface(); // alpha, theta, p_s, Marangoni forces
+    predictor(dt);         // u*: gravity, viscosity, surface forces, Darcy
+    pressure_solve(dt);    // div(dt/rho grad p) = div u*
+    correction(dt);        // u = u* - dt/rho grad p
     // Step rejection: if the new nodal velocity would carry a point more
     // than a cell (e.g. a sudden recoil or capillary pressure that the
     // limits of the last step did not foresee), redo the step as two halves.
-    {
-      double umax = 0;
-      for (const auto n : active)
-        {
-          double s2 = 0;
-          for (int d = 0; d < dim; ++d)
-            s2 += u_new[d][n] * u_new[d][n];
-          umax = std::max(umax, s2);
-        }
-      umax = std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
-      if (umax * dt > grid.h())
-        {
-          if (depth >= 20)
-            {
-              std::ostringstream msg;
-              msg << "Melt flow became unstable: nodal speed " << umax
-                  << " m/s moves points more than a cell even after halving "
-                  << "the step 20 times (step " << dt << " s).";
-              throw std::runtime_error(msg.str());
-            }
-          ++stats.halvings;
-          advance(dt / 2, depth + 1);
-          advance(dt / 2, depth + 1);
-          return;
-        }
-    }
-    {
-      Section s(timer, "flow: cell velocity");
-      for (int d = 0; d < dim; ++d)
-        std::fill(u_cell[d].begin(), u_cell[d].end(), 0.);
-      for (const auto c : fluid_cells)
-        {
-          const std::size_t n0 = grid.first_node_of_cell(c);
-          for (int d = 0; d < dim; ++d)
-            {
-              double s = 0;
-              for (unsigned int k = 0; k < n_corners; ++k)
-                s += u_new[d][n0 + corner_offset[k]];
-              u_cell[d][c] = s / n_corners;
-            }
-        }
-      for (int d = 0; d < dim; ++d)
-        grid.update_ghosts(u_cell[d]);
-    }
-    if (prm.volume_correction > 0)
+    const double umax = max_nodal_speed();
+    if (umax * dt > grid.h())
       {
-        Section s(timer, "flow: volume correction");
-        volume_solve();
+        if (depth >= 20)
+          {
+            std::ostringstream msg;
+            msg << "Melt flow became unstable: nodal speed " << umax
+                << " m/s moves points more than a cell even after halving "
+                << "the step 20 times (step " << dt << " s).";
+            throw std::runtime_error(msg.str());
+          }
+        ++stats.halvings;
+        advance(dt / 2, depth + 1);
+        advance(dt / 2, depth + 1);
+        return;
       }
-    {
-      Section s(timer, "flow: grid to points + advection");
-      grid_to_points(dt);
-    }
+    update_cell_velocity();
+    volume_solve();       // psi of the volume correction (when on)
+    grid_to_points(dt);   // G2P: FLIP/PIC update and advection
     ++stats.steps;
   }
+
+
+  template <int dim>
+  double
+  IncompressibleFlow<dim>::max_nodal_speed() const
+  {
+    double umax = 0;
+    for (const auto n : active)
+      {
+        double s2 = 0;
+        for (int d = 0; d < dim; ++d)
+          s2 += u_new[d][n] * u_new[d][n];
+        umax = std::max(umax, s2);
+      }
+    return std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::update_cell_velocity()
+  {
+    Section section(timer, "flow: cell velocity");
+    for (int d = 0; d < dim; ++d)
+      std::fill(u_cell[d].begin(), u_cell[d].end(), 0.);
+    for (const auto c : fluid_cells)
+      {
+        const std::size_t n0 = grid.first_node_of_cell(c);
+        for (int d = 0; d < dim; ++d)
+          {
+            double s = 0;
+            for (unsigned int k = 0; k < n_corners; ++k)
+              s += u_new[d][n0 + corner_offset[k]];
+            u_cell[d][c] = s / n_corners;
+          }
+      }
+    for (int d = 0; d < dim; ++d)
+      grid.update_ghosts(u_cell[d]);
+  }
+
+
 
   template <int dim>
   void

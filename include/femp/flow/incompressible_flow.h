@@ -26,18 +26,23 @@
 // between fluid and gas cells, each face weighted by |n_d| so that the
 // staircase of faces carries the area of the smoothed interface; it is
 // spread to the face's nodes.
+//
+// The step reads P2G -> free surface -> predictor -> pressure -> correction
+// -> G2P; the free-surface terms are computed by FreeSurface
+// (free_surface.h), the pressure system is assembled and solved by
+// PressureSolver (pressure_solver.h).
 #ifndef femp_incompressible_flow_h
 #define femp_incompressible_flow_h
 
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/tensor.h>
 #include <deal.II/base/timer.h>
-#include <deal.II/lac/trilinos_precondition.h>
-#include <deal.II/lac/trilinos_sparse_matrix.h>
-#include <deal.II/lac/trilinos_vector.h>
 
-#include <femp/grid/background_grid.h>
 #include <femp/base/material.h>
+#include <femp/flow/flow_cells.h>
+#include <femp/flow/free_surface.h>
+#include <femp/flow/pressure_solver.h>
+#include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 
 #include <array>
@@ -95,15 +100,21 @@ namespace femp
       /// and density @p rho; called before any work.
       void
       check_time_step(const double h, const double rho) const;
+      /// The parameters of the free surface (surface tension, Marangoni,
+      /// recoil, curvature smoothing) and of the pressure solver.
+      typename FreeSurface<dim>::Parameters
+      surface_parameters() const;
+      typename PressureSolver<dim>::Parameters
+      solver_parameters() const;
     };
 
     /// Cell classes used by the flow (cell_type()).
     enum CellType : int
     {
-      gas     = 0, ///< no metal point: free surface beyond, p = 0
-      solid   = 1, ///< metal points but none fluid: rigid, no-slip
-      fluid   = 2, ///< at least one fluid point: pressure unknown
-      outside = 3  ///< beyond the domain: free-slip wall
+      gas     = flow_cells::gas,   ///< no metal point: free surface beyond, p = 0
+      solid   = flow_cells::solid, ///< metal points but none fluid: rigid, no-slip
+      fluid   = flow_cells::fluid, ///< at least one fluid point: pressure unknown
+      outside = flow_cells::outside ///< beyond the domain: free-slip wall
     };
 
     /// Stable step limits, s (each is reported by the caller).
@@ -192,7 +203,7 @@ namespace femp
     const std::vector<double> &
     surface_pressure() const
     {
-      return p_surface;
+      return surface.surface_pressure();
     }
     /// Cell type per cell of the local box (as double, ghosts exchanged).
     const std::vector<double> &
@@ -232,44 +243,47 @@ namespace femp
     fluid_forces_on_solid(std::array<std::vector<double>, 2 * dim * dim> &F) const;
 
   private:
-    /// The step proper; redone as two halves (recursively, @p depth) when
+    /// The step proper (P2G, free surface, predictor, pressure,
+    /// correction, G2P); redone as two halves (recursively, @p depth) when
     /// the new nodal speed would move a point more than a cell.
     void
     advance(const double dt, const unsigned int depth);
+    /// P2G: classify_cells() and transfer_to_grid().
+    void
+    particles_to_grid();
     void
     classify_cells();
     void
     transfer_to_grid();
+    /// FreeSurface::update() for the current cells.
+    void
+    update_free_surface();
     void
     predictor(const double dt);
-    /// Smoothed alpha, the interface position theta on free-surface faces,
-    /// and (when on) normals, capillary + recoil pressure and the Marangoni
-    /// nodal forces of the surface cells.
+    /// The fluid cells as the pressure solver sees them.
+    typename PressureSolver<dim>::FluidCells
+    fluid_cell_set() const;
+    /// div u* per owned fluid cell (divergence).
     void
-    surface_terms();
-    bool
-    has_surface_terms() const
-    {
-      return prm.surface_tension > 0 || prm.surface_tension_gradient != 0 ||
-             prm.recoil_coefficient > 0;
-    }
-    /// Add the recoil pressure of the surface cells to p_s, from the
-    /// surface temperature of their neighbourhood (median over the surface
-    /// cells among the 3^dim neighbours).
-    void
-    add_recoil_pressure();
-    /// Average the capillary part of p_s over neighbouring surface cells
-    /// (Melt flow/Curvature smoothing passes).
-    void
-    smooth_capillary_pressure();
+    velocity_divergence();
     void
     pressure_solve(const double dt);
+    /// The solver's counters into stats.
+    void
+    copy_solver_statistics();
     void
     correction(const double dt);
-    /// Volume correction (Melt flow/Volume correction): solve
-    /// lap(psi) = c (V_c/h^dim - 1) on the fluid cells with psi = 0 at the
-    /// free surface (same matrix and preconditioner as the pressure), so
-    /// that grid_to_points() can move the points by grad(psi).
+    /// Largest nodal speed |u| over the active nodes (collective), m/s.
+    double
+    max_nodal_speed() const;
+    /// u_cell: mean of the nodes of the fluid cells.
+    void
+    update_cell_velocity();
+    /// Volume correction (Melt flow/Volume correction; nothing when off):
+    /// solve lap(psi) = c (V_c/h^dim - 1) on the fluid cells with psi = 0
+    /// at the free surface (same matrix and preconditioner as the
+    /// pressure), so that grid_to_points() can move the points by
+    /// grad(psi).
     void
     volume_solve();
     /// Displacement grad(psi) normal to the 2 dim faces of @p cell (face
@@ -277,6 +291,7 @@ namespace femp
     /// gas faces.
     void
     volume_faces(const std::size_t cell, double *G) const;
+    /// G2P: FLIP/PIC update of the point velocities and advection.
     void
     grid_to_points(const double dt);
 
@@ -290,11 +305,6 @@ namespace femp
     };
     ShiftCell
     shift_cell(const std::size_t cell) const;
-    /// Nodal alpha at the corners of @p cell, doubled per direction at
-    /// nodes on the domain boundary (where the node sum saw only half of
-    /// its cells): the mirror-wall value.
-    std::array<double, (1u << dim)>
-    corner_alpha(const std::size_t cell) const;
     /// Displacement of a point at reference coordinates @p xi of the cell
     /// moving at @p speed during @p dt: -A h speed dt grad(alpha), its
     /// normal component removed near the free surface, at most h/4.
@@ -313,23 +323,19 @@ namespace femp
     MaterialPoints<dim> &      points;
     TimerOutput *              timer;
     const std::vector<double> *gamma = nullptr;
-    const std::vector<double> *temperature = nullptr;
 
     static constexpr unsigned int n_corners = 1u << dim;
     std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
     std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
+    std::vector<std::ptrdiff_t>           stencil; // 3^dim neighbourhood offsets
     std::array<std::array<double, n_corners>, n_corners> stiffness; // Q1 Laplace
 
-    std::vector<double>                  type, type_old, gid, p_cell;
+    FreeSurface<dim>    surface;
+    PressureSolver<dim> pressure_solver;
+
+    std::vector<double>                  type, type_old, p_cell;
     std::vector<double>                  mass, volume;
     std::vector<double>                  occupancy, psi; // point volume per cell, m^dim; psi/h^2
-    std::vector<double>                  alpha_node, alpha_cell, p_surface;
-    std::vector<double>                  p_capillary, surface_mark; // sigma div(n), 0/1
-    std::array<std::vector<double>, dim> surface_force; // Marangoni, N (2D N/m)
-    std::array<std::vector<double>, 2 * dim> theta; // interface distance/h, per face
-    static constexpr double theta_min = 0.05;
-    std::vector<double>         near1, near2; // cells near the fluid (0/1)
-    std::vector<std::ptrdiff_t> stencil;      // 3^dim neighbourhood offsets
     std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
     std::vector<std::uint32_t>           active;      // nodes of fluid cells
     std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
@@ -337,18 +343,7 @@ namespace femp
     std::vector<std::uint8_t>            node_fix;    // bit d: u_d = 0
     std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
     std::vector<double>                  divergence;  // per owned fluid cell
-
-    // Pressure system over a band of cells round the fluid (see
-    // pressure_solve()): owned band cells in row order.
-    std::vector<std::uint32_t>        band;
-    std::size_t                       n_fluid_rows = 0;
-    unsigned int                      iterations_after_setup = 1;
-    IndexSet                          owned_rows;
-    TrilinosWrappers::SparseMatrix    matrix;
-    TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
-    TrilinosWrappers::PreconditionAMG amg;
-    TrilinosWrappers::MPI::Vector     solution, rhs, psi_solution;
-    bool                              have_matrix = false;
+    std::vector<double> volume_source; // -c e per owned fluid cell
 
     Statistics stats;
   };

@@ -1,0 +1,188 @@
+// femp: the free surface of the melt flow (paper sec. 2.3, eq. 3: the
+// surface tension, Marangoni and recoil terms; doc/flow.md).
+//
+// From the metal points near the fluid it computes the smoothed metal
+// fraction alpha (point volume mapped to the nodes with tent weights,
+// divided by h^dim, averaged to the cell centres), the interface position
+// theta on each face between a fluid and a gas cell (where alpha, linear
+// between the two centres, is 1/2), and, when switched on,
+//  - the capillary pressure p_s = sigma div(n) of the surface cells
+//    (n = -grad alpha/|grad alpha| at the cell's nodes, div(n) at its
+//    centre), the sharp-interface form of the CSF term sigma kappa n
+//    |grad alpha| of eq. (3), optionally averaged along the surface
+//    (Melt flow/Curvature smoothing);
+//  - the recoil pressure zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] added to
+//    p_s, from the median surface temperature round the cell;
+//  - the Marangoni traction dsigma/dT (grad T - (n.grad T) n) on the
+//    fluid-gas faces, weighted by |n_d|, spread to the face nodes.
+// IncompressibleFlow imposes p_s as the Dirichlet pressure at the interface
+// (ghost-fluid method, see PressureSolver) and adds the nodal Marangoni
+// forces in its predictor.
+#ifndef femp_free_surface_h
+#define femp_free_surface_h
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <femp/flow/flow_cells.h>
+#include <femp/grid/background_grid.h>
+#include <femp/grid/material_points.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class FreeSurface
+  {
+  public:
+    struct Parameters
+    {
+      double       surface_tension          = 0; ///< sigma, N/m (0: off)
+      double       surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      double       recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
+      /// Passes of the curvature smoothing along the surface (0: none).
+      unsigned int curvature_smoothing = 0;
+      // Evaporation data for the recoil pressure (from Heat transfer, not
+      // declared in Melt flow): L_v J/kg, M kg/mol, T_v K, p0 Pa.
+      double latent_heat_evaporation = 7.41e6;
+      double evaporation_temperature = 3090.;
+      double molar_mass              = 0.0558;
+      double ambient_pressure        = 101325.;
+
+      /// The free-surface entries of the subsection Melt flow (the caller
+      /// has entered it): Curvature smoothing, Surface tension, Surface
+      /// tension temperature derivative, Recoil coefficient.
+      static void
+      declare_parameters(ParameterHandler &prm);
+      /// Read them (inside Melt flow) and check their ranges.
+      void
+      parse_parameters(ParameterHandler &prm);
+      /// Whether any surface force is on (surface tension, Marangoni or
+      /// recoil).
+      bool
+      any() const
+      {
+        return surface_tension > 0 || surface_tension_gradient != 0 ||
+               recoil_coefficient > 0;
+      }
+    };
+
+    FreeSurface(const Parameters &         prm,
+                const BackgroundGrid<dim> &grid,
+                const MaterialPoints<dim> &points);
+
+    /// Cell temperature (ghost values needed), K, for the Marangoni stress
+    /// and the recoil pressure; required when either is switched on.
+    void
+    set_temperature(const std::vector<double> *T);
+
+    /// Everything of the surface for the current cell classes @p type
+    /// (flow_cells::Type per cell of the local box, ghosts current) and the
+    /// owned fluid cells @p fluid_cells: near-fluid marks, alpha, theta and
+    /// (when on) p_s and the Marangoni nodal forces.
+    void
+    update(const std::vector<double> &       type,
+           const std::vector<std::uint32_t> &fluid_cells);
+
+    /// 1 on the cells within one cell of a fluid cell (ghosts exchanged),
+    /// 0 elsewhere: where alpha_cell() is computed, and the band of the
+    /// pressure system.
+    const std::vector<double> &
+    near_fluid() const
+    {
+      return near1;
+    }
+    /// Smoothed metal fraction at the nodes (near the fluid).
+    const std::vector<double> &
+    alpha_at_nodes() const
+    {
+      return alpha_node;
+    }
+    /// Smoothed metal fraction at the centres of the near_fluid() cells
+    /// (ghosts exchanged).
+    const std::vector<double> &
+    alpha_at_cells() const
+    {
+      return alpha_cell;
+    }
+    /// Interface distance / h from the fluid cell centre, per face 2d+side
+    /// of the fluid cells with a gas neighbour there (1/2 elsewhere; ghosts
+    /// exchanged), in [theta_min, 1].
+    const std::array<std::vector<double>, 2 * dim> &
+    interface_position() const
+    {
+      return theta;
+    }
+    /// p_s = capillary + recoil pressure of the surface cells (ghosts
+    /// exchanged), Pa; zero elsewhere or when no surface term is on.
+    const std::vector<double> &
+    surface_pressure() const
+    {
+      return p_surface;
+    }
+    /// Marangoni force per node, N (2D: N/m), summed over ranks; zero when
+    /// dsigma/dT = 0.
+    const std::array<std::vector<double>, dim> &
+    marangoni_force() const
+    {
+      return surface_force;
+    }
+    /// Nodal alpha at the corners of @p cell, doubled per direction at
+    /// nodes on the domain boundary (where the node sum saw only half of
+    /// its cells): the mirror-wall value.
+    std::array<double, (1u << dim)>
+    corner_alpha(const std::size_t cell) const;
+
+    static constexpr double theta_min = 0.05;
+
+  private:
+    /// near1/near2: cells within one/two cells of a fluid cell.
+    void
+    mark_near_fluid(const std::vector<double> &type);
+    /// alpha_node from the points of the near2 cells, alpha_cell at the
+    /// owned near1 cells.
+    void
+    map_metal_fraction();
+    /// theta on the fluid-gas faces.
+    void
+    locate_interface(const std::vector<double> &       type,
+                     const std::vector<std::uint32_t> &fluid_cells);
+    /// Capillary pressure of the surface cells, and their Marangoni
+    /// traction.
+    void
+    capillary_and_marangoni(const std::vector<double> &       type,
+                            const std::vector<std::uint32_t> &fluid_cells);
+    /// Add the recoil pressure of the surface cells to p_s, from the
+    /// surface temperature of their neighbourhood (median over the surface
+    /// cells among the 3^dim neighbours).
+    void
+    add_recoil_pressure(const std::vector<std::uint32_t> &fluid_cells);
+    /// Average the capillary part of p_s over neighbouring surface cells
+    /// (Melt flow/Curvature smoothing passes).
+    void
+    smooth_capillary_pressure(const std::vector<std::uint32_t> &fluid_cells);
+
+    const Parameters           prm;
+    const BackgroundGrid<dim> &grid;
+    const MaterialPoints<dim> &points;
+    const std::vector<double> *temperature = nullptr;
+
+    static constexpr unsigned int         n_corners = 1u << dim;
+    std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
+    std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
+    std::vector<std::ptrdiff_t>           stencil; // 3^dim neighbourhood
+
+    std::vector<double>                      near1, near2; // 0/1
+    std::vector<double>                      alpha_node, alpha_cell;
+    std::array<std::vector<double>, 2 * dim> theta;
+    std::vector<double>                      p_surface;
+    std::vector<double> p_capillary, surface_mark; // sigma div(n), 0/1
+    std::array<std::vector<double>, dim> surface_force; // Marangoni, N
+  };
+} // namespace femp
+
+#endif

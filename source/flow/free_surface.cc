@@ -1,0 +1,450 @@
+// femp: the free surface of the melt flow: smoothed metal fraction,
+// interface position, capillary pressure sigma div(n), recoil pressure and
+// Marangoni traction (paper sec. 2.3, eq. 3; doc/flow.md). See
+// include/femp/flow/free_surface.h.
+#include <femp/base/input_checks.h>
+#include <femp/flow/free_surface.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace femp
+{
+  namespace
+  {
+    constexpr int gas   = flow_cells::gas;
+    constexpr int solid = flow_cells::solid;
+    constexpr int fluid = flow_cells::fluid;
+  } // namespace
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.declare_entry("Curvature smoothing", "0", Patterns::Integer(0, 4),
+                      "Passes of the curvature smoothing: each pass replaces "
+                      "the capillary pressure of a free-surface cell by the "
+                      "mean over the free-surface cells among its 3^dim "
+                      "neighbours (see doc/flow.md); 0: none. Range [0, 4].");
+    prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
+                      "Surface tension coefficient sigma, N/m (0: no surface "
+                      "tension); enters as the capillary pressure sigma div(n) "
+                      "at the free surface. Range [0, inf).");
+    prm.declare_entry("Surface tension temperature derivative", "0",
+                      Patterns::Double(),
+                      "dsigma/dT of the Marangoni stress, N/(m K) (negative "
+                      "for most metals; 0: no Marangoni stress). Range any "
+                      "real number.");
+    prm.declare_entry("Recoil coefficient", "0", Patterns::Double(0., 1.),
+                      "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
+                      "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
+                      "L_v, M, T_v, p0 from the Heat transfer subsection. "
+                      "Range [0, 1].");
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    curvature_smoothing = prm.get_integer("Curvature smoothing");
+    surface_tension     = prm.get_double("Surface tension");
+    surface_tension_gradient =
+      prm.get_double("Surface tension temperature derivative");
+    recoil_coefficient = prm.get_double("Recoil coefficient");
+    require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
+            "it must be non-negative (N/m)");
+  }
+
+
+  template <int dim>
+  FreeSurface<dim>::FreeSurface(const Parameters &         prm,
+                                const BackgroundGrid<dim> &grid,
+                                const MaterialPoints<dim> &points)
+    : prm(prm)
+    , grid(grid)
+    , points(points)
+    , corner_offset(flow_cells::corner_offsets(grid, true))
+    , around_offset(flow_cells::corner_offsets(grid, false))
+    , stencil(flow_cells::neighbourhood(grid))
+  {
+    p_surface    = grid.make_field(0.);
+    p_capillary  = grid.make_field(0.);
+    surface_mark = grid.make_field(0.);
+    alpha_cell   = grid.make_field(0.);
+    alpha_node   = grid.make_node_field();
+    for (int d = 0; d < dim; ++d)
+      surface_force[d] = grid.make_node_field();
+    for (int f = 0; f < 2 * dim; ++f)
+      theta[f] = grid.make_field(0.5);
+    near1 = grid.make_field();
+    near2 = grid.make_field();
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::set_temperature(const std::vector<double> *T)
+  {
+    temperature = T;
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::update(const std::vector<double> &       type,
+                           const std::vector<std::uint32_t> &fluid_cells)
+  {
+    const bool thermal =
+      prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
+    AssertThrow(!thermal || temperature != nullptr,
+                ExcMessage("Melt flow: Marangoni stress and recoil pressure "
+                           "need the temperature (set_temperature())."));
+    mark_near_fluid(type);
+    map_metal_fraction();
+    locate_interface(type, fluid_cells);
+    if (!prm.any())
+      return;
+    capillary_and_marangoni(type, fluid_cells);
+    if (prm.recoil_coefficient > 0 ||
+        (prm.curvature_smoothing > 0 && prm.surface_tension > 0))
+      grid.update_ghosts(surface_mark);
+    add_recoil_pressure(fluid_cells);
+    smooth_capillary_pressure(fluid_cells);
+    grid.update_ghosts(p_surface);
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::mark_near_fluid(const std::vector<double> &type)
+  {
+    // Only cells near the fluid need alpha: near1 = within one cell of a
+    // fluid cell (alpha_cell is used there), near2 = within two (their
+    // points contribute to the nodes of near1 cells). Marked from the fluid
+    // cells of the local box; near1 of ghosts comes from their owners.
+    const auto &status = grid.cell_status();
+    std::fill(near1.begin(), near1.end(), 0.);
+    std::fill(near2.begin(), near2.end(), 0.);
+    for (std::size_t c = 0; c < type.size(); ++c)
+      if (type[c] == fluid)
+        for (const auto o : stencil)
+          {
+            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
+            if (e >= 0 && std::size_t(e) < near1.size())
+              near1[e] = 1;
+          }
+    grid.update_ghosts(near1);
+    for (std::size_t c = 0; c < near1.size(); ++c)
+      if (near1[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
+        for (const auto o : stencil)
+          {
+            const std::ptrdiff_t e = std::ptrdiff_t(c) + o;
+            if (e >= 0 && std::size_t(e) < near2.size())
+              near2[e] = 1;
+          }
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::map_metal_fraction()
+  {
+    using P          = typename MaterialPoints<dim>::PropertyIndex;
+    const double h   = grid.h();
+    const double ih  = 1. / h;
+    const double ihd = std::pow(ih, dim);
+    const auto & x0  = grid.origin();
+    // alpha at nodes: volume of the metal points near the fluid, tent
+    // weights.
+    std::fill(alpha_node.begin(), alpha_node.end(), 0.);
+    const auto &handler = points.particle_handler();
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        if (near2[idx] == 0)
+          continue;
+        const auto        ijk = grid.global_index(idx);
+        const std::size_t n0  = grid.first_node_of_cell(idx);
+        for (const auto &particle : handler.particles_in_cell(cell))
+          {
+            const Point<dim> x = particle.get_location();
+            double           xi[dim];
+            for (int d = 0; d < dim; ++d)
+              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
+            const double V = particle.get_properties()[P::volume] * ihd;
+            for (unsigned int k = 0; k < n_corners; ++k)
+              {
+                double w = V;
+                for (int d = 0; d < dim; ++d)
+                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
+                alpha_node[n0 + corner_offset[k]] += w;
+              }
+          }
+      }
+    grid.sum_shared_nodes(alpha_node);
+    // Smoothed alpha at the owned near1 cell centres: mean of the cell's
+    // nodes, node values mirrored at the domain boundary (walls are not
+    // free surfaces).
+    std::fill(alpha_cell.begin(), alpha_cell.end(), 0.);
+    for (const auto c : grid.owned_cells())
+      {
+        if (near1[c] == 0)
+          continue;
+        double a = 0;
+        for (const double ak : corner_alpha(c))
+          a += ak;
+        alpha_cell[c] = a / n_corners;
+      }
+    grid.update_ghosts(alpha_cell);
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::locate_interface(
+    const std::vector<double> &       type,
+    const std::vector<std::uint32_t> &fluid_cells)
+  {
+    // Free-surface position on each fluid-gas face: where the smoothed
+    // alpha, linear between the two cell centres, is 1/2; theta is its
+    // distance from the fluid cell centre in units of h, in
+    // [theta_min, 1] (1/2 for a fluid cell filled to its face).
+    const auto &cs = grid.strides();
+    for (int f = 0; f < 2 * dim; ++f)
+      std::fill(theta[f].begin(), theta[f].end(), 0.5);
+    for (const auto c : fluid_cells)
+      for (int d = 0; d < dim; ++d)
+        for (const int side : {0, 1})
+          {
+            const std::size_t g = side ? c + cs[d] : c - cs[d];
+            if (type[g] != gas)
+              continue;
+            const double ac = alpha_cell[c], ag = alpha_cell[g];
+            const double th = ac > ag ? (ac - 0.5) / (ac - ag) : theta_min;
+            theta[2 * d + side][c] = std::min(std::max(th, theta_min), 1.);
+          }
+    for (int f = 0; f < 2 * dim; ++f)
+      grid.update_ghosts(theta[f]);
+  }
+
+
+  template <int dim>
+  void
+  FreeSurface<dim>::capillary_and_marangoni(
+    const std::vector<double> &       type,
+    const std::vector<std::uint32_t> &fluid_cells)
+  {
+    const double h      = grid.h();
+    const auto & cs     = grid.strides();
+    const auto & status = grid.cell_status();
+    // Surface cells (owned fluid cells with a gas face): p_s = sigma div(n)
+    // + p_recoil(T), and the Marangoni traction on their gas faces.
+    std::fill(p_surface.begin(), p_surface.end(), 0.);
+    std::fill(p_capillary.begin(), p_capillary.end(), 0.);
+    std::fill(surface_mark.begin(), surface_mark.end(), 0.);
+    if (prm.surface_tension_gradient != 0)
+      for (int d = 0; d < dim; ++d)
+        std::fill(surface_force[d].begin(), surface_force[d].end(), 0.);
+    for (const auto c : fluid_cells)
+      {
+        bool surface = false;
+        for (int d = 0; d < dim; ++d)
+          surface = surface || type[c + cs[d]] == gas || type[c - cs[d]] == gas;
+        if (!surface)
+          continue;
+        double div = 0;
+        double nc[dim] = {};
+        for (unsigned int k = 0; k < n_corners; ++k)
+          {
+            // Node k of cell c; the cell above it is c0.
+            const std::size_t c0 = c + around_offset[k];
+            double            g[dim], norm = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                g[d] = 0;
+                for (unsigned int j = 0; j < n_corners; ++j)
+                  if (!((j >> d) & 1))
+                    {
+                      const std::size_t up = c0 - around_offset[j];
+                      const std::size_t lo = up - cs[d];
+                      // Outside the domain alpha has zero gradient.
+                      if (status[up] != BackgroundGrid<dim>::outside &&
+                          status[lo] != BackgroundGrid<dim>::outside)
+                        g[d] += alpha_cell[up] - alpha_cell[lo];
+                    }
+                norm += g[d] * g[d];
+              }
+            norm = std::sqrt(norm);
+            if (norm > 1e-8)
+              for (int d = 0; d < dim; ++d)
+                {
+                  div -= (((k >> d) & 1) ? 1. : -1.) * g[d] / norm;
+                  nc[d] -= g[d] / norm;
+                }
+          }
+        double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
+        p_capillary[c]  = ps;
+        surface_mark[c] = 1;
+        p_surface[c]    = ps; // the recoil is added by add_recoil_pressure()
+        if (prm.surface_tension_gradient == 0)
+          continue;
+        const double T = (*temperature)[c];
+        // Unit normal of the cell; grad T from metal neighbours.
+        double nn = 0;
+        for (int d = 0; d < dim; ++d)
+          nn += nc[d] * nc[d];
+        nn = std::sqrt(nn);
+        if (nn < 1e-12)
+          continue;
+        double gT[dim], ndotg = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            nc[d] /= nn;
+            const bool   m = type[c - cs[d]] == fluid || type[c - cs[d]] == solid;
+            const bool   p = type[c + cs[d]] == fluid || type[c + cs[d]] == solid;
+            const double Tm = m ? (*temperature)[c - cs[d]] : T;
+            const double Tp = p ? (*temperature)[c + cs[d]] : T;
+            gT[d] = (m && p) ? (Tp - Tm) / (2 * h) : (Tp - Tm) / h;
+            ndotg += nc[d] * gT[d];
+          }
+        const double face = std::pow(h, dim - 1) / (1u << (dim - 1));
+        for (int d = 0; d < dim; ++d)
+          for (const int side : {0, 1})
+            {
+              const std::ptrdiff_t o = side ? cs[d] : -cs[d];
+              if (type[c + o] != gas)
+                continue;
+              const double w = prm.surface_tension_gradient * face * std::abs(nc[d]);
+              const std::size_t n0 = grid.first_node_of_cell(c);
+              for (unsigned int k = 0; k < n_corners; ++k)
+                if ((int((k >> d) & 1)) == side)
+                  for (int e = 0; e < dim; ++e)
+                    surface_force[e][n0 + corner_offset[k]] +=
+                      w * (gT[e] - ndotg * nc[e]);
+            }
+      }
+    if (prm.surface_tension_gradient != 0)
+      for (int d = 0; d < dim; ++d)
+        grid.sum_shared_nodes(surface_force[d]);
+  }
+
+
+  // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
+  // surface cell (doc/flow.md, "3D track with recoil"). T_s is the median
+  // of the cell temperatures over the surface cells among its 3^dim
+  // neighbours (itself included; the mean of the two middle values for an
+  // even count). The cell temperature of single surface cells has outliers:
+  // on the 3D track, surface cells at the top of melting powder grains
+  // reached 8,000-17,000 K next to cells at 4,500-6,000 K (fragments of
+  // 2-30 cells), and the exponential turned that into recoil jumps of
+  // 1e9-3e10 Pa between neighbouring cells, which blew the fragment apart
+  // at 300-5,000 m/s (the spikes of the convective limit). The median drops
+  // such a single-cell outlier, gives a fragment of a few cells one recoil
+  // pressure on its whole surface (no net force or internal drive, as for a
+  // uniformly hot droplet), and keeps the cell's own temperature where T is
+  // linear along a flat surface (in 2D wherever T is monotone along it); at
+  // a smooth temperature peak it takes about the value one cell away. Cost
+  // on the track: the recoil of surface cells above 4000 K is typically
+  // 0.3 (0.03-0.65) of the cell-wise value (the surface T varies by several
+  // hundred K per cell near the beam).
+  template <int dim>
+  void
+  FreeSurface<dim>::add_recoil_pressure(
+    const std::vector<std::uint32_t> &fluid_cells)
+  {
+    if (prm.recoil_coefficient == 0)
+      return;
+    const double R_gas = 8.314462618;
+    const double Tv    = prm.evaporation_temperature;
+    const double a     = prm.latent_heat_evaporation * prm.molar_mass /
+                     (R_gas * Tv);
+    std::array<double, 27> Ts;
+    for (const auto c : fluid_cells)
+      {
+        if (surface_mark[c] == 0)
+          continue;
+        unsigned int n = 0;
+        for (const auto o : stencil)
+          if (surface_mark[c + o] != 0)
+            Ts[n++] = (*temperature)[c + o];
+        std::sort(Ts.begin(), Ts.begin() + n);
+        const double T = (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
+        if (T > 0)
+          p_surface[c] += prm.recoil_coefficient * prm.ambient_pressure *
+                          std::exp(a * (T - Tv) / T);
+      }
+  }
+
+
+  // Curvature smoothing: the curvature div(n) of the smoothed alpha at a
+  // staircase surface is noisy from cell to cell (at a round drop of
+  // R = 20 h the capillary pressure of single surface cells ranged from 0.13
+  // to 2.5 sigma/R). Each pass replaces the capillary part of p_s of every
+  // surface cell by the mean over the surface cells among its 3^dim
+  // neighbours (itself included), i.e. the curvature is averaged along the
+  // interface over about three cells per pass, the usual remedy of
+  // convolved-CSF schemes (smoothed curvature; cf. the height-function and
+  // smoothing comparisons of Cummins, Francois and Kothe 2005). The recoil
+  // part is not smoothed.
+  template <int dim>
+  void
+  FreeSurface<dim>::smooth_capillary_pressure(
+    const std::vector<std::uint32_t> &fluid_cells)
+  {
+    if (prm.curvature_smoothing == 0 || prm.surface_tension == 0)
+      return;
+    std::vector<double> smoothed(fluid_cells.size());
+    for (unsigned int pass = 0; pass < prm.curvature_smoothing; ++pass)
+      {
+        grid.update_ghosts(p_capillary);
+        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+          {
+            const std::size_t c = fluid_cells[i];
+            if (surface_mark[c] == 0)
+              continue;
+            double sum = 0, n = 0;
+            for (const auto o : stencil)
+              if (surface_mark[c + o] != 0)
+                sum += p_capillary[c + o], n += 1;
+            smoothed[i] = sum / n;
+          }
+        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+          {
+            const std::size_t c = fluid_cells[i];
+            if (surface_mark[c] == 0)
+              continue;
+            p_surface[c] += smoothed[i] - p_capillary[c];
+            p_capillary[c] = smoothed[i];
+          }
+      }
+  }
+
+
+
+
+  template <int dim>
+  std::array<double, (1u << dim)>
+  FreeSurface<dim>::corner_alpha(const std::size_t c) const
+  {
+    const auto &                    nc  = grid.n_cells();
+    const auto                      ijk = grid.global_index(c);
+    const std::size_t               n0  = grid.first_node_of_cell(c);
+    std::array<double, (1u << dim)> a;
+    for (unsigned int k = 0; k < n_corners; ++k)
+      {
+        double f = 1;
+        for (int d = 0; d < dim; ++d)
+          {
+            const int i = ijk[d] + ((k >> d) & 1);
+            if (i == 0 || i == int(nc[d]))
+              f *= 2;
+          }
+        a[k] = f * alpha_node[n0 + corner_offset[k]];
+      }
+    return a;
+  }
+
+  template class FreeSurface<2>;
+  template class FreeSurface<3>;
+} // namespace femp
