@@ -11,12 +11,58 @@
 // emitted energy of each reader's segments, the beam at three times, the
 // energy the scene absorbs (1 %), and that a 2D scene refuses a path whose
 // y varies.
+//
+// With '--generated DIR': the files contrib/scan_path_generator.py wrote
+// in DIR for two 400 um square layers (border contour at 40 um inset, two
+// 160 um hatches 80 um apart, 200 W at 1 m/s): by hand 2 x (4 x 320 um +
+// 2 x 160 um) x 200 W / (1 m/s) = 0.64 J in every format, and the three
+// formats must give the same beam at all times.
 #include <femp/heat/scan_path.h>
 
 #include "scene_driver.h"
 #include "test_tools.h"
 
 using namespace femp_test;
+
+namespace
+{
+  int
+  check_generated(const std::string &dir, Checks &checks)
+  {
+    std::vector<std::unique_ptr<Laser<3>>> lasers;
+    for (const std::string format :
+         {"adamantine_segment", "adamantine_event_series", "additivefoam"})
+      {
+        Laser<3>::Parameters lp;
+        lp.scan_path_file   = dir + "/gen_" + format + ".txt";
+        lp.scan_path_format = format;
+        lp.power            = 200;
+        lasers.push_back(std::make_unique<Laser<3>>(lp));
+        checks.at_most(format + ": |emitted - 0.64 J| (J)",
+                       std::abs(emitted_energy<3>(lasers.back()->segments()) -
+                                0.64),
+                       1e-9);
+      }
+    checks.print("path end time (s)", lasers[0]->end_time(), 6);
+    double difference = 0;
+    for (unsigned int i = 0; i <= 1000; ++i)
+      {
+        const double t = 0.999 * i * lasers[0]->end_time() / 1000;
+        Point<3>     x0, x;
+        double       p0 = 0, p = 0;
+        const bool   on0 = lasers[0]->position(t, x0, p0);
+        for (unsigned int k = 1; k < 3; ++k)
+          {
+            const bool on = lasers[k]->position(t, x, p);
+            difference    = std::max(difference, (on != on0) + std::abs(p - p0) +
+                                                x.distance(x0) / 1e-6);
+          }
+      }
+    checks.at_most("largest difference between the formats", difference,
+                   1e-6);
+    return checks.exit_code();
+  }
+} // namespace
 
 int
 main(int argc, char **argv)
@@ -25,6 +71,8 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
   const std::string                dir = argv[2];
+  if (std::string(argv[1]) == "--generated")
+    return check_generated(dir, checks);
 
   const double emitted_by_hand = 1e5 * 60e-6 + 5e4 * 20e-6 + 8e4 * 50e-6;
   const double t0              = 1e-5;
