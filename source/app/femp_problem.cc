@@ -48,6 +48,7 @@ namespace femp
     IncompressibleFlow<3>::Parameters::declare_parameters(prm);
     Laser<3>::Parameters::declare_parameters(prm);
     Output<3>::Parameters::declare_parameters(prm);
+    ThermalHistory<3>::Parameters::declare_parameters(prm);
     SolidMaterial::declare_parameters(prm);
     SolidStress<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
@@ -116,6 +117,7 @@ namespace femp
       flow_prm.check_time_step(grid_prm.cell_size, material.density);
     laser_prm.parse_parameters(prm);
     output_prm.parse_parameters(prm);
+    history_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     melt_temperature = material.liquidus;
     if (solid_enabled)
@@ -254,6 +256,10 @@ namespace femp
           heat->set_velocity(&flow->cell_velocity());
       }
     output = std::make_unique<Output<dim>>(output_prm, *grid);
+    if (history_prm.enabled)
+      history = std::make_unique<ThermalHistory<dim>>(
+        *grid, material.solidus, material.liquidus, heat->temperature(),
+        heat->metal_fraction(), 0.);
     {
       std::vector<std::string> names;
       for (const auto &f : output_fields())
@@ -420,6 +426,8 @@ namespace femp
             TimerOutput::Scope t(timer, "temperature step");
             heat->advance(dt, time);
           }
+        if (history)
+          history->observe(heat->temperature(), heat->metal_fraction(), time + dt);
         {
           TimerOutput::Scope t(timer, "cells to points");
           points->cells_to_points(heat->temperature());
@@ -494,6 +502,8 @@ namespace femp
                   << " s" << std::endl;
           }
       }
+    if (history)
+      history->write(output_prm.directory);
     result.steps = step;
     result.time  = time;
     result.T_max = heat->max_temperature();

@@ -2,6 +2,7 @@
 // from the prm file or from a scan-path file).
 #include <femp/base/input_checks.h>
 #include <femp/heat/laser.h>
+#include <femp/heat/scan_path.h>
 
 #include <fstream>
 #include <sstream>
@@ -37,6 +38,15 @@ namespace femp
                       "laser off. Segments follow each other in time from "
                       "'Start time'. Lines starting with # are comments. A "
                       "relative path is relative to the working directory.");
+    prm.declare_entry("Scan path format", "femp",
+                      Patterns::Selection(scan_path_formats()),
+                      "Format of 'Scan path file': 'femp' (above), "
+                      "'adamantine_segment', 'adamantine_event_series' "
+                      "(adamantine's scan paths, power = factor x 'Power') "
+                      "or 'additivefoam' (AdditiveFOAM's scanPath, power in "
+                      "W, W/m in 2D). These hold x, y, z (m), dwells and "
+                      "jumps; a 2D scene takes (x, z) of a path at constant "
+                      "y. Times count from 'Start time'. See doc/inputs.md.");
     prm.leave_subsection();
   }
 
@@ -54,6 +64,7 @@ namespace femp
     end_point      = parse_point<dim>(prm.get("End point"), "Laser/End point");
     start_time     = prm.get_double("Start time");
     scan_path_file = prm.get("Scan path file");
+    scan_path_format = prm.get("Scan path format");
     prm.leave_subsection();
     require(beam_radius > 0, "Laser/Beam radius", beam_radius,
             "it must be positive (m)");
@@ -76,6 +87,9 @@ namespace femp
     };
     if (prm.scan_path_file.empty())
       add(prm.start_point, prm.end_point, prm.scan_speed, prm.power);
+    else if (prm.scan_path_format != "femp")
+      path = read_scan_path<dim>(prm.scan_path_file, prm.scan_path_format,
+                                 prm.power, prm.start_time);
     else
       {
         std::ifstream in(prm.scan_path_file);
@@ -120,17 +134,23 @@ namespace femp
     const std::string name = prm.scan_path_file.empty() ?
                                std::string("Laser/End point") :
                                std::string("Laser/Scan path file");
+    // Paths read in other formats carry their height (layer) too.
+    const int n_checked =
+      prm.scan_path_file.empty() || prm.scan_path_format == "femp" ? dim - 1 :
+                                                                     dim;
     for (const auto &s : path)
       for (const auto &p : {s.start, s.end})
-        for (int d = 0; d < dim - 1; ++d)
+        for (int d = 0; d < n_checked; ++d)
           {
             std::ostringstream v;
             v << p;
             require(p[d] >= lower[d] && p[d] <= upper[d],
                     name,
                     v.str(),
-                    "the scan path must stay inside the horizontal extent of "
-                    "the domain (coordinate " + std::to_string(d) + " in [" +
+                    "the scan path must stay inside the " +
+                      std::string(d < dim - 1 ? "horizontal" : "vertical") +
+                      " extent of the domain (coordinate " +
+                      std::to_string(d) + " in [" +
                       num(lower[d]) + ", " +
                       num(upper[d]) + "] m)");
           }

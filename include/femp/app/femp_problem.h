@@ -20,6 +20,7 @@
 #include <femp/heat/heat_transfer.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/heat/laser.h>
+#include <femp/heat/thermal_history.h>
 #include <femp/base/material.h>
 #include <femp/grid/material_points.h>
 #include <femp/io/output.h>
@@ -121,6 +122,7 @@ namespace femp
     typename HeatTransfer<dim>::Parameters    heat_prm;
     typename Laser<dim>::Parameters           laser_prm;
     typename Output<dim>::Parameters          output_prm;
+    typename ThermalHistory<dim>::Parameters  history_prm;
     double                                    melt_temperature;
     bool                                      melt_flow = false;
     /// Physics/Heat transfer: false freezes the temperature field.
@@ -142,6 +144,7 @@ namespace femp
     flow_substeps(const double dt);
     std::unique_ptr<Output<dim>>         output;
     std::unique_ptr<SolidStress<dim>>    solid;
+    std::unique_ptr<ThermalHistory<dim>> history; ///< null unless enabled
     /// Fluid forces on the solid's grid nodes (flow and solid together),
     /// and on the faces of the solid cells (per face and component).
     std::array<std::vector<double>, dim>           fluid_force;

@@ -25,7 +25,10 @@ namespace femp
   public:
     struct Segment
     {
-      Point<dim> start, end; ///< last coordinate unused
+      /// Last coordinate: the height of the layer for paths read in other
+      /// formats (heat/scan_path.h), else 0; the beam deposits its energy
+      /// where it meets the metal, whatever this height.
+      Point<dim> start, end;
       double     speed;      ///< m/s
       double     power;      ///< W (3D) or W/m (2D); 0 = laser off
       double     t_begin, t_end;
@@ -40,6 +43,7 @@ namespace femp
       Point<dim>  start_point, end_point;
       double      start_time = 0.;
       std::string scan_path_file;
+      std::string scan_path_format = "femp"; ///< see heat/scan_path.h
 
       static void
       declare_parameters(ParameterHandler &prm);

@@ -1,0 +1,26 @@
+// femp: reading a scene file whose 'include' lines name files relative to
+// the scene's own folder (deal.II's ParameterHandler opens them relative to
+// the working directory, so a scene that includes a material file, e.g.
+// 'include materials/316L.prm' in prm/, would only run from one folder).
+#ifndef femp_parameter_file_h
+#define femp_parameter_file_h
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <string>
+
+namespace femp
+{
+  /// Parse @p file into @p prm as ParameterHandler::parse_input() does,
+  /// except that the relative path of an 'include' line is looked up first
+  /// next to @p file, then (as deal.II does) in the working directory.
+  /// Includes inside an included file follow deal.II's rule.
+  void
+  parse_parameter_file(dealii::ParameterHandler &prm, const std::string &file);
+
+  /// The text of @p file with its 'include' paths resolved as above.
+  std::string
+  resolve_includes(const std::string &file);
+} // namespace femp
+
+#endif
