@@ -5,6 +5,7 @@
 
 #include <femp/app/femp_problem.h>
 #include <femp/base/input_checks.h>
+#include <femp/solid/fe_zone_depth.h>
 
 #include <chrono>
 #include <iomanip>
@@ -128,6 +129,30 @@ namespace femp
         solid_prm.parse_parameters(prm);
         solid_prm.check(solid_material, grid_prm);
         fem_prm.parse_parameters(prm);
+        if (fem_prm.enabled && fem_prm.automatic_top)
+          {
+            // 'Zone upper corner = auto' (fe_zone_depth.h, doc/cases.md):
+            // the top below the conservative melt depth of the laser's
+            // strongest moving segment.
+            require(dim == 3, "Solid FEM/Zone upper corner", "auto",
+                    "'auto' is for 3D scenes; give the corner's coordinates");
+            double           d = 0;
+            const Laser<dim> path(laser_prm);
+            for (const auto &s : path.segments())
+              if (s.power > 0 && s.speed > 0)
+                d = std::max(d, conservative_melt_depth(
+                                  material, laser_prm.absorptivity * s.power,
+                                  s.speed, heat_prm.initial_temperature));
+            fem_prm.upper_corner              = grid_prm.upper_corner;
+            fem_prm.upper_corner[dim - 1]     = automatic_fe_zone_top(
+              d, points_prm.substrate_top, grid_prm.lower_corner[dim - 1],
+              grid_prm.cell_size);
+            pcout << "Solid FEM: zone top 'auto' at z = "
+                  << fem_prm.upper_corner[dim - 1]
+                  << " m (conservative melt depth " << d
+                  << " m below the substrate top " << points_prm.substrate_top
+                  << " m, margin 1.1 d + 2 cells)" << std::endl;
+          }
         fem_prm.check(grid_prm);
         if (melt_flow)
           {
@@ -378,13 +403,18 @@ namespace femp
       phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
     const std::vector<double> zone = points->zone_tags();
     auto fields = output_fields();
-    std::vector<double> sigma_xx, von_mises;
+    // Solid: sigma_xx, sigma_yy, sigma_zz, von Mises, equivalent plastic
+    // strain (FE element or mean over the cell's solid points); also on the
+    // probe lines.
+    std::vector<std::vector<double>> solid_fields;
     if (solid)
       {
-        solid->cell_stress_fields(sigma_xx, von_mises);
-        fields.push_back({"sigma_xx", &sigma_xx});
-        fields.push_back({"von_mises", &von_mises});
+        solid->cell_fields(solid_fields);
+        const auto names = SolidStress<dim>::cell_field_names();
+        for (std::size_t i = 0; i < names.size(); ++i)
+          fields.push_back({names[i], &solid_fields[i]});
       }
+    const auto line_fields = fields;
     fields.push_back({"laser_source", &heat->laser_source()});
     fields.push_back({"phase", &phase});
     fields.push_back({"zone", &zone});
@@ -393,7 +423,7 @@ namespace femp
     output->write_fields(n, time, fields,
                          with_points ? &points->particle_handler() : nullptr,
                          points->used_property_names());
-    output->write_probe_lines(n, time, output_fields());
+    output->write_probe_lines(n, time, line_fields);
   }
 
 

@@ -34,7 +34,18 @@ namespace femp
     prm.declare_entry("Zone upper corner", "0, 0, 0", Patterns::Anything(),
                       "Upper corner of the finite-element zone, m (dim "
                       "coordinates); on grid lines, inside the domain, above "
-                      "the lower corner in every direction.");
+                      "the lower corner in every direction. Or 'auto' (3D): "
+                      "the zone spans the domain horizontally and its top is "
+                      "the highest grid line at or below 'Material "
+                      "points/Substrate top' - (1.1 d + 2 cells), d a "
+                      "conservative melt depth from Rosenthal's moving point "
+                      "source and its line-source limit sqrt(2 A P / (pi e "
+                      "rho c_min v (T_s - T0))) for the laser's largest power "
+                      "P, absorptivity A and speed v, the material's density, "
+                      "smallest specific heat and conductivity table, solidus "
+                      "T_s and 'Heat transfer/Initial temperature' T0 "
+                      "(doc/cases.md). With either choice the run stops if a "
+                      "finite element reaches the solidus.");
     prm.declare_entry("Hourglass coefficient", "0.1", Patterns::Double(),
                       "kappa of the Flanagan-Belytschko hourglass stiffness "
                       "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
@@ -55,8 +66,10 @@ namespace femp
       {
         lower_corner = parse_point<dim>(prm.get("Zone lower corner"),
                                         "Solid FEM/Zone lower corner");
-        upper_corner = parse_point<dim>(prm.get("Zone upper corner"),
-                                        "Solid FEM/Zone upper corner");
+        automatic_top = Utilities::trim(prm.get("Zone upper corner")) == "auto";
+        if (!automatic_top)
+          upper_corner = parse_point<dim>(prm.get("Zone upper corner"),
+                                          "Solid FEM/Zone upper corner");
       }
     prm.leave_subsection();
     require(hourglass_coefficient >= 0 && hourglass_coefficient <= 1,
@@ -72,6 +85,11 @@ namespace femp
   {
     if (!enabled)
       return;
+    require(!automatic_top || upper_corner[dim - 1] > lower_corner[dim - 1],
+            "Solid FEM/Zone upper corner", "auto",
+            "the estimated melt depth leaves no finite element above the "
+            "zone's lower corner: use a deeper substrate, or all-MPM "
+            "(Use finite elements = false)");
     for (int d = 0; d < dim; ++d)
       {
         for (int c = 0; c < 2; ++c)
@@ -998,12 +1016,11 @@ namespace femp
 
   template <int dim>
   void
-  SolidFEM<dim>::cell_stress_fields(std::vector<double> &sxx,
-                                    std::vector<double> &vm) const
+  SolidFEM<dim>::cell_fields(std::vector<std::vector<double>> &f) const
   {
     if (!prm.enabled)
       return;
-    // Element stresses to the grid ranks owning their cells.
+    // Element values to the grid ranks owning their cells.
     std::vector<types::global_dof_index> have(element_id.begin(),
                                               element_id.end()),
       want;
@@ -1016,20 +1033,20 @@ namespace femp
         want.push_back(id);
       }
     Utilities::MPI::NoncontiguousPartitioner back(have, want, comm);
-    std::vector<double> a(element_id.size()), b(element_id.size()),
-      ra(want.size()), rb(want.size());
-    for (std::size_t e = 0; e < element_id.size(); ++e)
+    std::vector<double> a(element_id.size()), r(want.size());
+    for (unsigned int k = 0; k < 5; ++k)
       {
-        const SymmetricTensor<2, 3> s = element_stress(e);
-        a[e]                          = s[0][0];
-        b[e]                          = von_mises(s);
-      }
-    back.export_to_ghosted_array(ArrayView<const double>(a), ArrayView<double>(ra));
-    back.export_to_ghosted_array(ArrayView<const double>(b), ArrayView<double>(rb));
-    for (std::size_t i = 0; i < want.size(); ++i)
-      {
-        sxx[grid_zone_cells[i]] = ra[i];
-        vm[grid_zone_cells[i]]  = rb[i];
+        for (std::size_t e = 0; e < element_id.size(); ++e)
+          {
+            const SymmetricTensor<2, 3> s = element_stress(e);
+            a[e] = k < 3  ? s[k][k] :
+                   k == 3 ? von_mises(s) :
+                            blocks[e / simd_lanes].eps_p[e % simd_lanes];
+          }
+        back.export_to_ghosted_array(ArrayView<const double>(a),
+                                     ArrayView<double>(r));
+        for (std::size_t i = 0; i < want.size(); ++i)
+          f[k][grid_zone_cells[i]] = r[i];
       }
   }
 

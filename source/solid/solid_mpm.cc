@@ -1354,9 +1354,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidMPM<dim>::add_cell_stresses(std::vector<double> &sxx,
-                                   std::vector<double> &vm,
-                                   std::vector<double> &count) const
+  SolidMPM<dim>::add_cell_fields(std::vector<std::vector<double>> &f,
+                                 std::vector<double> &             count) const
   {
     for (std::size_t p = 0; p < true_mass.size(); ++p)
       {
@@ -1364,8 +1363,10 @@ namespace femp
         for (unsigned int i = 0; i < 3; ++i)
           for (unsigned int j = i; j < 3; ++j)
             s[i][j] = sigma[sidx(i, j)][p];
-        sxx[cell[p]] += sigma[0][p];
-        vm[cell[p]] += von_mises(s);
+        for (unsigned int i = 0; i < 3; ++i)
+          f[i][cell[p]] += s[i][i];
+        f[3][cell[p]] += von_mises(s);
+        f[4][cell[p]] += eps_p[p];
         count[cell[p]] += 1;
       }
   }

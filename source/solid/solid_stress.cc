@@ -5,10 +5,12 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
 
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace femp
@@ -251,9 +253,10 @@ namespace femp
               }
           }
       mpm_cells.clear();
+      fe_cells.clear();
       for (const auto c : grid.owned_cells())
-        if (!fem.zone_mask()[c])
-          mpm_cells.push_back(c);
+        (fem.zone_mask()[c] ? fe_cells : mpm_cells).push_back(c);
+      guard_fe_zone = Utilities::MPI::max(int(!fe_cells.empty()), comm) > 0;
       grid_transition.clear();
       const auto &size = grid.box_size();
       for (std::size_t t = 0; t < fem.n_transition(); ++t)
@@ -345,6 +348,7 @@ namespace femp
                             const std::vector<double> &T,
                             const bool                 final)
   {
+    check_fe_zone_solid(T, t);
     fem.new_temperatures(T);
     fem.set_external_forces(external_forces);
     // Same decision on every rank (gather_points() is collective).
@@ -797,17 +801,89 @@ namespace femp
   SolidStress<dim>::cell_stress_fields(std::vector<double> &sxx,
                                        std::vector<double> &vm) const
   {
-    sxx.assign(grid.n_local(), 0.);
-    vm.assign(grid.n_local(), 0.);
+    std::vector<std::vector<double>> f;
+    cell_fields(f);
+    sxx.swap(f[0]);
+    vm.swap(f[3]);
+  }
+
+
+  template <int dim>
+  std::vector<std::string>
+  SolidStress<dim>::cell_field_names()
+  {
+    return {"sigma_xx", "sigma_yy", "sigma_zz", "von_mises", "plastic_strain"};
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::cell_fields(std::vector<std::vector<double>> &f) const
+  {
+    f.assign(5, std::vector<double>(grid.n_local(), 0.));
     std::vector<double> count(grid.n_local(), 0.);
-    mpm.add_cell_stresses(sxx, vm, count);
+    mpm.add_cell_fields(f, count);
     for (const auto c : grid.owned_cells())
       if (count[c] > 0)
+        for (auto &field : f)
+          field[c] /= count[c];
+    fem.cell_fields(f);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::check_fe_zone_solid(const std::vector<double> &T,
+                                        const double               t) const
+  {
+    if (!guard_fe_zone)
+      return;
+    const double T_s    = mat.melt_temperature;
+    double       T_max  = -std::numeric_limits<double>::infinity();
+    for (const auto c : fe_cells)
+      T_max = std::max(T_max, T[c]);
+    T_max = Utilities::MPI::max(T_max, comm);
+    if (!(T_max >= T_s))
+      return;
+    // The deepest element at or above the solidus: its position (cell
+    // centre; ties: largest x, then y) and the hottest zone temperature.
+    const double h = grid.h();
+    std::array<double, dim> where;
+    where.fill(-std::numeric_limits<double>::infinity());
+    double z_low = std::numeric_limits<double>::infinity();
+    for (const auto c : fe_cells)
+      if (T[c] >= T_s)
+        z_low = std::min(z_low, grid.cell_center(c)[dim - 1]);
+    z_low = Utilities::MPI::min(z_low, comm);
+    for (const auto c : fe_cells)
+      if (T[c] >= T_s &&
+          std::abs(grid.cell_center(c)[dim - 1] - z_low) < 1e-3 * h)
         {
-          sxx[c] /= count[c];
-          vm[c] /= count[c];
+          const Point<dim> x = grid.cell_center(c);
+          if (x[0] > where[0] || (dim == 3 && x[0] == where[0] && x[1] > where[1]))
+            for (int d = 0; d < dim; ++d)
+              where[d] = x[d];
         }
-    fem.cell_stress_fields(sxx, vm);
+    // Largest x first, then the largest y among the ranks with that x.
+    const double x_max = Utilities::MPI::max(where[0], comm);
+    if (where[0] != x_max)
+      where.fill(-std::numeric_limits<double>::infinity());
+    for (int d = 1; d < dim; ++d)
+      where[d] = Utilities::MPI::max(where[d], comm);
+    where[0] = x_max;
+    const double top = grid.origin()[dim - 1] +
+                       std::floor((z_low - 0.5 * h - grid.origin()[dim - 1]) / h +
+                                  1e-9) * h - 2 * h;
+    std::ostringstream s;
+    s << "the finite element at (";
+    for (int d = 0; d < dim; ++d)
+      s << (d ? ", " : "") << where[d];
+    s << ") m reached the solidus " << T_s << " K at t = " << t
+      << " s (hottest element " << T_max
+      << " K): the FE zone must stay solid (paper sec. 2.1). Set 'Solid "
+         "FEM/Zone upper corner' to 'auto' or lower its top to at most "
+      << top << " m (two cells below the deepest molten element)";
+    throw FeZoneMelted(s.str());
   }
 
 

@@ -82,6 +82,9 @@ namespace femp
       Point<dim> lower_corner;
       Point<dim> upper_corner;
       double     hourglass_coefficient = 0.1;
+      /// 'Zone upper corner = auto': the driver places the top below the
+      /// estimated melt depth (fe_zone_depth.h) before check().
+      bool automatic_top = false;
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -211,11 +214,11 @@ namespace femp
     /// @p x, or false if none.
     bool
     probe(const Point<dim> &x, double &sigma_xx, double &T) const;
-    /// sigma_xx and von Mises stress of the zone cells of the grid's local
-    /// box (at owned cells; other entries untouched). Collective.
+    /// sigma_xx, sigma_yy, sigma_zz, von Mises stress and equivalent
+    /// plastic strain (@p f[0..4]) of the zone cells of the grid's local box
+    /// (at owned cells; other entries untouched). Collective.
     void
-    cell_stress_fields(std::vector<double> &sigma_xx,
-                       std::vector<double> &von_mises) const;
+    cell_fields(std::vector<std::vector<double>> &f) const;
     bool
     find_non_finite(Point<dim> &where) const;
 

@@ -220,12 +220,12 @@ namespace femp
     /// Mean sigma_xx and number of points in cell @p idx (this rank).
     std::pair<double, unsigned int>
     cell_stress_xx(const std::size_t idx) const;
-    /// Add sigma_xx and the von Mises stress of every point to its cell
-    /// (sums) and count the points per cell.
+    /// Add sigma_xx, sigma_yy, sigma_zz, the von Mises stress and the
+    /// equivalent plastic strain of every point to its cell (sums, into
+    /// @p f[0..4]) and count the points per cell.
     void
-    add_cell_stresses(std::vector<double> &sxx,
-                      std::vector<double> &vm,
-                      std::vector<double> &count) const;
+    add_cell_fields(std::vector<std::vector<double>> &f,
+                    std::vector<double> &             count) const;
     /// Position of the first point with a non-finite state, if any.
     bool
     find_non_finite(Point<dim> &where) const;

@@ -213,6 +213,16 @@ namespace femp
     void
     cell_stress_fields(std::vector<double> &sigma_xx,
                        std::vector<double> &von_mises) const;
+    /// Names of the cell fields of cell_fields(): sigma_xx, sigma_yy,
+    /// sigma_zz, von_mises (Pa) and plastic_strain (equivalent, -).
+    static std::vector<std::string>
+    cell_field_names();
+    /// Cell fields over the local box (output, probe lines), in the order of
+    /// cell_field_names(): in a cell of the FE zone the values of its
+    /// element, elsewhere the mean over the cell's solid points; 0 in cells
+    /// without solid (fluid, powder, gas). Collective.
+    void
+    cell_fields(std::vector<std::vector<double>> &fields) const;
     /// FE elements whose grid cell is owned by another rank (global; the
     /// two meshes are partitioned independently).
     double
@@ -237,6 +247,9 @@ namespace femp
     /// Owned cells outside the FE zone (the only cells whose temperature
     /// the points need; none: no gather of the points at all).
     std::vector<std::uint32_t> mpm_cells;
+    /// Owned cells inside the FE zone (the solidus guard).
+    std::vector<std::uint32_t> fe_cells;
+    bool                       guard_fe_zone = false; ///< any FE zone cell
     /// (transition index, local grid node) for transition nodes among the
     /// nodes of this rank's owned cells.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
@@ -273,6 +286,11 @@ namespace femp
     /// between the last two temperature fields.
     void
     step(const double dt, const double w);
+    /// Guard of the FE zone (fe_zone_depth.h): throws FeZoneMelted on every
+    /// rank if a cell of the zone is at or above the solidus in @p T at
+    /// time @p t, naming the element and the zone top to use (collective).
+    void
+    check_fe_zone_solid(const std::vector<double> &T, const double t) const;
     void
     write_rows();
     /// Gather the points for a solid advance: book the kinetic energy of

@@ -1,0 +1,129 @@
+// The paper's case 3.2 (SLM single track with melt flow and thermal stress)
+// reduced to 8 um cells and the first 10 us of the scan
+// (tests/case_3_2_reduced.prm): run by FEMP (finite elements below 40 um,
+// material points above) and by all-MPM, the paper's comparison of its
+// Fig. 8. Both runs sample the probe lines CD (MPM zone, 20 um below the
+// substrate top) and EF (FE zone in the FEMP run, 60 um below it) at the
+// end; the test compares the profiles of T and sigma_xx along each line:
+//   - T: largest |T_FEMP - T_MPM| over the line relative to the largest
+//     temperature rise on it. The temperature is solved on the same grid
+//     in both runs; only the points that melt and move differ (the solid
+//     moves the points in the MPM zone by its displacements, which differ
+//     slightly), so the profiles must agree closely: gate 2 %.
+//   - sigma_xx: largest |sigma_FEMP - sigma_MPM| over both lines relative
+//     to the peak |sigma_xx| of the all-MPM run on them. One-point
+//     hexahedra with hourglass control against 8 points per cell with
+//     trilinear shape functions: the same elasticity, but not the same
+//     discrete stress field. The gate (0.35) is about twice the difference
+//     measured when the test was written (printed, 2 ranks); it fails if
+//     either zone's stress is wrong by a sizeable fraction, e.g. a sign or
+//     a lost thermal expansion. Also printed: the peak |sigma_xx| of each
+//     run (must lie within 25 % of each other), the pool length at the end
+//     and the solid energy balance of the FEMP run.
+// One optional argument after the scene: a directory for both runs' output
+// directories femp/ and mpm/ (default: the working directory).
+#include "scene_driver.h"
+#include "test_tools.h"
+
+#include <map>
+
+using namespace femp_test;
+
+namespace
+{
+  constexpr int dim = 3;
+
+  /// Columns of a probe-line CSV file: name -> values along the line.
+  std::map<std::string, std::vector<double>>
+  read_probe_line(const std::string &file)
+  {
+    std::ifstream in(file);
+    AssertThrow(in, ExcMessage("cannot read " + file));
+    std::string row;
+    std::getline(in, row); // "# time = ..."
+    std::getline(in, row);
+    const auto names = Utilities::split_string_list(row, ',');
+    std::map<std::string, std::vector<double>> columns;
+    while (std::getline(in, row))
+      {
+        const auto v = Utilities::split_string_list(row, ',');
+        for (std::size_t i = 0; i < names.size() && i < v.size(); ++i)
+          columns[names[i]].push_back(Utilities::string_to_double(v[i]));
+      }
+    return columns;
+  }
+} // namespace
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+  const std::string dir = argc > 2 ? std::string(argv[2]) + "/" : "";
+  try
+    {
+      std::map<std::string, std::map<std::string, std::vector<double>>> line;
+      std::map<std::string, typename FempProblem<dim>::Summary>          sum;
+      for (const std::string run : {"femp", "mpm"})
+        {
+          const auto s = run_scene<dim>(
+            argv[1], comm,
+            {{"Solid FEM", "Use finite elements", run == "femp" ? "true" : "false"},
+             {"Output", "Directory", dir + run}});
+          sum[run] = s;
+          MPI_Barrier(comm); // rank 0 wrote the probe files
+          for (const std::string l : {"CD", "EF"})
+            line[run + l] =
+              read_probe_line(dir + run + "/probe_line_" + l + "_00001.csv");
+        }
+
+      const double T0     = 300;
+      double       T_err  = 0;
+      double       s_diff = 0, s_peak[2] = {0, 0};
+      for (const std::string l : {"CD", "EF"})
+        {
+          const auto &a = line["femp" + l], &b = line["mpm" + l];
+          const auto &Ta = a.at("T"), &Tb = b.at("T");
+          const auto &sa = a.at("sigma_xx"), &sb = b.at("sigma_xx");
+          AssertThrow(Ta.size() == Tb.size() && sa.size() == sb.size() &&
+                        Ta.size() == sa.size() && !Ta.empty(),
+                      ExcMessage("probe lines of the two runs differ in size"));
+          double dT = 0, rise = 0;
+          for (std::size_t i = 0; i < Ta.size(); ++i)
+            {
+              dT   = std::max(dT, std::abs(Ta[i] - Tb[i]));
+              rise = std::max(rise, Tb[i] - T0);
+              s_diff    = std::max(s_diff, std::abs(sa[i] - sb[i]));
+              s_peak[0] = std::max(s_peak[0], std::abs(sa[i]));
+              s_peak[1] = std::max(s_peak[1], std::abs(sb[i]));
+            }
+          checks.print("line " + l + ": largest temperature rise, all-MPM (K)",
+                       std::round(rise / 10) * 10, 3);
+          checks.at_most("line " + l + ": max |T_FEMP - T_MPM| / rise",
+                         dT / std::max(rise, 1.), 0.02);
+          T_err = std::max(T_err, dT / std::max(rise, 1.));
+        }
+      checks.print("peak |sigma_xx| on CD and EF, FEMP (MPa)",
+                   std::round(s_peak[0] / 1e7) * 10, 2);
+      checks.print("peak |sigma_xx| on CD and EF, all-MPM (MPa)",
+                   std::round(s_peak[1] / 1e7) * 10, 2);
+      checks.in_range("peak |sigma_xx| FEMP / all-MPM", s_peak[0] / s_peak[1],
+                      0.75, 1.25);
+      checks.at_most("max |sigma_xx,FEMP - sigma_xx,MPM| / peak |sigma_xx,MPM|",
+                     s_diff / s_peak[1], 0.35);
+      checks.print("melt pool length FEMP / all-MPM",
+                   std::round(sum["femp"].pool.length /
+                              std::max(1e-30, sum["mpm"].pool.length) * 10) / 10,
+                   2);
+      const auto &E = sum["femp"].solid_energy;
+      checks.at_most("FEMP solid energy balance / stress work",
+                     std::abs(E.balance()) / std::abs(E.internal), 0.05);
+    }
+  catch (const std::exception &e)
+    {
+      std::cerr << e.what() << std::endl;
+      return 1;
+    }
+  return checks.exit_code();
+}
