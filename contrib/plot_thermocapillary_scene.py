@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """femp contrib: the thermocapillary cavity scene (prm/thermocapillary_cavity.prm)
-against the closed-form return-flow profile (VERIFICATION.md sec. 4)
+against the closed-form return-flow profile (doc/verification.md)
 
     u(zeta) = tau_s D/(4 mu) (3 zeta^2 - 2 zeta),  tau_s = dsigma/dT G.
 

@@ -1,4 +1,4 @@
-// femp benchmark of the solid step (issue 3 item 9; not a test): cost per
+// femp benchmark of the solid step (not a test; doc/performance.md): cost per
 // point-step of the material point method (P2G, grid update, G2P, MUSL
 // re-map, constitutive update) and per element-step of the finite elements
 // (internal and hourglass forces, node update, constitutive update), on a

@@ -1,5 +1,5 @@
-// Verification: 1D transient conduction into a half space (VERIFICATION.md
-// sec. 1, theta = erfc): a strip x in [0, 2] initially at T0 = 1 with the
+// Verification: 1D transient conduction into a half space (doc/verification.md,
+// theta = erfc): a strip x in [0, 2] initially at T0 = 1 with the
 // face x = 0 held at T0 + 1 from t = 0; all properties 1. Compares with
 // T = T0 + erfc(x / (2 sqrt(t))) at t = 0.05 on three grids and prints the
 // observed order of spatial convergence (diffusion step ~ h^2, so the time

@@ -1,4 +1,4 @@
-// Flow and solid together (paper sec. 2.6, METHOD sec. 5; doc/solid.md
+// Flow and solid together (paper sec. 2.6; doc/solid.md
 // "Flow and solid together"): tests/coupled_pool_on_solid.prm, a resting
 // liquid layer of height H on an elastic block of depth D under gravity,
 // bottom fixed, sides on rollers, run by FempProblem with both the melt flow

@@ -1,4 +1,4 @@
-// Melt flow, dam break (VERIFICATION.md sec. 4, Martin & Moyce 1952): a
+// Melt flow, dam break (doc/verification.md, Martin & Moyce 1952): a
 // water column of width a and height 2a collapses in a tank 5a wide with
 // free-slip walls. The surge front position Z = z/a against
 // T = t sqrt(2g/a), and the residual column height H = h/(2a) at the left
@@ -14,7 +14,7 @@
 // a/64, written by "test_dam_break 64 write=FILE") the run is also compared
 // with that converged curve (target 1 %). "noslip" puts a row of solid
 // cells (rigid, no-slip for the flow) under the column; it and the Courant
-// number (default 0.25) serve the checks of the front lead in doc/flow.md.
+// number (default 0.25) serve the checks of the front lead in doc/studies/flow.md.
 //
 // Measurement: front = rightmost fluid point plus half a point spacing (it
 // agrees within a cell with the end of the bottom cell row holding >= 2 of
@@ -26,7 +26,7 @@
 // along the floor (a front that ignores a leading film thinner than
 // ~0.6 h) goes to the log.
 //
-// Result (doc/flow.md), with point shifting A = 2 and the volume
+// Result (doc/verification.md), with point shifting A = 2 and the volume
 // correction c = 0.5 (Melt flow/Point shifting, Volume correction): the
 // front is converged (a/32 within 0.6 % of a/64) and leads the experiment
 // by up to 20 % (T = 1.19); without a film thinner than 0.6 h 15 / 18 /
@@ -113,7 +113,7 @@ main(int argc, char **argv)
   prm.gravity   = Tensor<1, dim>({0., -g});
   // Optional: the time-step's Courant number, and a no-slip floor (a row of
   // solid cells under the column: the flow treats solid cells as rigid
-  // no-slip walls), both for the checks of the front lead in doc/flow.md.
+  // no-slip walls), both for the checks of the front lead in doc/studies/flow.md.
   if (argc > 6)
     prm.cfl = std::atof(argv[6]);
   const bool no_slip_floor = argc > 5 && std::string(argv[5]) == "noslip";

@@ -1,5 +1,5 @@
 // Energy bookkeeping of the heat equation with melt flow (doc/verification.md,
-// Energy accounting): tests/melt_flow_scene.prm (2D powder bed melted by a
+// "Energy balance"): tests/melt_flow_scene.prm (2D powder bed melted by a
 // line scan, melt flow with surface tension and Marangoni) through
 // FempProblem, once with each way heat moves with the flow (Heat transfer/
 // Advection by melt flow). femp reports, besides laser, losses, fixed faces

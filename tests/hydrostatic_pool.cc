@@ -1,4 +1,4 @@
-// Melt flow, hydrostatics (VERIFICATION.md sec. 4): a pool of depth H at
+// Melt flow, hydrostatics (doc/verification.md): a pool of depth H at
 // rest in a box under gravity (H a whole number of cells, and H = 11.5
 // cells: the free surface inside a cell, the sub-cell interface position). After many fluid steps the cell-centre
 // pressure must match rho g (H - z) within 1 % of rho g H, and the point

@@ -1,4 +1,4 @@
-// Melt flow, oscillating droplet (VERIFICATION.md sec. 4, Rayleigh/Lamb):
+// Melt flow, oscillating droplet (doc/verification.md, Rayleigh/Lamb):
 // a 2D drop r = R (1 + eps cos 2 theta), no gravity, surface tension sigma,
 // small viscosity. Mode n = 2 of a 2D drop oscillates with
 //   omega^2 = (n^3 - n) sigma / (rho R^3) = 6 sigma / (rho R^3)
@@ -10,14 +10,14 @@
 // eps, is recorded every step; its upward and downward zero crossings
 // (linear interpolation) give the period T = t_3 - t_1 (first and third
 // crossing) and 2 (t_2 - t_1). The test fails when the period error
-// exceeds 5 % (issue 4). The automatic step uses the capillary step
+// exceeds 5 %. The automatic step uses the capillary step
 // fraction given per case; the flow runs with point shifting (A = 2) and
-// two passes of curvature smoothing (doc/flow.md: without them the period
+// two passes of curvature smoothing (doc/studies/flow.md: without them the period
 // was not robust to the step). 1 and 2 ranks give the same output.
 //
 // Runs R = 20 h at step fractions 1/2 and 1/4 (gated) and R = 10 h at 1/2
 // (printed, not gated: +7 %, the smoothing bias at this resolution).
-// Arguments (optional, for the study in doc/flow.md; one gated run):
+// Arguments (optional, for the study in doc/studies/flow.md; one gated run):
 // capillary step fraction, R/h (default 20), series file (CSV for
 // contrib/flow_plots.py: t/T, S/S0 and void diagnostics per step: enclosed
 // empty cells, free faces, free faces of enclosed cells, interior cells with
@@ -27,7 +27,7 @@
 // speeds are the spurious currents), the FLIP fraction (-1: the solver's),
 // the point shifting A (-1: 2), the curvature smoothing passes (-1: 2) and
 // the volume correction c (Melt flow/Volume correction; -1: the solver's
-// default 0 -- doc/flow.md, "Volume correction": with c = 0.5 the period
+// default 0 -- doc/studies/flow.md, "Volume correction": with c = 0.5 the period
 // error grows to 10-21 %, so the droplet runs without it).
 #include "flow_tools.h"
 

@@ -54,8 +54,8 @@ run(const double h, const bool latent, MPI_Comm comm)
   Material mat     = unit_material();
   mat.conductivity = PiecewiseLinear(kappa);
   // The moving metal is melt, as in a scene: its points are (or have been)
-  // above the solidus, so alpha is the points' volume (doc/flow.md,
-  // "Volume-based alpha"); sub-cell occupancy would read half a cell when
+  // above the solidus, so alpha is the points' volume (doc/equations.md,
+  // "Background grid and material points"); sub-cell occupancy would read half a cell when
   // round-off puts two points of a row into one sub-cell.
   mat.solidus  = latent ? 1.4 : 0.5;
   mat.liquidus = latent ? 1.6 : 0.6;

@@ -1,5 +1,5 @@
 // Verification: quasi-steady melt pool of a moving Gaussian source on a
-// half space with constant properties (VERIFICATION.md sec. 3), against the
+// half space with constant properties (doc/verification.md), against the
 // Eagar-Tsai integral (which reduces to Rosenthal for a point source):
 //   T - T0 = eta P / (pi rho c sqrt(4 pi kappa)) int_0^inf
 //     exp[-((xi + v t')^2 + y^2)/(4 kappa t' + 2 s^2) - z^2/(4 kappa t')]

@@ -1,5 +1,5 @@
-// Verification of the thermo-elasto-plastic model (eq. 5; VERIFICATION.md
-// sec. 5), single material point driven by prescribed strain increments:
+// Verification of the thermo-elasto-plastic model (eq. 5; doc/verification.md,
+// "Thermo-elasto-plastic point"), single material point driven by prescribed strain increments:
 // 1. uniaxial stress (lateral stresses zero by a Newton iteration on the
 //    lateral strain), loading past yield with linear hardening and elastic
 //    unloading: compared with the exact curve sigma = sigma_y + E_t (eps -
@@ -17,8 +17,8 @@
 //    sigma = -E(T) alpha dT/(1-2nu) at every step (the rate form would give
 //    -alpha/(1-2nu) int E dT, 1.6 times that peak at the solidus, all of it
 //    released in the step that melts the point), and
-//    the stress goes continuously to almost zero: no jump at melting
-//    (issue 3); the scalar and the SIMD kernels agree.
+//    the stress goes continuously to almost zero: no jump at melting;
+//    the scalar and the SIMD kernels agree.
 #include <deal.II/base/mpi.h>
 
 #include <femp/solid/constitutive.h>

@@ -1,4 +1,4 @@
-// FEMP coupling over MPI ranks (issue 3 item 4): a 2D substrate block,
+// FEMP coupling over MPI ranks (doc/solid.md, "MPI"): a 2D substrate block,
 // 1.6 m x 0.8 m, cells of 0.1 m; finite elements below y = 0.4 m (the
 // constant-solid zone), material points above (2 x 2 per cell), so that the
 // horizontal FE-MPM interface crosses the rank boundaries of any partition

@@ -1,5 +1,5 @@
 // Verification: the paper's case 3.1, Danilovskaya thermal shock
-// (VERIFICATION.md sec. 1; METHOD sec. 7). A bar 5 m long with cells and
+// (doc/verification.md; doc/method.md). A bar 5 m long with cells and
 // point spacing h = 0.02 m, all constants 1 (rho = c = lambda = E = 1,
 // alpha = 1, nu = 0, so beta = 1 and the wave speed is 1), stress-free at
 // T_ref = 1 K; the face x = 0 is held at 1.001 K (T0 = 0.001 K) from t = 0,
@@ -12,7 +12,7 @@
 // all finite elements. The probe is the cell that holds x = 1 m, whose
 // point/Gauss point sits at its centre x_A = 1.01 m: the closed form is
 // evaluated there (theta = erfc(a); S from the erfcx forms).
-// Checks (VERIFICATION.md sec. 1, issue 3 item 6):
+// Checks (doc/verification.md, "Danilovskaya thermal shock"):
 //   T at the probe within 1 % of T0 (all t);
 //   sigma_x within 5 % of beta T0 for |t - x_A/c| > 5 h/c;
 //   front arrival (S crossing the middle of the jump) within 2 h/c;

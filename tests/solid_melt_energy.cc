@@ -1,5 +1,5 @@
-// Energy balance of the solid with melting and re-solidification (issue 3
-// item 5, doc/solid.md "Energies"). A 2D block, 1.6 m x 0.8 m, cells of
+// Energy balance of the solid with melting and re-solidification (doc/verification.md,
+// "Energy balances of the solid"; doc/solid.md "Energies"). A 2D block, 1.6 m x 0.8 m, cells of
 // 0.1 m: finite elements below y = 0.3 m, material points above (2 x 2 per
 // cell); bottom fixed, sides on rollers. A hot spot on the top (prescribed
 // cell temperatures, no heat solver) heats the block fast enough (peak in

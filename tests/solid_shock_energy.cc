@@ -1,5 +1,5 @@
-// Energy balance of the 3D solid under a thermal shock (issue 3 items 4-5,
-// doc/solid.md "Energy balance with melting"): the reproduction of the
+// Energy balance of the 3D solid under a thermal shock (doc/verification.md,
+// "Energy balances of the solid"; doc/studies/solid.md): the reproduction of the
 // small single-track scene (prm/single_track_solid_small.prm) in seconds.
 // A 3D block 0.8 x 0.4 x 0.8 m, cells of 0.1 m, finite elements below
 // z = 0.3 m, 2 x 2 x 2 material points per cell above; bottom fixed, sides

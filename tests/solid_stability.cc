@@ -1,4 +1,4 @@
-// Stability checks of the solid (issue 3 item 7; VERIFICATION.md sec. 5).
+// Stability checks of the solid (doc/verification.md, "Stability").
 // 1. Hourglass control: a 2D block of finite elements (16 x 8 cells of
 //    0.1 m, E = 100 Pa, nu = 0.3, rho = 1, elastic), free, loaded by
 //    a constant point force at the top centre node (an impact-like load that

@@ -1,4 +1,4 @@
-// Melt flow, static droplet (VERIFICATION.md sec. 4): a 2D drop of radius R
+// Melt flow, static droplet (doc/verification.md): a 2D drop of radius R
 // = 10 h, no gravity, surface tension sigma; 400 steps at the automatic
 // step (default Melt flow/Capillary step fraction). The pressure inside must match
 // the Laplace jump sigma/R within 5 % (mean over the cells within R/2 of the

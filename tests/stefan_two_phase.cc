@@ -1,5 +1,5 @@
 // Verification: two-phase Stefan problem (Neumann solution,
-// VERIFICATION.md sec. 2). All properties 1 (rho, c, lambda, L); solid
+// doc/verification.md, "Stefan problem"). All properties 1 (rho, c, lambda, L); solid
 // initially 1 K below the melting point T_m = 10 K; the face x = 0 held
 // 1 K above it. Closed form: front s = 2 lambda sqrt(t) with
 // lambda = 0.377760. The simulation melts over the narrow range

@@ -1,4 +1,4 @@
-// Melt flow, thermocapillary return flow (VERIFICATION.md sec. 4): a shallow
+// Melt flow, thermocapillary return flow (doc/verification.md): a shallow
 // liquid layer of depth D = 8 h and length 10 D on a no-slip solid floor
 // (one row of solid points), free surface kept flat by a strong gravity
 // (1000 m/s^2), imposed temperature

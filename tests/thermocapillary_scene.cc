@@ -5,7 +5,7 @@
 // frozen (Physics/Heat transfer = false) at the function-valued initial
 // field T = 1800 K + G x over a cold solid floor; the Marangoni shear
 // tau_s = dsigma/dT G drives, at mid-length,
-//   u(zeta) = tau_s D/(4 mu) (3 zeta^2 - 2 zeta)   (VERIFICATION.md sec. 4).
+//   u(zeta) = tau_s D/(4 mu) (3 zeta^2 - 2 zeta)   (doc/verification.md).
 // The test reads u_x on the probe line 'mid' (cell centres at x = L/2 + h/2)
 // of the last output and checks: the surface speed (quadratic through the
 // three top cells, extrapolated to zeta = 1) within 5 % of U_s, the zero
