@@ -6,9 +6,15 @@
 // T_m -/+ 0.005 K; its front is the liquid amount sum(gamma h). Checks the
 // front at t = 0.25, 0.5, 1 (2 % once it spans >= 20 cells) and the global
 // energy balance: stored enthalpy = heat that entered through the faces.
+// Optional arguments (for contrib/study.py; the test runs without them):
+// cell size h (default 0.01) and the step as a fraction of the stable step
+// (default 0.4; up to 4, above the limit for stability experiments,
+// doc/stability.md); the front checks then print their errors as usual.
 #include "test_tools.h"
 
+#include <cstdlib>
 #include <fstream>
+#include <iostream>
 
 using namespace femp_test;
 
@@ -20,7 +26,15 @@ main(int argc, char **argv)
   Checks                           checks(comm);
 
   const int    dim = 2;
-  const double h   = 0.01, Tm = 10, lambda = 0.377760;
+  const double h      = argc > 1 ? std::atof(argv[1]) : 0.01;
+  const double safety = argc > 2 ? std::atof(argv[2]) : 0.4;
+  const double Tm = 10, lambda = 0.377760;
+  if (!(h > 0 && h <= 0.1) || !(safety > 0 && safety <= 4))
+    {
+      std::cerr << "usage: test_stefan_two_phase [h in (0, 0.1]] "
+                   "[step fraction of the stable step in (0, 4]]\n";
+      return 1;
+    }
   const auto   gp  = box<dim>(Point<dim>(0, 0), Point<dim>(3, 2 * h), h);
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
@@ -36,7 +50,7 @@ main(int argc, char **argv)
   heat.set_metal_fraction(grid.make_field(1.));
   const double H0 = heat.stored_enthalpy();
 
-  const double dt = 0.4 * heat.stable_time_step();
+  const double dt = safety * heat.stable_time_step();
   double       t  = 0;
   // Front history and the final profile for the plot in doc/
   // (contrib/plot_verification.py).

@@ -1,0 +1,325 @@
+#!/usr/bin/env python3
+"""Speed against accuracy studies of femp (doc/speed_accuracy.md).
+
+One command per study; each runs a program over a parameter sweep, one run
+directory per point of the sweep, and skips runs whose result.json exists
+(resumable: rerun the same command after an interruption). It collects the
+CPU seconds of every run (user + system of the run and its children, from
+the operating system) and an error against a named reference, writes a CSV
+and an error-versus-cost plot (log-log, Pareto front marked) as SVG, drawn
+with the standard library only (matplotlib is not needed).
+
+  contrib/study.py stefan       [--build build] [--out study] [--img doc/img]
+  contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
+                                [--np 1]
+
+stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
+  form of Neumann) over cell size h x step fraction of the stable step;
+  error: relative error of the melt front at t = 1 against the closed form
+  (as the test prints it, 2 digits); the largest error of the temperature
+  profile is written as well.
+mass_scaling: the reduced coupled single track (prm/single_track_coupled.prm
+  on a shorter box and time) over Solid/Mass scaling factor 1 ... 1e4;
+  error: RMS of the difference of sigma_xx at solid probe points in the
+  melt-pool region at the end time against the run with factor 1, relative
+  to the RMS of that run's values. Also written: the stress work and
+  the booked transfer dissipation at the end, the largest
+  kinetic-to-internal ratio (doc/speed_accuracy.md explains them).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+# ---------------------------------------------------------------- runs
+def run_timed(cmd, cwd, log):
+    """Run cmd in cwd, stdout+stderr to log; return (exit code, CPU s, wall s)."""
+    t0 = time.time()
+    with open(log, "w") as out:
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=subprocess.STDOUT)
+        _, status, ru = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    return p.returncode, ru.ru_utime + ru.ru_stime, time.time() - t0
+
+
+def cached(run_dir, make):
+    """result.json of run_dir, or make(run_dir) stored there."""
+    f = os.path.join(run_dir, "result.json")
+    if os.path.exists(f):
+        with open(f) as fh:
+            return json.load(fh)
+    os.makedirs(run_dir, exist_ok=True)
+    r = make(run_dir)
+    with open(f, "w") as fh:
+        json.dump(r, fh, indent=1)
+    return r
+
+
+def set_parameters(text, values):
+    """Replace 'set NAME = ...' lines of a .prm text; values maps
+    'Sub/Section/Name' to the new value. A missing entry is inserted at the
+    end of its subsection (which must exist, or be the top level)."""
+    lines, path, done = text.split("\n"), [], set()
+    out = []
+    for line in lines:
+        s = line.split("#")[0].strip()
+        m = re.match(r"subsection\s+(.*)$", s)
+        if m:
+            path.append(m.group(1).strip())
+        elif s == "end":
+            here = "/".join(path)
+            for k, v in values.items():
+                if k not in done and k.rsplit("/", 1)[0] == here:
+                    out.append("  set %s = %s" % (k.rsplit("/", 1)[1], v))
+                    done.add(k)
+            path.pop()
+        else:
+            m = re.match(r"set\s+(.*?)\s*=", s)
+            if m:
+                key = "/".join(path + [m.group(1)])
+                if key in values:
+                    indent = line[: len(line) - len(line.lstrip())]
+                    line = "%sset %s = %s" % (indent, m.group(1), values[key])
+                    done.add(key)
+        out.append(line)
+    for k, v in values.items():
+        if k not in done:
+            if "/" in k:
+                raise SystemExit("study.py: subsection of %s not in the scene" % k)
+            out.append("set %s = %s" % (k, v))
+    return "\n".join(out)
+
+
+def read_csv(path):
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
+# ---------------------------------------------------------------- output
+def pareto(points):
+    """Indices of points not dominated in (cost, error), both smaller better."""
+    idx = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front, best = [], math.inf
+    for i in idx:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def svg_loglog(path, rows, xkey, ykey, label, title, xlabel, ylabel):
+    """Error-cost scatter on log axes, Pareto front joined, points labelled."""
+    pts = [(r[xkey], r[ykey], r[label]) for r in rows
+           if r[xkey] > 0 and r[ykey] is not None and r[ykey] > 0]
+    if not pts:
+        return
+    W, H, L, R, T, B = 640, 460, 80, 20, 40, 60
+    lx = [math.log10(p[0]) for p in pts]
+    ly = [math.log10(p[1]) for p in pts]
+    x0, x1 = math.floor(min(lx)), math.ceil(max(lx))
+    y0, y1 = math.floor(min(ly)), math.ceil(max(ly))
+    x1, y1 = max(x1, x0 + 1), max(y1, y0 + 1)
+    X = lambda v: L + (math.log10(v) - x0) / (x1 - x0) * (W - L - R)
+    Y = lambda v: H - B - (math.log10(v) - y0) / (y1 - y0) * (H - T - B)
+    o = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
+         'font-family="sans-serif" font-size="11">' % (W, H),
+         '<rect width="100%" height="100%" fill="white"/>',
+         '<text x="%d" y="20" font-size="14">%s</text>' % (L, title)]
+    for e in range(x0, x1 + 1):
+        x = L + (e - x0) / (x1 - x0) * (W - L - R)
+        o.append('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ddd"/>'
+                 % (x, T, x, H - B))
+        o.append('<text x="%.1f" y="%d" text-anchor="middle">1e%d</text>'
+                 % (x, H - B + 16, e))
+    for e in range(y0, y1 + 1):
+        y = H - B - (e - y0) / (y1 - y0) * (H - T - B)
+        o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#ddd"/>'
+                 % (L, y, W - R, y))
+        o.append('<text x="%d" y="%.1f" text-anchor="end">1e%d</text>'
+                 % (L - 6, y + 4, e))
+    o.append('<rect x="%d" y="%d" width="%d" height="%d" fill="none" '
+             'stroke="black"/>' % (L, T, W - L - R, H - T - B))
+    o.append('<text x="%d" y="%d" text-anchor="middle">%s</text>'
+             % ((L + W - R) // 2, H - 20, xlabel))
+    o.append('<text x="18" y="%d" text-anchor="middle" transform="rotate(-90 '
+             '18 %d)">%s</text>' % ((T + H - B) // 2, (T + H - B) // 2, ylabel))
+    front = pareto([(p[0], p[1]) for p in pts])
+    o.append('<polyline fill="none" stroke="red" stroke-width="1.5" points="%s"/>'
+             % " ".join("%.1f,%.1f" % (X(pts[i][0]), Y(pts[i][1])) for i in front))
+    for i, p in enumerate(pts):
+        on = i in front
+        o.append('<circle cx="%.1f" cy="%.1f" r="%d" fill="%s"/>'
+                 % (X(p[0]), Y(p[1]), 4 if on else 3, "red" if on else "#36c"))
+        o.append('<text x="%.1f" y="%.1f" font-size="9">%s</text>'
+                 % (X(p[0]) + 5, Y(p[1]) - 4, p[2]))
+    o.append('<text x="%d" y="%d" fill="red">red: Pareto front (no run both '
+             'cheaper and more accurate)</text>' % (L + 8, T + 14))
+    o.append("</svg>")
+    with open(path, "w") as fh:
+        fh.write("\n".join(o) + "\n")
+
+
+def write_outputs(name, rows, fields, args, title, xlabel, ylabel):
+    os.makedirs(args.out, exist_ok=True)
+    f = os.path.join(args.out, name + ".csv")
+    with open(f, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+    front = pareto([(r["cpu_s"], r["error"] if r["error"] else math.inf)
+                    for r in rows])
+    for i, r in enumerate(rows):
+        r["pareto"] = i in front
+    with open(f, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields + ["pareto"],
+                           extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+    os.makedirs(args.img, exist_ok=True)
+    svg = os.path.join(args.img, "study_%s.svg" % name)
+    svg_loglog(svg, rows, "cpu_s", "error", "label", title, xlabel, ylabel)
+    print("wrote", f, "and", svg)
+    for r in rows:
+        print("  ".join("%s=%s" % (k, r[k]) for k in fields + ["pareto"]))
+
+
+# ---------------------------------------------------------------- studies
+def study_stefan(args):
+    exe = os.path.join(args.build, "tests", "test_stefan_two_phase")
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first (cmake --build %s --target "
+                         "test_stefan_two_phase)" % (exe, args.build))
+    exe = os.path.abspath(exe)
+    rows = []
+    for h in (0.04, 0.02, 0.01, 0.005):
+        for c in (0.1, 0.25, 0.5, 1.0):
+            def make(d, h=h, c=c):
+                rc, cpu, wall = run_timed([exe, str(h), str(c)], d,
+                                          os.path.join(d, "log.txt"))
+                text = open(os.path.join(d, "log.txt")).read()
+                m = re.search(r"front t=1 \([^)]*\): relative error = ([-0-9.e+]+)",
+                              text)
+                return {"rc": rc, "cpu_s": cpu, "wall_s": wall,
+                        "error": float(m.group(1)) if m else None}
+            d = os.path.join(args.out, "stefan", "h%g_c%g" % (h, c))
+            r = cached(d, make)
+            # Also the largest temperature error of the final profile against
+            # the Neumann solution (K per K of the driving difference; it
+            # has a floor of ~0.055 from the domain's far face, held at
+            # T_m - 1 K at x = 3 where the half-space solution is 0.06 K
+            # warmer).
+            try:
+                prof = read_csv(os.path.join(d, "stefan_profile.csv"))
+                r["profile_error"] = max(
+                    abs(float(p["T_sim"]) - float(p["T_exact"])) for p in prof)
+            except (OSError, ValueError):
+                r["profile_error"] = None
+            r.update(h=h, step_fraction=c, label="h=%g,C=%g" % (h, c))
+            rows.append(r)
+    write_outputs("stefan", rows,
+                  ["h", "step_fraction", "cpu_s", "wall_s", "error",
+                   "profile_error", "rc"], args,
+                  "Stefan problem: front error at t = 1 vs CPU time",
+                  "CPU seconds", "relative front error")
+
+
+def coupled_scene(factor, args):
+    """prm/single_track_coupled.prm cut to a 120 x 80 x 144 um box around the
+    start of the track and its first microsecond (the solid's mass-scaling
+    effects show there first: the surface under the beam heats at ~3e9 K/s
+    and expands at ~1 m/s, doc/speed_accuracy.md)."""
+    base = open(os.path.join(ROOT, "prm", "single_track_coupled.prm")).read()
+    probes = "; ".join("%ge-6,80e-6,%ge-6" % (x, z)
+                       for x in (52, 60, 68) for z in (92, 84, 76, 68))
+    return set_parameters(base, {
+        "Time stepping/End time": "1e-6",
+        "Background grid/Lower corner": "0, 40e-6, 0",
+        "Background grid/Upper corner": "120e-6, 120e-6, 144e-6",
+        "Laser/End point": "110e-6, 80e-6, 0",
+        "Solid/Mass scaling factor": "%g" % factor,
+        "Solid/Probe points": probes,
+        "Solid FEM/Zone lower corner": "0, 40e-6, 0",
+        "Solid FEM/Zone upper corner": "120e-6, 120e-6, 48e-6",
+        "Output/Directory": "out",
+        "Output/Output interval": "0",
+        "Output/Write material points": "never",
+        "Output/Probe points": "60e-6,80e-6,92e-6",
+    })
+
+
+def study_mass_scaling(args):
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first" % exe)
+    rows = []
+    for f in (1, 10, 100, 1000, 10000):
+        def make(d, f=f):
+            with open(os.path.join(d, "scene.prm"), "w") as fh:
+                fh.write(coupled_scene(f, args))
+            cmd = [exe, "scene.prm"]
+            if args.np > 1:
+                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
+                       "-np", str(args.np)] + cmd
+            rc, cpu, wall = run_timed(cmd, d, os.path.join(d, "log.txt"))
+            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+            try:
+                probes = read_csv(os.path.join(d, "out", "solid_probes.csv"))
+                last = probes[-1]
+                r["sxx"] = [float(last[k]) for k in last
+                            if k.startswith("sigma_xx")]
+                r["probe_time"] = float(last[next(iter(last))])
+                e = read_csv(os.path.join(d, "out", "solid_energy.csv"))
+                r["stress_work"] = float(e[-1]["internal_work"])
+                r["transfer"] = float(e[-1]["transfer_dissipation"])
+                r["remap"] = float(e[-1]["remap_work"])
+                r["max_k_over_i"] = max(float(x["kinetic_to_internal"])
+                                        for x in e[len(e) // 10:])
+                r["solid_steps"] = int(e[-1]["step"])
+            except (OSError, StopIteration, KeyError, IndexError) as ex:
+                r["read_error"] = str(ex)
+            return r
+        r = cached(os.path.join(args.out, "mass_scaling", "f%g" % f), make)
+        r.update(factor=f, label="s=%g" % f)
+        rows.append(r)
+    ref = rows[0].get("sxx")
+    for r in rows:
+        s = r.get("sxx")
+        if ref and s and len(s) == len(ref) and r["rc"] == 0:
+            num = sum((a - b) ** 2 for a, b in zip(s, ref))
+            den = sum(b * b for b in ref)
+            r["error"] = math.sqrt(num / den) if den > 0 else None
+        else:
+            r["error"] = None
+        if r is rows[0]:
+            r["error"] = None  # the reference itself
+    write_outputs("mass_scaling", rows,
+                  ["factor", "cpu_s", "wall_s", "error", "solid_steps",
+                   "stress_work", "transfer", "remap", "max_k_over_i", "rc"],
+                  args, "Solid mass scaling: sigma_xx vs factor 1, reduced "
+                  "coupled track", "CPU seconds", "relative RMS sigma_xx error")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("study", choices=["stefan", "mass_scaling"])
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
+                    help="folder for run directories and CSV")
+    ap.add_argument("--img", default=os.path.join(ROOT, "doc", "img"))
+    ap.add_argument("--np", type=int, default=1, help="MPI ranks of femp runs")
+    args = ap.parse_args()
+    {"stefan": study_stefan, "mass_scaling": study_mass_scaling}[args.study](args)
+
+
+if __name__ == "__main__":
+    main()
