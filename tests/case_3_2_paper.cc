@@ -8,7 +8,8 @@
 // test prints their sizes (grid cells, material points, solid points,
 // finite elements: the paper's 624,000 cells, 180,000 elements), checks
 // that the probe lines carry the stress fields, and that EF lies in the FE
-// zone of the FEMP scene and CD above it.
+// zone of the FEMP scene and CD above it. Expected output: the sizes as
+// printed by femp for both scenes in the measured 2 us runs of doc/cases.md.
 #include "scene_driver.h"
 #include "test_tools.h"
 
