@@ -3,7 +3,8 @@
 // (tests/case_3_2_reduced.prm): run by FEMP (finite elements below 40 um,
 // material points above) and by all-MPM, the paper's comparison of its
 // Fig. 8. Both runs sample the probe lines CD (MPM zone, 20 um below the
-// substrate top) and EF (FE zone in the FEMP run, 60 um below it) at the
+// substrate top) and EF (the FE zone's top row of elements in the FEMP run,
+// 44 um below it) at the
 // end; the test compares the profiles of T and sigma_xx along each line:
 //   - T: largest |T_FEMP - T_MPM| over the line relative to the largest
 //     temperature rise on it. The temperature is solved on the same grid
@@ -11,15 +12,19 @@
 //     moves the points in the MPM zone by its displacements, which differ
 //     slightly), so the profiles must agree closely: gate 2 %.
 //   - sigma_xx: largest |sigma_FEMP - sigma_MPM| over both lines relative
-//     to the peak |sigma_xx| of the all-MPM run on them. One-point
-//     hexahedra with hourglass control against 8 points per cell with
-//     trilinear shape functions: the same elasticity, but not the same
-//     discrete stress field. The gate (0.35) is about twice the difference
-//     measured when the test was written (printed, 2 ranks); it fails if
-//     either zone's stress is wrong by a sizeable fraction, e.g. a sign or
-//     a lost thermal expansion. Also printed: the peak |sigma_xx| of each
-//     run (must lie within 25 % of each other), the pool length at the end
-//     and the solid energy balance of the FEMP run.
+//     to the peak |sigma_xx| of the all-MPM run on them (on CD, under the
+//     track). On EF, the top row of elements, one-point hexahedra with
+//     hourglass control stand against 8 points per cell with trilinear
+//     shape functions: the same elasticity, not the same discrete stress
+//     field; on CD the points are the same in both runs and differ through
+//     the FE zone below them. Measured when the test was written (2 ranks):
+//     0.024, all of it on EF, where the stress is still small after 10 us
+//     (about 10 MPa, the difference about half of that: the top row of
+//     elements against the points' cell means, next to the transition
+//     nodes); on CD 0.009. Gate 0.05. Also printed: the peak |sigma_xx| of each run and of
+//     each line (the peaks of the two runs must lie within 25 % of each
+//     other), the pool length at the end and the solid energy balance of
+//     the FEMP run (gate 5 %, as in the coupling tests).
 // One optional argument after the scene: a directory for both runs' output
 // directories femp/ and mpm/ (default: the working directory).
 #include "scene_driver.h"
@@ -98,8 +103,13 @@ main(int argc, char **argv)
               s_peak[0] = std::max(s_peak[0], std::abs(sa[i]));
               s_peak[1] = std::max(s_peak[1], std::abs(sb[i]));
             }
+          double line_peak = 0;
+          for (const double x : sb)
+            line_peak = std::max(line_peak, std::abs(x));
           checks.print("line " + l + ": largest temperature rise, all-MPM (K)",
                        std::round(rise / 10) * 10, 3);
+          checks.print("line " + l + ": peak |sigma_xx|, all-MPM (MPa)",
+                       std::round(line_peak / 1e7) * 10, 3);
           checks.at_most("line " + l + ": max |T_FEMP - T_MPM| / rise",
                          dT / std::max(rise, 1.), 0.02);
           T_err = std::max(T_err, dT / std::max(rise, 1.));
@@ -111,7 +121,7 @@ main(int argc, char **argv)
       checks.in_range("peak |sigma_xx| FEMP / all-MPM", s_peak[0] / s_peak[1],
                       0.75, 1.25);
       checks.at_most("max |sigma_xx,FEMP - sigma_xx,MPM| / peak |sigma_xx,MPM|",
-                     s_diff / s_peak[1], 0.35);
+                     s_diff / s_peak[1], 0.05);
       checks.print("melt pool length FEMP / all-MPM",
                    std::round(sum["femp"].pool.length /
                               std::max(1e-30, sum["mpm"].pool.length) * 10) / 10,
