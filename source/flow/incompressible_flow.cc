@@ -928,7 +928,7 @@ namespace femp
 
 
   // Point shifting: fluid points are displaced down the gradient of the
-  // metal fraction alpha (nodal values from surface_terms()), so that they
+  // metal fraction alpha (nodal values from FreeSurface::update()), so that they
   // stay evenly spread (4 per cell in 2D) instead of bunching or leaving
   // voids in the liquid. The displacement -A h |u| dt grad(alpha) is the
   // diffusion-type shifting of SPH (Lind et al. 2012 with the
