@@ -414,7 +414,7 @@ namespace femp
         require(step > 0 || time_prm.end_time / dt <= time_prm.max_steps,
                 "Time stepping/Maximum number of steps", time_prm.max_steps,
                 "the first step of " + num(dt) + " s needs about " +
-                  num(time_prm.end_time / dt) + " steps to reach 'End time'; "
+                  num(std::ceil(time_prm.end_time / dt)) + " steps to reach 'End time'; "
                   "raise the bound or shorten the scene");
 
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
@@ -598,6 +598,8 @@ namespace femp
               << r.max_substeps << std::endl;
       }
     timer.print_summary();
+    if (Utilities::MPI::n_mpi_processes(comm) > 1)
+      timer.print_wall_time_statistics(comm); // min/avg/max over the ranks
   }
 
 
