@@ -598,8 +598,7 @@ namespace femp
               << r.max_substeps << std::endl;
       }
     timer.print_summary();
-    if (Utilities::MPI::n_mpi_processes(comm) > 1)
-      timer.print_wall_time_statistics(comm); // min/avg/max over the ranks
+    print_timer_statistics(timer, comm); // min/avg/max over the ranks
   }
 
 

@@ -8,6 +8,7 @@
 #include <femp/base/input_checks.h>
 
 #include <cmath>
+#include <functional>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -85,6 +86,11 @@ namespace femp
     std::ifstream in(file_name);
     require(static_cast<bool>(in), param, short_value(file_name),
             "the file cannot be read");
+
+    // JSON and XML scenes: deal.II checks them as a whole.
+    const std::string ext = fs::path(file_name).extension().string();
+    if (ext == ".json" || ext == ".xml")
+      return;
 
     // Statements of this file (not of the files it includes), with
     // deal.II's syntax: '#' comments, '\' continues a line.
@@ -432,5 +438,24 @@ namespace femp
     error = dealii::Utilities::MPI::broadcast(comm, error, 0);
     if (!error.empty())
       throw std::runtime_error(error);
+  }
+
+
+  void
+  print_timer_statistics(const dealii::TimerOutput &timer,
+                         const MPI_Comm             comm)
+  {
+    if (dealii::Utilities::MPI::n_mpi_processes(comm) < 2)
+      return;
+    // Collective over the sections: only if all ranks have the same ones.
+    std::string names;
+    for (const auto &s :
+         timer.get_summary_data(dealii::TimerOutput::total_wall_time))
+      names += s.first + '\n';
+    unsigned long long hash = std::hash<std::string>()(names), lo = 0, hi = 0;
+    MPI_Allreduce(&hash, &lo, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, comm);
+    MPI_Allreduce(&hash, &hi, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, comm);
+    if (lo == hi)
+      timer.print_wall_time_statistics(comm);
   }
 } // namespace femp

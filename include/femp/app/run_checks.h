@@ -9,6 +9,7 @@
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/timer.h>
 
 #include <string>
 
@@ -61,6 +62,13 @@ namespace femp
   void
   prepare_output_directory(const dealii::ParameterHandler &prm,
                            const MPI_Comm                  comm);
+
+  /// With several ranks, the minimum, average and maximum wall time of
+  /// each section of @p timer over the ranks (TimerOutput's statistics),
+  /// if every rank has the same sections (else nothing: no rank waits).
+  void
+  print_timer_statistics(const dealii::TimerOutput &timer,
+                         const MPI_Comm             comm);
 } // namespace femp
 
 #endif
