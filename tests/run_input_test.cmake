@@ -1,9 +1,23 @@
 # Run femp on a bad scene: it must exit non-zero, print a message matching
-# REGEX, and not start the computation (no banner, no output directory).
+# REGEX, and (unless WORK_ALLOWED) not start the computation (no banner, no
+# output directory). Optional: ARGS, command-line arguments separated by '|'
+# (replace PRM when PRM is empty); NPROC > 1 runs it with MPIEXEC on that
+# many ranks (the test's TIMEOUT then catches a rank left waiting).
 file(REMOVE_RECURSE ${WORKDIR})
 file(MAKE_DIRECTORY ${WORKDIR})
+set(args)
+if(DEFINED ARGS AND NOT "${ARGS}" STREQUAL "")
+  string(REPLACE "|" ";" args "${ARGS}")
+endif()
+if(NOT "${PRM}" STREQUAL "")
+  list(APPEND args ${PRM})
+endif()
+set(cmd ${EXE} ${args})
+if(DEFINED NPROC AND NPROC GREATER 1)
+  set(cmd ${MPIEXEC} --allow-run-as-root --oversubscribe -np ${NPROC} ${cmd})
+endif()
 execute_process(
-  COMMAND ${EXE} ${PRM}
+  COMMAND ${cmd}
   WORKING_DIRECTORY ${WORKDIR}
   OUTPUT_VARIABLE out
   ERROR_VARIABLE err
@@ -15,6 +29,6 @@ endif()
 if(NOT "${err}" MATCHES "${REGEX}")
   message(FATAL_ERROR "the error message does not match '${REGEX}'")
 endif()
-if("${out}" MATCHES "femp: [23]D scene" OR EXISTS ${WORKDIR}/output)
+if(NOT WORK_ALLOWED AND ("${out}" MATCHES "femp: [23]D scene" OR EXISTS ${WORKDIR}/output))
   message(FATAL_ERROR "femp started the computation before rejecting the input")
 endif()

@@ -4,6 +4,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/app/femp_problem.h>
+#include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
 #include <femp/solid/fe_zone_depth.h>
 
@@ -328,7 +329,7 @@ namespace femp
                         " material points, " +
                         std::to_string(int(solid->sizes()[1])) +
                         " finite elements, step " +
-                        std::to_string(solid->time_step()) + " s\n" :
+                        num(solid->time_step()) + " s\n" :
                       std::string())
           << "  output: " << output_prm.directory << "/grid.pvd, "
           << output_prm.directory << "/points.pvd, "
@@ -362,8 +363,8 @@ namespace femp
                                                  ", time " + num(time) + " s" :
                                                std::string())
           << "; use 0 (automatic) or a step <= " << stable << " s";
-        throw InputError("Time stepping/Time step",
-                         std::to_string(time_prm.time_step), s.str());
+        throw InputError("Time stepping/Time step", num(time_prm.time_step),
+                         s.str());
       }
     return std::min(dt, time_prm.end_time - time);
   }
@@ -444,6 +445,13 @@ namespace femp
     while (time < time_prm.end_time * (1 - 1e-12) && step < time_prm.max_steps)
       {
         const double dt = choose_time_step(step, time);
+        // No run that silently stops short: refuse a projected step count
+        // above the bound (collective: dt is the same on every rank).
+        require(step > 0 || time_prm.end_time / dt <= time_prm.max_steps,
+                "Time stepping/Maximum number of steps", time_prm.max_steps,
+                "the first step of " + num(dt) + " s needs about " +
+                  num(std::ceil(time_prm.end_time / dt)) + " steps to reach 'End time'; "
+                  "raise the bound or shorten the scene");
 
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
         //    points move (the melt-flow and solid modules), so nothing to do
@@ -630,6 +638,7 @@ namespace femp
               << r.max_substeps << std::endl;
       }
     timer.print_summary();
+    print_timer_statistics(timer, comm); // min/avg/max over the ranks
   }
 
 
@@ -662,7 +671,13 @@ namespace femp
           rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
         flow->step(dt_f);
         t += dt_f;
-        ++n_sub;
+        require(++n_sub <= run_limits().max_flow_substeps,
+                "Run limits/Maximum flow sub-steps",
+                run_limits().max_flow_substeps,
+                "the flow needed more sub-steps in the temperature step of " +
+                  num(dt) + " s (sub-step now " + num(dt_f) +
+                  " s: the flow may have blown up); raise the bound if the "
+                  "flow is right");
       }
     r.min_substeps = std::min(r.min_substeps, n_sub);
     r.max_substeps = std::max(r.max_substeps, n_sub);

@@ -1,14 +1,26 @@
-// femp: command-line driver. `femp scene.prm` runs a scene; `--help` and
-// `--print-parameters` document the input.
+// femp: command-line driver. `femp [--set Section/Name=value ...] scene.prm`
+// runs a scene; `--help` and `--print-parameters[=json]` document the input.
+//
+// Errors: everything that can be refused is refused before any work, on
+// every rank together (the ranks agree on a failure flag, the lowest failing
+// rank prints one message, all exit with status 1). An error during the run
+// (a file that cannot be written, a solver failure) is printed by the rank
+// that meets it, which then ends every rank with MPI_Abort, so that no rank
+// waits forever in a collective operation (doc/input_errors.md).
+#include <deal.II/base/exceptions.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/app/femp_problem.h>
 #include <femp/base/input_checks.h>
+#include <femp/app/run_checks.h>
 
 #include <cctype>
+#include <chrono>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <thread>
 
 namespace
 {
@@ -18,16 +30,114 @@ namespace
     out << "femp: laser powder bed fusion by the multi-physics finite "
            "element-material point method.\n\n"
            "Usage:\n"
-           "  femp scene.prm              run the scene described in scene.prm\n"
+           "  femp [options] scene.prm    run the scene described in scene.prm\n"
            "  mpirun -np N femp scene.prm run it on N MPI ranks\n"
            "  femp --print-parameters     list every parameter with its "
-           "default, allowed values, unit and meaning\n"
+           "default, allowed values, unit and meaning (prm format)\n"
+           "  femp --print-parameters=json  the same as JSON\n"
            "  femp --help                 this text\n\n"
+           "Options:\n"
+           "  --set 'Section/Name=value'  override one parameter of the scene "
+           "(repeatable;\n"
+           "                              nested subsections: "
+           "'A/B/Name=value')\n\n"
            "Output goes to the directory set in 'Output/Directory' "
            "(default ./output): open grid.pvd and points.pvd in ParaView; "
            "melt_pool.csv, probe_points.csv and probe_line_*.csv hold the "
-           "time series and line samples.\n";
+           "time series and line samples; parameters.prm the parameters "
+           "used. Errors in the input are reported before any work, with "
+           "exit status 1 (doc/input_errors.md).\n";
   }
+
+
+  /// One line of an exception's message: deal.II's explanation without its
+  /// boilerplate and stack trace.
+  std::string
+  clean_message(const std::exception &e)
+  {
+    std::string msg = e.what();
+    if (dynamic_cast<const dealii::ExceptionBase *>(&e) != nullptr)
+      {
+        const auto pos = msg.find("Additional information:");
+        if (pos != std::string::npos)
+          msg = msg.substr(pos + 23);
+        const auto trace = msg.find("Stacktrace:");
+        if (trace != std::string::npos)
+          msg = msg.substr(0, trace);
+      }
+    std::string flat;
+    for (const char c : msg)
+      if (!std::isspace(static_cast<unsigned char>(c)))
+        flat += c;
+      else if (!flat.empty() && flat.back() != ' ')
+        flat += ' ';
+    while (!flat.empty() && flat.back() == ' ')
+      flat.pop_back();
+    return flat;
+  }
+
+
+  /// A --set override: "A/B/Name=value" as prm text.
+  std::string
+  override_as_prm(const std::string &text)
+  {
+    const auto eq = text.find('=');
+    femp::require(eq != std::string::npos && eq > 0,
+                  "--set (command line)",
+                  femp::short_value(text),
+                  "it must read 'Section/Name=value' (nested subsections: "
+                  "'A/B/Name=value'; top-level parameters: 'Name=value')");
+    const auto path =
+      dealii::Utilities::split_string_list(text.substr(0, eq), '/');
+    std::string prm_text;
+    for (std::size_t i = 0; i + 1 < path.size(); ++i)
+      prm_text += "subsection " + path[i] + "\n";
+    prm_text += "set " + path.back() + " = " + text.substr(eq + 1) + "\n";
+    for (std::size_t i = 0; i + 1 < path.size(); ++i)
+      prm_text += "end\n";
+    return prm_text;
+  }
+
+
+  /// Parse the scene file and the overrides; errors as one-line messages.
+  void
+  read_input(dealii::ParameterHandler &       prm,
+             const std::string &              scene,
+             const std::vector<std::string> &overrides)
+  {
+    femp::check_scene_file(scene);
+    try
+      {
+        prm.parse_input(scene);
+      }
+    catch (const std::exception &e)
+      {
+        throw std::runtime_error("Invalid input in '" + scene +
+                                 "': " + clean_message(e));
+      }
+    for (const auto &o : overrides)
+      {
+        const std::string text = override_as_prm(o);
+        try
+          {
+            prm.parse_input_from_string(text);
+          }
+        catch (const std::exception &e)
+          {
+            throw std::runtime_error("Invalid input in --set '" +
+                                     femp::short_value(o) +
+                                     "': " + clean_message(e));
+          }
+      }
+  }
+
+
+  /// The problem of either dimension.
+  struct Problem
+  {
+    std::unique_ptr<femp::FempProblem<2>> p2;
+    std::unique_ptr<femp::FempProblem<3>> p3;
+  };
 } // namespace
 
 
@@ -36,75 +146,128 @@ main(int argc, char *argv[])
 {
   using namespace dealii;
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
-  const bool root = Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
+  const MPI_Comm     comm    = MPI_COMM_WORLD;
+  const unsigned int rank    = Utilities::MPI::this_mpi_process(comm);
+  const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
+  const bool         root    = rank == 0;
+
+  // Phase 1: command line, input and every check, on all ranks. A failure
+  // on any rank ends all of them here, with one message.
+  ParameterHandler prm;
+  Problem          problem;
+  std::string      error;
+  int              status = 0; // 0: run, 1: error, 2: done (help, listing)
   try
     {
-      ParameterHandler prm;
       femp::declare_all_parameters(prm);
-      if (argc != 2)
+      femp::declare_run_limits(prm);
+      std::vector<std::string> overrides;
+      std::string              scene;
+      for (int i = 1; i < argc; ++i)
         {
-          if (root)
-            print_help(std::cerr);
-          return 1;
+          const std::string arg = argv[i];
+          if (arg == "--help" || arg == "-h")
+            {
+              if (root)
+                print_help(std::cout);
+              status = 2;
+            }
+          else if (arg == "--print-parameters" ||
+                   arg == "--print-parameters=prm" ||
+                   arg == "--print-parameters=json")
+            {
+              if (root)
+                prm.print_parameters(
+                  std::cout,
+                  ParameterHandler::OutputStyle(
+                    (arg == "--print-parameters=json" ?
+                       ParameterHandler::JSON :
+                       ParameterHandler::PRM) |
+                    ParameterHandler::KeepDeclarationOrder));
+              status = 2;
+            }
+          else if (arg == "--set" || arg.rfind("--set=", 0) == 0)
+            {
+              if (arg == "--set")
+                {
+                  femp::require(i + 1 < argc, "--set (command line)", "",
+                                "it needs an argument 'Section/Name=value'");
+                  overrides.push_back(argv[++i]);
+                }
+              else
+                overrides.push_back(arg.substr(6));
+            }
+          else if (arg.size() > 1 && arg[0] == '-')
+            femp::require(false, "command line", femp::short_value(arg),
+                          "it is not an option of femp; the options are "
+                          "--set 'Section/Name=value', --print-parameters"
+                          "[=json] and --help");
+          else
+            {
+              femp::require(scene.empty(), "command line",
+                            femp::short_value(arg),
+                            "only one scene file may be given (the first was '" +
+                              femp::short_value(scene) + "')");
+              scene = arg;
+            }
         }
-      const std::string arg = argv[1];
-      if (arg == "--help" || arg == "-h")
+      if (status == 0)
         {
-          if (root)
-            print_help(std::cout);
-          return 0;
-        }
-      if (arg == "--print-parameters")
-        {
-          if (root)
-            prm.print_parameters(std::cout, ParameterHandler::OutputStyle(ParameterHandler::PRM | ParameterHandler::KeepDeclarationOrder));
-          return 0;
-        }
-      {
-        std::ifstream in(arg);
-        femp::require(static_cast<bool>(in), "scene file (command line)", arg,
-                      "the file does not exist or cannot be read");
-      }
-      try
-        {
-          prm.parse_input(arg);
-        }
-      catch (const std::exception &e)
-        {
-          std::string msg = e.what();
-          // Keep deal.II's explanation, drop its stack-trace boilerplate.
-          const auto pos = msg.find("Additional information:");
-          if (pos != std::string::npos)
-            msg = msg.substr(pos + 23);
-          const auto trace = msg.find("Stacktrace:");
-          if (trace != std::string::npos)
-            msg = msg.substr(0, trace);
-          // One line: collapse deal.II's line breaks and indentation.
-          std::string flat;
-          for (const char c : msg)
-            if (!std::isspace(static_cast<unsigned char>(c)))
-              flat += c;
-            else if (!flat.empty() && flat.back() != ' ')
-              flat += ' ';
-          throw std::runtime_error("Invalid input in '" + arg + "': " +
-                                   dealii::Utilities::trim(flat));
-        }
-      const int dim = prm.get_integer("Dimension");
-      if (dim == 2)
-        {
-          femp::FempProblem<2> problem(prm, MPI_COMM_WORLD);
-          problem.run();
-        }
-      else
-        {
-          femp::FempProblem<3> problem(prm, MPI_COMM_WORLD);
-          problem.run();
+          if (scene.empty())
+            {
+              if (root)
+                print_help(std::cerr);
+              throw std::runtime_error("no scene file given");
+            }
+          read_input(prm, scene, overrides);
+          femp::check_output_file_names(prm);
+          femp::check_values(prm);
+          femp::check_memory(prm, n_ranks);
+          if (prm.get_integer("Dimension") == 2)
+            problem.p2 = std::make_unique<femp::FempProblem<2>>(prm, comm);
+          else
+            problem.p3 = std::make_unique<femp::FempProblem<3>>(prm, comm);
+          femp::prepare_output_directory(prm, comm);
         }
     }
   catch (const std::exception &e)
     {
-      if (root)
-        std::cerr << "femp: error: " << e.what() << std::endl;
+      error  = clean_message(e);
+      status = 1;
+    }
+  const unsigned int first_failed =
+    Utilities::MPI::min(status == 1 ? rank : n_ranks, comm);
+  if (first_failed < n_ranks)
+    {
+      if (rank == first_failed)
+        std::cerr << "femp: error: " << error << std::endl;
+      return 1;
+    }
+  if (status == 2)
+    return 0;
+
+  // Phase 2: the run. An error on one rank ends every rank.
+  try
+    {
+      if (problem.p2)
+        problem.p2->run();
+      else
+        problem.p3->run();
+    }
+  catch (const std::exception &e)
+    {
+      if (!root)
+        {
+          // If rank 0 fails too (the same error everywhere), let it speak.
+          std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        }
+      std::cerr << "femp: error" << (root ? std::string() :
+                                            " (rank " + std::to_string(rank) + ")")
+                << ": " << clean_message(e) << std::endl;
+      std::cerr.flush();
+      std::cout.flush();
+      if (n_ranks > 1)
+        MPI_Abort(comm, 1);
       return 1;
     }
   return 0;

@@ -11,9 +11,13 @@ namespace femp
   InputError::InputError(const std::string &parameter,
                          const std::string &value,
                          const std::string &allowed)
-    : std::runtime_error("Invalid input: parameter '" + parameter +
-                         "' has the value '" + value + "', but " + allowed +
-                         ".")
+    : std::runtime_error(
+        "Invalid input: parameter '" + parameter + "' has the value '" +
+        // A long value (a table, a list of bodies) is quoted in part.
+        (value.size() <= 100 ? value :
+                               value.substr(0, 80) + " ... (" +
+                                 std::to_string(value.size()) + " characters)") +
+        "', but " + allowed + ".")
   {}
 
 

@@ -39,6 +39,10 @@ namespace femp
         sum += grain_volume(0.5 * dia);
       }
     std::sort(radii.begin(), radii.end(), std::greater<double>());
+    PowderBed bed;
+    bed.achieved_packing_fraction = 0;
+    if (radii.empty())
+      return bed; // nothing to place (packing fraction or layer volume 0)
 
     // Grains by vertical column of width = largest diameter.
     const double bin = 2 * radii.front();
@@ -53,8 +57,7 @@ namespace femp
     };
     std::unordered_multimap<std::int64_t, std::size_t> columns;
 
-    PowderBed bed;
-    double    placed = 0;
+    double placed = 0;
     for (const double r : radii)
       {
         for (unsigned int attempt = 0; attempt < spec.max_attempts / radii.size() + 50;

@@ -15,13 +15,63 @@
 
 namespace femp
 {
+  namespace
+  {
+    /// Throw, naming the file, if a write to @p out failed.
+    void
+    check_stream(const std::ostream &out, const std::string &file)
+    {
+      AssertThrow(static_cast<bool>(out),
+                  ExcMessage("cannot write the output file '" + file +
+                             "' (missing directory, no permission or disk "
+                             "full?)"));
+    }
+
+    /// Rewrite the ParaView index @p file once every rank has written its
+    /// pieces (barrier), atomically: a temporary file renamed over the old
+    /// one, so that a reader never sees a half-written index.
+    void
+    write_pvd(const std::string &                                file,
+              const std::vector<std::pair<double, std::string>> &records,
+              const MPI_Comm                                     comm)
+    {
+      const int ierr = MPI_Barrier(comm);
+      AssertThrowMPI(ierr);
+      if (Utilities::MPI::this_mpi_process(comm) != 0)
+        return;
+      const std::string tmp = file + ".tmp";
+      {
+        std::ofstream pvd(tmp);
+        DataOutBase::write_pvd_record(pvd, records);
+        pvd.close();
+        check_stream(pvd, tmp);
+      }
+      std::error_code error;
+      std::filesystem::rename(tmp, file, error);
+      AssertThrow(!error, ExcMessage("cannot replace '" + file + "' by '" +
+                                     tmp + "': " + error.message()));
+    }
+  } // namespace
+
+
   template <int dim>
   void
   Output<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Output");
     prm.declare_entry("Directory", "output", Patterns::Anything(),
-                      "Directory for all output files; created if missing.");
+                      "Directory for all output files; created if missing. "
+                      "A relative path is relative to the working directory; "
+                      "an absolute path is allowed. The parameters used are "
+                      "written into it as parameters.prm.");
+    prm.declare_entry("Existing directory", "clear",
+                      Patterns::Selection("clear|refuse"),
+                      "What to do when 'Directory' holds the output of an "
+                      "earlier run (numbered grid_/points_/probe_line_ "
+                      "files, .pvd indices, the CSV series, parameters.prm): "
+                      "'clear' removes those files (and no others) before "
+                      "the run, so that no stale time step is mixed into the "
+                      "new series; 'refuse' stops before any work.");
     prm.declare_entry("Output interval", "1e-4", Patterns::Double(0.),
                       "Simulated time between VTU/PVTU outputs of the fields, "
                       "s; 0 writes only the first and last state. Range [0, inf).");
@@ -149,6 +199,7 @@ namespace femp
       {
         pool_csv.open(prm.directory + "/melt_pool.csv");
         pool_csv << "time,length,width,depth,volume,T_max\n";
+        check_stream(pool_csv, prm.directory + "/melt_pool.csv");
         if (!prm.probe_points.empty())
           {
             probe_csv.open(prm.directory + "/probe_points.csv");
@@ -157,6 +208,7 @@ namespace femp
               for (const auto &q : quantities)
                 probe_csv << ",p" << i << "_" << q;
             probe_csv << "\n";
+            check_stream(probe_csv, prm.directory + "/probe_points.csv");
           }
       }
     MPI_Barrier(comm);
@@ -248,11 +300,7 @@ namespace femp
       const std::string name = data_out.write_vtu_with_pvtu_record(
         prm.directory + "/", "grid", n, comm, 5, 8);
       grid_records.emplace_back(time, name);
-      if (Utilities::MPI::this_mpi_process(comm) == 0)
-        {
-          std::ofstream pvd(prm.directory + "/grid.pvd");
-          DataOutBase::write_pvd_record(pvd, grid_records);
-        }
+      write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
     }
     if (points)
       {
@@ -268,11 +316,7 @@ namespace femp
         const std::string name = data_out.write_vtu_with_pvtu_record(
           prm.directory + "/", "points", n, comm, 5, 8);
         point_records.emplace_back(time, name);
-        if (Utilities::MPI::this_mpi_process(comm) == 0)
-          {
-            std::ofstream pvd(prm.directory + "/points.pvd");
-            DataOutBase::write_pvd_record(pvd, point_records);
-          }
+        write_pvd(prm.directory + "/points.pvd", point_records, comm);
       }
   }
 
@@ -290,6 +334,7 @@ namespace femp
              << pool.width << ',' << pool.depth << ',' << pool.volume << ','
              << pool.T_max << '\n';
     pool_csv.flush();
+    check_stream(pool_csv, prm.directory + "/melt_pool.csv");
     if (probe_csv.is_open())
       {
         probe_csv << std::setprecision(8) << time;
@@ -297,6 +342,7 @@ namespace femp
           probe_csv << ',' << x;
         probe_csv << '\n';
         probe_csv.flush();
+        check_stream(probe_csv, prm.directory + "/probe_points.csv");
       }
   }
 
@@ -316,8 +362,10 @@ namespace femp
         const auto v = sample(pts, probe_fields);
         if (Utilities::MPI::this_mpi_process(grid.communicator()) != 0)
           continue;
-        std::ofstream out(prm.directory + "/probe_line_" + line.name + "_" +
-                          Utilities::int_to_string(n, 5) + ".csv");
+        const std::string file = prm.directory + "/probe_line_" + line.name +
+                                 "_" + Utilities::int_to_string(n, 5) + ".csv";
+        std::ofstream     out(file);
+        check_stream(out, file);
         out << "# time = " << std::setprecision(8) << time << " s\n";
         out << "s";
         for (int d = 0; d < dim; ++d)
@@ -334,6 +382,8 @@ namespace femp
               out << ',' << v[i * probe_fields.size() + f];
             out << '\n';
           }
+        out.close();
+        check_stream(out, file);
       }
   }
 

@@ -1,0 +1,74 @@
+// femp: checks of a scene that span several modules or the machine, run by
+// the driver before any work: the scene file itself (readable, not empty,
+// no parameter set twice), names of output files, a memory estimate against
+// the machine's memory, and the output directory (parameters.prm written
+// into it). Also the run limits that keep a scene from running on without
+// feedback (doc/input_errors.md).
+#ifndef femp_run_checks_h
+#define femp_run_checks_h
+
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/timer.h>
+
+#include <string>
+
+namespace femp
+{
+  /// At most the first ~80 characters of @p value, for messages.
+  std::string
+  short_value(const std::string &value);
+
+  /// The scene file must be a readable regular file with at least one 'set'
+  /// or 'include' statement, and must not set one parameter twice (an
+  /// 'include' followed by a 'set' of an included parameter is allowed).
+  void
+  check_scene_file(const std::string &file_name);
+
+  /// Subsection 'Run limits': memory limit and flow sub-step bound.
+  void
+  declare_run_limits(dealii::ParameterHandler &prm);
+
+  /// Limits read by check_memory(); defaults if it was not called.
+  struct RunLimits
+  {
+    double       memory_limit      = 0;      ///< bytes, 0: no check
+    unsigned int max_flow_substeps = 100000; ///< per temperature step
+  };
+  const RunLimits &
+  run_limits();
+
+  /// Names of files inside the output directory must stay inside it (no
+  /// '..' component, no absolute path, probe line names without '/').
+  void
+  check_output_file_names(const dealii::ParameterHandler &prm);
+
+  /// Values no module refuses by itself: a plain-number initial
+  /// temperature in (0, 1e5] K, a packing fraction in (0, 0.64], a line
+  /// scan of non-zero length, a scan-path file in the format of the
+  /// dimension.
+  void
+  check_values(const dealii::ParameterHandler &prm);
+
+  /// Refuse a scene whose rough memory estimate (cells, points, probe
+  /// samples) exceeds 'Run limits/Memory limit' (default: the machine's
+  /// memory from /proc/meminfo); also reads run_limits().
+  void
+  check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks);
+
+  /// Collective: create the output directory, apply 'Output/Existing
+  /// directory' (refuse, or clear earlier numbered files) and write the
+  /// parameters used to parameters.prm (rank 0). Throws on every rank.
+  void
+  prepare_output_directory(const dealii::ParameterHandler &prm,
+                           const MPI_Comm                  comm);
+
+  /// With several ranks, the minimum, average and maximum wall time of
+  /// each section of @p timer over the ranks (TimerOutput's statistics),
+  /// if every rank has the same sections (else nothing: no rank waits).
+  void
+  print_timer_statistics(const dealii::TimerOutput &timer,
+                         const MPI_Comm             comm);
+} // namespace femp
+
+#endif

@@ -1,0 +1,461 @@
+// femp: checks of a scene before any work that span several modules or the
+// machine (scene file, output file names, memory, output directory), and
+// the run limits. No paper equations.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/app/run_checks.h>
+#include <femp/base/input_checks.h>
+
+#include <cmath>
+#include <functional>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+namespace femp
+{
+  namespace
+  {
+    RunLimits limits;
+
+    /// Value of @p name in the subsection path @p path ("A/B").
+    std::string
+    get(const dealii::ParameterHandler &prm_in,
+        const std::string &             path,
+        const std::string &             name)
+    {
+      auto &prm = const_cast<dealii::ParameterHandler &>(prm_in);
+      const auto sections = path.empty() ? std::vector<std::string>() :
+                              dealii::Utilities::split_string_list(path, '/');
+      for (const auto &s : sections)
+        prm.enter_subsection(s);
+      const std::string v = prm.get(name);
+      for (std::size_t i = 0; i < sections.size(); ++i)
+        prm.leave_subsection();
+      return v;
+    }
+
+    double
+    get_double(const dealii::ParameterHandler &prm,
+               const std::string &             path,
+               const std::string &             name)
+    {
+      return dealii::Utilities::string_to_double(get(prm, path, name));
+    }
+
+    /// Physical memory of this machine in bytes (0 if unknown).
+    double
+    physical_memory()
+    {
+      std::ifstream in("/proc/meminfo");
+      std::string   key, unit;
+      double        kb = 0;
+      while (in >> key >> kb >> unit)
+        if (key == "MemTotal:")
+          return kb * 1024.;
+      return 0;
+    }
+  } // namespace
+
+
+  std::string
+  short_value(const std::string &value)
+  {
+    if (value.size() <= 80)
+      return value;
+    return value.substr(0, 60) + " ... (" + std::to_string(value.size()) +
+           " characters)";
+  }
+
+
+  void
+  check_scene_file(const std::string &file_name)
+  {
+    namespace fs = std::filesystem;
+    const std::string param = "scene file (command line)";
+    std::error_code   error;
+    require(fs::exists(file_name, error), param, short_value(file_name),
+            "the file does not exist");
+    require(fs::is_regular_file(file_name, error), param,
+            short_value(file_name),
+            "it is not a regular file (a directory?); give a .prm file");
+    std::ifstream in(file_name);
+    require(static_cast<bool>(in), param, short_value(file_name),
+            "the file cannot be read");
+
+    // JSON and XML scenes: deal.II checks them as a whole.
+    const std::string ext = fs::path(file_name).extension().string();
+    if (ext == ".json" || ext == ".xml")
+      return;
+
+    // Statements of this file (not of the files it includes), with
+    // deal.II's syntax: '#' comments, '\' continues a line.
+    std::vector<std::string>           sections;
+    std::map<std::string, unsigned>    set_at; // parameter -> line
+    unsigned int                       line_no = 0, statements = 0;
+    std::string                        line, pending;
+    unsigned int                       pending_line = 0;
+    while (std::getline(in, line))
+      {
+        ++line_no;
+        const auto hash = line.find('#');
+        if (hash != std::string::npos)
+          line.erase(hash);
+        line = dealii::Utilities::trim(line);
+        if (pending.empty())
+          pending_line = line_no;
+        if (!line.empty() && line.back() == '\\')
+          {
+            pending += line.substr(0, line.size() - 1) + " ";
+            continue;
+          }
+        line = dealii::Utilities::trim(pending + line);
+        pending.clear();
+        if (line.empty())
+          continue;
+        std::istringstream s(line);
+        std::string        word;
+        s >> word;
+        if (word == "subsection")
+          {
+            std::string name;
+            std::getline(s, name);
+            sections.push_back(dealii::Utilities::trim(name));
+          }
+        else if (word == "end" && !sections.empty())
+          sections.pop_back();
+        else if (word == "include")
+          ++statements;
+        else if (word == "set")
+          {
+            ++statements;
+            const auto eq = line.find('=');
+            if (eq == std::string::npos)
+              continue; // deal.II reports the syntax error
+            std::string key;
+            for (const auto &sec : sections)
+              key += sec + "/";
+            key += dealii::Utilities::trim(line.substr(3, eq - 3));
+            const auto previous = set_at.find(key);
+            require(previous == set_at.end(), key, file_name + ", line " +
+                      std::to_string(pending_line),
+                    "it is set twice in this file (first at line " +
+                      (previous == set_at.end() ?
+                         std::string() :
+                         std::to_string(previous->second)) +
+                      "); set each parameter once (a 'set' after an "
+                      "'include' may override an included value)");
+            set_at[key] = pending_line;
+          }
+      }
+    require(statements > 0, param, short_value(file_name),
+            "it holds no 'set' or 'include' statement: an empty scene "
+            "would silently run the default scene");
+  }
+
+
+  void
+  declare_run_limits(dealii::ParameterHandler &prm)
+  {
+    prm.enter_subsection("Run limits");
+    prm.declare_entry(
+      "Memory limit", "0", dealii::Patterns::Double(0.),
+      "Largest memory the scene may need, GiB, by a rough estimate from "
+      "the number of cells, material points and probe samples made before "
+      "any work; a larger scene is refused. 0: the physical memory of this "
+      "machine (/proc/meminfo). Range [0, inf).");
+    prm.declare_entry(
+      "Maximum flow sub-steps", "100000", dealii::Patterns::Integer(1),
+      "Most melt-flow sub-steps within one temperature step; the run stops "
+      "with an error when the flow needs more (a flow that blows up makes "
+      "its stable step tiny). Range [1, inf).");
+    prm.leave_subsection();
+  }
+
+
+  const RunLimits &
+  run_limits()
+  {
+    return limits;
+  }
+
+
+  void
+  check_output_file_names(const dealii::ParameterHandler &prm)
+  {
+    namespace fs = std::filesystem;
+    const std::string allowed =
+      "a file of the output directory must be named relative to it, "
+      "without '..' or an absolute path (Output/Directory may be absolute)";
+    for (const std::string name : {"Energy file", "Probe file"})
+      {
+        const std::string v = get(prm, "Solid", name);
+        const fs::path    p(v);
+        bool              ok = !p.is_absolute();
+        for (const auto &part : p)
+          ok = ok && part != "..";
+        require(ok, "Solid/" + name, short_value(v), allowed);
+      }
+    for (const auto &l : dealii::Utilities::split_string_list(
+           get(prm, "Output", "Probe lines"), ';'))
+      {
+        const std::string line_name =
+          dealii::Utilities::split_string_list(l, ':').front();
+        require(std::regex_match(line_name, std::regex("[A-Za-z0-9_.+-]*")) &&
+                  line_name.find("..") == std::string::npos,
+                "Output/Probe lines", short_value(l),
+                "a probe line's name becomes part of a file name: use "
+                "letters, digits, '_', '-', '+', '.' (no '..')");
+      }
+  }
+
+
+  void
+  check_values(const dealii::ParameterHandler &prm)
+  {
+    const int dim = std::stoi(get(prm, "", "Dimension"));
+    const std::string text =
+      dealii::Utilities::trim(get(prm, "Heat transfer", "Initial temperature"));
+    char *       end = nullptr;
+    const double T   = std::strtod(text.c_str(), &end);
+    // (An expression is checked at every cell centre by HeatTransfer.)
+    if (!text.empty() && end == text.c_str() + text.size())
+      require(std::isfinite(T) && T > 0 && T <= 1e5,
+              "Heat transfer/Initial temperature", short_value(text),
+              "it must be a finite temperature in (0, 1e5] K");
+
+    const double packing =
+      get_double(prm, "Material points/Powder layer", "Packing fraction");
+    require(packing > 0 && packing <= 0.64,
+            "Material points/Powder layer/Packing fraction", packing,
+            "it must lie in (0, 0.64] (no powder: 'Layer thickness = 0')");
+
+    const std::string path_file = get(prm, "Laser", "Scan path file");
+    if (path_file.empty())
+      {
+        const auto a = dealii::Utilities::split_string_list(
+          get(prm, "Laser", "Start point"), ',');
+        const auto b = dealii::Utilities::split_string_list(
+          get(prm, "Laser", "End point"), ',');
+        double length2 = 0;
+        for (int d = 0; d < dim - 1 && d < int(a.size()) && d < int(b.size()); ++d)
+          {
+            const double l = dealii::Utilities::string_to_double(b[d]) -
+                             dealii::Utilities::string_to_double(a[d]);
+            length2 += l * l;
+          }
+        require(length2 > 0 || get_double(prm, "Laser", "Power") == 0,
+                "Laser/End point", short_value(get(prm, "Laser", "End point")),
+                "it must differ from 'Laser/Start point' in the horizontal "
+                "coordinates: a line scan of zero length takes no time, so "
+                "the laser would deposit nothing (power 0 turns it off)");
+      }
+    else
+      {
+        // Every segment line must hold the numbers of this dimension's
+        // format (the 3D format read in 2D would shift every column).
+        std::ifstream in(path_file);
+        require(static_cast<bool>(in), "Laser/Scan path file",
+                short_value(path_file), "the file cannot be opened");
+        const unsigned int wanted = 2 * (dim - 1) + 2;
+        std::string        line;
+        unsigned int       line_no = 0;
+        while (std::getline(in, line))
+          {
+            ++line_no;
+            const auto first = line.find_first_not_of(" \t\r");
+            if (first == std::string::npos || line[first] == '#')
+              continue;
+            std::istringstream s(line);
+            std::string        word;
+            unsigned int       n = 0;
+            while (s >> word)
+              ++n;
+            require(n == wanted, "Laser/Scan path file",
+                    short_value(path_file) + ", line " +
+                      std::to_string(line_no) + ": '" + short_value(line) + "'",
+                    "in " + std::to_string(dim) + "D each segment line must hold " +
+                      std::to_string(wanted) + " numbers, " +
+                      (dim == 2 ? "'x0 x1 speed power'" :
+                                  "'x0 y0 x1 y1 speed power'") +
+                      "; this line has " + std::to_string(n));
+          }
+      }
+  }
+
+
+  void
+  check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks)
+  {
+    prm.enter_subsection("Run limits");
+    const double limit_gib     = prm.get_double("Memory limit");
+    limits.max_flow_substeps   = prm.get_integer("Maximum flow sub-steps");
+    prm.leave_subsection();
+    const int dim = prm.get_integer("Dimension");
+
+    // Cells of the background grid, metal points (substrate and powder).
+    const auto lo = dealii::Utilities::split_string_list(
+      get(prm, "Background grid", "Lower corner"), ',');
+    const auto hi = dealii::Utilities::split_string_list(
+      get(prm, "Background grid", "Upper corner"), ',');
+    const double h = get_double(prm, "Background grid", "Cell size");
+    if (lo.size() < std::size_t(dim) || hi.size() < std::size_t(dim) || !(h > 0))
+      return; // the modules report malformed corners
+    double cells = 1, area = 1, extent[3] = {0, 0, 0};
+    for (int d = 0; d < dim; ++d)
+      {
+        extent[d] = dealii::Utilities::string_to_double(hi[d]) -
+                    dealii::Utilities::string_to_double(lo[d]);
+        if (!(extent[d] > 0))
+          return;
+        cells *= std::ceil(extent[d] / h * (1 - 1e-9));
+        if (d < dim - 1)
+          area *= extent[d];
+      }
+    const double bottom   = dealii::Utilities::string_to_double(lo[dim - 1]);
+    const double spacing  = get_double(prm, "Material points", "Point spacing");
+    const double top      = get_double(prm, "Material points", "Substrate top");
+    const double layer    =
+      get_double(prm, "Material points/Powder layer", "Layer thickness");
+    const double packing  =
+      get_double(prm, "Material points/Powder layer", "Packing fraction");
+    double points = 0;
+    if (spacing > 0)
+      points = area * (std::max(0., top - bottom) + layer * packing) /
+               std::pow(spacing, dim);
+    // Probe line samples.
+    double samples = 0;
+    for (const auto &l : dealii::Utilities::split_string_list(
+           get(prm, "Output", "Probe lines"), ';'))
+      {
+        const auto parts = dealii::Utilities::split_string_list(l, ':');
+        if (parts.size() == 3)
+          samples += std::max(0., std::atof(parts[2].c_str()));
+      }
+    // Bytes per item, measured on the default 3D scene (156 250 cells,
+    // 1.05 million points: 0.65 GB) and rounded up; flow and solid add
+    // their matrices and point properties.
+    const bool flow  = get(prm, "Physics", "Melt flow") == "true";
+    const bool solid = get(prm, "Physics", "Solid stress") == "true";
+    const double bytes = cells * (1500. + (flow ? 1500. : 0.) + (solid ? 1000. : 0.)) +
+                         points * (400. + (solid ? 300. : 0.)) +
+                         samples * 200. + n_ranks * 100e6;
+    const double limit = limit_gib > 0 ? limit_gib * 1024. * 1024. * 1024. :
+                                         physical_memory();
+    limits.memory_limit = limit;
+    if (limit <= 0 || bytes <= limit)
+      return;
+    std::ostringstream s;
+    s.precision(3);
+    s << "the scene needs about " << bytes / 1e9 << " GB (" << cells
+      << " cells, " << points << " material points, " << samples
+      << " probe-line samples, " << n_ranks << " ranks), more than the "
+      << limit / 1e9 << " GB allowed: coarsen 'Background grid/Cell size' or "
+      << "'Material points/Point spacing', or raise 'Run limits/Memory "
+         "limit' (GiB) if the estimate is wrong or the ranks run on several "
+         "machines";
+    throw InputError("Run limits/Memory limit", num(limit_gib), s.str());
+  }
+
+
+  void
+  prepare_output_directory(const dealii::ParameterHandler &prm,
+                           const MPI_Comm                  comm)
+  {
+    namespace fs = std::filesystem;
+    const std::string directory = get(prm, "Output", "Directory");
+    const std::string policy    = get(prm, "Output", "Existing directory");
+    std::string       error;
+    if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        // Files a run of femp writes: numbered VTU/PVTU pieces, probe lines,
+        // the .pvd indices, the CSV series and this parameter listing.
+        const std::regex ours(
+          "(grid|points)(_[0-9]+(\\.[0-9]+)?\\.(vtu|pvtu)|\\.pvd)|"
+          "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
+          "parameters\\.prm|.*\\.pvd\\.tmp");
+        const std::string energy = get(prm, "Solid", "Energy file");
+        const std::string probes = get(prm, "Solid", "Probe file");
+        std::error_code   ec;
+        std::vector<fs::path> earlier;
+        if (fs::is_directory(directory, ec))
+          for (const auto &entry : fs::directory_iterator(directory, ec))
+            {
+              const std::string name = entry.path().filename().string();
+              if (entry.is_regular_file(ec) &&
+                  (std::regex_match(name, ours) || name == energy ||
+                   name == probes))
+                earlier.push_back(entry.path());
+            }
+        if (!earlier.empty() && policy == "refuse")
+          error = InputError("Output/Directory", short_value(directory),
+                             "it holds the output of an earlier run (e.g. " +
+                               earlier.front().filename().string() +
+                               ") and 'Output/Existing directory = refuse'; "
+                               "choose another directory, remove it, or set "
+                               "'Output/Existing directory = clear'")
+                    .what();
+        if (error.empty() && !earlier.empty())
+          for (const auto &f : earlier)
+            if (!fs::remove(f, ec) || ec)
+              {
+                error = "cannot remove '" + f.string() +
+                        "' of an earlier run (Output/Existing directory = "
+                        "clear): " + ec.message();
+                break;
+              }
+        if (error.empty())
+          {
+            fs::create_directories(directory, ec);
+            if (ec || !fs::is_directory(directory))
+              error = InputError("Output/Directory", short_value(directory),
+                                 "it cannot be created or is not a "
+                                 "directory" +
+                                   (ec ? " (" + ec.message() + ")" :
+                                         std::string()))
+                        .what();
+          }
+        if (error.empty())
+          {
+            const std::string file = directory + "/parameters.prm";
+            std::ofstream     out(file);
+            out << "# Parameters of this run of femp (all of them, with the "
+                   "values used).\n";
+            const_cast<dealii::ParameterHandler &>(prm).print_parameters(
+              out,
+              dealii::ParameterHandler::OutputStyle(
+                dealii::ParameterHandler::ShortPRM |
+                dealii::ParameterHandler::KeepDeclarationOrder));
+            out.close();
+            if (!out)
+              error = "cannot write '" + file + "'";
+          }
+      }
+    error = dealii::Utilities::MPI::broadcast(comm, error, 0);
+    if (!error.empty())
+      throw std::runtime_error(error);
+  }
+
+
+  void
+  print_timer_statistics(const dealii::TimerOutput &timer,
+                         const MPI_Comm             comm)
+  {
+    if (dealii::Utilities::MPI::n_mpi_processes(comm) < 2)
+      return;
+    // Collective over the sections: only if all ranks have the same ones.
+    std::string names;
+    for (const auto &s :
+         timer.get_summary_data(dealii::TimerOutput::total_wall_time))
+      names += s.first + '\n';
+    unsigned long long hash = std::hash<std::string>()(names), lo = 0, hi = 0;
+    MPI_Allreduce(&hash, &lo, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, comm);
+    MPI_Allreduce(&hash, &hi, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, comm);
+    if (lo == hi)
+      timer.print_wall_time_statistics(comm);
+  }
+} // namespace femp
