@@ -14,6 +14,7 @@
 #include <femp/app/femp_problem.h>
 #include <femp/base/input_checks.h>
 #include <femp/app/run_checks.h>
+#include <femp/base/parameter_file.h>
 
 #include <cctype>
 #include <chrono>
@@ -108,7 +109,16 @@ namespace
     femp::check_scene_file(scene);
     try
       {
-        prm.parse_input(scene);
+        // .prm scenes: 'include' paths relative to the scene's folder
+        // first (so a scene runs from any folder); JSON and XML as deal.II
+        // reads them.
+        const bool structured =
+          scene.size() > 5 && (scene.substr(scene.size() - 5) == ".json" ||
+                               scene.substr(scene.size() - 4) == ".xml");
+        if (structured)
+          prm.parse_input(scene);
+        else
+          femp::parse_parameter_file(prm, scene);
       }
     catch (const std::exception &e)
       {
