@@ -1,7 +1,7 @@
 // The paper-scale scenes of cases 3.2 and 3.3 (prm/case_3_2_femp.prm,
 // prm/case_3_2_mpm.prm, prm/case_3_3_{50,100,200}W.prm; doc/cases.md), label
-// 'long': every scene file is read as femp reads it (deal.II's `include`,
-// resolved from the repository root given as the argument); the case 3.3
+// 'long': every scene file is read as femp reads it ('include' next to the
+// including scene; the repository root is the argument); the case 3.3
 // files must differ from the FEMP scene in Laser/Power and Output/Directory
 // only. Then the FEMP and the all-MPM scene run their first two
 // temperature steps (0.2 us; about a minute each, mostly setup) and the
@@ -10,6 +10,8 @@
 // that the probe lines carry the stress fields, and that EF lies in the FE
 // zone of the FEMP scene and CD above it. Expected output: the sizes as
 // printed by femp for both scenes in the measured 2 us runs of doc/cases.md.
+#include <femp/base/parameter_file.h>
+
 #include "scene_driver.h"
 #include "test_tools.h"
 
@@ -22,30 +24,11 @@ namespace
 {
   constexpr int dim = 3;
 
-  /// The text of @p file with every `include F` line replaced by the text
-  /// of F, read relative to @p root (as femp started in @p root reads it).
-  std::string
-  expand(const std::string &root, const std::string &file)
-  {
-    std::ifstream in(root + "/" + file);
-    AssertThrow(in, ExcMessage("cannot read " + root + "/" + file));
-    std::ostringstream out;
-    std::string        row;
-    const std::regex   include("^\\s*include\\s+(\\S+)\\s*$");
-    std::smatch        m;
-    while (std::getline(in, row))
-      if (std::regex_match(row, m, include))
-        out << expand(root, m[1]) << "\n";
-      else
-        out << row << "\n";
-    return out.str();
-  }
-
   void
   parse(ParameterHandler &prm, const std::string &root, const std::string &file)
   {
     declare_all_parameters(prm);
-    prm.parse_input_from_string(expand(root, file));
+    femp::parse_parameter_file(prm, root + "/" + file);
   }
 } // namespace
 
