@@ -18,7 +18,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "test_tools.h"
+#include "solid_tools.h"
 
 using namespace femp_test;
 
@@ -31,30 +31,14 @@ namespace
   {
     constexpr int dim = 2;
     const double  h   = 0.1;
-    const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
-    BackgroundGrid<dim> grid(gp, comm);
-    grid.create();
     Material mat = unit_material();
     mat.density  = 1;
-    typename MaterialPoints<dim>::Parameters pp;
-    pp.point_spacing   = h / 2;
-    pp.substrate_top   = 0.8;
-    pp.layer_thickness = 0;
-    pp.subcells        = 2;
-    MaterialPoints<dim> points(pp, mat, grid);
-    points.create(300.);
-    SolidMaterial sm;
-    sm.youngs_modulus   = PiecewiseLinear(100.);
-    sm.plastic_modulus  = PiecewiseLinear(5.);
-    sm.yield_stress     = PiecewiseLinear::parse("300:0.02, 400:0.005", "yield");
-    sm.expansion        = 1e-4;
-    sm.density          = 1;
-    sm.melt_temperature = 1e6;
-    typename SolidStress<dim>::Parameters sp;
-    sp.fixed_faces  = {"y-"};
-    sp.roller_faces = {"x-", "x+"};
-    sp.gravity[1]   = -0.01;
-    sp.energy_file  = "";
+    SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
+    auto &          grid   = block.grid;
+    auto &          points = *block.points;
+    const SolidMaterial sm = block_material("300:0.02, 400:0.005", 1e6);
+    auto                sp = block_supports<dim>();
+    sp.gravity[1]          = -0.01;
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(0.2, 0);
@@ -98,32 +82,16 @@ main(int argc, char **argv)
   constexpr int                    dim = 2;
   const double                     h   = 0.1;
 
-  const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
-  BackgroundGrid<dim> grid(gp, comm);
-  grid.create();
   Material mat = unit_material();
   mat.density  = 1;
-  typename MaterialPoints<dim>::Parameters pp;
-  pp.point_spacing   = h / 2;
-  pp.substrate_top   = 0.8;
-  pp.layer_thickness = 0;
-  pp.subcells        = 2;
-  MaterialPoints<dim> points(pp, mat, grid);
-  points.create(300.);
+  SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
+  auto &          grid   = block.grid;
+  auto &          points = *block.points;
 
-  SolidMaterial sm;
-  sm.youngs_modulus   = PiecewiseLinear(100.);
-  sm.plastic_modulus  = PiecewiseLinear(5.);
-  sm.yield_stress     = PiecewiseLinear::parse("300:0.02, 400:0.005", "yield");
-  sm.poisson_ratio    = 0.3;
-  sm.expansion        = 1e-4;
-  sm.density          = 1;
-  sm.melt_temperature = 1e6;
-  typename SolidStress<dim>::Parameters sp;
-  sp.fixed_faces  = {"y-"};
-  sp.roller_faces = {"x-", "x+"};
-  sp.gravity[1]   = -0.01;
-  sp.energy_file  = "";
+  SolidMaterial sm = block_material("300:0.02, 400:0.005", 1e6);
+  sm.poisson_ratio = 0.3;
+  auto sp          = block_supports<dim>();
+  sp.gravity[1]    = -0.01;
   typename SolidFEM<dim>::Parameters fp;
   fp.enabled      = true;
   fp.lower_corner = Point<dim>(0, 0);
@@ -193,7 +161,7 @@ main(int argc, char **argv)
   // cell, compress it: 0.16 of the former stress with APIC, 0.015 with
   // FLIP, whose transfers smooth the nodal velocities; doc/solid.md.)
   {
-    mat.solidus         = 450;
+    block.material.solidus = 450; // the material of the points
     sm.melt_temperature = 450;
     const Point<dim> hot(0.85, 0.75);
     const auto       ijk = grid.cell_of(hot);

@@ -26,7 +26,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "test_tools.h"
+#include "solid_tools.h"
 
 using namespace femp_test;
 
@@ -39,33 +39,17 @@ namespace
       Checks &checks, MPI_Comm comm, const std::string &directory)
   {
     const double h  = 0.1;
-    const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
-    BackgroundGrid<dim> grid(gp, comm);
-    grid.create();
     Material mat = unit_material();
     mat.solidus  = 450;
     mat.liquidus = 460;
-    typename MaterialPoints<dim>::Parameters pp;
-    pp.point_spacing   = h / 2;
-    pp.substrate_top   = 0.8;
-    pp.layer_thickness = 0;
-    pp.subcells        = 2;
-    MaterialPoints<dim> points(pp, mat, grid);
-    points.create(300.);
+    SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
+    auto &          grid   = block.grid;
+    auto &          points = *block.points;
 
-    SolidMaterial sm;
-    sm.youngs_modulus    = PiecewiseLinear(100.);
-    sm.plastic_modulus   = PiecewiseLinear(5.);
-    sm.yield_stress      = PiecewiseLinear::parse("300:0.05, 450:0.01", "yield");
+    SolidMaterial sm     = block_material("300:0.05, 450:0.01", 450);
     sm.poisson_ratio     = 0.3;
-    sm.expansion         = 1e-4;
-    sm.density           = 1;
-    sm.melt_temperature  = 450;
     sm.velocity_transfer = transfer;
-    typename SolidStress<dim>::Parameters sp;
-    sp.fixed_faces  = {"y-"};
-    sp.roller_faces = {"x-", "x+"};
-    sp.energy_file  = "";
+    auto sp              = block_supports<dim>();
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(0, 0);

@@ -100,6 +100,18 @@ namespace femp
   void
   BackgroundGrid<dim>::create()
   {
+    create_triangulation();
+    KnownCells known;
+    set_local_box(known);
+    set_ghost_pattern(known);
+    set_node_pattern(known);
+  }
+
+
+  template <int dim>
+  void
+  BackgroundGrid<dim>::create_triangulation()
+  {
     for (int d = 0; d < dim; ++d)
       n_global[d] = static_cast<unsigned int>(std::round(
         (prm.upper_corner[d] - prm.lower_corner[d]) / prm.cell_size));
@@ -143,14 +155,17 @@ namespace femp
                                               tria_upper);
     if (r > 0)
       tria.refine_global(r);
+  }
 
+
+  template <int dim>
+  void
+  BackgroundGrid<dim>::set_local_box(KnownCells &known)
+  {
     // Structured index of each owned and ghost cell, and the local box.
     std::array<int, dim> box_min, box_max;
     box_min.fill(std::numeric_limits<int>::max());
     box_max.fill(std::numeric_limits<int>::min());
-    std::vector<std::pair<std::array<int, dim>,
-                          typename Triangulation<dim>::active_cell_iterator>>
-      known;
     for (const auto &cell : tria.active_cell_iterators())
       if (!cell->is_artificial() && in_domain(cell->center()))
         {
@@ -190,7 +205,13 @@ namespace femp
           owned_list.push_back(idx);
       }
     std::sort(owned_list.begin(), owned_list.end());
+  }
 
+
+  template <int dim>
+  void
+  BackgroundGrid<dim>::set_ghost_pattern(const KnownCells &known)
+  {
     // Ghost pattern: tell each owner which of its cells we hold as ghosts.
     auto global_linear = [this](const std::array<int, dim> &ijk) {
       std::uint64_t g = 0, m = 1;
@@ -250,7 +271,13 @@ namespace femp
       }
     send_buffers.resize(neighbours.size());
     recv_buffers.resize(neighbours.size());
+  }
 
+
+  template <int dim>
+  void
+  BackgroundGrid<dim>::set_node_pattern(const KnownCells &known)
+  {
     // Nodes: layout, the nodes of owned cells, and per neighbour rank the
     // nodes shared with its owned cells (= nodes of owned cells that are
     // also nodes of a ghost cell it owns).

@@ -644,27 +644,53 @@ namespace femp
     Assert(!frozen, ExcMessage("advance() on a frozen temperature field"));
     // Properties: in 3D plane by plane just ahead of the sweep (pass B), so
     // that they are still in cache when the stencil reads them.
-    const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();
-    const std::size_t row_len = grid.box_size()[0];
-    auto properties_of_plane = [&](const std::size_t first_row,
-                                   const std::size_t n_rows) {
-      for (std::size_t r = first_row; r < first_row + n_rows; ++r)
-        if (row_has_metal[r])
-          compute_properties(r * row_len, (r + 1) * row_len);
-    };
-    const std::size_t rows_per_plane = dim == 3 ? plane / row_len : 0;
+    const std::size_t rows_per_plane =
+      dim == 3 ? grid.strides()[dim - 1] / grid.box_size()[0] : 0;
     if (dim == 3)
-      properties_of_plane(0, 2 * rows_per_plane);
+      properties_of_rows(0, 2 * rows_per_plane);
     else
-      properties_of_plane(0, row_has_metal.size());
+      properties_of_rows(0, row_has_metal.size());
     compute_surface_sources(dt, time);
 
+    StepSums sums;
+    conduction_pass(dt, sums);       // pass B: T_new by conduction
+    fixed_face_pass(dt, sums);       // fixed-temperature faces
+    convection_pass(dt, sums);       // upwind convection (with a velocity)
+    source_pass(dt, sums);           // pass C: sources, surface losses
+    phase_change_pass(sums);         // pass D: enthalpy iteration
+    finish_step(dt, time, sums);     // budget, T_max, ghosts, next limit
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::properties_of_rows(const std::size_t first_row,
+                                        const std::size_t n_rows)
+  {
+    const std::size_t row_len = grid.box_size()[0];
+    for (std::size_t r = first_row; r < first_row + n_rows; ++r)
+      if (row_has_metal[r])
+        compute_properties(r * row_len, (r + 1) * row_len);
+  }
+
+
+  // Pass B: conduction on whole x-rows of the box interior, branch-free
+  // so that it vectorizes; gas and padding cells have zero conductance and
+  // keep their value. Rows where a cell may need the phase-change
+  // iteration are flagged for pass D. In 3D the properties of the plane
+  // ahead are computed just before each plane.
+  template <int dim>
+  void
+  HeatTransfer<dim>::conduction_pass(const double dt, StepSums &sums)
+  {
+    const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();
+    const std::size_t row_len = grid.box_size()[0];
+    const std::size_t rows_per_plane = dim == 3 ? plane / row_len : 0;
     const auto & st   = grid.strides();
     const auto & size = grid.box_size();
     const double h    = grid.h();
     const double ih   = 1. / h;
     const double ih2  = ih * ih;
-    const double V    = std::pow(h, dim);
     const double Ts   = mat.solidus;
     const double Tl   = mat.liquidus;
     const double rhoL = mat.density * mat.latent_heat_fusion;
@@ -672,10 +698,6 @@ namespace femp
 
     double rate_max = 0;
 
-    // Pass B: conduction on whole x-rows of the box interior, branch-free
-    // so that it vectorizes; gas and padding cells have zero conductance and
-    // keep their value. Rows where a cell may need the phase-change
-    // iteration are flagged for pass D.
     const double  *Tp = T.data(), *kp = conductance.data(), *cp = capacity.data(),
                   *gp = gamma.data();
     double        *Tn = T_new.data();
@@ -688,7 +710,7 @@ namespace femp
     for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
       {
       if (dim == 3)
-        properties_of_plane((kk + 1) * rows_per_plane, rows_per_plane);
+        properties_of_rows((kk + 1) * rows_per_plane, rows_per_plane);
       for (int jj = j0; jj < ny - 1; ++jj)
         {
           if (!row_has_metal[(jj * sy + kk * sz) / row_len])
@@ -748,6 +770,21 @@ namespace femp
         }
       }
 
+    sums.rate_max = rate_max;
+    sums.box_max  = box_max;
+    sums.box_bad  = box_bad;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::fixed_face_pass(const double dt, StepSums &sums)
+  {
+    const double h   = grid.h();
+    const double ih  = 1. / h;
+    const double ih2 = ih * ih;
+    const double V   = std::pow(h, dim);
+    double       rate_max = sums.rate_max;
     // Fixed-temperature faces: the face value sits h/2 from the cell centre.
     double e_boundary = 0;
     for (const auto &f : fixed_faces)
@@ -759,6 +796,9 @@ namespace femp
           e_boundary += q * V * dt;
           rate_max = std::max(rate_max, 4 * k * ih2 / capacity[f.index]);
         }
+    sums.e_boundary = e_boundary;
+    sums.rate_max   = rate_max;
+  }
 
 
     // Convection (only when a velocity field is present): first-order
@@ -770,6 +810,14 @@ namespace femp
     // are unchanged. With it, the alpha update from the points (which
     // books the arriving volume at the cell's T) and the convection give
     // the arriving metal the upwind temperature (doc/equations.md).
+  template <int dim>
+  void
+  HeatTransfer<dim>::convection_pass(const double dt, StepSums &sums)
+  {
+    const auto & st       = grid.strides();
+    const double ih       = 1. / grid.h();
+    const double ih2      = ih * ih;
+    double       rate_max = sums.rate_max;
     double e_advection = 0;
     if (velocity)
       for (const auto idx : grid.owned_cells())
@@ -811,6 +859,10 @@ namespace femp
               }
           rate_max = std::max(rate_max, rate + sumk * ih2 / capacity[idx]);
         }
+    sums.e_advection = e_advection;
+    sums.rate_max    = rate_max;
+  }
+
 
     // Pass C: cells with sparse sources (laser, surface losses, fixed
     // faces). The surface loss q(T) w |grad alpha| is taken at the new
@@ -820,6 +872,12 @@ namespace femp
     // the first steps of the 3D track heat powder tops to 8000 K and
     // more). The loss is booked at the new temperature, so the energy
     // stays balanced exactly.
+  template <int dim>
+  void
+  HeatTransfer<dim>::source_pass(const double dt, StepSums &sums)
+  {
+    const double rhoL       = mat.density * mat.latent_heat_fusion;
+    const bool   variable_c = !mat.specific_heat.is_constant();
     std::size_t nphase = 0;
     double      e_evap = 0, e_conv = 0, e_rad = 0;
     for (const auto idx : source_cells)
@@ -850,11 +908,25 @@ namespace femp
         gamma[idx]   = mat.liquid_fraction(Tnew);
         is_source[idx] = 1;
       }
+    sums.nphase = nphase;
+    sums.e_evap = e_evap;
+    sums.e_conv = e_conv;
+    sums.e_rad  = e_rad;
+  }
+
 
     // Pass D: the local enthalpy iteration in flagged rows (not for source
     // cells, done above): find T with
     //   H(T) = H(T^n) + dH,  H = a rho_m (C(T) + L gamma(T)) + (1-a) rho_g c_g T,
     // C the antiderivative of c_m; exact bookkeeping of c(T) and latent heat.
+  template <int dim>
+  void
+  HeatTransfer<dim>::phase_change_pass(StepSums &sums)
+  {
+    const auto & size       = grid.box_size();
+    const double rhoL       = mat.density * mat.latent_heat_fusion;
+    const bool   variable_c = !mat.specific_heat.is_constant();
+    std::size_t  nphase     = sums.nphase;
     const auto &status = grid.cell_status();
     for (const std::size_t row : flagged_rows)
       for (int ii = 1; ii < size[0] - 1; ++ii)
@@ -874,7 +946,25 @@ namespace femp
           T_new[idx] = Tnew;
           gamma[idx] = mat.liquid_fraction(Tnew);
         }
+    sums.nphase = nphase;
+  }
 
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::finish_step(const double      dt,
+                                 const double      time,
+                                 const StepSums &  sums)
+  {
+    const auto & size        = grid.box_size();
+    const double V           = std::pow(grid.h(), dim);
+    const double e_evap      = sums.e_evap, e_conv = sums.e_conv,
+                 e_rad       = sums.e_rad;
+    const double e_boundary  = sums.e_boundary;
+    const double e_advection = sums.e_advection;
+    const double box_max     = sums.box_max, box_bad = sums.box_bad;
+    const double rate_max    = sums.rate_max;
+    const std::size_t nphase = sums.nphase;
     // Reset the sparse sources.
     for (const auto idx : source_cells)
       {

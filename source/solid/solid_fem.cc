@@ -226,7 +226,91 @@ namespace femp
     in_zone_cell.assign(grid.n_local(), 0);
     if (!prm.enabled)
       return;
+    set_zone();
+    create_mesh();
+    const double m_el = mat.density * V * mass_scaling / n_corners;
+    std::vector<std::array<int, dim>> node_ijk(n_local);
+    const auto cells = local_elements(node_ijk);
+    set_node_box(node_ijk);
+    set_elements(cells);
+    allocate_node_arrays();
+    const auto mass = lumped_masses(m_el);
+    set_transition_nodes(face_bits, m_el, mass, node_ijk);
+    set_temperature_exchange(T);
+    element_loop<false>(0, 1);
+  }
+
+
+  template <int dim>
+  bool
+  SolidFEM<dim>::in_zone(const std::array<int, dim> &ijk) const
+  {
+    for (int d = 0; d < dim; ++d)
+      if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
+        return false;
+    return true;
+  }
+
+
+  template <int dim>
+  std::uint64_t
+  SolidFEM<dim>::zone_cell_id(const std::array<int, dim> &ijk) const
+  {
+    std::uint64_t id = 0;
+    for (int d = dim - 1; d >= 0; --d)
+      id = id * zn[d] + (ijk[d] - zlo[d]);
+    return id;
+  }
+
+
+  template <int dim>
+  std::uint64_t
+  SolidFEM<dim>::zone_node_id(const std::array<int, dim> &ijk) const
+  {
+    std::uint64_t id = 0;
+    for (int d = dim - 1; d >= 0; --d)
+      id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
+    return id;
+  }
+
+
+  template <int dim>
+  bool
+  SolidFEM<dim>::is_transition(const std::array<int, dim> &ijk) const
+  {
+    // A zone node on a zone face that is not a domain face.
     const auto &N = grid.n_cells();
+    for (int d = 0; d < dim; ++d)
+      if ((ijk[d] == zlo[d] && zlo[d] > 0) ||
+          (ijk[d] == zlo[d] + zn[d] && zlo[d] + zn[d] < int(N[d])))
+        return true;
+    return false;
+  }
+
+
+  template <int dim>
+  std::uint8_t
+  SolidFEM<dim>::fix_bits(const std::array<int, dim> &             ijk,
+                          const std::array<std::uint8_t, 2 * dim> &face_bits) const
+  {
+    const auto & N = grid.n_cells();
+    std::uint8_t f = 0;
+    for (int d = 0; d < dim; ++d)
+      {
+        if (ijk[d] == 0)
+          f |= face_bits[2 * d];
+        if (ijk[d] == int(N[d]))
+          f |= face_bits[2 * d + 1];
+      }
+    return f;
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_zone()
+  {
+    const double h = grid.h();
     for (int d = 0; d < dim; ++d)
       {
         zlo[d] = static_cast<int>(
@@ -234,47 +318,16 @@ namespace femp
         zn[d] = static_cast<int>(
           std::round((prm.upper_corner[d] - prm.lower_corner[d]) / h));
       }
-    auto in_zone = [&](const std::array<int, dim> &ijk) {
-      for (int d = 0; d < dim; ++d)
-        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
-          return false;
-      return true;
-    };
-    auto zone_cell_id = [&](const std::array<int, dim> &ijk) {
-      std::uint64_t id = 0;
-      for (int d = dim - 1; d >= 0; --d)
-        id = id * zn[d] + (ijk[d] - zlo[d]);
-      return id;
-    };
-    auto zone_node_id = [&](const std::array<int, dim> &ijk) {
-      std::uint64_t id = 0;
-      for (int d = dim - 1; d >= 0; --d)
-        id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
-      return id;
-    };
-    // A zone node on a zone face that is not a domain face.
-    auto is_transition = [&](const std::array<int, dim> &ijk) {
-      for (int d = 0; d < dim; ++d)
-        if ((ijk[d] == zlo[d] && zlo[d] > 0) ||
-            (ijk[d] == zlo[d] + zn[d] && zlo[d] + zn[d] < int(N[d])))
-          return true;
-      return false;
-    };
-    auto fix_bits = [&](const std::array<int, dim> &ijk) {
-      std::uint8_t f = 0;
-      for (int d = 0; d < dim; ++d)
-        {
-          if (ijk[d] == 0)
-            f |= face_bits[2 * d];
-          if (ijk[d] == int(N[d]))
-            f |= face_bits[2 * d + 1];
-        }
-      return f;
-    };
     for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
       if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
         in_zone_cell[idx] = in_zone(grid.global_index(idx));
+  }
 
+
+  template <int dim>
+  void
+  SolidFEM<dim>::create_mesh()
+  {
     // The FE triangulation: coarse blocks of 2^r cells (largest r <= 3 that
     // divides every cell count), refined r times; p4est partitions it.
     unsigned int r = 3;
@@ -312,11 +365,16 @@ namespace femp
         vg.add_range(dim * i, dim * i + dim);
       force.reinit(std::make_shared<Utilities::MPI::Partitioner>(vo, vg, comm));
     }
+  }
 
-    // Elements in lexicographic order of their zone index (x fastest), and
-    // the structured index of each local node.
-    const double m_el = mat.density * V * mass_scaling / n_corners;
-    std::vector<std::array<int, dim>> node_ijk(n_local);
+
+  // Elements in lexicographic order of their zone index (x fastest), and
+  // the structured index of each local node.
+  template <int dim>
+  std::vector<
+    std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
+  SolidFEM<dim>::local_elements(std::vector<std::array<int, dim>> &node_ijk)
+  {
     std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, n_corners>>>
                                          cells;
     std::vector<types::global_dof_index> dofs(n_corners);
@@ -340,8 +398,14 @@ namespace femp
         }
     std::sort(cells.begin(), cells.end(),
               [](const auto &a, const auto &b) { return a.first < b.first; });
-    const std::size_t n_el = cells.size();
+    return cells;
+  }
 
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_node_box(const std::vector<std::array<int, dim>> &node_ijk)
+  {
     // The node box: bounding box of the local nodes' structured indices.
     multi_rank = Utilities::MPI::n_mpi_processes(comm) > 1;
     for (int d = 0; d < dim; ++d)
@@ -367,7 +431,16 @@ namespace femp
       box_of[ln] = box_index(node_ijk[ln]);
     AssertThrow(n_box < std::numeric_limits<std::uint32_t>::max(),
                 ExcMessage("FE node box too large for 32-bit node indices"));
+  }
 
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_elements(
+    const std::vector<
+      std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>> &cells)
+  {
+    const std::size_t n_el = cells.size();
     conn.resize(n_corners * n_el);
     element_id.resize(n_el);
     for (std::size_t e = 0; e < n_el; ++e)
@@ -393,7 +466,13 @@ namespace femp
             id0 % zn[0] + simd_lanes <= std::uint64_t(zn[0]))
           block_row[b] = conn[n_corners * e0];
       }
+  }
 
+
+  template <int dim>
+  void
+  SolidFEM<dim>::allocate_node_arrays()
+  {
     // Node arrays over the box.
     for (int d = 0; d < dim; ++d)
       {
@@ -421,7 +500,13 @@ namespace femp
       }
     else
       shared_nodes.clear();
+  }
 
+
+  template <int dim>
+  std::vector<double>
+  SolidFEM<dim>::lumped_masses(const double m_el)
+  {
     // Lumped masses: element shares summed over ranks.
     for (const auto n : conn)
       for (int d = 0; d < dim; ++d)
@@ -432,7 +517,19 @@ namespace femp
       mass[box_of[ln]] = frc[0][box_of[ln]];
     for (int d = 0; d < dim; ++d)
       std::fill(frc[d].begin(), frc[d].end(), 0.);
+    return mass;
+  }
 
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_transition_nodes(
+    const std::array<std::uint8_t, 2 * dim> &face_bits,
+    const double                             m_el,
+    const std::vector<double> &              mass,
+    const std::vector<std::array<int, dim>> &node_ijk)
+  {
+    const std::size_t n_el = element_id.size();
     // Transition nodes, numbered on every rank in lexicographic order of
     // the zone's nodes.
     std::vector<std::uint64_t> tr_id;
@@ -454,7 +551,7 @@ namespace femp
             continue;
           tr_id.push_back(id);
           tr_ijk.push_back(ijk);
-          tr_fix.push_back(fix_bits(ijk));
+          tr_fix.push_back(fix_bits(ijk, face_bits));
           unsigned int n_adj = 1; // adjacent zone elements
           for (int d = 0; d < dim; ++d)
             n_adj *= (ijk[d] > zlo[d]) + (ijk[d] < zlo[d] + zn[d]);
@@ -478,7 +575,7 @@ namespace femp
         // Transition nodes take their velocity from update_transition():
         // zero inverse mass, all components free (fixed ones are zero there).
         inv_mass[n] = tr ? 0. : 1. / mass[n];
-        fix[n]      = tr ? 0 : fix_bits(node_ijk[ln]);
+        fix[n]      = tr ? 0 : fix_bits(node_ijk[ln], face_bits);
       }
     std::sort(tr_local.begin(), tr_local.end());
     std::vector<int> box_tr(n_box, -1);
@@ -490,7 +587,14 @@ namespace femp
         if (box_tr[conn[n_corners * e + a]] >= 0)
           tr_corners.push_back({{std::uint32_t(e), a,
                                  std::uint32_t(box_tr[conn[n_corners * e + a]])}});
+  }
 
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_temperature_exchange(const std::vector<double> &T)
+  {
+    const std::size_t n_el = element_id.size();
     // Temperatures: the grid rank owning a zone cell sends it (eq. 2).
     grid_zone_cells.clear();
     std::vector<types::global_dof_index> send_ids, recv_ids(element_id.begin(),
@@ -509,8 +613,6 @@ namespace femp
     for (std::size_t b = 0; b < blocks.size(); ++b)
       for (unsigned int l = 0; l < simd_lanes; ++l)
         blocks[b].T[l] = T_end[std::min(simd_lanes * b + l, n_el - 1)];
-
-    element_loop<false>(0, 1);
   }
 
 

@@ -512,6 +512,159 @@ namespace femp
             v2 += C[i * dim + j][p] * C[i * dim + j][p] * D;
         }
     }
+
+    /// The velocity gradient times dt of the points of a block, L dt =
+    /// sum v_a (x) grad N_a dt, the gradient of the interpolant of the nodal
+    /// velocities @p vel in monomial form (as in g2p()): nodal values
+    /// loaded once and broadcast when the W points lie in the same cell (the
+    /// usual case: the points are sorted by cell), their coefficients @p cv
+    /// shared by the blocks of the cell (@p coef_cell: the cell whose
+    /// coefficients @p cv holds, none (-1) after a block of several cells).
+    template <int dim, std::size_t W, typename VD>
+    [[gnu::always_inline]] inline void
+    block_velocity_gradient(
+      const double *const *                            vel,
+      const std::array<std::ptrdiff_t, (1u << dim)> &   corner_offset,
+      const std::size_t (&n0)[W],
+      const VD (&xi)[dim],
+      const double dt_ih,
+      VD (&cv)[dim][1u << dim],
+      std::size_t &coef_cell,
+      VD (&L)[3][3])
+    {
+      constexpr std::size_t none = std::size_t(-1);
+      auto coefficients = [&](auto &&nodal) {
+        for (int i = 0; i < dim; ++i)
+          {
+            for (unsigned int a = 0; a < (1u << dim); ++a)
+              cv[i][a] = nodal(vel[i], corner_offset[a]);
+            monomial_coefficients<dim>(cv[i]);
+          }
+      };
+      if (one_cell(n0))
+        {
+          if (n0[0] != coef_cell)
+            {
+              coefficients([&](const double *f, const std::ptrdiff_t o) {
+                return VD{} + f[n0[0] + o];
+              });
+              coef_cell = n0[0];
+            }
+        }
+      else
+        {
+          coefficients([&](const double *f, const std::ptrdiff_t o) {
+            VD r;
+            for (unsigned int l = 0; l < W; ++l)
+              r[l] = f[n0[l] + o];
+            return r;
+          });
+          coef_cell = none;
+        }
+      for (int i = 0; i < dim; ++i)
+        {
+          VD val, g[dim];
+          multilinear<dim>(cv[i], xi, val, g);
+          for (int j = 0; j < dim; ++j)
+            L[i][j] = dt_ih * g[j];
+        }
+    }
+
+    /// E(T_new), E(T_old) and sigma_y(T_new) of the cell last looked up.
+    struct CellModuli
+    {
+      unsigned int cell;
+      double       E, E_old, sy;
+    };
+
+    /// E(T_new), E(T_old), sigma_y(T_new) and the temperatures of the
+    /// points of a block into @p sb and @p sy: the points are sorted by
+    /// cell, so the tables are read once per cell run (@p cache; kernel and
+    /// viscous pressure share E); one-cell blocks broadcast the cell's
+    /// values.
+    template <std::size_t W, typename VD>
+    [[gnu::always_inline]] inline void
+    block_moduli(const SolidMaterial &             mat,
+                 const std::vector<std::uint32_t> &cell,
+                 const std::size_t (&pl)[W],
+                 const std::size_t (&n0)[W],
+                 const std::vector<double> &       T_old,
+                 const std::vector<double> &       T_new,
+                 CellModuli &                      cache,
+                 StressBlockOf<VD> &               sb,
+                 VD &                              sy)
+    {
+      if (one_cell(n0))
+        {
+          const auto cp = cell[pl[0]];
+          if (cp != cache.cell)
+            cache.cell = cp, cache.E = mat.youngs_modulus.value(T_new[cp]),
+            cache.E_old = mat.youngs_modulus.value(T_old[cp]),
+            cache.sy = mat.yield_stress.value(T_new[cp]);
+          sb.E     = VD{} + cache.E;
+          sb.E_old = VD{} + cache.E_old;
+          sb.T_old = VD{} + T_old[cp];
+          sb.T_new = VD{} + T_new[cp];
+          sy       = VD{} + cache.sy;
+        }
+      else
+        for (unsigned int l = 0; l < W; ++l)
+          {
+            const auto cp = cell[pl[l]];
+            if (cp != cache.cell)
+              cache.cell = cp, cache.E = mat.youngs_modulus.value(T_new[cp]),
+              cache.E_old = mat.youngs_modulus.value(T_old[cp]),
+              cache.sy = mat.yield_stress.value(T_new[cp]);
+            sb.E[l]     = cache.E;
+            sb.E_old[l] = cache.E_old;
+            sb.T_old[l] = T_old[cp];
+            sb.T_new[l] = T_new[cp];
+            sy[l]       = cache.sy;
+          }
+    }
+
+    /// Kinetic energy and momentum of the points of a block in SIMD, when
+    /// every point stays in its cell (the usual case; the sums are taken
+    /// lane by lane in point order, the arithmetic per point that of
+    /// SolidMPM::finish_points()): false (nothing added) otherwise.
+    template <int dim, bool A, typename VD>
+    [[gnu::always_inline]] inline bool
+    block_kinetic_in_cell(const VD (&vp)[dim],
+                          const VD (&xn)[dim],
+                          const VD (&cn)[dim],
+                          const VD (&Cp)[dim * dim],
+                          const double h,
+                          const double ih,
+                          const VD     use,
+                          const VD     m,
+                          const VD     mg,
+                          VD &         kinetic_v,
+                          VD (&momentum_v)[dim])
+    {
+      auto in_cell = xn[0] >= cn[0] && xn[0] <= cn[0] + h;
+      for (int d = 1; d < dim; ++d)
+        in_cell = in_cell && xn[d] >= cn[d] && xn[d] <= cn[d] + h;
+      bool all_in = true;
+      for (unsigned int l = 0; l < simd_width<VD>; ++l)
+        all_in = all_in && in_cell[l];
+      if (!all_in)
+        return false;
+      VD v2 = {};
+      for (int d = 0; d < dim; ++d)
+        v2 += vp[d] * vp[d];
+      if constexpr (A)
+        for (int j = 0; j < dim; ++j)
+          {
+            const VD xj = (xn[j] - cn[j]) * ih;
+            const VD D  = h * h * xj * (1 - xj);
+            for (int i = 0; i < dim; ++i)
+              v2 += Cp[i * dim + j] * Cp[i * dim + j] * D;
+          }
+      kinetic_v += use * (0.5 * m * v2);
+      for (int d = 0; d < dim; ++d)
+        momentum_v[d] += use * (mg * vp[d]);
+      return true;
+    }
   } // namespace
 
 
@@ -1036,10 +1189,11 @@ namespace femp
     // Viscous pressure q = b1 h sqrt(M m / V) tr(D), M = E M_per_E.
     const double M_per_E = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     const double b1h = b1 * h, idt = 1. / dt;
-    auto         E_cell = cell.empty() ? 0 : cell[0];
-    double       E_c    = n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.;
-    double       Eo_c   = n > 0 ? mat.youngs_modulus.value(T_old[E_cell]) : 0.;
-    double       sy_c   = n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.;
+    const unsigned int E_cell = cell.empty() ? 0 : cell[0];
+    CellModuli         moduli{E_cell,
+                      n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.,
+                      n > 0 ? mat.youngs_modulus.value(T_old[E_cell]) : 0.,
+                      n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.};
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
     // run's sub-cycling), so that a run of one step per gather pays nothing
@@ -1119,82 +1273,14 @@ namespace femp
         std::size_t n0[W];
         for (unsigned int l = 0; l < W; ++l)
           n0[l] = node0[pl[l]];
-        // L dt = sum v_a (x) grad N_a dt, the gradient of the interpolant of
-        // the nodal velocities in monomial form (as in g2p()): nodal values
-        // loaded once and broadcast when the four points lie in the same
-        // cell (the usual case: the points are sorted by cell), their
-        // coefficients shared by the blocks of the cell.
-        auto coefficients = [&](auto &&nodal) {
-          for (int i = 0; i < dim; ++i)
-            {
-              for (unsigned int a = 0; a < n_corners; ++a)
-                cv[i][a] = nodal(vel[i], corner_offset[a]);
-              monomial_coefficients<dim>(cv[i]);
-            }
-        };
-        if (one_cell(n0))
-          {
-            if (n0[0] != coef_cell)
-              {
-                coefficients([&](const double *f, const std::ptrdiff_t o) {
-                  return VD{} + f[n0[0] + o];
-                });
-                coef_cell = n0[0];
-              }
-          }
-        else
-          {
-            coefficients([&](const double *f, const std::ptrdiff_t o) {
-              VD r;
-              for (unsigned int l = 0; l < W; ++l)
-                r[l] = f[n0[l] + o];
-              return r;
-            });
-            coef_cell = none;
-          }
-        for (int i = 0; i < dim; ++i)
-          {
-            VD val, g[dim];
-            multilinear<dim>(cv[i], xi, val, g);
-            for (int j = 0; j < dim; ++j)
-              L[i][j] = dt_ih * g[j];
-          }
+        block_velocity_gradient<dim>(vel, corner_offset, n0, xi, dt_ih, cv,
+                                     coef_cell, L);
         VD s_old[n_stress];
         for (unsigned int c = 0; c < n_stress; ++c)
           sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
         sb.eps_p = simd_load(eps_p, pl, full);
-        // E(T_new), E(T_old) and sigma_y(T_new) per cell: the points are
-        // sorted by cell, so the tables are read once per cell run (kernel
-        // and viscous pressure share E); one-cell blocks broadcast the
-        // cell's values.
         VD sy;
-        if (one_cell(n0))
-          {
-            const auto cp = cell[pl[0]];
-            if (cp != E_cell)
-              E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
-              Eo_c = mat.youngs_modulus.value(T_old[cp]),
-              sy_c = mat.yield_stress.value(T_new[cp]);
-            sb.E     = VD{} + E_c;
-            sb.E_old = VD{} + Eo_c;
-            sb.T_old = VD{} + T_old[cp];
-            sb.T_new = VD{} + T_new[cp];
-            sy       = VD{} + sy_c;
-          }
-        else
-          for (unsigned int l = 0; l < W; ++l)
-            {
-              const auto cp = cell[pl[l]];
-              if (cp != E_cell)
-                E_cell = cp, E_c = mat.youngs_modulus.value(T_new[cp]),
-                Eo_c = mat.youngs_modulus.value(T_old[cp]),
-                sy_c = mat.yield_stress.value(T_new[cp]);
-              sb.E[l]     = E_c;
-              sb.E_old[l] = Eo_c;
-              sb.T_old[l] = T_old[cp];
-              sb.T_new[l] = T_new[cp];
-              sy[l]       = sy_c;
-            }
+        block_moduli(mat, cell, pl, n0, T_old, T_new, moduli, sb, sy);
         update_stress_block(mat, sb, sy);
         for (unsigned int c = 0; c < n_stress; ++c)
           simd_store(sigma[c], p0, nl, sb.s[c]);
@@ -1238,85 +1324,10 @@ namespace femp
           for (unsigned int c = 0; c < dim * dim; ++c)
             Cp[c] = simd_load(C[c], pl, full);
         // Kinetic energy and momentum, the cell check: in SIMD when every
-        // point stays in its cell (the usual case; the sums are taken lane by
-        // lane in point order, the arithmetic per point that of the lane
-        // loop below).
-        auto in_cell = xn[0] >= cn[0] && xn[0] <= cn[0] + h;
-        for (int d = 1; d < dim; ++d)
-          in_cell = in_cell && xn[d] >= cn[d] && xn[d] <= cn[d] + h;
-        bool all_in = true;
-        for (unsigned int l = 0; l < W; ++l)
-          all_in = all_in && in_cell[l];
-        if (all_in)
-          {
-            VD v2 = {};
-            for (int d = 0; d < dim; ++d)
-              v2 += vp[d] * vp[d];
-            if constexpr (A)
-              for (int j = 0; j < dim; ++j)
-                {
-                  const VD xj = (xn[j] - cn[j]) * ih;
-                  const VD D  = h * h * xj * (1 - xj);
-                  for (int i = 0; i < dim; ++i)
-                    v2 += Cp[i * dim + j] * Cp[i * dim + j] * D;
-                }
-            kinetic_v += use * (0.5 * m * v2);
-            for (int d = 0; d < dim; ++d)
-              momentum_v[d] += use * (mg * vp[d]);
-          }
-        else
-        for (unsigned int l = 0; l < nl; ++l)
-          {
-            const std::size_t p = p0 + l;
-            // Kinetic energy and momentum (APIC: the affine part is added
-            // after the cell crossing, with the tents of the new cell).
-            double v2 = 0;
-            for (int d = 0; d < dim; ++d)
-              {
-                v2 += v[d][p] * v[d][p];
-                weight_momentum[d] += true_mass[p] * v[d][p];
-              }
-
-            // Cell crossing (see solid_mpm.h).
-            bool inside = true;
-            for (int d = 0; d < dim; ++d)
-              inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
-            if (!inside)
-              {
-                Point<dim> xp;
-                for (int d = 0; d < dim; ++d)
-                  xp[d] = x[d][p];
-                const auto ijk = grid.cell_of(xp);
-                if (!grid.in_domain(xp) ||
-                    (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
-                  {
-                    if (!lost)
-                      escaped = xp;
-                    lost = true;
-                    continue;
-                  }
-                const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
-                if (!grid.in_box(ijk) ||
-                    grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
-                  {
-                    ++left_rank;
-                    continue;
-                  }
-                cell[p]  = idx;
-                node0[p] = grid.first_node_of_cell(idx);
-                for (int d = 0; d < dim; ++d)
-                  corner[d][p] = grid.origin()[d] + ijk[d] * h;
-                moved_cell = true;
-                mark_cell_nodes(node0[p]);
-              }
-            // APIC: affine part with the tents of the cell that now holds
-            // the point (those of the next P2G). Points that left the rank
-            // are counted by the gather of resort().
-            if (A)
-              add_affine_kinetic<dim>(x, corner, C, p, h, v2);
-            kinetic += 0.5 * (true_mass[p] * scaling) * v2;
-          }
-
+        // point stays in its cell, else point by point.
+        if (!block_kinetic_in_cell<dim, A>(vp, xn, cn, Cp, h, ih, use, m, mg,
+                                           kinetic_v, momentum_v))
+          finish_points<A>(p0, nl);
       }
     if constexpr (F)
       p2g_blocks<A>(in, c0, c1, n, out);
@@ -1336,6 +1347,70 @@ namespace femp
       loop(std::false_type(), std::false_type());
     next_ready = fuse && !lost && left_rank == 0;
     return work;
+  }
+
+
+  // The points of a block of update_stresses() of which one left its cell
+  // or the rank, point by point: kinetic energy and momentum, the cell
+  // crossing (see solid_mpm.h) and the APIC affine part of the kinetic
+  // energy with the tents of the new cell.
+  template <int dim>
+  template <bool A>
+  void
+  SolidMPM<dim>::finish_points(const std::size_t p0, const unsigned int nl)
+  {
+    const double h = grid.h();
+    for (unsigned int l = 0; l < nl; ++l)
+      {
+        const std::size_t p = p0 + l;
+        // Kinetic energy and momentum (APIC: the affine part is added
+        // after the cell crossing, with the tents of the new cell).
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            v2 += v[d][p] * v[d][p];
+            weight_momentum[d] += true_mass[p] * v[d][p];
+          }
+
+        // Cell crossing (see solid_mpm.h).
+        bool inside = true;
+        for (int d = 0; d < dim; ++d)
+          inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
+        if (!inside)
+          {
+            Point<dim> xp;
+            for (int d = 0; d < dim; ++d)
+              xp[d] = x[d][p];
+            const auto ijk = grid.cell_of(xp);
+            if (!grid.in_domain(xp) ||
+                (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+              {
+                if (!lost)
+                  escaped = xp;
+                lost = true;
+                continue;
+              }
+            const auto idx = grid.in_box(ijk) ? grid.local_index(ijk) : 0;
+            if (!grid.in_box(ijk) ||
+                grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
+              {
+                ++left_rank;
+                continue;
+              }
+            cell[p]  = idx;
+            node0[p] = grid.first_node_of_cell(idx);
+            for (int d = 0; d < dim; ++d)
+              corner[d][p] = grid.origin()[d] + ijk[d] * h;
+            moved_cell = true;
+            mark_cell_nodes(node0[p]);
+          }
+        // APIC: affine part with the tents of the cell that now holds
+        // the point (those of the next P2G). Points that left the rank
+        // are counted by the gather of resort().
+        if (A)
+          add_affine_kinetic<dim>(x, corner, C, p, h, v2);
+        kinetic += 0.5 * (true_mass[p] * scaling) * v2;
+      }
   }
 
 

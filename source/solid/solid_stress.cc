@@ -191,7 +191,31 @@ namespace femp
     dt_solid = prm.time_step > 0 ? prm.time_step :
                                    prm.safety_factor *
                                      prm.stable_limit(mat, grid.h());
+    const auto face_bits = set_boundary_flags();
+    fem.setup(prm.mass_scaling, face_bits, prm.gravity, T);
+    find_active_nodes();
 
+    T_solid = T;
+    T_prev  = T;
+    T_next  = T;
+    t_solid = t_prev = 0;
+    steps            = 0;
+    mpm.gather(fem.zone_mask(), prm.mass_scaling);
+    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
+                                 comm);
+    W_ext = W_int = 0;
+    D_transfer = K_melted = K_solidified = W_remap = 0;
+    n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
+    K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
+
+    open_output_files(directory);
+  }
+
+
+  template <int dim>
+  std::array<std::uint8_t, 2 * dim>
+  SolidStress<dim>::set_boundary_flags()
+  {
     // Boundary flags of the nodes of owned cells.
     constrained.assign(grid.n_local_nodes(), 0);
     const auto &ns = grid.node_strides();
@@ -230,8 +254,16 @@ namespace femp
           if (name == face_names[f])
             face_bits[f] |= 1u << (f / 2);
       }
-    fem.setup(prm.mass_scaling, face_bits, prm.gravity, T);
+    return face_bits;
+  }
 
+
+  template <int dim>
+  void
+  SolidStress<dim>::find_active_nodes()
+  {
+    const auto &ns = grid.node_strides();
+    const auto &lo = grid.box_lower();
     // Grid nodes a step touches: nodes of owned cells outside the FE zone,
     // and the transition nodes among the nodes of owned cells.
     {
@@ -300,20 +332,13 @@ namespace femp
             counted_nodes.emplace_back(n, tr_of[n]);
         }
     }
+  }
 
-    T_solid = T;
-    T_prev  = T;
-    T_next  = T;
-    t_solid = t_prev = 0;
-    steps            = 0;
-    mpm.gather(fem.zone_mask(), prm.mass_scaling);
-    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
-                                 comm);
-    W_ext = W_int = 0;
-    D_transfer = K_melted = K_solidified = W_remap = 0;
-    n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
-    K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
 
+  template <int dim>
+  void
+  SolidStress<dim>::open_output_files(const std::string &directory)
+  {
     if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
       {
         if (!prm.energy_file.empty())
@@ -387,6 +412,35 @@ namespace femp
   void
   SolidStress<dim>::step(const double dt, const double w)
   {
+    particles_to_grid();                              // 1. P2G
+    const double merge_loss = merge_transition_nodes(dt); // 2. transition
+    sum_grid_partials();
+    // Transfer dissipation, P2G part: point kinetic energy at the start of
+    // the step minus that of the points' grid momenta.
+    double transfer =
+      mpm.kinetic_energy() - grid_point_kinetic(false) + merge_loss;
+    update_grid_momentum(dt);                         // 3. grid update
+    // G2P part (completed below): grid kinetic energy of the points' mass
+    // after the update (nodes.mass is still the point mass here).
+    transfer += grid_point_kinetic(true);
+    set_transition_velocities();
+    const double ext_power = external_power();
+    const auto   fe_energy = grid_to_points(dt);      // 3., 4. G2P, FE nodes
+    const double remap_work = remap_work_of_step(dt);
+    set_grid_velocities();
+
+    // 5. Stresses (eq. 5).
+    double work = mpm.update_stresses(nodes, dt, T_solid, T_next);
+    work += fem.update_elements(dt, w);
+    ++steps;
+    book_energies(dt, ext_power, fe_energy, transfer, work, remap_work);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::particles_to_grid()
+  {
     // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
     // partial sums of this rank, on the grid nodes of MPM cells.
     for (const auto n : active_nodes)
@@ -400,11 +454,17 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         for (const auto n : active_nodes)
           nodes.force[d][n] += (*external_forces)[d][n];
+  }
 
+
+  template <int dim>
+  double
+  SolidStress<dim>::merge_transition_nodes(const double dt)
+  {
     // 2. Transition nodes (eqs. 14-17): partial grid and FE sums of this
     // rank, summed over all ranks in one reduction; every rank then holds
     // the totals and computes the same grid and FE velocities there.
-    constexpr unsigned int W = SolidFEM<dim>::tr_width;
+    constexpr unsigned int W          = SolidFEM<dim>::tr_width;
     double                 merge_loss = 0;
     if (fem.n_transition() > 0)
       {
@@ -445,6 +505,14 @@ namespace femp
         tr_u.assign(u0, u0 + dim * fem.n_transition());
         fem.update_transition(tr_buffer, dt, tr_v, tr_a);
       }
+    return merge_loss;
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::sum_grid_partials()
+  {
     grid.sum_shared_nodes(nodes.mass);
     for (int d = 0; d < dim; ++d)
       {
@@ -455,11 +523,13 @@ namespace femp
     for (const auto &[t, n] : grid_transition)
       for (int d = 0; d < dim; ++d)
         tr_fgrid[dim * t + d] = nodes.force[d][n];
-    // Transfer dissipation, P2G part: point kinetic energy at the start of
-    // the step minus that of the points' grid momenta.
-    double transfer =
-      mpm.kinetic_energy() - grid_point_kinetic(false) + merge_loss;
+  }
 
+
+  template <int dim>
+  void
+  SolidStress<dim>::update_grid_momentum(const double dt)
+  {
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
     for (const auto n : active_nodes)
@@ -484,9 +554,15 @@ namespace femp
             nodes.velocity[d][n] = nodes.momentum[d][n] / m;
           }
       }
-    // G2P part (completed below): grid kinetic energy of the points' mass
-    // after the update (nodes.mass is still the point mass here).
-    transfer += grid_point_kinetic(true);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::set_transition_velocities()
+  {
+    // Transition nodes: merged mass, velocity and acceleration of step 2.
+    constexpr unsigned int W = SolidFEM<dim>::tr_width;
     for (const auto &[t, n] : grid_transition)
       {
         nodes.mass[n] = tr_buffer[W * t] + fem.transition_mass(t);
@@ -496,12 +572,26 @@ namespace femp
             nodes.force[d][n]    = tr_a[dim * t + d];
           }
       }
+  }
+
+
+  template <int dim>
+  double
+  SolidStress<dim>::external_power() const
+  {
     double ext_power = 0;
     if (external_forces) // partial forces: the rank sum is the total
       for (int d = 0; d < dim; ++d)
         for (const auto n : active_nodes)
           ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
+    return ext_power;
+  }
 
+
+  template <int dim>
+  std::array<double, 2>
+  SolidStress<dim>::grid_to_points(const double dt)
+  {
     // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
     // momenta (in the same loop as G2P), grid velocities.
     for (int d = 0; d < dim; ++d)
@@ -515,6 +605,15 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         nodes.momentum[d][n] +=
           fem.transition_mass(t) * fem.transition_velocity(t)[d];
+    return fe_energy;
+  }
+
+
+  template <int dim>
+  double
+  SolidStress<dim>::remap_work_of_step(const double dt) const
+  {
+    constexpr unsigned int W = SolidFEM<dim>::tr_width;
     // Re-map work (booked, doc/solid.md "Energies"): the nodal forces f_I
     // (= m_I times the acceleration in nodes.force) do the work
     // dt f_I . (v_start + v_end) / 2 on the grid, but the step ends with the
@@ -557,18 +656,32 @@ namespace femp
                  (f - fg + b[1 + 2 * dim + d]) *
                    (vI - fem.transition_velocity(t)[d] + vm - u));
             }
+    return remap_work;
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::set_grid_velocities()
+  {
     for (const auto n : active_nodes)
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
           (nodes.mass[n] > 0 && !(constrained[n] & (1u << d))) ?
             nodes.momentum[d][n] / nodes.mass[n] :
             0.;
+  }
 
-    // 5. Stresses (eq. 5).
-    double work = mpm.update_stresses(nodes, dt, T_solid, T_next);
-    work += fem.update_elements(dt, w);
-    ++steps;
 
+  template <int dim>
+  void
+  SolidStress<dim>::book_energies(const double                 dt,
+                                  const double                 ext_power,
+                                  const std::array<double, 2> &fe_energy,
+                                  const double                 transfer,
+                                  const double                 work,
+                                  const double                 remap_work)
+  {
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];

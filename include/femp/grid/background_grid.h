@@ -298,6 +298,24 @@ namespace femp
     std::vector<int>                        node_neighbours;
     std::vector<std::vector<std::uint32_t>> shared_nodes;
     mutable std::vector<std::vector<double>> node_send, node_recv;
+
+    /// The owned and ghost cells of the triangulation in the domain, with
+    /// their structured index.
+    using KnownCells =
+      std::vector<std::pair<std::array<int, dim>,
+                            typename Triangulation<dim>::active_cell_iterator>>;
+    /// The parts of create(): the p4est triangulation (coarse blocks
+    /// refined globally); the local box, the cell status and the owned
+    /// cells (fills @p known); the ghost exchange pattern; the node layout
+    /// and the shared-node pattern.
+    void
+    create_triangulation();
+    void
+    set_local_box(KnownCells &known);
+    void
+    set_ghost_pattern(const KnownCells &known);
+    void
+    set_node_pattern(const KnownCells &known);
   };
 
   /// Tent (multilinear) weights of the 2^dim corners of cell @p ijk for a

@@ -286,6 +286,43 @@ namespace femp
     double       dt_stable_next = 0;
     std::size_t  n_phase_cells  = 0;
 
+    /// What the passes of advance() hand on to each other.
+    struct StepSums
+    {
+      double      rate_max = 0; ///< largest rate (1/stable step), 1/s
+      double      box_max  = 0; ///< pass B: peak new T over metal cells, K
+      double      box_bad  = 0; ///< pass B: NaN when a new T is not finite
+      double      e_boundary  = 0; ///< through fixed faces in the step, J
+      double      e_advection = 0; ///< convection, W/m^3 summed over cells
+      double      e_evap = 0, e_conv = 0, e_rad = 0; ///< losses, W/m^3 sums
+      std::size_t nphase = 0; ///< cells of the local enthalpy iteration
+    };
+    /// The passes of advance(), in this order.
+    /// Properties of the x-rows [first_row, first_row + n_rows) with metal.
+    void
+    properties_of_rows(const std::size_t first_row, const std::size_t n_rows);
+    /// Pass B: explicit conduction of all metal rows into T_new; flags the
+    /// rows for pass D.
+    void
+    conduction_pass(const double dt, StepSums &sums);
+    /// Fixed-temperature faces: their flux into the sources.
+    void
+    fixed_face_pass(const double dt, StepSums &sums);
+    /// Upwind convection with the velocity field (when set).
+    void
+    convection_pass(const double dt, StepSums &sums);
+    /// Pass C: the cells with sparse sources (laser, surface losses, fixed
+    /// faces), surface losses implicit.
+    void
+    source_pass(const double dt, StepSums &sums);
+    /// Pass D: the local enthalpy iteration in the flagged rows.
+    void
+    phase_change_pass(StepSums &sums);
+    /// Reset the sources, book the energies, T_max, swap and exchange T,
+    /// the next stable step; diagnostic when T is not finite.
+    void
+    finish_step(const double dt, const double time, const StepSums &sums);
+
     void
     compute_properties();
     /// Properties of the flat index range [begin, end) of the box.

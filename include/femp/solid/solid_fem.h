@@ -328,6 +328,51 @@ namespace femp
 
     std::vector<std::uint8_t> in_zone_cell;
 
+    /// The parts of setup(): the zone (zlo, zn, in_zone_cell); the FE
+    /// triangulation, its dofs and the node partitioner; the owned
+    /// elements sorted by zone index, with the structured index of each
+    /// local node; the node box; the element arrays and SIMD blocks; the
+    /// node arrays; the lumped masses (summed over ranks); the transition
+    /// nodes; the temperature exchange with the grid.
+    void
+    set_zone();
+    void
+    create_mesh();
+    std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
+    local_elements(std::vector<std::array<int, dim>> &node_ijk);
+    void
+    set_node_box(const std::vector<std::array<int, dim>> &node_ijk);
+    void
+    set_elements(
+      const std::vector<
+        std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
+        &cells);
+    void
+    allocate_node_arrays();
+    std::vector<double>
+    lumped_masses(const double m_el);
+    void
+    set_transition_nodes(const std::array<std::uint8_t, 2 * dim> &face_bits,
+                         const double                             m_el,
+                         const std::vector<double> &              mass,
+                         const std::vector<std::array<int, dim>> &node_ijk);
+    void
+    set_temperature_exchange(const std::vector<double> &T);
+    /// Zone geometry: cell @p ijk in the zone; lexicographic zone index of
+    /// a cell and of a node; a zone node on a zone face that is not a
+    /// domain face; the fixed components of a node on the domain faces.
+    bool
+    in_zone(const std::array<int, dim> &ijk) const;
+    std::uint64_t
+    zone_cell_id(const std::array<int, dim> &ijk) const;
+    std::uint64_t
+    zone_node_id(const std::array<int, dim> &ijk) const;
+    bool
+    is_transition(const std::array<int, dim> &ijk) const;
+    std::uint8_t
+    fix_bits(const std::array<int, dim> &             ijk,
+             const std::array<std::uint8_t, 2 * dim> &face_bits) const;
+
     template <bool update>
     double
     element_loop(const double dt, const double w);

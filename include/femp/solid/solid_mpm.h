@@ -283,6 +283,12 @@ namespace femp
     bool                 have_gravity       = false;
     Tensor<1, dim>       p2g_gravity; ///< of the last p2g()
 
+    /// The points p0 .. p0 + nl - 1 of a block of update_stresses() of
+    /// which one left its cell, point by point: kinetic energy, momentum
+    /// and the cell crossing (@p A: APIC).
+    template <bool A>
+    void
+    finish_points(const std::size_t p0, const unsigned int nl);
     /// Marks the corners of the cell with first node @p n0 in next_nodes.
     void
     mark_cell_nodes(const std::size_t n0);

@@ -291,6 +291,48 @@ namespace femp
     /// time @p t, naming the element and the zone top to use (collective).
     void
     check_fe_zone_solid(const std::vector<double> &T, const double t) const;
+    /// The parts of initialize(): boundary flags of the nodes of owned
+    /// cells (returns the constrained components per domain face for the
+    /// FE zone), the grid nodes a step touches, the output files.
+    std::array<std::uint8_t, 2 * dim>
+    set_boundary_flags();
+    void
+    find_active_nodes();
+    void
+    open_output_files(const std::string &directory);
+    /// The parts of step(), in this order: 1. P2G (partial sums of this
+    /// rank); 2. the merge at the transition nodes (returns its kinetic
+    /// energy loss, counted on the first rank); the sums over ranks; 3. the
+    /// grid momentum update; the transition-node velocities; the power of
+    /// the external forces; 3.-4. G2P and the FE nodes (returns the FE
+    /// {kinetic energy, external power}); the re-map work; the grid
+    /// velocities of the re-mapped momenta; after the stresses, the energy
+    /// balance and the blow-up check.
+    void
+    particles_to_grid();
+    double
+    merge_transition_nodes(const double dt);
+    void
+    sum_grid_partials();
+    void
+    update_grid_momentum(const double dt);
+    void
+    set_transition_velocities();
+    double
+    external_power() const;
+    std::array<double, 2>
+    grid_to_points(const double dt);
+    double
+    remap_work_of_step(const double dt) const;
+    void
+    set_grid_velocities();
+    void
+    book_energies(const double                 dt,
+                  const double                 ext_power,
+                  const std::array<double, 2> &fe_energy,
+                  const double                 transfer,
+                  const double                 work,
+                  const double                 remap_work);
     void
     write_rows();
     /// Gather the points for a solid advance: book the kinetic energy of

@@ -1,0 +1,79 @@
+// femp tests: the set-up shared by the 2D solid block tests (a substrate
+// block of material points on the background grid, the elastic-plastic
+// test material and the supports), as tests/flow_tools.h does for the flow
+// tests.
+#ifndef femp_solid_tools_h
+#define femp_solid_tools_h
+
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
+
+#include "test_tools.h"
+
+#include <memory>
+#include <string>
+
+namespace femp_test
+{
+  /// Box [0, size] with cells of size h; solid material points (2 x 2 per
+  /// cell, spacing h/2) filling it up to y = @p top, at @p T0, of @p
+  /// material (the grid is created first, then the points).
+  template <int dim>
+  struct SolidBlock
+  {
+    SolidBlock(const Point<dim> &size,
+               const double      h,
+               const double      top,
+               const Material &  material,
+               MPI_Comm          comm,
+               const double      T0 = 300.)
+      : grid(box<dim>(Point<dim>(), size, h), comm)
+      , material(material)
+    {
+      grid.create();
+      typename MaterialPoints<dim>::Parameters pp;
+      pp.point_spacing   = h / 2;
+      pp.substrate_top   = top;
+      pp.layer_thickness = 0;
+      pp.subcells        = 2;
+      points = std::make_unique<MaterialPoints<dim>>(pp, this->material, grid);
+      points->create(T0);
+    }
+
+    BackgroundGrid<dim>                  grid;
+    Material                             material;
+    std::unique_ptr<MaterialPoints<dim>> points;
+  };
+
+  /// The elastic-plastic block material: E = 100 Pa, hardening 5 Pa,
+  /// yield stress table @p yield (T:sigma_y), alpha = 1e-4 1/K, rho = 1,
+  /// melting at @p melt_temperature; Poisson ratio as SolidMaterial's
+  /// default unless set by the caller.
+  inline SolidMaterial
+  block_material(const std::string &yield, const double melt_temperature)
+  {
+    SolidMaterial sm;
+    sm.youngs_modulus   = PiecewiseLinear(100.);
+    sm.plastic_modulus  = PiecewiseLinear(5.);
+    sm.yield_stress     = PiecewiseLinear::parse(yield, "yield");
+    sm.expansion        = 1e-4;
+    sm.density          = 1;
+    sm.melt_temperature = melt_temperature;
+    return sm;
+  }
+
+  /// Supports of the blocks: bottom fixed, sides on rollers; no energy
+  /// file.
+  template <int dim>
+  typename SolidStress<dim>::Parameters
+  block_supports()
+  {
+    typename SolidStress<dim>::Parameters sp;
+    sp.fixed_faces  = {"y-"};
+    sp.roller_faces = {"x-", "x+"};
+    sp.energy_file  = "";
+    return sp;
+  }
+} // namespace femp_test
+
+#endif
