@@ -42,7 +42,7 @@ namespace femp
                       "(doc/solid.md, 'Flow and solid together'); "
                       "'Solid/Gravity' must then be the flow's gravity.");
     prm.leave_subsection();
-    FempProblem<3>::TimeParameters::declare_parameters(prm);
+    SimulationControl::Parameters::declare_parameters(prm);
     Material::declare_parameters(prm);
     BackgroundGrid<3>::Parameters::declare_parameters(prm);
     MaterialPoints<3>::Parameters::declare_parameters(prm);
@@ -54,44 +54,6 @@ namespace femp
     SolidMaterial::declare_parameters(prm);
     SolidStress<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
-  }
-
-
-  template <int dim>
-  void
-  FempProblem<dim>::TimeParameters::declare_parameters(ParameterHandler &prm)
-  {
-    prm.enter_subsection("Time stepping");
-    prm.declare_entry("End time", "1e-3", Patterns::Double(0.),
-                      "Simulated time at which the run ends, s; range (0, inf).");
-    prm.declare_entry("Time step", "0", Patterns::Double(0.),
-                      "Temperature step, s; 0 chooses it automatically as the "
-                      "safety factor times the stable limit. A prescribed step "
-                      "above the stable limit is refused. Range [0, inf).");
-    prm.declare_entry("Safety factor", "0.5", Patterns::Double(0., 1.),
-                      "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
-                      "(diffusion) and h/|u| (convection) used as the "
-                      "automatic step; range (0, 1].");
-    prm.declare_entry("Maximum number of steps", "100000000", Patterns::Integer(1),
-                      "Stop after this many steps even before the end time.");
-    prm.leave_subsection();
-  }
-
-
-  template <int dim>
-  void
-  FempProblem<dim>::TimeParameters::parse_parameters(ParameterHandler &prm)
-  {
-    prm.enter_subsection("Time stepping");
-    end_time      = prm.get_double("End time");
-    time_step     = prm.get_double("Time step");
-    safety_factor = prm.get_double("Safety factor");
-    max_steps     = prm.get_integer("Maximum number of steps");
-    prm.leave_subsection();
-    require(end_time > 0, "Time stepping/End time", end_time,
-            "it must be positive (s)");
-    require(safety_factor > 0, "Time stepping/Safety factor", safety_factor,
-            "it must lie in (0, 1]");
   }
 
 
@@ -121,7 +83,6 @@ namespace femp
     output_prm.parse_parameters(prm);
     history_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
-    melt_temperature = material.liquidus;
     if (solid_enabled)
       {
         solid_material.parse_parameters(prm);
@@ -131,53 +92,82 @@ namespace femp
         solid_prm.check(solid_material, grid_prm);
         fem_prm.parse_parameters(prm);
         if (fem_prm.enabled && fem_prm.automatic_top)
-          {
-            // 'Zone upper corner = auto' (fe_zone_depth.h, doc/cases.md):
-            // the top below the conservative melt depth of the laser's
-            // strongest moving segment.
-            require(dim == 3, "Solid FEM/Zone upper corner", "auto",
-                    "'auto' is for 3D scenes; give the corner's coordinates");
-            double           d = 0;
-            const Laser<dim> path(laser_prm);
-            for (const auto &s : path.segments())
-              if (s.power > 0 && s.speed > 0)
-                d = std::max(d, conservative_melt_depth(
-                                  material, laser_prm.absorptivity * s.power,
-                                  s.speed, heat_prm.initial_temperature));
-            fem_prm.upper_corner              = grid_prm.upper_corner;
-            fem_prm.upper_corner[dim - 1]     = automatic_fe_zone_top(
-              d, points_prm.substrate_top, grid_prm.lower_corner[dim - 1],
-              grid_prm.cell_size);
-            pcout << "Solid FEM: zone top 'auto' at z = "
-                  << fem_prm.upper_corner[dim - 1]
-                  << " m (conservative melt depth " << d
-                  << " m below the substrate top " << points_prm.substrate_top
-                  << " m, margin 1.1 d + 2 cells)" << std::endl;
-          }
+          place_fe_zone_automatically();
         fem_prm.check(grid_prm);
-        if (melt_flow)
-          {
-            // One body under one gravity: the fluid's weight reaches the
-            // solid through the fluid forces, the solid's own through
-            // Solid/Gravity.
-            bool same = true;
-            for (int d = 0; d < dim; ++d)
-              same = same && std::abs(solid_prm.gravity[d] -
-                                      flow_prm.gravity[d]) <=
-                               1e-12 * (1 + flow_prm.gravity.norm());
-            std::ostringstream v, allowed;
-            for (int d = 0; d < dim; ++d)
-              v << (d ? ", " : "") << solid_prm.gravity[d];
-            allowed << "with Physics/Melt flow = true it must be the flow's "
-                       "gravity (Melt flow/Gravity "
-                    << -flow_prm.gravity[dim - 1] << " m/s^2 downwards): ";
-            for (int d = 0; d < dim; ++d)
-              allowed << (d ? ", " : "") << flow_prm.gravity[d];
-            require(same, "Solid/Gravity", v.str(), allowed.str());
-          }
       }
 
-    // Checks that need several modules, still before any work.
+    check_across_modules();
+    control = std::make_unique<SimulationControl>(
+      time_prm,
+      SimulationControl::Cadence{output_prm.output_interval,
+                                 output_prm.output_steps,
+                                 output_prm.series_interval,
+                                 output_prm.progress_interval});
+    control->set_step_chooser(
+      [this](const unsigned int step, const double time) {
+        return choose_time_step(step, time);
+      });
+    report = std::make_unique<RunReport<dim>>(comm, pcout);
+    laser = std::make_unique<Laser<dim>>(laser_prm);
+    laser->check_path_inside(grid_prm.lower_corner, grid_prm.upper_corner);
+  }
+
+
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::place_fe_zone_automatically()
+  {
+    // 'Zone upper corner = auto' (fe_zone_depth.h, doc/cases.md): the top
+    // below the conservative melt depth of the laser's strongest moving
+    // segment.
+    require(dim == 3, "Solid FEM/Zone upper corner", "auto",
+            "'auto' is for 3D scenes; give the corner's coordinates");
+    double           d = 0;
+    const Laser<dim> path(laser_prm);
+    for (const auto &s : path.segments())
+      if (s.power > 0 && s.speed > 0)
+        d = std::max(d,
+                     conservative_melt_depth(material,
+                                             laser_prm.absorptivity * s.power,
+                                             s.speed,
+                                             heat_prm.initial_temperature));
+    fem_prm.upper_corner          = grid_prm.upper_corner;
+    fem_prm.upper_corner[dim - 1] = automatic_fe_zone_top(
+      d, points_prm.substrate_top, grid_prm.lower_corner[dim - 1],
+      grid_prm.cell_size);
+    pcout << "Solid FEM: zone top 'auto' at z = "
+          << fem_prm.upper_corner[dim - 1] << " m (conservative melt depth "
+          << d << " m below the substrate top " << points_prm.substrate_top
+          << " m, margin 1.1 d + 2 cells)" << std::endl;
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::check_across_modules()
+  {
+    if (solid_enabled && melt_flow)
+      {
+        // One body under one gravity: the fluid's weight reaches the
+        // solid through the fluid forces, the solid's own through
+        // Solid/Gravity.
+        bool same = true;
+        for (int d = 0; d < dim; ++d)
+          same = same && std::abs(solid_prm.gravity[d] -
+                                  flow_prm.gravity[d]) <=
+                           1e-12 * (1 + flow_prm.gravity.norm());
+        std::ostringstream v, allowed;
+        for (int d = 0; d < dim; ++d)
+          v << (d ? ", " : "") << solid_prm.gravity[d];
+        allowed << "with Physics/Melt flow = true it must be the flow's "
+                   "gravity (Melt flow/Gravity "
+                << -flow_prm.gravity[dim - 1] << " m/s^2 downwards): ";
+        for (int d = 0; d < dim; ++d)
+          allowed << (d ? ", " : "") << flow_prm.gravity[d];
+        require(same, "Solid/Gravity", v.str(), allowed.str());
+      }
     require(heat_enabled || melt_flow || time_prm.time_step > 0,
             "Time stepping/Time step", time_prm.time_step,
             "with 'Physics/Heat transfer = false' and no melt flow nothing "
@@ -198,8 +188,6 @@ namespace femp
         require(time_prm.time_step <= bound, "Time stepping/Time step",
                 time_prm.time_step, allowed.str());
       }
-    laser = std::make_unique<Laser<dim>>(laser_prm);
-    laser->check_path_inside(grid_prm.lower_corner, grid_prm.upper_corner);
   }
 
 
@@ -227,60 +215,15 @@ namespace femp
     heat->initialize();
     if (!heat_enabled)
       heat->freeze();
-    if (!heat_prm.initial_temperature_expression.empty())
-      {
-        // Points outside the initial bodies take the initial temperature
-        // at their position.
-        using P = typename MaterialPoints<dim>::PropertyIndex;
-        for (auto &particle : points->particle_handler())
-          {
-            const Point<dim> x = particle.get_location();
-            bool             in_body = false;
-            for (const auto &b : points_prm.bodies)
-              in_body = in_body || b.inside(x);
-            if (in_body)
-              continue;
-            auto         v         = particle.get_properties();
-            const double T0        = heat_prm.initial_temperature_at(x);
-            v[P::temperature]      = T0;
-            v[P::peak_temperature] = T0;
-          }
-      }
-    if (!points_prm.bodies.empty())
-      {
-        // Cells of initial bodies take the mean temperature of their points
-        // (and the liquid fraction of that temperature).
-        using P = typename MaterialPoints<dim>::PropertyIndex;
-        for (const auto &[idx, cell] : points->occupied_cells())
-          {
-            double sum = 0, n = 0;
-            for (const auto &particle :
-                 points->particle_handler().particles_in_cell(cell))
-              sum += particle.get_properties()[P::temperature], ++n;
-            if (n > 0)
-              heat->set_cell_temperature(idx, sum / n);
-          }
-        heat->update_ghosts();
-      }
+    point_heat = std::make_unique<PointHeatExchange<dim>>(
+      *points, *heat, heat_prm.advection_by_melt_flow == "points");
+    point_heat->initial_temperatures(points_prm.bodies, heat_prm);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
       heat->set_metal_fraction(points->metal_fraction());
     }
     if (melt_flow)
-      {
-        flow_prm.latent_heat_evaporation = heat_prm.latent_heat_evaporation;
-        flow_prm.evaporation_temperature = heat_prm.evaporation_temperature;
-        flow_prm.molar_mass              = heat_prm.molar_mass;
-        flow_prm.ambient_pressure        = heat_prm.ambient_pressure;
-        flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
-                                                         *grid, *points, &timer);
-        flow->set_liquid_fraction(&heat->liquid_fraction());
-        flow->set_temperature(&heat->temperature());
-        // Heat moves with the flow either on the points (taken when they
-        // change cells, flow_substeps()) or by upwind convection of T.
-        if (heat_prm.advection_by_melt_flow == "upwind")
-          heat->set_velocity(&flow->cell_velocity());
-      }
+      setup_flow();
     output = std::make_unique<Output<dim>>(output_prm, *grid);
     if (history_prm.enabled)
       history = std::make_unique<ThermalHistory<dim>>(
@@ -293,29 +236,60 @@ namespace femp
       output->initialize(names);
     }
     if (solid_enabled)
-      {
-        TimerOutput::Scope t(timer, "setup: solid");
-        solid = std::make_unique<SolidStress<dim>>(solid_prm, fem_prm,
-                                                   solid_material, *grid,
-                                                   *points);
-        if (flow)
-          {
-            // Flow and solid together (doc/solid.md): the flow owns the
-            // fluid points' velocities; its forces on the solid enter
-            // through the solid's external nodal forces.
-            solid->set_flow_owns_fluid_points(true);
-            // Fragments that solidify where the flow left them: no force
-            // on nodes with less than `Solid/Small mass cutoff` (default
-            // 5 %) of a full node's mass (stability estimate and choice:
-            // doc/solid.md).
-            solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
-            for (int d = 0; d < dim; ++d)
-              fluid_force[d] = grid->make_node_field();
-            solid->set_external_nodal_forces(&fluid_force);
-          }
-        solid->initialize(heat->temperature(), output_prm.directory);
-      }
+      setup_solid();
+    print_scene();
+  }
 
+
+  template <int dim>
+  void
+  FempProblem<dim>::setup_flow()
+  {
+    flow_prm.latent_heat_evaporation = heat_prm.latent_heat_evaporation;
+    flow_prm.evaporation_temperature = heat_prm.evaporation_temperature;
+    flow_prm.molar_mass              = heat_prm.molar_mass;
+    flow_prm.ambient_pressure        = heat_prm.ambient_pressure;
+    flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
+                                                     *grid, *points, &timer);
+    flow->set_liquid_fraction(&heat->liquid_fraction());
+    flow->set_temperature(&heat->temperature());
+    // Heat moves with the flow either on the points (taken when they
+    // change cells, PointHeatExchange) or by upwind convection of T.
+    if (heat_prm.advection_by_melt_flow == "upwind")
+      heat->set_velocity(&flow->cell_velocity());
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::setup_solid()
+  {
+    TimerOutput::Scope t(timer, "setup: solid");
+    solid = std::make_unique<SolidStress<dim>>(solid_prm, fem_prm,
+                                               solid_material, *grid, *points);
+    if (flow)
+      {
+        // Flow and solid together (doc/solid.md): the flow owns the
+        // fluid points' velocities; its forces on the solid enter
+        // through the solid's external nodal forces.
+        solid->set_flow_owns_fluid_points(true);
+        // Fragments that solidify where the flow left them: no force
+        // on nodes with less than `Solid/Small mass cutoff` (default
+        // 5 %) of a full node's mass (stability estimate and choice:
+        // doc/solid.md).
+        solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
+        fluid_solid = std::make_unique<FluidSolidForces<dim>>(
+          *grid, *points, material.density, fem_prm);
+        solid->set_external_nodal_forces(&fluid_solid->nodal_forces());
+      }
+    solid->initialize(heat->temperature(), output_prm.directory);
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::print_scene() const
+  {
     pcout << "femp: " << dim << "D scene, "
           << Utilities::MPI::n_mpi_processes(comm) << " MPI rank(s)\n"
           << "  background grid: " << grid->n_global_cells() << " cells of "
@@ -338,6 +312,177 @@ namespace femp
 
 
   template <int dim>
+  void
+  FempProblem<dim>::run()
+  {
+    control->start_clock();
+    setup();
+    report->start(*heat);
+    write_output(false);
+
+    while (control->running())
+      {
+        const double dt = control->next_time_step();
+
+        // 1. Tag cells, alpha, gamma, properties: alpha changes only when
+        //    points move (the melt-flow and solid modules, step 3), so
+        //    nothing to do here; gamma and the properties follow T inside
+        //    HeatTransfer::advance().
+
+        // 2. Temperature in fluid, solid and powder (eq. 1), then to the
+        //    points (eq. 2).
+        temperature_step(dt);
+        cells_to_points();
+
+        // 3. Melt-pool flow (eqs. 3-4), sub-cycled, with the heat carried
+        //    by the points that changed cells; with the solid, the fluid
+        //    forces on it (eq. 13), held over the solid sub-steps of 4.
+        if (flow)
+          flow_substeps(dt);
+        if (fluid_solid)
+          fluid_forces_on_solid();
+
+        control->advance(dt);
+
+        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17),
+        //    sub-cycled against the temperature step.
+        if (solid)
+          solid_step();
+
+        // 5. Output.
+        output_results();
+      }
+
+    report->finish(*control, *heat, *points, flow.get(), solid.get(),
+                   point_heat->moved_points_energy(), result);
+    if (history)
+      history->write(output_prm.directory);
+    timer.print_summary();
+    print_timer_statistics(timer, comm); // min/avg/max over the ranks
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::temperature_step(const double dt)
+  {
+    if (!heat_enabled)
+      return;
+    {
+      TimerOutput::Scope t(timer, "temperature step");
+      heat->advance(dt, control->time());
+    }
+    if (history)
+      history->observe(heat->temperature(), heat->metal_fraction(),
+                       control->time() + dt);
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::cells_to_points()
+  {
+    {
+      TimerOutput::Scope t(timer, "cells to points");
+      points->cells_to_points(heat->temperature());
+    }
+    if (flow && solid)
+      {
+        // Points that melted leave the solid with the velocity they had
+        // in it (booked before the flow changes it).
+        TimerOutput::Scope t(timer, "solid");
+        solid->find_state_changes();
+      }
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::flow_substeps(const double dt)
+  {
+    // Sub-cycle with the current limits (they change as the flow speeds
+    // up), or with the prescribed step, in equal pieces that end with the
+    // temperature step. The limits and which one governed are recorded for
+    // the report at the end of the run.
+    const unsigned int resorts = flow->statistics().resorts;
+    auto &             r       = result.flow_limits;
+    double             t       = 0;
+    unsigned int       n_sub   = 0;
+    while (t < dt * (1 - 1e-12))
+      {
+        const auto l = flow->stable_time_step();
+        r.record(l, flow_prm.time_step > 0);
+        const double wanted = flow_prm.time_step > 0 ? flow_prm.time_step : l.min();
+        // Equal sub-steps over the rest of the temperature step, none above
+        // the wanted step: no tiny last sub-step (uneven sub-steps shortened
+        // the droplet period in prm/oscillating_droplet.prm).
+        const double rest = dt - t;
+        const double dt_f =
+          rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
+        flow->step(dt_f);
+        t += dt_f;
+        require(++n_sub <= run_limits().max_flow_substeps,
+                "Run limits/Maximum flow sub-steps",
+                run_limits().max_flow_substeps,
+                "the flow needed more sub-steps in the temperature step of " +
+                  num(dt) + " s (sub-step now " + num(dt_f) +
+                  " s: the flow may have blown up); raise the bound if the "
+                  "flow is right");
+      }
+    r.record_substeps(n_sub);
+    if (flow->statistics().resorts == resorts)
+      return;
+    // Points changed cells: new alpha, and the heat they bring.
+    TimerOutput::Scope scope(timer, "flow: alpha and new metal cells");
+    point_heat->points_changed_cells();
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::fluid_forces_on_solid()
+  {
+    TimerOutput::Scope t(timer, "flow: forces on the solid");
+    fluid_solid->update(*flow);
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::solid_step()
+  {
+    TimerOutput::Scope t(timer, "solid");
+    solid->advance(control->time(), heat->temperature(), control->is_last());
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::output_results()
+  {
+    if (control->series_due())
+      write_series();
+    if (control->output_due())
+      write_output(control->is_last());
+    if (control->progress_due())
+      report->progress(*control, heat->max_temperature(), result.pool);
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::write_series()
+  {
+    TimerOutput::Scope t(timer, "time series");
+    result.pool = measure_melt_pool(*grid, heat->temperature(),
+                                    heat->metal_fraction(), material.liquidus,
+                                    points_prm.substrate_top);
+    output->write_series(control->time(), output_fields(), result.pool);
+    control->series_written();
+  }
+
+
+  template <int dim>
   double
   FempProblem<dim>::choose_time_step(const unsigned int step, const double time)
   {
@@ -349,11 +494,12 @@ namespace femp
             time_prm.time_step :
             (flow_prm.time_step > 0 ? flow_prm.time_step :
                                       flow->stable_time_step().min());
-        return std::min(dt, time_prm.end_time - time);
+        check_projected_steps(step, dt);
+        return dt;
       }
     const double stable =
       step == 0 ? heat->stable_time_step() : heat->last_stable_time_step();
-    double dt = time_prm.time_step > 0 ? time_prm.time_step :
+    const double dt = time_prm.time_step > 0 ? time_prm.time_step :
                                          time_prm.safety_factor * stable;
     if (time_prm.time_step > stable)
       {
@@ -366,7 +512,24 @@ namespace femp
         throw InputError("Time stepping/Time step", num(time_prm.time_step),
                          s.str());
       }
-    return std::min(dt, time_prm.end_time - time);
+    check_projected_steps(step, dt);
+    return dt;
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::check_projected_steps(const unsigned int step,
+                                          const double       dt) const
+  {
+    // No run that silently stops short: refuse a projected step count
+    // above the bound (collective: dt is the same on every rank).
+    require(step > 0 || time_prm.end_time / dt <= time_prm.max_steps,
+            "Time stepping/Maximum number of steps", time_prm.max_steps,
+            "the first step of " + num(dt) + " s needs about " +
+              num(std::ceil(time_prm.end_time / dt)) +
+              " steps to reach 'End time'; raise the bound or shorten the "
+              "scene");
   }
 
 
@@ -392,10 +555,10 @@ namespace femp
 
   template <int dim>
   void
-  FempProblem<dim>::write_output(const unsigned int n,
-                                 const double       time,
-                                 const bool         last)
+  FempProblem<dim>::write_output(const bool last)
   {
+    const unsigned int n    = control->output_number();
+    const double       time = control->time();
     TimerOutput::Scope t(timer, "output");
     std::vector<double> phase(grid->n_local(), 0.);
     const auto &        a = heat->metal_fraction();
@@ -425,393 +588,9 @@ namespace femp
                          with_points ? &points->particle_handler() : nullptr,
                          points->used_property_names());
     output->write_probe_lines(n, time, line_fields);
+    control->output_written();
   }
 
-
-  template <int dim>
-  void
-  FempProblem<dim>::run()
-  {
-    const auto wall_start = std::chrono::steady_clock::now();
-    setup();
-
-    const double H0   = heat->stored_enthalpy();
-    double       time = 0;
-    unsigned int step = 0, n_output = 0;
-    double       next_output = output_prm.output_interval;
-    double       next_series = 0;
-    write_output(n_output++, time, false);
-
-    while (time < time_prm.end_time * (1 - 1e-12) && step < time_prm.max_steps)
-      {
-        const double dt = choose_time_step(step, time);
-        // No run that silently stops short: refuse a projected step count
-        // above the bound (collective: dt is the same on every rank).
-        require(step > 0 || time_prm.end_time / dt <= time_prm.max_steps,
-                "Time stepping/Maximum number of steps", time_prm.max_steps,
-                "the first step of " + num(dt) + " s needs about " +
-                  num(std::ceil(time_prm.end_time / dt)) + " steps to reach 'End time'; "
-                  "raise the bound or shorten the scene");
-
-        // 1. Tag cells, alpha, gamma, properties: alpha changes only when
-        //    points move (the melt-flow and solid modules), so nothing to do
-        //    in a thermal-only scene; gamma and the properties follow T
-        //    inside HeatTransfer::advance().
-
-        // 2. Temperature in fluid, solid and powder (eq. 1).
-        if (heat_enabled)
-          {
-            TimerOutput::Scope t(timer, "temperature step");
-            heat->advance(dt, time);
-          }
-        if (history)
-          history->observe(heat->temperature(), heat->metal_fraction(), time + dt);
-        {
-          TimerOutput::Scope t(timer, "cells to points");
-          points->cells_to_points(heat->temperature());
-        }
-        if (melt_flow && solid)
-          {
-            // Points that melted leave the solid with the velocity they had
-            // in it (booked before the flow changes it).
-            TimerOutput::Scope t(timer, "solid");
-            solid->find_state_changes();
-          }
-
-        // 3. Melt-pool flow (IncompressibleFlow, eqs. 3-4), sub-cycled;
-        //    with the solid, the fluid forces on it (eq. 13), held over
-        //    the solid sub-steps of step 4.
-        if (melt_flow)
-          flow_substeps(dt);
-        if (melt_flow && solid)
-          {
-            TimerOutput::Scope t(timer, "flow: forces on the solid");
-            fluid_forces_to_solid_nodes();
-          }
-
-        time += dt;
-        ++step;
-        const bool last = time >= time_prm.end_time * (1 - 1e-12) ||
-                          step >= time_prm.max_steps;
-
-        // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17),
-        //    sub-cycled against the temperature step.
-        if (solid)
-          {
-            TimerOutput::Scope t(timer, "solid");
-            solid->advance(time, heat->temperature(), last);
-          }
-
-        // 5. Output.
-        if (time >= next_series * (1 - 1e-12) || last)
-          {
-            TimerOutput::Scope t(timer, "time series");
-            result.pool = measure_melt_pool(*grid, heat->temperature(),
-                                            heat->metal_fraction(),
-                                            melt_temperature,
-                                            points_prm.substrate_top);
-            output->write_series(time, output_fields(), result.pool);
-            next_series = time + output_prm.series_interval;
-          }
-        if ((output_prm.output_interval > 0 &&
-             time >= next_output * (1 - 1e-9)) ||
-            (output_prm.output_steps > 0 && step % output_prm.output_steps == 0) ||
-            last)
-          {
-            write_output(n_output++, time, last);
-            while (next_output <= time * (1 + 1e-9) &&
-                   output_prm.output_interval > 0)
-              next_output += output_prm.output_interval;
-          }
-        if (step % output_prm.progress_interval == 0 || last)
-          {
-            const double wall = std::chrono::duration<double>(
-                                  std::chrono::steady_clock::now() - wall_start)
-                                  .count();
-            const double left = wall / time * (time_prm.end_time - time);
-            pcout << std::setprecision(4) << "t = " << std::setw(10) << time
-                  << " s  step " << std::setw(7) << step << "  dt = "
-                  << std::setw(10) << dt << " s  T_max = " << std::setw(8)
-                  << heat->max_temperature() << " K  pool L x W x D = "
-                  << result.pool.length * 1e6 << " x "
-                  << result.pool.width * 1e6 << " x "
-                  << result.pool.depth * 1e6 << " um  wall "
-                  << std::setprecision(3) << wall << " s, left ~" << left
-                  << " s" << std::endl;
-          }
-      }
-    if (history)
-      history->write(output_prm.directory);
-    result.steps = step;
-    result.time  = time;
-    result.T_max = heat->max_temperature();
-
-    const auto e    = heat->energy_budget();
-    result.laser    = e.laser;
-    result.losses   = heat->total_losses();
-    result.boundary = e.boundary;
-    result.advection = e.advection;
-    result.stored   = heat->stored_enthalpy() - H0;
-    result.n_points = points->n_global_points();
-    {
-      double sum = 0;
-      for (const auto &p : points->particle_handler())
-        sum += p.get_properties()[MaterialPoints<dim>::PropertyIndex::temperature];
-      result.point_T_mean =
-        Utilities::MPI::sum(sum, comm) / std::max<double>(1, result.n_points);
-    }
-    if (solid)
-      {
-        result.solid_steps  = solid->n_steps();
-        result.solid_energy = solid->energies();
-        const auto &e       = result.solid_energy;
-        pcout << std::setprecision(6) << "Solid: " << result.solid_steps
-              << " steps of " << solid->time_step()
-              << " s; energies (J" << (dim == 2 ? "/m" : "")
-              << "): external work " << e.external << ", stress work "
-              << e.internal << ", kinetic " << e.kinetic << ", hourglass "
-              << e.hourglass << ", balance " << e.balance()
-              << "; kinetic/internal " << e.kinetic / std::max(1e-300, std::abs(e.internal))
-              << std::endl;
-      }
-    if (!heat_enabled)
-      pcout << "Energy: heat transfer off (Physics/Heat transfer = false), "
-               "temperature frozen at its initial field"
-            << std::endl;
-    else
-      pcout << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
-            << "): laser " << result.laser << ", surface losses "
-            << result.losses << " (evaporation " << e.evaporation
-            << ", convection " << e.convection << ", radiation " << e.radiation
-            << " at the end of each step), fixed faces " << result.boundary
-            << ", stored " << result.stored << "; balance error "
-            << std::abs(result.laser + result.boundary - result.losses -
-                        result.stored) /
-                 std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
-                                           result.losses))
-            << std::endl;
-    if (heat_enabled && flow)
-      pcout << std::setprecision(6)
-            << "  with melt flow, energy created (J" << (dim == 2 ? "/m" : "")
-            << ") by the upwind convection of T " << result.advection
-            << " and by points moving between cells " << result.moved_points
-            << "; balance error with these counted as sources "
-            << std::abs(result.laser + result.boundary + result.advection +
-                        result.moved_points - result.losses - result.stored) /
-                 std::max(1e-300, std::max(result.laser + std::abs(result.boundary),
-                                           result.losses))
-            << std::endl;
-    if (flow)
-      {
-        const auto &st                = flow->statistics();
-        result.flow_steps             = st.steps;
-        result.pressure_matrix_builds = st.matrix_rebuilds;
-        result.pressure_cg_iterations = st.cg_iterations;
-        result.max_fluid_speed        = st.max_point_speed;
-        pcout << "Melt flow: " << st.steps << " fluid steps, pressure matrix "
-              << "graph built " << st.matrix_rebuilds << " times, AMG "
-              << "hierarchy " << st.amg_setups << " times, CG iterations " << st.cg_iterations << " in total ("
-              << std::setprecision(3)
-              << double(st.cg_iterations) / std::max(1u, st.steps)
-              << " per solve, at most " << st.max_iterations
-              << "), " << st.halvings << " steps redone as halves, points "
-              << "re-sorted in " << st.resorts << " steps (" << st.global_sorts
-              << " with deal.II's global sort), "
-              << st.n_fluid_cells << " fluid cells and max speed "
-              << st.max_point_speed << " m/s at the end" << std::endl;
-        if (st.volume_iterations > 0 || st.volume_skipped > 0)
-          pcout << "Melt flow volume correction: " << st.volume_iterations
-                << " CG iterations in total, " << st.volume_skipped
-                << " solves not converged (no correction in those steps)"
-                << std::endl;
-        const auto &r = result.flow_limits;
-        pcout << std::setprecision(4)
-              << "Melt flow time step limits (smallest over the run): "
-              << "convective " << r.convective << " s, viscous " << r.viscous
-              << " s, capillary " << r.capillary << " s (used x "
-              << r.capillary_fraction << ")\n"
-              << "  sub-steps governed by: convective " << r.governed[0]
-              << ", viscous " << r.governed[1] << ", capillary "
-              << r.governed[2] << ", prescribed (Melt flow/Time step) "
-              << r.governed[3] << "; sub-steps per temperature step "
-              << (r.max_substeps > 0 ? r.min_substeps : 0) << " to "
-              << r.max_substeps << std::endl;
-      }
-    timer.print_summary();
-    print_timer_statistics(timer, comm); // min/avg/max over the ranks
-  }
-
-
-  template <int dim>
-  void
-  FempProblem<dim>::flow_substeps(const double dt)
-  {
-    // Sub-cycle with the current limits (they change as the flow speeds
-    // up), or with the prescribed step, in equal pieces that end with the
-    // temperature step. The limits and which one governed are recorded for
-    // the report at the end of the run.
-    const unsigned int resorts = flow->statistics().resorts;
-    auto &             r       = result.flow_limits;
-    double             t       = 0;
-    unsigned int       n_sub   = 0;
-    while (t < dt * (1 - 1e-12))
-      {
-        const auto l = flow->stable_time_step();
-        r.convective = std::min(r.convective, l.convective);
-        r.viscous    = std::min(r.viscous, l.viscous);
-        r.capillary  = std::min(r.capillary, l.capillary);
-        r.capillary_fraction = l.capillary_fraction;
-        const double wanted  = flow_prm.time_step > 0 ? flow_prm.time_step : l.min();
-        ++r.governed[flow_prm.time_step > 0 ? 3 : l.governing()];
-        // Equal sub-steps over the rest of the temperature step, none above
-        // the wanted step: no tiny last sub-step (uneven sub-steps shortened
-        // the droplet period in prm/oscillating_droplet.prm).
-        const double rest = dt - t;
-        const double dt_f =
-          rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
-        flow->step(dt_f);
-        t += dt_f;
-        require(++n_sub <= run_limits().max_flow_substeps,
-                "Run limits/Maximum flow sub-steps",
-                run_limits().max_flow_substeps,
-                "the flow needed more sub-steps in the temperature step of " +
-                  num(dt) + " s (sub-step now " + num(dt_f) +
-                  " s: the flow may have blown up); raise the bound if the "
-                  "flow is right");
-      }
-    r.min_substeps = std::min(r.min_substeps, n_sub);
-    r.max_substeps = std::max(r.max_substeps, n_sub);
-    if (flow->statistics().resorts == resorts)
-      return;
-    // Points changed cells: new alpha; cells that gained metal take the
-    // mean temperature of their points (METHOD sec. 2).
-    TimerOutput::Scope  scope(timer, "flow: alpha and new metal cells");
-    // Energy bookkeeping: the stored enthalpy before and after (collective).
-    const double        H_before = heat_enabled ? heat->stored_enthalpy() : 0.;
-    std::vector<double> alpha = points->metal_fraction();
-    const auto &        old   = heat->metal_fraction();
-    using P                   = typename MaterialPoints<dim>::PropertyIndex;
-    if (heat_enabled && heat_prm.advection_by_melt_flow == "points")
-      {
-        // The points carry the heat: every cell whose points came from
-        // cells at other temperatures takes their mean specific enthalpy
-        // (cells that gained metal included).
-        const auto mean_e = points->volume_mean_over_points(
-          heat->temperature(),
-          [this](const double T) { return heat->specific_enthalpy(T); });
-        heat->set_metal_fraction(alpha);
-        heat->take_point_enthalpy(mean_e);
-        result.moved_points += heat->stored_enthalpy() - H_before;
-        return;
-      }
-    // (With a frozen temperature the field keeps its initial values.)
-    if (heat_enabled)
-      {
-      for (const auto &[idx, cell] : points->occupied_cells())
-        if (old[idx] <= 0 && alpha[idx] > 0)
-          {
-            double sum = 0, n = 0;
-            for (const auto &particle : points->particle_handler().particles_in_cell(cell))
-              sum += particle.get_properties()[P::temperature], ++n;
-            // gamma from T: a stale gamma (0 in a former gas cell) would
-            // take the latent heat of a hot arrival from its sensible heat
-            // at the next step (cooling it by up to L_m/c_m ~ 350 K).
-            if (n > 0)
-              heat->set_cell_temperature(idx, sum / n);
-          }
-      }
-    heat->update_ghosts();
-    heat->set_metal_fraction(alpha);
-    if (heat_enabled)
-      result.moved_points += heat->stored_enthalpy() - H_before;
-  }
-
-  template <int dim>
-  void
-  FempProblem<dim>::fluid_forces_to_solid_nodes()
-  {
-    // Flow and solid together (doc/solid.md): the fluid force through each
-    // face of an owned solid cell to a fluid cell goes to the face's
-    // 2^(dim-1) grid nodes, to node I the share
-    //   F_face / 2^(dim-1) * min(1, m_I / (m_ref / 2)),
-    // m_I = sum_p N_I(x_p) m_p over the cell's solid points, m_ref = rho
-    // h^dim / 2^dim the share of a full cell. A full cell gets the face
-    // force exactly (equal shares: the traction on the face), also when
-    // its points have moved by up to a quarter cell; a node that holds
-    // only a small part of a point's mass gets a force in proportion, so
-    // its acceleration is at most twice that of a node of a full cell (a
-    // whole face force on such a node made the 3D track scene blow up). Spreading over the points with their tents instead was stable
-    // but put half of the face force on the far nodes of the cell (the
-    // stress under the interface 0.47 short in coupled_pool_on_solid).
-    // Cells of the FE zone: equal shares. Cells with no solid point
-    // (powder only): no force; the unmelted powder carries no stress.
-    using P = typename MaterialPoints<dim>::PropertyIndex;
-    flow->fluid_forces_on_solid(fluid_face_force);
-    for (int d = 0; d < dim; ++d)
-      std::fill(fluid_force[d].begin(), fluid_force[d].end(), 0.);
-    constexpr unsigned int n_corners = 1u << dim;
-    const double           h = grid->h(), ih = 1. / h;
-    const double           m_ref = material.density * std::pow(h, dim) / n_corners;
-    const auto &           x0    = grid->origin();
-    const auto &           ns    = grid->node_strides();
-    std::array<std::size_t, n_corners> offset;
-    for (unsigned int k = 0; k < n_corners; ++k)
-      {
-        offset[k] = 0;
-        for (int d = 0; d < dim; ++d)
-          if ((k >> d) & 1)
-            offset[k] += ns[d];
-      }
-    auto &handler = points->particle_handler();
-    for (const auto c : grid->owned_cells())
-      {
-        bool any = false;
-        for (const auto &f : fluid_face_force)
-          any = any || f[c] != 0;
-        if (!any)
-          continue;
-        const auto        ijk = grid->global_index(c);
-        const std::size_t n0  = grid->first_node_of_cell(c);
-        // Share of each corner: 1 in the FE zone, else min(1, 2 m_I / m_ref).
-        std::array<double, n_corners> share;
-        bool fe = fem_prm.enabled;
-        for (int d = 0; d < dim; ++d)
-          {
-            const double xc = x0[d] + (ijk[d] + 0.5) * h;
-            fe = fe && xc > fem_prm.lower_corner[d] && xc < fem_prm.upper_corner[d];
-          }
-        if (fe)
-          share.fill(1.);
-        else
-          {
-            share.fill(0.);
-            for (const auto &particle :
-                 handler.particles_in_cell(grid->cell_iterator(c)))
-              {
-                const auto v = particle.get_properties();
-                if (v[P::state] != MaterialPoints<dim>::solid)
-                  continue;
-                const Point<dim> &x = particle.get_location();
-                double            w[n_corners];
-                tent_weights<dim>(x, x0, ih, ijk, v[P::mass] / (0.5 * m_ref), w);
-                for (unsigned int k = 0; k < n_corners; ++k)
-                  share[k] += w[k];
-              }
-            for (auto &s : share)
-              s = std::min(1., s);
-          }
-        for (int d = 0; d < dim; ++d)
-          for (unsigned int side = 0; side < 2; ++side)
-            {
-              const unsigned int f = dim * (2 * d + side);
-              for (unsigned int k = 0; k < n_corners; ++k)
-                if (((k >> d) & 1) == side)
-                  for (int e = 0; e < dim; ++e)
-                    fluid_force[e][n0 + offset[k]] +=
-                      fluid_face_force[f + e][c] * share[k] / (n_corners / 2);
-            }
-      }
-  }
 
   template class FempProblem<2>;
   template class FempProblem<3>;

@@ -1,14 +1,16 @@
-// femp: the top-level problem. It owns the modules and runs the macro time
-// step of the paper's sec. 2.6 (METHOD sec. 5):
+// femp: the top-level problem. It reads the scene, owns the modules and
+// what joins them, and runs the macro time step of the paper's sec. 2.6:
 //   1. tag cells from the points, update alpha, gamma and properties;
-//   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1);
-//   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4), sub-cycled;
-//      with the solid, the fluid forces on the solid (pressure and viscous
-//      force on the faces to solid cells, eq. 13);
+//   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1), then
+//      the cell temperatures to the points (eq. 2);
+//   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4), sub-cycled,
+//      the heat carried by points that changed cells (PointHeatExchange);
+//      with the solid, the fluid forces on the solid's nodes (eq. 13,
+//      FluidSolidForces);
 //   4. solid by MPM + FE with transition-node coupling (SolidStress,
 //      eqs. 5-17), sub-cycled to the macro time, loaded by those fluid
 //      forces held constant over its sub-steps;
-//   5. output, next step.
+//   5. output (Output, RunReport) when the SimulationControl says so.
 #ifndef femp_femp_problem_h
 #define femp_femp_problem_h
 
@@ -16,6 +18,9 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/app/simulation_control.h>
+#include <femp/coupling/fluid_solid_forces.h>
+#include <femp/coupling/point_heat_exchange.h>
 #include <femp/grid/background_grid.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/flow/incompressible_flow.h>
@@ -24,10 +29,9 @@
 #include <femp/base/material.h>
 #include <femp/grid/material_points.h>
 #include <femp/io/output.h>
+#include <femp/io/run_report.h>
 #include <femp/solid/solid_stress.h>
 
-#include <array>
-#include <limits>
 #include <memory>
 
 namespace femp
@@ -42,18 +46,10 @@ namespace femp
   class FempProblem
   {
   public:
-    struct TimeParameters
-    {
-      double       end_time      = 1e-3;
-      double       time_step     = 0;
-      double       safety_factor = 0.5;
-      unsigned int max_steps     = 100000000;
-
-      static void
-      declare_parameters(ParameterHandler &prm);
-      void
-      parse_parameters(ParameterHandler &prm);
-    };
+    /// Subsection 'Time stepping' (SimulationControl).
+    using TimeParameters = SimulationControl::Parameters;
+    /// Summary numbers of the finished run (for tests and benchmarks).
+    using Summary = RunSummary<dim>;
 
     /// Read and check all parameters; throws InputError before any work.
     FempProblem(ParameterHandler &prm, MPI_Comm comm);
@@ -61,45 +57,6 @@ namespace femp
     void
     run();
 
-    /// Summary numbers of the finished run (for tests and benchmarks).
-    struct Summary
-    {
-      unsigned int steps = 0;
-      double       time  = 0;
-      double       T_max = 0;
-      MeltPoolSize pool;
-      /// Energies over the run, J (2D: J/m): laser input, surface losses,
-      /// heat in through fixed faces, change of stored enthalpy.
-      double laser = 0, losses = 0, boundary = 0, stored = 0;
-      /// With melt flow: energy created by the upwind convection of T (not
-      /// conservative) and by points moving between cells (change of the
-      /// stored enthalpy when alpha and the new metal cells are updated),
-      /// J (2D: J/m); both are zero for a conservative scheme.
-      double advection = 0, moved_points = 0;
-      types::particle_index n_points = 0;
-      double                point_T_mean = 0; ///< mean point temperature, K
-      // Melt flow (zero when Physics/Melt flow is false).
-      unsigned int flow_steps             = 0;
-      unsigned int pressure_matrix_builds = 0; ///< matrix + AMG setups
-      unsigned long pressure_cg_iterations = 0; ///< total
-      double       max_fluid_speed        = 0; ///< m/s, at the end
-      /// Fluid step limits, s: the smallest of each over the run, how many
-      /// sub-steps each governed (convective, viscous, capillary,
-      /// prescribed), and the sub-steps per temperature step.
-      struct FlowLimits
-      {
-        double convective = std::numeric_limits<double>::infinity();
-        double viscous    = std::numeric_limits<double>::infinity();
-        double capillary  = std::numeric_limits<double>::infinity();
-        double capillary_fraction = 1;
-        std::array<unsigned long, 4> governed{};
-        unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
-        unsigned int max_substeps = 0;
-      } flow_limits;
-      /// Solid (if Physics/Solid stress): steps and final energies.
-      unsigned int solid_steps = 0;
-      typename SolidStress<dim>::Energies solid_energy;
-    };
     const Summary &
     summary() const
     {
@@ -123,7 +80,6 @@ namespace femp
     typename Laser<dim>::Parameters           laser_prm;
     typename Output<dim>::Parameters          output_prm;
     typename ThermalHistory<dim>::Parameters  history_prm;
-    double                                    melt_temperature;
     bool                                      melt_flow = false;
     /// Physics/Heat transfer: false freezes the temperature field.
     bool                                      heat_enabled = true;
@@ -133,37 +89,72 @@ namespace femp
     typename SolidStress<dim>::Parameters     solid_prm;
     typename SolidFEM<dim>::Parameters        fem_prm;
 
-    std::unique_ptr<BackgroundGrid<dim>> grid;
-    std::unique_ptr<Laser<dim>>          laser;
-    std::unique_ptr<MaterialPoints<dim>> points;
-    std::unique_ptr<HeatTransfer<dim>>   heat;
+    // The modules; flow and solid exist only when switched on.
+    std::unique_ptr<BackgroundGrid<dim>>     grid;
+    std::unique_ptr<Laser<dim>>              laser;
+    std::unique_ptr<MaterialPoints<dim>>     points;
+    std::unique_ptr<HeatTransfer<dim>>       heat;
     std::unique_ptr<IncompressibleFlow<dim>> flow;
-    /// Step 3 of the macro step: the flow sub-cycled over @p dt, then alpha
-    /// and the temperature of cells that gained points (METHOD sec. 2, 5).
-    void
-    flow_substeps(const double dt);
-    std::unique_ptr<Output<dim>>         output;
-    std::unique_ptr<SolidStress<dim>>    solid;
-    std::unique_ptr<ThermalHistory<dim>> history; ///< null unless enabled
-    /// Fluid forces on the solid's grid nodes (flow and solid together),
-    /// and on the faces of the solid cells (per face and component).
-    std::array<std::vector<double>, dim>           fluid_force;
-    std::array<std::vector<double>, 2 * dim * dim> fluid_face_force;
-    /// Step 3 with the solid: the fluid forces on the faces of the solid
-    /// cells (IncompressibleFlow::fluid_forces_on_solid) to the faces' grid
-    /// nodes, weighted by the solid mass they hold, into fluid_force
-    /// (partial sums of this rank, summed by the solid).
-    void
-    fluid_forces_to_solid_nodes();
-    TimerOutput                          timer;
-    Summary                              result;
+    std::unique_ptr<SolidStress<dim>>        solid;
+    std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
+    // What joins them.
+    std::unique_ptr<PointHeatExchange<dim>>  point_heat;
+    std::unique_ptr<FluidSolidForces<dim>>   fluid_solid;
+    // Clock, output and report.
+    std::unique_ptr<SimulationControl>       control;
+    std::unique_ptr<Output<dim>>             output;
+    std::unique_ptr<RunReport<dim>>          report;
+    TimerOutput                              timer;
+    Summary                                  result;
 
+    /// 'Solid FEM/Zone upper corner = auto': the FE zone's top below a
+    /// conservative melt depth of the scene's laser (fe_zone_depth.h).
+    void
+    place_fe_zone_automatically();
+    /// Checks that need several modules' parameters (before any work).
+    void
+    check_across_modules();
     void
     setup();
+    void
+    setup_flow();
+    void
+    setup_solid();
+    void
+    print_scene() const;
+
+    // The steps of the macro time step (paper sec. 2.6), in run() order.
+    /// The step chooser of the SimulationControl.
     double
     choose_time_step(const unsigned int step, const double time);
+    /// Refuses (at the first step) a run that would need more than
+    /// 'Time stepping/Maximum number of steps' steps of @p dt.
     void
-    write_output(const unsigned int n, const double time, const bool last);
+    check_projected_steps(const unsigned int step, const double dt) const;
+    /// 2. Temperature in fluid, solid and powder (eq. 1).
+    void
+    temperature_step(const double dt);
+    /// The cell temperatures to the points (eq. 2); their states follow.
+    void
+    cells_to_points();
+    /// 3. The flow sub-cycled over @p dt; then alpha and the heat of points
+    /// that changed cells (PointHeatExchange).
+    void
+    flow_substeps(const double dt);
+    /// 3. With the solid: the fluid forces on the solid's nodes.
+    void
+    fluid_forces_on_solid();
+    /// 4. The solid to the end of the step, loaded by those forces.
+    void
+    solid_step();
+    /// 5. Time series, field output and progress line when due.
+    void
+    output_results();
+
+    void
+    write_series();
+    void
+    write_output(const bool last);
     std::vector<typename Output<dim>::Field>
     output_fields() const;
   };

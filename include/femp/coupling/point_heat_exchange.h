@@ -1,0 +1,65 @@
+// femp: PointHeatExchange, the heat that passes between the material points
+// and the cells of the background grid beyond the plain cells-to-points
+// copy of eq. 2:
+//  - at the start, points outside the initial bodies take the initial
+//    temperature at their position, and the cells of initial bodies the
+//    mean temperature of their points;
+//  - after the points changed cells (the flow moved them), the new metal
+//    fraction alpha, and either each cell takes the mean specific enthalpy
+//    C(T) + L_m gamma(T) of the points now in it (Heat transfer/Advection
+//    by melt flow = points: the points carry the heat), or only cells that
+//    gained metal take the mean temperature of their points ('upwind': the
+//    heat moves by upwind convection of T in the heat equation).
+// It keeps the energy account of these exchanges ('moved_points': the
+// change of the stored enthalpy of the grid they caused, zero for a
+// conservative exchange).
+#ifndef femp_point_heat_exchange_h
+#define femp_point_heat_exchange_h
+
+#include <femp/grid/material_points.h>
+#include <femp/heat/heat_transfer.h>
+
+namespace femp
+{
+  template <int dim>
+  class PointHeatExchange
+  {
+  public:
+    /// @p carried_by_points: Heat transfer/Advection by melt flow = points.
+    PointHeatExchange(MaterialPoints<dim> &points,
+                      HeatTransfer<dim> &  heat,
+                      const bool           carried_by_points);
+
+    /// Initial temperatures: points outside the initial @p bodies take
+    /// heat_prm's initial temperature at their position (when it is a
+    /// function), then the occupied cells of the bodies take the mean
+    /// temperature of their points (and the liquid fraction of that
+    /// temperature). Collective.
+    void
+    initial_temperatures(
+      const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
+      const typename HeatTransfer<dim>::Parameters &heat_prm);
+
+    /// The points changed cells: new alpha for the heat module and the heat
+    /// the points bring (see the header comment); with a frozen
+    /// temperature only alpha. Collective.
+    void
+    points_changed_cells();
+
+    /// Change of the stored enthalpy caused by points_changed_cells() over
+    /// the run, J (2D: J/m).
+    double
+    moved_points_energy() const
+    {
+      return moved_points;
+    }
+
+  private:
+    MaterialPoints<dim> &points;
+    HeatTransfer<dim> &  heat;
+    const bool           carried_by_points;
+    double               moved_points = 0;
+  };
+} // namespace femp
+
+#endif

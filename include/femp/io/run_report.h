@@ -1,0 +1,132 @@
+// femp: what a run reports about itself: the summary numbers of a finished
+// run (RunSummary, read by tests and benchmarks), the progress line, and
+// the end-of-run report (solid energies, the energy balance of eq. 1 with
+// the laser, surface losses, fixed faces and stored enthalpy, the melt-flow
+// solver statistics and fluid step limits). It reads the modules; it
+// changes nothing.
+#ifndef femp_run_report_h
+#define femp_run_report_h
+
+#include <deal.II/base/conditional_ostream.h>
+
+#include <femp/app/simulation_control.h>
+#include <femp/flow/incompressible_flow.h>
+#include <femp/grid/material_points.h>
+#include <femp/heat/heat_transfer.h>
+#include <femp/heat/melt_pool.h>
+#include <femp/solid/solid_stress.h>
+
+#include <array>
+#include <limits>
+
+namespace femp
+{
+  using namespace dealii;
+
+  /// Summary numbers of a finished run (for tests and benchmarks).
+  template <int dim>
+  struct RunSummary
+  {
+    unsigned int steps = 0;
+    double       time  = 0;
+    double       T_max = 0;
+    MeltPoolSize pool;
+    /// Energies over the run, J (2D: J/m): laser input, surface losses,
+    /// heat in through fixed faces, change of stored enthalpy.
+    double laser = 0, losses = 0, boundary = 0, stored = 0;
+    /// With melt flow: energy created by the upwind convection of T (not
+    /// conservative) and by points moving between cells (change of the
+    /// stored enthalpy when alpha and the new metal cells are updated),
+    /// J (2D: J/m); both are zero for a conservative scheme.
+    double advection = 0, moved_points = 0;
+    types::particle_index n_points = 0;
+    double                point_T_mean = 0; ///< mean point temperature, K
+    // Melt flow (zero when Physics/Melt flow is false).
+    unsigned int  flow_steps             = 0;
+    unsigned int  pressure_matrix_builds = 0; ///< matrix + AMG setups
+    unsigned long pressure_cg_iterations = 0; ///< total
+    double        max_fluid_speed        = 0; ///< m/s, at the end
+    /// Fluid step limits, s: the smallest of each over the run, how many
+    /// sub-steps each governed (convective, viscous, capillary,
+    /// prescribed), and the sub-steps per temperature step.
+    struct FlowLimits
+    {
+      double convective = std::numeric_limits<double>::infinity();
+      double viscous    = std::numeric_limits<double>::infinity();
+      double capillary  = std::numeric_limits<double>::infinity();
+      double capillary_fraction = 1;
+      std::array<unsigned long, 4> governed{};
+      unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
+      unsigned int max_substeps = 0;
+
+      /// Book the limits @p l of one fluid sub-step; @p prescribed: the
+      /// step was Melt flow/Time step.
+      void
+      record(const typename IncompressibleFlow<dim>::StepLimits &l,
+             const bool                                          prescribed)
+      {
+        convective         = std::min(convective, l.convective);
+        viscous            = std::min(viscous, l.viscous);
+        capillary          = std::min(capillary, l.capillary);
+        capillary_fraction = l.capillary_fraction;
+        ++governed[prescribed ? 3 : l.governing()];
+      }
+      /// Book the number of sub-steps of one temperature step.
+      void
+      record_substeps(const unsigned int n)
+      {
+        min_substeps = std::min(min_substeps, n);
+        max_substeps = std::max(max_substeps, n);
+      }
+    } flow_limits;
+    /// Solid (if Physics/Solid stress): steps and final energies.
+    unsigned int                        solid_steps = 0;
+    typename SolidStress<dim>::Energies solid_energy;
+  };
+
+
+  template <int dim>
+  class RunReport
+  {
+  public:
+    RunReport(MPI_Comm comm, ConditionalOStream &out);
+
+    /// Remember the stored enthalpy at the start (collective).
+    void
+    start(const HeatTransfer<dim> &heat);
+
+    /// The progress line of the step just taken.
+    void
+    progress(const SimulationControl &control,
+             const double             T_max,
+             const MeltPoolSize &     pool) const;
+
+    /// Fill the end-of-run numbers of @p s from the modules (@p flow and
+    /// @p solid may be null) and print the report; @p moved_points is the
+    /// energy account of the point heat exchange. Collective.
+    void
+    finish(const SimulationControl &        control,
+           const HeatTransfer<dim> &        heat,
+           const MaterialPoints<dim> &      points,
+           const IncompressibleFlow<dim> *  flow,
+           const SolidStress<dim> *         solid,
+           const double                     moved_points,
+           RunSummary<dim> &                s) const;
+
+  private:
+    MPI_Comm            comm;
+    ConditionalOStream &out;
+    double              H0 = 0;
+
+    void
+    print_energy(const RunSummary<dim> &                          s,
+                 const typename HeatTransfer<dim>::EnergyBudget &e,
+                 const bool heat_enabled,
+                 const bool with_flow) const;
+    void
+    print_flow(const IncompressibleFlow<dim> &flow,
+               const RunSummary<dim> &        s) const;
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,139 @@
+// femp: SimulationControl, the clock and output cadence of a run (see the
+// header).
+#include <femp/app/simulation_control.h>
+#include <femp/base/input_checks.h>
+
+#include <algorithm>
+
+namespace femp
+{
+  void
+  SimulationControl::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Time stepping");
+    prm.declare_entry("End time", "1e-3", Patterns::Double(0.),
+                      "Simulated time at which the run ends, s; range (0, inf).");
+    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+                      "Temperature step, s; 0 chooses it automatically as the "
+                      "safety factor times the stable limit. A prescribed step "
+                      "above the stable limit is refused. Range [0, inf).");
+    prm.declare_entry("Safety factor", "0.5", Patterns::Double(0., 1.),
+                      "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
+                      "(diffusion) and h/|u| (convection) used as the "
+                      "automatic step; range (0, 1].");
+    prm.declare_entry("Maximum number of steps", "100000000", Patterns::Integer(1),
+                      "Stop after this many steps even before the end time.");
+    prm.leave_subsection();
+  }
+
+
+  void
+  SimulationControl::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Time stepping");
+    end_time      = prm.get_double("End time");
+    time_step     = prm.get_double("Time step");
+    safety_factor = prm.get_double("Safety factor");
+    max_steps     = prm.get_integer("Maximum number of steps");
+    prm.leave_subsection();
+    require(end_time > 0, "Time stepping/End time", end_time,
+            "it must be positive (s)");
+    require(safety_factor > 0, "Time stepping/Safety factor", safety_factor,
+            "it must lie in (0, 1]");
+  }
+
+
+  SimulationControl::SimulationControl(const Parameters &prm,
+                                       const Cadence &   cadence)
+    : prm(prm)
+    , cadence(cadence)
+    , next_output(cadence.output_interval)
+    , wall_start(std::chrono::steady_clock::now())
+  {}
+
+
+  void
+  SimulationControl::start_clock()
+  {
+    wall_start = std::chrono::steady_clock::now();
+  }
+
+
+  bool
+  SimulationControl::running() const
+  {
+    return t < prm.end_time * (1 - 1e-12) && n_step < prm.max_steps;
+  }
+
+
+  double
+  SimulationControl::next_time_step() const
+  {
+    return std::min(choose(n_step, t), prm.end_time - t);
+  }
+
+
+  void
+  SimulationControl::advance(const double dt)
+  {
+    t += dt;
+    ++n_step;
+    dt_last = dt;
+    last    = t >= prm.end_time * (1 - 1e-12) || n_step >= prm.max_steps;
+  }
+
+
+  bool
+  SimulationControl::series_due() const
+  {
+    return t >= next_series * (1 - 1e-12) || last;
+  }
+
+
+  void
+  SimulationControl::series_written()
+  {
+    next_series = t + cadence.series_interval;
+  }
+
+
+  bool
+  SimulationControl::output_due() const
+  {
+    return (cadence.output_interval > 0 && t >= next_output * (1 - 1e-9)) ||
+           (cadence.output_steps > 0 && n_step % cadence.output_steps == 0) ||
+           last;
+  }
+
+
+  void
+  SimulationControl::output_written()
+  {
+    ++n_output;
+    while (next_output <= t * (1 + 1e-9) && cadence.output_interval > 0)
+      next_output += cadence.output_interval;
+  }
+
+
+  bool
+  SimulationControl::progress_due() const
+  {
+    return n_step % cadence.progress_interval == 0 || last;
+  }
+
+
+  double
+  SimulationControl::wall_time() const
+  {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                         wall_start)
+      .count();
+  }
+
+
+  double
+  SimulationControl::wall_time_left() const
+  {
+    return wall_time() / t * (prm.end_time - t);
+  }
+} // namespace femp

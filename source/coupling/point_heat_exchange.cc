@@ -1,0 +1,108 @@
+// femp: PointHeatExchange, heat between the material points and the grid
+// cells when points enter the grid or change cells (see the header; the
+// enthalpy relation of eq. 1, the point-cell transfer of eq. 2).
+#include <femp/coupling/point_heat_exchange.h>
+
+namespace femp
+{
+  template <int dim>
+  PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim> &points,
+                                            HeatTransfer<dim> &  heat,
+                                            const bool carried_by_points)
+    : points(points)
+    , heat(heat)
+    , carried_by_points(carried_by_points)
+  {}
+
+
+  template <int dim>
+  void
+  PointHeatExchange<dim>::initial_temperatures(
+    const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
+    const typename HeatTransfer<dim>::Parameters &heat_prm)
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    if (!heat_prm.initial_temperature_expression.empty())
+      {
+        // Points outside the initial bodies take the initial temperature
+        // at their position.
+        for (auto &particle : points.particle_handler())
+          {
+            const Point<dim> x       = particle.get_location();
+            bool             in_body = false;
+            for (const auto &b : bodies)
+              in_body = in_body || b.inside(x);
+            if (in_body)
+              continue;
+            auto         v         = particle.get_properties();
+            const double T0        = heat_prm.initial_temperature_at(x);
+            v[P::temperature]      = T0;
+            v[P::peak_temperature] = T0;
+          }
+      }
+    if (!bodies.empty())
+      {
+        // Cells of initial bodies take the mean temperature of their points
+        // (and the liquid fraction of that temperature).
+        for (const auto &[idx, cell] : points.occupied_cells())
+          {
+            double sum = 0, n = 0;
+            for (const auto &particle :
+                 points.particle_handler().particles_in_cell(cell))
+              sum += particle.get_properties()[P::temperature], ++n;
+            if (n > 0)
+              heat.set_cell_temperature(idx, sum / n);
+          }
+        heat.update_ghosts();
+      }
+  }
+
+
+  template <int dim>
+  void
+  PointHeatExchange<dim>::points_changed_cells()
+  {
+    const bool heat_enabled = !heat.is_frozen();
+    // Energy bookkeeping: the stored enthalpy before and after (collective).
+    const double        H_before = heat_enabled ? heat.stored_enthalpy() : 0.;
+    std::vector<double> alpha    = points.metal_fraction();
+    const auto &        old      = heat.metal_fraction();
+    using P                      = typename MaterialPoints<dim>::PropertyIndex;
+    if (heat_enabled && carried_by_points)
+      {
+        // The points carry the heat: every cell whose points came from
+        // cells at other temperatures takes their mean specific enthalpy
+        // (cells that gained metal included).
+        const auto mean_e = points.volume_mean_over_points(
+          heat.temperature(),
+          [this](const double T) { return heat.specific_enthalpy(T); });
+        heat.set_metal_fraction(alpha);
+        heat.take_point_enthalpy(mean_e);
+        moved_points += heat.stored_enthalpy() - H_before;
+        return;
+      }
+    // (With a frozen temperature the field keeps its initial values.)
+    if (heat_enabled)
+      for (const auto &[idx, cell] : points.occupied_cells())
+        if (old[idx] <= 0 && alpha[idx] > 0)
+          {
+            double sum = 0, n = 0;
+            for (const auto &particle :
+                 points.particle_handler().particles_in_cell(cell))
+              sum += particle.get_properties()[P::temperature], ++n;
+            // gamma from T: a stale gamma (0 in a former gas cell) would
+            // take the latent heat of a hot arrival from its sensible heat
+            // at the next step (cooling it by up to L_m/c_m ~ 350 K).
+            if (n > 0)
+              heat.set_cell_temperature(idx, sum / n);
+          }
+    heat.update_ghosts();
+    heat.set_metal_fraction(alpha);
+    if (heat_enabled)
+      moved_points += heat.stored_enthalpy() - H_before;
+  }
+
+
+  template class PointHeatExchange<2>;
+  template class PointHeatExchange<3>;
+} // namespace femp

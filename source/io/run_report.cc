@@ -1,0 +1,184 @@
+// femp: RunReport, the progress line and the end-of-run report of a scene
+// (see the header): the energy balance of the temperature equation (1),
+// the solid energies of eqs. 5-17 and the melt-flow statistics.
+#include <deal.II/base/mpi.h>
+
+#include <femp/io/run_report.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+
+namespace femp
+{
+  template <int dim>
+  RunReport<dim>::RunReport(MPI_Comm comm, ConditionalOStream &out)
+    : comm(comm)
+    , out(out)
+  {}
+
+
+  template <int dim>
+  void
+  RunReport<dim>::start(const HeatTransfer<dim> &heat)
+  {
+    H0 = heat.stored_enthalpy();
+  }
+
+
+  template <int dim>
+  void
+  RunReport<dim>::progress(const SimulationControl &control,
+                           const double             T_max,
+                           const MeltPoolSize &     pool) const
+  {
+    const double time = control.time();
+    const double wall = control.wall_time();
+    const double left =
+      wall / time * (control.parameters().end_time - time);
+    out << std::setprecision(4) << "t = " << std::setw(10) << time
+        << " s  step " << std::setw(7) << control.step() << "  dt = "
+        << std::setw(10) << control.time_step() << " s  T_max = "
+        << std::setw(8) << T_max << " K  pool L x W x D = "
+        << pool.length * 1e6 << " x " << pool.width * 1e6 << " x "
+        << pool.depth * 1e6 << " um  wall " << std::setprecision(3) << wall
+        << " s, left ~" << left << " s" << std::endl;
+  }
+
+
+  template <int dim>
+  void
+  RunReport<dim>::finish(const SimulationControl &       control,
+                         const HeatTransfer<dim> &       heat,
+                         const MaterialPoints<dim> &     points,
+                         const IncompressibleFlow<dim> * flow,
+                         const SolidStress<dim> *        solid,
+                         const double                    moved_points,
+                         RunSummary<dim> &               s) const
+  {
+    const bool heat_enabled = !heat.is_frozen();
+    s.steps        = control.step();
+    s.time         = control.time();
+    s.T_max        = heat.max_temperature();
+    s.moved_points = moved_points;
+
+    const auto e = heat.energy_budget();
+    s.laser      = e.laser;
+    s.losses     = heat.total_losses();
+    s.boundary   = e.boundary;
+    s.advection  = e.advection;
+    s.stored     = heat.stored_enthalpy() - H0;
+    s.n_points   = points.n_global_points();
+    {
+      using P    = typename MaterialPoints<dim>::PropertyIndex;
+      double sum = 0;
+      for (const auto &p : points.particle_handler())
+        sum += p.get_properties()[P::temperature];
+      s.point_T_mean =
+        Utilities::MPI::sum(sum, comm) / std::max<double>(1, s.n_points);
+    }
+    if (solid)
+      {
+        s.solid_steps  = solid->n_steps();
+        s.solid_energy = solid->energies();
+        const auto &se = s.solid_energy;
+        out << std::setprecision(6) << "Solid: " << s.solid_steps
+            << " steps of " << solid->time_step() << " s; energies (J"
+            << (dim == 2 ? "/m" : "") << "): external work " << se.external
+            << ", stress work " << se.internal << ", kinetic " << se.kinetic
+            << ", hourglass " << se.hourglass << ", balance " << se.balance()
+            << "; kinetic/internal "
+            << se.kinetic / std::max(1e-300, std::abs(se.internal))
+            << std::endl;
+      }
+    print_energy(s, e, heat_enabled, flow != nullptr);
+    if (flow)
+      {
+        const auto &st           = flow->statistics();
+        s.flow_steps             = st.steps;
+        s.pressure_matrix_builds = st.matrix_rebuilds;
+        s.pressure_cg_iterations = st.cg_iterations;
+        s.max_fluid_speed        = st.max_point_speed;
+        print_flow(*flow, s);
+      }
+  }
+
+
+  template <int dim>
+  void
+  RunReport<dim>::print_energy(
+    const RunSummary<dim> &                          s,
+    const typename HeatTransfer<dim>::EnergyBudget &e,
+    const bool                                       heat_enabled,
+    const bool                                       with_flow) const
+  {
+    if (!heat_enabled)
+      {
+        out << "Energy: heat transfer off (Physics/Heat transfer = false), "
+               "temperature frozen at its initial field"
+            << std::endl;
+        return;
+      }
+    const double scale =
+      std::max(1e-300, std::max(s.laser + std::abs(s.boundary), s.losses));
+    out << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
+        << "): laser " << s.laser << ", surface losses " << s.losses
+        << " (evaporation " << e.evaporation << ", convection "
+        << e.convection << ", radiation " << e.radiation
+        << " at the end of each step), fixed faces " << s.boundary
+        << ", stored " << s.stored << "; balance error "
+        << std::abs(s.laser + s.boundary - s.losses - s.stored) / scale
+        << std::endl;
+    if (with_flow)
+      out << std::setprecision(6) << "  with melt flow, energy created (J"
+          << (dim == 2 ? "/m" : "") << ") by the upwind convection of T "
+          << s.advection << " and by points moving between cells "
+          << s.moved_points
+          << "; balance error with these counted as sources "
+          << std::abs(s.laser + s.boundary + s.advection + s.moved_points -
+                      s.losses - s.stored) /
+               scale
+          << std::endl;
+  }
+
+
+  template <int dim>
+  void
+  RunReport<dim>::print_flow(const IncompressibleFlow<dim> &flow,
+                             const RunSummary<dim> &        s) const
+  {
+    const auto &st = flow.statistics();
+    out << "Melt flow: " << st.steps << " fluid steps, pressure matrix "
+        << "graph built " << st.matrix_rebuilds << " times, AMG "
+        << "hierarchy " << st.amg_setups << " times, CG iterations "
+        << st.cg_iterations << " in total (" << std::setprecision(3)
+        << double(st.cg_iterations) / std::max(1u, st.steps)
+        << " per solve, at most " << st.max_iterations << "), "
+        << st.halvings << " steps redone as halves, points "
+        << "re-sorted in " << st.resorts << " steps (" << st.global_sorts
+        << " with deal.II's global sort), " << st.n_fluid_cells
+        << " fluid cells and max speed " << st.max_point_speed
+        << " m/s at the end" << std::endl;
+    if (st.volume_iterations > 0 || st.volume_skipped > 0)
+      out << "Melt flow volume correction: " << st.volume_iterations
+          << " CG iterations in total, " << st.volume_skipped
+          << " solves not converged (no correction in those steps)"
+          << std::endl;
+    const auto &r = s.flow_limits;
+    out << std::setprecision(4)
+        << "Melt flow time step limits (smallest over the run): "
+        << "convective " << r.convective << " s, viscous " << r.viscous
+        << " s, capillary " << r.capillary << " s (used x "
+        << r.capillary_fraction << ")\n"
+        << "  sub-steps governed by: convective " << r.governed[0]
+        << ", viscous " << r.governed[1] << ", capillary " << r.governed[2]
+        << ", prescribed (Melt flow/Time step) " << r.governed[3]
+        << "; sub-steps per temperature step "
+        << (r.max_substeps > 0 ? r.min_substeps : 0) << " to "
+        << r.max_substeps << std::endl;
+  }
+
+
+  template class RunReport<2>;
+  template class RunReport<3>;
+} // namespace femp
