@@ -1,6 +1,6 @@
 // femp: melt-pool flow, improved incompressible MPM (paper sec. 2.3,
 // eqs. 3-4 with gravity, viscosity, Darcy damping, surface tension,
-// Marangoni stress and recoil pressure; METHOD sec. 3, ref. [11]).
+// Marangoni stress and recoil pressure; doc/method.md, "Melt flow", ref. [11]).
 //
 // Discretization choices (documented in doc/flow.md):
 // - velocities on grid nodes, pressure on the centres of fluid cells;

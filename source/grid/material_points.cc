@@ -1,7 +1,7 @@
 // femp: material points on the background grid: creation of the substrate
 // and the powder layer (inserted cell by cell), metal fraction by sub-cell
 // occupation (by point volume in cells holding melt), and the cell-to-point
-// temperature transfer (METHOD sec. 1-2).
+// temperature transfer (doc/method.md, "Zones and discretizations").
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
@@ -503,7 +503,7 @@ namespace femp
   std::vector<double>
   MaterialPoints<dim>::metal_fraction() const
   {
-    // Sub-cell occupancy (METHOD sec. 2) everywhere, and, when some point
+    // Sub-cell occupancy (doc/method.md, "Heat transfer") everywhere, and, when some point
     // is fluid, the volume of the points in the cells that hold a fluid
     // point (see the header; doc/flow.md, "Volume-based alpha").
     using P                = PropertyIndex;

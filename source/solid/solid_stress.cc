@@ -1,4 +1,4 @@
-// femp: the solid step (paper eqs. 5-17, METHOD sec. 4-5): MPM and FE
+// femp: the solid step (paper eqs. 5-17, doc/method.md, "Solid" and "Macro time step"): MPM and FE
 // coupled at the transition nodes through the background-grid nodes, with
 // sub-cycling against the temperature step; see solid_stress.h.
 #include <deal.II/base/mpi.h>

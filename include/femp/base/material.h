@@ -1,7 +1,7 @@
 // femp: thermophysical material data of the metal and the ambient gas,
 // used by eq. (1): density, temperature tables of specific heat and
 // conductivity, solidus/liquidus, latent heats and the liquid fraction
-// gamma = clamp((T - T_s)/(T_l - T_s), 0, 1) of METHOD sec. 1.
+// gamma = clamp((T - T_s)/(T_l - T_s), 0, 1) of doc/method.md, "Zones and discretizations".
 #ifndef femp_material_h
 #define femp_material_h
 

@@ -1,5 +1,5 @@
 // femp: melt-pool flow by the improved incompressible material point method
-// (paper sec. 2.3, eqs. 3-4; METHOD sec. 3; ref. [11]).
+// (paper sec. 2.3, eqs. 3-4; doc/method.md, "Melt flow"; ref. [11]).
 //
 // Fluid material points carry mass and velocity; each fluid step maps them
 // to the nodes of the background grid (P2G, bilinear/trilinear tent
@@ -19,7 +19,7 @@
 // Surface tension enters through the free-surface condition: the Dirichlet
 // pressure on the faces between fluid and gas cells is the capillary
 // pressure p_s = sigma div(n) (n the outward normal of the smoothed metal
-// fraction alpha, METHOD sec. 3), the sharp-interface form of the CSF term
+// fraction alpha, doc/method.md, "Melt flow"), the sharp-interface form of the CSF term
 // sigma kappa n |grad alpha| of eq. (3); the recoil pressure
 // p_r = zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] adds to it. The Marangoni
 // stress dsigma/dT (grad T - (n.grad T) n) is a traction on the faces

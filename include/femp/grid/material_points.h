@@ -1,4 +1,4 @@
-// femp: the material points (METHOD sec. 1-2) on the background grid,
+// femp: the material points (doc/method.md, "Zones and discretizations") on the background grid,
 // carried by deal.II's Particles::ParticleHandler.
 //
 // A scene builds a substrate block and a powder layer of randomly packed
@@ -191,7 +191,7 @@ namespace femp
 
     /// Metal fraction alpha per cell of the local box (ghosts exchanged).
     /// Cells without a fluid point: sub-cell occupancy (the fraction of the
-    /// n^dim sub-cells holding a point, METHOD sec. 2). Cells holding a
+    /// n^dim sub-cells holding a point, doc/method.md, "Heat transfer"). Cells holding a
     /// fluid point: the volume of their points over the cell volume, with
     /// the excess of over-full cells (points bunched by the flow) passed on
     /// to fluid face neighbours that are not full, then min(1, .): the metal

@@ -1,4 +1,4 @@
-// femp: random packing of spherical powder grains (METHOD sec. 6): grain
+// femp: random packing of spherical powder grains (doc/method.md, "Zones and discretizations"): grain
 // diameters drawn from a normal distribution truncated to [d_min, d_max],
 // largest first, each dropped vertically at a random horizontal position
 // until it rests on the substrate or touches a grain below it (ballistic

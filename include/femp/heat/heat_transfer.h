@@ -12,7 +12,7 @@
 // velocity (none unless a flow solver or a prescribed field provides one;
 // in partly filled cells at the rate 1/alpha, the part above 1 implicit);
 // latent heat by a local iteration per cell over the solid, mushy and liquid
-// branches of the enthalpy relation (METHOD sec. 2); surface losses and the
+// branches of the enthalpy relation (doc/method.md, "Heat transfer"); surface losses and the
 // laser deposited through |grad alpha| with the density weighting above (the
 // default 'first surface' laser only into the cells where the vertical beam
 // first meets metal, shared in proportion to that weight).

@@ -1,5 +1,5 @@
 // femp: the thermo-elasto-plastic constitutive model of the solid (paper
-// eq. 5, METHOD sec. 4), shared by the material points (SolidMPM) and the
+// eq. 5, doc/method.md, "Solid"), shared by the material points (SolidMPM) and the
 // finite elements (SolidFEM).
 //
 // Hypoelastic-plastic, rate form, one explicit increment per solid step:
@@ -14,7 +14,7 @@
 // update: sigma <- sigma E(T_new)/E(T_old) before the increment; Poisson's
 // ratio is constant, so C(T_new) C(T_old)^-1 = E(T_new)/E(T_old)). With an
 // E(T) table that falls to a small value at the solidus the stress of a
-// heated point goes continuously to (almost) zero before it melts (issue 3;
+// heated point goes continuously to (almost) zero before it melts (see
 // doc/solid.md "Constitutive model"). The pure rate form without that term
 // would keep the pressure built at low temperature.
 // Objective update: sigma* = R sigma R^T with the Hughes-Winget rotation

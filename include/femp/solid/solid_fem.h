@@ -1,5 +1,5 @@
 // femp: SolidFEM<dim>, explicit finite elements for the constant-solid zone
-// (paper eqs. 6-10, METHOD sec. 4): 8-node hexahedra (4-node quadrilaterals
+// (paper eqs. 6-10, doc/method.md, "Solid"): 8-node hexahedra (4-node quadrilaterals
 // in 2D, plane strain), one-point quadrature, Flanagan-Belytschko hourglass
 // control, lumped mass, central difference; transition nodes (eqs. 14-17).
 //
@@ -45,7 +45,7 @@
 // SIMD blocks of simd_lanes elements (one per lane of simd_double, element
 // state stored per block, update_stress_block of constitutive.h).
 //
-// Transition nodes (METHOD sec. 4): FE nodes on a face of the zone that is
+// Transition nodes (doc/method.md, "Solid"): FE nodes on a face of the zone that is
 // not a domain face (they touch grid cells outside the zone). They are
 // numbered globally from geometry (every rank knows all of them); see
 // solid_stress.h for the exchange of their sums.

@@ -1,5 +1,5 @@
 // femp: SolidMPM<dim>, the explicit material point method for the fusible
-// solid (paper eqs. 11-13, METHOD sec. 4).
+// solid (paper eqs. 11-13, doc/method.md, "Solid").
 //
 // Points of state 'solid' outside the finite-element zone take part. Their
 // state is copied from the ParticleHandler into flat arrays (structure of

@@ -1,4 +1,4 @@
-// femp: SolidStress<dim>, the solid step of the macro step (METHOD sec. 4-5,
+// femp: SolidStress<dim>, the solid step of the macro step (doc/method.md, "Solid" and "Macro time step",
 // paper eqs. 5-17): material points (SolidMPM) and finite elements
 // (SolidFEM) coupled through the background-grid nodes, sub-cycled against
 // the temperature step.
