@@ -463,7 +463,8 @@ namespace femp
             result.pool = measure_melt_pool(*grid, heat->temperature(),
                                             heat->metal_fraction(),
                                             melt_temperature,
-                                            points_prm.substrate_top);
+                                            points_prm.substrate_top,
+                                            heat->material().solidus);
             output->write_series(time, output_fields(), result.pool);
             next_series = time + output_prm.series_interval;
           }

@@ -148,7 +148,8 @@ namespace femp
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
         pool_csv.open(prm.directory + "/melt_pool.csv");
-        pool_csv << "time,length,width,depth,volume,T_max\n";
+        pool_csv << "time,length,width,depth,volume,T_max,"
+                    "width_solidus_substrate,depth_solidus_substrate\n";
         if (!prm.probe_points.empty())
           {
             probe_csv.open(prm.directory + "/probe_points.csv");
@@ -288,7 +289,8 @@ namespace femp
       return;
     pool_csv << std::setprecision(8) << time << ',' << pool.length << ','
              << pool.width << ',' << pool.depth << ',' << pool.volume << ','
-             << pool.T_max << '\n';
+             << pool.T_max << ',' << pool.solidus_width << ','
+             << pool.solidus_depth << '\n';
     pool_csv.flush();
     if (probe_csv.is_open())
       {
