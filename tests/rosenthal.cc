@@ -193,7 +193,7 @@ main(int argc, char **argv)
   }
 
   const auto pool = measure_melt_pool(grid, heat.temperature(),
-                                      heat.metal_fraction(), Tm, 0.);
+                                      heat.metal_fraction(), Tm, 0., Tm);
   checks.print("simulated: length", pool.length);
   checks.print("simulated: width", 2 * pool.width);
   checks.print("simulated: depth", pool.depth);

@@ -308,6 +308,39 @@ namespace femp
           << "  output: " << output_prm.directory << "/grid.pvd, "
           << output_prm.directory << "/points.pvd, "
           << output_prm.directory << "/melt_pool.csv\n";
+    if (dim == 3 && heat_enabled)
+      print_melting_regime();
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::print_melting_regime() const
+  {
+    // Regime by the normalized enthalpy of King et al. (2014),
+    // eta P/(pi h_s sqrt(D v r_b^3)), h_s = rho c T_s, D = lambda/(rho c)
+    // at the solidus, largest over the laser-on segments; keyhole-mode
+    // melting above about 30 (doc/absorption.md).
+    const double Ts    = material.solidus;
+    const double rc    = material.density * material.specific_heat.value(Ts);
+    const double D     = material.conductivity.value(Ts) / rc;
+    const double rb    = laser_prm.beam_radius;
+    double       ratio = 0;
+    for (const auto &s : laser->segments())
+      if (s.power > 0)
+        ratio = std::max(ratio,
+                         laser_prm.absorptivity * s.power /
+                           (M_PI * rc * Ts * std::sqrt(D * s.speed * rb * rb * rb)));
+    if (ratio > 0)
+      pcout << "  regime: normalized enthalpy eta P/(pi h_s sqrt(D v r_b^3)) = "
+            << std::setprecision(3) << ratio
+            << (ratio >= 30 ?
+                  " >= 30: keyhole mode likely; a fixed absorptivity on the "
+                  "first surface underestimates the depth there (ray-traced "
+                  "absorption: doc/absorption.md)\n" :
+                  (ratio >= 20 ? " (near the keyhole transition at ~30, "
+                                 "doc/absorption.md)\n" :
+                                 " < 30: conduction mode\n"));
   }
 
 
@@ -476,7 +509,8 @@ namespace femp
     TimerOutput::Scope t(timer, "time series");
     result.pool = measure_melt_pool(*grid, heat->temperature(),
                                     heat->metal_fraction(), material.liquidus,
-                                    points_prm.substrate_top);
+                                    points_prm.substrate_top,
+                                    material.solidus);
     output->write_series(control->time(), output_fields(), result.pool);
     control->series_written();
   }

@@ -198,7 +198,8 @@ namespace femp
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
         pool_csv.open(prm.directory + "/melt_pool.csv");
-        pool_csv << "time,length,width,depth,volume,T_max\n";
+        pool_csv << "time,length,width,depth,volume,T_max,"
+                    "width_solidus_substrate,depth_solidus_substrate\n";
         check_stream(pool_csv, prm.directory + "/melt_pool.csv");
         if (!prm.probe_points.empty())
           {
@@ -332,7 +333,8 @@ namespace femp
       return;
     pool_csv << std::setprecision(8) << time << ',' << pool.length << ','
              << pool.width << ',' << pool.depth << ',' << pool.volume << ','
-             << pool.T_max << '\n';
+             << pool.T_max << ',' << pool.solidus_width << ','
+             << pool.solidus_depth << '\n';
     pool_csv.flush();
     check_stream(pool_csv, prm.directory + "/melt_pool.csv");
     if (probe_csv.is_open())

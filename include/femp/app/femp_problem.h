@@ -122,6 +122,9 @@ namespace femp
     setup_solid();
     void
     print_scene() const;
+    /// The melting regime of the scene's laser (normalized enthalpy).
+    void
+    print_melting_regime() const;
 
     // The steps of the macro time step (paper sec. 2.6), in run() order.
     /// The step chooser of the SimulationControl.

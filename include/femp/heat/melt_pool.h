@@ -7,6 +7,12 @@
 //   depth:  reference top surface height minus the lowest crossing.
 // The pool is the melt connected to colder metal (spatter in the gas is
 // not counted); where nothing is colder, all melt counts.
+// Beside this liquidus box, the size as a cross-section of the track is
+// measured: the fusion zone is the region above the solidus T_s inside
+// the original substrate (cell centres below the substrate top), so the
+// bead or molten powder above the original surface does not count:
+//   solidus_width: extent along y (3D; 2D: along x) of that region,
+//   solidus_depth: substrate top minus its lowest crossing of T_s.
 #ifndef femp_melt_pool_h
 #define femp_melt_pool_h
 
@@ -19,17 +25,23 @@ namespace femp
     double length = 0, width = 0, depth = 0; ///< m, zero when nothing melted
     double volume = 0;                       ///< m^3 (2D: m^2), cells above T_m
     double T_max  = 0;                       ///< K, over metal cells
+    /// Fusion zone inside the original substrate at the solidus, m.
+    double solidus_width = 0, solidus_depth = 0;
     std::array<double, 3> lower{}, upper{};  ///< bounding box of the pool, m
   };
 
   /// Global melt-pool size; @p T needs valid ghosts; @p alpha marks metal.
+  /// @p T_melt: the pool's isotherm (liquidus); @p surface_height: the
+  /// original substrate top, m; @p T_solidus: the isotherm of the fusion
+  /// zone inside the substrate (solidus_width, solidus_depth). Collective.
   template <int dim>
   MeltPoolSize
   measure_melt_pool(const BackgroundGrid<dim> &grid,
                     const std::vector<double> &T,
                     const std::vector<double> &alpha,
                     const double               T_melt,
-                    const double               surface_height);
+                    const double               surface_height,
+                    const double               T_solidus);
 } // namespace femp
 
 #endif
