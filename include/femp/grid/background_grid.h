@@ -34,7 +34,7 @@ namespace femp
     {
       Point<dim> lower_corner;
       Point<dim> upper_corner;
-      double     cell_size = 4e-6;
+      double     cell_size = 8e-6; ///< as declared ("Cell size")
 
       static void
       declare_parameters(ParameterHandler &prm);
