@@ -490,6 +490,8 @@ namespace femp
     // until points are inserted, removed or re-sorted: call again then.
     point_properties.clear();
     cell_begin.assign(1, 0);
+    pushed_temperature.assign(grid.n_local(),
+                              std::numeric_limits<double>::quiet_NaN());
     for (const auto &[idx, cell] : occupied)
       {
         for (auto &particle : handler.particles_in_cell(cell))
@@ -632,11 +634,22 @@ namespace femp
   void
   MaterialPoints<dim>::cells_to_points(const std::vector<double> &T)
   {
+    // A cell whose temperature is bit-for-bit the one last pushed to the
+    // same set of points has nothing to change (temperature, peak and state
+    // follow from it alone): far from the laser most cells are such. The
+    // record is forgotten for every cell whose points change.
     using P         = PropertyIndex;
     const double Ts = mat.solidus;
+    if (pushed_temperature.size() != grid.n_local())
+      pushed_temperature.assign(grid.n_local(),
+                                std::numeric_limits<double>::quiet_NaN());
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-        const double Tc = T[occupied[c].first];
+        const auto   idx = occupied[c].first;
+        const double Tc  = T[idx];
+        if (Tc == pushed_temperature[idx])
+          continue;
+        pushed_temperature[idx] = Tc;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           {
             double *const v   = point_properties[k];
@@ -935,6 +948,8 @@ namespace femp
           {
             // A changed cell: ask the handler (also when it was occupied).
             const auto &cell = grid.cell_iterator(ik);
+            if (ik < pushed_temperature.size())
+              pushed_temperature[ik] = std::numeric_limits<double>::quiet_NaN();
             if (handler.n_particles_in_cell(cell) > 0)
               {
                 new_occupied.emplace_back(ik, cell);

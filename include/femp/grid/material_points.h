@@ -278,6 +278,9 @@ namespace femp
     // cell_begin[c+1]).
     std::vector<double *>      point_properties;
     std::vector<std::uint32_t> cell_begin;
+    // Per local cell, the temperature cells_to_points() last gave its
+    // points (NaN: not given since the cell's points changed).
+    std::vector<double> pushed_temperature;
     void
     cache_point_handles();
     /// Rebuild occupied (and the pointer cache) from the handler.
