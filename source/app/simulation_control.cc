@@ -80,6 +80,22 @@ namespace femp
     ++n_step;
     dt_last = dt;
     last    = t >= prm.end_time * (1 - 1e-12) || n_step >= prm.max_steps;
+    record_rate_sample();
+  }
+
+
+  void
+  SimulationControl::record_rate_sample()
+  {
+    // A (wall, simulated time) sample at most every 1/64 of the elapsed
+    // wall time; the window of wall_time_left() is the last quarter.
+    const double wall = wall_time();
+    if (!rate_samples.empty() &&
+        wall - rate_samples.back().first < wall / 64)
+      return;
+    rate_samples.emplace_back(wall, t);
+    while (rate_samples.size() > 2 && rate_samples[1].first <= 0.75 * wall)
+      rate_samples.pop_front();
   }
 
 
@@ -134,6 +150,19 @@ namespace femp
   double
   SimulationControl::wall_time_left() const
   {
-    return wall_time() / t * (prm.end_time - t);
+    // The cost per simulated second grows while a melt pool grows (more
+    // fluid cells, more flow and solid sub-steps), so the rate of the last
+    // quarter of the wall time predicts the rest better than the mean since
+    // the start, which is several times too optimistic in a heating phase.
+    const double wall = wall_time();
+    const double left = std::max(0., prm.end_time - t);
+    if (t <= 0)
+      return 0;
+    double rate = wall / t;
+    if (!rate_samples.empty() && t > rate_samples.front().second &&
+        wall > rate_samples.front().first)
+      rate = std::max(rate, (wall - rate_samples.front().first) /
+                              (t - rate_samples.front().second));
+    return rate * left;
   }
 } // namespace femp

@@ -34,8 +34,7 @@ namespace femp
   {
     const double time = control.time();
     const double wall = control.wall_time();
-    const double left =
-      wall / time * (control.parameters().end_time - time);
+    const double left = control.wall_time_left();
     out << std::setprecision(4) << "t = " << std::setw(10) << time
         << " s  step " << std::setw(7) << control.step() << "  dt = "
         << std::setw(10) << control.time_step() << " s  T_max = "

@@ -11,6 +11,8 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <chrono>
+#include <deque>
+#include <utility>
 #include <functional>
 
 namespace femp
@@ -121,7 +123,10 @@ namespace femp
     /// Progress line due at this step?
     bool
     progress_due() const;
-    /// Wall time since start_clock(), s, and the estimate of what is left.
+    /// Wall time since start_clock(), s, and the estimate of what is left:
+    /// the simulated time left times the wall time per simulated second of
+    /// the last quarter of the run so far (or of the whole run so far, if
+    /// that is slower).
     double
     wall_time() const;
     double
@@ -136,6 +141,10 @@ namespace femp
     bool         last = false;
     double       next_output, next_series = 0;
     std::chrono::steady_clock::time_point wall_start;
+    /// (wall time, simulated time) samples of the recent past.
+    std::deque<std::pair<double, double>> rate_samples;
+    void
+    record_rate_sample();
   };
 } // namespace femp
 
