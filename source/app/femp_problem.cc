@@ -614,8 +614,8 @@ namespace femp
       }
     const auto line_fields = fields;
     fields.push_back({"laser_source", &heat->laser_source()});
-    fields.push_back({"phase", &phase});
-    fields.push_back({"zone", &zone});
+    fields.push_back({"phase", &phase, false});
+    fields.push_back({"zone", &zone, false});
     const bool with_points = output_prm.write_points == "always" ||
                              (output_prm.write_points == "last" && last);
     output->write_fields(n, time, fields,

@@ -93,6 +93,15 @@ namespace femp
                       "Points whose cell values are written to probe_points.csv, "
                       "as coordinate lists (m) separated by ';', e.g. "
                       "'1e-4,2e-4,1e-4; 2e-4,2e-4,1e-4'.");
+    prm.declare_entry("Probe interpolation", "cell",
+                      Patterns::Selection("cell|linear"),
+                      "How probe points and probe lines read the cell fields: "
+                      "'cell' gives the value of the cell that contains the "
+                      "sample (piecewise constant, exact cell values); "
+                      "'linear' interpolates between the nearest cell centres "
+                      "(bilinear/trilinear), weighting each cell by its metal "
+                      "fraction, so that an isotherm can be placed inside a "
+                      "cell. Tags (phase, zone) are never interpolated.");
     prm.declare_entry("Probe lines", "", Patterns::Anything(),
                       "Lines sampled at every field output into "
                       "probe_line_<name>_<n>.csv, separated by ';', each "
@@ -113,6 +122,7 @@ namespace femp
     output_steps      = prm.get_integer("Steps between outputs");
     series_interval   = prm.get_double("Time series interval");
     progress_interval = prm.get_integer("Progress interval");
+    probe_linear      = prm.get("Probe interpolation") == "linear";
     probe_points.clear();
     for (const auto &p :
          Utilities::split_string_list(prm.get("Probe points"), ';'))
@@ -222,22 +232,81 @@ namespace femp
                       const std::vector<Field> &     fields) const
   {
     // The owner of the cell that contains a point contributes its values;
-    // everybody else adds zeros.
-    std::vector<double> v(points.size() * fields.size(), 0.);
-    for (std::size_t i = 0; i < points.size(); ++i)
+    // everybody else adds zeros. With linear interpolation, the owner of
+    // each of the 2^dim cells around the point adds its weighted values and
+    // weight to a second block (owned cells only: no ghost values needed).
+    const std::size_t nf = fields.size();
+    const std::size_t np = points.size();
+    const std::size_t nw = nf + 1; // weighted sums of the fields and weight
+    std::vector<double> v(np * nf + (prm.probe_linear ? np * nw : 0), 0.);
+    const auto &        status = grid.cell_status();
+    auto                owned  = [&](const std::array<int, dim> &ijk) {
+      return grid.in_box(ijk) &&
+             status[grid.local_index(ijk)] == BackgroundGrid<dim>::owned;
+    };
+    const std::vector<double> *alpha = nullptr;
+    for (const auto &f : fields)
+      if (f.name == "alpha")
+        alpha = f.values;
+    for (std::size_t i = 0; i < np; ++i)
       {
         const auto ijk = grid.cell_of(points[i]);
-        if (!grid.in_box(ijk))
+        if (owned(ijk))
+          for (std::size_t f = 0; f < nf; ++f)
+            v[i * nf + f] = (*fields[f].values)[grid.local_index(ijk)];
+        if (!prm.probe_linear)
           continue;
-        const auto idx = grid.local_index(ijk);
-        if (grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
-          continue;
-        for (std::size_t f = 0; f < fields.size(); ++f)
-          v[i * fields.size() + f] = (*fields[f].values)[idx];
+        // Lower cell of the centre stencil and the local coordinates; at
+        // the domain's faces the stencil shrinks to the boundary cell.
+        std::array<int, dim>    lo;
+        std::array<double, dim> t;
+        for (int d = 0; d < dim; ++d)
+          {
+            const double s =
+              (points[i][d] - grid.origin()[d]) / grid.h() - 0.5;
+            const int n = grid.n_cells()[d];
+            lo[d]       = static_cast<int>(std::floor(s));
+            t[d]        = s - lo[d];
+            if (lo[d] < 0)
+              lo[d] = 0, t[d] = 0;
+            if (lo[d] >= n - 1)
+              lo[d] = n - 1, t[d] = 0;
+          }
+        double *const acc = v.data() + np * nf + i * nw;
+        for (unsigned int c = 0; c < (1u << dim); ++c)
+          {
+            std::array<int, dim> cell = lo;
+            double               w    = 1;
+            for (int d = 0; d < dim; ++d)
+              {
+                const bool up = (c >> d) & 1;
+                cell[d] += up;
+                w *= up ? t[d] : 1 - t[d];
+              }
+            if (w == 0 || !owned(cell))
+              continue;
+            const auto idx = grid.local_index(cell);
+            if (alpha)
+              w *= (*alpha)[idx];
+            for (std::size_t f = 0; f < nf; ++f)
+              acc[f] += w * (*fields[f].values)[idx];
+            acc[nf] += w;
+          }
       }
     std::vector<double> global(v.size());
     Utilities::MPI::sum(ArrayView<const double>(v), grid.communicator(),
                         ArrayView<double>(global));
+    if (prm.probe_linear)
+      for (std::size_t i = 0; i < np; ++i)
+        {
+          const double *const acc = global.data() + np * nf + i * nw;
+          if (acc[nf] <= 0)
+            continue;
+          for (std::size_t f = 0; f < nf; ++f)
+            if (fields[f].continuous)
+              global[i * nf + f] = acc[f] / acc[nf];
+        }
+    global.resize(np * nf);
     return global;
   }
 

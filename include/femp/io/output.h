@@ -38,6 +38,9 @@ namespace femp
       double                 series_interval = 0;
       unsigned int           output_steps    = 0;
       unsigned int           progress_interval = 100;
+      /// Probe values: the containing cell's ("cell") or interpolated
+      /// between cell centres, weighted by the metal fraction ("linear").
+      bool                   probe_linear = false;
       std::vector<Point<dim>> probe_points;
       std::vector<ProbeLine>  probe_lines;
 
@@ -50,11 +53,14 @@ namespace femp
       check(const Point<dim> &lo, const Point<dim> &hi) const;
     };
 
-    /// A named cell field over the local box.
+    /// A named cell field over the local box. A field that is not
+    /// continuous (a tag such as the phase or the zone) is never
+    /// interpolated by the probes.
     struct Field
     {
       std::string                name;
       const std::vector<double> *values;
+      bool                       continuous = true;
     };
 
     Output(const Parameters &prm, const BackgroundGrid<dim> &grid);
@@ -89,16 +95,22 @@ namespace femp
       return prm;
     }
 
+    /// Values of @p fields at @p points, point by point (global, on all
+    /// ranks; collective). With "Probe interpolation = cell" the value of
+    /// the containing cell; with "linear" the multilinear interpolation
+    /// between the 2^dim nearest cell centres, each weighted by its metal
+    /// fraction (the field named "alpha", if given), so that gas cells do
+    /// not pull a surface value towards theirs. Non-continuous fields and
+    /// points with no metal around take the containing cell's value.
+    std::vector<double>
+    sample(const std::vector<Point<dim>> &points,
+           const std::vector<Field> &     fields) const;
+
   private:
     Parameters                 prm;
     const BackgroundGrid<dim> &grid;
     std::ofstream              probe_csv, pool_csv;
     std::vector<std::pair<double, std::string>> grid_records, point_records;
-
-    /// Value of @p field in the cell containing @p p (global, on all ranks).
-    std::vector<double>
-    sample(const std::vector<Point<dim>> &points,
-           const std::vector<Field> &     fields) const;
   };
 } // namespace femp
 
