@@ -136,11 +136,22 @@ namespace femp
             total *= size[d];
           }
         a.assign(total, 0.);
-        for (const auto idx : g.owned_cells())
+        // The owned cells of the window (not all owned cells).
+        const auto &status = g.cell_status();
+        for (std::size_t f = 0; f < total; ++f)
           {
-            const auto ijk = g.global_index(idx);
-            if (contains(ijk))
-              a[flat(ijk)] = alpha[idx];
+            std::array<int, dim> ijk;
+            std::size_t          ff = f;
+            for (int d = 0; d < dim; ++d)
+              {
+                ijk[d] = lo[d] + int(ff % size[d]);
+                ff /= size[d];
+              }
+            if (!g.in_box(ijk))
+              continue;
+            const std::size_t idx = g.local_index(ijk);
+            if (status[idx] == BackgroundGrid<dim>::owned)
+              a[f] = alpha[idx];
           }
         MPI_Allreduce(MPI_IN_PLACE, a.data(), int(a.size()), MPI_DOUBLE,
                       MPI_SUM, g.communicator());
@@ -360,7 +371,7 @@ namespace femp
                   if (w.at(q) >= 0.5)
                     {
                       Point<dim> a = p, b = q;
-                      for (int k = 0; k < 30; ++k)
+                      for (int k = 0; k < 20; ++k) // to 1e-6 of a step
                         {
                           const Point<dim> c = 0.5 * (a + b);
                           (w.at(c) >= 0.5 ? b : a) = c;
