@@ -32,7 +32,7 @@ main(int argc, char **argv)
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
   RayTracedAbsorption<dim>::Parameters prm;
-  prm.model = "ray tracing";
+  prm.model = "ray traced";
   RayTracedAbsorption<dim> rays(prm, grid);
   const double A0 = 4 * prm.refractive_index /
                     (std::pow(prm.refractive_index + 1, 2) +

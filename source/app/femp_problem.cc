@@ -49,6 +49,7 @@ namespace femp
     HeatTransfer<3>::Parameters::declare_parameters(prm);
     IncompressibleFlow<3>::Parameters::declare_parameters(prm);
     Laser<3>::Parameters::declare_parameters(prm);
+    RayTracedAbsorption<3>::Parameters::declare_parameters(prm);
     Output<3>::Parameters::declare_parameters(prm);
     ThermalHistory<3>::Parameters::declare_parameters(prm);
     SolidMaterial::declare_parameters(prm);
@@ -80,6 +81,7 @@ namespace femp
     if (melt_flow)
       flow_prm.check_time_step(grid_prm.cell_size, material.density);
     laser_prm.parse_parameters(prm);
+    absorption_prm.parse_parameters(prm);
     output_prm.parse_parameters(prm);
     history_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
@@ -213,6 +215,7 @@ namespace femp
     }
     heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
     heat->initialize();
+    heat->set_absorption_model(absorption_prm);
     if (!heat_enabled)
       heat->freeze();
     point_heat = std::make_unique<PointHeatExchange<dim>>(
@@ -336,11 +339,14 @@ namespace femp
             << std::setprecision(3) << ratio
             << (ratio >= 30 ?
                   " >= 30: keyhole mode likely; a fixed absorptivity on the "
-                  "first surface underestimates the depth there (ray-traced "
-                  "absorption: doc/absorption.md)\n" :
-                  (ratio >= 20 ? " (near the keyhole transition at ~30, "
-                                 "doc/absorption.md)\n" :
+                  "first surface underestimates the depth there" :
+                  (ratio >= 20 ? " (near the keyhole transition at ~30)" :
                                  " < 30: conduction mode\n"));
+    if (ratio >= 20)
+      pcout << (heat->ray_traced() ?
+                  "; ray-traced absorption on (doc/absorption.md)\n" :
+                  "; use 'Laser/Absorption model = ray traced' "
+                  "(doc/absorption.md)\n");
   }
 
 
@@ -401,6 +407,11 @@ namespace femp
   {
     if (!heat_enabled)
       return;
+    if (heat->ray_traced())
+      {
+        TimerOutput::Scope t(timer, "laser ray tracing");
+        heat->trace_laser(control->time());
+      }
     {
       TimerOutput::Scope t(timer, "temperature step");
       heat->advance(dt, control->time());
@@ -512,7 +523,35 @@ namespace femp
                                     points_prm.substrate_top,
                                     material.solidus);
     output->write_series(control->time(), output_fields(), result.pool);
+    if (heat_enabled && heat->ray_traced())
+      write_absorption_series();
     control->series_written();
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::write_absorption_series()
+  {
+    if (Utilities::MPI::this_mpi_process(comm) != 0)
+      return;
+    const std::string name = output_prm.directory + "/absorption.csv";
+    if (!absorption_csv)
+      {
+        absorption_csv = std::make_unique<std::ofstream>(name);
+        *absorption_csv << "time,incident,absorbed,escaped,absorbed_fraction,"
+                           "hits_per_ray\n";
+      }
+    // The last trace: of the step that ended at this time.
+    const auto &r = heat->last_trace();
+    *absorption_csv << std::setprecision(8) << control->time() << ','
+                    << r.incident << ',' << r.absorbed << ',' << r.escaped
+                    << ',' << (r.incident > 0 ? r.absorbed / r.incident : 0.)
+                    << ',' << double(r.n_hits) / std::max(1u, r.n_rays)
+                    << '\n';
+    absorption_csv->flush();
+    require(bool(*absorption_csv), "Output/Directory", output_prm.directory,
+            "absorption.csv cannot be written there");
   }
 
 

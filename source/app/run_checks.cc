@@ -377,7 +377,7 @@ namespace femp
         const std::regex ours(
           "(grid|points)(_[0-9]+(\\.[0-9]+)?\\.(vtu|pvtu)|\\.pvd)|"
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
-          "parameters\\.prm|.*\\.pvd\\.tmp");
+          "absorption\\.csv|parameters\\.prm|.*\\.pvd\\.tmp");
         const std::string energy = get(prm, "Solid", "Energy file");
         const std::string probes = get(prm, "Solid", "Probe file");
         std::error_code   ec;

@@ -7,6 +7,7 @@
 #include <femp/heat/heat_transfer.h>
 #include <femp/base/input_checks.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <type_traits>
@@ -515,7 +516,9 @@ namespace femp
         loss_weight[s.index]   = wg;
         e_laser += q_laser;
       }
-    if (!gradient_mode)
+    if (tracer)
+      e_laser += deposit_traced_laser(time, dt);
+    else if (!gradient_mode)
       for (const auto &lc : first_surface)
         {
           if (!laser_on)
@@ -533,6 +536,74 @@ namespace femp
           e_laser += q;
         }
     budget.laser += e_laser * V * dt;
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::set_absorption_model(
+    const typename RayTracedAbsorption<dim>::Parameters &absorption)
+  {
+    tracer.reset();
+    if (absorption.model == "ray traced")
+      tracer = std::make_unique<RayTracedAbsorption<dim>>(absorption, grid);
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::trace_laser(const double time)
+  {
+    Assert(tracer, ExcMessage("trace_laser() needs 'ray traced'"));
+    ray_deposits.clear();
+    trace_result = {};
+    Point<dim> axis;
+    double     power = 0;
+    if (laser.position(time, axis, power) && power > 0)
+      trace_result = tracer->trace(alpha, axis, power, laser.beam_radius(),
+                                   ray_deposits);
+    traced_time = time;
+    traced      = true;
+  }
+
+
+  // Ray-traced laser: each hit's absorbed power W goes into its (owned)
+  // surface cell as the volumetric source W/V for this step. A cell that is
+  // not yet among the sparse-source cells (not expected: the tracer picks
+  // surface cells as set_metal_fraction() does) is added to them, so that
+  // no deposit is lost. The beam energy P dt and the escaping part are
+  // booked once (rank 0; the trace is the same on every rank).
+  template <int dim>
+  double
+  HeatTransfer<dim>::deposit_traced_laser(const double time, const double dt)
+  {
+    if (!traced || traced_time != time)
+      trace_laser(time);
+    traced = false;
+    for (const auto idx : ray_cells)
+      laser_density[idx] = 0;
+    ray_cells.clear();
+    const double iV  = 1. / std::pow(grid.h(), dim);
+    double       sum = 0;
+    for (const auto &[idx, W] : ray_deposits)
+      {
+        const double q = W * iV;
+        if (laser_density[idx] == 0)
+          ray_cells.push_back(idx);
+        laser_density[idx] += q;
+        source[idx] += q;
+        sum += q;
+        const auto it =
+          std::lower_bound(source_cells.begin(), source_cells.end(), idx);
+        if (it == source_cells.end() || *it != idx)
+          source_cells.insert(it, idx);
+      }
+    if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
+      {
+        budget.laser_incident += trace_result.incident * dt;
+        budget.laser_escaped += trace_result.escaped * dt;
+      }
+    return sum;
   }
 
 
@@ -1171,14 +1242,16 @@ namespace femp
   typename HeatTransfer<dim>::EnergyBudget
   HeatTransfer<dim>::energy_budget() const
   {
-    const double local[6] = {budget.laser,     budget.evaporation,
-                             budget.convection, budget.radiation,
-                             budget.boundary,  budget.advection};
-    double       global[6];
-    Utilities::MPI::sum(ArrayView<const double>(local, 6),
+    const double local[8] = {budget.laser,          budget.evaporation,
+                             budget.convection,     budget.radiation,
+                             budget.boundary,       budget.advection,
+                             budget.laser_incident, budget.laser_escaped};
+    double       global[8];
+    Utilities::MPI::sum(ArrayView<const double>(local, 8),
                         grid.communicator(),
-                        ArrayView<double>(global, 6));
-    return {global[0], global[1], global[2], global[3], global[4], global[5]};
+                        ArrayView<double>(global, 8));
+    return {global[0], global[1], global[2], global[3],
+            global[4], global[5], global[6], global[7]};
   }
 
 

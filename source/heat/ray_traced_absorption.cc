@@ -21,33 +21,40 @@ namespace femp
   {
     prm.enter_subsection("Laser");
     prm.declare_entry(
-      "Absorption model", "fixed", Patterns::Selection("fixed|ray tracing"),
+      "Absorption model", "fixed", Patterns::Selection("fixed|ray traced"),
       "'fixed': the absorbed flux is 'Absorptivity' times the beam's flux, "
-      "put into the cells where the vertical beam first meets metal. 'ray "
-      "tracing': rays over the beam's Gaussian profile are traced into the "
+      "put into the cells where the vertical beam first meets metal "
+      "('Heat transfer/Laser deposition'). 'ray traced': every temperature "
+      "step, rays over the beam's Gaussian profile are traced into the "
       "current metal surface (alpha = 1/2), absorbed there by the Fresnel "
       "relation of 'Refractive index' and 'Extinction coefficient' at the "
       "angle of incidence and reflected specularly (multiple reflections in "
-      "a depression); 'Absorptivity' is then not used. Recommended where the "
-      "surface is deeply depressed (normalized enthalpy above ~30, see the "
-      "scene log and doc/absorption.md).");
+      "a depression); each hit's absorbed power goes as a volumetric source "
+      "into the surface cell next to it; the power of rays that leave the "
+      "domain is booked as escaping (absorbed + escaping = P). "
+      "'Absorptivity' and 'Heat transfer/Laser deposition' are then not "
+      "used. Recommended where the surface is deeply depressed (normalized "
+      "enthalpy above ~20-30, see the scene log and doc/absorption.md).");
     prm.declare_entry("Refractive index", "3.5", Patterns::Double(0.),
                       "Real part n of the metal's complex refractive index at "
-                      "the laser wavelength (ray tracing only); range (0, "
-                      "inf). The default is a placeholder of the order of "
-                      "iron and steels near 1.06 um (normal-incidence "
-                      "absorptivity 0.346 with the default extinction "
-                      "coefficient); set it from optical data of the alloy.");
+                      "the laser wavelength (ray traced only), dimensionless; "
+                      "range (0, inf). The default is a placeholder of the "
+                      "order of iron and steels near 1.06 um (normal-"
+                      "incidence absorptivity 0.346 with the default "
+                      "extinction coefficient), not a measured value of an "
+                      "alloy; set it from optical data of the alloy "
+                      "(doc/absorption.md).");
     prm.declare_entry("Extinction coefficient", "4.5", Patterns::Double(0.),
                       "Imaginary part k of the complex refractive index at the "
-                      "laser wavelength (ray tracing only); range [0, inf).");
+                      "laser wavelength (ray traced only), dimensionless; range "
+                      "[0, inf).");
     prm.declare_entry("Rays per beam radius", "4", Patterns::Integer(1, 64),
                       "Ray spacing r_b / this number on a square lattice (3D) "
-                      "or a line (2D) out to 2 r_b (ray tracing only); range "
-                      "[1, 64].");
+                      "or a line (2D) out to 2 r_b (ray traced only): "
+                      "4 gives 197 rays in 3D, 17 in 2D; range [1, 64].");
     prm.declare_entry("Maximum reflections", "50", Patterns::Integer(0, 10000),
                       "After this many reflections a ray's remaining power is "
-                      "absorbed where it is (ray tracing only); range [0, "
+                      "absorbed where it is (ray traced only); range [0, "
                       "10000].");
     prm.leave_subsection();
   }
@@ -129,11 +136,22 @@ namespace femp
             total *= size[d];
           }
         a.assign(total, 0.);
-        for (const auto idx : g.owned_cells())
+        // The owned cells of the window (not all owned cells).
+        const auto &status = g.cell_status();
+        for (std::size_t f = 0; f < total; ++f)
           {
-            const auto ijk = g.global_index(idx);
-            if (contains(ijk))
-              a[flat(ijk)] = alpha[idx];
+            std::array<int, dim> ijk;
+            std::size_t          ff = f;
+            for (int d = 0; d < dim; ++d)
+              {
+                ijk[d] = lo[d] + int(ff % size[d]);
+                ff /= size[d];
+              }
+            if (!g.in_box(ijk))
+              continue;
+            const std::size_t idx = g.local_index(ijk);
+            if (status[idx] == BackgroundGrid<dim>::owned)
+              a[f] = alpha[idx];
           }
         MPI_Allreduce(MPI_IN_PLACE, a.data(), int(a.size()), MPI_DOUBLE,
                       MPI_SUM, g.communicator());
@@ -353,7 +371,7 @@ namespace femp
                   if (w.at(q) >= 0.5)
                     {
                       Point<dim> a = p, b = q;
-                      for (int k = 0; k < 30; ++k)
+                      for (int k = 0; k < 20; ++k) // to 1e-6 of a step
                         {
                           const Point<dim> c = 0.5 * (a + b);
                           (w.at(c) >= 0.5 ? b : a) = c;

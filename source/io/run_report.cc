@@ -128,6 +128,15 @@ namespace femp
         << ", stored " << s.stored << "; balance error "
         << std::abs(s.laser + s.boundary - s.losses - s.stored) / scale
         << std::endl;
+    if (e.laser_incident > 0)
+      out << std::setprecision(6) << "  ray-traced laser (J"
+          << (dim == 2 ? "/m" : "") << "): incident " << e.laser_incident
+          << ", absorbed " << e.laser << " (fraction "
+          << e.laser / e.laser_incident << "), escaping " << e.laser_escaped
+          << "; |absorbed + escaping - incident| / incident "
+          << std::abs(e.laser + e.laser_escaped - e.laser_incident) /
+               e.laser_incident
+          << std::endl;
     if (with_flow)
       out << std::setprecision(6) << "  with melt flow, energy created (J"
           << (dim == 2 ? "/m" : "") << ") by the upwind convection of T "

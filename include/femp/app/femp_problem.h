@@ -32,6 +32,7 @@
 #include <femp/io/run_report.h>
 #include <femp/solid/solid_stress.h>
 
+#include <fstream>
 #include <memory>
 
 namespace femp
@@ -78,6 +79,10 @@ namespace femp
     typename MaterialPoints<dim>::Parameters  points_prm;
     typename HeatTransfer<dim>::Parameters    heat_prm;
     typename Laser<dim>::Parameters           laser_prm;
+    /// Laser/Absorption model and the ray tracer's parameters.
+    typename RayTracedAbsorption<dim>::Parameters absorption_prm;
+    /// Ray traced: absorption.csv of the output directory (rank 0).
+    std::unique_ptr<std::ofstream>            absorption_csv;
     typename Output<dim>::Parameters          output_prm;
     typename ThermalHistory<dim>::Parameters  history_prm;
     bool                                      melt_flow = false;
@@ -134,6 +139,10 @@ namespace femp
     /// 'Time stepping/Maximum number of steps' steps of @p dt.
     void
     check_projected_steps(const unsigned int step, const double dt) const;
+    /// Ray traced: one row of absorption.csv (time, incident, absorbed,
+    /// escaped power, absorbed fraction, hits per ray).
+    void
+    write_absorption_series();
     /// 2. Temperature in fluid, solid and powder (eq. 1).
     void
     temperature_step(const double dt);

@@ -25,6 +25,7 @@
 
 #include <femp/grid/background_grid.h>
 #include <femp/heat/laser.h>
+#include <femp/heat/ray_traced_absorption.h>
 #include <femp/base/material.h>
 
 #include <cstdint>
@@ -94,6 +95,11 @@ namespace femp
       /// Created by the upwind convection term (sum of rho c dT V over the
       /// cells): zero for a conservative scheme; not a loss, reported apart.
       double advection = 0;
+      /// 'ray traced' only: beam energy sent (P dt summed over the steps
+      /// with the laser on) and the part that left the domain after its
+      /// reflections; laser + laser_escaped = laser_incident. Zero with
+      /// the fixed absorptivity.
+      double laser_incident = 0, laser_escaped = 0;
     };
 
     /// Total surface losses so far (global, collective), J (2D: J/m).
@@ -161,6 +167,31 @@ namespace femp
     void
     take_point_enthalpy(
       const std::vector<std::pair<std::uint32_t, double>> &mean_e);
+
+    /// Absorption model of the laser (subsection Laser): with 'ray traced'
+    /// the laser's power is traced into the current metal surface
+    /// (RayTracedAbsorption) instead of 'Absorptivity' times the flux on
+    /// the first surface. Call after initialize(); 'fixed' changes nothing.
+    void
+    set_absorption_model(
+      const typename RayTracedAbsorption<dim>::Parameters &absorption);
+    /// True with 'Laser/Absorption model = ray traced'.
+    bool
+    ray_traced() const
+    {
+      return tracer != nullptr;
+    }
+    /// Ray traced: trace the beam at @p time into the current metal
+    /// fraction; the next advance() from this time deposits the result
+    /// (advance() traces itself if this was not called). Collective.
+    void
+    trace_laser(const double time);
+    /// Ray traced: the outcome of the last trace (global, W or W/m).
+    const typename RayTracedAbsorption<dim>::Result &
+    last_trace() const
+    {
+      return trace_result;
+    }
 
     /// Cell-centred velocity, one array per direction over the local box
     /// (with ghosts); nullptr switches convection off.
@@ -279,6 +310,20 @@ namespace femp
       double        value;
     };
     std::vector<FixedFace> fixed_faces;
+
+    /// Ray-traced absorption (nullptr: the fixed model), its deposits
+    /// (owned cell, W) for the time traced_time, the cells that took the
+    /// last step's deposits, the outcome of the last trace.
+    std::unique_ptr<RayTracedAbsorption<dim>>       tracer;
+    std::vector<std::pair<std::uint32_t, double>>   ray_deposits;
+    std::vector<std::uint32_t>                      ray_cells;
+    double                                          traced_time = -1;
+    bool                                            traced      = false;
+    typename RayTracedAbsorption<dim>::Result       trace_result;
+    /// Ray traced: the deposits of the trace at @p time into the sources
+    /// of this step; returns their sum over the owned cells, W/m^3 summed.
+    double
+    deposit_traced_laser(const double time, const double dt);
 
     bool         frozen = false;
     EnergyBudget budget;

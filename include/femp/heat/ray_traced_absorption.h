@@ -36,7 +36,7 @@ namespace femp
   public:
     struct Parameters
     {
-      /// 'fixed' (eq. 1, 'Laser/Absorptivity') or 'ray tracing'.
+      /// 'fixed' (eq. 1, 'Laser/Absorptivity') or 'ray traced'.
       std::string  model                  = "fixed";
       double       refractive_index       = 3.5;
       double       extinction_coefficient = 4.5;
