@@ -1,5 +1,10 @@
-// femp: VTU/PVTU/PVD output of grid fields and material points, CSV probes
-// and the melt-pool time series.
+// femp: output of the grid fields and the material points as VTU/PVTU
+// pieces with a .pvd index, or as HDF5 with an XDMF index (grid: the mesh
+// once in grid_mesh.h5, the fields per output in grid_<n>.h5; points: one
+// points_<n>.h5 per output since they move); the chosen fields and point
+// properties only; CSV probes and the melt-pool time series. Every index is
+// rewritten after a barrier under a temporary name and then renamed, so a
+// killed run leaves an index that lists complete files only.
 #include <deal.II/base/data_out_base.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
@@ -8,9 +13,13 @@
 #include <deal.II/particles/data_out.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/grid/material_points.h>
 #include <femp/io/output.h>
+#include <femp/solid/solid_stress.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 
 namespace femp
@@ -27,30 +36,158 @@ namespace femp
                              "full?)"));
     }
 
-    /// Rewrite the ParaView index @p file once every rank has written its
-    /// pieces (barrier), atomically: a temporary file renamed over the old
-    /// one, so that a reader never sees a half-written index.
+    /// Replace the index @p file by the one @p write puts into the stream,
+    /// once every rank has written its pieces (barrier), atomically: rank 0
+    /// writes a temporary file and renames it over the old one, so that a
+    /// reader, or a run killed meanwhile, never leaves a half-written index.
     void
-    write_pvd(const std::string &                                file,
-              const std::vector<std::pair<double, std::string>> &records,
-              const MPI_Comm                                     comm)
+    replace_index(const std::string &                         file,
+                  const std::function<void(const std::string &)> &write,
+                  const MPI_Comm                               comm)
     {
       const int ierr = MPI_Barrier(comm);
       AssertThrowMPI(ierr);
       if (Utilities::MPI::this_mpi_process(comm) != 0)
         return;
       const std::string tmp = file + ".tmp";
-      {
-        std::ofstream pvd(tmp);
-        DataOutBase::write_pvd_record(pvd, records);
-        pvd.close();
-        check_stream(pvd, tmp);
-      }
+      write(tmp);
       std::error_code error;
       std::filesystem::rename(tmp, file, error);
       AssertThrow(!error, ExcMessage("cannot replace '" + file + "' by '" +
                                      tmp + "': " + error.message()));
     }
+
+    /// The ParaView index of a series of PVTU records.
+    void
+    write_pvd(const std::string &                                file,
+              const std::vector<std::pair<double, std::string>> &records,
+              const MPI_Comm                                     comm)
+    {
+      replace_index(
+        file,
+        [&](const std::string &tmp) {
+          std::ofstream pvd(tmp);
+          DataOutBase::write_pvd_record(pvd, records);
+          pvd.close();
+          check_stream(pvd, tmp);
+        },
+        comm);
+    }
+
+    /// The XDMF index of a series of HDF5 files (rank 0 writes it).
+    template <int patch_dim, int spacedim>
+    void
+    write_xdmf(const std::string &                           file,
+               const std::vector<XDMFEntry> &                entries,
+               const DataOutInterface<patch_dim, spacedim> &writer,
+               const MPI_Comm                                comm)
+    {
+      replace_index(
+        file,
+        [&](const std::string &tmp) {
+          writer.write_xdmf_file(entries, tmp, MPI_COMM_SELF);
+          std::ifstream check(tmp);
+          AssertThrow(static_cast<bool>(check),
+                      ExcMessage("cannot write the output file '" + tmp +
+                                 "' (missing directory, no permission or "
+                                 "disk full?)"));
+        },
+        comm);
+    }
+
+    /// Every grid field femp writes (FempProblem::write_output); a run
+    /// writes those of the physics it has switched on.
+    template <int dim>
+    std::vector<std::string>
+    known_grid_fields()
+    {
+      std::vector<std::string> names = {"T", "gamma", "alpha", "p"};
+      for (int d = 0; d < dim; ++d)
+        names.push_back(std::string("u_") + char('x' + d));
+      for (const auto &n : SolidStress<dim>::cell_field_names())
+        names.push_back(n);
+      for (const char *n : {"laser_source", "phase", "zone", "subdomain"})
+        names.push_back(n);
+      return names;
+    }
+
+    /// Parse 'all' or a comma-separated list of names out of @p known
+    /// (empty result: all).
+    std::vector<std::string>
+    parse_selection(const std::string &             text,
+                    const std::vector<std::string> &known,
+                    const std::string &             parameter)
+    {
+      if (Utilities::trim(text) == "all")
+        return {};
+      std::string allowed = "'all' or a comma-separated list of";
+      for (std::size_t i = 0; i < known.size(); ++i)
+        allowed += (i ? ", " : " ") + known[i];
+      const auto names = Utilities::split_string_list(text, ',');
+      require(!names.empty(), parameter, text, allowed);
+      for (const auto &name : names)
+        require(std::find(known.begin(), known.end(), name) != known.end(),
+                parameter, name, allowed);
+      return names;
+    }
+
+    /// Whether @p name is in @p selection (empty: all are).
+    bool
+    selected(const std::vector<std::string> &selection, const std::string &name)
+    {
+      return selection.empty() ||
+             std::find(selection.begin(), selection.end(), name) !=
+               selection.end();
+    }
+
+    /// Material points as 0-dimensional patches (one per point) with the
+    /// point id and the chosen properties, for the VTU and the HDF5 writers.
+    template <int dim>
+    class PointPatches : public DataOutInterface<0, dim>
+    {
+    public:
+      PointPatches(const Particles::ParticleHandler<dim> &points,
+                   const std::vector<std::string> &       property_names,
+                   const std::vector<std::string> &       selection)
+      {
+        std::vector<unsigned int> columns;
+        names = {"id"};
+        for (unsigned int i = 0; i < property_names.size(); ++i)
+          if (selected(selection, property_names[i]))
+            {
+              columns.push_back(i);
+              names.push_back(property_names[i]);
+            }
+        patches.resize(points.n_locally_owned_particles());
+        unsigned int i = 0;
+        for (const auto &point : points)
+          {
+            auto &patch       = patches[i];
+            patch.vertices[0] = point.get_location();
+            patch.patch_index = i++;
+            patch.data.reinit(names.size(), 1);
+            patch.data(0, 0)  = point.get_id();
+            const auto props  = point.get_properties();
+            for (unsigned int c = 0; c < columns.size(); ++c)
+              patch.data(c + 1, 0) = props[columns[c]];
+          }
+      }
+
+    private:
+      std::vector<DataOutBase::Patch<0, dim>> patches;
+      std::vector<std::string>                names;
+
+      const std::vector<DataOutBase::Patch<0, dim>> &
+      get_patches() const override
+      {
+        return patches;
+      }
+      std::vector<std::string>
+      get_dataset_names() const override
+      {
+        return names;
+      }
+    };
   } // namespace
 
 
@@ -84,6 +221,40 @@ namespace femp
                       "field output ('always'), only with the last one "
                       "('last'), or not at all. Point files are large: about "
                       "100 bytes per point.");
+    prm.declare_entry("Format", "vtu", Patterns::Selection("vtu|hdf5"),
+                      "File format of the grid fields and the material "
+                      "points: 'vtu' writes compressed VTU pieces (one per "
+                      "rank or group of ranks) with PVTU records and the "
+                      "indices grid.pvd, points.pvd; 'hdf5' writes one HDF5 "
+                      "file per output for all ranks (MPI-IO; the grid's "
+                      "mesh once in grid_mesh.h5, its fields in "
+                      "grid_<n>.h5; the points in points_<n>.h5) with the "
+                      "indices grid.xdmf, points.xdmf (ParaView: 'XDMF "
+                      "Reader'). HDF5 data are uncompressed doubles: larger "
+                      "files than VTU, but fewer of them and faster to "
+                      "write from many ranks (doc/output.md).");
+    prm.declare_entry("Point properties", "all", Patterns::Anything(),
+                      "Material-point properties to write, 'all' or a "
+                      "comma-separated list of: mass (kg), volume (m^3), "
+                      "temperature (K), state (0 powder, 1 solid, 2 fluid), "
+                      "peak_temperature (K), "
+                      "velocity_x, velocity_y, velocity_z (m/s), stress_xx, "
+                      "stress_yy, stress_zz, stress_xy, stress_xz, stress_yz "
+                      "(Pa), plastic_strain (-), viscous_pressure (Pa), "
+                      "affine_velocity_xx ... affine_velocity_zz (1/s). "
+                      "Properties a scene does not carry (the stresses "
+                      "without the solid) are skipped; the point id is "
+                      "always written.");
+    prm.declare_entry("Grid fields", "all", Patterns::Anything(),
+                      "Grid cell fields to write, 'all' or a comma-separated "
+                      "list of: T (K), gamma (liquid fraction, -), alpha "
+                      "(metal fraction, -), p (Pa), u_x, u_y, u_z (m/s), "
+                      "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
+                      "plastic_strain (-), laser_source (W/m^3), phase (0 "
+                      "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
+                      "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
+                      "scene switches off are skipped. Probe lines sample "
+                      "their fields regardless.");
     prm.declare_entry("Time series interval", "0", Patterns::Double(0.),
                       "Simulated time between rows of the probe-point and "
                       "melt-pool CSV files, s; 0 writes a row every step.");
@@ -113,6 +284,15 @@ namespace femp
     output_steps      = prm.get_integer("Steps between outputs");
     series_interval   = prm.get_double("Time series interval");
     progress_interval = prm.get_integer("Progress interval");
+    format            = prm.get("Format");
+    point_properties  = parse_selection(
+      prm.get("Point properties"),
+      MaterialPoints<dim>::property_names(
+        MaterialPoints<dim>::PropertyIndex::n_properties),
+      "Output/Point properties");
+    grid_fields = parse_selection(prm.get("Grid fields"),
+                                  known_grid_fields<dim>(),
+                                  "Output/Grid fields");
     probe_points.clear();
     for (const auto &p :
          Utilities::split_string_list(prm.get("Probe points"), ';'))
@@ -250,66 +430,109 @@ namespace femp
                             const Particles::ParticleHandler<dim> * points,
                             const std::vector<std::string> &        point_names)
   {
+    std::vector<Field> chosen;
+    for (const auto &f : fields)
+      if (selected(prm.grid_fields, f.name))
+        chosen.push_back(f);
+    write_grid_output(n, time, chosen);
+    if (points)
+      write_point_output(n, time, *points, point_names);
+  }
+
+
+  template <int dim>
+  void
+  Output<dim>::write_grid_output(const unsigned int        n,
+                                 const double              time,
+                                 const std::vector<Field> &fields)
+  {
     const MPI_Comm comm = grid.communicator();
     const auto &   tria = grid.triangulation();
-    {
-      DataOut<dim> data_out;
-      data_out.attach_triangulation(tria);
-      // Only owned cells of the domain (not the triangulation's padding).
-      const auto &flat_of = grid.flat_index_of_active_cell();
-      auto        wanted  = [&](const typename Triangulation<dim>::cell_iterator &c) {
-        return c->is_active() && c->is_locally_owned() &&
-               flat_of[c->active_cell_index()] != numbers::invalid_unsigned_int;
-      };
-      data_out.set_cell_selection(
-        [wanted](const Triangulation<dim> &t) {
-          for (auto c : t.active_cell_iterators())
-            if (wanted(c))
-              return typename Triangulation<dim>::cell_iterator(c);
-          return t.end();
-        },
-        [wanted](const Triangulation<dim> &t,
-                 const typename Triangulation<dim>::cell_iterator &c) {
-          typename Triangulation<dim>::active_cell_iterator next(c);
-          for (++next; next != t.end(); ++next)
-            if (wanted(next))
-              return typename Triangulation<dim>::cell_iterator(next);
-          return t.end();
-        });
-      std::vector<Vector<float>> data(fields.size() + 1,
-                                      Vector<float>(tria.n_active_cells()));
-      const auto &flat = grid.flat_index_of_active_cell();
-      for (const auto &cell : tria.active_cell_iterators())
-        if (cell->is_locally_owned() &&
-            flat[cell->active_cell_index()] != numbers::invalid_unsigned_int)
-          {
-            const auto i = cell->active_cell_index();
-            for (std::size_t f = 0; f < fields.size(); ++f)
-              data[f][i] = (*fields[f].values)[flat[i]];
+    DataOut<dim>   data_out;
+    data_out.attach_triangulation(tria);
+    // Only owned cells of the domain (not the triangulation's padding).
+    const auto &flat_of = grid.flat_index_of_active_cell();
+    auto        wanted  = [&](const typename Triangulation<dim>::cell_iterator &c) {
+      return c->is_active() && c->is_locally_owned() &&
+             flat_of[c->active_cell_index()] != numbers::invalid_unsigned_int;
+    };
+    data_out.set_cell_selection(
+      [wanted](const Triangulation<dim> &t) {
+        for (auto c : t.active_cell_iterators())
+          if (wanted(c))
+            return typename Triangulation<dim>::cell_iterator(c);
+        return t.end();
+      },
+      [wanted](const Triangulation<dim> &t,
+               const typename Triangulation<dim>::cell_iterator &c) {
+        typename Triangulation<dim>::active_cell_iterator next(c);
+        for (++next; next != t.end(); ++next)
+          if (wanted(next))
+            return typename Triangulation<dim>::cell_iterator(next);
+        return t.end();
+      });
+    const bool with_subdomain = selected(prm.grid_fields, "subdomain");
+    std::vector<Vector<float>> data(fields.size() + with_subdomain,
+                                    Vector<float>(tria.n_active_cells()));
+    for (const auto &cell : tria.active_cell_iterators())
+      if (wanted(cell))
+        {
+          const auto i = cell->active_cell_index();
+          for (std::size_t f = 0; f < fields.size(); ++f)
+            data[f][i] = (*fields[f].values)[flat_of[i]];
+          if (with_subdomain)
             data[fields.size()][i] = cell->subdomain_id();
-          }
-      for (std::size_t f = 0; f < fields.size(); ++f)
-        data_out.add_data_vector(data[f], fields[f].name,
-                                 DataOut<dim>::type_cell_data);
+        }
+    for (std::size_t f = 0; f < fields.size(); ++f)
+      data_out.add_data_vector(data[f], fields[f].name,
+                               DataOut<dim>::type_cell_data);
+    if (with_subdomain)
       data_out.add_data_vector(data[fields.size()], "subdomain",
                                DataOut<dim>::type_cell_data);
-      data_out.build_patches();
-      DataOutBase::VtkFlags flags;
-      flags.time              = time;
-      flags.compression_level = DataOutBase::VtkFlags::best_speed;
-      data_out.set_flags(flags);
-      const std::string name = data_out.write_vtu_with_pvtu_record(
-        prm.directory + "/", "grid", n, comm, 5, 8);
-      grid_records.emplace_back(time, name);
-      write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
-    }
-    if (points)
+    data_out.build_patches();
+    if (prm.format == "vtu")
       {
-        Particles::DataOut<dim> data_out;
-        std::vector<DataComponentInterpretation::DataComponentInterpretation>
-          interpretation(point_names.size(),
-                         DataComponentInterpretation::component_is_scalar);
-        data_out.build_patches(*points, point_names, interpretation);
+        DataOutBase::VtkFlags flags;
+        flags.time              = time;
+        flags.compression_level = DataOutBase::VtkFlags::best_speed;
+        data_out.set_flags(flags);
+        const std::string name = data_out.write_vtu_with_pvtu_record(
+          prm.directory + "/", "grid", n, comm, 5, 8);
+        grid_records.emplace_back(time, name);
+        write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
+        return;
+      }
+    // HDF5: the background grid, its partition and the order of the cells
+    // never change during a run, so the mesh (node coordinates, cells) is
+    // written once and each output holds only the fields. Cell data are
+    // written at the 2^dim corners of each cell (no shared nodes), as in
+    // the VTU pieces.
+    DataOutBase::DataOutFilter filter(
+      DataOutBase::DataOutFilterFlags(false, true));
+    data_out.write_filtered_data(filter);
+    const std::string mesh = "grid_mesh.h5";
+    const std::string file = "grid_" + Utilities::int_to_string(n, 5) + ".h5";
+    data_out.write_hdf5_parallel(filter, !grid_mesh_written,
+                                 prm.directory + "/" + mesh,
+                                 prm.directory + "/" + file, comm);
+    grid_mesh_written = true;
+    grid_entries.push_back(
+      data_out.create_xdmf_entry(filter, mesh, file, time, comm));
+    write_xdmf(prm.directory + "/grid.xdmf", grid_entries, data_out, comm);
+  }
+
+
+  template <int dim>
+  void
+  Output<dim>::write_point_output(const unsigned int                     n,
+                                  const double                           time,
+                                  const Particles::ParticleHandler<dim> &points,
+                                  const std::vector<std::string> &point_names)
+  {
+    const MPI_Comm     comm = grid.communicator();
+    PointPatches<dim>  data_out(points, point_names, prm.point_properties);
+    if (prm.format == "vtu")
+      {
         DataOutBase::VtkFlags flags;
         flags.time              = time;
         flags.compression_level = DataOutBase::VtkFlags::best_speed;
@@ -318,7 +541,17 @@ namespace femp
           prm.directory + "/", "points", n, comm, 5, 8);
         point_records.emplace_back(time, name);
         write_pvd(prm.directory + "/points.pvd", point_records, comm);
+        return;
       }
+    // HDF5: the points move, so each output holds their positions too.
+    DataOutBase::DataOutFilter filter(
+      DataOutBase::DataOutFilterFlags(false, true));
+    data_out.write_filtered_data(filter);
+    const std::string file = "points_" + Utilities::int_to_string(n, 5) + ".h5";
+    data_out.write_hdf5_parallel(filter, prm.directory + "/" + file, comm);
+    point_entries.push_back(
+      data_out.create_xdmf_entry(filter, file, time, comm));
+    write_xdmf(prm.directory + "/points.xdmf", point_entries, data_out, comm);
   }
 
 
