@@ -120,7 +120,7 @@ namespace femp
     {
       if (Utilities::trim(text) == "all")
         return {};
-      std::string allowed = "'all' or a comma-separated list of";
+      std::string allowed = "it must be 'all' or a comma-separated list of";
       for (std::size_t i = 0; i < known.size(); ++i)
         allowed += (i ? ", " : " ") + known[i];
       const auto names = Utilities::split_string_list(text, ',');
