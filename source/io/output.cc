@@ -10,14 +10,16 @@
 #include <deal.II/base/utilities.h>
 #include <deal.II/lac/vector.h>
 #include <deal.II/numerics/data_out.h>
-#include <deal.II/particles/data_out.h>
 
 #include <femp/base/input_checks.h>
 #include <femp/grid/material_points.h>
 #include <femp/io/output.h>
 #include <femp/solid/solid_stress.h>
 
+#include <hdf5.h>
+
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <iomanip>
@@ -74,25 +76,222 @@ namespace femp
         comm);
     }
 
-    /// The XDMF index of a series of HDF5 files (rank 0 writes it).
-    template <int patch_dim, int spacedim>
+    /// The XDMF index of a series of HDF5 files: one temporal collection
+    /// of the <Grid> elements @p entries (rank 0 writes it).
     void
-    write_xdmf(const std::string &                           file,
-               const std::vector<XDMFEntry> &                entries,
-               const DataOutInterface<patch_dim, spacedim> &writer,
-               const MPI_Comm                                comm)
+    write_xdmf(const std::string &             file,
+               const std::vector<std::string> &entries,
+               const MPI_Comm                  comm)
     {
       replace_index(
         file,
         [&](const std::string &tmp) {
-          writer.write_xdmf_file(entries, tmp, MPI_COMM_SELF);
-          std::ifstream check(tmp);
-          AssertThrow(static_cast<bool>(check),
-                      ExcMessage("cannot write the output file '" + tmp +
-                                 "' (missing directory, no permission or "
-                                 "disk full?)"));
+          std::ofstream x(tmp);
+          x << "<?xml version=\"1.0\" ?>\n"
+            << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+            << "<Xdmf Version=\"2.0\">\n  <Domain>\n"
+            << "    <Grid Name=\"CellTime\" GridType=\"Collection\" "
+               "CollectionType=\"Temporal\">\n";
+          for (const auto &e : entries)
+            x << e;
+          x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+          x.close();
+          check_stream(x, tmp);
         },
         comm);
+    }
+
+    /// One rank's part of an unstructured mesh with data at its nodes, as
+    /// it goes into an HDF5 file: node coordinates, cells (corner indices
+    /// into this rank's nodes) and named node data sets; those flagged
+    /// single are stored as 4-byte floats (the VTU writer's precision), the
+    /// others as doubles.
+    struct H5Part
+    {
+      unsigned int              dim = 0, corners = 0;
+      std::vector<double>       nodes;
+      std::vector<unsigned int> cells;
+      struct DataSet
+      {
+        std::string         name;
+        bool                single;
+        std::vector<double> values;
+      };
+      std::vector<DataSet> data;
+      std::uint64_t
+      n_nodes() const
+      {
+        return nodes.size() / dim;
+      }
+      std::uint64_t
+      n_cells() const
+      {
+        return cells.size() / corners;
+      }
+    };
+
+    /// Global sizes of the parts of all ranks and this rank's offsets.
+    struct H5Layout
+    {
+      std::uint64_t nodes = 0, cells = 0, node_offset = 0, cell_offset = 0;
+    };
+
+    /// Write rows [@p offset, @p offset + @p rows) of the 2D data set
+    /// @p name (global size @p global_rows x @p columns) from @p values,
+    /// collectively; a rank without rows takes part with an empty selection.
+    void
+    write_h5_dataset(const hid_t file, const std::string &name,
+                     const hid_t file_type, const hid_t memory_type,
+                     const std::uint64_t global_rows, const std::uint64_t columns,
+                     const std::uint64_t offset, const std::uint64_t rows,
+                     const void *values, const std::string &file_name)
+    {
+      const hsize_t dims[2]  = {global_rows, columns};
+      const hsize_t count[2] = {rows, columns};
+      const hsize_t start[2] = {offset, 0};
+      const hid_t   file_space = H5Screate_simple(2, dims, nullptr);
+      const hid_t   set = H5Dcreate2(file, name.c_str(), file_type, file_space,
+                                   H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+      const hid_t   memory_space = H5Screate_simple(2, count, nullptr);
+      herr_t        status = 0;
+      if (rows > 0)
+        status = H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start,
+                                     nullptr, count, nullptr);
+      else
+        status = std::min(H5Sselect_none(file_space),
+                          H5Sselect_none(memory_space));
+      const hid_t transfer = H5Pcreate(H5P_DATASET_XFER);
+      H5Pset_dxpl_mpio(transfer, H5FD_MPIO_COLLECTIVE);
+      static const double none = 0;
+      const bool ok = file_space >= 0 && set >= 0 && memory_space >= 0 &&
+                      status >= 0 &&
+                      H5Dwrite(set, memory_type, memory_space, file_space,
+                               transfer, rows > 0 ? values : &none) >= 0;
+      H5Pclose(transfer);
+      H5Sclose(memory_space);
+      H5Dclose(set);
+      H5Sclose(file_space);
+      AssertThrow(ok, ExcMessage("cannot write the data set '" + name +
+                                 "' of the output file '" + file_name + "'"));
+    }
+
+    /// Create @p name for parallel writing by all ranks of @p comm.
+    hid_t
+    create_h5_file(const std::string &name, const MPI_Comm comm)
+    {
+      const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
+      H5Pset_fapl_mpio(access, comm, MPI_INFO_NULL);
+      const hid_t file =
+        H5Fcreate(name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
+      H5Pclose(access);
+      AssertThrow(file >= 0,
+                  ExcMessage("cannot write the output file '" + name +
+                             "' (missing directory, no permission or disk "
+                             "full?)"));
+      return file;
+    }
+
+    /// Write the parts of all ranks (collective; a rank may have none)
+    /// into one HDF5 file: with @p write_mesh the data sets /nodes and
+    /// /cells into @p mesh_file, the node data into @p data_file (the same
+    /// name: one file). Returns the global sizes.
+    H5Layout
+    write_h5(const std::string &mesh_file, const std::string &data_file,
+             const bool write_mesh, const H5Part &part, const MPI_Comm comm)
+    {
+      H5Layout            l;
+      const std::uint64_t local[2] = {part.n_nodes(), part.n_cells()};
+      std::uint64_t       offset[2] = {0, 0}, total[2] = {0, 0};
+      int ierr = MPI_Exscan(local, offset, 2, MPI_UINT64_T, MPI_SUM, comm);
+      AssertThrowMPI(ierr);
+      if (Utilities::MPI::this_mpi_process(comm) == 0)
+        offset[0] = offset[1] = 0;
+      ierr = MPI_Allreduce(local, total, 2, MPI_UINT64_T, MPI_SUM, comm);
+      AssertThrowMPI(ierr);
+      l.nodes = total[0], l.cells = total[1];
+      l.node_offset = offset[0], l.cell_offset = offset[1];
+      hid_t file = -1;
+      if (write_mesh)
+        {
+          file = create_h5_file(mesh_file, comm);
+          write_h5_dataset(file, "nodes", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+                           l.nodes, part.dim, l.node_offset, local[0],
+                           part.nodes.data(), mesh_file);
+          std::vector<std::uint32_t> cells(part.cells.size());
+          for (std::size_t i = 0; i < cells.size(); ++i)
+            cells[i] = part.cells[i] + l.node_offset;
+          write_h5_dataset(file, "cells", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+                           l.cells, part.corners, l.cell_offset, local[1],
+                           cells.data(), mesh_file);
+          if (mesh_file != data_file)
+            {
+              AssertThrow(H5Fclose(file) >= 0,
+                          ExcMessage("cannot close '" + mesh_file + "'"));
+              file = -1;
+            }
+        }
+      if (file < 0)
+        file = create_h5_file(data_file, comm);
+      for (const auto &set : part.data)
+        {
+          AssertThrow(set.values.size() == local[0],
+                      ExcMessage("data set '" + set.name + "' of " +
+                                 std::to_string(set.values.size()) +
+                                 " values for " + std::to_string(local[0]) +
+                                 " nodes"));
+          write_h5_dataset(file, set.name,
+                           set.single ? H5T_IEEE_F32LE : H5T_IEEE_F64LE,
+                           H5T_NATIVE_DOUBLE, l.nodes, 1, l.node_offset,
+                           local[0], set.values.data(), data_file);
+        }
+      AssertThrow(H5Fclose(file) >= 0,
+                  ExcMessage("cannot close '" + data_file + "'"));
+      return l;
+    }
+
+    /// The XDMF <Grid> element of one output: geometry and topology from
+    /// @p mesh_file, the data sets of @p part from @p data_file (names
+    /// relative to the index's directory).
+    std::string
+    xdmf_entry(const double time, const std::string &mesh_file,
+               const std::string &data_file, const H5Part &part,
+               const H5Layout &l)
+    {
+      std::ostringstream x;
+      const std::string  type = part.corners == 1 ? "Polyvertex" :
+                                (part.corners == 4 ? "Quadrilateral" :
+                                                     "Hexahedron");
+      auto item = [&](const std::string &dims, const std::string &number,
+                      const std::string &file, const std::string &set) {
+        x << "          <DataItem Dimensions=\"" << dims << "\" NumberType=\""
+          << number << " Format=\"HDF\">\n            " << file << ":/" << set
+          << "\n          </DataItem>\n";
+      };
+      x << "      <Grid Name=\"mesh\" GridType=\"Uniform\">\n"
+        << "        <Time Value=\"" << std::setprecision(10) << time << "\"/>\n"
+        << "        <Geometry GeometryType=\"" << (part.dim == 2 ? "XY" : "XYZ")
+        << "\">\n";
+      item(std::to_string(l.nodes) + " " + std::to_string(part.dim),
+           "Float\" Precision=\"8\"", mesh_file, "nodes");
+      x << "        </Geometry>\n"
+        << "        <Topology TopologyType=\"" << type
+        << "\" NumberOfElements=\"" << l.cells << "\""
+        << (part.corners == 1 ? " NodesPerElement=\"1\"" : "") << ">\n";
+      item(std::to_string(l.cells) + " " + std::to_string(part.corners),
+           "UInt\" Precision=\"4\"", mesh_file, "cells");
+      x << "        </Topology>\n";
+      for (const auto &set : part.data)
+        {
+          x << "        <Attribute Name=\"" << set.name
+            << "\" AttributeType=\"Scalar\" Center=\"Node\">\n";
+          item(std::to_string(l.nodes) + " 1",
+               std::string("Float\" Precision=\"") + (set.single ? "4" : "8") +
+                 "\"",
+               data_file, set.name);
+          x << "        </Attribute>\n";
+        }
+      x << "      </Grid>\n";
+      return x.str();
     }
 
     /// Every grid field femp writes (FempProblem::write_output); a run
@@ -505,20 +704,44 @@ namespace femp
     // HDF5: the background grid, its partition and the order of the cells
     // never change during a run, so the mesh (node coordinates, cells) is
     // written once and each output holds only the fields. Cell data are
-    // written at the 2^dim corners of each cell (no shared nodes), as in
-    // the VTU pieces.
+    // stored at the 2^dim corners of each cell (no shared nodes), as in the
+    // VTU pieces. DataOutFilter gives the arrays; deal.II 9.4's own
+    // write_hdf5_parallel/create_xdmf_entry fail when a rank has nothing
+    // to write (possible for the points, and for the grid on many ranks),
+    // so write_h5() writes them.
     DataOutBase::DataOutFilter filter(
       DataOutBase::DataOutFilterFlags(false, true));
     data_out.write_filtered_data(filter);
+    H5Part part;
+    part.dim     = dim;
+    part.corners = GeometryInfo<dim>::vertices_per_cell;
+    if (filter.n_nodes() > 0)
+      {
+        filter.fill_node_data(part.nodes);
+        filter.fill_cell_data(0, part.cells);
+      }
+    std::vector<std::string> names;
+    for (const auto &f : fields)
+      names.push_back(f.name);
+    if (with_subdomain)
+      names.emplace_back("subdomain");
+    for (const auto &name : names)
+      {
+        part.data.push_back({name, true, {}});
+        for (unsigned int i = 0; i < filter.n_data_sets(); ++i)
+          if (filter.get_data_set_name(i) == name)
+            part.data.back().values.assign(filter.get_data_set(i),
+                                           filter.get_data_set(i) +
+                                             filter.n_nodes());
+      }
     const std::string mesh = "grid_mesh.h5";
     const std::string file = "grid_" + Utilities::int_to_string(n, 5) + ".h5";
-    data_out.write_hdf5_parallel(filter, !grid_mesh_written,
-                                 prm.directory + "/" + mesh,
-                                 prm.directory + "/" + file, comm);
+    const auto        layout = write_h5(prm.directory + "/" + mesh,
+                                 prm.directory + "/" + file,
+                                 !grid_mesh_written, part, comm);
     grid_mesh_written = true;
-    grid_entries.push_back(
-      data_out.create_xdmf_entry(filter, mesh, file, time, comm));
-    write_xdmf(prm.directory + "/grid.xdmf", grid_entries, data_out, comm);
+    grid_entries.push_back(xdmf_entry(time, mesh, file, part, layout));
+    write_xdmf(prm.directory + "/grid.xdmf", grid_entries, comm);
   }
 
 
@@ -529,10 +752,10 @@ namespace femp
                                   const Particles::ParticleHandler<dim> &points,
                                   const std::vector<std::string> &point_names)
   {
-    const MPI_Comm     comm = grid.communicator();
-    PointPatches<dim>  data_out(points, point_names, prm.point_properties);
+    const MPI_Comm comm = grid.communicator();
     if (prm.format == "vtu")
       {
+        PointPatches<dim> data_out(points, point_names, prm.point_properties);
         DataOutBase::VtkFlags flags;
         flags.time              = time;
         flags.compression_level = DataOutBase::VtkFlags::best_speed;
@@ -543,15 +766,35 @@ namespace femp
         write_pvd(prm.directory + "/points.pvd", point_records, comm);
         return;
       }
-    // HDF5: the points move, so each output holds their positions too.
-    DataOutBase::DataOutFilter filter(
-      DataOutBase::DataOutFilterFlags(false, true));
-    data_out.write_filtered_data(filter);
+    // HDF5: the points move, so each output holds their positions too;
+    // the id as a double (exact), the properties as 4-byte floats.
+    H5Part part;
+    part.dim     = dim;
+    part.corners = 1;
+    part.data.push_back({"id", false, {}});
+    std::vector<unsigned int> columns;
+    for (unsigned int i = 0; i < point_names.size(); ++i)
+      if (selected(prm.point_properties, point_names[i]))
+        {
+          columns.push_back(i);
+          part.data.push_back({point_names[i], true, {}});
+        }
+    for (const auto &point : points)
+      {
+        part.cells.push_back(part.nodes.size() / dim);
+        for (int d = 0; d < dim; ++d)
+          part.nodes.push_back(point.get_location()[d]);
+        part.data[0].values.push_back(point.get_id());
+        const auto props = point.get_properties();
+        for (unsigned int c = 0; c < columns.size(); ++c)
+          part.data[c + 1].values.push_back(props[columns[c]]);
+      }
     const std::string file = "points_" + Utilities::int_to_string(n, 5) + ".h5";
-    data_out.write_hdf5_parallel(filter, prm.directory + "/" + file, comm);
-    point_entries.push_back(
-      data_out.create_xdmf_entry(filter, file, time, comm));
-    write_xdmf(prm.directory + "/points.xdmf", point_entries, data_out, comm);
+    const auto        layout =
+      write_h5(prm.directory + "/" + file, prm.directory + "/" + file, true,
+               part, comm);
+    point_entries.push_back(xdmf_entry(time, file, file, part, layout));
+    write_xdmf(prm.directory + "/points.xdmf", point_entries, comm);
   }
 
 

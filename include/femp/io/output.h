@@ -5,7 +5,6 @@
 #ifndef femp_output_h
 #define femp_output_h
 
-#include <deal.II/base/data_out_base.h>
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/particles/particle_handler.h>
 
@@ -99,7 +98,8 @@ namespace femp
     const BackgroundGrid<dim> &grid;
     std::ofstream              probe_csv, pool_csv;
     std::vector<std::pair<double, std::string>> grid_records, point_records;
-    std::vector<XDMFEntry>     grid_entries, point_entries;
+    /// XDMF <Grid> elements of the outputs written so far.
+    std::vector<std::string>   grid_entries, point_entries;
     bool                       grid_mesh_written = false;
 
     /// Write the selected grid fields in the chosen format, and the index.
