@@ -5,9 +5,9 @@
 //    elements nested as the XDMF schema allows, required attributes with
 //    allowed values, one Time/Geometry/Topology per uniform grid),
 //  - opens every HDF5 dataset a DataItem names (HDF5 C API) and checks that
-//    it exists with the stated dimensions and number type, that the
-//    geometry, topology and attributes agree in their sizes and that the
-//    cells only reference existing nodes,
+//    it exists with the stated dimensions, number type and precision, that
+//    the geometry, topology and attributes (on nodes or cells) agree in
+//    their sizes and that the cells only reference existing nodes,
 //  - compares the temperature of every cell (matched by its centre) and of
 //    every material point (matched by its id) with the VTU output,
 //  - checks that the indices list only existing files and no temporary
@@ -264,6 +264,15 @@ namespace
             const auto &part = x[c];
             if (part.name == "Time")
               continue;
+            if (part.name == "Topology" && part.children.empty())
+              {
+                // Polyvertex: one cell per node, no connectivity needed.
+                AssertThrow(part.attributes.at("TopologyType") == "Polyvertex",
+                            ExcMessage("a topology without connectivity"));
+                n_cells      = std::stoull(part.attributes.at("NumberOfElements"));
+                n_node_index = n_cells;
+                continue;
+              }
             AssertThrow(part.children.size() == 1,
                         ExcMessage("<" + part.name + "> without one DataItem"));
             const auto &item = x[part.children[0]];
@@ -298,6 +307,7 @@ namespace
               }
             else if (part.name == "Topology")
               {
+                AssertThrow(n_nodes > 0, ExcMessage("topology before geometry"));
                 n_cells = dims[0];
                 AssertThrow(std::to_string(n_cells) ==
                               part.attributes.at("NumberOfElements"),
@@ -310,11 +320,11 @@ namespace
               {
                 summary.attributes.push_back(part.attributes.at("Name"));
                 summary.last_file = file;
-                AssertThrow(part.attributes.at("Center") == "Node",
-                            ExcMessage("femp writes node data only"));
-                AssertThrow(dims[0] == n_nodes,
+                const bool on_cells = part.attributes.at("Center") == "Cell";
+                AssertThrow(dims.size() == 2 && dims[1] == 1 &&
+                              dims[0] == (on_cells ? n_cells : n_nodes),
                             ExcMessage(part.attributes.at("Name") +
-                                       ": not one value per node"));
+                                       ": not one value per node or cell"));
               }
           }
         AssertThrow(n_nodes > 0 && n_cells > 0 && n_node_index <= n_nodes,
@@ -363,7 +373,7 @@ namespace
   std::map<std::vector<long>, double>
   by_centre(const std::vector<double> &nodes, const unsigned int dim,
             const std::vector<double> &cells, const unsigned int corners,
-            const std::vector<double> &field)
+            const std::vector<double> &field, const bool on_cells)
   {
     std::map<std::vector<long>, double> m;
     for (std::size_t c = 0; c < cells.size() / corners; ++c)
@@ -375,7 +385,7 @@ namespace
         std::vector<long> key(dim);
         for (unsigned int d = 0; d < dim; ++d)
           key[d] = std::lround(x[d] * 1e9);
-        m[key] = field[std::size_t(cells[c * corners])];
+        m[key] = on_cells ? field[c] : field[std::size_t(cells[c * corners])];
       }
     return m;
   }
@@ -394,8 +404,6 @@ namespace
     const bool        points = kind == "points";
     const std::string mesh   = h5_dir + "/" + (points ? kind + "_" + number : "grid_mesh") + ".h5";
     const std::string file   = h5_dir + "/" + kind + "_" + number + ".h5";
-    const auto nodes = read_dataset(mesh, "/nodes").values;
-    const auto cells = read_dataset(mesh, "/cells").values;
     const auto value = read_dataset(file, "/" + field).values;
     std::map<std::vector<long>, double> h5, vtu;
     if (points)
@@ -405,7 +413,9 @@ namespace
           h5[{std::lround(id[i])}] = value[i];
       }
     else
-      h5 = by_centre(nodes, dim, cells, 1u << dim, value);
+      h5 = by_centre(read_dataset(mesh, "/nodes").values, dim,
+                     read_dataset(mesh, "/cells").values, 1u << dim, value,
+                     true);
     // VTU pieces: every grid_<n>.<piece>.vtu of the output.
     const std::regex piece(kind + "_" + number + "\\.[0-9]+\\.vtu");
     for (const auto &entry : std::filesystem::directory_iterator(vtu_dir))
@@ -431,7 +441,8 @@ namespace
         const auto m = by_centre(x, dim,
                                  std::vector<double>(conn.begin(), conn.end()),
                                  1u << dim,
-                                 std::vector<double>(v.begin(), v.end()));
+                                 std::vector<double>(v.begin(), v.end()),
+                                 false);
         vtu.insert(m.begin(), m.end());
       }
     count     = h5.size();

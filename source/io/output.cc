@@ -101,33 +101,26 @@ namespace femp
         comm);
     }
 
-    /// One rank's part of an unstructured mesh with data at its nodes, as
-    /// it goes into an HDF5 file: node coordinates, cells (corner indices
-    /// into this rank's nodes) and named node data sets; those flagged
-    /// single are stored as 4-byte floats (the VTU writer's precision), the
-    /// others as doubles.
+    /// One rank's part of an unstructured mesh with data sets on its nodes
+    /// or cells, as it goes into an HDF5 file: node coordinates and cells
+    /// (corner indices into this rank's nodes; none for points, corners =
+    /// 1: XDMF's Polyvertex needs no connectivity). Data sets flagged single
+    /// are stored as 4-byte floats (the VTU writer's precision), the others
+    /// as doubles.
     struct H5Part
     {
       unsigned int              dim = 0, corners = 0;
+      std::uint64_t             n_nodes = 0, n_cells = 0;
+      bool                      single_nodes = false;
       std::vector<double>       nodes;
       std::vector<unsigned int> cells;
       struct DataSet
       {
         std::string         name;
-        bool                single;
+        bool                single, on_cells;
         std::vector<double> values;
       };
       std::vector<DataSet> data;
-      std::uint64_t
-      n_nodes() const
-      {
-        return nodes.size() / dim;
-      }
-      std::uint64_t
-      n_cells() const
-      {
-        return cells.size() / corners;
-      }
     };
 
     /// Global sizes of the parts of all ranks and this rank's offsets.
@@ -193,14 +186,14 @@ namespace femp
 
     /// Write the parts of all ranks (collective; a rank may have none)
     /// into one HDF5 file: with @p write_mesh the data sets /nodes and
-    /// /cells into @p mesh_file, the node data into @p data_file (the same
+    /// /cells into @p mesh_file, the data sets into @p data_file (the same
     /// name: one file). Returns the global sizes.
     H5Layout
     write_h5(const std::string &mesh_file, const std::string &data_file,
              const bool write_mesh, const H5Part &part, const MPI_Comm comm)
     {
       H5Layout            l;
-      const std::uint64_t local[2] = {part.n_nodes(), part.n_cells()};
+      const std::uint64_t local[2]  = {part.n_nodes, part.n_cells};
       std::uint64_t       offset[2] = {0, 0}, total[2] = {0, 0};
       int ierr = MPI_Exscan(local, offset, 2, MPI_UINT64_T, MPI_SUM, comm);
       AssertThrowMPI(ierr);
@@ -213,16 +206,24 @@ namespace femp
       hid_t file = -1;
       if (write_mesh)
         {
+          AssertThrow(part.nodes.size() == local[0] * part.dim &&
+                        part.cells.size() ==
+                          (part.corners > 1 ? local[1] * part.corners : 0),
+                      ExcInternalError());
           file = create_h5_file(mesh_file, comm);
-          write_h5_dataset(file, "nodes", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
-                           l.nodes, part.dim, l.node_offset, local[0],
-                           part.nodes.data(), mesh_file);
-          std::vector<std::uint32_t> cells(part.cells.size());
-          for (std::size_t i = 0; i < cells.size(); ++i)
-            cells[i] = part.cells[i] + l.node_offset;
-          write_h5_dataset(file, "cells", H5T_STD_U32LE, H5T_NATIVE_UINT32,
-                           l.cells, part.corners, l.cell_offset, local[1],
-                           cells.data(), mesh_file);
+          write_h5_dataset(file, "nodes",
+                           part.single_nodes ? H5T_IEEE_F32LE : H5T_IEEE_F64LE,
+                           H5T_NATIVE_DOUBLE, l.nodes, part.dim, l.node_offset,
+                           local[0], part.nodes.data(), mesh_file);
+          if (part.corners > 1)
+            {
+              std::vector<std::uint32_t> cells(part.cells.size());
+              for (std::size_t i = 0; i < cells.size(); ++i)
+                cells[i] = part.cells[i] + l.node_offset;
+              write_h5_dataset(file, "cells", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+                               l.cells, part.corners, l.cell_offset, local[1],
+                               cells.data(), mesh_file);
+            }
           if (mesh_file != data_file)
             {
               AssertThrow(H5Fclose(file) >= 0,
@@ -234,15 +235,16 @@ namespace femp
         file = create_h5_file(data_file, comm);
       for (const auto &set : part.data)
         {
-          AssertThrow(set.values.size() == local[0],
+          const unsigned int k = set.on_cells;
+          AssertThrow(set.values.size() == local[k],
                       ExcMessage("data set '" + set.name + "' of " +
                                  std::to_string(set.values.size()) +
-                                 " values for " + std::to_string(local[0]) +
-                                 " nodes"));
+                                 " values for " + std::to_string(local[k]) +
+                                 (k ? " cells" : " nodes")));
           write_h5_dataset(file, set.name,
                            set.single ? H5T_IEEE_F32LE : H5T_IEEE_F64LE,
-                           H5T_NATIVE_DOUBLE, l.nodes, 1, l.node_offset,
-                           local[0], set.values.data(), data_file);
+                           H5T_NATIVE_DOUBLE, total[k], 1, offset[k], local[k],
+                           set.values.data(), data_file);
         }
       AssertThrow(H5Fclose(file) >= 0,
                   ExcMessage("cannot close '" + data_file + "'"));
@@ -251,43 +253,46 @@ namespace femp
 
     /// The XDMF <Grid> element of one output: geometry and topology from
     /// @p mesh_file, the data sets of @p part from @p data_file (names
-    /// relative to the index's directory).
+    /// relative to the index's directory), sizes from @p l.
     std::string
     xdmf_entry(const double time, const std::string &mesh_file,
                const std::string &data_file, const H5Part &part,
                const H5Layout &l)
     {
       std::ostringstream x;
-      const std::string  type = part.corners == 1 ? "Polyvertex" :
-                                (part.corners == 4 ? "Quadrilateral" :
-                                                     "Hexahedron");
-      auto item = [&](const std::string &dims, const std::string &number,
+      auto item = [&](const std::uint64_t rows, const unsigned int columns,
+                      const std::string &number, const unsigned int precision,
                       const std::string &file, const std::string &set) {
-        x << "          <DataItem Dimensions=\"" << dims << "\" NumberType=\""
-          << number << " Format=\"HDF\">\n            " << file << ":/" << set
+        x << "          <DataItem Dimensions=\"" << rows << ' ' << columns
+          << "\" NumberType=\"" << number << "\" Precision=\"" << precision
+          << "\" Format=\"HDF\">\n            " << file << ":/" << set
           << "\n          </DataItem>\n";
       };
       x << "      <Grid Name=\"mesh\" GridType=\"Uniform\">\n"
         << "        <Time Value=\"" << std::setprecision(10) << time << "\"/>\n"
         << "        <Geometry GeometryType=\"" << (part.dim == 2 ? "XY" : "XYZ")
         << "\">\n";
-      item(std::to_string(l.nodes) + " " + std::to_string(part.dim),
-           "Float\" Precision=\"8\"", mesh_file, "nodes");
-      x << "        </Geometry>\n"
-        << "        <Topology TopologyType=\"" << type
-        << "\" NumberOfElements=\"" << l.cells << "\""
-        << (part.corners == 1 ? " NodesPerElement=\"1\"" : "") << ">\n";
-      item(std::to_string(l.cells) + " " + std::to_string(part.corners),
-           "UInt\" Precision=\"4\"", mesh_file, "cells");
-      x << "        </Topology>\n";
+      item(l.nodes, part.dim, "Float", part.single_nodes ? 4 : 8, mesh_file,
+           "nodes");
+      x << "        </Geometry>\n";
+      if (part.corners == 1)
+        x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\""
+          << l.cells << "\" NodesPerElement=\"1\"/>\n";
+      else
+        {
+          x << "        <Topology TopologyType=\""
+            << (part.corners == 4 ? "Quadrilateral" : "Hexahedron")
+            << "\" NumberOfElements=\"" << l.cells << "\">\n";
+          item(l.cells, part.corners, "UInt", 4, mesh_file, "cells");
+          x << "        </Topology>\n";
+        }
       for (const auto &set : part.data)
         {
           x << "        <Attribute Name=\"" << set.name
-            << "\" AttributeType=\"Scalar\" Center=\"Node\">\n";
-          item(std::to_string(l.nodes) + " 1",
-               std::string("Float\" Precision=\"") + (set.single ? "4" : "8") +
-                 "\"",
-               data_file, set.name);
+            << "\" AttributeType=\"Scalar\" Center=\""
+            << (set.on_cells ? "Cell" : "Node") << "\">\n";
+          item(set.on_cells ? l.cells : l.nodes, 1, "Float",
+               set.single ? 4 : 8, data_file, set.name);
           x << "        </Attribute>\n";
         }
       x << "      </Grid>\n";
@@ -671,6 +676,67 @@ namespace femp
         return t.end();
       });
     const bool with_subdomain = selected(prm.grid_fields, "subdomain");
+    if (prm.format == "hdf5")
+      {
+        // HDF5: the background grid, its partition and the order of the
+        // cells never change during a run, so the mesh (node coordinates,
+        // cells) is written once, from DataOut's patches with the nodes
+        // that cells share merged (DataOutFilter), and each output holds
+        // only the cell fields (one value per cell, not per corner as in
+        // the VTU pieces). deal.II 9.4's own write_hdf5_parallel and
+        // create_xdmf_entry fail when a rank has nothing to write and store
+        // only node data, so write_h5() writes the arrays.
+        H5Part part;
+        part.dim     = dim;
+        part.corners = GeometryInfo<dim>::vertices_per_cell;
+        std::vector<unsigned int> flat; // the fields' index of each cell
+        for (const auto &cell : tria.active_cell_iterators())
+          if (wanted(cell))
+            flat.push_back(flat_of[cell->active_cell_index()]);
+        part.n_cells = flat.size();
+        if (!grid_mesh_written)
+          {
+            Vector<float> owner(tria.n_active_cells());
+            data_out.add_data_vector(owner, "owner",
+                                     DataOut<dim>::type_cell_data);
+            data_out.build_patches();
+            DataOutBase::DataOutFilter filter(
+              DataOutBase::DataOutFilterFlags(true, true));
+            data_out.write_filtered_data(filter);
+            if (filter.n_nodes() > 0)
+              {
+                filter.fill_node_data(part.nodes);
+                filter.fill_cell_data(0, part.cells);
+              }
+            part.n_nodes = filter.n_nodes();
+          }
+        for (const auto &f : fields)
+          {
+            part.data.push_back({f.name, true, true, {}});
+            auto &v = part.data.back().values;
+            v.reserve(flat.size());
+            for (const auto i : flat)
+              v.push_back((*f.values)[i]);
+          }
+        if (with_subdomain)
+          part.data.push_back(
+            {"subdomain", true, true,
+             std::vector<double>(flat.size(),
+                                 Utilities::MPI::this_mpi_process(comm))});
+        const std::string mesh = "grid_mesh.h5";
+        const std::string file =
+          "grid_" + Utilities::int_to_string(n, 5) + ".h5";
+        auto layout = write_h5(prm.directory + "/" + mesh,
+                               prm.directory + "/" + file, !grid_mesh_written,
+                               part, comm);
+        if (!grid_mesh_written)
+          grid_mesh_nodes = layout.nodes;
+        layout.nodes      = grid_mesh_nodes;
+        grid_mesh_written = true;
+        grid_entries.push_back(xdmf_entry(time, mesh, file, part, layout));
+        write_xdmf(prm.directory + "/grid.xdmf", grid_entries, comm);
+        return;
+      }
     std::vector<Vector<float>> data(fields.size() + with_subdomain,
                                     Vector<float>(tria.n_active_cells()));
     for (const auto &cell : tria.active_cell_iterators())
@@ -689,59 +755,14 @@ namespace femp
       data_out.add_data_vector(data[fields.size()], "subdomain",
                                DataOut<dim>::type_cell_data);
     data_out.build_patches();
-    if (prm.format == "vtu")
-      {
-        DataOutBase::VtkFlags flags;
-        flags.time              = time;
-        flags.compression_level = DataOutBase::VtkFlags::best_speed;
-        data_out.set_flags(flags);
-        const std::string name = data_out.write_vtu_with_pvtu_record(
-          prm.directory + "/", "grid", n, comm, 5, 8);
-        grid_records.emplace_back(time, name);
-        write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
-        return;
-      }
-    // HDF5: the background grid, its partition and the order of the cells
-    // never change during a run, so the mesh (node coordinates, cells) is
-    // written once and each output holds only the fields. Cell data are
-    // stored at the 2^dim corners of each cell (no shared nodes), as in the
-    // VTU pieces. DataOutFilter gives the arrays; deal.II 9.4's own
-    // write_hdf5_parallel/create_xdmf_entry fail when a rank has nothing
-    // to write (possible for the points, and for the grid on many ranks),
-    // so write_h5() writes them.
-    DataOutBase::DataOutFilter filter(
-      DataOutBase::DataOutFilterFlags(false, true));
-    data_out.write_filtered_data(filter);
-    H5Part part;
-    part.dim     = dim;
-    part.corners = GeometryInfo<dim>::vertices_per_cell;
-    if (filter.n_nodes() > 0)
-      {
-        filter.fill_node_data(part.nodes);
-        filter.fill_cell_data(0, part.cells);
-      }
-    std::vector<std::string> names;
-    for (const auto &f : fields)
-      names.push_back(f.name);
-    if (with_subdomain)
-      names.emplace_back("subdomain");
-    for (const auto &name : names)
-      {
-        part.data.push_back({name, true, {}});
-        for (unsigned int i = 0; i < filter.n_data_sets(); ++i)
-          if (filter.get_data_set_name(i) == name)
-            part.data.back().values.assign(filter.get_data_set(i),
-                                           filter.get_data_set(i) +
-                                             filter.n_nodes());
-      }
-    const std::string mesh = "grid_mesh.h5";
-    const std::string file = "grid_" + Utilities::int_to_string(n, 5) + ".h5";
-    const auto        layout = write_h5(prm.directory + "/" + mesh,
-                                 prm.directory + "/" + file,
-                                 !grid_mesh_written, part, comm);
-    grid_mesh_written = true;
-    grid_entries.push_back(xdmf_entry(time, mesh, file, part, layout));
-    write_xdmf(prm.directory + "/grid.xdmf", grid_entries, comm);
+    DataOutBase::VtkFlags flags;
+    flags.time              = time;
+    flags.compression_level = DataOutBase::VtkFlags::best_speed;
+    data_out.set_flags(flags);
+    const std::string name = data_out.write_vtu_with_pvtu_record(
+      prm.directory + "/", "grid", n, comm, 5, 8);
+    grid_records.emplace_back(time, name);
+    write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
   }
 
 
@@ -766,22 +787,27 @@ namespace femp
         write_pvd(prm.directory + "/points.pvd", point_records, comm);
         return;
       }
-    // HDF5: the points move, so each output holds their positions too;
+    // HDF5: the points move, so each output holds their positions too (as
+    // 4-byte floats, like the VTU pieces); no connectivity (Polyvertex);
     // the id as a double (exact), the properties as 4-byte floats.
     H5Part part;
-    part.dim     = dim;
-    part.corners = 1;
-    part.data.push_back({"id", false, {}});
+    part.dim          = dim;
+    part.corners      = 1;
+    part.single_nodes = true;
+    part.n_nodes = part.n_cells = points.n_locally_owned_particles();
+    part.data.push_back({"id", false, false, {}});
     std::vector<unsigned int> columns;
     for (unsigned int i = 0; i < point_names.size(); ++i)
       if (selected(prm.point_properties, point_names[i]))
         {
           columns.push_back(i);
-          part.data.push_back({point_names[i], true, {}});
+          part.data.push_back({point_names[i], true, false, {}});
         }
+    part.nodes.reserve(part.n_nodes * dim);
+    for (auto &set : part.data)
+      set.values.reserve(part.n_nodes);
     for (const auto &point : points)
       {
-        part.cells.push_back(part.nodes.size() / dim);
         for (int d = 0; d < dim; ++d)
           part.nodes.push_back(point.get_location()[d]);
         part.data[0].values.push_back(point.get_id());

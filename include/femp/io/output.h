@@ -11,6 +11,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/heat/melt_pool.h>
 
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -101,6 +102,8 @@ namespace femp
     /// XDMF <Grid> elements of the outputs written so far.
     std::vector<std::string>   grid_entries, point_entries;
     bool                       grid_mesh_written = false;
+    std::uint64_t              grid_mesh_nodes   = 0; ///< all ranks'
+
 
     /// Write the selected grid fields in the chosen format, and the index.
     void
