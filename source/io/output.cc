@@ -1,8 +1,10 @@
 // femp: output of the grid fields and the material points as VTU/PVTU
 // pieces with a .pvd index, or as HDF5 with an XDMF index (grid: the mesh
-// once in grid_mesh.h5, the fields per output in grid_<n>.h5; points: one
-// points_<n>.h5 per output since they move); the chosen fields and point
-// properties only; CSV probes and the melt-pool time series. Every index is
+// once in grid_mesh.h5, one value per cell and field per output in
+// grid_<n>.h5; points: one points_<n>.h5 per output since they move),
+// written collectively by all ranks through MPI-IO with zlib compression;
+// the chosen fields and point properties only; CSV probes and the
+// melt-pool time series. Every index is
 // rewritten after a barrier under a temporary name and then renamed, so a
 // killed run leaves an index that lists complete files only.
 #include <deal.II/base/data_out_base.h>
@@ -111,7 +113,7 @@ namespace femp
     {
       unsigned int              dim = 0, corners = 0;
       std::uint64_t             n_nodes = 0, n_cells = 0;
-      bool                      single_nodes = false;
+      bool                      single_nodes = false, compress = false;
       std::vector<double>       nodes;
       std::vector<unsigned int> cells;
       struct DataSet
@@ -137,14 +139,25 @@ namespace femp
                      const hid_t file_type, const hid_t memory_type,
                      const std::uint64_t global_rows, const std::uint64_t columns,
                      const std::uint64_t offset, const std::uint64_t rows,
-                     const void *values, const std::string &file_name)
+                     const void *values, const std::string &file_name,
+                     const bool compress = false)
     {
       const hsize_t dims[2]  = {global_rows, columns};
       const hsize_t count[2] = {rows, columns};
       const hsize_t start[2] = {offset, 0};
       const hid_t   file_space = H5Screate_simple(2, dims, nullptr);
-      const hid_t   set = H5Dcreate2(file, name.c_str(), file_type, file_space,
-                                   H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+      // Compressed: zlib level 1 (as the VTU pieces) on chunks of 2^16 rows.
+      const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
+      if (compress && global_rows > 0)
+        {
+          const hsize_t chunk[2] = {std::min<hsize_t>(global_rows, 1 << 16),
+                                    columns};
+          H5Pset_chunk(create, 2, chunk);
+          H5Pset_deflate(create, 1);
+        }
+      const hid_t set = H5Dcreate2(file, name.c_str(), file_type, file_space,
+                                   H5P_DEFAULT, create, H5P_DEFAULT);
+      H5Pclose(create);
       const hid_t   memory_space = H5Screate_simple(2, count, nullptr);
       herr_t        status = 0;
       if (rows > 0)
@@ -211,16 +224,28 @@ namespace femp
                           (part.corners > 1 ? local[1] * part.corners : 0),
                       ExcInternalError());
           file = create_h5_file(mesh_file, comm);
+          // Single precision converted here: with compression, HDF5 writes
+          // collectively only without type conversions.
+          std::vector<float> single(part.single_nodes ? part.nodes.size() :
+                                                        0);
+          std::copy(part.nodes.begin(), part.nodes.begin() + single.size(),
+                    single.begin());
           write_h5_dataset(file, "nodes",
-                           part.single_nodes ? H5T_IEEE_F32LE : H5T_IEEE_F64LE,
-                           H5T_NATIVE_DOUBLE, l.nodes, part.dim, l.node_offset,
-                           local[0], part.nodes.data(), mesh_file);
+                           part.single_nodes ? H5T_NATIVE_FLOAT :
+                                               H5T_NATIVE_DOUBLE,
+                           part.single_nodes ? H5T_NATIVE_FLOAT :
+                                               H5T_NATIVE_DOUBLE,
+                           l.nodes, part.dim, l.node_offset, local[0],
+                           part.single_nodes ?
+                             static_cast<const void *>(single.data()) :
+                             static_cast<const void *>(part.nodes.data()),
+                           mesh_file, part.compress);
           if (part.corners > 1)
             {
               std::vector<std::uint32_t> cells(part.cells.size());
               for (std::size_t i = 0; i < cells.size(); ++i)
                 cells[i] = part.cells[i] + l.node_offset;
-              write_h5_dataset(file, "cells", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+              write_h5_dataset(file, "cells", H5T_NATIVE_UINT32, H5T_NATIVE_UINT32,
                                l.cells, part.corners, l.cell_offset, local[1],
                                cells.data(), mesh_file);
             }
@@ -241,10 +266,16 @@ namespace femp
                                  std::to_string(set.values.size()) +
                                  " values for " + std::to_string(local[k]) +
                                  (k ? " cells" : " nodes")));
-          write_h5_dataset(file, set.name,
-                           set.single ? H5T_IEEE_F32LE : H5T_IEEE_F64LE,
-                           H5T_NATIVE_DOUBLE, total[k], 1, offset[k], local[k],
-                           set.values.data(), data_file);
+          std::vector<float> single(set.single ? set.values.size() : 0);
+          std::copy(set.values.begin(), set.values.begin() + single.size(),
+                    single.begin());
+          const hid_t type = set.single ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
+          write_h5_dataset(file, set.name, type, type, total[k], 1, offset[k],
+                           local[k],
+                           set.single ?
+                             static_cast<const void *>(single.data()) :
+                             static_cast<const void *>(set.values.data()),
+                           data_file, part.compress);
         }
       AssertThrow(H5Fclose(file) >= 0,
                   ExcMessage("cannot close '" + data_file + "'"));
@@ -429,14 +460,13 @@ namespace femp
                       "File format of the grid fields and the material "
                       "points: 'vtu' writes compressed VTU pieces (one per "
                       "rank or group of ranks) with PVTU records and the "
-                      "indices grid.pvd, points.pvd; 'hdf5' writes one HDF5 "
-                      "file per output for all ranks (MPI-IO; the grid's "
-                      "mesh once in grid_mesh.h5, its fields in "
-                      "grid_<n>.h5; the points in points_<n>.h5) with the "
-                      "indices grid.xdmf, points.xdmf (ParaView: 'XDMF "
-                      "Reader'). HDF5 data are uncompressed doubles: larger "
-                      "files than VTU, but fewer of them and faster to "
-                      "write from many ranks (doc/output.md).");
+                      "indices grid.pvd, points.pvd; 'hdf5' writes one "
+                      "compressed HDF5 file per output for all ranks "
+                      "(MPI-IO: grid_<n>.h5 with one value per cell, the "
+                      "grid's mesh once in grid_mesh.h5; points_<n>.h5) "
+                      "with the indices grid.xdmf, points.xdmf (ParaView: "
+                      "open the .xdmf with the 'XDMF Reader'). Sizes and "
+                      "write times of both: doc/output.md.");
     prm.declare_entry("Point properties", "all", Patterns::Anything(),
                       "Material-point properties to write, 'all' or a "
                       "comma-separated list of: mass (kg), volume (m^3), "
@@ -689,6 +719,7 @@ namespace femp
         H5Part part;
         part.dim     = dim;
         part.corners = GeometryInfo<dim>::vertices_per_cell;
+        part.compress = true;
         std::vector<unsigned int> flat; // the fields' index of each cell
         for (const auto &cell : tria.active_cell_iterators())
           if (wanted(cell))
@@ -794,6 +825,7 @@ namespace femp
     part.dim          = dim;
     part.corners      = 1;
     part.single_nodes = true;
+    part.compress     = true;
     part.n_nodes = part.n_cells = points.n_locally_owned_particles();
     part.data.push_back({"id", false, false, {}});
     std::vector<unsigned int> columns;
