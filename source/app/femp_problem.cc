@@ -293,6 +293,7 @@ namespace femp
   void
   FempProblem<dim>::print_scene() const
   {
+    const std::string index = output_prm.format == "hdf5" ? ".xdmf" : ".pvd";
     pcout << "femp: " << dim << "D scene, "
           << Utilities::MPI::n_mpi_processes(comm) << " MPI rank(s)\n"
           << "  background grid: " << grid->n_global_cells() << " cells of "
@@ -308,8 +309,8 @@ namespace femp
                         " finite elements, step " +
                         num(solid->time_step()) + " s\n" :
                       std::string())
-          << "  output: " << output_prm.directory << "/grid.pvd, "
-          << output_prm.directory << "/points.pvd, "
+          << "  output: " << output_prm.directory << "/grid" << index
+          << ", " << output_prm.directory << "/points" << index << ", "
           << output_prm.directory << "/melt_pool.csv\n";
     if (dim == 3 && heat_enabled)
       print_melting_regime();

@@ -372,12 +372,14 @@ namespace femp
     std::string       error;
     if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
       {
-        // Files a run of femp writes: numbered VTU/PVTU pieces, probe lines,
-        // the .pvd indices, the CSV series and this parameter listing.
+        // Files a run of femp writes: numbered VTU/PVTU pieces or HDF5
+        // files, probe lines, the .pvd/.xdmf indices, the CSV series and
+        // this parameter listing.
         const std::regex ours(
           "(grid|points)(_[0-9]+(\\.[0-9]+)?\\.(vtu|pvtu)|\\.pvd)|"
+          "(grid|points)(_[0-9]+|_mesh)\\.h5|(grid|points)\\.xdmf|"
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
-          "absorption\\.csv|parameters\\.prm|.*\\.pvd\\.tmp");
+          "absorption\\.csv|parameters\\.prm|.*\\.(pvd|xdmf)\\.tmp");
         const std::string energy = get(prm, "Solid", "Energy file");
         const std::string probes = get(prm, "Solid", "Probe file");
         std::error_code   ec;

@@ -1,16 +1,29 @@
-// femp: VTU/PVTU/PVD output of grid fields and material points, CSV probes
-// and the melt-pool time series.
+// femp: output of the grid fields and the material points as VTU/PVTU
+// pieces with a .pvd index, or as HDF5 with an XDMF index (grid: the mesh
+// once in grid_mesh.h5, one value per cell and field per output in
+// grid_<n>.h5; points: one points_<n>.h5 per output since they move),
+// written collectively by all ranks through MPI-IO with zlib compression;
+// the chosen fields and point properties only; CSV probes and the
+// melt-pool time series. Every index is
+// rewritten after a barrier under a temporary name and then renamed, so a
+// killed run leaves an index that lists complete files only.
 #include <deal.II/base/data_out_base.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 #include <deal.II/lac/vector.h>
 #include <deal.II/numerics/data_out.h>
-#include <deal.II/particles/data_out.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/grid/material_points.h>
 #include <femp/io/output.h>
+#include <femp/solid/solid_stress.h>
 
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 
 namespace femp
@@ -27,30 +40,389 @@ namespace femp
                              "full?)"));
     }
 
-    /// Rewrite the ParaView index @p file once every rank has written its
-    /// pieces (barrier), atomically: a temporary file renamed over the old
-    /// one, so that a reader never sees a half-written index.
+    /// Replace the index @p file by the one @p write puts into the stream,
+    /// once every rank has written its pieces (barrier), atomically: rank 0
+    /// writes a temporary file and renames it over the old one, so that a
+    /// reader, or a run killed meanwhile, never leaves a half-written index.
     void
-    write_pvd(const std::string &                                file,
-              const std::vector<std::pair<double, std::string>> &records,
-              const MPI_Comm                                     comm)
+    replace_index(const std::string &                         file,
+                  const std::function<void(const std::string &)> &write,
+                  const MPI_Comm                               comm)
     {
       const int ierr = MPI_Barrier(comm);
       AssertThrowMPI(ierr);
       if (Utilities::MPI::this_mpi_process(comm) != 0)
         return;
       const std::string tmp = file + ".tmp";
-      {
-        std::ofstream pvd(tmp);
-        DataOutBase::write_pvd_record(pvd, records);
-        pvd.close();
-        check_stream(pvd, tmp);
-      }
+      write(tmp);
       std::error_code error;
       std::filesystem::rename(tmp, file, error);
       AssertThrow(!error, ExcMessage("cannot replace '" + file + "' by '" +
                                      tmp + "': " + error.message()));
     }
+
+    /// The ParaView index of a series of PVTU records.
+    void
+    write_pvd(const std::string &                                file,
+              const std::vector<std::pair<double, std::string>> &records,
+              const MPI_Comm                                     comm)
+    {
+      replace_index(
+        file,
+        [&](const std::string &tmp) {
+          std::ofstream pvd(tmp);
+          DataOutBase::write_pvd_record(pvd, records);
+          pvd.close();
+          check_stream(pvd, tmp);
+        },
+        comm);
+    }
+
+    /// The XDMF index of a series of HDF5 files: one temporal collection
+    /// of the <Grid> elements @p entries (rank 0 writes it).
+    void
+    write_xdmf(const std::string &             file,
+               const std::vector<std::string> &entries,
+               const MPI_Comm                  comm)
+    {
+      replace_index(
+        file,
+        [&](const std::string &tmp) {
+          std::ofstream x(tmp);
+          x << "<?xml version=\"1.0\" ?>\n"
+            << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+            << "<Xdmf Version=\"2.0\">\n  <Domain>\n"
+            << "    <Grid Name=\"CellTime\" GridType=\"Collection\" "
+               "CollectionType=\"Temporal\">\n";
+          for (const auto &e : entries)
+            x << e;
+          x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+          x.close();
+          check_stream(x, tmp);
+        },
+        comm);
+    }
+
+    /// One rank's part of an unstructured mesh with data sets on its nodes
+    /// or cells, as it goes into an HDF5 file: node coordinates and cells
+    /// (corner indices into this rank's nodes; none for points, corners =
+    /// 1: XDMF's Polyvertex needs no connectivity). Data sets flagged single
+    /// are stored as 4-byte floats (the VTU writer's precision), the others
+    /// as doubles.
+    struct H5Part
+    {
+      unsigned int              dim = 0, corners = 0;
+      std::uint64_t             n_nodes = 0, n_cells = 0;
+      bool                      single_nodes = false, compress = false;
+      std::vector<double>       nodes;
+      std::vector<unsigned int> cells;
+      struct DataSet
+      {
+        std::string         name;
+        bool                single, on_cells;
+        std::vector<double> values;
+      };
+      std::vector<DataSet> data;
+    };
+
+    /// Global sizes of the parts of all ranks and this rank's offsets.
+    struct H5Layout
+    {
+      std::uint64_t nodes = 0, cells = 0, node_offset = 0, cell_offset = 0;
+    };
+
+    /// Write rows [@p offset, @p offset + @p rows) of the 2D data set
+    /// @p name (global size @p global_rows x @p columns) from @p values,
+    /// collectively; a rank without rows takes part with an empty selection.
+    void
+    write_h5_dataset(const hid_t file, const std::string &name,
+                     const hid_t file_type, const hid_t memory_type,
+                     const std::uint64_t global_rows, const std::uint64_t columns,
+                     const std::uint64_t offset, const std::uint64_t rows,
+                     const void *values, const std::string &file_name,
+                     const bool compress = false)
+    {
+      const hsize_t dims[2]  = {global_rows, columns};
+      const hsize_t count[2] = {rows, columns};
+      const hsize_t start[2] = {offset, 0};
+      const hid_t   file_space = H5Screate_simple(2, dims, nullptr);
+      // Compressed: zlib level 1 (as the VTU pieces) on chunks of 2^16 rows.
+      const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
+      if (compress && global_rows > 0)
+        {
+          const hsize_t chunk[2] = {std::min<hsize_t>(global_rows, 1 << 16),
+                                    columns};
+          H5Pset_chunk(create, 2, chunk);
+          H5Pset_deflate(create, 1);
+        }
+      const hid_t set = H5Dcreate2(file, name.c_str(), file_type, file_space,
+                                   H5P_DEFAULT, create, H5P_DEFAULT);
+      H5Pclose(create);
+      const hid_t   memory_space = H5Screate_simple(2, count, nullptr);
+      herr_t        status = 0;
+      if (rows > 0)
+        status = H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start,
+                                     nullptr, count, nullptr);
+      else
+        status = std::min(H5Sselect_none(file_space),
+                          H5Sselect_none(memory_space));
+      const hid_t transfer = H5Pcreate(H5P_DATASET_XFER);
+      H5Pset_dxpl_mpio(transfer, H5FD_MPIO_COLLECTIVE);
+      static const double none = 0;
+      const bool ok = file_space >= 0 && set >= 0 && memory_space >= 0 &&
+                      status >= 0 &&
+                      H5Dwrite(set, memory_type, memory_space, file_space,
+                               transfer, rows > 0 ? values : &none) >= 0;
+      H5Pclose(transfer);
+      H5Sclose(memory_space);
+      H5Dclose(set);
+      H5Sclose(file_space);
+      AssertThrow(ok, ExcMessage("cannot write the data set '" + name +
+                                 "' of the output file '" + file_name + "'"));
+    }
+
+    /// Create @p name for parallel writing by all ranks of @p comm.
+    hid_t
+    create_h5_file(const std::string &name, const MPI_Comm comm)
+    {
+      const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
+      H5Pset_fapl_mpio(access, comm, MPI_INFO_NULL);
+      const hid_t file =
+        H5Fcreate(name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
+      H5Pclose(access);
+      AssertThrow(file >= 0,
+                  ExcMessage("cannot write the output file '" + name +
+                             "' (missing directory, no permission or disk "
+                             "full?)"));
+      return file;
+    }
+
+    /// Write the parts of all ranks (collective; a rank may have none)
+    /// into one HDF5 file: with @p write_mesh the data sets /nodes and
+    /// /cells into @p mesh_file, the data sets into @p data_file (the same
+    /// name: one file). Returns the global sizes.
+    H5Layout
+    write_h5(const std::string &mesh_file, const std::string &data_file,
+             const bool write_mesh, const H5Part &part, const MPI_Comm comm)
+    {
+      H5Layout            l;
+      const std::uint64_t local[2]  = {part.n_nodes, part.n_cells};
+      std::uint64_t       offset[2] = {0, 0}, total[2] = {0, 0};
+      int ierr = MPI_Exscan(local, offset, 2, MPI_UINT64_T, MPI_SUM, comm);
+      AssertThrowMPI(ierr);
+      if (Utilities::MPI::this_mpi_process(comm) == 0)
+        offset[0] = offset[1] = 0;
+      ierr = MPI_Allreduce(local, total, 2, MPI_UINT64_T, MPI_SUM, comm);
+      AssertThrowMPI(ierr);
+      l.nodes = total[0], l.cells = total[1];
+      l.node_offset = offset[0], l.cell_offset = offset[1];
+      hid_t file = -1;
+      if (write_mesh)
+        {
+          AssertThrow(part.nodes.size() == local[0] * part.dim &&
+                        part.cells.size() ==
+                          (part.corners > 1 ? local[1] * part.corners : 0),
+                      ExcInternalError());
+          file = create_h5_file(mesh_file, comm);
+          // Single precision converted here: with compression, HDF5 writes
+          // collectively only without type conversions.
+          std::vector<float> single(part.single_nodes ? part.nodes.size() :
+                                                        0);
+          std::copy(part.nodes.begin(), part.nodes.begin() + single.size(),
+                    single.begin());
+          write_h5_dataset(file, "nodes",
+                           part.single_nodes ? H5T_NATIVE_FLOAT :
+                                               H5T_NATIVE_DOUBLE,
+                           part.single_nodes ? H5T_NATIVE_FLOAT :
+                                               H5T_NATIVE_DOUBLE,
+                           l.nodes, part.dim, l.node_offset, local[0],
+                           part.single_nodes ?
+                             static_cast<const void *>(single.data()) :
+                             static_cast<const void *>(part.nodes.data()),
+                           mesh_file, part.compress);
+          if (part.corners > 1)
+            {
+              std::vector<std::uint32_t> cells(part.cells.size());
+              for (std::size_t i = 0; i < cells.size(); ++i)
+                cells[i] = part.cells[i] + l.node_offset;
+              write_h5_dataset(file, "cells", H5T_NATIVE_UINT32, H5T_NATIVE_UINT32,
+                               l.cells, part.corners, l.cell_offset, local[1],
+                               cells.data(), mesh_file);
+            }
+          if (mesh_file != data_file)
+            {
+              AssertThrow(H5Fclose(file) >= 0,
+                          ExcMessage("cannot close '" + mesh_file + "'"));
+              file = -1;
+            }
+        }
+      if (file < 0)
+        file = create_h5_file(data_file, comm);
+      for (const auto &set : part.data)
+        {
+          const unsigned int k = set.on_cells;
+          AssertThrow(set.values.size() == local[k],
+                      ExcMessage("data set '" + set.name + "' of " +
+                                 std::to_string(set.values.size()) +
+                                 " values for " + std::to_string(local[k]) +
+                                 (k ? " cells" : " nodes")));
+          std::vector<float> single(set.single ? set.values.size() : 0);
+          std::copy(set.values.begin(), set.values.begin() + single.size(),
+                    single.begin());
+          const hid_t type = set.single ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
+          write_h5_dataset(file, set.name, type, type, total[k], 1, offset[k],
+                           local[k],
+                           set.single ?
+                             static_cast<const void *>(single.data()) :
+                             static_cast<const void *>(set.values.data()),
+                           data_file, part.compress);
+        }
+      AssertThrow(H5Fclose(file) >= 0,
+                  ExcMessage("cannot close '" + data_file + "'"));
+      return l;
+    }
+
+    /// The XDMF <Grid> element of one output: geometry and topology from
+    /// @p mesh_file, the data sets of @p part from @p data_file (names
+    /// relative to the index's directory), sizes from @p l.
+    std::string
+    xdmf_entry(const double time, const std::string &mesh_file,
+               const std::string &data_file, const H5Part &part,
+               const H5Layout &l)
+    {
+      std::ostringstream x;
+      auto item = [&](const std::uint64_t rows, const unsigned int columns,
+                      const std::string &number, const unsigned int precision,
+                      const std::string &file, const std::string &set) {
+        x << "          <DataItem Dimensions=\"" << rows << ' ' << columns
+          << "\" NumberType=\"" << number << "\" Precision=\"" << precision
+          << "\" Format=\"HDF\">\n            " << file << ":/" << set
+          << "\n          </DataItem>\n";
+      };
+      x << "      <Grid Name=\"mesh\" GridType=\"Uniform\">\n"
+        << "        <Time Value=\"" << std::setprecision(10) << time << "\"/>\n"
+        << "        <Geometry GeometryType=\"" << (part.dim == 2 ? "XY" : "XYZ")
+        << "\">\n";
+      item(l.nodes, part.dim, "Float", part.single_nodes ? 4 : 8, mesh_file,
+           "nodes");
+      x << "        </Geometry>\n";
+      if (part.corners == 1)
+        x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\""
+          << l.cells << "\" NodesPerElement=\"1\"/>\n";
+      else
+        {
+          x << "        <Topology TopologyType=\""
+            << (part.corners == 4 ? "Quadrilateral" : "Hexahedron")
+            << "\" NumberOfElements=\"" << l.cells << "\">\n";
+          item(l.cells, part.corners, "UInt", 4, mesh_file, "cells");
+          x << "        </Topology>\n";
+        }
+      for (const auto &set : part.data)
+        {
+          x << "        <Attribute Name=\"" << set.name
+            << "\" AttributeType=\"Scalar\" Center=\""
+            << (set.on_cells ? "Cell" : "Node") << "\">\n";
+          item(set.on_cells ? l.cells : l.nodes, 1, "Float",
+               set.single ? 4 : 8, data_file, set.name);
+          x << "        </Attribute>\n";
+        }
+      x << "      </Grid>\n";
+      return x.str();
+    }
+
+    /// Every grid field femp writes (FempProblem::write_output); a run
+    /// writes those of the physics it has switched on.
+    template <int dim>
+    std::vector<std::string>
+    known_grid_fields()
+    {
+      std::vector<std::string> names = {"T", "gamma", "alpha", "p"};
+      for (int d = 0; d < dim; ++d)
+        names.push_back(std::string("u_") + char('x' + d));
+      for (const auto &n : SolidStress<dim>::cell_field_names())
+        names.push_back(n);
+      for (const char *n : {"laser_source", "phase", "zone", "subdomain"})
+        names.push_back(n);
+      return names;
+    }
+
+    /// Parse 'all' or a comma-separated list of names out of @p known
+    /// (empty result: all).
+    std::vector<std::string>
+    parse_selection(const std::string &             text,
+                    const std::vector<std::string> &known,
+                    const std::string &             parameter)
+    {
+      if (Utilities::trim(text) == "all")
+        return {};
+      std::string allowed = "it must be 'all' or a comma-separated list of";
+      for (std::size_t i = 0; i < known.size(); ++i)
+        allowed += (i ? ", " : " ") + known[i];
+      const auto names = Utilities::split_string_list(text, ',');
+      require(!names.empty(), parameter, text, allowed);
+      for (const auto &name : names)
+        require(std::find(known.begin(), known.end(), name) != known.end(),
+                parameter, name, allowed);
+      return names;
+    }
+
+    /// Whether @p name is in @p selection (empty: all are).
+    bool
+    selected(const std::vector<std::string> &selection, const std::string &name)
+    {
+      return selection.empty() ||
+             std::find(selection.begin(), selection.end(), name) !=
+               selection.end();
+    }
+
+    /// Material points as 0-dimensional patches (one per point) with the
+    /// point id and the chosen properties, for the VTU and the HDF5 writers.
+    template <int dim>
+    class PointPatches : public DataOutInterface<0, dim>
+    {
+    public:
+      PointPatches(const Particles::ParticleHandler<dim> &points,
+                   const std::vector<std::string> &       property_names,
+                   const std::vector<std::string> &       selection)
+      {
+        std::vector<unsigned int> columns;
+        names = {"id"};
+        for (unsigned int i = 0; i < property_names.size(); ++i)
+          if (selected(selection, property_names[i]))
+            {
+              columns.push_back(i);
+              names.push_back(property_names[i]);
+            }
+        patches.resize(points.n_locally_owned_particles());
+        unsigned int i = 0;
+        for (const auto &point : points)
+          {
+            auto &patch       = patches[i];
+            patch.vertices[0] = point.get_location();
+            patch.patch_index = i++;
+            patch.data.reinit(names.size(), 1);
+            patch.data(0, 0)  = point.get_id();
+            const auto props  = point.get_properties();
+            for (unsigned int c = 0; c < columns.size(); ++c)
+              patch.data(c + 1, 0) = props[columns[c]];
+          }
+      }
+
+    private:
+      std::vector<DataOutBase::Patch<0, dim>> patches;
+      std::vector<std::string>                names;
+
+      const std::vector<DataOutBase::Patch<0, dim>> &
+      get_patches() const override
+      {
+        return patches;
+      }
+      std::vector<std::string>
+      get_dataset_names() const override
+      {
+        return names;
+      }
+    };
   } // namespace
 
 
@@ -84,6 +456,39 @@ namespace femp
                       "field output ('always'), only with the last one "
                       "('last'), or not at all. Point files are large: about "
                       "100 bytes per point.");
+    prm.declare_entry("Format", "vtu", Patterns::Selection("vtu|hdf5"),
+                      "File format of the grid fields and the material "
+                      "points: 'vtu' writes compressed VTU pieces (one per "
+                      "rank or group of ranks) with PVTU records and the "
+                      "indices grid.pvd, points.pvd; 'hdf5' writes one "
+                      "compressed HDF5 file per output for all ranks "
+                      "(MPI-IO: grid_<n>.h5 with one value per cell, the "
+                      "grid's mesh once in grid_mesh.h5; points_<n>.h5) "
+                      "with the indices grid.xdmf, points.xdmf (ParaView: "
+                      "open the .xdmf with the 'XDMF Reader'). Sizes and "
+                      "write times of both: doc/output.md.");
+    prm.declare_entry("Point properties", "all", Patterns::Anything(),
+                      "Material-point properties to write, 'all' or a "
+                      "comma-separated list of: mass (kg), volume (m^3), "
+                      "temperature (K), state (0 powder, 1 solid, 2 fluid), "
+                      "peak_temperature (K), "
+                      "velocity_x, velocity_y, velocity_z (m/s), stress_xx, "
+                      "stress_yy, stress_zz, stress_xy, stress_xz, stress_yz "
+                      "(Pa), plastic_strain (-), viscous_pressure (Pa), "
+                      "affine_velocity_xx ... affine_velocity_zz (1/s). "
+                      "Properties a scene does not carry (the stresses "
+                      "without the solid) are skipped; the point id is "
+                      "always written.");
+    prm.declare_entry("Grid fields", "all", Patterns::Anything(),
+                      "Grid cell fields to write, 'all' or a comma-separated "
+                      "list of: T (K), gamma (liquid fraction, -), alpha "
+                      "(metal fraction, -), p (Pa), u_x, u_y, u_z (m/s), "
+                      "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
+                      "plastic_strain (-), laser_source (W/m^3), phase (0 "
+                      "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
+                      "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
+                      "scene switches off are skipped. Probe lines sample "
+                      "their fields regardless.");
     prm.declare_entry("Time series interval", "0", Patterns::Double(0.),
                       "Simulated time between rows of the probe-point and "
                       "melt-pool CSV files, s; 0 writes a row every step.");
@@ -123,6 +528,15 @@ namespace femp
     series_interval   = prm.get_double("Time series interval");
     progress_interval = prm.get_integer("Progress interval");
     probe_linear      = prm.get("Probe interpolation") == "linear";
+    format            = prm.get("Format");
+    point_properties  = parse_selection(
+      prm.get("Point properties"),
+      MaterialPoints<dim>::property_names(
+        MaterialPoints<dim>::PropertyIndex::n_properties),
+      "Output/Point properties");
+    grid_fields = parse_selection(prm.get("Grid fields"),
+                                  known_grid_fields<dim>(),
+                                  "Output/Grid fields");
     probe_points.clear();
     for (const auto &p :
          Utilities::split_string_list(prm.get("Probe points"), ';'))
@@ -319,66 +733,150 @@ namespace femp
                             const Particles::ParticleHandler<dim> * points,
                             const std::vector<std::string> &        point_names)
   {
+    std::vector<Field> chosen;
+    for (const auto &f : fields)
+      if (selected(prm.grid_fields, f.name))
+        chosen.push_back(f);
+    write_grid_output(n, time, chosen);
+    if (points)
+      write_point_output(n, time, *points, point_names);
+  }
+
+
+  template <int dim>
+  void
+  Output<dim>::write_grid_output(const unsigned int        n,
+                                 const double              time,
+                                 const std::vector<Field> &fields)
+  {
     const MPI_Comm comm = grid.communicator();
     const auto &   tria = grid.triangulation();
-    {
-      DataOut<dim> data_out;
-      data_out.attach_triangulation(tria);
-      // Only owned cells of the domain (not the triangulation's padding).
-      const auto &flat_of = grid.flat_index_of_active_cell();
-      auto        wanted  = [&](const typename Triangulation<dim>::cell_iterator &c) {
-        return c->is_active() && c->is_locally_owned() &&
-               flat_of[c->active_cell_index()] != numbers::invalid_unsigned_int;
-      };
-      data_out.set_cell_selection(
-        [wanted](const Triangulation<dim> &t) {
-          for (auto c : t.active_cell_iterators())
-            if (wanted(c))
-              return typename Triangulation<dim>::cell_iterator(c);
-          return t.end();
-        },
-        [wanted](const Triangulation<dim> &t,
-                 const typename Triangulation<dim>::cell_iterator &c) {
-          typename Triangulation<dim>::active_cell_iterator next(c);
-          for (++next; next != t.end(); ++next)
-            if (wanted(next))
-              return typename Triangulation<dim>::cell_iterator(next);
-          return t.end();
-        });
-      std::vector<Vector<float>> data(fields.size() + 1,
-                                      Vector<float>(tria.n_active_cells()));
-      const auto &flat = grid.flat_index_of_active_cell();
-      for (const auto &cell : tria.active_cell_iterators())
-        if (cell->is_locally_owned() &&
-            flat[cell->active_cell_index()] != numbers::invalid_unsigned_int)
+    DataOut<dim>   data_out;
+    data_out.attach_triangulation(tria);
+    // Only owned cells of the domain (not the triangulation's padding).
+    const auto &flat_of = grid.flat_index_of_active_cell();
+    auto        wanted  = [&](const typename Triangulation<dim>::cell_iterator &c) {
+      return c->is_active() && c->is_locally_owned() &&
+             flat_of[c->active_cell_index()] != numbers::invalid_unsigned_int;
+    };
+    data_out.set_cell_selection(
+      [wanted](const Triangulation<dim> &t) {
+        for (auto c : t.active_cell_iterators())
+          if (wanted(c))
+            return typename Triangulation<dim>::cell_iterator(c);
+        return t.end();
+      },
+      [wanted](const Triangulation<dim> &t,
+               const typename Triangulation<dim>::cell_iterator &c) {
+        typename Triangulation<dim>::active_cell_iterator next(c);
+        for (++next; next != t.end(); ++next)
+          if (wanted(next))
+            return typename Triangulation<dim>::cell_iterator(next);
+        return t.end();
+      });
+    const bool with_subdomain = selected(prm.grid_fields, "subdomain");
+    if (prm.format == "hdf5")
+      {
+        // HDF5: the background grid, its partition and the order of the
+        // cells never change during a run, so the mesh (node coordinates,
+        // cells) is written once, from DataOut's patches with the nodes
+        // that cells share merged (DataOutFilter), and each output holds
+        // only the cell fields (one value per cell, not per corner as in
+        // the VTU pieces). deal.II 9.4's own write_hdf5_parallel and
+        // create_xdmf_entry fail when a rank has nothing to write and store
+        // only node data, so write_h5() writes the arrays.
+        H5Part part;
+        part.dim     = dim;
+        part.corners = GeometryInfo<dim>::vertices_per_cell;
+        part.compress = true;
+        std::vector<unsigned int> flat; // the fields' index of each cell
+        for (const auto &cell : tria.active_cell_iterators())
+          if (wanted(cell))
+            flat.push_back(flat_of[cell->active_cell_index()]);
+        part.n_cells = flat.size();
+        if (!grid_mesh_written)
           {
-            const auto i = cell->active_cell_index();
-            for (std::size_t f = 0; f < fields.size(); ++f)
-              data[f][i] = (*fields[f].values)[flat[i]];
-            data[fields.size()][i] = cell->subdomain_id();
+            Vector<float> owner(tria.n_active_cells());
+            data_out.add_data_vector(owner, "owner",
+                                     DataOut<dim>::type_cell_data);
+            data_out.build_patches();
+            DataOutBase::DataOutFilter filter(
+              DataOutBase::DataOutFilterFlags(true, true));
+            data_out.write_filtered_data(filter);
+            if (filter.n_nodes() > 0)
+              {
+                filter.fill_node_data(part.nodes);
+                filter.fill_cell_data(0, part.cells);
+              }
+            part.n_nodes = filter.n_nodes();
           }
-      for (std::size_t f = 0; f < fields.size(); ++f)
-        data_out.add_data_vector(data[f], fields[f].name,
-                                 DataOut<dim>::type_cell_data);
+        for (const auto &f : fields)
+          {
+            part.data.push_back({f.name, true, true, {}});
+            auto &v = part.data.back().values;
+            v.reserve(flat.size());
+            for (const auto i : flat)
+              v.push_back((*f.values)[i]);
+          }
+        if (with_subdomain)
+          part.data.push_back(
+            {"subdomain", true, true,
+             std::vector<double>(flat.size(),
+                                 Utilities::MPI::this_mpi_process(comm))});
+        const std::string mesh = "grid_mesh.h5";
+        const std::string file =
+          "grid_" + Utilities::int_to_string(n, 5) + ".h5";
+        auto layout = write_h5(prm.directory + "/" + mesh,
+                               prm.directory + "/" + file, !grid_mesh_written,
+                               part, comm);
+        if (!grid_mesh_written)
+          grid_mesh_nodes = layout.nodes;
+        layout.nodes      = grid_mesh_nodes;
+        grid_mesh_written = true;
+        grid_entries.push_back(xdmf_entry(time, mesh, file, part, layout));
+        write_xdmf(prm.directory + "/grid.xdmf", grid_entries, comm);
+        return;
+      }
+    std::vector<Vector<float>> data(fields.size() + with_subdomain,
+                                    Vector<float>(tria.n_active_cells()));
+    for (const auto &cell : tria.active_cell_iterators())
+      if (wanted(cell))
+        {
+          const auto i = cell->active_cell_index();
+          for (std::size_t f = 0; f < fields.size(); ++f)
+            data[f][i] = (*fields[f].values)[flat_of[i]];
+          if (with_subdomain)
+            data[fields.size()][i] = cell->subdomain_id();
+        }
+    for (std::size_t f = 0; f < fields.size(); ++f)
+      data_out.add_data_vector(data[f], fields[f].name,
+                               DataOut<dim>::type_cell_data);
+    if (with_subdomain)
       data_out.add_data_vector(data[fields.size()], "subdomain",
                                DataOut<dim>::type_cell_data);
-      data_out.build_patches();
-      DataOutBase::VtkFlags flags;
-      flags.time              = time;
-      flags.compression_level = DataOutBase::VtkFlags::best_speed;
-      data_out.set_flags(flags);
-      const std::string name = data_out.write_vtu_with_pvtu_record(
-        prm.directory + "/", "grid", n, comm, 5, 8);
-      grid_records.emplace_back(time, name);
-      write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
-    }
-    if (points)
+    data_out.build_patches();
+    DataOutBase::VtkFlags flags;
+    flags.time              = time;
+    flags.compression_level = DataOutBase::VtkFlags::best_speed;
+    data_out.set_flags(flags);
+    const std::string name = data_out.write_vtu_with_pvtu_record(
+      prm.directory + "/", "grid", n, comm, 5, 8);
+    grid_records.emplace_back(time, name);
+    write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
+  }
+
+
+  template <int dim>
+  void
+  Output<dim>::write_point_output(const unsigned int                     n,
+                                  const double                           time,
+                                  const Particles::ParticleHandler<dim> &points,
+                                  const std::vector<std::string> &point_names)
+  {
+    const MPI_Comm comm = grid.communicator();
+    if (prm.format == "vtu")
       {
-        Particles::DataOut<dim> data_out;
-        std::vector<DataComponentInterpretation::DataComponentInterpretation>
-          interpretation(point_names.size(),
-                         DataComponentInterpretation::component_is_scalar);
-        data_out.build_patches(*points, point_names, interpretation);
+        PointPatches<dim> data_out(points, point_names, prm.point_properties);
         DataOutBase::VtkFlags flags;
         flags.time              = time;
         flags.compression_level = DataOutBase::VtkFlags::best_speed;
@@ -387,7 +885,43 @@ namespace femp
           prm.directory + "/", "points", n, comm, 5, 8);
         point_records.emplace_back(time, name);
         write_pvd(prm.directory + "/points.pvd", point_records, comm);
+        return;
       }
+    // HDF5: the points move, so each output holds their positions too (as
+    // 4-byte floats, like the VTU pieces); no connectivity (Polyvertex);
+    // the id as a double (exact), the properties as 4-byte floats.
+    H5Part part;
+    part.dim          = dim;
+    part.corners      = 1;
+    part.single_nodes = true;
+    part.compress     = true;
+    part.n_nodes = part.n_cells = points.n_locally_owned_particles();
+    part.data.push_back({"id", false, false, {}});
+    std::vector<unsigned int> columns;
+    for (unsigned int i = 0; i < point_names.size(); ++i)
+      if (selected(prm.point_properties, point_names[i]))
+        {
+          columns.push_back(i);
+          part.data.push_back({point_names[i], true, false, {}});
+        }
+    part.nodes.reserve(part.n_nodes * dim);
+    for (auto &set : part.data)
+      set.values.reserve(part.n_nodes);
+    for (const auto &point : points)
+      {
+        for (int d = 0; d < dim; ++d)
+          part.nodes.push_back(point.get_location()[d]);
+        part.data[0].values.push_back(point.get_id());
+        const auto props = point.get_properties();
+        for (unsigned int c = 0; c < columns.size(); ++c)
+          part.data[c + 1].values.push_back(props[columns[c]]);
+      }
+    const std::string file = "points_" + Utilities::int_to_string(n, 5) + ".h5";
+    const auto        layout =
+      write_h5(prm.directory + "/" + file, prm.directory + "/" + file, true,
+               part, comm);
+    point_entries.push_back(xdmf_entry(time, file, file, part, layout));
+    write_xdmf(prm.directory + "/points.xdmf", point_entries, comm);
   }
 
 

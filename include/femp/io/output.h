@@ -1,6 +1,7 @@
-// femp: output of a scene: PVTU files of the grid fields and of the material
-// points with .pvd time series for ParaView, CSV probe points and probe
-// lines, and the CSV time series of the melt-pool size.
+// femp: output of a scene: the grid fields and the material points as
+// PVTU pieces with .pvd time series, or as HDF5 files with XDMF time series
+// (Output/Format), a chosen subset of fields and point properties, CSV probe
+// points and probe lines, and the CSV time series of the melt-pool size.
 #ifndef femp_output_h
 #define femp_output_h
 
@@ -10,6 +11,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/heat/melt_pool.h>
 
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -35,6 +37,9 @@ namespace femp
       std::string            directory       = "output";
       double                 output_interval = 1e-4;
       std::string            write_points    = "last"; ///< always|last|never
+      std::string            format          = "vtu";  ///< vtu|hdf5
+      /// Point properties and grid fields to write; empty: all.
+      std::vector<std::string> point_properties, grid_fields;
       double                 series_interval = 0;
       unsigned int           output_steps    = 0;
       unsigned int           progress_interval = 100;
@@ -111,6 +116,22 @@ namespace femp
     const BackgroundGrid<dim> &grid;
     std::ofstream              probe_csv, pool_csv;
     std::vector<std::pair<double, std::string>> grid_records, point_records;
+    /// XDMF <Grid> elements of the outputs written so far.
+    std::vector<std::string>   grid_entries, point_entries;
+    bool                       grid_mesh_written = false;
+    std::uint64_t              grid_mesh_nodes   = 0; ///< all ranks'
+
+
+    /// Write the selected grid fields in the chosen format, and the index.
+    void
+    write_grid_output(const unsigned int n, const double time,
+               const std::vector<Field> &fields);
+    /// Write the selected point properties in the chosen format, and the
+    /// index.
+    void
+    write_point_output(const unsigned int n, const double time,
+                 const Particles::ParticleHandler<dim> &points,
+                 const std::vector<std::string> &       point_names);
   };
 } // namespace femp
 
