@@ -373,10 +373,12 @@ namespace femp
     if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
       {
         // Files a run of femp writes: numbered VTU/PVTU pieces, probe lines,
+        // the track shape,
         // the .pvd indices, the CSV series and this parameter listing.
         const std::regex ours(
           "(grid|points)(_[0-9]+(\\.[0-9]+)?\\.(vtu|pvtu)|\\.pvd)|"
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
+          "track_shape_[0-9]+\\.csv|track_bead\\.csv|"
           "parameters\\.prm|.*\\.pvd\\.tmp");
         const std::string energy = get(prm, "Solid", "Energy file");
         const std::string probes = get(prm, "Solid", "Probe file");
