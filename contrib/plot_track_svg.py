@@ -2,12 +2,12 @@
 """Pictures of a track scene (e.g. prm/case_3_2_reduced.prm) as SVG, with
 the Python standard library only (no matplotlib, no numpy, no ParaView).
 
-    python3 contrib/plot_track_svg.py OUTPUT_DIR [FIGURE_DIR] [--x X] [--y Y] [--n N]
+    python3 contrib/plot_track_svg.py OUTPUT_DIR [FIGURE_DIR] [--x X] [--y Y] [--n N] [--prefix P]
 
 reads from OUTPUT_DIR the field output number N (default: the last one):
 grid_<N>.*.vtu (deal.II's zlib-compressed VTU pieces, one per rank),
 probe_line_<name>_<N>.csv and track_shape_<N>.csv, and writes to FIGURE_DIR
-(default: OUTPUT_DIR):
+(default: OUTPUT_DIR), each name preceded by P (default: none):
 
   section_T.svg, section_von_mises.svg   cross-section at x = X (default:
       the track-shape file's first cross-section) and longitudinal section
@@ -210,7 +210,7 @@ def section_plot(path, title, panels, field, unit, scale):
 def main():
     args = [a for a in sys.argv[1:]]
     opts = {}
-    for k in ("--x", "--y", "--n"):
+    for k in ("--x", "--y", "--n", "--prefix"):
         if k in args:
             i = args.index(k)
             opts[k] = args[i + 1]
@@ -219,6 +219,7 @@ def main():
         sys.exit(__doc__)
     out = args[0]
     fig = args[1] if len(args) > 1 else out
+    prefix = opts.get("--prefix", "")
     os.makedirs(fig, exist_ok=True)
     numbers = sorted(int(m.group(1)) for f in os.listdir(out)
                      for m in [re.match(r"grid_(\d{5})\.pvtu$", f)] if m)
@@ -261,7 +262,7 @@ def main():
                  if c[0] == xc and v.get("alpha", 1) >= 0.5}
         longi = {(c[0], c[2]): v[field] for c, v in cells.items()
                  if c[1] == yc and v.get("alpha", 1) >= 0.5}
-        section_plot(os.path.join(fig, name), "%s at t = %s s" % (field, time),
+        section_plot(os.path.join(fig, prefix + name), "%s at t = %s s" % (field, time),
                      [("cross-section x = %.0f um (y, z)" % (xc * 1e6), cross, surface("cross_1", "y")),
                       ("longitudinal section y = %.0f um (x, z)" % (yc * 1e6), longi, surface("centre", "x"))],
                      field, unit, scale)
@@ -276,13 +277,13 @@ def main():
         series.append((label, [float(s) * 1e6 for s in d["s"]],
                        [float(v) * 1e-6 for v in d["sigma_xx"]], palette[i % len(palette)]))
     if series:
-        line_plot(os.path.join(fig, "probe_sigma_xx.svg"),
+        line_plot(os.path.join(fig, prefix + "probe_sigma_xx.svg"),
                   "sigma_xx along the probe lines, t = %s s" % time,
                   "distance along the line (um)", "sigma_xx (MPa)", series, [(0, "")])
     if shape:
         c = [(a * 1e6, (z - z_top) * 1e6) for a, z in surface("centre", "x")]
         x = [(a * 1e6, (z - z_top) * 1e6) for a, z in surface("cross_1", "y")]
-        line_plot(os.path.join(fig, "track_shape.svg"),
+        line_plot(os.path.join(fig, prefix + "track_shape.svg"),
                   "surface height above the substrate top, t = %s s" % time,
                   "x (centre line) or y (cross-section) (um)", "z_s - substrate top (um)",
                   [("centre line, along x", [a for a, _ in c], [b for _, b in c], palette[0]),
