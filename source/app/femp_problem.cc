@@ -52,6 +52,7 @@ namespace femp
     RayTracedAbsorption<3>::Parameters::declare_parameters(prm);
     Output<3>::Parameters::declare_parameters(prm);
     ThermalHistory<3>::Parameters::declare_parameters(prm);
+    TrackShape<3>::Parameters::declare_parameters(prm);
     SolidMaterial::declare_parameters(prm);
     SolidStress<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
@@ -84,6 +85,7 @@ namespace femp
     absorption_prm.parse_parameters(prm);
     output_prm.parse_parameters(prm);
     history_prm.parse_parameters(prm);
+    track_prm.parse_parameters(prm);
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     if (solid_enabled)
       {
@@ -170,6 +172,14 @@ namespace femp
           allowed << (d ? ", " : "") << flow_prm.gravity[d];
         require(same, "Solid/Gravity", v.str(), allowed.str());
       }
+    require(time_prm.stop_temperature == 0 ||
+              (heat_enabled &&
+               time_prm.stop_temperature > heat_prm.initial_temperature),
+            "Time stepping/Stop when peak temperature below",
+            time_prm.stop_temperature,
+            "0 (off), or with Physics/Heat transfer a temperature above the "
+            "initial temperature " +
+              num(heat_prm.initial_temperature) + " K");
     require(heat_enabled || melt_flow || time_prm.time_step > 0,
             "Time stepping/Time step", time_prm.time_step,
             "with 'Physics/Heat transfer = false' and no melt flow nothing "
@@ -228,6 +238,19 @@ namespace femp
     if (melt_flow)
       setup_flow();
     output = std::make_unique<Output<dim>>(output_prm, *grid);
+    if (track_prm.enabled(melt_flow))
+      {
+        // Centre line and default cross-section from the laser's first
+        // segment (the middle of the domain without a path).
+        Point<dim> a = grid->origin(), b = grid->origin();
+        for (int d = 0; d < dim; ++d)
+          a[d] = b[d] = 0.5 * (grid_prm.lower_corner[d] + grid_prm.upper_corner[d]);
+        if (!laser->segments().empty())
+          a = laser->segments().front().start, b = laser->segments().front().end;
+        track_shape = std::make_unique<TrackShape<dim>>(
+          track_prm, *grid, dim == 3 ? a[1] : 0., points_prm.substrate_top,
+          0.5 * (a[0] + b[0]));
+      }
     if (history_prm.enabled)
       history = std::make_unique<ThermalHistory<dim>>(
         *grid, material.solidus, material.liquidus, heat->temperature(),
@@ -382,6 +405,15 @@ namespace femp
         if (fluid_solid)
           fluid_forces_on_solid();
 
+        if (cooled_down(dt))
+          {
+            control->request_stop();
+            pcout << "Stopping at t = " << control->time() + dt
+                  << " s: the laser's path has ended and the peak "
+                     "temperature "
+                  << heat->max_temperature() << " K is below "
+                  << time_prm.stop_temperature << " K" << std::endl;
+          }
         control->advance(dt);
 
         // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17),
@@ -498,6 +530,16 @@ namespace femp
   {
     TimerOutput::Scope t(timer, "solid");
     solid->advance(control->time(), heat->temperature(), control->is_last());
+  }
+
+
+  template <int dim>
+  bool
+  FempProblem<dim>::cooled_down(const double dt) const
+  {
+    return time_prm.stop_temperature > 0 && heat_enabled &&
+           control->time() + dt >= laser->end_time() * (1 - 1e-12) &&
+           heat->max_temperature() < time_prm.stop_temperature;
   }
 
 
@@ -662,7 +704,20 @@ namespace femp
                          with_points ? &points->particle_handler() : nullptr,
                          points->used_property_names());
     output->write_probe_lines(n, time, line_fields);
+    if (track_shape)
+      write_track_shape(n, time);
     control->output_written();
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::write_track_shape(const unsigned int n, const double time)
+  {
+    const auto sections = track_shape->measure(
+      heat->metal_fraction(),
+      track_shape->resolidified_cells(*points, material.liquidus));
+    track_shape->write(output_prm.directory, n, time, sections);
   }
 
 

@@ -373,12 +373,13 @@ namespace femp
     if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
       {
         // Files a run of femp writes: numbered VTU/PVTU pieces or HDF5
-        // files, probe lines, the .pvd/.xdmf indices, the CSV series and
-        // this parameter listing.
+        // files, probe lines, the track shape, the .pvd/.xdmf indices,
+        // the CSV series and this parameter listing.
         const std::regex ours(
           "(grid|points)(_[0-9]+(\\.[0-9]+)?\\.(vtu|pvtu)|\\.pvd)|"
           "(grid|points)(_[0-9]+|_mesh)\\.h5|(grid|points)\\.xdmf|"
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
+          "track_shape_[0-9]+\\.csv|track_bead\\.csv|"
           "absorption\\.csv|parameters\\.prm|.*\\.(pvd|xdmf)\\.tmp");
         const std::string energy = get(prm, "Solid", "Energy file");
         const std::string probes = get(prm, "Solid", "Probe file");

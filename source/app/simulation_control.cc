@@ -23,6 +23,16 @@ namespace femp
                       "automatic step; range (0, 1].");
     prm.declare_entry("Maximum number of steps", "100000000", Patterns::Integer(1),
                       "Stop after this many steps even before the end time.");
+    prm.declare_entry("Stop when peak temperature below", "0",
+                      Patterns::Double(0.),
+                      "K; 0: off. Once the laser has finished its path (the "
+                      "end of its last segment; it is off after that), end "
+                      "the run at the first temperature step after which the "
+                      "hottest metal cell is below this temperature, with "
+                      "the field output of the last step (e.g. the residual "
+                      "stress on the probe lines after cooling). The run "
+                      "still ends at 'End time' at the latest. Range 0 or "
+                      "above the initial temperature.");
     prm.leave_subsection();
   }
 
@@ -35,6 +45,7 @@ namespace femp
     time_step     = prm.get_double("Time step");
     safety_factor = prm.get_double("Safety factor");
     max_steps     = prm.get_integer("Maximum number of steps");
+    stop_temperature = prm.get_double("Stop when peak temperature below");
     prm.leave_subsection();
     require(end_time > 0, "Time stepping/End time", end_time,
             "it must be positive (s)");
@@ -62,7 +73,7 @@ namespace femp
   bool
   SimulationControl::running() const
   {
-    return t < prm.end_time * (1 - 1e-12) && n_step < prm.max_steps;
+    return !last && t < prm.end_time * (1 - 1e-12) && n_step < prm.max_steps;
   }
 
 
@@ -79,7 +90,8 @@ namespace femp
     t += dt;
     ++n_step;
     dt_last = dt;
-    last    = t >= prm.end_time * (1 - 1e-12) || n_step >= prm.max_steps;
+    last    = t >= prm.end_time * (1 - 1e-12) || n_step >= prm.max_steps ||
+           stop_requested;
     record_rate_sample();
   }
 

@@ -30,6 +30,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/io/output.h>
 #include <femp/io/run_report.h>
+#include <femp/io/track_shape.h>
 #include <femp/solid/solid_stress.h>
 
 #include <fstream>
@@ -93,6 +94,7 @@ namespace femp
     SolidMaterial                             solid_material;
     typename SolidStress<dim>::Parameters     solid_prm;
     typename SolidFEM<dim>::Parameters        fem_prm;
+    typename TrackShape<dim>::Parameters      track_prm;
 
     // The modules; flow and solid exist only when switched on.
     std::unique_ptr<BackgroundGrid<dim>>     grid;
@@ -109,6 +111,7 @@ namespace femp
     std::unique_ptr<SimulationControl>       control;
     std::unique_ptr<Output<dim>>             output;
     std::unique_ptr<RunReport<dim>>          report;
+    std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
     TimerOutput                              timer;
     Summary                                  result;
 
@@ -159,6 +162,11 @@ namespace femp
     /// 4. The solid to the end of the step, loaded by those forces.
     void
     solid_step();
+    /// 'Time stepping/Stop when peak temperature below': true once the
+    /// laser's path has ended by the end of the step of @p dt and the
+    /// hottest metal cell is below that temperature.
+    bool
+    cooled_down(const double dt) const;
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
@@ -167,6 +175,9 @@ namespace femp
     write_series();
     void
     write_output(const bool last);
+    /// The track's surface and bead (TrackShape) for output number @p n.
+    void
+    write_track_shape(const unsigned int n, const double time);
     std::vector<typename Output<dim>::Field>
     output_fields() const;
   };

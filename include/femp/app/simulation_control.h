@@ -29,6 +29,9 @@ namespace femp
       double       time_step     = 0;    ///< s, 0: automatic
       double       safety_factor = 0.5;  ///< of the stable limit, (0, 1]
       unsigned int max_steps     = 100000000;
+      /// K; 0: off. After the laser's path, end the run once the hottest
+      /// metal cell is below this temperature (the driver asks for it).
+      double       stop_temperature = 0;
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -74,6 +77,13 @@ namespace femp
     /// Advance the clock by @p dt (time, step number, last-step flag).
     void
     advance(const double dt);
+    /// Make the step that the next advance() takes the last one (a stop
+    /// condition met before the end time, e.g. the scene has cooled down).
+    void
+    request_stop()
+    {
+      stop_requested = true;
+    }
     /// The step just taken is the last one.
     bool
     is_last() const
@@ -138,7 +148,7 @@ namespace femp
     StepChooser  choose;
     double       t = 0, dt_last = 0;
     unsigned int n_step = 0, n_output = 0;
-    bool         last = false;
+    bool         last = false, stop_requested = false;
     double       next_output, next_series = 0;
     std::chrono::steady_clock::time_point wall_start;
     /// (wall time, simulated time) samples of the recent past.

@@ -1,0 +1,297 @@
+#!/usr/bin/env python3
+"""Pictures of a track scene (e.g. prm/case_3_2_reduced.prm) as SVG, with
+the Python standard library only (no matplotlib, no numpy, no ParaView).
+
+    python3 contrib/plot_track_svg.py OUTPUT_DIR [FIGURE_DIR] [--x X] [--y Y] [--n N] [--prefix P]
+
+reads from OUTPUT_DIR the field output number N (default: the last one):
+grid_<N>.*.vtu (deal.II's zlib-compressed VTU pieces, one per rank),
+probe_line_<name>_<N>.csv and track_shape_<N>.csv, and writes to FIGURE_DIR
+(default: OUTPUT_DIR), each name preceded by P (default: none):
+
+  section_T.svg, section_von_mises.svg   cross-section at x = X (default:
+      the track-shape file's first cross-section) and longitudinal section
+      at y = Y (default: its centre line) of T and of the von Mises stress,
+      metal cells only (alpha >= 1/2), with the surface height z_s;
+  probe_sigma_xx.svg   sigma_xx along every probe line (MPa);
+  track_shape.svg      the surface height z_s along the centre line and
+      across the track, the re-solidified bead's columns marked.
+"""
+import base64
+import csv
+import glob
+import math
+import os
+import re
+import struct
+import sys
+import zlib
+
+
+# ---------------------------------------------------------------- reading
+def _decode(text, vtype):
+    """One binary DataArray of a zlib-compressed VTU (UInt32 headers)."""
+    text = "".join(text.split())
+    first = base64.b64decode(text[:8])
+    nblocks = struct.unpack("<I", first[:4])[0]
+    hlen = 4 * (3 + nblocks)
+    hb64 = 4 * math.ceil(hlen / 3)
+    header = struct.unpack("<%dI" % (3 + nblocks), base64.b64decode(text[:hb64])[:hlen])
+    data = base64.b64decode(text[hb64:])
+    raw, pos = b"", 0
+    for size in header[3:]:
+        raw += zlib.decompress(data[pos:pos + size])
+        pos += size
+    fmt = {"Float32": "f", "Float64": "d", "Int32": "i", "UInt8": "B"}[vtype]
+    n = len(raw) // struct.calcsize(fmt)
+    return struct.unpack("<%d%s" % (n, fmt), raw)
+
+
+def read_cells(output_dir, n):
+    """Cell centres (x, y, z) and fields of every piece of output n."""
+    cells = {}
+    for piece in sorted(glob.glob(os.path.join(output_dir, "grid_%05d.*.vtu" % n))):
+        text = open(piece).read()
+        arrays = {}
+        for m in re.finditer(r'<DataArray([^>]*)>([^<]*)</DataArray>', text):
+            attrs = m.group(1)
+            if 'format="binary"' not in attrs:
+                continue
+            vtype = re.search(r'type="(\w+)"', attrs).group(1)
+            name = re.search(r'Name="(\w+)"', attrs)
+            arrays[name.group(1) if name else "points"] = _decode(m.group(2), vtype)
+        pts = arrays.pop("points")
+        for k in ("connectivity", "offsets", "types"):
+            arrays.pop(k, None)
+        nv = len(pts) // 3
+        per_cell = 8 if "connectivity" not in arrays else 8
+        for c in range(nv // per_cell):
+            v = range(c * per_cell, (c + 1) * per_cell)
+            centre = tuple(round(sum(pts[3 * i + d] for i in v) / per_cell, 9) for d in range(3))
+            cells[centre] = {k: a[c * per_cell] for k, a in arrays.items()}
+    return cells
+
+
+def read_csv(path):
+    rows = [r for r in csv.reader(l for l in open(path) if not l.startswith("#"))]
+    head, body = rows[0], rows[1:]
+    return {h: [r[i] for r in body] for i, h in enumerate(head)}
+
+
+# ---------------------------------------------------------------- drawing
+def colour(t):
+    """Blue - cyan - yellow - red ramp for t in [0, 1]."""
+    stops = [(0, (49, 54, 149)), (0.35, (69, 160, 200)), (0.65, (254, 224, 144)),
+             (1, (165, 0, 38))]
+    t = min(max(t, 0), 1)
+    for (a, ca), (b, cb) in zip(stops, stops[1:]):
+        if t <= b:
+            f = (t - a) / (b - a)
+            return "rgb(%d,%d,%d)" % tuple(int(ca[i] + f * (cb[i] - ca[i])) for i in range(3))
+    return "rgb(165,0,38)"
+
+
+class Svg:
+    def __init__(self, w, h):
+        self.w, self.h, self.items = w, h, []
+
+    def add(self, s):
+        self.items.append(s)
+
+    def text(self, x, y, s, size=12, anchor="start", rotate=None):
+        tr = ' transform="rotate(%g %g %g)"' % (rotate, x, y) if rotate else ""
+        self.add('<text x="%.1f" y="%.1f" font-size="%d" font-family="sans-serif" '
+                 'text-anchor="%s"%s>%s</text>' % (x, y, size, anchor, tr, s))
+
+    def save(self, path):
+        with open(path, "w") as f:
+            f.write('<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
+                    'viewBox="0 0 %d %d">\n<rect width="100%%" height="100%%" fill="white"/>\n'
+                    % (self.w, self.h, self.w, self.h))
+            f.write("\n".join(self.items))
+            f.write("\n</svg>\n")
+
+
+def nice_ticks(lo, hi, n=5):
+    if hi <= lo:
+        hi = lo + 1
+    step = 10 ** math.floor(math.log10((hi - lo) / n))
+    for m in (1, 2, 5, 10):
+        if (hi - lo) / (m * step) <= n:
+            step *= m
+            break
+    t = math.ceil(lo / step) * step
+    out = []
+    while t <= hi + 1e-9 * step:
+        out.append(round(t, 10))
+        t += step
+    return out
+
+
+def line_plot(path, title, xlabel, ylabel, series, hlines=()):
+    """series: list of (label, xs, ys, colour)."""
+    svg = Svg(640, 400)
+    L, R, T, B = 70, 150, 40, 50
+    xs = [x for s in series for x in s[1]]
+    ys = [y for s in series for y in s[2]] + [h for h, _ in hlines]
+    x0, x1 = min(xs), max(xs)
+    y0, y1 = min(ys), max(ys)
+    pad = 0.05 * (y1 - y0 or 1)
+    y0, y1 = y0 - pad, y1 + pad
+    X = lambda x: L + (x - x0) / (x1 - x0 or 1) * (640 - L - R)
+    Y = lambda y: 400 - B - (y - y0) / (y1 - y0) * (400 - T - B)
+    svg.text(320 - R / 2 + L / 2, 22, title, 14, "middle")
+    svg.add('<rect x="%d" y="%d" width="%d" height="%d" fill="none" stroke="black"/>'
+            % (L, T, 640 - L - R, 400 - T - B))
+    for t in nice_ticks(x0, x1):
+        svg.add('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ccc"/>' % (X(t), T, X(t), 400 - B))
+        svg.text(X(t), 400 - B + 16, "%g" % t, 11, "middle")
+    for t in nice_ticks(y0, y1):
+        svg.add('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#ccc"/>' % (L, Y(t), 640 - R, Y(t)))
+        svg.text(L - 6, Y(t) + 4, "%g" % t, 11, "end")
+    for h, lab in hlines:
+        svg.add('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="gray" stroke-dasharray="5,4"/>'
+                % (L, Y(h), 640 - R, Y(h)))
+        svg.text(640 - R - 4, Y(h) - 4, lab, 10, "end")
+    for i, (label, sx, sy, c) in enumerate(series):
+        pts = " ".join("%.1f,%.1f" % (X(a), Y(b)) for a, b in zip(sx, sy))
+        svg.add('<polyline points="%s" fill="none" stroke="%s" stroke-width="2"/>' % (pts, c))
+        svg.add('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"/>'
+                % (640 - R + 10, T + 10 + 18 * i, 640 - R + 30, T + 10 + 18 * i, c))
+        svg.text(640 - R + 34, T + 14 + 18 * i, label, 11)
+    svg.text(L + (640 - L - R) / 2, 400 - 12, xlabel, 12, "middle")
+    svg.text(18, T + (400 - T - B) / 2, ylabel, 12, "middle", rotate=-90)
+    svg.save(path)
+
+
+def section_plot(path, title, panels, field, unit, scale):
+    """panels: list of (label, cells {(a, b): value}, surface [(a, z)])."""
+    svg = Svg(760, 150 + 260 * len(panels))
+    vals = [v for _, c, _ in panels for v in c.values()]
+    vmin, vmax = min(vals), max(vals)
+    svg.text(380, 22, title, 14, "middle")
+    y_top = 40
+    for label, cells, surface in panels:
+        a_vals = sorted({a for a, _ in cells})
+        b_vals = sorted({b for _, b in cells})
+        da = min(b - a for a, b in zip(a_vals, a_vals[1:])) if len(a_vals) > 1 else 1
+        a0, a1 = a_vals[0] - da / 2, a_vals[-1] + da / 2
+        b0, b1 = b_vals[0] - da / 2, b_vals[-1] + da / 2
+        s = min(560 / (a1 - a0), 200 / (b1 - b0))
+        X = lambda a: 80 + (a - a0) * s
+        Y = lambda b: y_top + 20 + (b1 - b) * s
+        svg.text(80, y_top + 12, label, 12)
+        for (a, b), v in cells.items():
+            svg.add('<rect x="%.2f" y="%.2f" width="%.2f" height="%.2f" fill="%s"/>'
+                    % (X(a - da / 2), Y(b + da / 2), da * s + 0.3, da * s + 0.3,
+                       colour((v - vmin) / (vmax - vmin or 1))))
+        if surface:
+            pts = " ".join("%.1f,%.1f" % (X(a), Y(z)) for a, z in surface)
+            svg.add('<polyline points="%s" fill="none" stroke="black" stroke-width="1.5"/>' % pts)
+        svg.add('<rect x="%.1f" y="%.1f" width="%.1f" height="%.1f" fill="none" stroke="black"/>'
+                % (X(a0), Y(b1), (a1 - a0) * s, (b1 - b0) * s))
+        for t in nice_ticks(a0 * 1e6, a1 * 1e6):
+            svg.text(X(t * 1e-6), Y(b0) + 14, "%g" % t, 10, "middle")
+        for t in nice_ticks(b0 * 1e6, b1 * 1e6, 4):
+            svg.text(X(a0) - 4, Y(t * 1e-6) + 4, "%g" % t, 10, "end")
+        y_top = Y(b0) + 30
+    # colour bar
+    for i in range(100):
+        svg.add('<rect x="%.1f" y="%d" width="3.2" height="14" fill="%s"/>'
+                % (80 + 3.2 * i, y_top + 10, colour(i / 99)))
+    svg.text(80, y_top + 40, "%.4g" % (vmin * scale), 11)
+    svg.text(400, y_top + 40, "%.4g %s" % (vmax * scale, unit), 11, "end")
+    svg.text(420, y_top + 22, "%s; positions in um, metal cells only" % field, 11)
+    svg.h = int(y_top + 60)
+    svg.save(path)
+
+
+# ---------------------------------------------------------------- main
+def main():
+    args = [a for a in sys.argv[1:]]
+    opts = {}
+    for k in ("--x", "--y", "--n", "--prefix"):
+        if k in args:
+            i = args.index(k)
+            opts[k] = args[i + 1]
+            del args[i:i + 2]
+    if not args:
+        sys.exit(__doc__)
+    out = args[0]
+    fig = args[1] if len(args) > 1 else out
+    prefix = opts.get("--prefix", "")
+    os.makedirs(fig, exist_ok=True)
+    numbers = sorted(int(m.group(1)) for f in os.listdir(out)
+                     for m in [re.match(r"grid_(\d{5})\.pvtu$", f)] if m)
+    if not numbers:
+        sys.exit("no grid_<n>.pvtu in " + out)
+    n = int(opts.get("--n", numbers[-1]))
+
+    shape_file = os.path.join(out, "track_shape_%05d.csv" % n)
+    shape = read_csv(shape_file) if os.path.exists(shape_file) else None
+    first_line = open(shape_file).readline() if shape else ""
+    z_top = float(re.search(r"substrate top z = ([-0-9.e+]+)", first_line).group(1)) if shape else None
+    centre_y = cross_x = None
+    if shape:
+        cy = [float(y) for s, y in zip(shape["section"], shape["y"]) if s == "centre"]
+        cx = [float(x) for s, x in zip(shape["section"], shape["x"]) if s == "cross_1"]
+        centre_y = cy[0] if cy else None
+        cross_x = cx[0] if cx else None
+    x_cut = float(opts.get("--x", cross_x if cross_x is not None else 0))
+    y_cut = float(opts.get("--y", centre_y if centre_y is not None else 0))
+
+    cells = read_cells(out, n)
+    xs = sorted({c[0] for c in cells})
+    ys = sorted({c[1] for c in cells})
+    xc = min(xs, key=lambda x: abs(x - x_cut))
+    yc = min(ys, key=lambda y: abs(y - y_cut))
+    time = open(glob.glob(os.path.join(out, "probe_line_*_%05d.csv" % n))[0]).readline().split("=")[1].split()[0] \
+        if glob.glob(os.path.join(out, "probe_line_*_%05d.csv" % n)) else "?"
+
+    def surface(section, coord):
+        if not shape:
+            return []
+        return [(float(a), float(z)) for s, a, z in
+                zip(shape["section"], shape[coord], shape["surface_z"]) if s == section]
+
+    for field, unit, scale, name in (("T", "K", 1, "section_T.svg"),
+                                     ("von_mises", "MPa", 1e-6, "section_von_mises.svg")):
+        if not any(field in v for v in cells.values()):
+            continue
+        cross = {(c[1], c[2]): v[field] for c, v in cells.items()
+                 if c[0] == xc and v.get("alpha", 1) >= 0.5}
+        longi = {(c[0], c[2]): v[field] for c, v in cells.items()
+                 if c[1] == yc and v.get("alpha", 1) >= 0.5}
+        section_plot(os.path.join(fig, prefix + name), "%s at t = %s s" % (field, time),
+                     [("cross-section x = %.0f um (y, z)" % (xc * 1e6), cross, surface("cross_1", "y")),
+                      ("longitudinal section y = %.0f um (x, z)" % (yc * 1e6), longi, surface("centre", "x"))],
+                     field, unit, scale)
+
+    palette = ["#1b6ca8", "#d1495b", "#2e933c", "#edae49", "#6a4c93", "#333333"]
+    series = []
+    for i, f in enumerate(sorted(glob.glob(os.path.join(out, "probe_line_*_%05d.csv" % n)))):
+        d = read_csv(f)
+        if "sigma_xx" not in d:
+            continue
+        label = re.match(r".*probe_line_(.*)_\d{5}\.csv", f).group(1)
+        series.append((label, [float(s) * 1e6 for s in d["s"]],
+                       [float(v) * 1e-6 for v in d["sigma_xx"]], palette[i % len(palette)]))
+    if series:
+        line_plot(os.path.join(fig, prefix + "probe_sigma_xx.svg"),
+                  "sigma_xx along the probe lines, t = %s s" % time,
+                  "distance along the line (um)", "sigma_xx (MPa)", series, [(0, "")])
+    if shape:
+        c = [(a * 1e6, (z - z_top) * 1e6) for a, z in surface("centre", "x")]
+        x = [(a * 1e6, (z - z_top) * 1e6) for a, z in surface("cross_1", "y")]
+        line_plot(os.path.join(fig, prefix + "track_shape.svg"),
+                  "surface height above the substrate top, t = %s s" % time,
+                  "x (centre line) or y (cross-section) (um)", "z_s - substrate top (um)",
+                  [("centre line, along x", [a for a, _ in c], [b for _, b in c], palette[0]),
+                   ("cross-section x = %.0f um, along y" % (cross_x * 1e6),
+                    [a for a, _ in x], [b for _, b in x], palette[1])],
+                  [(0, "substrate top")])
+    print("wrote the figures of output %d (t = %s s) to %s" % (n, time, fig))
+
+
+if __name__ == "__main__":
+    main()
