@@ -8,6 +8,7 @@
 #include <deal.II/particles/data_out.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 
 #include <filesystem>
@@ -182,7 +183,8 @@ namespace femp
 
   template <int dim>
   void
-  Output<dim>::initialize(const std::vector<std::string> &quantities)
+  Output<dim>::initialize(const std::vector<std::string> &quantities,
+                          const bool                      resume)
   {
     const MPI_Comm comm = grid.communicator();
     int ok = 1;
@@ -195,7 +197,7 @@ namespace femp
     ok = Utilities::MPI::min(ok, comm);
     require(ok == 1, "Output/Directory", prm.directory,
             "it cannot be created or is not a directory");
-    if (Utilities::MPI::this_mpi_process(comm) == 0)
+    if (Utilities::MPI::this_mpi_process(comm) == 0 && !resume)
       {
         pool_csv.open(prm.directory + "/melt_pool.csv");
         pool_csv << "time,length,width,depth,volume,T_max,"
@@ -387,6 +389,93 @@ namespace femp
         out.close();
         check_stream(out, file);
       }
+  }
+
+  template <int dim>
+  void
+  Output<dim>::save_state(StateWriter &out) const
+  {
+    // Rank 0 holds the records and writes the CSV files (flushed after
+    // every row, so their size is what they hold).
+    auto records = [&](const std::vector<std::pair<double, std::string>> &r) {
+      out.put<std::uint64_t>(r.size());
+      for (const auto &[t, name] : r)
+        {
+          out.put(t);
+          out.put_string(name);
+        }
+    };
+    records(grid_records);
+    records(point_records);
+    const auto size = [](std::ofstream &f) -> std::uint64_t {
+      return f.is_open() ? std::uint64_t(f.tellp()) : 0;
+    };
+    out.put(size(const_cast<std::ofstream &>(pool_csv)));
+    out.put(size(const_cast<std::ofstream &>(probe_csv)));
+  }
+
+
+  template <int dim>
+  void
+  Output<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    auto &in      = parts[0];
+    auto  records = [&](std::vector<std::pair<double, std::string>> &r) {
+      r.resize(in.get<std::uint64_t>());
+      for (auto &[t, name] : r)
+        {
+          t    = in.get<double>();
+          name = in.get_string();
+        }
+    };
+    records(grid_records);
+    records(point_records);
+    const auto pool_size  = in.get<std::uint64_t>();
+    const auto probe_size = in.get<std::uint64_t>();
+    const MPI_Comm comm   = grid.communicator();
+    std::string    error;
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        namespace fs = std::filesystem;
+        // Drop the rows written after the checkpoint, then append.
+        auto reopen = [&](std::ofstream &f, const std::string &name,
+                          const std::uint64_t size) {
+          const std::string file = prm.directory + "/" + name;
+          std::error_code   ec;
+          if (!fs::exists(file) || fs::file_size(file, ec) < size)
+            {
+              error = "the time series '" + file + "' is missing or shorter "
+                      "than at the checkpoint (" + std::to_string(size) +
+                      " bytes); resume into the output directory of the run "
+                      "that wrote the checkpoint";
+              return;
+            }
+          fs::resize_file(file, size, ec);
+          f.open(file, std::ios::app);
+          if (ec || !f)
+            error = "cannot truncate and reopen '" + file + "'";
+        };
+        reopen(pool_csv, "melt_pool.csv", pool_size);
+        if (error.empty() && !prm.probe_points.empty())
+          reopen(probe_csv, "probe_points.csv", probe_size);
+      }
+    const int ok = Utilities::MPI::min(int(error.empty()), comm);
+    if (!ok)
+      {
+        const auto msg = Utilities::MPI::broadcast(comm, error, 0);
+        throw InputError("Checkpoint/Resume from", prm.directory, msg);
+      }
+    // The indices list the outputs up to the checkpoint (none: removed).
+    for (const auto &[name, r] :
+         {std::make_pair(std::string("grid.pvd"), &grid_records),
+          std::make_pair(std::string("points.pvd"), &point_records)})
+      if (!r->empty())
+        write_pvd(prm.directory + "/" + name, *r, comm);
+      else if (Utilities::MPI::this_mpi_process(comm) == 0)
+        {
+          std::error_code ec;
+          std::filesystem::remove(prm.directory + "/" + name, ec);
+        }
   }
 
   template class Output<2>;
