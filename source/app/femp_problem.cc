@@ -697,6 +697,12 @@ namespace femp
         history->save_state(th);
         sections.emplace_back("thermal history", &th);
       }
+    StateWriter f;
+    if (flow)
+      {
+        flow->save_state(f);
+        sections.emplace_back("flow", &f);
+      }
     const std::string dir =
       checkpoint->write(control->step(), control->time(), sections);
     pcout << "Checkpoint: step " << control->step() << ", time "
@@ -720,6 +726,8 @@ namespace femp
     load("heat", *heat);
     load("output", *output);
     load("trigger", *checkpoint);
+    if (flow)
+      load("flow", *flow);
     if (history)
       {
         require(checkpoint->has_section("thermal history"),

@@ -990,15 +990,16 @@ namespace femp
   {
     // Fixed-size records: id, cell (global number), position, reference
     // position, properties.
-    const auto &flat = grid.flat_index_of_active_cell();
+    // Cell by cell in the order of the owned cells (the handler's own
+    // order of cells depends on the history of insertions; the order of
+    // the points in a cell is kept, it sets the order of sums).
     out.put<std::uint32_t>(n_props);
     out.put<std::uint64_t>(handler.n_locally_owned_particles());
-    for (const auto &p : handler)
+    for (const auto &[idx, cell] : occupied)
+      for (const auto &p : handler.particles_in_cell(cell))
       {
         out.put<std::uint64_t>(p.get_id());
-        const auto cell = p.get_surrounding_cell();
-        out.put(global_cell_number(
-          grid, grid.global_index(flat[cell->active_cell_index()])));
+        out.put(global_cell_number(grid, grid.global_index(idx)));
         const Point<dim> x = p.get_location(), r = p.get_reference_location();
         for (int d = 0; d < dim; ++d)
           out.put(x[d]);
