@@ -102,6 +102,16 @@ namespace femp
     checkpoint = std::make_unique<Checkpoint<dim>>(checkpoint_prm,
                                                    output_prm.directory,
                                                    checkpoint_scene(), comm);
+    // The solid's state (MPM and FE zone, sub-step clock, transfer
+    // buffers) is not in the checkpoint yet.
+    require(!solid_enabled || !(checkpoint->enabled() || checkpoint->resuming()),
+            checkpoint->resuming() ? "Checkpoint/Resume from" :
+                                     "Checkpoint/Every steps",
+            checkpoint->resuming() ? checkpoint_prm.resume_from :
+                                     std::string("(a trigger is on)"),
+            "checkpoints hold heat transfer, material points and melt flow; "
+            "with 'Physics/Solid stress = true' they are not available yet "
+            "(doc/checkpoint.md): switch all 'Checkpoint' triggers off");
     if (checkpoint->resuming())
       checkpoint->read(); // refuses a corrupt or mismatched one here
     control = std::make_unique<SimulationControl>(
