@@ -754,6 +754,7 @@ namespace femp
       result.pool        = in.get<MeltPoolSize>();
       result.flow_limits = in.get<typename Summary::FlowLimits>();
     }
+    checkpoint->release();
     pcout << "Resumed from " << checkpoint->path_read() << " (written by "
           << checkpoint->saved_ranks() << " rank(s)) at step "
           << control->step() << ", time " << control->time() << " s"

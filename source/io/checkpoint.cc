@@ -430,6 +430,7 @@ namespace femp
           std::memcpy(&n_ranks, files[0].data() + 16, 4);
         check_file(files[r], file, r, n_ranks);
       }
+    n_files = n_ranks;
   }
 
 

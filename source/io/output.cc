@@ -407,11 +407,17 @@ namespace femp
     };
     records(grid_records);
     records(point_records);
-    const auto size = [](std::ofstream &f) -> std::uint64_t {
-      return f.is_open() ? std::uint64_t(f.tellp()) : 0;
+    // (The size on disk, not tellp(): a stream reopened for appending
+    // reports 0 until it writes.)
+    const auto size = [&](const std::ofstream &f,
+                          const std::string &  name) -> std::uint64_t {
+      std::error_code ec;
+      const auto      n =
+        std::filesystem::file_size(prm.directory + "/" + name, ec);
+      return f.is_open() && !ec ? std::uint64_t(n) : 0;
     };
-    out.put(size(const_cast<std::ofstream &>(pool_csv)));
-    out.put(size(const_cast<std::ofstream &>(probe_csv)));
+    out.put(size(pool_csv, "melt_pool.csv"));
+    out.put(size(probe_csv, "probe_points.csv"));
   }
 
 

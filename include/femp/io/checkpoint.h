@@ -295,6 +295,13 @@ namespace femp
     section(const std::string &name) const;
     bool
     has_section(const std::string &name) const;
+    /// Free the checkpoint read (after every module took its state).
+    void
+    release()
+    {
+      files          = {};
+      sections_of_file = {};
+    }
     unsigned int
     saved_step() const
     {
@@ -309,7 +316,7 @@ namespace femp
     unsigned int
     saved_ranks() const
     {
-      return files.size();
+      return n_files;
     }
     /// Directory of the checkpoint read.
     const std::string &
@@ -349,6 +356,7 @@ namespace femp
     // The checkpoint read: one file image per saved rank, its sections.
     std::string                                        path;
     unsigned int                                       step_read = 0;
+    unsigned int                                       n_files   = 0;
     double                                             time_read = 0;
     std::vector<std::vector<char>>                     files;
     std::vector<std::map<std::string, std::pair<std::size_t, std::size_t>>>
