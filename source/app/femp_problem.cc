@@ -56,6 +56,7 @@ namespace femp
     SolidMaterial::declare_parameters(prm);
     SolidStress<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
+    Checkpoint<3>::Parameters::declare_parameters(prm);
   }
 
 
@@ -101,6 +102,22 @@ namespace femp
       }
 
     check_across_modules();
+    checkpoint_prm.parse_parameters(prm);
+    checkpoint = std::make_unique<Checkpoint<dim>>(checkpoint_prm,
+                                                   output_prm.directory,
+                                                   checkpoint_scene(), comm);
+    // The solid's state (MPM and FE zone, sub-step clock, transfer
+    // buffers) is not in the checkpoint yet.
+    require(!solid_enabled || !(checkpoint->enabled() || checkpoint->resuming()),
+            checkpoint->resuming() ? "Checkpoint/Resume from" :
+                                     "Checkpoint/Every steps",
+            checkpoint->resuming() ? checkpoint_prm.resume_from :
+                                     std::string("(a trigger is on)"),
+            "checkpoints hold heat transfer, material points and melt flow; "
+            "with 'Physics/Solid stress = true' they are not available yet "
+            "(doc/checkpoint.md): switch all 'Checkpoint' triggers off");
+    if (checkpoint->resuming())
+      checkpoint->read(); // refuses a corrupt or mismatched one here
     control = std::make_unique<SimulationControl>(
       time_prm,
       SimulationControl::Cadence{output_prm.output_interval,
@@ -259,7 +276,7 @@ namespace femp
       std::vector<std::string> names;
       for (const auto &f : output_fields())
         names.push_back(f.name);
-      output->initialize(names);
+      output->initialize(names, checkpoint->resuming());
     }
     if (solid_enabled)
       setup_solid();
@@ -380,8 +397,13 @@ namespace femp
   {
     control->start_clock();
     setup();
-    report->start(*heat);
-    write_output(false);
+    if (checkpoint->resuming())
+      restore_checkpoint();
+    else
+      {
+        report->start(*heat);
+        write_output(false);
+      }
 
     while (control->running())
       {
@@ -423,6 +445,9 @@ namespace femp
 
         // 5. Output.
         output_results();
+        if (checkpoint->enabled() &&
+            checkpoint->due(control->step(), control->time()))
+          write_checkpoint();
       }
 
     report->finish(*control, *heat, *points, flow.get(), solid.get(),
@@ -720,6 +745,115 @@ namespace femp
     track_shape->write(output_prm.directory, n, time, sections);
   }
 
+
+  typename Checkpoint<dim>::Scene
+  FempProblem<dim>::checkpoint_scene() const
+  {
+    typename Checkpoint<dim>::Scene s;
+    for (int d = 0; d < dim; ++d)
+      {
+        s.n_cells[d] = static_cast<unsigned int>(
+          std::round((grid_prm.upper_corner[d] - grid_prm.lower_corner[d]) /
+                     grid_prm.cell_size));
+        s.lower_corner[d] = grid_prm.lower_corner[d];
+      }
+    s.cell_size = grid_prm.cell_size;
+    s.heat      = heat_enabled;
+    s.flow      = melt_flow;
+    s.solid     = solid_enabled;
+    s.fe_zone   = solid_enabled && fem_prm.enabled;
+    if (s.fe_zone)
+      for (int d = 0; d < dim; ++d)
+        {
+          s.fe_lower[d] = fem_prm.lower_corner[d];
+          s.fe_upper[d] = fem_prm.upper_corner[d];
+        }
+    const bool affine = solid_enabled && solid_material.velocity_transfer ==
+                                           SolidMaterial::VelocityTransfer::apic;
+    s.n_point_properties =
+      MaterialPoints<dim>::PropertyIndex::n_used(solid_enabled, affine);
+    return s;
+  }
+
+
+  template <int dim>
+  std::string
+  FempProblem<dim>::write_checkpoint()
+  {
+    TimerOutput::Scope t(timer, "checkpoint");
+    // One section per module that owns state; the problem's own section
+    // holds the run's accounts that no module keeps.
+    StateWriter c, h, p, o, th, run, trigger;
+    control->save_state(c);
+    heat->save_state(h);
+    points->save_state(p);
+    output->save_state(o);
+    checkpoint->save_state(trigger);
+    run.put(report->initial_enthalpy());
+    run.put(point_heat->moved_points_energy());
+    run.put(result.pool);
+    run.put(result.flow_limits);
+    std::vector<std::pair<std::string, const StateWriter *>> sections = {
+      {"control", &c}, {"heat", &h},       {"points", &p},
+      {"output", &o},  {"trigger", &trigger}, {"run", &run}};
+    if (history)
+      {
+        history->save_state(th);
+        sections.emplace_back("thermal history", &th);
+      }
+    StateWriter f;
+    if (flow)
+      {
+        flow->save_state(f);
+        sections.emplace_back("flow", &f);
+      }
+    const std::string dir =
+      checkpoint->write(control->step(), control->time(), sections);
+    pcout << "Checkpoint: step " << control->step() << ", time "
+          << control->time() << " s -> " << dir << " ("
+          << checkpoint->bytes_written() << " bytes)" << std::endl;
+    return dir;
+  }
+
+
+  template <int dim>
+  void
+  FempProblem<dim>::restore_checkpoint()
+  {
+    TimerOutput::Scope t(timer, "checkpoint");
+    auto               load = [&](const std::string &name, auto &module) {
+      auto parts = checkpoint->section(name);
+      module.load_state(parts);
+    };
+    load("control", *control);
+    load("points", *points);
+    load("heat", *heat);
+    load("output", *output);
+    load("trigger", *checkpoint);
+    if (flow)
+      load("flow", *flow);
+    if (history)
+      {
+        require(checkpoint->has_section("thermal history"),
+                "Checkpoint/Resume from", checkpoint->path_read(),
+                "it was written without 'Thermal history/Enable' (the "
+                "history before it is lost)");
+        load("thermal history", *history);
+      }
+    {
+      std::vector<StateReader> parts = checkpoint->section("run");
+      StateReader &            in    = parts[0];
+      report->set_initial_enthalpy(in.get<double>());
+      point_heat->set_moved_points_energy(in.get<double>());
+      result.pool        = in.get<MeltPoolSize>();
+      result.flow_limits = in.get<typename Summary::FlowLimits>();
+    }
+    checkpoint->release();
+    pcout << "Resumed from " << checkpoint->path_read() << " (written by "
+          << checkpoint->saved_ranks() << " rank(s)) at step "
+          << control->step() << ", time " << control->time() << " s"
+          << std::endl;
+  }
 
   template class FempProblem<2>;
   template class FempProblem<3>;

@@ -41,7 +41,11 @@ namespace
            "  --set 'Section/Name=value'  override one parameter of the scene "
            "(repeatable;\n"
            "                              nested subsections: "
-           "'A/B/Name=value')\n\n"
+           "'A/B/Name=value')\n"
+           "  --resume DIR                continue from the checkpoint in "
+           "DIR (doc/checkpoint.md;\n"
+           "                              the same as --set "
+           "'Checkpoint/Resume from=DIR')\n\n"
            "Output goes to the directory set in 'Output/Directory' "
            "(default ./output): open grid.pvd and points.pvd (grid.xdmf and "
            "points.xdmf with 'Output/Format = hdf5') in ParaView; "
@@ -208,11 +212,25 @@ main(int argc, char *argv[])
               else
                 overrides.push_back(arg.substr(6));
             }
+          else if (arg == "--resume" || arg.rfind("--resume=", 0) == 0)
+            {
+              // The same as --set 'Checkpoint/Resume from=DIR'.
+              std::string dir;
+              if (arg == "--resume")
+                {
+                  femp::require(i + 1 < argc, "--resume (command line)", "",
+                                "it needs a checkpoint directory");
+                  dir = argv[++i];
+                }
+              else
+                dir = arg.substr(9);
+              overrides.push_back("Checkpoint/Resume from=" + dir);
+            }
           else if (arg.size() > 1 && arg[0] == '-')
             femp::require(false, "command line", femp::short_value(arg),
                           "it is not an option of femp; the options are "
-                          "--set 'Section/Name=value', --print-parameters"
-                          "[=json] and --help");
+                          "--set 'Section/Name=value', --resume DIR, "
+                          "--print-parameters[=json] and --help");
           else
             {
               femp::require(scene.empty(), "command line",

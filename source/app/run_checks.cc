@@ -394,6 +394,10 @@ namespace femp
                    name == probes))
                 earlier.push_back(entry.path());
             }
+        // Resuming a checkpoint continues this directory's series: they
+        // stay (the rows after the checkpoint are dropped on resume).
+        if (!get(prm, "Checkpoint", "Resume from").empty())
+          earlier.clear();
         if (!earlier.empty() && policy == "refuse")
           error = InputError("Output/Directory", short_value(directory),
                              "it holds the output of an earlier run (e.g. " +

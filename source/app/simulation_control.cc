@@ -2,6 +2,7 @@
 // header).
 #include <femp/app/simulation_control.h>
 #include <femp/base/input_checks.h>
+#include <femp/io/checkpoint.h>
 
 #include <algorithm>
 
@@ -176,5 +177,35 @@ namespace femp
       rate = std::max(rate, (wall - rate_samples.front().first) /
                               (t - rate_samples.front().second));
     return rate * left;
+  }
+
+
+  void
+  SimulationControl::save_state(StateWriter &out) const
+  {
+    out.put(t);
+    out.put(dt_last);
+    out.put(n_step);
+    out.put(n_output);
+    out.put<std::uint8_t>(last);
+    out.put(next_output);
+    out.put(next_series);
+  }
+
+
+  void
+  SimulationControl::load_state(std::vector<StateReader> &parts)
+  {
+    // The same on every rank: the first part holds it.
+    auto &in    = parts[0];
+    t           = in.get<double>();
+    dt_last     = in.get<double>();
+    n_step      = in.get<unsigned int>();
+    n_output    = in.get<unsigned int>();
+    in.get<std::uint8_t>(); // 'last': from this run's end time instead
+    next_output = in.get<double>();
+    next_series = in.get<double>();
+    // A resumed run with a later end time goes on past the old last step.
+    last = !running();
   }
 } // namespace femp

@@ -41,6 +41,7 @@
 
 #include <femp/flow/incompressible_flow.h>
 #include <femp/base/input_checks.h>
+#include <femp/io/checkpoint.h>
 
 #include <algorithm>
 #include <cmath>
@@ -1145,6 +1146,61 @@ namespace femp
                   F[f + e][c] = prm.viscosity * u_cell[e][n] / (0.5 * h) * area;
             }
       }
+  }
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::save_state(StateWriter &out)
+  {
+    std::vector<const std::vector<double> *> fields = {&type, &type_old,
+                                                       &p_cell};
+    for (int d = 0; d < dim; ++d)
+      fields.push_back(&u_cell[d]);
+    save_cell_fields(out, grid, fields);
+    // The statistics are global (the same on every rank); field by field
+    // (no padding bytes in the file).
+    const auto &s = stats;
+    for (const unsigned int v : {s.steps, s.matrix_rebuilds, s.amg_setups,
+                                 s.last_iterations, s.max_iterations,
+                                 s.resorts, s.global_sorts, s.halvings,
+                                 s.volume_skipped})
+      out.put(v);
+    for (const unsigned long v :
+         {s.cg_iterations, s.n_fluid_cells, s.volume_iterations})
+      out.put(v);
+    out.put(s.max_point_speed);
+    pressure_solver.restart(pressure_solver.statistics());
+  }
+
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    std::vector<std::vector<double> *> fields = {&type, &type_old, &p_cell};
+    for (int d = 0; d < dim; ++d)
+      fields.push_back(&u_cell[d]);
+    load_cell_fields(parts, grid, fields);
+    auto &in = parts[0];
+    auto &s  = stats;
+    for (unsigned int *v : {&s.steps, &s.matrix_rebuilds, &s.amg_setups,
+                            &s.last_iterations, &s.max_iterations, &s.resorts,
+                            &s.global_sorts, &s.halvings, &s.volume_skipped})
+      *v = in.get<unsigned int>();
+    for (unsigned long *v :
+         {&s.cg_iterations, &s.n_fluid_cells, &s.volume_iterations})
+      *v = in.get<unsigned long>();
+    s.max_point_speed = in.get<double>();
+    typename PressureSolver<dim>::Statistics ps;
+    ps.matrix_rebuilds   = s.matrix_rebuilds;
+    ps.amg_setups        = s.amg_setups;
+    ps.cg_iterations     = s.cg_iterations;
+    ps.last_iterations   = s.last_iterations;
+    ps.max_iterations    = s.max_iterations;
+    ps.n_fluid_cells     = s.n_fluid_cells;
+    ps.volume_iterations = s.volume_iterations;
+    ps.volume_skipped    = s.volume_skipped;
+    pressure_solver.restart(ps);
   }
 
   template class IncompressibleFlow<2>;

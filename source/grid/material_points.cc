@@ -6,6 +6,7 @@
 
 #include <femp/base/input_checks.h>
 #include <femp/grid/material_points.h>
+#include <femp/io/checkpoint.h>
 #include <femp/grid/powder_bed.h>
 
 #include <bitset>
@@ -997,6 +998,66 @@ namespace femp
 #endif
   }
 
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::save_state(StateWriter &out) const
+  {
+    // Fixed-size records: id, cell (global number), position, reference
+    // position, properties.
+    // Cell by cell in the order of the owned cells (the handler's own
+    // order of cells depends on the history of insertions; the order of
+    // the points in a cell is kept, it sets the order of sums).
+    out.put<std::uint32_t>(n_props);
+    out.put<std::uint64_t>(handler.n_locally_owned_particles());
+    for (const auto &[idx, cell] : occupied)
+      for (const auto &p : handler.particles_in_cell(cell))
+      {
+        out.put<std::uint64_t>(p.get_id());
+        out.put(global_cell_number(grid, grid.global_index(idx)));
+        const Point<dim> x = p.get_location(), r = p.get_reference_location();
+        for (int d = 0; d < dim; ++d)
+          out.put(x[d]);
+        for (int d = 0; d < dim; ++d)
+          out.put(r[d]);
+        const auto props = p.get_properties();
+        for (unsigned int i = 0; i < n_props; ++i)
+          out.put(props[i]);
+      }
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    handler.clear_particles();
+    std::vector<double> props(n_props);
+    for (auto &in : parts)
+      {
+        require(in.get<std::uint32_t>() == n_props, "Checkpoint/Resume from",
+                "", "its points carry other properties than this scene's");
+        const auto n = in.get<std::uint64_t>();
+        for (std::uint64_t k = 0; k < n; ++k)
+          {
+            const auto       id   = in.get<std::uint64_t>();
+            const auto       cell = in.get<std::uint64_t>();
+            Point<dim>       x, r;
+            for (int d = 0; d < dim; ++d)
+              x[d] = in.get<double>();
+            for (int d = 0; d < dim; ++d)
+              r[d] = in.get<double>();
+            for (unsigned int i = 0; i < n_props; ++i)
+              props[i] = in.get<double>();
+            const auto idx = owned_local_index(grid, cell);
+            if (idx >= 0)
+              handler.insert_particle(x, r, id, grid.cell_iterator(idx),
+                                      ArrayView<const double>(props));
+          }
+      }
+    handler.update_cached_numbers();
+    index_occupied_cells();
+  }
 
   template class MaterialPoints<2>;
   template class MaterialPoints<3>;

@@ -5,6 +5,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/heat/heat_transfer.h>
+#include <femp/io/checkpoint.h>
 #include <femp/base/input_checks.h>
 
 #include <algorithm>
@@ -1261,6 +1262,55 @@ namespace femp
   {
     const auto e = energy_budget();
     return e.evaporation + e.convection + e.radiation;
+  }
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::save_state(StateWriter &out) const
+  {
+    save_cell_fields(out, grid, {&T, &T_new, &gamma, &alpha});
+    out.put(budget);
+    out.put(T_max);
+    out.put(dt_stable_next);
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    std::vector<double> a = grid.make_field(0.);
+    load_cell_fields(parts, grid, {&T, &T_new, &gamma, &a});
+    // The energy accounts are sums per rank: on as many ranks as wrote
+    // them each takes its own (bit-identical totals), else rank 0 takes
+    // the total.
+    const unsigned int rank  = Utilities::MPI::this_mpi_process(grid.communicator());
+    const bool         same  = parts.size() ==
+                        Utilities::MPI::n_mpi_processes(grid.communicator());
+    budget = EnergyBudget();
+    for (std::size_t r = 0; r < parts.size(); ++r)
+      {
+        const auto b = parts[r].get<EnergyBudget>();
+        if ((same && r == rank) || (!same && rank == 0))
+          {
+            budget.laser += b.laser;
+            budget.evaporation += b.evaporation;
+            budget.convection += b.convection;
+            budget.radiation += b.radiation;
+            budget.boundary += b.boundary;
+            budget.advection += b.advection;
+          }
+        const double Tmax = parts[r].get<double>();
+        const double dts  = parts[r].get<double>();
+        if (r == 0)
+          {
+            T_max          = Tmax;
+            dt_stable_next = dts;
+          }
+      }
+    const double Tmax = T_max;
+    set_metal_fraction(a);
+    T_max = Tmax;
   }
 
   template class HeatTransfer<2>;

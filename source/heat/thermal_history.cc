@@ -3,6 +3,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/heat/thermal_history.h>
+#include <femp/io/checkpoint.h>
 
 #include <cmath>
 #include <fstream>
@@ -161,6 +162,86 @@ namespace femp
         full << xyz.str() << ',' << e.tm << ',' << e.tl << ',' << e.ts << ','
              << e.cooling_rate << ',' << e.gradient << ','
              << (e.gradient > 0 ? e.cooling_rate / e.gradient : 0.) << '\n';
+      }
+  }
+
+  template <int dim>
+  void
+  ThermalHistory<dim>::save_state(StateWriter &out) const
+  {
+    out.put(t_old);
+    out.put<std::uint64_t>(finished.size());
+    for (const auto &e : finished)
+      {
+        out.put(global_cell_number(grid, grid.global_index(e.cell)));
+        out.put(e.tm);
+        out.put(e.tl);
+        out.put(e.ts);
+        out.put(e.cooling_rate);
+        out.put(e.gradient);
+      }
+    const auto &               owned = grid.owned_cells();
+    std::vector<std::uint64_t> keys(owned.size());
+    std::vector<double>        T(owned.size());
+    for (std::size_t k = 0; k < owned.size(); ++k)
+      {
+        keys[k] = global_cell_number(grid, grid.global_index(owned[k]));
+        T[k]    = T_old[owned[k]];
+      }
+    out.put_vector(keys);
+    out.put_vector(T);
+    out.put_vector(state);
+    out.put_vector(melt_time);
+    out.put_vector(open_event);
+  }
+
+
+  template <int dim>
+  void
+  ThermalHistory<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    const auto &              owned = grid.owned_cells();
+    std::vector<std::int64_t> k_of(grid.n_local(), -1);
+    for (std::size_t k = 0; k < owned.size(); ++k)
+      k_of[owned[k]] = k;
+    finished.clear();
+    for (auto &in : parts)
+      {
+        t_old = in.get<double>();
+        // Events of owned cells, in the saved order.
+        std::vector<std::int64_t> new_index(in.get<std::uint64_t>(), -1);
+        for (auto &n : new_index)
+          {
+            const auto idx = owned_local_index(grid, in.get<std::uint64_t>());
+            Event      e;
+            e.tm           = in.get<double>();
+            e.tl           = in.get<double>();
+            e.ts           = in.get<double>();
+            e.cooling_rate = in.get<double>();
+            e.gradient     = in.get<double>();
+            if (idx >= 0)
+              {
+                e.cell = idx;
+                n      = finished.size();
+                finished.push_back(e);
+              }
+          }
+        const auto keys = in.get_vector<std::uint64_t>();
+        const auto T    = in.get_vector<double>();
+        const auto s    = in.get_vector<std::uint8_t>();
+        const auto tm   = in.get_vector<double>();
+        const auto open = in.get_vector<std::int64_t>();
+        for (std::size_t i = 0; i < keys.size(); ++i)
+          {
+            const auto idx = owned_local_index(grid, keys[i]);
+            if (idx < 0)
+              continue;
+            const auto k  = k_of[idx];
+            T_old[idx]    = T[i];
+            state[k]      = s[i];
+            melt_time[k]  = tm[i];
+            open_event[k] = open[i] >= 0 ? new_index[open[i]] : -1;
+          }
       }
   }
 

@@ -15,6 +15,7 @@
 
 #include <femp/base/input_checks.h>
 #include <femp/grid/material_points.h>
+#include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/solid/solid_stress.h>
 
@@ -606,7 +607,8 @@ namespace femp
 
   template <int dim>
   void
-  Output<dim>::initialize(const std::vector<std::string> &quantities)
+  Output<dim>::initialize(const std::vector<std::string> &quantities,
+                          const bool                      resume)
   {
     const MPI_Comm comm = grid.communicator();
     int ok = 1;
@@ -619,7 +621,7 @@ namespace femp
     ok = Utilities::MPI::min(ok, comm);
     require(ok == 1, "Output/Directory", prm.directory,
             "it cannot be created or is not a directory");
-    if (Utilities::MPI::this_mpi_process(comm) == 0)
+    if (Utilities::MPI::this_mpi_process(comm) == 0 && !resume)
       {
         pool_csv.open(prm.directory + "/melt_pool.csv");
         pool_csv << "time,length,width,depth,volume,T_max,"
@@ -990,6 +992,99 @@ namespace femp
         out.close();
         check_stream(out, file);
       }
+  }
+
+  template <int dim>
+  void
+  Output<dim>::save_state(StateWriter &out) const
+  {
+    // Rank 0 holds the records and writes the CSV files (flushed after
+    // every row, so their size is what they hold).
+    auto records = [&](const std::vector<std::pair<double, std::string>> &r) {
+      out.put<std::uint64_t>(r.size());
+      for (const auto &[t, name] : r)
+        {
+          out.put(t);
+          out.put_string(name);
+        }
+    };
+    records(grid_records);
+    records(point_records);
+    // (The size on disk, not tellp(): a stream reopened for appending
+    // reports 0 until it writes.)
+    const auto size = [&](const std::ofstream &f,
+                          const std::string &  name) -> std::uint64_t {
+      std::error_code ec;
+      const auto      n =
+        std::filesystem::file_size(prm.directory + "/" + name, ec);
+      return f.is_open() && !ec ? std::uint64_t(n) : 0;
+    };
+    out.put(size(pool_csv, "melt_pool.csv"));
+    out.put(size(probe_csv, "probe_points.csv"));
+  }
+
+
+  template <int dim>
+  void
+  Output<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    auto &in      = parts[0];
+    auto  records = [&](std::vector<std::pair<double, std::string>> &r) {
+      r.resize(in.get<std::uint64_t>());
+      for (auto &[t, name] : r)
+        {
+          t    = in.get<double>();
+          name = in.get_string();
+        }
+    };
+    records(grid_records);
+    records(point_records);
+    const auto pool_size  = in.get<std::uint64_t>();
+    const auto probe_size = in.get<std::uint64_t>();
+    const MPI_Comm comm   = grid.communicator();
+    std::string    error;
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        namespace fs = std::filesystem;
+        // Drop the rows written after the checkpoint, then append.
+        auto reopen = [&](std::ofstream &f, const std::string &name,
+                          const std::uint64_t size) {
+          const std::string file = prm.directory + "/" + name;
+          std::error_code   ec;
+          if (!fs::exists(file) || fs::file_size(file, ec) < size)
+            {
+              error = "the time series '" + file + "' is missing or shorter "
+                      "than at the checkpoint (" + std::to_string(size) +
+                      " bytes); resume into the output directory of the run "
+                      "that wrote the checkpoint";
+              return;
+            }
+          fs::resize_file(file, size, ec);
+          f.open(file, std::ios::app);
+          if (ec || !f)
+            error = "cannot truncate and reopen '" + file + "'";
+        };
+        reopen(pool_csv, "melt_pool.csv", pool_size);
+        if (error.empty() && !prm.probe_points.empty())
+          reopen(probe_csv, "probe_points.csv", probe_size);
+      }
+    const int ok = Utilities::MPI::min(int(error.empty()), comm);
+    if (!ok)
+      {
+        const auto msg = Utilities::MPI::broadcast(comm, error, 0);
+        throw InputError("Checkpoint/Resume from", prm.directory, msg);
+      }
+    // The indices list the outputs up to the checkpoint (none: removed).
+    for (const auto &[name, r] :
+         {std::make_pair(std::string("grid.pvd"), &grid_records),
+          std::make_pair(std::string("points.pvd"), &point_records)})
+      if (!r->empty())
+        write_pvd(prm.directory + "/" + name, *r, comm);
+      else if (Utilities::MPI::this_mpi_process(comm) == 0)
+        {
+          std::error_code ec;
+          std::filesystem::remove(prm.directory + "/" + name, ec);
+        }
   }
 
   template class Output<2>;

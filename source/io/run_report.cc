@@ -70,9 +70,13 @@ namespace femp
     s.n_points   = points.n_global_points();
     {
       using P    = typename MaterialPoints<dim>::PropertyIndex;
+      // Cell by cell in the order of the owned cells (not the handler's,
+      // which depends on the history of insertions: a resumed run sums in
+      // the same order).
       double sum = 0;
-      for (const auto &p : points.particle_handler())
-        sum += p.get_properties()[P::temperature];
+      for (std::size_t c = 0; c < points.occupied_cells().size(); ++c)
+        for (const double *p : points.cell_point_properties(c))
+          sum += p[P::temperature];
       s.point_T_mean =
         Utilities::MPI::sum(sum, comm) / std::max<double>(1, s.n_points);
     }

@@ -28,6 +28,7 @@
 #include <femp/heat/thermal_history.h>
 #include <femp/base/material.h>
 #include <femp/grid/material_points.h>
+#include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/io/run_report.h>
 #include <femp/io/track_shape.h>
@@ -70,6 +71,11 @@ namespace femp
     {
       return *points;
     }
+    /// Write a checkpoint of the present state now (collective; after
+    /// run(), tests compare the final states of two runs by it); returns
+    /// its directory.
+    std::string
+    write_checkpoint();
 
   private:
     MPI_Comm           comm;
@@ -95,6 +101,7 @@ namespace femp
     typename SolidStress<dim>::Parameters     solid_prm;
     typename SolidFEM<dim>::Parameters        fem_prm;
     typename TrackShape<dim>::Parameters      track_prm;
+    typename Checkpoint<dim>::Parameters      checkpoint_prm;
 
     // The modules; flow and solid exist only when switched on.
     std::unique_ptr<BackgroundGrid<dim>>     grid;
@@ -112,6 +119,7 @@ namespace femp
     std::unique_ptr<Output<dim>>             output;
     std::unique_ptr<RunReport<dim>>          report;
     std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
+    std::unique_ptr<Checkpoint<dim>>         checkpoint;
     TimerOutput                              timer;
     Summary                                  result;
 
@@ -170,6 +178,13 @@ namespace femp
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
+    /// The checkpoint (doc/checkpoint.md): what the scene must share with
+    /// a checkpoint; every module's state of the present step; the state
+    /// of the checkpoint read, after setup().
+    typename Checkpoint<dim>::Scene
+    checkpoint_scene() const;
+    void
+    restore_checkpoint();
 
     void
     write_series();

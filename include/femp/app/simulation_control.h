@@ -14,10 +14,13 @@
 #include <deque>
 #include <utility>
 #include <functional>
+#include <vector>
 
 namespace femp
 {
   using namespace dealii;
+  class StateWriter;
+  class StateReader;
 
   class SimulationControl
   {
@@ -141,6 +144,13 @@ namespace femp
     wall_time() const;
     double
     wall_time_left() const;
+
+    /// Checkpoint (Checkpoint<dim>): time, step, last step and the output,
+    /// series and progress cadence.
+    void
+    save_state(StateWriter &out) const;
+    void
+    load_state(std::vector<StateReader> &parts);
 
   private:
     Parameters   prm;

@@ -54,6 +54,13 @@ namespace femp
       return moved_points;
     }
 
+    /// Resume: the account at the checkpoint.
+    void
+    set_moved_points_energy(const double e)
+    {
+      moved_points = e;
+    }
+
   private:
     MaterialPoints<dim> &points;
     HeatTransfer<dim> &  heat;

@@ -51,6 +51,8 @@
 namespace femp
 {
   using namespace dealii;
+  class StateWriter;
+  class StateReader;
 
   template <int dim>
   class IncompressibleFlow
@@ -241,6 +243,17 @@ namespace femp
     /// each (resized and overwritten), N (2D: N/m); zero elsewhere.
     void
     fluid_forces_on_solid(std::array<std::vector<double>, 2 * dim * dim> &F) const;
+
+    /// Checkpoint: the cell pressure, velocity and types of the last step
+    /// (the temperature step and the fluid forces read them) and the
+    /// statistics (the largest point speed sets the next step). Saving
+    /// also restarts the pressure solver: the next step numbers the system
+    /// and builds the preconditioner afresh, as a resumed run does, so
+    /// that both continue bit for bit.
+    void
+    save_state(StateWriter &out);
+    void
+    load_state(std::vector<StateReader> &parts);
 
   private:
     /// The step proper (P2G, free surface, predictor, pressure,

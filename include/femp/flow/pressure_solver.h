@@ -122,6 +122,15 @@ namespace femp
     {
       return stats;
     }
+    /// Forget the numbering, matrix and preconditioner (the next
+    /// update_system() builds them afresh, the next solve starts from
+    /// zero) and take the counters @p s (checkpoint and resume).
+    void
+    restart(const Statistics &s)
+    {
+      have_matrix = false;
+      stats       = s;
+    }
 
   private:
     /// Whether the fluid set or the type of a neighbour changed since the

@@ -36,6 +36,8 @@
 namespace femp
 {
   using namespace dealii;
+  class StateWriter;
+  class StateReader;
 
   template <int dim>
   class MaterialPoints
@@ -252,6 +254,16 @@ namespace femp
     {
       return packing;
     }
+    /// Checkpoint: every point with its id, cell, position, reference
+    /// position and all properties, in the handler's order.
+    void
+    save_state(StateWriter &out) const;
+    /// Replace the points by those saved (all saved ranks' parts): each
+    /// rank keeps the points of its owned cells, in the saved order, so
+    /// that sums over points repeat bit for bit. Collective.
+    void
+    load_state(std::vector<StateReader> &parts);
+
     /// Names of the first @p n properties, for output.
     static std::vector<std::string>
     property_names(const unsigned int n = PropertyIndex::n_properties);

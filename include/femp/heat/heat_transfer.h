@@ -37,6 +37,8 @@
 namespace femp
 {
   using namespace dealii;
+  class StateWriter;
+  class StateReader;
 
   template <int dim>
   class HeatTransfer
@@ -258,6 +260,16 @@ namespace femp
     {
       return mat;
     }
+
+    /// Checkpoint: T (and the previous T, which gas cells keep), gamma and
+    /// alpha of the owned cells, the energy accounts, the peak temperature
+    /// and the stable step found in the last step.
+    void
+    save_state(StateWriter &out) const;
+    /// Restore what save_state() wrote (all saved ranks' parts; collective):
+    /// the surface lists and properties follow from alpha.
+    void
+    load_state(std::vector<StateReader> &parts);
 
     /// Number of cells that needed the phase-change iteration in the last
     /// step (local), for timing reports.

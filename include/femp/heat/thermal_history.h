@@ -25,6 +25,8 @@
 namespace femp
 {
   using namespace dealii;
+  class StateWriter;
+  class StateReader;
 
   template <int dim>
   class ThermalHistory
@@ -73,6 +75,13 @@ namespace femp
     /// Write this rank's two CSV files into @p directory (which must exist).
     void
     write(const std::string &directory) const;
+
+    /// Checkpoint: per owned cell the last temperature, melt state and
+    /// time and the open event; the finished events with their cell.
+    void
+    save_state(StateWriter &out) const;
+    void
+    load_state(std::vector<StateReader> &parts);
 
   private:
     double

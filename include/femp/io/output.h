@@ -20,6 +20,8 @@
 namespace femp
 {
   using namespace dealii;
+  class StateWriter;
+  class StateReader;
 
   template <int dim>
   class Output
@@ -70,9 +72,20 @@ namespace femp
 
     Output(const Parameters &prm, const BackgroundGrid<dim> &grid);
 
-    /// Create the directory and open the CSV files (rank 0).
+    /// Create the directory and open the CSV files (rank 0); with
+    /// @p resume the CSV files are opened by load_state() instead.
     void
-    initialize(const std::vector<std::string> &probe_quantities);
+    initialize(const std::vector<std::string> &probe_quantities,
+               const bool                      resume = false);
+
+    /// Checkpoint: the .pvd records and the length of the CSV series.
+    void
+    save_state(StateWriter &out) const;
+    /// Cut the CSV series back to their length at the checkpoint (rows
+    /// after it are dropped) and append from there; the .pvd indices list
+    /// the outputs up to the checkpoint again (rank 0 writes).
+    void
+    load_state(std::vector<StateReader> &parts);
 
     /// Write grid fields (and points) for output number @p n at @p time.
     void

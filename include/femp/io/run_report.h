@@ -95,6 +95,18 @@ namespace femp
     void
     start(const HeatTransfer<dim> &heat);
 
+    /// The stored enthalpy at the start (checkpoint and resume).
+    double
+    initial_enthalpy() const
+    {
+      return H0;
+    }
+    void
+    set_initial_enthalpy(const double H)
+    {
+      H0 = H;
+    }
+
     /// The progress line of the step just taken.
     void
     progress(const SimulationControl &control,

@@ -1,0 +1,297 @@
+// Checkpoint and restart (doc/checkpoint.md): the scene argv[1] (dimension
+// argv[2]) run straight through, writing checkpoints at half the end time
+// and at the end, against the same scene resumed from the half-way
+// checkpoint: the final checkpoints (every module's raw state), the time
+// series, the .pvd indices and the thermal history must be bit-identical
+// (on the number of ranks of the test). Then rank 0 alone resumes the same
+// checkpoint (written by all ranks): the final points must agree with the
+// straight run to round-off (argv[3]: the gate; with melt flow the
+// pressure solver's preconditioner depends on the partition, so results on
+// other rank counts agree to its tolerance only). Last, a corrupt, a truncated and two
+// mismatched checkpoints must be refused before any work, naming the fault.
+#include <deal.II/base/mpi.h>
+
+#include <femp/base/input_checks.h>
+
+#include "scene_driver.h"
+#include "test_tools.h"
+
+#include <filesystem>
+#include <map>
+
+using namespace femp_test;
+namespace fs = std::filesystem;
+
+namespace
+{
+  std::string
+  file_text(const std::string &name, const bool skip_date = false)
+  {
+    std::ifstream in(name, std::ios::binary);
+    std::string   all, line;
+    while (std::getline(in, line))
+      if (!(skip_date && line.rfind("#This file was generated", 0) == 0))
+        all += line + "\n";
+    return in.eof() || all.size() ? all : std::string("<missing>");
+  }
+
+  /// The two lines of a checkpoint index: latest, previous.
+  std::pair<std::string, std::string>
+  index_of(const std::string &dir)
+  {
+    std::ifstream in(dir + "/index");
+    std::string   a, b;
+    std::getline(in, a);
+    std::getline(in, b);
+    return {a, b};
+  }
+
+  /// Every point (id -> position and properties), gathered on rank 0.
+  template <int dim>
+  std::map<unsigned long, std::vector<double>>
+  gather_points(const femp::MaterialPoints<dim> &points, MPI_Comm comm)
+  {
+    std::vector<double> mine;
+    for (const auto &p : points.particle_handler())
+      {
+        mine.push_back(p.get_id());
+        for (int d = 0; d < dim; ++d)
+          mine.push_back(p.get_location()[d]);
+        for (const double v : p.get_properties())
+          mine.push_back(v);
+      }
+    const auto   all = Utilities::MPI::gather(comm, mine, 0);
+    const auto   n   = dim + points.n_properties() + 1;
+    std::map<unsigned long, std::vector<double>> by_id;
+    for (const auto &part : all)
+      for (std::size_t i = 0; i + n <= part.size(); i += n)
+        by_id[static_cast<unsigned long>(part[i])] =
+          std::vector<double>(part.begin() + i + 1, part.begin() + i + n);
+    return by_id;
+  }
+
+  /// Run @p file with @p overrides on @p comm; the points at the end.
+  template <int dim>
+  std::map<unsigned long, std::vector<double>>
+  run(const std::string &file, MPI_Comm comm, const std::vector<Override> &overrides,
+      typename femp::FempProblem<dim>::Summary *summary = nullptr)
+  {
+    dealii::ParameterHandler prm;
+    femp::declare_all_parameters(prm);
+    prm.parse_input(file);
+    for (const auto &[section, entry, value] : overrides)
+      {
+        prm.enter_subsection(section);
+        prm.set(entry, value);
+        prm.leave_subsection();
+      }
+    std::streambuf *old = std::cout.rdbuf();
+    std::ofstream   log("scene.log", std::ios::app);
+    std::cout.rdbuf(log.rdbuf());
+    femp::FempProblem<dim> problem(prm, comm);
+    problem.run();
+    std::cout.rdbuf(old);
+    if (summary)
+      *summary = problem.summary();
+    return gather_points(problem.material_points(), comm);
+  }
+
+  /// The message of the InputError that resuming @p overrides raises, or
+  /// "accepted".
+  template <int dim>
+  std::string
+  refusal(const std::string &file, MPI_Comm comm, const std::vector<Override> &overrides)
+  {
+    dealii::ParameterHandler prm;
+    femp::declare_all_parameters(prm);
+    prm.parse_input(file);
+    for (const auto &[section, entry, value] : overrides)
+      {
+        prm.enter_subsection(section);
+        prm.set(entry, value);
+        prm.leave_subsection();
+      }
+    try
+      {
+        femp::FempProblem<dim> problem(prm, comm);
+      }
+    catch (const femp::InputError &e)
+      {
+        return e.what();
+      }
+    return "accepted";
+  }
+
+  template <int dim>
+  int
+  test(const std::string &scene, const double gate, MPI_Comm comm)
+  {
+    const bool root     = Utilities::MPI::this_mpi_process(comm) == 0;
+    int        failures = 0;
+    auto       verdict  = [&](const std::string &what, const bool ok) {
+      if (root)
+        std::cout << what << ": " << (ok ? "yes" : "NO") << std::endl;
+      failures += !ok;
+    };
+    auto print = [&](const std::string &what, const double v) {
+      if (root)
+        std::cout << what << " = " << std::setprecision(8) << v << std::endl;
+    };
+    double     end_time;
+    {
+      dealii::ParameterHandler prm;
+      femp::declare_all_parameters(prm);
+      prm.parse_input(scene);
+      prm.enter_subsection("Time stepping");
+      end_time = prm.get_double("End time");
+      prm.leave_subsection();
+    }
+    const std::vector<Override> common = {
+      {"Output", "Thermal history", "true"},
+      {"Output", "Output interval", femp::num(end_time / 3)},
+      {"Output", "Write material points", "always"},
+      {"Checkpoint", "Every simulated time", femp::num(end_time / 2)}};
+    auto with = [&](std::vector<Override> extra) {
+      extra.insert(extra.begin(), common.begin(), common.end());
+      return extra;
+    };
+    for (const std::string d : {"out0", "out1", "out2", "bad"})
+      if (root)
+        fs::remove_all(d);
+    MPI_Barrier(comm);
+
+    // Straight through, with the checkpoints.
+    typename femp::FempProblem<dim>::Summary s0, s1;
+    const auto points0 = run<dim>(scene, comm, with({{"Output", "Directory", "out0"}}), &s0);
+    const auto [last, half] = index_of("out0/checkpoint");
+    if (root)
+      std::cout << "checkpoints written (index): " << last << ", " << half
+                << std::endl;
+
+    // Resumed from the half-way checkpoint, continuing a copy of the
+    // output directory (the run killed after its checkpoint).
+    if (root)
+      fs::copy("out0", "out1", fs::copy_options::recursive);
+    MPI_Barrier(comm);
+    run<dim>(scene, comm,
+             with({{"Output", "Directory", "out1"},
+                   {"Checkpoint", "Resume from", "out1/checkpoint/" + half}}),
+             &s1);
+    bool same_state = true;
+    for (unsigned int r = 0; r < Utilities::MPI::n_mpi_processes(comm); ++r)
+      {
+        const std::string f =
+          "/" + last + "/rank_" + Utilities::int_to_string(r, 5) + ".bin";
+        same_state = same_state && file_text("out0/checkpoint" + f) ==
+                                     file_text("out1/checkpoint" + f);
+      }
+    auto identical = [&](const std::string &what, const bool same) {
+      verdict(what + " bit-identical", same);
+    };
+    identical("final state (checkpoint files of the last step)", same_state);
+    for (const std::string f : {"melt_pool.csv", "probe_line_AB_00003.csv",
+                                "thermal_history_full_0.csv"})
+      identical(f, file_text("out0/" + f) == file_text("out1/" + f));
+    for (const std::string f : {"grid.pvd", "points.pvd"})
+      identical(f + " (but its date)",
+                file_text("out0/" + f, true) == file_text("out1/" + f, true));
+    print("steps", s1.steps);
+    print("peak temperature (K)", s1.T_max);
+    print("melt pool length (m)", s1.pool.length);
+    print("melt pool depth (m)", s1.pool.depth);
+    print("laser energy", s1.laser);
+    print("stored enthalpy change", s1.stored);
+    print("mean point temperature (K)", s1.point_T_mean);
+    identical("summary numbers",
+              s0.steps == s1.steps && s0.T_max == s1.T_max &&
+                s0.laser == s1.laser && s0.stored == s1.stored &&
+                s0.losses == s1.losses && s0.point_T_mean == s1.point_T_mean &&
+                s0.moved_points == s1.moved_points &&
+                s0.pool.depth == s1.pool.depth);
+
+    // Rank 0 alone resumes the checkpoint that all ranks wrote.
+    if (root)
+      {
+        fs::copy("out0", "out2", fs::copy_options::recursive);
+        const auto points2 = run<dim>(
+          scene, MPI_COMM_SELF,
+          with({{"Output", "Directory", "out2"},
+                {"Checkpoint", "Resume from", "out2/checkpoint/" + half}}));
+        double diff = points2.size() == points0.size() ? 0 : 1;
+        for (const auto &[id, v] : points0)
+          {
+            const auto it = points2.find(id);
+            if (it == points2.end())
+              {
+                diff = 1;
+                continue;
+              }
+            for (std::size_t i = 0; i < v.size(); ++i)
+              diff = std::max(diff, std::abs(it->second[i] - v[i]) /
+                                      (std::abs(v[i]) + 1e-300 + 1e-12));
+          }
+        std::cout << "resumed on 1 rank: " << points2.size() << " points"
+                  << std::endl;
+        verdict("  their max relative difference to the straight run <= " +
+                  femp::num(gate),
+                diff <= gate);
+        if (!(diff <= gate))
+          std::cout << "  (difference " << diff << ")" << std::endl;
+      }
+
+    // Refusals: corrupt, truncated, another grid, other physics.
+    const std::string bad  = "bad/" + half;
+    const std::string file = bad + "/rank_00000.bin";
+    auto refused = [&](const std::string &what, const std::vector<Override> &o,
+                       const std::string &expect) {
+      const std::string msg = refusal<dim>(scene, comm, with(o));
+      const bool        ok  = msg.find(expect) != std::string::npos;
+      verdict(what + ": refused naming '" + expect + "'", ok);
+      if (!ok && root)
+        std::cout << "  (" << msg << ")" << std::endl;
+    };
+    const std::vector<Override> resume_bad = {
+      {"Output", "Directory", "out1"}, {"Checkpoint", "Resume from", bad}};
+    if (root)
+      {
+        fs::create_directories("bad");
+        fs::copy("out0/checkpoint/" + half, bad, fs::copy_options::recursive);
+        std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(-9, std::ios::end);
+        f.put('\x5a');
+      }
+    MPI_Barrier(comm);
+    refused("corrupt checkpoint", resume_bad, "is corrupt");
+    MPI_Barrier(comm);
+    if (root)
+      fs::resize_file(file, fs::file_size(file) - 100);
+    MPI_Barrier(comm);
+    refused("truncated checkpoint", resume_bad, "is truncated");
+    refused("other cell size",
+            {{"Output", "Directory", "out1"},
+             {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
+             {"Background grid", "Cell size", "8e-6"}},
+            "Background grid/Cell size = 4e-06 m, the scene has 8e-06 m");
+    refused("heat switched off",
+            {{"Output", "Directory", "out1"},
+             {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
+             {"Physics", "Heat transfer", "false"},
+             {"Time stepping", "Time step", "1e-7"}},
+            "Physics/Heat transfer = true, the scene has false");
+    if (root)
+      std::cout << (failures == 0 ? "all checks passed" : "CHECKS FAILED")
+                << std::endl;
+    return failures == 0 ? 0 : 1;
+  }
+} // namespace
+
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  const std::string                scene = argv[1];
+  const double                     gate  = std::stod(argv[3]);
+  return std::string(argv[2]) == "3" ? test<3>(scene, gate, MPI_COMM_WORLD) :
+                                       test<2>(scene, gate, MPI_COMM_WORLD);
+}
