@@ -116,6 +116,16 @@ namespace femp
             "checkpoints hold heat transfer, material points and melt flow; "
             "with 'Physics/Solid stress = true' they are not available yet "
             "(doc/checkpoint.md): switch all 'Checkpoint' triggers off");
+    // The HDF5 output's XDMF indices and mesh are not in the checkpoint
+    // yet.
+    require(output_prm.format == "vtu" ||
+              !(checkpoint->enabled() || checkpoint->resuming()),
+            "Output/Format", output_prm.format,
+            std::string("'vtu' ") +
+              (checkpoint->resuming() ? "with 'Checkpoint/Resume from'" :
+                                        "with a 'Checkpoint' trigger on") +
+              " (the XDMF indices of the HDF5 output are not in the "
+              "checkpoint yet; doc/checkpoint.md)");
     if (checkpoint->resuming())
       checkpoint->read(); // refuses a corrupt or mismatched one here
     control = std::make_unique<SimulationControl>(
@@ -848,6 +858,19 @@ namespace femp
       result.pool        = in.get<MeltPoolSize>();
       result.flow_limits = in.get<typename Summary::FlowLimits>();
     }
+    // Series written outside Output: drop their rows after the checkpoint.
+    if (track_shape)
+      track_shape->resume(output_prm.directory, control->time());
+    if (heat_enabled && heat->ray_traced() &&
+        Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        absorption_csv = std::make_unique<std::ofstream>();
+        reopen_series_at(*absorption_csv,
+                         output_prm.directory + "/absorption.csv",
+                         control->time());
+        if (!absorption_csv->is_open())
+          absorption_csv.reset();
+      }
     checkpoint->release();
     pcout << "Resumed from " << checkpoint->path_read() << " (written by "
           << checkpoint->saved_ranks() << " rank(s)) at step "

@@ -1087,6 +1087,36 @@ namespace femp
         }
   }
 
+  void
+  reopen_series_at(std::ofstream &stream, const std::string &file,
+                   const double time)
+  {
+    std::ifstream in(file);
+    if (!in)
+      return;
+    std::string kept, line;
+    while (std::getline(in, line))
+      {
+        char *     end = nullptr;
+        const auto t   = std::strtod(line.c_str(), &end);
+        // Rows are written with 8 significant digits.
+        if (end == line.c_str() || t <= time * (1 + 1e-7))
+          kept += line + '\n';
+      }
+    in.close();
+    {
+      std::ofstream out(file, std::ios::trunc);
+      out << kept;
+      out.close();
+      AssertThrow(static_cast<bool>(out),
+                  ExcMessage("cannot rewrite the time series '" + file +
+                             "' on resume"));
+    }
+    stream.open(file, std::ios::app);
+    AssertThrow(static_cast<bool>(stream),
+                ExcMessage("cannot reopen the time series '" + file + "'"));
+  }
+
   template class Output<2>;
   template class Output<3>;
 } // namespace femp

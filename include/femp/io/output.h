@@ -146,6 +146,15 @@ namespace femp
                  const Particles::ParticleHandler<dim> &points,
                  const std::vector<std::string> &       point_names);
   };
+  /// On resume from a checkpoint at @p time: keep the lines of the CSV
+  /// time series @p file that do not start with a number (the header) and
+  /// the rows whose first column (the time) is not after @p time, and open
+  /// @p stream on it for appending. A missing file leaves @p stream closed.
+  /// Called by the rank that writes the file; throws if it cannot be
+  /// rewritten.
+  void
+  reopen_series_at(std::ofstream &stream, const std::string &file,
+                   const double time);
 } // namespace femp
 
 #endif

@@ -29,6 +29,8 @@
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 
+#include <femp/io/output.h>
+
 #include <fstream>
 #include <string>
 #include <vector>
@@ -93,6 +95,15 @@ namespace femp
             const std::vector<double> &resolidified) const;
 
     /// Rank 0: write track_shape_<n>.csv (every column of every section)
+    /// On resume from a checkpoint at @p time: drop the rows of
+    /// track_bead.csv after it and append from there.
+    void
+    resume(const std::string &directory, const double time)
+    {
+      if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
+        reopen_series_at(bead_csv, directory + "/track_bead.csv", time);
+    }
+
     /// and append a row to track_bead.csv (width and height per section)
     /// in @p directory.
     void
