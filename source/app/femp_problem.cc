@@ -756,6 +756,7 @@ namespace femp
   }
 
 
+  template <int dim>
   typename Checkpoint<dim>::Scene
   FempProblem<dim>::checkpoint_scene() const
   {
