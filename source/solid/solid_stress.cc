@@ -1046,6 +1046,16 @@ namespace femp
               *probe_out << "," << q[0] << "," << q[1];
             *probe_out << "\n";
           }
+        // A row that cannot be written (disk full, file system gone) stops
+        // the run naming the file, instead of losing the series quietly.
+        AssertThrow(!energy_out || *energy_out,
+                    ExcMessage("cannot write the solid energy file '" +
+                               prm.energy_file + "' (Solid/Energy file): "
+                               "disk full or file system gone?"));
+        AssertThrow(!probe_out || *probe_out,
+                    ExcMessage("cannot write the solid probe file '" +
+                               prm.probe_file + "' (Solid/Probe file): "
+                               "disk full or file system gone?"));
       }
   }
 
