@@ -77,14 +77,7 @@ namespace
       typename femp::FempProblem<dim>::Summary *summary = nullptr)
   {
     dealii::ParameterHandler prm;
-    femp::declare_all_parameters(prm);
-    prm.parse_input(file);
-    for (const auto &[section, entry, value] : overrides)
-      {
-        prm.enter_subsection(section);
-        prm.set(entry, value);
-        prm.leave_subsection();
-      }
+    parse_scene(prm, file, overrides);
     std::streambuf *old = std::cout.rdbuf();
     std::ofstream   log("scene.log", std::ios::app);
     std::cout.rdbuf(log.rdbuf());
@@ -103,14 +96,7 @@ namespace
   refusal(const std::string &file, MPI_Comm comm, const std::vector<Override> &overrides)
   {
     dealii::ParameterHandler prm;
-    femp::declare_all_parameters(prm);
-    prm.parse_input(file);
-    for (const auto &[section, entry, value] : overrides)
-      {
-        prm.enter_subsection(section);
-        prm.set(entry, value);
-        prm.leave_subsection();
-      }
+    parse_scene(prm, file, overrides);
     try
       {
         femp::FempProblem<dim> problem(prm, comm);

@@ -5,6 +5,7 @@
 #include <femp/app/femp_problem.h>
 
 #include <string>
+#include <vector>
 #include <fstream>
 #include <iostream>
 
@@ -16,6 +17,23 @@ namespace femp_test
     std::string section, entry, value;
   };
 
+  /// Declare every parameter in @p prm, parse @p file and apply
+  /// @p overrides ({subsection, entry, value}).
+  inline void
+  parse_scene(dealii::ParameterHandler &   prm,
+              const std::string &          file,
+              const std::vector<Override> &overrides)
+  {
+    femp::declare_all_parameters(prm);
+    prm.parse_input(file);
+    for (const auto &[section, entry, value] : overrides)
+      {
+        prm.enter_subsection(section);
+        prm.set(entry, value);
+        prm.leave_subsection();
+      }
+  }
+
   /// Parse @p file, apply @p overrides ({subsection, entry, value}), and run
   /// the scene with std::cout silenced; returns the summary.
   template <int dim>
@@ -25,14 +43,7 @@ namespace femp_test
             const std::vector<Override> &overrides = {})
   {
     dealii::ParameterHandler prm;
-    femp::declare_all_parameters(prm);
-    prm.parse_input(file);
-    for (const auto &[section, entry, value] : overrides)
-      {
-        prm.enter_subsection(section);
-        prm.set(entry, value);
-        prm.leave_subsection();
-      }
+    parse_scene(prm, file, overrides);
     std::streambuf *old = std::cout.rdbuf();
     std::ofstream   log("scene.log");
     std::cout.rdbuf(log.rdbuf());
