@@ -5,6 +5,7 @@
 
 #include <femp/app/femp_problem.h>
 #include <femp/app/run_checks.h>
+#include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
 #include <femp/solid/fe_zone_depth.h>
 
@@ -411,6 +412,9 @@ namespace femp
       restore_checkpoint();
     else
       {
+        // The exact stability limit and the projected number of steps are
+        // checked before anything is written.
+        choose_time_step(0, control->time());
         report->start(*heat);
         write_output(false);
       }
@@ -660,8 +664,11 @@ namespace femp
                                                  ", time " + num(time) + " s" :
                                                std::string())
           << "; use 0 (automatic) or a step <= " << stable << " s";
-        throw InputError("Time stepping/Time step", num(time_prm.time_step),
-                         s.str());
+        // Collective: the stable limit is a global minimum.
+        throw CollectiveError(
+          InputError("Time stepping/Time step", num(time_prm.time_step),
+                     s.str())
+            .what());
       }
     check_projected_steps(step, dt);
     return dt;
@@ -675,12 +682,16 @@ namespace femp
   {
     // No run that silently stops short: refuse a projected step count
     // above the bound (collective: dt is the same on every rank).
-    require(step > 0 || time_prm.end_time / dt <= time_prm.max_steps,
-            "Time stepping/Maximum number of steps", time_prm.max_steps,
-            "the first step of " + num(dt) + " s needs about " +
-              num(std::ceil(time_prm.end_time / dt)) +
-              " steps to reach 'End time'; raise the bound or shorten the "
-              "scene");
+    if (step > 0 || time_prm.end_time / dt <= time_prm.max_steps)
+      return;
+    throw CollectiveError(
+      InputError("Time stepping/Maximum number of steps",
+                 std::to_string(time_prm.max_steps),
+                 "the first step of " + num(dt) + " s needs about " +
+                   num(std::ceil(time_prm.end_time / dt)) +
+                   " steps to reach 'End time'; raise the bound or shorten "
+                   "the scene")
+        .what());
   }
 
 

@@ -4,14 +4,18 @@
 // Errors: everything that can be refused is refused before any work, on
 // every rank together (the ranks agree on a failure flag, the lowest failing
 // rank prints one message, all exit with status 1). An error during the run
-// (a file that cannot be written, a solver failure) is printed by the rank
-// that meets it, which then ends every rank with MPI_Abort, so that no rank
-// waits forever in a collective operation (doc/input_errors.md).
+// that every rank meets together (a CollectiveError: a non-finite field, a
+// step above its limit) is printed once and all ranks exit with status 1;
+// any other error during the run (a file that cannot be written, a solver
+// failure) is printed by the rank that meets it, which then ends every rank
+// with MPI_Abort, so that no rank waits forever in a collective operation
+// (doc/input_errors.md).
 #include <deal.II/base/exceptions.h>
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/app/femp_problem.h>
+#include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
 #include <femp/app/run_checks.h>
 #include <femp/base/parameter_file.h>
@@ -282,6 +286,15 @@ main(int argc, char *argv[])
         problem.p2->run();
       else
         problem.p3->run();
+    }
+  catch (const femp::CollectiveError &e)
+    {
+      // Every rank stops here with the same message: print it once and end
+      // normally (no MPI_Abort, whose banner would bury the message).
+      std::cout.flush();
+      if (root)
+        std::cerr << "femp: error: " << clean_message(e) << std::endl;
+      return 1;
     }
   catch (const std::exception &e)
     {

@@ -40,6 +40,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/flow/incompressible_flow.h>
+#include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
 #include <femp/io/checkpoint.h>
 
@@ -1052,7 +1053,7 @@ namespace femp
             msg << "Melt flow became unstable: nodal speed " << umax
                 << " m/s moves points more than a cell even after halving "
                 << "the step 20 times (step " << dt << " s).";
-            throw std::runtime_error(msg.str());
+            throw CollectiveError(msg.str()); // umax is global
           }
         ++stats.halvings;
         advance(dt / 2, depth + 1);

@@ -6,6 +6,7 @@
 
 #include <femp/heat/heat_transfer.h>
 #include <femp/io/checkpoint.h>
+#include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
 
 #include <algorithm>
@@ -21,6 +22,17 @@ namespace femp
   {
     constexpr double stefan_boltzmann = 5.670374419e-8; // W/(m^2 K^4)
     constexpr double gas_constant     = 8.314462618;    // J/(mol K)
+
+    /// A position for a message: "(x, y[, z])".
+    template <int dim>
+    std::string
+    point_text(const Point<dim> &p)
+    {
+      std::string s = "(";
+      for (int d = 0; d < dim; ++d)
+        s += (d > 0 ? ", " : "") + num(p[d]);
+      return s + ")";
+    }
   } // namespace
 
 
@@ -714,6 +726,8 @@ namespace femp
   HeatTransfer<dim>::advance(const double dt, const double time)
   {
     Assert(!frozen, ExcMessage("advance() on a frozen temperature field"));
+    if (std::isnan(T_floor))
+      set_temperature_floor();
     // Properties: in 3D plane by plane just ahead of the sweep (pass B), so
     // that they are still in cache when the stencil reads them.
     const std::size_t rows_per_plane =
@@ -779,6 +793,7 @@ namespace femp
     flagged_rows.clear();
     const bool has_latent = rhoL > 0;
     double     box_max = -std::numeric_limits<double>::max(), box_bad = 0;
+    double     box_min = std::numeric_limits<double>::max();
     for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
       {
       if (dim == 3)
@@ -789,7 +804,8 @@ namespace femp
             continue; // gas only: nothing changes
           const std::size_t row = jj * sy + kk * sz;
           double row_rate = 0, row_max = 0, row_bad = 0, row_flags = 0;
-#pragma omp simd reduction(max : row_rate, row_max) reduction(+ : row_bad, row_flags)
+          double row_min = std::numeric_limits<double>::max();
+#pragma omp simd reduction(max : row_rate, row_max) reduction(min : row_min) reduction(+ : row_bad, row_flags)
           for (int ii = 1; ii < size[0] - 1; ++ii)
             {
               const std::size_t i  = row + ii;
@@ -823,6 +839,7 @@ namespace femp
               row_rate           = rate > row_rate ? rate : row_rate;
               // metal cells only: gas may keep a stale T after points moved
               row_max = (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
+              row_min = (kc > 0) & (Tnew < row_min) ? Tnew : row_min;
               row_bad += Tnew - Tnew; // NaN if Tnew is not finite
               // Flag: a cell may change phase (unless clearly solid or
               // clearly liquid) or, with c(T) tables, takes a large step.
@@ -835,6 +852,7 @@ namespace femp
             }
           const bool needs_phase = row_flags > 0;
           box_max = std::max(box_max, row_max);
+          box_min = std::min(box_min, row_min);
           box_bad += row_bad;
           rate_max = std::max(rate_max, row_rate);
           if (needs_phase)
@@ -844,6 +862,7 @@ namespace femp
 
     sums.rate_max = rate_max;
     sums.box_max  = box_max;
+    sums.box_min  = box_min;
     sums.box_bad  = box_bad;
   }
 
@@ -1053,14 +1072,20 @@ namespace femp
     // holds owned cells and true ghost values, so its maximum over metal
     // cells is the global one.
     // Cells changed after pass B (sources, phase change) are added here.
-    double Tmax = box_max;
+    double Tmax = box_max, Tmin = sums.box_min;
     for (const auto idx : source_cells)
       if (alpha[idx] > 0)
-        Tmax = std::max(Tmax, T_new[idx]);
+        {
+          Tmax = std::max(Tmax, T_new[idx]);
+          Tmin = std::min(Tmin, T_new[idx]);
+        }
     for (const std::size_t row : flagged_rows)
       for (int ii = 1; ii < size[0] - 1; ++ii)
         if (alpha[row + ii] > 0)
-          Tmax = std::max(Tmax, T_new[row + ii]);
+          {
+            Tmax = std::max(Tmax, T_new[row + ii]);
+            Tmin = std::min(Tmin, T_new[row + ii]);
+          }
     bool finite = std::isfinite(box_bad) && std::isfinite(Tmax);
     for (const auto idx : source_cells)
       finite = finite && std::isfinite(T_new[idx]);
@@ -1072,34 +1097,37 @@ namespace femp
     grid.update_ghosts(gamma);
     n_phase_cells = nphase;
 
-    const double local[2] = {Tmax, rate_max};
-    double       global[2];
-    Utilities::MPI::max(ArrayView<const double>(local, 2),
+    // One reduction for the peak, the rate and the lowest temperature.
+    const double local[3] = {Tmax, rate_max, -Tmin};
+    double       global[3];
+    Utilities::MPI::max(ArrayView<const double>(local, 3),
                         grid.communicator(),
-                        ArrayView<double>(global, 2));
+                        ArrayView<double>(global, 3));
     T_max          = global[0];
     dt_stable_next = global[1] > 0 ? 1. / global[1] :
                                      std::numeric_limits<double>::max();
 
     if (!std::isfinite(T_max))
       {
-        // Find where it went wrong, for the diagnostic.
-        std::ostringstream where;
+        // Every rank knows (T_max is global): the first rank with a
+        // non-finite owned cell tells the others where, and all stop with
+        // the same message.
+        Point<dim> where;
+        bool       found = false;
         for (const auto idx : grid.owned_cells())
           if (!std::isfinite(T[idx]))
             {
-              where << " First non-finite temperature on rank "
-                    << Utilities::MPI::this_mpi_process(grid.communicator())
-                    << " in the cell at " << grid.cell_center(idx) << " m.";
+              where = grid.cell_center(idx), found = true;
               break;
             }
-        AssertThrow(false,
-                    ExcMessage("The temperature became non-finite at time " +
-                               num(time + dt) + " s (step size " + num(dt) +
-                               " s)." + where.str() +
-                               " The step may exceed the stable limit, or a "
-                               "surface loss (evaporation) may be too stiff."));
+        broadcast_location(found, where);
+        throw CollectiveError(
+          "The temperature became non-finite at time " + num(time + dt) +
+          " s (step size " + num(dt) + " s). First non-finite temperature in "
+          "the cell at " + point_text(where) + " m. The step may exceed the "
+          "stable limit, or a surface loss (evaporation) may be too stiff.");
       }
+    check_temperature_floor(-global[2], dt, time);
   }
 
 
@@ -1312,6 +1340,71 @@ namespace femp
     set_metal_fraction(a);
     T_max = Tmax;
   }
+
+    template <int dim>
+  void
+  HeatTransfer<dim>::set_temperature_floor()
+  {
+    double lowest = std::numeric_limits<double>::max();
+    for (const auto idx : grid.owned_cells())
+      if (alpha[idx] > 0)
+        lowest = std::min(lowest, T[idx]);
+    T_floor = std::min(Utilities::MPI::min(lowest, grid.communicator()),
+                       prm.reference_temperature);
+    for (const auto &f : fixed_faces)
+      T_floor = std::min(T_floor, f.value);
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::check_temperature_floor(const double T_min,
+                                             const double dt,
+                                             const double time) const
+  {
+    // Round-off and the enthalpy iteration's tolerance stay far inside
+    // this margin; the unstable checkerboard of a step twice the limit
+    // falls below it by kelvins within a few steps.
+    const double margin = 1e-6 * std::max(1., std::abs(T_floor));
+    if (!(T_min < T_floor - margin))
+      return;
+    Point<dim> where;
+    bool       found = false;
+    double     lowest = std::numeric_limits<double>::max();
+    for (const auto idx : grid.owned_cells())
+      if (alpha[idx] > 0 && T[idx] < lowest)
+        lowest = T[idx], where = grid.cell_center(idx);
+    // The rank that holds the global minimum tells the others.
+    found = lowest <= T_min;
+    broadcast_location(found, where);
+    throw CollectiveError(
+      "The temperature step broke the discrete maximum principle at time " +
+      num(time + dt) + " s (step size " + num(dt) + " s): the cell at " +
+      point_text(where) + " m fell to " + num(T_min) + " K, below " +
+      num(T_floor) + " K, the lowest initial, fixed-face or reference "
+      "temperature, which no stable step can undershoot. The step exceeds "
+      "the stable limit of the explicit temperature step (an unstable step "
+      "can stay finite: the latent heat clamps it into a wrong "
+      "checkerboard). Use a smaller 'Time stepping/Safety factor' or "
+      "'Time stepping/Time step'.");
+  }
+
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::broadcast_location(const bool found,
+                                        Point<dim> &where) const
+  {
+    const MPI_Comm     comm = grid.communicator();
+    const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
+    const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
+    if (root < (1u << 30))
+      {
+        const int ierr = MPI_Bcast(&where[0], dim, MPI_DOUBLE, root, comm);
+        AssertThrowMPI(ierr);
+      }
+  }
+
 
   template class HeatTransfer<2>;
   template class HeatTransfer<3>;

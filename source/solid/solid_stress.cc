@@ -7,6 +7,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
+#include <femp/base/collective_error.h>
 
 #include <cmath>
 #include <iomanip>
@@ -717,7 +718,7 @@ namespace femp
                       "left the domain")
           << " at solid step " << steps << ", time " << t_solid + dt
           << " s, near x = " << where;
-        throw std::runtime_error(s.str());
+        throw CollectiveError(s.str()); // the sums are global
       }
     if (sums[4] > 0) // a point entered a cell of another rank
       {

@@ -29,6 +29,7 @@
 #include <femp/base/material.h>
 
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <utility>
@@ -342,12 +343,32 @@ namespace femp
     double       T_max          = 0;
     double       dt_stable_next = 0;
     std::size_t  n_phase_cells  = 0;
+    /// The lowest temperature a stable step can produce: the lowest metal
+    /// temperature when the first step starts, the reference (ambient)
+    /// temperature and the fixed-face temperatures (NaN before the first
+    /// step). Conduction, the implicit surface losses and the mixing of
+    /// moved points are convex in T, so no metal cell may fall below it.
+    double T_floor = std::numeric_limits<double>::quiet_NaN();
+    /// Set T_floor from the current state (collective).
+    void
+    set_temperature_floor();
+    /// Stop the run (CollectiveError) if the lowest metal temperature
+    /// @p T_min after the step is below T_floor: the explicit step broke the
+    /// discrete maximum principle, which the latent heat can otherwise
+    /// hide as a bounded, wrong checkerboard. Collective.
+    void
+    check_temperature_floor(const double T_min, const double dt,
+                            const double time) const;
+    /// The lowest rank with @p found sends its @p where to all. Collective.
+    void
+    broadcast_location(const bool found, Point<dim> &where) const;
 
     /// What the passes of advance() hand on to each other.
     struct StepSums
     {
       double      rate_max = 0; ///< largest rate (1/stable step), 1/s
       double      box_max  = 0; ///< pass B: peak new T over metal cells, K
+      double      box_min  = 0; ///< pass B: lowest new T over metal cells, K
       double      box_bad  = 0; ///< pass B: NaN when a new T is not finite
       double      e_boundary  = 0; ///< through fixed faces in the step, J
       double      e_advection = 0; ///< convection, W/m^3 summed over cells
