@@ -3,6 +3,8 @@
 # output directory). Optional: ARGS, command-line arguments separated by '|'
 # (replace PRM when PRM is empty); NPROC > 1 runs it with MPIEXEC on that
 # many ranks (the test's TIMEOUT then catches a rank left waiting).
+# COLLECTIVE: an error every rank meets during setup; it must end all ranks
+# without MPI_Abort (no Open MPI banner), before the t = 0 output.
 file(REMOVE_RECURSE ${WORKDIR})
 file(MAKE_DIRECTORY ${WORKDIR})
 set(args)
@@ -31,4 +33,14 @@ if(NOT "${err}" MATCHES "${REGEX}")
 endif()
 if(NOT WORK_ALLOWED AND ("${out}" MATCHES "femp: [23]D scene" OR EXISTS ${WORKDIR}/output))
   message(FATAL_ERROR "femp started the computation before rejecting the input")
+endif()
+if(COLLECTIVE)
+  if("${err}" MATCHES "MPI_ABORT|MPI_Abort")
+    message(FATAL_ERROR "a collective error ended the run with MPI_Abort")
+  endif()
+  file(GLOB written ${WORKDIR}/output/*.vtu ${WORKDIR}/output/*.pvtu
+       ${WORKDIR}/output/*.pvd)
+  if(written)
+    message(FATAL_ERROR "fields were written before the refusal: ${written}")
+  endif()
 endif()
