@@ -537,14 +537,29 @@ namespace femp
           rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
         flow->step(dt_f);
         t += dt_f;
-        require(++n_sub <= run_limits().max_flow_substeps,
-                "Run limits/Maximum flow sub-steps",
-                run_limits().max_flow_substeps,
-                "the flow needed more sub-steps in the temperature step of " +
-                  num(dt) + " s (sub-step now " + num(dt_f) +
-                  " s: the flow may have blown up); raise the bound if the "
-                  "flow is right");
+        // Collective: the limits are global, so is the count.
+        if (++n_sub > run_limits().max_flow_substeps)
+          throw CollectiveError(
+            InputError("Run limits/Maximum flow sub-steps",
+                       std::to_string(run_limits().max_flow_substeps),
+                       "the flow needed more sub-steps in the temperature "
+                       "step of " + num(dt) + " s (sub-step now " +
+                         num(dt_f) + " s: the flow may have blown up); raise "
+                         "the bound if the flow is right")
+              .what());
+        // Feedback during a long sub-cycle (the progress line comes only
+        // between temperature steps).
+        const double wall = control->wall_time();
+        if (wall > next_substep_report)
+          {
+            pcout << "  melt flow: sub-step " << n_sub << " of the temperature "
+                  << "step at t = " << control->time() << " s, " << t / dt * 100
+                  << " % done, sub-step " << dt_f << " s (wall " << wall
+                  << " s)" << std::endl;
+            next_substep_report = wall + 30;
+          }
       }
+    next_substep_report = control->wall_time() + 30;
     r.record_substeps(n_sub);
     if (flow->statistics().resorts == resorts)
       return;

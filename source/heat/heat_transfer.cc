@@ -1349,10 +1349,11 @@ namespace femp
     for (const auto idx : grid.owned_cells())
       if (alpha[idx] > 0)
         lowest = std::min(lowest, T[idx]);
+    // Each rank holds only the fixed faces of its own cells: reduce after.
+    for (const auto &f : fixed_faces)
+      lowest = std::min(lowest, f.value);
     T_floor = std::min(Utilities::MPI::min(lowest, grid.communicator()),
                        prm.reference_temperature);
-    for (const auto &f : fixed_faces)
-      T_floor = std::min(T_floor, f.value);
   }
 
 

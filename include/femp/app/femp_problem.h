@@ -80,6 +80,8 @@ namespace femp
   private:
     MPI_Comm           comm;
     ConditionalOStream pcout;
+    /// Wall time (s) after which a long melt-flow sub-cycle reports.
+    double             next_substep_report = 30;
     TimeParameters     time_prm;
     Material           material;
     typename BackgroundGrid<dim>::Parameters  grid_prm;

@@ -13,8 +13,9 @@ namespace femp
 {
   /// Parse @p file into @p prm as ParameterHandler::parse_input() does,
   /// except that the relative path of an 'include' line is looked up first
-  /// next to @p file, then (as deal.II does) in the working directory.
-  /// Includes inside an included file follow deal.II's rule.
+  /// next to @p file, then (as deal.II does) in the working directory; the
+  /// same holds inside included files, at any depth (up to 16 levels), so a
+  /// scene may include a scene that includes a material file.
   void
   parse_parameter_file(dealii::ParameterHandler &prm, const std::string &file);
 
