@@ -232,6 +232,21 @@ namespace
       {
         for (const std::string f : {"solid_energy.csv", "solid_probes.csv"})
           identical(f, file_text("out0/" + f) == file_text("out1/" + f));
+        // Every output's probe lines (they hold the cell stresses: also
+        // those written after a temperature step without a solid step).
+        unsigned int n_lines = 0;
+        bool         same    = true;
+        for (const auto &e : fs::directory_iterator("out0"))
+          if (e.path().filename().string().rfind("probe_line_", 0) == 0)
+            {
+              const std::string f = e.path().filename().string();
+              same = same && file_text("out0/" + f) == file_text("out1/" + f);
+              ++n_lines;
+            }
+        MPI_Bcast(&n_lines, 1, MPI_UNSIGNED, 0, comm);
+        identical("probe lines of all " + std::to_string(n_lines) +
+                    " outputs",
+                  Utilities::MPI::min(int(same), comm) == 1);
         const auto &e0 = s0.solid_energy, &e1 = s1.solid_energy;
         print("solid steps", s1.solid_steps);
         print("solid stress work", e1.internal);
