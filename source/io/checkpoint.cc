@@ -345,7 +345,8 @@ namespace femp
     if (s.solid != scene.solid)
       differs("Physics/Solid stress", on_off(s.solid), on_off(scene.solid));
     if (s.fe_zone != scene.fe_zone)
-      differs("Solid FEM/Enable", on_off(s.fe_zone), on_off(scene.fe_zone));
+      differs("Solid FEM/Use finite elements", on_off(s.fe_zone),
+              on_off(scene.fe_zone));
     std::array<double, 3> n_saved{}, n_now{};
     for (int d = 0; d < 3; ++d)
       {
