@@ -3,12 +3,16 @@
 // and at the end, against the same scene resumed from the half-way
 // checkpoint: the final checkpoints (every module's raw state), the time
 // series, the .pvd indices and the thermal history must be bit-identical
-// (on the number of ranks of the test). Then rank 0 alone resumes the same
-// checkpoint (written by all ranks): the final points must agree with the
+// (on the number of ranks of the test); with the solid also its energy and
+// probe files and its final energies (the final checkpoints hold the point
+// and element stresses). Then rank 0 alone resumes the same checkpoint
+// (written by all ranks): the final points, and with the solid the rows of
+// its energy and probe files after the checkpoint, must agree with the
 // straight run to round-off (argv[3]: the gate; with melt flow the
 // pressure solver's preconditioner depends on the partition, so results on
-// other rank counts agree to its tolerance only). Last, a corrupt, a truncated and two
-// mismatched checkpoints must be refused before any work, naming the fault.
+// other rank counts agree to its tolerance only). Last, a corrupt, a
+// truncated and two mismatched checkpoints must be refused before any work,
+// naming the fault, and with the solid one of another FE zone.
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
@@ -18,6 +22,7 @@
 
 #include <filesystem>
 #include <map>
+#include <sstream>
 
 using namespace femp_test;
 namespace fs = std::filesystem;
@@ -33,6 +38,47 @@ namespace
       if (!(skip_date && line.rfind("#This file was generated", 0) == 0))
         all += line + "\n";
     return in.eof() || all.size() ? all : std::string("<missing>");
+  }
+
+  /// Largest difference between the numbers of two CSV files of the same
+  /// shape, each column relative to its largest magnitude in @p a (1 if
+  /// the shapes differ); the rows with time <= @p after are skipped.
+  double
+  csv_difference(const std::string &a, const std::string &b, const double after)
+  {
+    auto rows = [&](const std::string &file) {
+      std::vector<std::vector<double>> r;
+      std::ifstream                    in(file);
+      std::string                      line;
+      std::getline(in, line); // header
+      while (std::getline(in, line))
+        {
+          std::vector<double> v;
+          std::stringstream   s(line);
+          std::string         x;
+          while (std::getline(s, x, ','))
+            v.push_back(std::stod(x));
+          if (!v.empty() && v[0] > after * (1 + 1e-9))
+            r.push_back(v);
+        }
+      return r;
+    };
+    const auto ra = rows(a), rb = rows(b);
+    if (ra.size() != rb.size() || ra.empty())
+      return 1;
+    std::vector<double> scale(ra[0].size(), 1e-300);
+    for (const auto &r : ra)
+      for (std::size_t j = 0; j < r.size() && j < scale.size(); ++j)
+        scale[j] = std::max(scale[j], std::abs(r[j]));
+    double diff = 0;
+    for (std::size_t i = 0; i < ra.size(); ++i)
+      {
+        if (ra[i].size() != rb[i].size() || ra[i].size() != scale.size())
+          return 1;
+        for (std::size_t j = 0; j < ra[i].size(); ++j)
+          diff = std::max(diff, std::abs(ra[i][j] - rb[i][j]) / scale[j]);
+      }
+    return diff;
   }
 
   /// The two lines of a checkpoint index: latest, previous.
@@ -181,6 +227,41 @@ namespace
     for (const std::string f : {"grid.pvd", "points.pvd"})
       identical(f + " (but its date)",
                 file_text("out0/" + f, true) == file_text("out1/" + f, true));
+    const bool solid = fs::exists("out0/solid_energy.csv");
+    if (solid)
+      {
+        for (const std::string f : {"solid_energy.csv", "solid_probes.csv"})
+          identical(f, file_text("out0/" + f) == file_text("out1/" + f));
+        // Every output's probe lines (they hold the cell stresses: also
+        // those written after a temperature step without a solid step).
+        unsigned int n_lines = 0;
+        bool         same    = true;
+        for (const auto &e : fs::directory_iterator("out0"))
+          if (e.path().filename().string().rfind("probe_line_", 0) == 0)
+            {
+              const std::string f = e.path().filename().string();
+              same = same && file_text("out0/" + f) == file_text("out1/" + f);
+              ++n_lines;
+            }
+        MPI_Bcast(&n_lines, 1, MPI_UNSIGNED, 0, comm);
+        identical("probe lines of all " + std::to_string(n_lines) +
+                    " outputs",
+                  Utilities::MPI::min(int(same), comm) == 1);
+        const auto &e0 = s0.solid_energy, &e1 = s1.solid_energy;
+        print("solid steps", s1.solid_steps);
+        print("solid stress work", e1.internal);
+        print("solid kinetic energy", e1.kinetic);
+        print("solid hourglass energy", e1.hourglass);
+        print("solid energy removed by melting", e1.melted);
+        print("solid energy added by solidification", e1.solidified);
+        identical("solid summary numbers",
+                  s0.solid_steps == s1.solid_steps &&
+                    e0.internal == e1.internal && e0.kinetic == e1.kinetic &&
+                    e0.hourglass == e1.hourglass &&
+                    e0.transfer == e1.transfer && e0.melted == e1.melted &&
+                    e0.solidified == e1.solidified && e0.remap == e1.remap &&
+                    e0.balance() == e1.balance());
+      }
     print("steps", s1.steps);
     print("peak temperature (K)", s1.T_max);
     print("melt pool length (m)", s1.pool.length);
@@ -223,6 +304,24 @@ namespace
                 diff <= gate);
         if (!(diff <= gate))
           std::cout << "  (difference " << diff << ")" << std::endl;
+        if (solid)
+          std::cout << "  points (with their stresses): max relative "
+                    << "difference " << std::setprecision(2)
+                    << (diff < 1e-15 ? 0. : diff) << std::endl;
+        if (solid)
+          for (const std::string f : {"solid_energy.csv", "solid_probes.csv"})
+            {
+              // The rows after the checkpoint, relative to each column's
+              // largest magnitude.
+              const double d =
+                csv_difference("out0/" + f, "out2/" + f, end_time / 2);
+              std::cout << "  " << f << " after the checkpoint: max relative "
+                        << "difference " << std::setprecision(2)
+                        << (d < 1e-15 ? 0. : d) << std::endl;
+              verdict("  " + f + " max relative difference <= " +
+                        femp::num(gate),
+                      d <= gate);
+            }
       }
 
     // Refusals: corrupt, truncated, another grid, other physics.
@@ -264,6 +363,13 @@ namespace
              {"Physics", "Heat transfer", "false"},
              {"Time stepping", "Time step", "1e-7"}},
             "Physics/Heat transfer = true, the scene has false");
+    if (solid)
+      refused("other FE zone",
+              {{"Output", "Directory", "out1"},
+               {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
+               {"Solid FEM", "Zone upper corner",
+                dim == 2 ? "160e-6, 36e-6" : "160e-6, 80e-6, 36e-6"}},
+              "Solid FEM/Zone upper corner");
     if (root)
       std::cout << (failures == 0 ? "all checks passed" : "CHECKS FAILED")
                 << std::endl;

@@ -107,16 +107,6 @@ namespace femp
     checkpoint = std::make_unique<Checkpoint<dim>>(checkpoint_prm,
                                                    output_prm.directory,
                                                    checkpoint_scene(), comm);
-    // The solid's state (MPM and FE zone, sub-step clock, transfer
-    // buffers) is not in the checkpoint yet.
-    require(!solid_enabled || !(checkpoint->enabled() || checkpoint->resuming()),
-            checkpoint->resuming() ? "Checkpoint/Resume from" :
-                                     "Checkpoint/Every steps",
-            checkpoint->resuming() ? checkpoint_prm.resume_from :
-                                     std::string("(a trigger is on)"),
-            "checkpoints hold heat transfer, material points and melt flow; "
-            "with 'Physics/Solid stress = true' they are not available yet "
-            "(doc/checkpoint.md): switch all 'Checkpoint' triggers off");
     // The HDF5 output's XDMF indices and mesh are not in the checkpoint
     // yet.
     require(output_prm.format == "vtu" ||
@@ -336,7 +326,11 @@ namespace femp
           *grid, *points, material.density, fem_prm);
         solid->set_external_nodal_forces(&fluid_solid->nodal_forces());
       }
-    solid->initialize(heat->temperature(), output_prm.directory);
+    // On resume the solid's CSV files are cut back and reopened by its
+    // load_state() instead.
+    solid->initialize(heat->temperature(), checkpoint->resuming() ?
+                                             std::string() :
+                                             output_prm.directory);
   }
 
 
@@ -844,6 +838,12 @@ namespace femp
         flow->save_state(f);
         sections.emplace_back("flow", &f);
       }
+    StateWriter sol;
+    if (solid)
+      {
+        solid->save_state(sol);
+        sections.emplace_back("solid", &sol);
+      }
     const std::string dir =
       checkpoint->write(control->step(), control->time(), sections);
     pcout << "Checkpoint: step " << control->step() << ", time "
@@ -869,6 +869,11 @@ namespace femp
     load("trigger", *checkpoint);
     if (flow)
       load("flow", *flow);
+    if (solid)
+      {
+        auto parts = checkpoint->section("solid");
+        solid->load_state(parts, output_prm.directory);
+      }
     if (history)
       {
         require(checkpoint->has_section("thermal history"),

@@ -16,7 +16,8 @@ namespace femp
   namespace
   {
     const char         magic[8]       = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
-    const std::uint32_t format_version = 1;
+    // 2: the solid's sections (Physics/Solid stress) added.
+    const std::uint32_t format_version = 2;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p.
     std::uint64_t
@@ -290,7 +291,9 @@ namespace femp
     if (version != format_version)
       refuse("its file " + name + " has format version " +
              std::to_string(version) + ", this femp reads version " +
-             std::to_string(format_version));
+             std::to_string(format_version) +
+             " only (written by another version of femp: resume it with "
+             "that version or start the run anew)");
     const auto file_dim  = in.get<std::uint32_t>();
     const auto file_n    = in.get<std::uint32_t>();
     const auto file_rank = in.get<std::uint32_t>();
@@ -342,7 +345,8 @@ namespace femp
     if (s.solid != scene.solid)
       differs("Physics/Solid stress", on_off(s.solid), on_off(scene.solid));
     if (s.fe_zone != scene.fe_zone)
-      differs("Solid FEM/Enable", on_off(s.fe_zone), on_off(scene.fe_zone));
+      differs("Solid FEM/Use finite elements", on_off(s.fe_zone),
+              on_off(scene.fe_zone));
     std::array<double, 3> n_saved{}, n_now{};
     for (int d = 0; d < 3; ++d)
       {

@@ -8,6 +8,7 @@
 #include <deal.II/grid/grid_generator.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/io/checkpoint.h>
 #include <femp/solid/solid_fem.h>
 
 #include <algorithm>
@@ -1170,6 +1171,159 @@ namespace femp
           return true;
         }
     return false;
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::save_state(StateWriter &out) const
+  {
+    // Element state, one array per value (stress components, plastic
+    // strain, viscous pressure, temperature of the last step, hourglass
+    // amplitudes, end temperature of the advance), keyed by zone index.
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    const std::size_t      n_el     = element_id.size();
+    out.put_vector(element_id);
+    std::vector<double> v(n_el);
+    for (unsigned int k = 0; k < n_values; ++k)
+      {
+        for (std::size_t e = 0; e < n_el; ++e)
+          {
+            const ElementBlock &eb = blocks[e / simd_lanes];
+            const unsigned int  l  = e % simd_lanes;
+            v[e] = k < 6  ? eb.s[k][l] :
+                   k == 6 ? eb.eps_p[l] :
+                   k == 7 ? eb.visc[l] :
+                   k == 8 ? eb.T[l] :
+                   k < n_values - 1 ?
+                            eb.q[(k - 9) / dim][(k - 9) % dim][l] :
+                            T_end[e];
+          }
+        out.put_vector(v);
+      }
+    // Velocities of the owned nodes, keyed by zone node index.
+    std::vector<std::uint64_t> ids(n_owned);
+    for (std::size_t ln = 0; ln < n_owned; ++ln)
+      ids[ln] = node_zone_id[box_of[ln]];
+    out.put_vector(ids);
+    v.resize(n_owned);
+    for (int d = 0; d < dim; ++d)
+      {
+        for (std::size_t ln = 0; ln < n_owned; ++ln)
+          v[ln] = vel[d][box_of[ln]];
+        out.put_vector(v);
+      }
+    // The same on every rank.
+    out.put_vector(tr_vel);
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    const std::size_t      n_el     = element_id.size();
+    // Local nodes (owned and ghost) by zone node index.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> node_by_id;
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      node_by_id.emplace_back(node_zone_id[box_of[ln]], box_of[ln]);
+    std::sort(node_by_id.begin(), node_by_id.end());
+    std::size_t elements_set = 0, nodes_set = 0;
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        StateReader &in  = parts[f];
+        const auto   ids = in.get_vector<std::uint64_t>();
+        std::vector<std::int64_t> local(ids.size(), -1);
+        for (std::size_t i = 0; i < ids.size(); ++i)
+          {
+            const auto it = std::lower_bound(
+              element_by_id.begin(), element_by_id.end(),
+              std::make_pair(ids[i], std::uint32_t(0)));
+            if (it != element_by_id.end() && it->first == ids[i])
+              local[i] = it->second, ++elements_set;
+          }
+        for (unsigned int k = 0; k < n_values; ++k)
+          {
+            const auto v = in.get_vector<double>();
+            AssertThrow(v.size() == ids.size(),
+                        ExcMessage("checkpoint: FE element data damaged"));
+            for (std::size_t i = 0; i < ids.size(); ++i)
+              if (local[i] >= 0)
+                {
+                  const std::size_t  e  = local[i];
+                  ElementBlock &     eb = blocks[e / simd_lanes];
+                  const unsigned int l  = e % simd_lanes;
+                  if (k < 6)
+                    eb.s[k][l] = v[i];
+                  else if (k == 6)
+                    eb.eps_p[l] = v[i];
+                  else if (k == 7)
+                    eb.visc[l] = v[i];
+                  else if (k == 8)
+                    eb.T[l] = v[i];
+                  else if (k < n_values - 1)
+                    eb.q[(k - 9) / dim][(k - 9) % dim][l] = v[i];
+                  else
+                    T_end[e] = v[i];
+                }
+          }
+        const auto node_ids = in.get_vector<std::uint64_t>();
+        std::vector<std::int64_t> box(node_ids.size(), -1);
+        for (std::size_t i = 0; i < node_ids.size(); ++i)
+          {
+            const auto it = std::lower_bound(
+              node_by_id.begin(), node_by_id.end(),
+              std::make_pair(node_ids[i], std::uint32_t(0)));
+            if (it != node_by_id.end() && it->first == node_ids[i])
+              box[i] = it->second, ++nodes_set;
+          }
+        for (int d = 0; d < dim; ++d)
+          {
+            const auto v = in.get_vector<double>();
+            for (std::size_t i = 0; i < node_ids.size(); ++i)
+              if (box[i] >= 0)
+                vel[d][box[i]] = v[i];
+          }
+        const auto tv = in.get_vector<double>();
+        if (f == 0)
+          {
+            AssertThrow(tv.size() == tr_vel.size(),
+                        ExcMessage("checkpoint: another number of FE "
+                                   "transition nodes"));
+            tr_vel = tv;
+          }
+      }
+    AssertThrow(elements_set == n_el && nodes_set == n_local,
+                ExcMessage("checkpoint: the FE zone's elements or nodes of "
+                           "this rank are not all in the checkpoint"));
+    // Spare lanes of the last block repeat the last element (as they do in
+    // a run: same inputs, same arithmetic).
+    if (n_el > 0)
+      {
+        ElementBlock &     eb   = blocks.back();
+        const unsigned int last = (n_el - 1) % simd_lanes;
+        for (unsigned int l = last + 1; l < simd_lanes; ++l)
+          {
+            for (unsigned int c = 0; c < 6; ++c)
+              eb.s[c][l] = eb.s[c][last];
+            eb.eps_p[l] = eb.eps_p[last];
+            eb.visc[l]  = eb.visc[last];
+            eb.T[l]     = eb.T[last];
+            for (unsigned int al = 0; al < n_hg; ++al)
+              for (int i = 0; i < dim; ++i)
+                eb.q[al][i][l] = eb.q[al][i][last];
+          }
+      }
+    // The next advance() makes the end temperatures its start ones.
+    T_start = T_end;
+    // The element forces of the next step (what the last update_elements()
+    // left in frc and tr_hg): the forces part of the element loop on the
+    // restored state.
+    for (int d = 0; d < dim; ++d)
+      std::fill(frc[d].begin(), frc[d].end(), 0.);
+    if (prm.enabled)
+      element_loop<false>(0, 1);
   }
 
 

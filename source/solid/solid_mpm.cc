@@ -3,6 +3,7 @@
 // the choice of variant and the cell-crossing rules).
 #include <deal.II/base/mpi.h>
 
+#include <femp/io/checkpoint.h>
 #include <femp/solid/solid_mpm.h>
 
 #include <algorithm>
@@ -1466,6 +1467,88 @@ namespace femp
           }
       }
     return false;
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::save_state(StateWriter &out) const
+  {
+    out.put(scaling);
+    out.put_vector(std::vector<std::uint64_t>(member_ids.begin(),
+                                              member_ids.end()));
+    const std::size_t          n = true_mass.size();
+    std::vector<std::uint64_t> keys(n);
+    for (std::size_t p = 0; p < n; ++p)
+      keys[p] = global_cell_number(grid, grid.global_index(cell[p]));
+    out.put_vector(keys);
+    for (const auto &s : sigma)
+      out.put_vector(s);
+    out.put_vector(eps_p);
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    const MPI_Comm comm = grid.communicator();
+    const bool     same_ranks =
+      parts.size() == Utilities::MPI::n_mpi_processes(comm);
+    const unsigned int me = Utilities::MPI::this_mpi_process(comm);
+    for (int d = 0; d < dim; ++d)
+      x[d].clear(), v[d].clear(), corner[d].clear(), xdot[d].clear();
+    for (auto &c : C)
+      c.clear();
+    for (auto &s : sigma)
+      s.clear();
+    true_mass.clear(), volume.clear(), visc.clear();
+    eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
+    member_ids.clear();
+    const double h = grid.h();
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        StateReader &in = parts[f];
+        const double s  = in.get<double>();
+        if (f == 0)
+          scaling = s;
+        const auto ids = in.get_vector<std::uint64_t>();
+        if (!same_ranks || f == me)
+          member_ids.insert(member_ids.end(), ids.begin(), ids.end());
+        const auto                             keys = in.get_vector<std::uint64_t>();
+        std::array<std::vector<double>, n_stress> sg;
+        for (auto &c : sg)
+          c = in.get_vector<double>();
+        const auto ep = in.get_vector<double>();
+        for (std::size_t p = 0; p < keys.size(); ++p)
+          {
+            const auto idx = owned_local_index(grid, keys[p]);
+            if (idx < 0)
+              continue;
+            cell.push_back(idx);
+            node0.push_back(grid.first_node_of_cell(idx));
+            const auto ijk = grid.global_index(idx);
+            for (int d = 0; d < dim; ++d)
+              corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+            for (unsigned int c = 0; c < n_stress; ++c)
+              sigma[c].push_back(sg[c][p]);
+            eps_p.push_back(ep[p]);
+          }
+      }
+    std::sort(member_ids.begin(), member_ids.end());
+    // Read before the next gather(): cell, stress and plastic strain; the
+    // other arrays keep the common length, zero.
+    const std::size_t n = cell.size();
+    for (int d = 0; d < dim; ++d)
+      x[d].assign(n, 0.), v[d].assign(n, 0.);
+    if (apic)
+      for (auto &c : C)
+        c.assign(n, 0.);
+    true_mass.assign(n, 0.), volume.assign(n, 0.), visc.assign(n, 0.);
+    kinetic = 0;
+    weight_momentum.fill(0.);
+    moved_cell = lost = false;
+    left_rank         = 0;
   }
 
 

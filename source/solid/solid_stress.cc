@@ -5,11 +5,13 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/io/checkpoint.h>
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
 #include <femp/base/collective_error.h>
 
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -340,6 +342,7 @@ namespace femp
   void
   SolidStress<dim>::open_output_files(const std::string &directory)
   {
+    csv_directory = directory;
     if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
       {
         if (!prm.energy_file.empty())
@@ -1058,6 +1061,115 @@ namespace femp
                                prm.probe_file + "' (Solid/Probe file): "
                                "disk full or file system gone?"));
       }
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::save_state(StateWriter &out) const
+  {
+    // The sub-step clock and the energy accounts (global: the same on every
+    // rank).
+    out.put(t_solid);
+    out.put(t_prev);
+    out.put(dt_solid);
+    out.put(steps);
+    for (const double a : {W_ext, W_int, K0, K, D_transfer, K_melted,
+                           K_solidified, W_remap, K_points, n_points_global})
+      out.put(a);
+    // Temperatures of the last sub-step, of the last advance() (the start
+    // of the next interpolation) and the spare buffer of the sub-steps.
+    save_cell_fields(out, grid, {&T_solid, &T_prev, &T_next});
+    // Lengths of the CSV files (rank 0 writes them; flushed so that the
+    // size on disk is what they hold).
+    auto size = [&](const std::unique_ptr<std::ofstream> &f,
+                    const std::string &                   name) {
+      std::uint64_t n = 0;
+      if (f)
+        {
+          f->flush();
+          std::error_code ec;
+          n = std::filesystem::file_size(csv_directory + "/" + name, ec);
+          AssertThrow(!ec && *f, ExcMessage("cannot measure the solid CSV "
+                                            "file '" + name + "' for the "
+                                            "checkpoint"));
+        }
+      return n;
+    };
+    out.put(size(energy_out, prm.energy_file));
+    out.put(size(probe_out, prm.probe_file));
+    mpm.save_state(out);
+    fem.save_state(out);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::load_state(std::vector<StateReader> &parts,
+                               const std::string &       directory)
+  {
+    double        a[10];
+    std::uint64_t energy_size = 0, probe_size = 0;
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        StateReader &in = parts[f];
+        const auto   ts = in.get<double>(), tp = in.get<double>(),
+                   dts = in.get<double>();
+        const auto n  = in.get<unsigned int>();
+        for (double &x : a)
+          x = in.get<double>();
+        if (f > 0)
+          continue;
+        t_solid = ts, t_prev = tp, dt_solid = dts, steps = n;
+        W_ext = a[0], W_int = a[1], K0 = a[2], K = a[3], D_transfer = a[4];
+        K_melted = a[5], K_solidified = a[6], W_remap = a[7];
+        K_points = a[8], n_points_global = a[9];
+      }
+    load_cell_fields(parts, grid, {&T_solid, &T_prev, &T_next});
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        const auto e = parts[f].get<std::uint64_t>();
+        const auto p = parts[f].get<std::uint64_t>();
+        if (f == 0)
+          energy_size = e, probe_size = p;
+      }
+    mpm.load_state(parts);
+    fem.load_state(parts);
+    have_pending_exchange = false;
+
+    // The CSV files: drop the rows after the checkpoint, then append.
+    csv_directory = directory;
+    std::string error;
+    if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
+      {
+        namespace fs = std::filesystem;
+        auto reopen  = [&](std::unique_ptr<std::ofstream> &f,
+                          const std::string &              name,
+                          const std::uint64_t              size) {
+          const std::string file = directory + "/" + name;
+          std::error_code   ec;
+          if (!fs::exists(file) || fs::file_size(file, ec) < size)
+            {
+              error = "the solid's time series '" + file +
+                      "' is missing or shorter than at the checkpoint (" +
+                      std::to_string(size) +
+                      " bytes); resume into the output directory of the run "
+                      "that wrote the checkpoint";
+              return;
+            }
+          fs::resize_file(file, size, ec);
+          f = std::make_unique<std::ofstream>(file, std::ios::app);
+          if (ec || !*f)
+            error = "cannot truncate and reopen '" + file + "'";
+        };
+        if (!prm.energy_file.empty())
+          reopen(energy_out, prm.energy_file, energy_size);
+        if (error.empty() && !prm.probe_file.empty() && !prm.probes.empty())
+          reopen(probe_out, prm.probe_file, probe_size);
+      }
+    if (Utilities::MPI::min(int(error.empty()), comm) == 0)
+      throw InputError("Checkpoint/Resume from", directory,
+                       Utilities::MPI::broadcast(comm, error, 0));
   }
 
 

@@ -72,6 +72,9 @@ namespace femp
 {
   using namespace dealii;
 
+  class StateWriter;
+  class StateReader;
+
   template <int dim>
   class SolidFEM
   {
@@ -221,6 +224,20 @@ namespace femp
     cell_fields(std::vector<std::vector<double>> &f) const;
     bool
     find_non_finite(Point<dim> &where) const;
+
+    /// Checkpoint, between two solid steps: per owned element, keyed by its
+    /// zone index, the stress, plastic strain, viscous pressure,
+    /// temperature of the last step, hourglass mode amplitudes and end
+    /// temperature of the advance; per owned node, keyed by its zone node
+    /// index, the velocity; the transition-node velocities.
+    void
+    save_state(StateWriter &out) const;
+    /// Restore it after setup() (any number of saved ranks; every rank
+    /// takes its owned elements and local nodes) and recompute the element
+    /// forces of the next step from the restored elements (the same
+    /// arithmetic as at the end of update_elements()).
+    void
+    load_state(std::vector<StateReader> &parts);
 
   private:
     Parameters                 prm;

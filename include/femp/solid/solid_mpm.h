@@ -87,6 +87,9 @@ namespace femp
 {
   using namespace dealii;
 
+  class StateWriter;
+  class StateReader;
+
   /// Node fields of the solid on the background grid (local node box).
   template <int dim>
   struct SolidNodeFields
@@ -235,6 +238,22 @@ namespace femp
     {
       return escaped;
     }
+
+    /// Checkpoint, between two advances of the solid (after scatter()):
+    /// what is read before the next gather() rebuilds the flat arrays: the
+    /// ids of the points of the last gather (state changes since), the
+    /// mass scaling of that gather, and per point in the order of the
+    /// arrays its global cell number, stress and plastic strain (cell
+    /// fields and probes). Positions, velocities, masses, ... are in the
+    /// particles and gathered again.
+    void
+    save_state(StateWriter &out) const;
+    /// Restore it (after a gather() that set the zone mask): each rank
+    /// keeps the points of its owned cells, in the saved order; on the
+    /// saved number of ranks its own ids of the last gather, on another
+    /// the ids of all ranks.
+    void
+    load_state(std::vector<StateReader> &parts);
 
   private:
     const BackgroundGrid<dim> &grid;

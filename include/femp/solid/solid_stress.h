@@ -68,6 +68,9 @@ namespace femp
 {
   using namespace dealii;
 
+  class StateWriter;
+  class StateReader;
+
   template <int dim>
   class SolidStress
   {
@@ -231,6 +234,21 @@ namespace femp
     std::array<double, 2>
     sizes() const;
 
+    /// Checkpoint (doc/checkpoint.md), after an advance(): the sub-step
+    /// clock, the temperatures it interpolates between, the energy
+    /// accounts, the lengths of the CSV files (flushed here), then
+    /// SolidMPM's and SolidFEM's state. The pending state-change exchange
+    /// is not saved: the next find_state_changes() finds it before the
+    /// next advance().
+    void
+    save_state(StateWriter &out) const;
+    /// Restore it after initialize() (collective; any number of saved
+    /// ranks): cut the CSV files in @p directory back to their length at
+    /// the checkpoint and append to them (initialize() with an empty
+    /// directory opened none).
+    void
+    load_state(std::vector<StateReader> &parts, const std::string &directory);
+
   private:
     Parameters                 prm;
     const SolidMaterial &      mat;
@@ -275,6 +293,7 @@ namespace femp
     /// -1.
     std::vector<std::pair<std::uint32_t, std::int32_t>> counted_nodes;
     std::unique_ptr<std::ofstream> energy_out, probe_out;
+    std::string                    csv_directory; ///< of energy_out, probe_out
     /// State changes found by find_state_changes() for the next gather.
     typename SolidMPM<dim>::Exchange pending_exchange;
     bool                             have_pending_exchange = false;
