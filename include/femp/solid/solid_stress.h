@@ -32,7 +32,10 @@
 // Time stepping. The solid keeps its own time t_s and step
 //   dt_s = C h / (sqrt(dim) c),  c = sqrt(M_max / (s rho)),
 // (C: safety factor; M_max: largest P-wave modulus of the E(T) table;
-// s: mass-scaling factor). advance(t) is called after every temperature
+// s: mass-scaling factor; fixed, or with Solid/Mass scaling = adaptive
+// set after each advance from the ratio of the mean kinetic energy of its
+// steps to the stored elastic energy, velocities kept and the kinetic
+// energy jump booked: doc/speed_accuracy.md, section 3). advance(t) is called after every temperature
 // step and takes whole solid steps up to t; the cell temperatures of each
 // sub-step are interpolated linearly between the temperature fields of the
 // last two calls, so both orders work: several solid steps inside one
