@@ -19,7 +19,8 @@ stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
   (as the test prints it, 2 digits); the largest error of the temperature
   profile is written as well.
 mass_scaling: the reduced coupled single track (prm/single_track_coupled.prm
-  on a shorter box and time) over Solid/Mass scaling factor 1 ... 1e4;
+  on a shorter box and time) over Solid/Mass scaling factor 1 ... 1e4 and
+  the adaptive mass scaling (Solid/Mass scaling = adaptive, four targets);
   error: RMS of the difference of sigma_xx at solid probe points in the
   melt-pool region at the end time against the run with factor 1, relative
   to the RMS of that run's values. Also written: the stress work and
@@ -190,7 +191,7 @@ def write_outputs(name, rows, fields, args, title, xlabel, ylabel):
     svg_loglog(svg, rows, "cpu_s", "error", "label", title, xlabel, ylabel)
     print("wrote", f, "and", svg)
     for r in rows:
-        print("  ".join("%s=%s" % (k, r[k]) for k in fields + ["pareto"]))
+        print("  ".join("%s=%s" % (k, r.get(k, "")) for k in fields + ["pareto"]))
 
 
 # ---------------------------------------------------------------- studies
@@ -233,6 +234,16 @@ def study_stefan(args):
                   "CPU seconds", "relative front error")
 
 
+def adaptive_block(r_max, s_min=1, s_max=1e4):
+    """The Solid entries of the adaptive mass scaling (appended to a scene:
+    a subsection may be opened again)."""
+    return ("\nsubsection Solid\n  set Mass scaling = adaptive\n"
+            "  subsection Adaptive mass scaling\n"
+            "    set Maximum kinetic energy ratio = %g\n"
+            "    set Minimum factor = %g\n    set Maximum factor = %g\n"
+            "  end\nend\n" % (r_max, s_min, s_max))
+
+
 def coupled_scene(factor, args):
     """prm/single_track_coupled.prm cut to a 120 x 80 x 144 um box around the
     start of the track and its first microsecond (the solid's mass-scaling
@@ -262,10 +273,15 @@ def study_mass_scaling(args):
     if not os.path.exists(exe):
         raise SystemExit("study.py: build %s first" % exe)
     rows = []
-    for f in (1, 10, 100, 1000, 10000):
-        def make(d, f=f):
+    # Fixed factors, then the adaptive controller (starting at s = 1, range
+    # [1, 1e4]) with four targets r_max of K / U_el.
+    points = [(f, None) for f in (1, 3, 10, 100, 1000, 10000)] + \
+        [(1, r) for r in (0.0005, 0.001, 0.002, 0.01)]
+    for f, r_max in points:
+        def make(d, f=f, r_max=r_max):
             with open(os.path.join(d, "scene.prm"), "w") as fh:
-                fh.write(coupled_scene(f, args))
+                fh.write(coupled_scene(f, args) +
+                         (adaptive_block(r_max) if r_max else ""))
             cmd = [exe, "scene.prm"]
             if args.np > 1:
                 cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
@@ -285,11 +301,22 @@ def study_mass_scaling(args):
                 r["max_k_over_i"] = max(float(x["kinetic_to_internal"])
                                         for x in e[len(e) // 10:])
                 r["solid_steps"] = int(e[-1]["step"])
+                r["balance"] = float(e[-1]["balance"])
+                if "mass_scaling" in e[-1]:
+                    s = [float(x["mass_scaling"]) for x in e]
+                    r["s_min"], r["s_max"] = min(s), max(s)
+                    r["s_end"] = s[-1]
+                    r["k_jump"] = float(e[-1]["mass_scaling_kinetic_jump"])
+                    r["max_k_over_el"] = max(
+                        float(x["kinetic_to_elastic"]) for x in e[len(e) // 10:])
             except (OSError, StopIteration, KeyError, IndexError) as ex:
                 r["read_error"] = str(ex)
             return r
-        r = cached(os.path.join(args.out, "mass_scaling", "f%g" % f), make)
-        r.update(factor=f, label="s=%g" % f)
+        name = "f%g" % f if r_max is None else "adaptive_r%g" % r_max
+        r = cached(os.path.join(args.out, "mass_scaling", name), make)
+        r.update(factor=f if r_max is None else "adaptive",
+                 r_max=r_max or "",
+                 label="s=%g" % f if r_max is None else "adapt r=%g" % r_max)
         rows.append(r)
     ref = rows[0].get("sxx")
     for r in rows:
@@ -303,8 +330,10 @@ def study_mass_scaling(args):
         if r is rows[0]:
             r["error"] = None  # the reference itself
     write_outputs("mass_scaling", rows,
-                  ["factor", "cpu_s", "wall_s", "error", "solid_steps",
-                   "stress_work", "transfer", "remap", "max_k_over_i", "rc"],
+                  ["factor", "r_max", "cpu_s", "wall_s", "error", "solid_steps",
+                   "stress_work", "transfer", "remap", "max_k_over_i",
+                   "max_k_over_el", "s_min", "s_max", "s_end", "k_jump",
+                   "balance", "rc"],
                   args, "Solid mass scaling: sigma_xx vs factor 1, reduced "
                   "coupled track", "CPU seconds", "relative RMS sigma_xx error")
 

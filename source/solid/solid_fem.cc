@@ -1155,6 +1155,42 @@ namespace femp
 
 
   template <int dim>
+  void
+  SolidFEM<dim>::set_mass_scaling(const double s)
+  {
+    const double r = s / mass_scale;
+    mass_scale     = s;
+    if (!prm.enabled)
+      return;
+    for (auto &m : owned_mass)
+      m *= r;
+    for (auto &m : inv_mass) // 0 at transition nodes stays 0
+      m /= r;
+    for (auto &m : tr_mass)
+      m *= r;
+    kinetic *= r;
+  }
+
+
+  template <int dim>
+  double
+  SolidFEM<dim>::elastic_energy() const
+  {
+    if (!prm.enabled)
+      return 0;
+    double u = 0;
+    double s[6];
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      {
+        for (unsigned int c = 0; c < 6; ++c)
+          s[c] = blocks[e / simd_lanes].s[c][e % simd_lanes];
+        u += V * elastic_energy_density(mat, s, element_T(e));
+      }
+    return u;
+  }
+
+
+  template <int dim>
   bool
   SolidFEM<dim>::find_non_finite(Point<dim> &where) const
   {

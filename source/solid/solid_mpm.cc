@@ -1416,6 +1416,22 @@ namespace femp
 
 
   template <int dim>
+  double
+  SolidMPM<dim>::elastic_energy(const std::vector<double> &T) const
+  {
+    double u = 0;
+    double s[n_stress];
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      {
+        for (unsigned int c = 0; c < n_stress; ++c)
+          s[c] = sigma[c][p];
+        u += volume[p] * elastic_energy_density(mat, s, T[cell[p]]);
+      }
+    return u;
+  }
+
+
+  template <int dim>
   std::pair<double, unsigned int>
   SolidMPM<dim>::cell_stress_xx(const std::size_t idx) const
   {

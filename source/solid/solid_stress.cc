@@ -66,7 +66,37 @@ namespace femp
                       "nodes (gravity keeps the true mass): the stable step "
                       "grows by sqrt(s). Only for quasi-static scenes: watch "
                       "the kinetic-to-internal energy ratio in the energy "
-                      "file (it should stay well below 0.1). Range [1, inf).");
+                      "file (it should stay well below 0.1). With 'Mass "
+                      "scaling = adaptive' the starting factor, which must "
+                      "lie in [Minimum factor, Maximum factor]. Range [1, "
+                      "inf).");
+    prm.declare_entry("Mass scaling", "fixed", Patterns::Selection("fixed|adaptive"),
+                      "fixed: the inertial mass is scaled by 'Mass scaling "
+                      "factor' throughout. adaptive: after every temperature "
+                      "step in which the solid stepped, the factor s is set "
+                      "from the ratio r = K / U_el of the mean kinetic energy "
+                      "of those solid steps to the stored elastic energy "
+                      "U_el = sum V sigma : C(T)^-1 : sigma / 2 (points and "
+                      "elements): s_new = s r_max / r, at most 2 s, rounded "
+                      "down to a power of 2^(1/4) and limited to [Minimum "
+                      "factor, Maximum factor]; velocities are kept, the "
+                      "solid step follows sqrt(s) and the kinetic energy "
+                      "jump is booked in the energy file (doc/speed_accuracy.md, "
+                      "section 3). Needs 'Time step = 0'.");
+    prm.enter_subsection("Adaptive mass scaling");
+    prm.declare_entry("Maximum kinetic energy ratio", "0.001", Patterns::Double(),
+                      "Target r_max of the ratio of kinetic to stored elastic "
+                      "energy K / U_el of the solid (dimensionless); used "
+                      "with 'Mass scaling = adaptive'. Range (0, 1].");
+    prm.declare_entry("Minimum factor", "1", Patterns::Double(),
+                      "Smallest mass-scaling factor of the adaptive "
+                      "controller (dimensionless); range [1, Maximum "
+                      "factor].");
+    prm.declare_entry("Maximum factor", "10000", Patterns::Double(),
+                      "Largest mass-scaling factor of the adaptive "
+                      "controller (dimensionless); range [Minimum factor, "
+                      "1e12].");
+    prm.leave_subsection();
     prm.declare_entry("Small mass cutoff", "0.05", Patterns::Double(),
                       "Used only with the melt flow (Physics/Melt flow and "
                       "Solid stress both true): grid nodes whose inertial "
@@ -95,7 +125,11 @@ namespace femp
                       "exchanges: MPM transfer dissipation, kinetic energy "
                       "removed by melting and added by solidification, and "
                       "the re-map work of the MUSL update (J, 2D: J/m; "
-                      "doc/solid.md); empty for none.");
+                      "doc/solid.md), then the mass-scaling factor, the ratio "
+                      "K / U_el of the kinetic to the stored elastic energy "
+                      "(at the end of the last temperature step) and the "
+                      "kinetic energy booked for changes of the factor "
+                      "(adaptive mass scaling); empty for none.");
     prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
                       "CSV file (in the output directory) with sigma_xx (Pa) "
                       "and T (K) at the probe points after every solid step.");
@@ -115,6 +149,12 @@ namespace femp
     time_step     = prm.get_double("Time step");
     safety_factor = prm.get_double("Safety factor");
     mass_scaling  = prm.get_double("Mass scaling factor");
+    adaptive_scaling = prm.get("Mass scaling") == "adaptive";
+    prm.enter_subsection("Adaptive mass scaling");
+    max_kinetic_ratio = prm.get_double("Maximum kinetic energy ratio");
+    min_factor        = prm.get_double("Minimum factor");
+    max_factor        = prm.get_double("Maximum factor");
+    prm.leave_subsection();
     small_mass_cutoff = prm.get_double("Small mass cutoff");
     const Point<dim> g = parse_point<dim>(prm.get("Gravity"), "Solid/Gravity");
     for (int d = 0; d < dim; ++d)
@@ -133,15 +173,39 @@ namespace femp
     require(small_mass_cutoff >= 0 && small_mass_cutoff < 1,
             "Solid/Small mass cutoff", small_mass_cutoff,
             "it must lie in [0, 1) (a fraction of a full node's mass)");
+    const std::string ams = "Solid/Adaptive mass scaling/";
+    require(max_kinetic_ratio > 0 && max_kinetic_ratio <= 1,
+            ams + "Maximum kinetic energy ratio", max_kinetic_ratio,
+            "it must lie in (0, 1]");
+    require(min_factor >= 1, ams + "Minimum factor", min_factor,
+            "it must lie in [1, Maximum factor]");
+    require(max_factor >= min_factor && max_factor <= 1e12,
+            ams + "Maximum factor", max_factor,
+            "it must lie in [Minimum factor, 1e12] (Minimum factor = " +
+              num(min_factor) + ")");
+    if (adaptive_scaling)
+      {
+        require(mass_scaling >= min_factor && mass_scaling <= max_factor,
+                "Solid/Mass scaling factor", mass_scaling,
+                "with 'Solid/Mass scaling = adaptive' the starting factor "
+                "must lie in [Minimum factor, Maximum factor] = [" +
+                  num(min_factor) + ", " +
+                  num(max_factor) + "]");
+        require(time_step == 0, "Solid/Time step", time_step,
+                "with 'Solid/Mass scaling = adaptive' the step follows the "
+                "factor: it must be 0 (automatic)");
+      }
   }
 
 
   template <int dim>
   double
   SolidStress<dim>::Parameters::stable_limit(const SolidMaterial &m,
-                                             const double         h) const
+                                             const double         h,
+                                             const double         s) const
   {
-    const double c  = std::sqrt(m.max_p_wave_modulus() / (mass_scaling * m.density));
+    const double c  = std::sqrt(m.max_p_wave_modulus() /
+                               ((s > 0 ? s : mass_scaling) * m.density));
     const double b1 = m.bulk_viscosity;
     return h / (std::sqrt(double(dim)) * c) * (std::sqrt(1 + b1 * b1) - b1);
   }
@@ -182,7 +246,9 @@ namespace femp
     , comm(grid.communicator())
     , mpm(grid, material, points)
     , fem(fem_prm, grid, material)
-  {}
+  {
+    scaling.factor = prm.mass_scaling;
+  }
 
 
   template <int dim>
@@ -195,7 +261,10 @@ namespace femp
                                    prm.safety_factor *
                                      prm.stable_limit(mat, grid.h());
     const auto face_bits = set_boundary_flags();
-    fem.setup(prm.mass_scaling, face_bits, prm.gravity, T);
+    scaling              = MassScalingState();
+    scaling.factor       = prm.mass_scaling;
+    phase_K_dt = phase_time = 0;
+    fem.setup(scaling.factor, face_bits, prm.gravity, T);
     find_active_nodes();
 
     T_solid = T;
@@ -203,7 +272,7 @@ namespace femp
     T_next  = T;
     t_solid = t_prev = 0;
     steps            = 0;
-    mpm.gather(fem.zone_mask(), prm.mass_scaling);
+    mpm.gather(fem.zone_mask(), scaling.factor);
     K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
                                  comm);
     W_ext = W_int = 0;
@@ -354,7 +423,8 @@ namespace femp
             *energy_out << "time,step,external_work,internal_work,kinetic,"
                            "hourglass,balance,kinetic_to_internal,hourglass_mode,"
                            "transfer_dissipation,removed_by_melting,"
-                           "added_by_solidification,remap_work\n";
+                           "added_by_solidification,remap_work,mass_scaling,"
+                           "kinetic_to_elastic,mass_scaling_kinetic_jump\n";
           }
         if (!prm.probe_file.empty() && !prm.probes.empty())
           {
@@ -401,11 +471,16 @@ namespace femp
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
         step(t_next - t_solid, w);
         T_solid.swap(T_next);
+        phase_K_dt += K * (t_next - t_solid);
+        phase_time += t_next - t_solid;
         t_solid = t_next;
         write_rows();
       }
     if (gathered) // collective
-      mpm.scatter();
+      {
+        measure_and_adapt_scaling(prm.adaptive_scaling && !final);
+        mpm.scatter();
+      }
     for (const auto c : mpm_cells)
       T_prev[c] = T[c];
     t_prev = t;
@@ -791,7 +866,7 @@ namespace femp
   void
   SolidStress<dim>::set_small_mass_cutoff(const double fraction)
   {
-    small_mass = fraction * prm.mass_scaling * mat.density *
+    small_mass = fraction * scaling.factor * mat.density *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
 
@@ -823,7 +898,7 @@ namespace femp
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
-        mpm.gather(fem.zone_mask(), prm.mass_scaling);
+        mpm.gather(fem.zone_mask(), scaling.factor);
       }
     have_pending_exchange = false;
     double sums[7] = {e.n_melted,     e.n_solidified,         e.n_lost,
@@ -876,6 +951,7 @@ namespace femp
     e.remap           = W_remap;
     e.melted          = K_melted;
     e.solidified      = K_solidified;
+    e.scaling_jump    = scaling.kinetic_jump;
     return e;
   }
 
@@ -1042,7 +1118,8 @@ namespace femp
                       << e.kinetic / std::max(std::abs(e.internal), 1e-300)
                       << "," << e.hourglass_mode << "," << e.transfer << ","
                       << e.melted << "," << e.solidified << "," << e.remap
-                      << "\n";
+                      << "," << scaling.factor << "," << scaling.last_ratio
+                      << "," << e.scaling_jump << "\n";
         if (probe_out)
           {
             *probe_out << std::setprecision(10) << t_solid;
@@ -1100,6 +1177,45 @@ namespace femp
     out.put(size(probe_out, prm.probe_file));
     mpm.save_state(out);
     fem.save_state(out);
+    // The mass-scaling factor (adaptive mass scaling changes it) and its
+    // measurement over the current solid phase.
+    for (const double a : {scaling.factor, scaling.last_ratio,
+                           scaling.kinetic_jump, phase_K_dt, phase_time})
+      out.put(a);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::measure_and_adapt_scaling(const bool adapt)
+  {
+    // The quasi-static gauge (doc/speed_accuracy.md, sections 1 and 3):
+    // the mean kinetic energy of the advance's steps over the elastic
+    // energy stored at its end (cell temperatures of the last step).
+    const double u = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
+                                           fem.elastic_energy(),
+                                         comm);
+    const double k_mean = phase_time > 0 ? phase_K_dt / phase_time : K;
+    scaling.last_ratio =
+      u > 0 ? k_mean / u :
+              (k_mean > 0 ? std::numeric_limits<double>::infinity() : 0.);
+    phase_K_dt = phase_time = 0;
+    if (!adapt)
+      return;
+    // Quasi-static motion is kinematic (thermal expansion), K ~ s: the
+    // factor that brings the ratio to r_max is s r_max / r. Up by at most
+    // x2 per temperature step, down at once; rounded down to a power of
+    // 2^(1/4), so that round-off of the global sums (rank count) cannot
+    // change the factor and the factor holds while r lies in
+    // (2^(-1/4) r_max, r_max].
+    const double s = scaling.factor, r = scaling.last_ratio;
+    double       target = r > 0 ? s * prm.max_kinetic_ratio / r : 2 * s;
+    target              = std::min(target, 2 * s);
+    if (target > 0)
+      target = std::exp2(std::floor(4 * std::log2(target) + 1e-9) / 4);
+    target = std::max(prm.min_factor, std::min(prm.max_factor, target));
+    if (target != s)
+      set_mass_scaling(target);
   }
 
 
@@ -1135,6 +1251,25 @@ namespace femp
       }
     mpm.load_state(parts);
     fem.load_state(parts);
+    {
+      double b[5] = {};
+      for (std::size_t f = 0; f < parts.size(); ++f)
+        for (std::size_t i = 0; i < 5; ++i)
+          {
+            const double x = parts[f].get<double>();
+            if (f == 0)
+              b[i] = x;
+          }
+      // The MPM side restored its factor with its state; the FE zone's
+      // masses and the small-mass threshold follow the factor from the one
+      // of the setup.
+      small_mass *= b[0] / scaling.factor;
+      fem.set_mass_scaling(b[0]);
+      scaling.factor       = b[0];
+      scaling.last_ratio   = b[1];
+      scaling.kinetic_jump = b[2];
+      phase_K_dt = b[3], phase_time = b[4];
+    }
     have_pending_exchange = false;
 
     // The CSV files: drop the rows after the checkpoint, then append.
@@ -1170,6 +1305,20 @@ namespace femp
     if (Utilities::MPI::min(int(error.empty()), comm) == 0)
       throw InputError("Checkpoint/Resume from", directory,
                        Utilities::MPI::broadcast(comm, error, 0));
+  SolidStress<dim>::set_mass_scaling(const double s)
+  {
+    // Velocities kept (the kinematic velocity of the thermal expansion
+    // does not depend on s); the kinetic energy follows the mass, and the
+    // jump is booked so that the balance still closes.
+    const double r = s / scaling.factor;
+    scaling.kinetic_jump += (r - 1) * K;
+    K *= r;
+    K_points *= r;
+    small_mass *= r;
+    mpm.set_mass_scaling(s);
+    fem.set_mass_scaling(s);
+    scaling.factor = s;
+    dt_solid       = prm.safety_factor * prm.stable_limit(mat, grid.h(), s);
   }
 
 

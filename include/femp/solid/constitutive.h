@@ -98,6 +98,20 @@ namespace femp
     }
   };
 
+  /// Stored elastic energy density sigma : C(T)^-1 : sigma / 2 (J/m^3) of
+  /// the stress @p s {xx, yy, zz, xy, xz, yz} at temperature @p T
+  /// (isotropic: ((1 + nu) sigma:sigma - nu tr(sigma)^2) / (2 E(T))); used
+  /// by the adaptive mass scaling (doc/speed_accuracy.md, section 3).
+  inline double
+  elastic_energy_density(const SolidMaterial &m, const double *s, const double T)
+  {
+    const double nu = m.poisson_ratio;
+    const double tr = s[0] + s[1] + s[2];
+    const double ss = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] +
+                      2 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
+    return ((1 + nu) * ss - nu * tr * tr) / (2 * m.youngs_modulus.value(T));
+  }
+
   /// Stress state of one material point or one Gauss point.
   struct StressPoint
   {

@@ -208,6 +208,15 @@ namespace femp
     {
       return kinetic;
     }
+    /// New mass-scaling factor @p s (adaptive mass scaling, between two
+    /// solid steps): lumped and transition-node masses follow, velocities
+    /// are kept (the kinetic energy follows the mass).
+    void
+    set_mass_scaling(const double s);
+    /// Stored elastic energy sum V sigma : C(T)^-1 : sigma / 2 of this
+    /// rank's elements, J (2D: J/m).
+    double
+    elastic_energy() const;
     /// Hourglass energy 1/2 k sum q^2 with the scene's kappa, or with the
     /// reference kappa = 0.05 if @p reference (mode amplitude measure).
     double

@@ -205,6 +205,19 @@ namespace femp
     {
       return kinetic;
     }
+    /// New inertial-mass factor @p s between two gathers (adaptive mass
+    /// scaling): the points keep their velocities, the kinetic energy
+    /// follows the mass (call after scatter(), before the next gather()).
+    void
+    set_mass_scaling(const double s)
+    {
+      kinetic *= s / scaling;
+      scaling = s;
+    }
+    /// Stored elastic energy sum V_p sigma_p : C(T)^-1 : sigma_p / 2 of this
+    /// rank's points, with T the cell temperatures @p T, J (2D: J/m).
+    double
+    elastic_energy(const std::vector<double> &T) const;
     /// Power of gravity at the current velocities, W.
     double
     gravity_power(const Tensor<1, dim> &gravity) const

@@ -32,7 +32,10 @@
 // Time stepping. The solid keeps its own time t_s and step
 //   dt_s = C h / (sqrt(dim) c),  c = sqrt(M_max / (s rho)),
 // (C: safety factor; M_max: largest P-wave modulus of the E(T) table;
-// s: mass-scaling factor). advance(t) is called after every temperature
+// s: mass-scaling factor; fixed, or with Solid/Mass scaling = adaptive
+// set after each advance from the ratio of the mean kinetic energy of its
+// steps to the stored elastic energy, velocities kept and the kinetic
+// energy jump booked: doc/speed_accuracy.md, section 3). advance(t) is called after every temperature
 // step and takes whole solid steps up to t; the cell temperatures of each
 // sub-step are interpolated linearly between the temperature fields of the
 // last two calls, so both orders work: several solid steps inside one
@@ -79,7 +82,16 @@ namespace femp
     {
       double                   time_step     = 0;
       double                   safety_factor = 0.5;
+      /// Mass-scaling factor s: the fixed value, or the starting value of
+      /// the adaptive controller.
       double                   mass_scaling  = 1;
+      /// Adaptive mass scaling (doc/speed_accuracy.md, section 3): between
+      /// two temperature steps the factor follows the ratio of the kinetic
+      /// to the stored elastic energy.
+      bool                     adaptive_scaling = false;
+      /// Target ratio K / U_el, and the factor's range.
+      double                   max_kinetic_ratio = 1e-3;
+      double                   min_factor = 1, max_factor = 1e4;
       /// With the melt flow only: nodes whose inertial mass is below this
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
@@ -99,9 +111,11 @@ namespace femp
       void
       check(const SolidMaterial &                           m,
             const typename BackgroundGrid<dim>::Parameters &g) const;
-      /// Largest stable step h / (sqrt(dim) c), s.
+      /// Largest stable step h / (sqrt(dim) c), s, with the mass-scaling
+      /// factor @p s (0: mass_scaling).
       double
-      stable_limit(const SolidMaterial &m, const double h) const;
+      stable_limit(const SolidMaterial &m, const double h,
+                   const double s = 0) const;
     };
 
     struct Energies
@@ -126,11 +140,15 @@ namespace femp
       /// destroys, a numerical error of MUSL, booked so that the balance
       /// tests the rest (doc/solid.md "Energies").
       double remap = 0;
+      /// Kinetic energy created (> 0) or removed by changes of the
+      /// mass-scaling factor at kept velocities (adaptive mass scaling:
+      /// (s_new / s_old - 1) K at each change), summed over the run.
+      double scaling_jump = 0;
       double
       balance() const
       {
         return external + remap - (kinetic - initial_kinetic) - internal -
-               hourglass - transfer - melted + solidified;
+               hourglass - transfer - melted + solidified + scaling_jump;
       }
     };
 
@@ -202,6 +220,22 @@ namespace femp
     n_steps() const
     {
       return steps;
+    }
+    /// State of the mass scaling (the adaptive controller's; constant with
+    /// a fixed factor): what a checkpoint must keep.
+    struct MassScalingState
+    {
+      double factor = 1; ///< current s
+      /// Ratio K / U_el measured at the end of the last solid advance
+      /// (mean kinetic energy of its steps over the stored elastic energy).
+      double last_ratio = 0;
+      /// Kinetic energy booked for the changes of s so far, J (2D: J/m).
+      double kinetic_jump = 0;
+    };
+    const MassScalingState &
+    mass_scaling_state() const
+    {
+      return scaling;
     }
     /// Global energies (collective).
     Energies
@@ -300,6 +334,10 @@ namespace femp
     /// Node mass below which the grid update applies no force (kg, 2D
     /// kg/m; 0: off).
     double small_mass = 0;
+    MassScalingState scaling;
+    /// Integral of K over the solid steps of the current advance and its
+    /// length (the mean kinetic energy of the controller), J s and s.
+    double phase_K_dt = 0, phase_time = 0;
 
     /// One solid step of size @p dt; @p w: weight of the step's end time
     /// between the last two temperature fields.
@@ -354,6 +392,14 @@ namespace femp
                   const double                 remap_work);
     void
     write_rows();
+    /// At the end of a solid advance (points still gathered, collective):
+    /// the ratio K / U_el, and with the adaptive mass scaling the new
+    /// factor (kinetic energy jump booked, masses and step updated).
+    void
+    measure_and_adapt_scaling(const bool adapt);
+    /// Change the mass-scaling factor to @p s at kept velocities.
+    void
+    set_mass_scaling(const double s);
     /// Gather the points for a solid advance: book the kinetic energy of
     /// melted and solidified points, and stop if a point was lost
     /// (collective).
