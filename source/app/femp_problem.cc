@@ -6,6 +6,7 @@
 #include <femp/app/femp_problem.h>
 #include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
+#include <femp/heat/attached_metal.h>
 #include <femp/solid/fe_zone_depth.h>
 
 #include <chrono>
@@ -442,8 +443,11 @@ namespace femp
             control->request_stop();
             pcout << "Stopping at t = " << control->time() + dt
                   << " s: the laser's path has ended and the peak "
-                     "temperature "
-                  << heat->max_temperature() << " K is below "
+                     "temperature of the metal attached to the substrate "
+                  << attached_metal_max_temperature(*grid,
+                                                    heat->temperature(),
+                                                    heat->metal_fraction())
+                  << " K is below "
                   << time_prm.stop_temperature << " K" << std::endl;
           }
         control->advance(dt);
@@ -574,7 +578,9 @@ namespace femp
   {
     return time_prm.stop_temperature > 0 && heat_enabled &&
            control->time() + dt >= laser->end_time() * (1 - 1e-12) &&
-           heat->max_temperature() < time_prm.stop_temperature;
+           attached_metal_max_temperature(*grid, heat->temperature(),
+                                          heat->metal_fraction()) <
+             time_prm.stop_temperature;
   }
 
 
