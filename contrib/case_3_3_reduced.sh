@@ -21,7 +21,10 @@
 #       for the three powers (the paper's Figs 9-10);
 # and prints the table of pool size, bead size and peak stresses against
 # the power (doc/cases.md). MPIRUN overrides the MPI launcher (default:
-# mpirun; e.g. MPIRUN="mpirun --allow-run-as-root --oversubscribe").
+# mpirun; e.g. MPIRUN="mpirun --allow-run-as-root --oversubscribe");
+# NO_RUN=1 only redraws the figures and the table from existing output.
+# On a machine shared with other jobs, 1 rank can be much faster than 2
+# (waiting MPI ranks spin; doc/cases.md).
 set -e
 NP=${1:-2}
 ROOT=${2:-output/reduced}
@@ -39,11 +42,13 @@ run() { # directory, extra --set arguments
   tail -1 "$dir.log"
 }
 
-for P in 50 100 200; do
-  run "$ROOT/${P}W" --set "Laser/Power=$P"
-done
-run "$ROOT/200W_mpm" --set "Solid FEM/Use finite elements=false" \
-  --set "Time stepping/End time=4e-5"
+if [ -z "$NO_RUN" ]; then
+  for P in 50 100 200; do
+    run "$ROOT/${P}W" --set "Laser/Power=$P"
+  done
+  run "$ROOT/200W_mpm" --set "Solid FEM/Use finite elements=false" \
+    --set "Time stepping/End time=4e-5"
+fi
 
 python3 contrib/plot_track_svg.py --compare "$FIG/case_3_2_reduced_femp_vs_mpm.svg" --n 2 \
   "$ROOT/200W=FEMP" "$ROOT/200W_mpm=all-MPM" CD:T CD:sigma_xx EF:sigma_xx
@@ -57,26 +62,32 @@ def rows(path):
     lines = [l for l in open(path) if not l.startswith("#")]
     return list(csv.DictReader(lines))
 print("| power | pool L x W x D at 40 us (um) | largest pool L x W x D (um) "
-      "| bead width x height at 150 us (um) | CD at 40 us: peak sigma_xx (MPa), T (K) "
+      "| fusion zone in the substrate, largest W x D (um) "
+      "| bead at 150 us: cross-section W x H, centre line L x H (um) "
+      "| CD at 40 us: T max (K), sigma_xx peak, von Mises max (MPa) "
       "| CD at 150 us: sigma_xx min / max, von Mises max (MPa) |")
-print("|---|---|---|---|---|---|")
+print("|---|---|---|---|---|---|---|")
 for p in (50, 100, 200):
     d = "%s/%dW" % (root, p)
     pool = rows(d + "/melt_pool.csv")
     at = min(pool, key=lambda r: abs(float(r["time"]) - 4e-5))
     um = lambda r, k: float(r[k]) * 1e6
-    big = {k: max(um(r, k) for r in pool) for k in ("length", "width", "depth")}
-    bead = rows(d + "/track_bead.csv")[-1]
+    big = {k: max(um(r, k) for r in pool) for k in
+           ("length", "width", "depth", "width_solidus_substrate", "depth_solidus_substrate")}
+    beads = rows(d + "/track_bead.csv")
+    bead = beads[-1]
     wk = [k for k in bead if k.startswith("width_")][0]
     hk = "height_" + wk[len("width_"):]
     cd = rows(d + "/probe_line_CD_00002.csv")
-    end = rows(d + "/probe_line_CD_%05d.csv" % (len(rows(d + "/track_bead.csv")) - 1))
-    s40 = [float(r["sigma_xx"]) * 1e-6 for r in cd]
-    s_end = [float(r["sigma_xx"]) * 1e-6 for r in end]
-    print("| %d W | %.0f x %.0f x %.0f | %.0f x %.0f x %.0f | %.0f x %.0f | %.0f, %.0f | %.0f / %.0f, %.0f |"
+    end = rows(d + "/probe_line_CD_%05d.csv" % (len(beads) - 1))
+    MPa = lambda rs, k: [float(r[k]) * 1e-6 for r in rs]
+    print("| %d W | %.0f x %.0f x %.0f | %.0f x %.0f x %.0f | %.0f x %.0f | %.0f x %.0f, %.0f x %.0f "
+          "| %.0f, %.0f, %.0f | %.0f / %.0f, %.0f |"
           % (p, um(at, "length"), um(at, "width"), um(at, "depth"),
              big["length"], big["width"], big["depth"],
-             um(bead, wk), um(bead, hk),
-             max(s40, key=abs), max(float(r["T"]) for r in cd),
-             min(s_end), max(s_end), max(float(r["von_mises"]) for r in end) * 1e-6))
+             big["width_solidus_substrate"], big["depth_solidus_substrate"],
+             um(bead, wk), um(bead, hk), um(bead, "centre_length"), um(bead, "centre_height"),
+             max(float(r["T"]) for r in cd), max(MPa(cd, "sigma_xx"), key=abs),
+             max(MPa(cd, "von_mises")),
+             min(MPa(end, "sigma_xx")), max(MPa(end, "sigma_xx")), max(MPa(end, "von_mises"))))
 PY

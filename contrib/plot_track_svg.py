@@ -21,7 +21,9 @@ probe_line_<name>_<N>.csv and track_shape_<N>.csv, and writes to FIGURE_DIR
 
 draws, for several runs (output directories DIR), one panel per LINE:field
 (e.g. CD:T EF:sigma_xx; fields T in K, stresses in MPa) with the probe
-line's profile of output N (default: each run's last) against x, and prints
+line's profile of output N (default: each run's last; DIR@M=label takes
+output M of that run, e.g. one run at several times) against x (against z
+for a vertical line), and prints
 the largest difference between the first two runs relative to the first
 run's peak |value|, per panel and over all panels of a field (e.g. FEMP
 against all-MPM, doc/cases.md).
@@ -229,11 +231,11 @@ UNITS = {"T": ("K", 1), "sigma_xx": ("MPa", 1e-6), "sigma_yy": ("MPa", 1e-6),
 
 
 def compare(args):
-    """--compare FIGURE.svg [--n N] DIR=label ... LINE:field ...: one panel
-    per LINE:field (e.g. CD:T EF:sigma_xx), the probe line's field of
-    output N (default: the last one each run wrote) of every run against x
-    (um); prints the largest difference between the first two runs
-    relative to the peak |value| of the first."""
+    """--compare FIGURE.svg [--n N] DIR[@M]=label ... LINE:field ...: one
+    panel per LINE:field (e.g. CD:T EF:sigma_xx), the probe line's field of
+    output M, else N, else the last one each run wrote, of every run
+    against the line's coordinate (um); prints the largest difference
+    between the first two runs relative to the peak |value| of the first."""
     path = args[0]
     n = None
     if "--n" in args:
@@ -249,13 +251,20 @@ def compare(args):
         unit, scale = UNITS.get(field, ("", 1))
         series, times = [], set()
         for i, (d, label) in enumerate(runs):
-            m = n if n is not None else max(
-                int(re.search(r"_(\d{5})\.csv$", f).group(1))
-                for f in glob.glob(os.path.join(d, "probe_line_%s_*.csv" % line)))
+            m = n
+            if "@" in d:
+                d, m = d.rsplit("@", 1)
+                m = int(m)
+            if m is None:
+                m = max(
+                    int(re.search(r"_(\d{5})\.csv$", f).group(1))
+                    for f in glob.glob(os.path.join(d, "probe_line_%s_*.csv" % line)))
             f = os.path.join(d, "probe_line_%s_%05d.csv" % (line, m))
             times.add(open(f).readline().split("=")[1].split()[0])
             c = read_csv(f)
-            series.append((label, [float(x) * 1e6 for x in c["x"]],
+            axis = "z" if len(set(c["x"])) == 1 and len(set(c["y"])) == 1 else \
+                "y" if len(set(c["x"])) == 1 else "x"
+            series.append((label, [float(x) * 1e6 for x in c[axis]],
                            [float(v) * scale for v in c[field]], palette[i % len(palette)]))
         if len(series) >= 2:
             a, b = series[0][2], series[1][2]
@@ -267,7 +276,7 @@ def compare(args):
             o = overall.setdefault(field, [0, 0])
             o[0], o[1] = max(o[0], diff), max(o[1], peak)
         line_panel(svg, 400 * k, "%s on %s, t = %s s" % (field, line, " / ".join(sorted(times))),
-                   "x (um)", "%s (%s)" % (field, unit), series,
+                   "%s (um)" % axis, "%s (%s)" % (field, unit), series,
                    [(0, "")] if field != "T" else [])
     for field, (diff, peak) in overall.items():
         print("%s over all panels: max difference / largest peak = %.4f" % (field, diff / peak))
