@@ -64,7 +64,7 @@ def rows(path):
 print("| power | pool L x W x D at 40 us (um) | largest pool L x W x D (um) "
       "| fusion zone in the substrate, largest W x D (um) "
       "| bead at 150 us: cross-section W x H, centre line L x H (um) "
-      "| CD at 40 us: T max (K), sigma_xx peak, von Mises max (MPa) "
+      "| CD at 40 us: T max (K), sigma_xx peak, von Mises max (MPa), plastic strain max "
       "| CD at 150 us: sigma_xx min / max, von Mises max (MPa) |")
 print("|---|---|---|---|---|---|---|")
 for p in (50, 100, 200):
@@ -82,12 +82,12 @@ for p in (50, 100, 200):
     end = rows(d + "/probe_line_CD_%05d.csv" % (len(beads) - 1))
     MPa = lambda rs, k: [float(r[k]) * 1e-6 for r in rs]
     print("| %d W | %.0f x %.0f x %.0f | %.0f x %.0f x %.0f | %.0f x %.0f | %.0f x %.0f, %.0f x %.0f "
-          "| %.0f, %.0f, %.0f | %.0f / %.0f, %.0f |"
+          "| %.0f, %.0f, %.0f, %.1f %% | %.0f / %.0f, %.0f |"
           % (p, um(at, "length"), um(at, "width"), um(at, "depth"),
              big["length"], big["width"], big["depth"],
              big["width_solidus_substrate"], big["depth_solidus_substrate"],
              um(bead, wk), um(bead, hk), um(bead, "centre_length"), um(bead, "centre_height"),
              max(float(r["T"]) for r in cd), max(MPa(cd, "sigma_xx"), key=abs),
-             max(MPa(cd, "von_mises")),
+             max(MPa(cd, "von_mises")), 100 * max(float(r["plastic_strain"]) for r in cd),
              min(MPa(end, "sigma_xx")), max(MPa(end, "sigma_xx")), max(MPa(end, "von_mises"))))
 PY
