@@ -441,13 +441,15 @@ namespace femp
         if (cooled_down(dt))
           {
             control->request_stop();
+            std::ostringstream T_peak; // to 0.01 K: it lies just below
+            T_peak << std::fixed << std::setprecision(2)
+                   << attached_metal_max_temperature(*grid,
+                                                     heat->temperature(),
+                                                     heat->metal_fraction());
             pcout << "Stopping at t = " << control->time() + dt
                   << " s: the laser's path has ended and the peak "
                      "temperature of the metal attached to the substrate "
-                  << attached_metal_max_temperature(*grid,
-                                                    heat->temperature(),
-                                                    heat->metal_fraction())
-                  << " K is below "
+                  << T_peak.str() << " K is below "
                   << time_prm.stop_temperature << " K" << std::endl;
           }
         control->advance(dt);
