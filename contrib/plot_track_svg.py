@@ -16,6 +16,17 @@ probe_line_<name>_<N>.csv and track_shape_<N>.csv, and writes to FIGURE_DIR
   probe_sigma_xx.svg   sigma_xx along every probe line (MPa);
   track_shape.svg      the surface height z_s along the centre line and
       across the track, the re-solidified bead's columns marked.
+
+    python3 contrib/plot_track_svg.py --compare FIGURE.svg [--n N] DIR=label ... LINE:field ...
+
+draws, for several runs (output directories DIR), one panel per LINE:field
+(e.g. CD:T EF:sigma_xx; fields T in K, stresses in MPa) with the probe
+line's profile of output N (default: each run's last; DIR@M=label takes
+output M of that run, e.g. one run at several times) against x (against z
+for a vertical line), and prints
+the largest difference between the first two runs relative to the first
+run's peak |value|, per panel and over all panels of a field (e.g. FEMP
+against all-MPM, doc/cases.md).
 """
 import base64
 import csv
@@ -131,6 +142,12 @@ def nice_ticks(lo, hi, n=5):
 def line_plot(path, title, xlabel, ylabel, series, hlines=()):
     """series: list of (label, xs, ys, colour)."""
     svg = Svg(640, 400)
+    line_panel(svg, 0, title, xlabel, ylabel, series, hlines)
+    svg.save(path)
+
+
+def line_panel(svg, top, title, xlabel, ylabel, series, hlines=()):
+    """One 640 x 400 line plot drawn into svg with its top at y = top."""
     L, R, T, B = 70, 150, 40, 50
     xs = [x for s in series for x in s[1]]
     ys = [y for s in series for y in s[2]] + [h for h, _ in hlines]
@@ -139,13 +156,14 @@ def line_plot(path, title, xlabel, ylabel, series, hlines=()):
     pad = 0.05 * (y1 - y0 or 1)
     y0, y1 = y0 - pad, y1 + pad
     X = lambda x: L + (x - x0) / (x1 - x0 or 1) * (640 - L - R)
-    Y = lambda y: 400 - B - (y - y0) / (y1 - y0) * (400 - T - B)
-    svg.text(320 - R / 2 + L / 2, 22, title, 14, "middle")
+    Y = lambda y: top + 400 - B - (y - y0) / (y1 - y0) * (400 - T - B)
+    svg.text(320 - R / 2 + L / 2, top + 22, title, 14, "middle")
     svg.add('<rect x="%d" y="%d" width="%d" height="%d" fill="none" stroke="black"/>'
-            % (L, T, 640 - L - R, 400 - T - B))
+            % (L, top + T, 640 - L - R, 400 - T - B))
     for t in nice_ticks(x0, x1):
-        svg.add('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ccc"/>' % (X(t), T, X(t), 400 - B))
-        svg.text(X(t), 400 - B + 16, "%g" % t, 11, "middle")
+        svg.add('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ccc"/>'
+                % (X(t), top + T, X(t), top + 400 - B))
+        svg.text(X(t), top + 400 - B + 16, "%g" % t, 11, "middle")
     for t in nice_ticks(y0, y1):
         svg.add('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#ccc"/>' % (L, Y(t), 640 - R, Y(t)))
         svg.text(L - 6, Y(t) + 4, "%g" % t, 11, "end")
@@ -154,14 +172,14 @@ def line_plot(path, title, xlabel, ylabel, series, hlines=()):
                 % (L, Y(h), 640 - R, Y(h)))
         svg.text(640 - R - 4, Y(h) - 4, lab, 10, "end")
     for i, (label, sx, sy, c) in enumerate(series):
+        dash = ' stroke-dasharray="6,4"' if i % 2 and len(series) == 2 else ""
         pts = " ".join("%.1f,%.1f" % (X(a), Y(b)) for a, b in zip(sx, sy))
-        svg.add('<polyline points="%s" fill="none" stroke="%s" stroke-width="2"/>' % (pts, c))
-        svg.add('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"/>'
-                % (640 - R + 10, T + 10 + 18 * i, 640 - R + 30, T + 10 + 18 * i, c))
-        svg.text(640 - R + 34, T + 14 + 18 * i, label, 11)
-    svg.text(L + (640 - L - R) / 2, 400 - 12, xlabel, 12, "middle")
-    svg.text(18, T + (400 - T - B) / 2, ylabel, 12, "middle", rotate=-90)
-    svg.save(path)
+        svg.add('<polyline points="%s" fill="none" stroke="%s" stroke-width="2"%s/>' % (pts, c, dash))
+        svg.add('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" stroke-width="2"%s/>'
+                % (640 - R + 10, top + T + 10 + 18 * i, 640 - R + 30, top + T + 10 + 18 * i, c, dash))
+        svg.text(640 - R + 34, top + T + 14 + 18 * i, label, 11)
+    svg.text(L + (640 - L - R) / 2, top + 400 - 12, xlabel, 12, "middle")
+    svg.text(18, top + T + (400 - T - B) / 2, ylabel, 12, "middle", rotate=-90)
 
 
 def section_plot(path, title, panels, field, unit, scale):
@@ -206,9 +224,71 @@ def section_plot(path, title, panels, field, unit, scale):
     svg.save(path)
 
 
+# ---------------------------------------------------------------- compare
+UNITS = {"T": ("K", 1), "sigma_xx": ("MPa", 1e-6), "sigma_yy": ("MPa", 1e-6),
+         "sigma_zz": ("MPa", 1e-6), "von_mises": ("MPa", 1e-6),
+         "plastic_strain": ("-", 1)}
+
+
+def compare(args):
+    """--compare FIGURE.svg [--n N] DIR[@M]=label ... LINE:field ...: one
+    panel per LINE:field (e.g. CD:T EF:sigma_xx), the probe line's field of
+    output M, else N, else the last one each run wrote, of every run
+    against the line's coordinate (um); prints the largest difference
+    between the first two runs relative to the peak |value| of the first."""
+    path = args[0]
+    n = None
+    if "--n" in args:
+        i = args.index("--n")
+        n = int(args[i + 1])
+        del args[i:i + 2]
+    runs = [a.rsplit("=", 1) for a in args[1:] if "=" in a]
+    panels = [a.split(":", 1) for a in args[1:] if "=" not in a]
+    palette = ["#1b6ca8", "#d1495b", "#2e933c", "#edae49", "#6a4c93", "#333333"]
+    svg = Svg(640, 400 * len(panels))
+    overall = {}
+    for k, (line, field) in enumerate(panels):
+        unit, scale = UNITS.get(field, ("", 1))
+        series, times = [], set()
+        for i, (d, label) in enumerate(runs):
+            m = n
+            if "@" in d:
+                d, m = d.rsplit("@", 1)
+                m = int(m)
+            if m is None:
+                m = max(
+                    int(re.search(r"_(\d{5})\.csv$", f).group(1))
+                    for f in glob.glob(os.path.join(d, "probe_line_%s_*.csv" % line)))
+            f = os.path.join(d, "probe_line_%s_%05d.csv" % (line, m))
+            times.add(open(f).readline().split("=")[1].split()[0])
+            c = read_csv(f)
+            axis = "z" if len(set(c["x"])) == 1 and len(set(c["y"])) == 1 else \
+                "y" if len(set(c["x"])) == 1 else "x"
+            series.append((label, [float(x) * 1e6 for x in c[axis]],
+                           [float(v) * scale for v in c[field]], palette[i % len(palette)]))
+        if len(series) >= 2:
+            a, b = series[0][2], series[1][2]
+            peak = max(abs(v) for v in a) or 1
+            diff = max(abs(p - q) for p, q in zip(a, b))
+            print("%s on %s: max |%s - %s| = %.4g %s = %.4f of the peak |%s| %.4g %s"
+                  % (field, line, series[0][0], series[1][0], diff, unit, diff / peak,
+                     series[0][0], peak, unit))
+            o = overall.setdefault(field, [0, 0])
+            o[0], o[1] = max(o[0], diff), max(o[1], peak)
+        line_panel(svg, 400 * k, "%s on %s, t = %s s" % (field, line, " / ".join(sorted(times))),
+                   "%s (um)" % axis, "%s (%s)" % (field, unit), series,
+                   [(0, "")] if field != "T" else [])
+    for field, (diff, peak) in overall.items():
+        print("%s over all panels: max difference / largest peak = %.4f" % (field, diff / peak))
+    svg.save(path)
+    print("wrote", path)
+
+
 # ---------------------------------------------------------------- main
 def main():
     args = [a for a in sys.argv[1:]]
+    if args and args[0] == "--compare":
+        return compare(args[1:])
     opts = {}
     for k in ("--x", "--y", "--n", "--prefix"):
         if k in args:

@@ -7,6 +7,7 @@
 #include <femp/app/run_checks.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
+#include <femp/heat/attached_metal.h>
 #include <femp/solid/fe_zone_depth.h>
 
 #include <chrono>
@@ -438,10 +439,15 @@ namespace femp
         if (cooled_down(dt))
           {
             control->request_stop();
+            std::ostringstream T_peak; // to 0.01 K: it lies just below
+            T_peak << std::fixed << std::setprecision(2)
+                   << attached_metal_max_temperature(*grid,
+                                                     heat->temperature(),
+                                                     heat->metal_fraction());
             pcout << "Stopping at t = " << control->time() + dt
                   << " s: the laser's path has ended and the peak "
-                     "temperature "
-                  << heat->max_temperature() << " K is below "
+                     "temperature of the metal attached to the substrate "
+                  << T_peak.str() << " K is below "
                   << time_prm.stop_temperature << " K" << std::endl;
           }
         control->advance(dt);
@@ -587,7 +593,9 @@ namespace femp
   {
     return time_prm.stop_temperature > 0 && heat_enabled &&
            control->time() + dt >= laser->end_time() * (1 - 1e-12) &&
-           heat->max_temperature() < time_prm.stop_temperature;
+           attached_metal_max_temperature(*grid, heat->temperature(),
+                                          heat->metal_fraction()) <
+             time_prm.stop_temperature;
   }
 
 
