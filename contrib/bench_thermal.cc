@@ -94,13 +94,13 @@ main(int argc, char **argv)
   heat.initialize();
   heat.set_metal_fraction(alpha);
   // A hot track so that cells are solid, mushy and liquid.
-  auto &T = heat.temperature();
-  for (std::size_t i = 0; i < T.size(); ++i)
+  for (std::size_t i = 0; i < grid.n_local(); ++i)
     {
       const auto c = grid.cell_center(i);
       const double r2 = std::pow(c[1] - 120e-6, 2) + std::pow(c[2] - 100e-6, 2);
-      T[i] = 300 + 2700 * std::exp(-r2 / (2 * 30e-6 * 30e-6)) *
-                     (c[0] > 100e-6 && c[0] < 500e-6);
+      heat.set_cell_temperature(
+        i, 300 + 2700 * std::exp(-r2 / (2 * 30e-6 * 30e-6)) *
+                   (c[0] > 100e-6 && c[0] < 500e-6));
     }
   double metal = 0;
   for (const auto idx : grid.owned_cells())

@@ -31,9 +31,9 @@ run(const double h, MPI_Comm comm)
   HeatTransfer<dim> heat(p, mat, laser, grid);
   heat.initialize();
   heat.set_metal_fraction(grid.make_field(1.));
-  auto &T = heat.temperature();
+  const auto &T = heat.temperature();
   for (std::size_t idx = 0; idx < T.size(); ++idx)
-    T[idx] = exact(grid.cell_center(idx)[0], t0);
+    heat.set_cell_temperature(idx, exact(grid.cell_center(idx)[0], t0));
 
   const double       t_end = 0.5;
   const double       dt0   = 0.5 * heat.stable_time_step();

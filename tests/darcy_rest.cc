@@ -28,13 +28,14 @@ main(int argc, char **argv)
                                },
                                prm, comm);
           const std::vector<double> gamma = scene.grid.make_field(gamma_value);
-          scene.flow->set_liquid_fraction(&gamma);
+          CellFields<dim> fields;
+          fields.liquid_fraction = &gamma;
           double time = 0;
           while (time < t_end)
             {
               const double dt =
                 std::min(scene.flow->stable_time_step().min(), t_end - time + 1e-12);
-              scene.flow->step(dt);
+              scene.flow->step(dt, fields);
               time += dt;
             }
           // The column's points start on the lattice (i + 1/2) h/2: the

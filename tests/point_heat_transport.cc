@@ -75,7 +75,7 @@ run(const double h, const bool latent, MPI_Comm comm)
   points.create_region([](const Point<dim> &x) { return x[0] < 2; }, 2.,
                        MaterialPoints<dim>::fluid);
   heat.set_metal_fraction(points.metal_fraction());
-  auto &T = heat.temperature();
+  const auto &T = heat.temperature();
   for (const auto idx : grid.owned_cells())
     heat.set_cell_temperature(idx, exact(grid.cell_center(idx)[0], t0));
   heat.update_ghosts();

@@ -63,11 +63,12 @@ namespace
                          [&](const Point<dim> &x) { return x[dim - 1] < H; },
                          prm, comm);
     std::vector<double> temperature = scene.grid.make_field(T);
-    scene.flow->set_temperature(&temperature);
+    CellFields<dim> fields;
+    fields.temperature = &temperature;
     const double dt = scene.flow->stable_time_step().min();
     const unsigned int n_steps = 200;
     for (unsigned int n = 0; n < n_steps; ++n)
-      scene.flow->step(dt);
+      scene.flow->step(dt, fields);
 
     const double pr = recoil(prm, T);
     const double s  = h / 2; // material surface: top lattice point + s/2
@@ -111,12 +112,13 @@ namespace
     for (std::size_t i = 0; i < temperature.size(); ++i)
       if (scene.grid.cell_center(i)[dim - 1] > 0.5 * (lo[1] + hi[1]))
         temperature[i] = T_hot;
-    scene.flow->set_temperature(&temperature);
+    CellFields<dim> fields;
+    fields.temperature = &temperature;
 
     const double       dt = 1e-3;
     const unsigned int n_steps = 50;
     for (unsigned int n = 0; n < n_steps; ++n)
-      scene.flow->step(dt);
+      scene.flow->step(dt, fields);
 
     using P = MaterialPoints<dim>::PropertyIndex;
     Tensor<1, dim> momentum;
@@ -153,10 +155,11 @@ namespace
     std::vector<double> temperature = scene.grid.make_field(T0);
     for (std::size_t i = 0; i < temperature.size(); ++i)
       temperature[i] = T0 + G * scene.grid.cell_center(i)[0];
-    scene.flow->set_temperature(&temperature);
+    CellFields<dim> fields;
+    fields.temperature = &temperature;
     // One short step (the recoil gradient along the surface drives a flow;
     // p_s is that of the configuration at the start, points moved ~1e-7 h).
-    scene.flow->step(1e-6);
+    scene.flow->step(1e-6, fields);
 
     // Surface cells: the top fluid row; away from the walls, i.e. the cells
     // whose 3 x 3 neighbourhood lies inside the box.
@@ -201,10 +204,11 @@ namespace
         if (x[0] > lo[0] && x[0] < lo[0] + h && x[1] > lo[1] && x[1] < lo[1] + h)
           temperature[i] = 8000;
       }
-    scene.flow->set_temperature(&temperature);
+    CellFields<dim> fields;
+    fields.temperature = &temperature;
     const double dt = 1e-5;
     for (unsigned int n = 0; n < 20; ++n)
-      scene.flow->step(dt);
+      scene.flow->step(dt, fields);
     const double umax = scene.max_over_points(
       [](const Point<dim> &, ArrayView<const double> v) {
         return point_speed<dim>(v);

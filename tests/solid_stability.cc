@@ -88,12 +88,11 @@ namespace
         add_force({{16, j}}, {{15, std::min(j, 7)}}, -1. / 9);
     else // point force at the top centre node
       add_force({{8, 8}}, {{8, 7}}, -1.);
-    solid.set_external_nodal_forces(&force);
 
     Result r;
-    solid.advance(0.5 * t_end, T, true);
+    solid.advance(0.5 * t_end, T, true, &force);
     r.mode_half = solid.energies().hourglass_mode;
-    solid.advance(t_end, T, true);
+    solid.advance(t_end, T, true, &force);
     const auto e = solid.energies();
     r.mode_end   = e.hourglass_mode;
     r.internal   = e.internal;

@@ -41,12 +41,13 @@ main(int argc, char **argv)
       for (std::size_t i = 0; i < T.size(); ++i)
         if (scene.grid.cell_status()[i] != BackgroundGrid<dim>::outside)
           T[i] = 1000 + G * scene.grid.cell_center(i)[0];
-      scene.flow->set_temperature(&T);
+      CellFields<dim> fields;
+      fields.temperature = &T;
       const double dt      = scene.flow->stable_time_step().min();
       const double t_end   = 4 * rho * D * D / mu; // 4 viscous times
       unsigned int n_steps = 0;
       for (double t = 0; t < t_end; t += dt, ++n_steps)
-        scene.flow->step(dt);
+        scene.flow->step(dt, fields);
       // Profile in the cell column at mid-length (x = Lx/2 is a node line:
       // mean of the two columns beside it).
       const auto &u   = scene.flow->cell_velocity()[0];

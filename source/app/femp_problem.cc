@@ -296,12 +296,8 @@ namespace femp
     flow_prm.ambient_pressure        = heat_prm.ambient_pressure;
     flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
                                                      *grid, *points, &timer);
-    flow->set_liquid_fraction(&heat->liquid_fraction());
-    flow->set_temperature(&heat->temperature());
-    // Heat moves with the flow either on the points (taken when they
-    // change cells, PointHeatExchange) or by upwind convection of T.
-    if (heat_prm.advection_by_melt_flow == "upwind")
-      heat->set_velocity(&flow->cell_velocity());
+    // The flow reads T and gamma, the heat (with 'Advection by melt flow =
+    // upwind') the flow's cell velocity, from cell_fields() at each call.
   }
 
 
@@ -325,7 +321,6 @@ namespace femp
         solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
         fluid_solid = std::make_unique<FluidSolidForces<dim>>(
           *grid, *points, material.density, fem_prm);
-        solid->set_external_nodal_forces(&fluid_solid->nodal_forces());
       }
     // On resume the solid's CSV files are cut back and reopened by its
     // load_state() instead.
@@ -474,6 +469,20 @@ namespace femp
 
 
   template <int dim>
+  CellFields<dim>
+  FempProblem<dim>::cell_fields() const
+  {
+    CellFields<dim> f;
+    f.temperature     = &heat->temperature();
+    f.liquid_fraction = &heat->liquid_fraction();
+    f.metal_fraction  = &heat->metal_fraction();
+    if (flow)
+      f.velocity = &flow->cell_velocity();
+    return f;
+  }
+
+
+  template <int dim>
   void
   FempProblem<dim>::temperature_step(const double dt)
   {
@@ -486,7 +495,7 @@ namespace femp
       }
     {
       TimerOutput::Scope t(timer, "temperature step");
-      heat->advance(dt, control->time());
+      heat->advance(dt, control->time(), cell_fields());
     }
     if (history)
       history->observe(heat->temperature(), heat->metal_fraction(),
@@ -535,7 +544,7 @@ namespace femp
         const double rest = dt - t;
         const double dt_f =
           rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
-        flow->step(dt_f);
+        flow->step(dt_f, cell_fields());
         t += dt_f;
         // Collective: the limits are global, so is the count.
         if (++n_sub > run_limits().max_flow_substeps)
@@ -583,7 +592,9 @@ namespace femp
   FempProblem<dim>::solid_step()
   {
     TimerOutput::Scope t(timer, "solid");
-    solid->advance(control->time(), heat->temperature(), control->is_last());
+    // Loaded by the fluid forces of step 3, with the flow.
+    solid->advance(control->time(), heat->temperature(), control->is_last(),
+                   fluid_solid ? &fluid_solid->nodal_forces() : nullptr);
   }
 
 
@@ -670,7 +681,8 @@ namespace femp
         return dt;
       }
     const double stable =
-      step == 0 ? heat->stable_time_step() : heat->last_stable_time_step();
+      step == 0 ? heat->stable_time_step(cell_fields()) :
+                  heat->last_stable_time_step();
     const double dt = time_prm.time_step > 0 ? time_prm.time_step :
                                          time_prm.safety_factor * stable;
     if (time_prm.time_step > stable)

@@ -26,7 +26,7 @@ namespace femp
       {
         // Points outside the initial bodies take the initial temperature
         // at their position.
-        for (auto &particle : points.particle_handler())
+        for (auto &particle : points.particle_handler_for_update())
           {
             const Point<dim> x       = particle.get_location();
             bool             in_body = false;

@@ -85,32 +85,25 @@ namespace femp
 
   template <int dim>
   void
-  FreeSurface<dim>::set_temperature(const std::vector<double> *T)
-  {
-    temperature = T;
-  }
-
-
-  template <int dim>
-  void
   FreeSurface<dim>::update(const std::vector<double> &       type,
-                           const std::vector<std::uint32_t> &fluid_cells)
+                           const std::vector<std::uint32_t> &fluid_cells,
+                           const std::vector<double> *       temperature)
   {
     const bool thermal =
       prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
     AssertThrow(!thermal || temperature != nullptr,
                 ExcMessage("Melt flow: Marangoni stress and recoil pressure "
-                           "need the temperature (set_temperature())."));
+                           "need the cell temperature (CellFields)."));
     mark_near_fluid(type);
     map_metal_fraction();
     locate_interface(type, fluid_cells);
     if (!prm.any())
       return;
-    capillary_and_marangoni(type, fluid_cells);
+    capillary_and_marangoni(type, fluid_cells, temperature);
     if (prm.recoil_coefficient > 0 ||
         (prm.curvature_smoothing > 0 && prm.surface_tension > 0))
       grid.update_ghosts(surface_mark);
-    add_recoil_pressure(fluid_cells);
+    add_recoil_pressure(fluid_cells, temperature);
     smooth_capillary_pressure(fluid_cells);
     grid.update_ghosts(p_surface);
   }
@@ -233,7 +226,8 @@ namespace femp
   void
   FreeSurface<dim>::capillary_and_marangoni(
     const std::vector<double> &       type,
-    const std::vector<std::uint32_t> &fluid_cells)
+    const std::vector<std::uint32_t> &fluid_cells,
+    const std::vector<double> *       temperature)
   {
     const double h      = grid.h();
     const auto & cs     = grid.strides();
@@ -351,7 +345,8 @@ namespace femp
   template <int dim>
   void
   FreeSurface<dim>::add_recoil_pressure(
-    const std::vector<std::uint32_t> &fluid_cells)
+    const std::vector<std::uint32_t> &fluid_cells,
+    const std::vector<double> *       temperature)
   {
     if (prm.recoil_coefficient == 0)
       return;

@@ -316,22 +316,6 @@ namespace femp
 
 
   template <int dim>
-  void
-  IncompressibleFlow<dim>::set_liquid_fraction(const std::vector<double> *g)
-  {
-    gamma = g;
-  }
-
-
-  template <int dim>
-  void
-  IncompressibleFlow<dim>::set_temperature(const std::vector<double> *T)
-  {
-    surface.set_temperature(T);
-  }
-
-
-  template <int dim>
   typename IncompressibleFlow<dim>::StepLimits
   IncompressibleFlow<dim>::stable_time_step() const
   {
@@ -516,7 +500,8 @@ namespace femp
 
   template <int dim>
   void
-  IncompressibleFlow<dim>::predictor(const double dt)
+  IncompressibleFlow<dim>::predictor(const double               dt,
+                                     const std::vector<double> *gamma)
   {
     Section section(timer, "flow: predictor");
     const auto &surface_force = surface.marangoni_force();
@@ -577,10 +562,10 @@ namespace femp
 
   template <int dim>
   void
-  IncompressibleFlow<dim>::update_free_surface()
+  IncompressibleFlow<dim>::update_free_surface(const std::vector<double> *T)
   {
     Section section(timer, "flow: free surface");
-    surface.update(type, fluid_cells);
+    surface.update(type, fluid_cells, T);
   }
 
 
@@ -794,7 +779,7 @@ namespace femp
     const auto & x0   = grid.origin();
     const auto & nc   = grid.n_cells();
     const double beta = prm.flip_fraction;
-    auto &       handler = points.particle_handler();
+    auto &       handler = points.particle_handler_for_update();
     // Cells where a point left (increasing): only their points are checked
     // by the re-sort, not every point of the powder and the substrate.
     std::vector<std::uint32_t> left_cells;
@@ -1016,7 +1001,7 @@ namespace femp
 
   template <int dim>
   void
-  IncompressibleFlow<dim>::step(const double dt)
+  IncompressibleFlow<dim>::step(const double dt, const CellFields<dim> &fields)
   {
     const StepLimits limits = stable_time_step();
     if (!(dt > 0) || dt > limits.viscous * (1 + 1e-12) ||
@@ -1029,16 +1014,19 @@ namespace femp
             << "limit " << limits.capillary << " s (sqrt(rho h^3/(2 pi sigma))).";
         throw std::runtime_error(msg.str());
       }
-    advance(dt, 0);
+    advance(dt, 0, fields);
   }
 
   template <int dim>
   void
-  IncompressibleFlow<dim>::advance(const double dt, const unsigned int depth)
+  IncompressibleFlow<dim>::advance(const double           dt,
+                                   const unsigned int     depth,
+                                   const CellFields<dim> &fields)
   {
     particles_to_grid();   // P2G: cell classes, nodal mass and momentum
-    update_free_surface(); // alpha, theta, p_s, Marangoni forces
-    predictor(dt);         // u*: gravity, viscosity, surface forces, Darcy
+    update_free_surface(fields.temperature); // alpha, theta, p_s, Marangoni
+    predictor(dt, fields.liquid_fraction);   // u*: gravity, viscosity,
+                                             // surface forces, Darcy
     pressure_solve(dt);    // div(dt/rho grad p) = div u*
     correction(dt);        // u = u* - dt/rho grad p
     // Step rejection: if the new nodal velocity would carry a point more
@@ -1056,8 +1044,8 @@ namespace femp
             throw CollectiveError(msg.str()); // umax is global
           }
         ++stats.halvings;
-        advance(dt / 2, depth + 1);
-        advance(dt / 2, depth + 1);
+        advance(dt / 2, depth + 1, fields);
+        advance(dt / 2, depth + 1, fields);
         return;
       }
     update_cell_velocity();

@@ -322,17 +322,17 @@ namespace femp
               for (int d = 0; d < dim; ++d)
                 prescribed[d][idx] = f.value(c, d);
             }
-        velocity = &prescribed;
       }
   }
 
 
   template <int dim>
-  void
-  HeatTransfer<dim>::set_velocity(
-    const std::array<std::vector<double>, dim> *v)
+  const std::array<std::vector<double>, dim> *
+  HeatTransfer<dim>::convection_velocity(const CellFields<dim> &fields) const
   {
-    velocity = v;
+    if (fields.velocity && prm.advection_by_melt_flow == "upwind")
+      return fields.velocity;
+    return prescribed[0].empty() ? nullptr : &prescribed;
   }
 
 
@@ -622,8 +622,9 @@ namespace femp
 
   template <int dim>
   double
-  HeatTransfer<dim>::stable_time_step()
+  HeatTransfer<dim>::stable_time_step(const CellFields<dim> &fields)
   {
+    const auto *velocity = convection_velocity(fields);
     compute_properties();
     const auto & st  = grid.strides();
     const double ih2 = 1. / (grid.h() * grid.h());
@@ -723,7 +724,9 @@ namespace femp
 
   template <int dim>
   void
-  HeatTransfer<dim>::advance(const double dt, const double time)
+  HeatTransfer<dim>::advance(const double           dt,
+                             const double           time,
+                             const CellFields<dim> &fields)
   {
     Assert(!frozen, ExcMessage("advance() on a frozen temperature field"));
     if (std::isnan(T_floor))
@@ -741,7 +744,7 @@ namespace femp
     StepSums sums;
     conduction_pass(dt, sums);       // pass B: T_new by conduction
     fixed_face_pass(dt, sums);       // fixed-temperature faces
-    convection_pass(dt, sums);       // upwind convection (with a velocity)
+    convection_pass(dt, convection_velocity(fields), sums); // upwind
     source_pass(dt, sums);           // pass C: sources, surface losses
     phase_change_pass(sums);         // pass D: enthalpy iteration
     finish_step(dt, time, sums);     // budget, T_max, ghosts, next limit
@@ -903,7 +906,10 @@ namespace femp
     // the arriving metal the upwind temperature (doc/equations.md).
   template <int dim>
   void
-  HeatTransfer<dim>::convection_pass(const double dt, StepSums &sums)
+  HeatTransfer<dim>::convection_pass(
+    const double                                dt,
+    const std::array<std::vector<double>, dim> *velocity,
+    StepSums &                                  sums)
   {
     const auto & st       = grid.strides();
     const double ih       = 1. / grid.h();

@@ -718,7 +718,7 @@ namespace femp
       s.clear();
     true_mass.clear(), volume.clear(), visc.clear();
     eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
-    auto &     handler = points.particle_handler();
+    auto &     handler = points.particle_handler_for_update();
     const auto h       = grid.h();
     {
       const std::size_t n = handler.n_locally_owned_particles();

@@ -445,7 +445,8 @@ namespace femp
   void
   SolidStress<dim>::advance(const double               t,
                             const std::vector<double> &T,
-                            const bool                 final)
+                            const bool                 final,
+                            const NodalForces *        external_forces)
   {
     check_fe_zone_solid(T, t);
     fem.new_temperatures(T);
@@ -469,7 +470,7 @@ namespace femp
         // (Cells of the FE zone: the elements interpolate their own.)
         for (const auto c : mpm_cells)
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
-        step(t_next - t_solid, w);
+        step(t_next - t_solid, w, external_forces);
         T_solid.swap(T_next);
         phase_K_dt += K * (t_next - t_solid);
         phase_time += t_next - t_solid;
@@ -489,9 +490,11 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::step(const double dt, const double w)
+  SolidStress<dim>::step(const double       dt,
+                         const double       w,
+                         const NodalForces *external_forces)
   {
-    particles_to_grid();                              // 1. P2G
+    particles_to_grid(external_forces);               // 1. P2G
     const double merge_loss = merge_transition_nodes(dt); // 2. transition
     sum_grid_partials();
     // Transfer dissipation, P2G part: point kinetic energy at the start of
@@ -503,7 +506,7 @@ namespace femp
     // after the update (nodes.mass is still the point mass here).
     transfer += grid_point_kinetic(true);
     set_transition_velocities();
-    const double ext_power = external_power();
+    const double ext_power = external_power(external_forces);
     const auto   fe_energy = grid_to_points(dt);      // 3., 4. G2P, FE nodes
     const double remap_work = remap_work_of_step(dt);
     set_grid_velocities();
@@ -518,7 +521,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::particles_to_grid()
+  SolidStress<dim>::particles_to_grid(const NodalForces *external_forces)
   {
     // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
     // partial sums of this rank, on the grid nodes of MPM cells.
@@ -656,7 +659,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::external_power() const
+  SolidStress<dim>::external_power(const NodalForces *external_forces) const
   {
     double ext_power = 0;
     if (external_forces) // partial forces: the rank sum is the total

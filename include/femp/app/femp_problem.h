@@ -22,6 +22,7 @@
 #include <femp/coupling/fluid_solid_forces.h>
 #include <femp/coupling/point_heat_exchange.h>
 #include <femp/grid/background_grid.h>
+#include <femp/grid/cell_fields.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/heat/laser.h>
@@ -143,6 +144,12 @@ namespace femp
     /// The melting regime of the scene's laser (normalized enthalpy).
     void
     print_melting_regime() const;
+
+    /// The shared cell fields of the present state (cell_fields.h), for
+    /// the modules that read them: T, gamma and alpha of the heat, the
+    /// cell velocity of the flow (when on).
+    CellFields<dim>
+    cell_fields() const;
 
     // The steps of the macro time step (paper sec. 2.6), in run() order.
     /// The step chooser of the SimulationControl.

@@ -75,18 +75,16 @@ namespace femp
                 const BackgroundGrid<dim> &grid,
                 const MaterialPoints<dim> &points);
 
-    /// Cell temperature (ghost values needed), K, for the Marangoni stress
-    /// and the recoil pressure; required when either is switched on.
-    void
-    set_temperature(const std::vector<double> *T);
-
     /// Everything of the surface for the current cell classes @p type
     /// (flow_cells::Type per cell of the local box, ghosts current) and the
     /// owned fluid cells @p fluid_cells: near-fluid marks, alpha, theta and
-    /// (when on) p_s and the Marangoni nodal forces.
+    /// (when on) p_s and the Marangoni nodal forces. @p T: the cell
+    /// temperature (ghost values needed), K, for the Marangoni stress and
+    /// the recoil pressure; required when either is switched on.
     void
     update(const std::vector<double> &       type,
-           const std::vector<std::uint32_t> &fluid_cells);
+           const std::vector<std::uint32_t> &fluid_cells,
+           const std::vector<double> *       T);
 
     /// 1 on the cells within one cell of a fluid cell (ghosts exchanged),
     /// 0 elsewhere: where alpha_cell() is computed, and the band of the
@@ -155,12 +153,14 @@ namespace femp
     /// traction.
     void
     capillary_and_marangoni(const std::vector<double> &       type,
-                            const std::vector<std::uint32_t> &fluid_cells);
+                            const std::vector<std::uint32_t> &fluid_cells,
+                            const std::vector<double> *       temperature);
     /// Add the recoil pressure of the surface cells to p_s, from the
     /// surface temperature of their neighbourhood (median over the surface
     /// cells among the 3^dim neighbours).
     void
-    add_recoil_pressure(const std::vector<std::uint32_t> &fluid_cells);
+    add_recoil_pressure(const std::vector<std::uint32_t> &fluid_cells,
+                        const std::vector<double> *       temperature);
     /// Average the capillary part of p_s over neighbouring surface cells
     /// (Melt flow/Curvature smoothing passes).
     void
@@ -169,7 +169,6 @@ namespace femp
     const Parameters           prm;
     const BackgroundGrid<dim> &grid;
     const MaterialPoints<dim> &points;
-    const std::vector<double> *temperature = nullptr;
 
     static constexpr unsigned int         n_corners = 1u << dim;
     std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets

@@ -43,6 +43,7 @@
 #include <femp/flow/free_surface.h>
 #include <femp/flow/pressure_solver.h>
 #include <femp/grid/background_grid.h>
+#include <femp/grid/cell_fields.h>
 #include <femp/grid/material_points.h>
 
 #include <array>
@@ -172,16 +173,6 @@ namespace femp
                        MaterialPoints<dim> &      points,
                        TimerOutput *              timer = nullptr);
 
-    /// Liquid fraction gamma per cell of the local box (ghost values
-    /// needed) for the Darcy term; nullptr (default): gamma = 1 everywhere.
-    void
-    set_liquid_fraction(const std::vector<double> *gamma);
-
-    /// Cell temperature (ghost values needed), K, for the Marangoni stress
-    /// and the recoil pressure; required when either is switched on.
-    void
-    set_temperature(const std::vector<double> *T);
-
     /// Limits from the current point velocities (collective).
     StepLimits
     stable_time_step() const;
@@ -189,9 +180,14 @@ namespace femp
     /// One fluid step of length @p dt. Refuses a step above the viscous or
     /// capillary limit; a step whose new nodal speed would move points more
     /// than a cell is redone as two halves (at most 2^20 pieces); stops with
-    /// a diagnostic when the solution becomes non-finite.
+    /// a diagnostic when the solution becomes non-finite. Of @p fields it
+    /// reads (ghost values needed):
+    ///  - the liquid fraction gamma for the Darcy term; nullptr: gamma = 1
+    ///    everywhere (no damping);
+    ///  - the temperature for the Marangoni stress and the recoil pressure;
+    ///    required when either is switched on.
     void
-    step(const double dt);
+    step(const double dt, const CellFields<dim> &fields = CellFields<dim>());
 
     /// Pressure per cell of the local box (ghosts exchanged), Pa; zero
     /// outside fluid cells.
@@ -214,7 +210,7 @@ namespace femp
       return type;
     }
     /// Cell-centred fluid velocity (mean of the nodes of fluid cells, zero
-    /// elsewhere, ghosts exchanged), for HeatTransfer::set_velocity().
+    /// elsewhere, ghosts exchanged): CellFields::velocity.
     const std::array<std::vector<double>, dim> &
     cell_velocity() const
     {
@@ -260,7 +256,9 @@ namespace femp
     /// correction, G2P); redone as two halves (recursively, @p depth) when
     /// the new nodal speed would move a point more than a cell.
     void
-    advance(const double dt, const unsigned int depth);
+    advance(const double           dt,
+            const unsigned int     depth,
+            const CellFields<dim> &fields);
     /// P2G: classify_cells() and transfer_to_grid().
     void
     particles_to_grid();
@@ -268,11 +266,12 @@ namespace femp
     classify_cells();
     void
     transfer_to_grid();
-    /// FreeSurface::update() for the current cells.
+    /// FreeSurface::update() for the current cells and temperature @p T.
     void
-    update_free_surface();
+    update_free_surface(const std::vector<double> *T);
+    /// u*; @p gamma: the liquid fraction of the Darcy term (nullptr: 1).
     void
-    predictor(const double dt);
+    predictor(const double dt, const std::vector<double> *gamma);
     /// The fluid cells as the pressure solver sees them.
     typename PressureSolver<dim>::FluidCells
     fluid_cell_set() const;
@@ -335,7 +334,6 @@ namespace femp
     const BackgroundGrid<dim> &grid;
     MaterialPoints<dim> &      points;
     TimerOutput *              timer;
-    const std::vector<double> *gamma = nullptr;
 
     static constexpr unsigned int n_corners = 1u << dim;
     std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets

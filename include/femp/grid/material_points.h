@@ -231,11 +231,13 @@ namespace femp
     {
       return handler;
     }
-    /// Write access for the flow and solid solvers, which update velocities,
-    /// positions and stresses (call points_moved() after a point left its
-    /// cell).
+    /// Write access for the writers of the points' state: the flow and
+    /// solid solvers, which update velocities, positions and stresses
+    /// (call points_moved() after a point left its cell), and
+    /// PointHeatExchange (their temperatures). Readers use
+    /// particle_handler().
     Particles::ParticleHandler<dim> &
-    particle_handler()
+    particle_handler_for_update()
     {
       return handler;
     }

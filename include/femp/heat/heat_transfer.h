@@ -24,6 +24,7 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/grid/background_grid.h>
+#include <femp/grid/cell_fields.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/ray_traced_absorption.h>
 #include <femp/base/material.h>
@@ -196,28 +197,26 @@ namespace femp
       return trace_result;
     }
 
-    /// Cell-centred velocity, one array per direction over the local box
-    /// (with ghosts); nullptr switches convection off.
-    void
-    set_velocity(const std::array<std::vector<double>, dim> *velocity);
-
     /// Largest stable step for the current state (global), s: diffusion and
-    /// convection, without safety factor.
+    /// convection (with the velocity of @p fields, see advance()), without
+    /// safety factor.
     double
-    stable_time_step();
+    stable_time_step(const CellFields<dim> &fields = CellFields<dim>());
 
     /// Advance T and gamma by one forward-Euler step of size @p dt from time
-    /// @p time. Throws if the state turns non-finite.
+    /// @p time. Of @p fields only the cell velocity is read: with 'Advection
+    /// by melt flow = upwind' it convects T (ghost values needed); without
+    /// it (nullptr, or 'points') the 'Prescribed velocity' if given, else
+    /// no convection. Throws if the state turns non-finite.
     void
-    advance(const double dt, const double time);
+    advance(const double           dt,
+            const double           time,
+            const CellFields<dim> &fields = CellFields<dim>());
 
+    /// Cell temperature, K (its only writers are advance(),
+    /// set_cell_temperature(), take_point_enthalpy() and load_state()).
     const std::vector<double> &
     temperature() const
-    {
-      return T;
-    }
-    std::vector<double> &
-    temperature()
     {
       return T;
     }
@@ -298,8 +297,12 @@ namespace femp
     /// Laser density of the last step, W/m^3; surface-loss weight
     /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
     std::vector<double> laser_density, loss_weight;
-    const std::array<std::vector<double>, dim> *velocity = nullptr;
-    std::array<std::vector<double>, dim>        prescribed;
+    /// 'Prescribed velocity' (empty arrays when none).
+    std::array<std::vector<double>, dim> prescribed;
+    /// The velocity that convects T in a step with @p fields (see
+    /// advance()); nullptr: none.
+    const std::array<std::vector<double>, dim> *
+    convection_velocity(const CellFields<dim> &fields) const;
 
     struct SurfaceCell
     {
@@ -386,9 +389,11 @@ namespace femp
     /// Fixed-temperature faces: their flux into the sources.
     void
     fixed_face_pass(const double dt, StepSums &sums);
-    /// Upwind convection with the velocity field (when set).
+    /// Upwind convection with the velocity field @p u (nullptr: none).
     void
-    convection_pass(const double dt, StepSums &sums);
+    convection_pass(const double                                dt,
+                    const std::array<std::vector<double>, dim> *u,
+                    StepSums &                                  sums);
     /// Pass C: the cells with sparse sources (laser, surface losses, fixed
     /// faces), surface losses implicit.
     void

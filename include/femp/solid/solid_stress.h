@@ -164,20 +164,21 @@ namespace femp
     void
     initialize(const std::vector<double> &T, const std::string &directory);
 
-    /// Advance the solid to @p t (see header comment) given the cell
-    /// temperatures @p T at @p t; @p final ends exactly at @p t.
-    void
-    advance(const double t, const std::vector<double> &T, const bool final);
+    /// External forces on the background grid nodes (one array per
+    /// direction over the local node box; partial contributions of this
+    /// rank, summed over ranks with the solid's own), N (2D: N/m); the
+    /// melt flow's (FluidSolidForces::nodal_forces()).
+    using NodalForces = std::array<std::vector<double>, dim>;
 
-    /// Entry point for the melt-flow solver: nodal forces on the background
-    /// grid nodes (one array per direction over the local node box; partial
-    /// contributions of this rank, summed over ranks with the solid's own),
-    /// held constant over the solid sub-steps; nullptr for none.
+    /// Advance the solid to @p t (see header comment) given the cell
+    /// temperatures @p T at @p t; @p final ends exactly at @p t. The
+    /// @p external_forces (nullptr: none) are held constant over the
+    /// solid sub-steps.
     void
-    set_external_nodal_forces(const std::array<std::vector<double>, dim> *f)
-    {
-      external_forces = f;
-    }
+    advance(const double               t,
+            const std::vector<double> &T,
+            const bool                 final,
+            const NodalForces *        external_forces = nullptr);
 
     /// The melt flow runs beside the solid: fluid points keep their
     /// velocity at the gather (SolidMPM::set_flow_owns_fluid_points()).
@@ -309,7 +310,6 @@ namespace femp
     /// Per transition node: FE velocity before the merge and the grid
     /// (point) force, for the re-map work there.
     std::vector<double> tr_u, tr_fgrid;
-    const std::array<std::vector<double>, dim> *external_forces = nullptr;
     std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
     std::vector<double>       T_solid, T_prev, T_next;
     double                    t_solid = 0, t_prev = 0, dt_solid = 0;
@@ -340,9 +340,10 @@ namespace femp
     double phase_K_dt = 0, phase_time = 0;
 
     /// One solid step of size @p dt; @p w: weight of the step's end time
-    /// between the last two temperature fields.
+    /// between the last two temperature fields; @p external_forces as in
+    /// advance().
     void
-    step(const double dt, const double w);
+    step(const double dt, const double w, const NodalForces *external_forces);
     /// Guard of the FE zone (fe_zone_depth.h): throws FeZoneMelted on every
     /// rank if a cell of the zone is at or above the solidus in @p T at
     /// time @p t, naming the element and the zone top to use (collective).
@@ -366,7 +367,7 @@ namespace femp
     /// velocities of the re-mapped momenta; after the stresses, the energy
     /// balance and the blow-up check.
     void
-    particles_to_grid();
+    particles_to_grid(const NodalForces *external_forces);
     double
     merge_transition_nodes(const double dt);
     void
@@ -376,7 +377,7 @@ namespace femp
     void
     set_transition_velocities();
     double
-    external_power() const;
+    external_power(const NodalForces *external_forces) const;
     std::array<double, 2>
     grid_to_points(const double dt);
     double
