@@ -1308,6 +1308,11 @@ namespace femp
     if (Utilities::MPI::min(int(error.empty()), comm) == 0)
       throw InputError("Checkpoint/Resume from", directory,
                        Utilities::MPI::broadcast(comm, error, 0));
+  }
+
+
+  template <int dim>
+  void
   SolidStress<dim>::set_mass_scaling(const double s)
   {
     // Velocities kept (the kinematic velocity of the thermal expansion
