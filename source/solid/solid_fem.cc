@@ -1158,16 +1158,24 @@ namespace femp
   void
   SolidFEM<dim>::set_mass_scaling(const double s)
   {
-    const double r = s / mass_scale;
-    mass_scale     = s;
+    const double old = mass_scale, r = s / old;
+    mass_scale       = s;
     if (!prm.enabled)
       return;
-    for (auto &m : owned_mass)
-      m *= r;
-    for (auto &m : inv_mass) // 0 at transition nodes stays 0
-      m /= r;
-    for (auto &m : tr_mass)
-      m *= r;
+    if (mass_scale_setup == 0)
+      {
+        mass_scale_setup = old;
+        inv_mass_setup   = inv_mass;
+        owned_mass_setup = owned_mass;
+        tr_mass_setup    = tr_mass;
+      }
+    const double f = s / mass_scale_setup;
+    for (std::size_t i = 0; i < owned_mass.size(); ++i)
+      owned_mass[i] = owned_mass_setup[i] * f;
+    for (std::size_t i = 0; i < inv_mass.size(); ++i) // 0 at transition nodes
+      inv_mass[i] = inv_mass_setup[i] / f;
+    for (std::size_t i = 0; i < tr_mass.size(); ++i)
+      tr_mass[i] = tr_mass_setup[i] * f;
     kinetic *= r;
   }
 

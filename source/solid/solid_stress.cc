@@ -869,6 +869,7 @@ namespace femp
   void
   SolidStress<dim>::set_small_mass_cutoff(const double fraction)
   {
+    small_mass_fraction = fraction;
     small_mass = fraction * scaling.factor * mat.density *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
@@ -1266,9 +1267,9 @@ namespace femp
       // The MPM side restored its factor with its state; the FE zone's
       // masses and the small-mass threshold follow the factor from the one
       // of the setup.
-      small_mass *= b[0] / scaling.factor;
       fem.set_mass_scaling(b[0]);
-      scaling.factor       = b[0];
+      scaling.factor = b[0];
+      set_small_mass_cutoff(small_mass_fraction);
       scaling.last_ratio   = b[1];
       scaling.kinetic_jump = b[2];
       phase_K_dt = b[3], phase_time = b[4];
@@ -1322,10 +1323,10 @@ namespace femp
     scaling.kinetic_jump += (r - 1) * K;
     K *= r;
     K_points *= r;
-    small_mass *= r;
     mpm.set_mass_scaling(s);
     fem.set_mass_scaling(s);
     scaling.factor = s;
+    set_small_mass_cutoff(small_mass_fraction); // from the factor, not by r
     dt_solid       = prm.safety_factor * prm.stable_limit(mat, grid.h(), s);
   }
 

@@ -334,6 +334,11 @@ namespace femp
     std::vector<std::uint8_t>  fix;
     std::vector<double>        inv_mass;   ///< 0 at transition nodes
     std::vector<double>        owned_mass; ///< lumped mass at owned nodes
+    /// The masses of the setup's factor, kept from the first change of the
+    /// factor on, so that every later factor scales them once (a resumed
+    /// run then has the same masses bit for bit as the run that went on).
+    std::vector<double> inv_mass_setup, owned_mass_setup, tr_mass_setup;
+    double              mass_scale_setup = 0;
     std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
     std::vector<std::uint32_t> ext_nodes;    ///< box indices
     double                     kinetic = 0;

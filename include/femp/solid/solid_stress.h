@@ -334,6 +334,7 @@ namespace femp
     /// Node mass below which the grid update applies no force (kg, 2D
     /// kg/m; 0: off).
     double small_mass = 0;
+    double small_mass_fraction = 0; ///< the cutoff it was set from
     MassScalingState scaling;
     /// Integral of K over the solid steps of the current advance and its
     /// length (the mean kinetic energy of the controller), J s and s.
