@@ -256,6 +256,7 @@ main(int argc, char *argv[])
           femp::check_output_file_names(prm);
           femp::check_values(prm);
           femp::check_memory(prm, n_ranks);
+          femp::check_disk(prm);
           if (prm.get_integer("Dimension") == 2)
             problem.p2 = std::make_unique<femp::FempProblem<2>>(prm, comm);
           else

@@ -169,6 +169,13 @@ namespace femp
       "any work; a larger scene is refused. 0: the physical memory of this "
       "machine (/proc/meminfo). Range [0, inf).");
     prm.declare_entry(
+      "Disk limit", "0", dealii::Patterns::Double(0.),
+      "Largest output the scene may write, GiB, by a rough estimate from "
+      "the cells, the material points written, the number of field outputs "
+      "('Output interval', 'End time') and the format, made before any "
+      "work; a larger scene is refused. 0: the free space of the file "
+      "system that holds 'Output/Directory'. Range [0, inf).");
+    prm.declare_entry(
       "Maximum flow sub-steps", "100000", dealii::Patterns::Integer(1),
       "Most melt-flow sub-steps within one temperature step; the run stops "
       "with an error when the flow needs more (a flow that blows up makes "
@@ -359,6 +366,91 @@ namespace femp
          "limit' (GiB) if the estimate is wrong or the ranks run on several "
          "machines";
     throw InputError("Run limits/Memory limit", num(limit_gib), s.str());
+  }
+
+
+  void
+  check_disk(dealii::ParameterHandler &prm)
+  {
+    prm.enter_subsection("Run limits");
+    const double limit_gib = prm.get_double("Disk limit");
+    prm.leave_subsection();
+    const int  dim = prm.get_integer("Dimension");
+    const auto lo  = dealii::Utilities::split_string_list(
+      get(prm, "Background grid", "Lower corner"), ',');
+    const auto hi = dealii::Utilities::split_string_list(
+      get(prm, "Background grid", "Upper corner"), ',');
+    const double h = get_double(prm, "Background grid", "Cell size");
+    if (lo.size() < std::size_t(dim) || hi.size() < std::size_t(dim) || !(h > 0))
+      return; // the modules report malformed corners
+    double cells = 1, area = 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        const double e = dealii::Utilities::string_to_double(hi[d]) -
+                         dealii::Utilities::string_to_double(lo[d]);
+        if (!(e > 0))
+          return;
+        cells *= std::ceil(e / h * (1 - 1e-9));
+        if (d < dim - 1)
+          area *= e;
+      }
+    const double bottom  = dealii::Utilities::string_to_double(lo[dim - 1]);
+    const double spacing = get_double(prm, "Material points", "Point spacing");
+    const double top     = get_double(prm, "Material points", "Substrate top");
+    const double layer =
+      get_double(prm, "Material points/Powder layer", "Layer thickness");
+    const double packing =
+      get_double(prm, "Material points/Powder layer", "Packing fraction");
+    const double points =
+      spacing > 0 ? area * (std::max(0., top - bottom) + layer * packing) /
+                      std::pow(spacing, dim) :
+                    0.;
+    // Field outputs: the first, one per 'Output interval', the last (a
+    // step-based cadence is not known before the first step: not counted).
+    const double end      = get_double(prm, "Time stepping", "End time");
+    const double interval = get_double(prm, "Output", "Output interval");
+    const double outputs =
+      2 + (interval > 0 ? std::floor(end / interval * (1 + 1e-12)) : 0.);
+    const std::string which = get(prm, "Output", "Write material points");
+    const double point_outputs =
+      which == "always" ? outputs : (which == "last" ? 1. : 0.);
+    // Bytes per cell and per point and output, measured on the VTU output
+    // of the 3D scenes (about 45 B per cell with every field, 100 B per
+    // point) and rounded up; HDF5 writes about a quarter of that.
+    const double format =
+      get(prm, "Output", "Format") == "hdf5" ? 0.25 : 1.;
+    const double bytes =
+      format * (outputs * cells * 50. + point_outputs * points * 100.);
+    double limit = limit_gib * 1024. * 1024. * 1024.;
+    if (limit_gib == 0)
+      {
+        // The free space where the output goes (its nearest existing
+        // folder).
+        std::filesystem::path dir =
+          std::filesystem::absolute(get(prm, "Output", "Directory"));
+        std::error_code ec;
+        while (!dir.empty() && !std::filesystem::exists(dir, ec) &&
+               dir != dir.root_path())
+          dir = dir.parent_path();
+        const auto space = std::filesystem::space(dir, ec);
+        if (ec)
+          return; // unknown: nothing to check against
+        limit = double(space.available);
+      }
+    if (bytes <= limit)
+      return;
+    std::ostringstream s;
+    s.precision(3);
+    s << "the scene would write about " << bytes / 1e9 << " GB ("
+      << outputs << " field outputs of " << cells << " cells, "
+      << point_outputs << " outputs of " << points
+      << " material points, format " << get(prm, "Output", "Format")
+      << "), more than the " << limit / 1e9 << " GB "
+      << (limit_gib > 0 ? "allowed" : "free where 'Output/Directory' is")
+      << ": raise 'Output/Output interval', set 'Output/Write material "
+         "points = last' or 'never', use 'Output/Format = hdf5', or raise "
+         "'Run limits/Disk limit' (GiB) if the estimate is wrong";
+    throw InputError("Run limits/Disk limit", num(limit_gib), s.str());
   }
 
 

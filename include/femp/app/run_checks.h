@@ -56,6 +56,12 @@ namespace femp
   void
   check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks);
 
+  /// Refuse a scene whose rough output estimate (field outputs of the
+  /// cells, material-point outputs, format) exceeds 'Run limits/Disk limit'
+  /// (default: the free space where 'Output/Directory' lies).
+  void
+  check_disk(dealii::ParameterHandler &prm);
+
   /// Collective: create the output directory, apply 'Output/Existing
   /// directory' (refuse, or clear earlier numbered files) and write the
   /// parameters used to parameters.prm (rank 0). Throws on every rank.
