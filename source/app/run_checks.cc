@@ -295,6 +295,60 @@ namespace femp
   }
 
 
+  namespace
+  {
+    /// Cells of the background grid and metal points (substrate and powder
+    /// layer) of a scene, from its parameters, for the estimates below.
+    struct SceneSize
+    {
+      bool   valid  = false;
+      double cells  = 0;
+      double points = 0;
+    };
+
+    SceneSize
+    scene_size(const dealii::ParameterHandler &prm)
+    {
+      SceneSize  size;
+      const int  dim = prm.get_integer("Dimension");
+      const auto lo  = dealii::Utilities::split_string_list(
+        get(prm, "Background grid", "Lower corner"), ',');
+      const auto hi = dealii::Utilities::split_string_list(
+        get(prm, "Background grid", "Upper corner"), ',');
+      const double h = get_double(prm, "Background grid", "Cell size");
+      if (lo.size() < std::size_t(dim) || hi.size() < std::size_t(dim) ||
+          !(h > 0))
+        return size;
+      double cells = 1, area = 1;
+      for (int d = 0; d < dim; ++d)
+        {
+          const double e = dealii::Utilities::string_to_double(hi[d]) -
+                           dealii::Utilities::string_to_double(lo[d]);
+          if (!(e > 0))
+            return size;
+          cells *= std::ceil(e / h * (1 - 1e-9));
+          if (d < dim - 1)
+            area *= e;
+        }
+      const double bottom = dealii::Utilities::string_to_double(lo[dim - 1]);
+      const double spacing =
+        get_double(prm, "Material points", "Point spacing");
+      const double top = get_double(prm, "Material points", "Substrate top");
+      const double layer =
+        get_double(prm, "Material points/Powder layer", "Layer thickness");
+      const double packing =
+        get_double(prm, "Material points/Powder layer", "Packing fraction");
+      size.valid  = true;
+      size.cells  = cells;
+      size.points = spacing > 0 ?
+                      area * (std::max(0., top - bottom) + layer * packing) /
+                        std::pow(spacing, dim) :
+                      0.;
+      return size;
+    }
+  } // namespace
+
+
   void
   check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks)
   {
@@ -302,38 +356,11 @@ namespace femp
     const double limit_gib     = prm.get_double("Memory limit");
     limits.max_flow_substeps   = prm.get_integer("Maximum flow sub-steps");
     prm.leave_subsection();
-    const int dim = prm.get_integer("Dimension");
-
     // Cells of the background grid, metal points (substrate and powder).
-    const auto lo = dealii::Utilities::split_string_list(
-      get(prm, "Background grid", "Lower corner"), ',');
-    const auto hi = dealii::Utilities::split_string_list(
-      get(prm, "Background grid", "Upper corner"), ',');
-    const double h = get_double(prm, "Background grid", "Cell size");
-    if (lo.size() < std::size_t(dim) || hi.size() < std::size_t(dim) || !(h > 0))
+    const SceneSize size = scene_size(prm);
+    if (!size.valid)
       return; // the modules report malformed corners
-    double cells = 1, area = 1, extent[3] = {0, 0, 0};
-    for (int d = 0; d < dim; ++d)
-      {
-        extent[d] = dealii::Utilities::string_to_double(hi[d]) -
-                    dealii::Utilities::string_to_double(lo[d]);
-        if (!(extent[d] > 0))
-          return;
-        cells *= std::ceil(extent[d] / h * (1 - 1e-9));
-        if (d < dim - 1)
-          area *= extent[d];
-      }
-    const double bottom   = dealii::Utilities::string_to_double(lo[dim - 1]);
-    const double spacing  = get_double(prm, "Material points", "Point spacing");
-    const double top      = get_double(prm, "Material points", "Substrate top");
-    const double layer    =
-      get_double(prm, "Material points/Powder layer", "Layer thickness");
-    const double packing  =
-      get_double(prm, "Material points/Powder layer", "Packing fraction");
-    double points = 0;
-    if (spacing > 0)
-      points = area * (std::max(0., top - bottom) + layer * packing) /
-               std::pow(spacing, dim);
+    const double cells = size.cells, points = size.points;
     // Probe line samples.
     double samples = 0;
     for (const auto &l : dealii::Utilities::split_string_list(
@@ -375,36 +402,10 @@ namespace femp
     prm.enter_subsection("Run limits");
     const double limit_gib = prm.get_double("Disk limit");
     prm.leave_subsection();
-    const int  dim = prm.get_integer("Dimension");
-    const auto lo  = dealii::Utilities::split_string_list(
-      get(prm, "Background grid", "Lower corner"), ',');
-    const auto hi = dealii::Utilities::split_string_list(
-      get(prm, "Background grid", "Upper corner"), ',');
-    const double h = get_double(prm, "Background grid", "Cell size");
-    if (lo.size() < std::size_t(dim) || hi.size() < std::size_t(dim) || !(h > 0))
+    const SceneSize size = scene_size(prm);
+    if (!size.valid)
       return; // the modules report malformed corners
-    double cells = 1, area = 1;
-    for (int d = 0; d < dim; ++d)
-      {
-        const double e = dealii::Utilities::string_to_double(hi[d]) -
-                         dealii::Utilities::string_to_double(lo[d]);
-        if (!(e > 0))
-          return;
-        cells *= std::ceil(e / h * (1 - 1e-9));
-        if (d < dim - 1)
-          area *= e;
-      }
-    const double bottom  = dealii::Utilities::string_to_double(lo[dim - 1]);
-    const double spacing = get_double(prm, "Material points", "Point spacing");
-    const double top     = get_double(prm, "Material points", "Substrate top");
-    const double layer =
-      get_double(prm, "Material points/Powder layer", "Layer thickness");
-    const double packing =
-      get_double(prm, "Material points/Powder layer", "Packing fraction");
-    const double points =
-      spacing > 0 ? area * (std::max(0., top - bottom) + layer * packing) /
-                      std::pow(spacing, dim) :
-                    0.;
+    const double cells = size.cells, points = size.points;
     // Field outputs: the first, one per 'Output interval', the last (a
     // step-based cadence is not known before the first step: not counted).
     const double end      = get_double(prm, "Time stepping", "End time");
