@@ -490,13 +490,17 @@ namespace femp
     // particles_in_cell() range per cell costs ~20 ns per point). Valid
     // until points are inserted, removed or re-sorted: call again then.
     point_properties.clear();
+    point_locations.clear();
     cell_begin.assign(1, 0);
     pushed_temperature.assign(grid.n_local(),
                               std::numeric_limits<double>::quiet_NaN());
     for (const auto &[idx, cell] : occupied)
       {
         for (auto &particle : handler.particles_in_cell(cell))
-          point_properties.push_back(particle.get_properties().data());
+          {
+            point_properties.push_back(particle.get_properties().data());
+            point_locations.push_back(&particle.get_location());
+          }
         cell_begin.push_back(point_properties.size());
       }
   }
@@ -518,9 +522,12 @@ namespace femp
     std::vector<double>        volume(grid.n_local(), 0.);
     std::vector<double>        fluid_cell(grid.n_local(), 0.);
     bool                       any_fluid = false;
-    for (const auto &particle : handler)
+    // Over the cached position and property pointers (the points of each
+    // occupied cell, in the handler's order), not deal.II's iterator.
+    AssertDimension(point_locations.size(), handler.n_locally_owned_particles());
+    for (std::size_t k = 0; k < point_locations.size(); ++k)
       {
-        const Point<dim> p = particle.get_location();
+        const Point<dim> &p = *point_locations[k];
         std::array<int, dim> ijk;
         unsigned int         bit = 0, m = 1;
         for (int d = 0; d < dim; ++d)
@@ -534,7 +541,7 @@ namespace femp
           }
         const auto idx = grid.local_index(ijk);
         mask[idx] |= (std::uint64_t(1) << bit);
-        const auto v = particle.get_properties();
+        const double *const v = point_properties[k];
         volume[idx] += v[P::volume];
         if (v[P::state] == fluid || v[P::peak_temperature] > Ts)
           fluid_cell[idx] = 1, any_fluid = true;
@@ -924,7 +931,9 @@ namespace femp
         const auto range = handler.particles_in_cell(occupied[c_check].second);
         if (range.begin() == range.end() ||
             range.begin()->get_properties().data() !=
-              point_properties[cell_begin[c_check]])
+              point_properties[cell_begin[c_check]] ||
+            &range.begin()->get_location() !=
+              point_locations[cell_begin[c_check]])
           {
             index_occupied_cells();
             return;
@@ -933,9 +942,11 @@ namespace femp
     // Merge the old occupied list with the changed cells (both increasing).
     decltype(occupied)         new_occupied;
     std::vector<double *>      new_pointers;
+    std::vector<const Point<dim> *> new_locations;
     std::vector<std::uint32_t> new_begin(1, 0);
     new_occupied.reserve(occupied.size() + changed.size());
     new_pointers.reserve(point_properties.size());
+    new_locations.reserve(point_locations.size());
     std::size_t c = 0, k = 0;
     while (c < occupied.size() || k < changed.size())
       {
@@ -955,7 +966,10 @@ namespace femp
               {
                 new_occupied.emplace_back(ik, cell);
                 for (auto &particle : handler.particles_in_cell(cell))
-                  new_pointers.push_back(particle.get_properties().data());
+                  {
+                    new_pointers.push_back(particle.get_properties().data());
+                    new_locations.push_back(&particle.get_location());
+                  }
                 new_begin.push_back(new_pointers.size());
               }
             ++k;
@@ -968,12 +982,16 @@ namespace femp
             new_pointers.insert(new_pointers.end(),
                                 point_properties.begin() + cell_begin[c],
                                 point_properties.begin() + cell_begin[c + 1]);
+            new_locations.insert(new_locations.end(),
+                                 point_locations.begin() + cell_begin[c],
+                                 point_locations.begin() + cell_begin[c + 1]);
             new_begin.push_back(new_pointers.size());
             ++c;
           }
       }
     occupied.swap(new_occupied);
     point_properties.swap(new_pointers);
+    point_locations.swap(new_locations);
     cell_begin.swap(new_begin);
 #ifdef DEBUG
     // Debug builds: the refreshed lists must equal a full rebuild, and the
@@ -986,10 +1004,11 @@ namespace femp
              ExcMessage("stale point count of the particle handler"));
       const auto o = occupied;
       const auto p = point_properties;
+      const auto l = point_locations;
       const auto b = cell_begin;
       index_occupied_cells();
       Assert(o.size() == occupied.size() && p == point_properties &&
-               b == cell_begin,
+               l == point_locations && b == cell_begin,
              ExcMessage("refreshed point cache differs from a rebuild"));
       for (std::size_t i = 0; i < o.size(); ++i)
         Assert(o[i].first == occupied[i].first,

@@ -292,6 +292,9 @@ namespace femp
     // cell_begin[c+1]).
     std::vector<double *>      point_properties;
     std::vector<std::uint32_t> cell_begin;
+    // Where the positions of the same points live in the pool (valid and
+    // refreshed together with point_properties).
+    std::vector<const Point<dim> *> point_locations;
     // Per local cell, the temperature cells_to_points() last gave its
     // points (NaN: not given since the cell's points changed).
     std::vector<double> pushed_temperature;

@@ -100,6 +100,9 @@ namespace femp
       std::vector<std::string> fixed_faces, roller_faces;
       std::string              energy_file = "solid_energy.csv";
       std::string              probe_file  = "solid_probes.csv";
+      /// Simulated time between two rows of the energy and probe files, s
+      /// (0: every solid step).
+      double                   row_interval = 0;
       std::vector<Point<dim>>  probes;
 
       static void
@@ -392,6 +395,10 @@ namespace femp
                   const double                 transfer,
                   const double                 work,
                   const double                 remap_work);
+    /// Whether the step from @p t_old to @p t_new ends with a row of the
+    /// energy and probe files ('Row interval').
+    bool
+    row_due(const double t_old, const double t_new) const;
     void
     write_rows();
     /// At the end of a solid advance (points still gathered, collective):
