@@ -107,8 +107,6 @@ namespace femp
                       "not make the explicit update unstable; 0 is off. "
                       "Dimensionless, range [0, 1) (doc/solid.md \"Small "
                       "node masses\").");
-    prm.declare_entry("Gravity", "0, 0, 0", Patterns::Anything(),
-                      "Gravitational acceleration, m/s^2 (dim components).");
     prm.declare_entry("Fixed faces", "", Patterns::Anything(),
                       "Domain faces whose grid nodes are fixed (zero "
                       "velocity): a comma-separated list of x-, x+, y-, y+, "
@@ -156,9 +154,6 @@ namespace femp
     max_factor        = prm.get_double("Maximum factor");
     prm.leave_subsection();
     small_mass_cutoff = prm.get_double("Small mass cutoff");
-    const Point<dim> g = parse_point<dim>(prm.get("Gravity"), "Solid/Gravity");
-    for (int d = 0; d < dim; ++d)
-      gravity[d] = g[d];
     fixed_faces  = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
     roller_faces = parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
     energy_file  = prm.get("Energy file");

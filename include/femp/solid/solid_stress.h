@@ -96,6 +96,8 @@ namespace femp
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
       double                   small_mass_cutoff = 0.05;
+      /// m/s^2 (default: none); not an input of Solid: FempProblem sets
+      /// it from Physics/Gravity.
       Tensor<1, dim>           gravity;
       std::vector<std::string> fixed_faces, roller_faces;
       std::string              energy_file = "solid_energy.csv";
