@@ -60,7 +60,7 @@ namespace
     prm.parse_input(in, name);
     Material material;
     material.parse_parameters(prm);
-    SolidMaterial solid;
+    SolidMaterial solid(material);
     solid.parse_parameters(prm);
     if (prm.get_integer("Dimension") == 2)
       {

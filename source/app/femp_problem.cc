@@ -103,8 +103,6 @@ namespace femp
     if (solid_enabled)
       {
         solid_material.parse_parameters(prm);
-        solid_material.density          = material.density;
-        solid_material.melt_temperature = material.solidus;
         solid_prm.parse_parameters(prm);
         solid_prm.gravity = gravity;
         solid_prm.check(solid_material, grid_prm);

@@ -229,7 +229,7 @@ namespace femp
       return;
     set_zone();
     create_mesh();
-    const double m_el = mat.density * V * mass_scaling / n_corners;
+    const double m_el = mat.density() * V * mass_scaling / n_corners;
     std::vector<std::array<int, dim>> node_ijk(n_local);
     const auto cells = local_elements(node_ijk);
     set_node_box(node_ijk);
@@ -866,11 +866,11 @@ namespace femp
     const double           mfac  = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     const double           kfac  = prm.hourglass_coefficient * mfac * V * bb / nc;
     const double           vfac  = mat.bulk_viscosity * h *
-                          std::sqrt(mfac * mat.density * mass_scale) /
+                          std::sqrt(mfac * mat.density() * mass_scale) /
                           (dt > 0 ? dt : 1.);
     double                 mg[dim];
     for (int d = 0; d < dim; ++d)
-      mg[d] = mat.density * V / nc * g[d];
+      mg[d] = mat.density() * V / nc * g[d];
     // The node forces are zero here (zeroed by the node update, or at
     // setup); the elements add theirs.
     double       *F[dim];

@@ -200,7 +200,7 @@ namespace femp
                                              const double         s) const
   {
     const double c  = std::sqrt(m.max_p_wave_modulus() /
-                               ((s > 0 ? s : mass_scaling) * m.density));
+                               ((s > 0 ? s : mass_scaling) * m.density()));
     const double b1 = m.bulk_viscosity;
     return h / (std::sqrt(double(dim)) * c) * (std::sqrt(1 + b1 * b1) - b1);
   }
@@ -218,7 +218,7 @@ namespace femp
          "- b1) = "
       << limit
       << " s (h = " << g.cell_size << " m, largest P-wave modulus "
-      << m.max_p_wave_modulus() << " Pa, density " << m.density
+      << m.max_p_wave_modulus() << " Pa, density " << m.density()
       << " kg/m^3, mass scaling " << mass_scaling
       << "); use 0 (automatic) or a smaller step";
     require(time_step <= limit, "Solid/Time step", time_step, s.str());
@@ -865,7 +865,7 @@ namespace femp
   SolidStress<dim>::set_small_mass_cutoff(const double fraction)
   {
     small_mass_fraction = fraction;
-    small_mass = fraction * scaling.factor * mat.density *
+    small_mass = fraction * scaling.factor * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
 
@@ -1030,7 +1030,7 @@ namespace femp
   {
     if (!guard_fe_zone)
       return;
-    const double T_s    = mat.melt_temperature;
+    const double T_s    = mat.melt_temperature();
     double       T_max  = -std::numeric_limits<double>::infinity();
     for (const auto c : fe_cells)
       T_max = std::max(T_max, T[c]);

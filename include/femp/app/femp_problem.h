@@ -104,7 +104,8 @@ namespace femp
     bool                                      heat_enabled = true;
     typename IncompressibleFlow<dim>::Parameters flow_prm;
     bool                                      solid_enabled = false;
-    SolidMaterial                             solid_material;
+    /// Reads the density and solidus of @ref material.
+    SolidMaterial                             solid_material{material};
     typename SolidStress<dim>::Parameters     solid_prm;
     typename SolidFEM<dim>::Parameters        fem_prm;
     typename TrackShape<dim>::Parameters      track_prm;
