@@ -200,7 +200,10 @@ namespace femp
     , comm(grid.communicator())
     , tria(grid.communicator())
     , fe(1)
-  {}
+  {
+    Assert(prm.enabled, ExcMessage("SolidFEM is built only for an FE zone "
+                                   "that is switched on"));
+  }
 
 
   template <int dim>
@@ -225,8 +228,6 @@ namespace femp
     const double b = 1. / (std::pow(2., dim - 1) * h);
     bb             = n_corners * dim * b * b;
     in_zone_cell.assign(grid.n_local(), 0);
-    if (!prm.enabled)
-      return;
     set_zone();
     create_mesh();
     const double m_el = mat.density() * V * mass_scaling / n_corners;
@@ -621,8 +622,6 @@ namespace femp
   void
   SolidFEM<dim>::new_temperatures(const std::vector<double> &T)
   {
-    if (!prm.enabled)
-      return;
     T_start = T_end;
     for (std::size_t i = 0; i < grid_zone_cells.size(); ++i)
       T_send[i] = T[grid_zone_cells[i]];
@@ -635,7 +634,7 @@ namespace femp
   void
   SolidFEM<dim>::set_external_forces(const std::array<std::vector<double>, dim> *f)
   {
-    if (!prm.enabled || (f == nullptr && ext_nodes.empty()))
+    if (f == nullptr && ext_nodes.empty())
       return;
     for (const auto n : ext_nodes)
       for (int d = 0; d < dim; ++d)
@@ -770,8 +769,6 @@ namespace femp
   std::array<double, 2>
   SolidFEM<dim>::update_nodes(const double dt)
   {
-    if (!prm.enabled)
-      return {{0., 0.}};
     // Element forces summed over ranks; velocities of the transition
     // nodes (zero inverse mass below keeps them).
     sum_shared(frc);
@@ -846,8 +843,6 @@ namespace femp
   double
   SolidFEM<dim>::update_elements(const double dt, const double w)
   {
-    if (!prm.enabled)
-      return 0;
     return element_loop<true>(dt, w);
   }
 
@@ -1076,7 +1071,7 @@ namespace femp
   SolidFEM<dim>::hourglass_energy(const bool reference) const
   {
     const double kappa = reference ? 0.05 : prm.hourglass_coefficient;
-    if (kappa == 0 || !prm.enabled)
+    if (kappa == 0)
       return 0;
     double energy = 0;
     for (std::size_t e = 0; e < element_id.size(); ++e)
@@ -1096,8 +1091,6 @@ namespace femp
   bool
   SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
   {
-    if (!prm.enabled)
-      return false;
     const auto    ijk = grid.cell_of(x);
     std::uint64_t id  = 0;
     for (int d = dim - 1; d >= 0; --d)
@@ -1121,8 +1114,6 @@ namespace femp
   void
   SolidFEM<dim>::cell_fields(std::vector<std::vector<double>> &f) const
   {
-    if (!prm.enabled)
-      return;
     // Element values to the grid ranks owning their cells.
     std::vector<types::global_dof_index> have(element_id.begin(),
                                               element_id.end()),
@@ -1160,8 +1151,6 @@ namespace femp
   {
     const double old = mass_scale, r = s / old;
     mass_scale       = s;
-    if (!prm.enabled)
-      return;
     if (mass_scale_setup == 0)
       {
         mass_scale_setup = old;
@@ -1184,8 +1173,6 @@ namespace femp
   double
   SolidFEM<dim>::elastic_energy() const
   {
-    if (!prm.enabled)
-      return 0;
     double u = 0;
     double s[6];
     for (std::size_t e = 0; e < element_id.size(); ++e)
@@ -1366,8 +1353,45 @@ namespace femp
     // restored state.
     for (int d = 0; d < dim; ++d)
       std::fill(frc[d].begin(), frc[d].end(), 0.);
-    if (prm.enabled)
-      element_loop<false>(0, 1);
+    element_loop<false>(0, 1);
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::save_no_zone(StateWriter &out)
+  {
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    out.put_vector(std::vector<std::uint64_t>()); // element ids
+    for (unsigned int k = 0; k < n_values; ++k)
+      out.put_vector(std::vector<double>());
+    out.put_vector(std::vector<std::uint64_t>()); // node ids
+    for (int d = 0; d < dim; ++d)
+      out.put_vector(std::vector<double>());
+    out.put_vector(std::vector<double>()); // transition-node velocities
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::load_no_zone(std::vector<StateReader> &parts)
+  {
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        StateReader &in  = parts[f];
+        const auto   ids = in.get_vector<std::uint64_t>();
+        for (unsigned int k = 0; k < n_values; ++k)
+          AssertThrow(in.get_vector<double>().size() == ids.size(),
+                      ExcMessage("checkpoint: FE element data damaged"));
+        in.get_vector<std::uint64_t>();
+        for (int d = 0; d < dim; ++d)
+          in.get_vector<double>();
+        const auto tv = in.get_vector<double>();
+        AssertThrow(f > 0 || tv.empty(),
+                    ExcMessage("checkpoint: another number of FE "
+                               "transition nodes"));
+      }
   }
 
 

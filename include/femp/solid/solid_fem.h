@@ -247,6 +247,16 @@ namespace femp
     /// arithmetic as at the end of update_elements()).
     void
     load_state(std::vector<StateReader> &parts);
+    /// The checkpoint section of an FE zone that is off (SolidStress then
+    /// holds no SolidFEM): the layout of save_state() without elements,
+    /// nodes or transition nodes, so that the solid's section keeps one
+    /// format.
+    static void
+    save_no_zone(StateWriter &out);
+    /// Read that section from each of @p parts; like load_state() on an
+    /// empty zone, a checkpoint with transition nodes is refused.
+    static void
+    load_no_zone(std::vector<StateReader> &parts);
 
   private:
     Parameters                 prm;
