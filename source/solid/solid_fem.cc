@@ -848,49 +848,266 @@ namespace femp
 
 
   template <int dim>
+  typename SolidFEM<dim>::LoopConstants
+  SolidFEM<dim>::loop_constants(const double dt) const
+  {
+    const double  h  = grid.h();
+    const double  B  = 1. / (std::pow(2., dim - 1) * h);
+    const double  nu = mat.poisson_ratio;
+    const double  mfac = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    LoopConstants c;
+    c.Bdt  = B * dt;
+    c.VB   = V * B;
+    c.kfac = prm.hourglass_coefficient * mfac * V * bb / n_corners;
+    c.vfac = mat.bulk_viscosity * h *
+             std::sqrt(mfac * mat.density() * mass_scale) / (dt > 0 ? dt : 1.);
+    for (int d = 0; d < dim; ++d)
+      c.mg[d] = mat.density() * V / n_corners * g[d];
+    return c;
+  }
+
+
+  template <int dim>
+  std::size_t
+  SolidFEM<dim>::corner_row_offset(const unsigned int a) const
+  {
+    // Box offset of corner a (bit d: upper side in direction d) from
+    // corner 0, in the directions other than x.
+    std::size_t o = 0;
+    for (int d = 1; d < dim; ++d)
+      o += ((a >> d) & 1u) * box_stride[d];
+    return o;
+  }
+
+
+  // Gather pass: the velocities of the corners of block b (lanes el) as
+  // coefficients of the Walsh-Hadamard transform over the corners:
+  // coefficient m of x is sum_a (prod_{d in m} s_a,d) x_a, so the one-bit
+  // coefficients give the velocity gradient (b_a = s_a B) and the
+  // coefficients with two or more bits the hourglass modes (Gamma =
+  // products of s).
+  template <int dim>
+  [[gnu::always_inline]] inline void
+  SolidFEM<dim>::gather_velocities(const std::size_t b,
+                                   const std::size_t (&el)[simd_lanes],
+                                   const double *const (&vl)[dim],
+                                   simd_double (&Vc)[n_corners][dim]) const
+  {
+    using VD                  = simd_double;
+    constexpr unsigned int nc = n_corners;
+    static_assert(simd_lanes == 4, "the gathers below are written for 4 lanes");
+    if (block_row[b] >= 0)
+      // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
+      // row(a) + l, corner a + 1 node row(a) + l + 1.
+#pragma GCC unroll 4
+      for (unsigned int a = 0; a < nc; a += 2)
+        {
+          const std::size_t r = block_row[b] + corner_row_offset(a);
+          for (int i = 0; i < dim; ++i)
+            {
+              std::memcpy(&Vc[a][i], vl[i] + r, sizeof(VD));
+              std::memcpy(&Vc[a + 1][i], vl[i] + r + 1, sizeof(VD));
+            }
+        }
+    else
+      {
+        const std::uint32_t *c0 = &conn[nc * el[0]], *c1 = &conn[nc * el[1]],
+                            *c2 = &conn[nc * el[2]], *c3 = &conn[nc * el[3]];
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < nc; ++a)
+          for (int i = 0; i < dim; ++i)
+            Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
+                          vl[i][c3[a]]};
+      }
+    fwht<dim>(Vc);
+  }
+
+
+  // Constitutive pass of block @p eb over the step dt: hourglass mode
+  // amplitudes q_alpha += dt Gamma_alpha . v (kept per element), the
+  // temperature at weight w of the advance, E(T_new) read once (for the
+  // constitutive kernel, the hourglass stiffness and the viscous pressure:
+  // returned in E), the velocity gradient, the stress update (eq. 5), the
+  // new viscous pressure; sb holds the new stress. Returns the stress work
+  // of each lane, (sigma_old + sigma_new)/2 : L V plus the viscous work.
+  template <int dim>
+  [[gnu::always_inline]] inline simd_double
+  SolidFEM<dim>::update_block(ElementBlock &                  eb,
+                              const std::size_t (&el)[simd_lanes],
+                              const unsigned int              nl,
+                              const simd_double (&Vc)[n_corners][dim],
+                              const double                    dt,
+                              const double                    w,
+                              const LoopConstants &           c,
+                              StressBlock &                   sb,
+                              simd_double &                   E) const
+  {
+    using VD                 = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    for (unsigned int al = 0; al < n_hg; ++al)
+      for (int i = 0; i < dim; ++i)
+        eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
+    VD Ts, Te;
+    if (nl == W)
+      {
+        std::memcpy(&Ts, &T_start[el[0]], sizeof(VD));
+        std::memcpy(&Te, &T_end[el[0]], sizeof(VD));
+      }
+    else
+      {
+        Ts = VD{T_start[el[0]], T_start[el[1]], T_start[el[2]], T_start[el[3]]};
+        Te = VD{T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
+      }
+    sb.T_old = eb.T;
+    sb.T_new = Ts + w * (Te - Ts);
+    auto Ef  = [&](const unsigned int l) {
+      return mat.youngs_modulus.value(sb.T_new[l]);
+    };
+    sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+    auto Eo  = [&](const unsigned int l) {
+      return mat.youngs_modulus.value(sb.T_old[l]);
+    };
+    sb.E_old = VD{Eo(0), Eo(1), Eo(2), Eo(3)};
+    sb.eps_p = eb.eps_p;
+    VD trL   = {};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        sb.L[i][j] = i < dim && j < dim ? c.Bdt * Vc[1u << j][i] : VD{};
+    for (int i = 0; i < dim; ++i)
+      trL += sb.L[i][i];
+    update_stress_block(mat, sb);
+    // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts summed in
+    // two independent chains; the new viscous pressure.
+    VD sd = {}, so = {};
+    for (int i = 0; i < dim; ++i)
+      {
+        sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
+        for (int j = i + 1; j < dim; ++j)
+          so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
+                (sb.L[i][j] + sb.L[j][i]);
+      }
+    const VD sw = sd + so;
+    const VD wk = 0.5 * V * sw + V * eb.visc * trL;
+    if (mat.bulk_viscosity > 0)
+      eb.visc = c.vfac * simd_sqrt(E) * trL;
+    for (unsigned int k = 0; k < 6; ++k)
+      eb.s[k] = sb.s[k];
+    eb.eps_p = sb.eps_p;
+    eb.T     = sb.T_new;
+    return wk;
+  }
+
+
+  // Force and scatter pass: the corner forces of the next step of block b
+  // (stress @p s, Young's modulus @p E, viscous pressure and hourglass
+  // amplitudes of the block) as coefficients of the same transform:
+  // gravity (m = 0), internal force -V sigma b_a with the viscous pressure
+  // (one-bit m, eq. 9), hourglass -k Gamma q (the others); the transposed
+  // transform gives the corner forces, added to the nodes.
+  template <int dim>
+  [[gnu::always_inline]] inline void
+  SolidFEM<dim>::scatter_forces(const std::size_t    b,
+                                const unsigned int   nl,
+                                const simd_double (&s)[6],
+                                const simd_double    E,
+                                const LoopConstants &c,
+                                double *const (&F)[dim])
+  {
+    using VD                  = simd_double;
+    constexpr unsigned int W  = simd_lanes;
+    constexpr unsigned int nc = n_corners;
+    const ElementBlock &   eb = blocks[b];
+    const VD               k  = c.kfac * E;
+    VD                     C[nc][dim];
+    for (unsigned int al = 0; al < n_hg; ++al)
+      for (int i = 0; i < dim; ++i)
+        C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
+    for (int i = 0; i < dim; ++i)
+      {
+        C[0][i] = VD{} + c.mg[i];
+        for (int j = 0; j < dim; ++j)
+          C[1u << j][i] = -c.VB * (s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
+      }
+    fwht_transpose<dim>(C);
+    if (block_row[b] >= 0)
+      // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1) get
+      // C_a from lane l at node l and C_a+1 at node l + 1, added as one
+      // vector (no two lanes write the same node) and the last one.
+#pragma GCC unroll 4
+      for (unsigned int a = 0; a < nc; a += 2)
+        {
+          const std::size_t r = block_row[b] + corner_row_offset(a);
+          for (int i = 0; i < dim; ++i)
+            {
+              const VD hi = C[a + 1][i];
+              const VD sh = __builtin_shufflevector(hi, VD{}, 4, 0, 1, 2);
+              VD       f;
+              std::memcpy(&f, F[i] + r, sizeof(VD));
+              f += C[a][i] + sh;
+              std::memcpy(F[i] + r, &f, sizeof(VD));
+              F[i][r + W] += hi[W - 1];
+            }
+        }
+    else
+      for (unsigned int l = 0; l < nl; ++l)
+        {
+          const std::uint32_t *cn = &conn[nc * (W * b + l)];
+#pragma GCC unroll 8
+          for (unsigned int a = 0; a < nc; ++a)
+            for (int i = 0; i < dim; ++i)
+              F[i][cn[a]] += C[a][i][l];
+        }
+  }
+
+
+  // Hourglass pass at the transition nodes: the hourglass forces of this
+  // rank's elements there, kept out of the grid's force and added back
+  // locally (eq. 17).
+  template <int dim>
+  void
+  SolidFEM<dim>::transition_hourglass_forces(const double kfac)
+  {
+    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
+    if (!(kfac > 0))
+      return;
+    for (const auto &tc : tr_corners)
+      {
+        const ElementBlock &eb = blocks[tc[0] / simd_lanes];
+        const unsigned int  l  = tc[0] % simd_lanes;
+        const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
+        for (int i = 0; i < dim; ++i)
+          for (unsigned int al = 0; al < n_hg; ++al)
+            tr_hg[dim * tc[2] + i] -=
+              k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
+      }
+  }
+
+
+  template <int dim>
   template <bool update>
   double
   SolidFEM<dim>::element_loop(const double dt, const double w)
   {
-    constexpr unsigned int nc = n_corners;
-    const double           h  = grid.h();
-    const double           B  = 1. / (std::pow(2., dim - 1) * h);
-    const double           Bdt   = B * dt;
-    const double           VB    = V * B;
-    const double           nu    = mat.poisson_ratio;
-    const double           mfac  = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
-    const double           kfac  = prm.hourglass_coefficient * mfac * V * bb / nc;
-    const double           vfac  = mat.bulk_viscosity * h *
-                          std::sqrt(mfac * mat.density() * mass_scale) /
-                          (dt > 0 ? dt : 1.);
-    double                 mg[dim];
-    for (int d = 0; d < dim; ++d)
-      mg[d] = mat.density() * V / nc * g[d];
-    // The node forces are zero here (zeroed by the node update, or at
-    // setup); the elements add theirs.
-    double       *F[dim];
-    const double *vl[dim];
-    for (int d = 0; d < dim; ++d)
-      F[d] = frc[d].data(), vl[d] = vel[d].data();
-    double work = 0;
-    const std::size_t n_el = element_id.size();
     // Blocks of simd_lanes elements, one element per lane of simd_double
     // (GCC vector extension, see constitutive.h); a partial last block
     // repeats its last element in the spare lanes and stores nothing from
     // them. Per element the arithmetic is that of the scalar formulation,
     // and the work is summed in element order. The nodal force sums are in
     // lexicographic element order, the two elements of a block that share a
-    // node summed first (round-off against other orders).
-    using VD               = simd_double;
+    // node summed first (round-off against other orders). The node forces
+    // are zero here (zeroed by the node update, or at setup); the elements
+    // add theirs. The passes of a block (gather, constitutive update,
+    // forces and scatter) run one after the other on the block, fused, so
+    // that its data stay in registers.
+    using VD                 = simd_double;
     constexpr unsigned int W = simd_lanes;
-    static_assert(W == 4, "the gathers below are written for 4 lanes");
-    // Box offset of corner a (bit d: upper side in direction d) from corner 0.
-    auto row_offset = [&](const unsigned int a) {
-      std::size_t o = 0;
-      for (int d = 1; d < dim; ++d)
-        o += ((a >> d) & 1u) * box_stride[d];
-      return o;
-    };
+    const LoopConstants    c = loop_constants(dt);
+    double *               F[dim];
+    const double *         vl[dim];
+    for (int d = 0; d < dim; ++d)
+      F[d] = frc[d].data(), vl[d] = vel[d].data();
+    double                 work = 0;
+    const std::size_t      n_el = element_id.size();
     for (std::size_t b = 0; b < blocks.size(); ++b)
       {
         const std::size_t  e0 = W * b;
@@ -899,100 +1116,17 @@ namespace femp
         for (unsigned int l = 0; l < W; ++l)
           el[l] = e0 + std::min(l, nl - 1);
         ElementBlock &eb = blocks[b];
-        // Walsh-Hadamard transforms over the corners: coefficient m of x is
-        // sum_a (prod_{d in m} s_a,d) x_a, so the one-bit coefficients give
-        // the velocity gradient (b_a = s_a B) and the coefficients with two
-        // or more bits the hourglass modes q_alpha (Gamma = products of s).
-        VD          E;
-        StressBlock sb;
-        for (unsigned int c = 0; c < 6; ++c)
-          sb.s[c] = eb.s[c];
+        VD            E;
+        StressBlock   sb;
+        for (unsigned int k = 0; k < 6; ++k)
+          sb.s[k] = eb.s[k];
         if constexpr (update)
           {
-            VD Vc[nc][dim];
-            if (block_row[b] >= 0)
-              // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
-              // row(a) + l, corner a + 1 node row(a) + l + 1.
-#pragma GCC unroll 4
-              for (unsigned int a = 0; a < nc; a += 2)
-                {
-                  const std::size_t r = block_row[b] + row_offset(a);
-                  for (int i = 0; i < dim; ++i)
-                    {
-                      std::memcpy(&Vc[a][i], vl[i] + r, sizeof(VD));
-                      std::memcpy(&Vc[a + 1][i], vl[i] + r + 1, sizeof(VD));
-                    }
-                }
-            else
-              {
-                const std::uint32_t *c0 = &conn[nc * el[0]],
-                                    *c1 = &conn[nc * el[1]],
-                                    *c2 = &conn[nc * el[2]],
-                                    *c3 = &conn[nc * el[3]];
-#pragma GCC unroll 8
-                for (unsigned int a = 0; a < nc; ++a)
-                  for (int i = 0; i < dim; ++i)
-                    Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
-                                  vl[i][c3[a]]};
-              }
-            fwht<dim>(Vc);
-            // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
-            // element: q += dt Gamma_alpha . v (the same transform).
-            for (unsigned int al = 0; al < n_hg; ++al)
-              for (int i = 0; i < dim; ++i)
-                eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
-            // E(T_new) read once: the constitutive kernel, the hourglass
-            // stiffness and the viscous pressure.
-            VD Ts, Te;
-            if (nl == W)
-              {
-                std::memcpy(&Ts, &T_start[e0], sizeof(VD));
-                std::memcpy(&Te, &T_end[e0], sizeof(VD));
-              }
-            else
-              {
-                Ts = VD{T_start[el[0]], T_start[el[1]], T_start[el[2]],
-                        T_start[el[3]]};
-                Te = VD{T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
-              }
-            sb.T_old    = eb.T;
-            sb.T_new    = Ts + w * (Te - Ts);
-            auto Ef     = [&](const unsigned int l) {
-              return mat.youngs_modulus.value(sb.T_new[l]);
-            };
-            sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
-            auto Eo  = [&](const unsigned int l) {
-              return mat.youngs_modulus.value(sb.T_old[l]);
-            };
-            sb.E_old = VD{Eo(0), Eo(1), Eo(2), Eo(3)};
-            sb.eps_p = eb.eps_p;
-            VD trL   = {};
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j)
-                sb.L[i][j] = i < dim && j < dim ? Bdt * Vc[1u << j][i] : VD{};
-            for (int i = 0; i < dim; ++i)
-              trL += sb.L[i][i];
-            update_stress_block(mat, sb);
-            // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
-            // summed in two independent chains; the new viscous pressure.
-            VD sd = {}, so = {};
-            for (int i = 0; i < dim; ++i)
-              {
-                sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
-                for (int j = i + 1; j < dim; ++j)
-                  so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
-                        (sb.L[i][j] + sb.L[j][i]);
-              }
-            const VD sw = sd + so;
-            const VD wk = 0.5 * V * sw + V * eb.visc * trL;
+            VD Vc[n_corners][dim];
+            gather_velocities(b, el, vl, Vc);
+            const VD wk = update_block(eb, el, nl, Vc, dt, w, c, sb, E);
             for (unsigned int l = 0; l < nl; ++l)
               work += wk[l];
-            if (mat.bulk_viscosity > 0)
-              eb.visc = vfac * simd_sqrt(E) * trL;
-            for (unsigned int c = 0; c < 6; ++c)
-              eb.s[c] = sb.s[c];
-            eb.eps_p = sb.eps_p;
-            eb.T     = sb.T_new;
           }
         else
           {
@@ -1001,67 +1135,9 @@ namespace femp
             };
             E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
           }
-        // Forces of the next step as coefficients of the same transform:
-        // gravity (m = 0), internal force -V sigma b_a with the viscous
-        // pressure (one-bit m, eq. 9), hourglass -k Gamma q (the others);
-        // the transposed transform gives the corner forces.
-        const VD k = kfac * E;
-        VD       C[nc][dim];
-        for (unsigned int al = 0; al < n_hg; ++al)
-          for (int i = 0; i < dim; ++i)
-            C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
-        for (int i = 0; i < dim; ++i)
-          {
-            C[0][i] = VD{} + mg[i];
-            for (int j = 0; j < dim; ++j)
-              C[1u << j][i] =
-                -VB * (sb.s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
-          }
-        fwht_transpose<dim>(C);
-        if (block_row[b] >= 0)
-          // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1)
-          // get C_a from lane l at node l and C_a+1 at node l + 1, added as
-          // one vector (no two lanes write the same node) and the last one.
-#pragma GCC unroll 4
-          for (unsigned int a = 0; a < nc; a += 2)
-            {
-              const std::size_t r = block_row[b] + row_offset(a);
-              for (int i = 0; i < dim; ++i)
-                {
-                  const VD hi = C[a + 1][i];
-                  const VD sh = __builtin_shufflevector(hi, VD{}, 4, 0, 1, 2);
-                  VD       f;
-                  std::memcpy(&f, F[i] + r, sizeof(VD));
-                  f += C[a][i] + sh;
-                  std::memcpy(F[i] + r, &f, sizeof(VD));
-                  F[i][r + W] += hi[W - 1];
-                }
-            }
-        else
-          for (unsigned int l = 0; l < nl; ++l)
-            {
-              const std::uint32_t *c = &conn[nc * (e0 + l)];
-#pragma GCC unroll 8
-              for (unsigned int a = 0; a < nc; ++a)
-                for (int i = 0; i < dim; ++i)
-                  F[i][c[a]] += C[a][i][l];
-            }
+        scatter_forces(b, nl, sb.s, E, c, F);
       }
-
-    // Hourglass forces of this rank's elements at the transition nodes
-    // (kept out of the grid's force, added back locally, eq. 17).
-    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
-    if (kfac > 0)
-      for (const auto &tc : tr_corners)
-        {
-          const ElementBlock &eb = blocks[tc[0] / simd_lanes];
-          const unsigned int  l  = tc[0] % simd_lanes;
-          const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
-          for (int i = 0; i < dim; ++i)
-            for (unsigned int al = 0; al < n_hg; ++al)
-              tr_hg[dim * tc[2] + i] -=
-                k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
-        }
+    transition_hourglass_forces(c.kfac);
     return work;
   }
 
