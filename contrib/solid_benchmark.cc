@@ -63,9 +63,7 @@ namespace
     MaterialPoints<dim> points(pp, mat, grid);
     points.create(300.);
 
-    SolidMaterial sm; // defaults: steel, E 193 GPa, sigma_y 250 MPa
-    sm.density          = mat.density;
-    sm.melt_temperature = mat.solidus;
+    SolidMaterial sm(mat); // defaults: steel, E 193 GPa, sigma_y 250 MPa
     sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;
@@ -138,8 +136,9 @@ namespace
   double
   constitutive_only(const unsigned int n, const unsigned int steps)
   {
-    SolidMaterial sm;
-    sm.melt_temperature = 1e6;
+    Material thermal; // 316L-like defaults, no melting
+    thermal.solidus = 1e6;
+    SolidMaterial sm(thermal);
     sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     states.assign(n, StressPoint());
     double                   sum   = 0;
@@ -171,8 +170,9 @@ namespace
   double
   constitutive_block(const unsigned int n, const unsigned int steps)
   {
-    SolidMaterial sm;
-    sm.melt_temperature = 1e6;
+    Material thermal; // 316L-like defaults, no melting
+    thermal.solidus = 1e6;
+    SolidMaterial sm(thermal);
     sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     constexpr unsigned int W = simd_lanes;
     blocks.resize(n / W);

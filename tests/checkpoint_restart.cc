@@ -12,7 +12,8 @@
 // pressure solver's preconditioner depends on the partition, so results on
 // other rank counts agree to its tolerance only). Last, a corrupt, a
 // truncated and two mismatched checkpoints must be refused before any work,
-// naming the fault, and with the solid one of another FE zone.
+// naming the fault, and with the solid one of another FE zone (without
+// an FE zone: one with the zone switched on).
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
@@ -363,13 +364,28 @@ namespace
              {"Physics", "Heat transfer", "false"},
              {"Time stepping", "Time step", "1e-7"}},
             "Physics/Heat transfer = true, the scene has false");
-    if (solid)
+    // With or without an FE zone: the entry of the scene file.
+    const std::string used  = file_text(scene);
+    const auto        entry = used.find("set Use finite elements");
+    const bool        fe_zone =
+      solid && entry != std::string::npos &&
+      used.substr(entry, used.find('\n', entry) - entry).find("true") !=
+        std::string::npos;
+    if (fe_zone)
       refused("other FE zone",
               {{"Output", "Directory", "out1"},
                {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
                {"Solid FEM", "Zone upper corner",
                 dim == 2 ? "160e-6, 36e-6" : "160e-6, 80e-6, 36e-6"}},
               "Solid FEM/Zone upper corner");
+    else if (solid) // all material points (the 2D scene of the solid)
+      refused("FE zone switched on",
+              {{"Output", "Directory", "out1"},
+               {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
+               {"Solid FEM", "Use finite elements", "true"},
+               {"Solid FEM", "Zone lower corner", "0, 0"},
+               {"Solid FEM", "Zone upper corner", "160e-6, 40e-6"}},
+              "Solid FEM/Use finite elements = false, the scene has true");
     if (root)
       std::cout << (failures == 0 ? "all checks passed" : "CHECKS FAILED")
                 << std::endl;

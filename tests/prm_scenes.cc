@@ -2,8 +2,8 @@
 // parses with femp's full parameter set, and its material, laser and solid
 // data pass femp's checks; nothing is run. For each scene, also whether
 // putting 'include materials/316L.prm' in front of it would change any
-// material value the scene uses (Material, the evaporation data of Heat
-// transfer, and Solid/Material when the solid is solved): a scene for
+// material value the scene uses (Material, with the evaporation data, and
+// Solid/Material when the solid is solved): a scene for
 // which nothing changes could include the file instead of relying on the
 // built-in defaults. Last, a scene in tests/ that includes a material file
 // by a path relative to itself is read from another working directory.
@@ -29,9 +29,9 @@ namespace
       {{"Material"}, "Solidus temperature"},
       {{"Material"}, "Liquidus temperature"},
       {{"Material"}, "Latent heat of fusion"},
-      {{"Heat transfer"}, "Latent heat of evaporation"},
-      {{"Heat transfer"}, "Evaporation temperature"},
-      {{"Heat transfer"}, "Molar mass"},
+      {{"Material"}, "Latent heat of evaporation"},
+      {{"Material"}, "Evaporation temperature"},
+      {{"Material"}, "Molar mass"},
       {{"Solid", "Material"}, "Young's modulus"},
       {{"Solid", "Material"}, "Plastic modulus"},
       {{"Solid", "Material"}, "Yield stress"},
@@ -60,7 +60,7 @@ namespace
     prm.parse_input(in, name);
     Material material;
     material.parse_parameters(prm);
-    SolidMaterial solid;
+    SolidMaterial solid(material);
     solid.parse_parameters(prm);
     if (prm.get_integer("Dimension") == 2)
       {

@@ -35,11 +35,13 @@ namespace
   double
   recoil(const IncompressibleFlow<dim>::Parameters &prm, const double T)
   {
-    const double R = 8.314462618;
-    return prm.recoil_coefficient * prm.ambient_pressure *
-           std::exp(prm.latent_heat_evaporation * prm.molar_mass *
-                    (T - prm.evaporation_temperature) /
-                    (R * T * prm.evaporation_temperature));
+    // The evaporation data of the scenes' material (the defaults).
+    const Material m;
+    const double   R = 8.314462618;
+    return prm.recoil_coefficient * m.ambient_pressure *
+           std::exp(m.latent_heat_evaporation * m.molar_mass *
+                    (T - m.evaporation_temperature) /
+                    (R * T * m.evaporation_temperature));
   }
 
   IncompressibleFlow<dim>::Parameters

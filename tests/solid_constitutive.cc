@@ -73,13 +73,14 @@ main(int argc, char **argv)
 
   // 1. Uniaxial loading and unloading with hardening.
   {
-    SolidMaterial m;
+    Material thermal; // the solidus the update reads
+    thermal.solidus = 1e9;
+    SolidMaterial m(thermal);
     m.youngs_modulus   = PiecewiseLinear(200.);
     m.plastic_modulus  = PiecewiseLinear(20.);
     m.yield_stress     = PiecewiseLinear(1.);
     m.poisson_ratio    = 0.3;
     m.expansion        = 0;
-    m.melt_temperature = 1e9;
     const double E = 200, H = 20, sy = 1, Et = E * H / (E + H);
     StressPoint  s;
     double       eps = 0, err_load = 0, err_unload = 0;
@@ -115,13 +116,14 @@ main(int argc, char **argv)
 
   // 2. Held in x, laterally free, heated; yield stress softens with T.
   {
-    SolidMaterial m;
+    Material thermal; // the solidus the update reads
+    thermal.solidus = 1e9;
+    SolidMaterial m(thermal);
     m.youngs_modulus   = PiecewiseLinear(200.);
     m.plastic_modulus  = PiecewiseLinear(0.);
     m.yield_stress     = PiecewiseLinear::parse("0:1, 100:0.5", "yield");
     m.poisson_ratio    = 0.3;
     m.expansion        = 1e-4;
-    m.melt_temperature = 1e9;
     StressPoint  s;
     double       err_el = 0, err_pl = 0, T = 0;
     const int    n = 1000;
@@ -145,13 +147,14 @@ main(int argc, char **argv)
 
   // 3. Fully constrained block heated: hydrostatic, never yields.
   {
-    SolidMaterial m;
+    Material thermal; // the solidus the update reads
+    thermal.solidus = 1e9;
+    SolidMaterial m(thermal);
     m.youngs_modulus   = PiecewiseLinear(200.);
     m.plastic_modulus  = PiecewiseLinear(0.);
     m.yield_stress     = PiecewiseLinear(1.);
     m.poisson_ratio    = 0.3;
     m.expansion        = 1e-4;
-    m.melt_temperature = 1e9;
     StressPoint s;
     for (int i = 0; i < 100; ++i)
       update_stress(m, Tensor<2, 3>(), i, i + 1., s);
@@ -166,10 +169,11 @@ main(int argc, char **argv)
 
   // 4. Rigid rotation: spin about a skew axis through 2 pi.
   {
-    SolidMaterial m;
+    Material thermal; // the solidus the update reads
+    thermal.solidus = 1e9;
+    SolidMaterial m(thermal);
     m.youngs_modulus   = PiecewiseLinear(200.);
     m.yield_stress     = PiecewiseLinear(1e9);
-    m.melt_temperature = 1e9;
     StressPoint s;
     s.sigma[0][0] = 3, s.sigma[1][1] = -1, s.sigma[2][2] = 0.5;
     s.sigma[0][1] = 0.7, s.sigma[0][2] = -0.2, s.sigma[1][2] = 1.1;
@@ -201,12 +205,13 @@ main(int argc, char **argv)
 
   // 5. Melting and re-solidification.
   {
-    SolidMaterial m;
+    Material thermal; // the solidus the update reads
+    thermal.solidus = 1000;
+    SolidMaterial m(thermal);
     m.youngs_modulus   = PiecewiseLinear(200.);
     m.yield_stress     = PiecewiseLinear(1.);
     m.plastic_modulus  = PiecewiseLinear(0.);
     m.expansion        = 1e-3;
-    m.melt_temperature = 1000;
     StressPoint s;
     uniaxial_step(m, 0.05, 300, 300, s);
     const double before = s.sigma.norm() + s.eps_p;
@@ -225,13 +230,14 @@ main(int argc, char **argv)
   }
   // 6. Stress released with E(T) towards the solidus.
   {
-    SolidMaterial m;
+    Material thermal; // the solidus the update reads
+    thermal.solidus = 1000;
+    SolidMaterial m(thermal);
     m.youngs_modulus   = PiecewiseLinear::parse("300:200, 900:100, 1000:1", "E");
     m.yield_stress     = PiecewiseLinear(1e30);
     m.plastic_modulus  = PiecewiseLinear(0.);
     m.poisson_ratio    = 0.3;
     m.expansion        = 1e-3;
-    m.melt_temperature = 1000;
     const double f     = m.expansion / (1 - 2 * m.poisson_ratio);
     StressPoint  s;
     StressBlock  b{};
@@ -251,7 +257,7 @@ main(int argc, char **argv)
           }
         update_stress_block(m, b);
         const double sigma = s.sigma[0][0];
-        if (T1 < m.melt_temperature)
+        if (T1 < m.melt_temperature())
           {
             const double exact = -m.youngs_modulus.value(T1) * f * (T1 - 300);
             err = worst(err, std::abs(sigma - exact) / std::abs(exact));

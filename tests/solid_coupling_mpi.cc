@@ -36,7 +36,7 @@ namespace
     SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
     auto &          grid   = block.grid;
     auto &          points = *block.points;
-    const SolidMaterial sm = block_material("300:0.02, 400:0.005", 1e6);
+    const SolidMaterial sm = block_material("300:0.02, 400:0.005", block.material);
     auto                sp = block_supports<dim>();
     sp.gravity[1]          = -0.01;
     typename SolidFEM<dim>::Parameters fp;
@@ -88,7 +88,7 @@ main(int argc, char **argv)
   auto &          grid   = block.grid;
   auto &          points = *block.points;
 
-  SolidMaterial sm = block_material("300:0.02, 400:0.005", 1e6);
+  SolidMaterial sm = block_material("300:0.02, 400:0.005", block.material);
   sm.poisson_ratio = 0.3;
   auto sp          = block_supports<dim>();
   sp.gravity[1]    = -0.01;
@@ -161,8 +161,7 @@ main(int argc, char **argv)
   // cell, compress it: 0.16 of the former stress with APIC, 0.015 with
   // FLIP, whose transfers smooth the nodal velocities; doc/solid.md.)
   {
-    block.material.solidus = 450; // the material of the points
-    sm.melt_temperature = 450;
+    block.material.solidus = 450; // the material of the points and the solid
     const Point<dim> hot(0.85, 0.75);
     const auto       ijk = grid.cell_of(hot);
     const bool       mine =

@@ -104,14 +104,12 @@ namespace
     heat.initialize();
     heat.set_metal_fraction(points.metal_fraction());
 
-    SolidMaterial sm;
+    SolidMaterial sm(mat); // density 1, solidus 1e6
     sm.youngs_modulus   = PiecewiseLinear(1.);
     sm.plastic_modulus  = PiecewiseLinear(0.);
     sm.yield_stress     = PiecewiseLinear(1e30);
     sm.poisson_ratio    = 0;
     sm.expansion        = 1;
-    sm.density          = 1;
-    sm.melt_temperature = 1e6;
     sm.bulk_viscosity   = 0.1;
     sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;

@@ -46,7 +46,7 @@ namespace
     auto &          grid   = block.grid;
     auto &          points = *block.points;
 
-    SolidMaterial sm     = block_material("300:0.05, 450:0.01", 450);
+    SolidMaterial sm     = block_material("300:0.05, 450:0.01", block.material);
     sm.poisson_ratio     = 0.3;
     sm.velocity_transfer = transfer;
     auto sp              = block_supports<dim>();

@@ -51,11 +51,9 @@ namespace
       }
     const double n0 = points.n_global_points();
 
-    SolidMaterial sm;
+    SolidMaterial sm(mat); // density 1, solidus 1e6
     sm.youngs_modulus    = PiecewiseLinear(1.);
     sm.poisson_ratio     = 0.3;
-    sm.density           = 1;
-    sm.melt_temperature  = 1e6;
     sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;
     sp.energy_file = "";
@@ -152,10 +150,8 @@ namespace
         p.get_properties()[P::velocity + 0] = 0.8 / dt;
         p.get_properties()[P::velocity + 1] = -0.35 / dt;
       }
-    SolidMaterial sm;
+    SolidMaterial sm(mat); // density 1, solidus 1e6
     sm.youngs_modulus   = PiecewiseLinear(1.);
-    sm.density          = 1;
-    sm.melt_temperature = 1e6;
     typename SolidStress<dim>::Parameters sp;
     sp.energy_file = "";
     sp.time_step   = dt;

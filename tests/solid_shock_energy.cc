@@ -64,14 +64,12 @@ namespace
     MaterialPoints<dim> points(pp, mat, grid);
     points.create(300.);
 
-    SolidMaterial sm;
+    SolidMaterial sm(mat); // density 1, solidus 1650
     sm.youngs_modulus    = PiecewiseLinear(100.);
     sm.plastic_modulus   = PiecewiseLinear(0.5);
     sm.yield_stress      = PiecewiseLinear(o.elastic ? 1e30 : 0.13);
     sm.poisson_ratio     = 0.3;
     sm.expansion         = 1.7e-5;
-    sm.density           = 1;
-    sm.melt_temperature  = mat.solidus;
     sm.bulk_viscosity    = o.b1;
     sm.velocity_transfer = o.flip ? SolidMaterial::VelocityTransfer::flip :
                                     SolidMaterial::VelocityTransfer::apic;

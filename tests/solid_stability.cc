@@ -47,14 +47,12 @@ namespace
     MaterialPoints<dim> points(pp, mat, grid);
     points.create(300.);
 
-    SolidMaterial sm;
+    SolidMaterial sm(mat); // density 1, solidus 1e6
     sm.youngs_modulus   = PiecewiseLinear(100.);
     sm.plastic_modulus  = PiecewiseLinear(0.);
     sm.yield_stress     = PiecewiseLinear(1e30);
     sm.poisson_ratio    = 0.3;
     sm.expansion        = 0;
-    sm.density          = 1;
-    sm.melt_temperature = 1e6;
     typename SolidStress<dim>::Parameters sp;
     sp.time_step   = dt;
     // Impact: free body (the checkerboard modes are zero-energy modes);
@@ -128,9 +126,9 @@ main(int argc, char **argv)
 
   // Forced blow-up: three times the elastic limit.
   {
-    SolidMaterial sm;
+    const Material thermal = unit_material(); // density 1
+    SolidMaterial  sm(thermal);
     sm.youngs_modulus = PiecewiseLinear(100.);
-    sm.density        = 1;
     sm.poisson_ratio  = 0.3;
     typename SolidStress<dim>::Parameters sp;
     const double limit = sp.stable_limit(sm, 0.1);

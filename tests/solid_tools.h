@@ -46,19 +46,17 @@ namespace femp_test
   };
 
   /// The elastic-plastic block material: E = 100 Pa, hardening 5 Pa,
-  /// yield stress table @p yield (T:sigma_y), alpha = 1e-4 1/K, rho = 1,
-  /// melting at @p melt_temperature; Poisson ratio as SolidMaterial's
-  /// default unless set by the caller.
+  /// yield stress table @p yield (T:sigma_y), alpha = 1e-4 1/K; density and
+  /// solidus those of @p thermal (the block's material); Poisson ratio as
+  /// SolidMaterial's default unless set by the caller.
   inline SolidMaterial
-  block_material(const std::string &yield, const double melt_temperature)
+  block_material(const std::string &yield, const Material &thermal)
   {
-    SolidMaterial sm;
+    SolidMaterial sm(thermal);
     sm.youngs_modulus   = PiecewiseLinear(100.);
     sm.plastic_modulus  = PiecewiseLinear(5.);
     sm.yield_stress     = PiecewiseLinear::parse(yield, "yield");
     sm.expansion        = 1e-4;
-    sm.density          = 1;
-    sm.melt_temperature = melt_temperature;
     return sm;
   }
 

@@ -41,8 +41,12 @@ namespace femp
                       "too, the flow moves the fluid points and the solid "
                       "the solid points, and the fluid pressure and viscous "
                       "forces on the faces to solid cells load the solid "
-                      "(doc/solid.md, 'Flow and solid together'); "
-                      "'Solid/Gravity' must then be the flow's gravity.");
+                      "(doc/solid.md, 'Flow and solid together').");
+    prm.declare_entry("Gravity", "9.81", Patterns::Double(),
+                      "Magnitude g of the gravitational acceleration, m/s^2, "
+                      "acting along -y (2D) or -z (3D) on the melt flow and "
+                      "on the solid (the one gravity of both); range [0, "
+                      "inf).");
     prm.leave_subsection();
     SimulationControl::Parameters::declare_parameters(prm);
     Material::declare_parameters(prm);
@@ -72,7 +76,12 @@ namespace femp
     melt_flow     = prm.get_bool("Melt flow");
     heat_enabled  = prm.get_bool("Heat transfer");
     solid_enabled = prm.get_bool("Solid stress");
+    const double g = prm.get_double("Gravity");
     prm.leave_subsection();
+    require(g >= 0, "Physics/Gravity", g,
+            "it must be a magnitude >= 0 (m/s^2; it acts along -y in 2D, "
+            "-z in 3D)");
+    gravity[dim - 1] = -g;
     time_prm.parse_parameters(prm);
     material.parse_parameters(prm);
     grid_prm.parse_parameters(prm);
@@ -82,6 +91,7 @@ namespace femp
     heat_prm.check(grid_prm.lower_corner, grid_prm.upper_corner,
                    grid_prm.cell_size);
     flow_prm.parse_parameters(prm);
+    flow_prm.gravity = gravity;
     if (melt_flow)
       flow_prm.check_time_step(grid_prm.cell_size, material.density);
     laser_prm.parse_parameters(prm);
@@ -93,9 +103,8 @@ namespace femp
     if (solid_enabled)
       {
         solid_material.parse_parameters(prm);
-        solid_material.density          = material.density;
-        solid_material.melt_temperature = material.solidus;
         solid_prm.parse_parameters(prm);
+        solid_prm.gravity = gravity;
         solid_prm.check(solid_material, grid_prm);
         fem_prm.parse_parameters(prm);
         if (fem_prm.enabled && fem_prm.automatic_top)
@@ -171,26 +180,6 @@ namespace femp
   void
   FempProblem<dim>::check_across_modules()
   {
-    if (solid_enabled && melt_flow)
-      {
-        // One body under one gravity: the fluid's weight reaches the
-        // solid through the fluid forces, the solid's own through
-        // Solid/Gravity.
-        bool same = true;
-        for (int d = 0; d < dim; ++d)
-          same = same && std::abs(solid_prm.gravity[d] -
-                                  flow_prm.gravity[d]) <=
-                           1e-12 * (1 + flow_prm.gravity.norm());
-        std::ostringstream v, allowed;
-        for (int d = 0; d < dim; ++d)
-          v << (d ? ", " : "") << solid_prm.gravity[d];
-        allowed << "with Physics/Melt flow = true it must be the flow's "
-                   "gravity (Melt flow/Gravity "
-                << -flow_prm.gravity[dim - 1] << " m/s^2 downwards): ";
-        for (int d = 0; d < dim; ++d)
-          allowed << (d ? ", " : "") << flow_prm.gravity[d];
-        require(same, "Solid/Gravity", v.str(), allowed.str());
-      }
     require(time_prm.stop_temperature == 0 ||
               (heat_enabled &&
                time_prm.stop_temperature > heat_prm.initial_temperature),
@@ -290,10 +279,6 @@ namespace femp
   void
   FempProblem<dim>::setup_flow()
   {
-    flow_prm.latent_heat_evaporation = heat_prm.latent_heat_evaporation;
-    flow_prm.evaporation_temperature = heat_prm.evaporation_temperature;
-    flow_prm.molar_mass              = heat_prm.molar_mass;
-    flow_prm.ambient_pressure        = heat_prm.ambient_pressure;
     flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
                                                      *grid, *points, &timer);
     // The flow reads T and gamma, the heat (with 'Advection by melt flow =
@@ -431,20 +416,7 @@ namespace femp
         if (fluid_solid)
           fluid_forces_on_solid();
 
-        if (cooled_down(dt))
-          {
-            control->request_stop();
-            std::ostringstream T_peak; // to 0.01 K: it lies just below
-            T_peak << std::fixed << std::setprecision(2)
-                   << attached_metal_max_temperature(*grid,
-                                                     heat->temperature(),
-                                                     heat->metal_fraction());
-            pcout << "Stopping at t = " << control->time() + dt
-                  << " s: the laser's path has ended and the peak "
-                     "temperature of the metal attached to the substrate "
-                  << T_peak.str() << " K is below "
-                  << time_prm.stop_temperature << " K" << std::endl;
-          }
+        stop_if_cooled_down(dt);
         control->advance(dt);
 
         // 4. Solid stress (SolidMPM + SolidFEM coupled, eqs. 5-17),
@@ -599,14 +571,28 @@ namespace femp
 
 
   template <int dim>
-  bool
-  FempProblem<dim>::cooled_down(const double dt) const
+  void
+  FempProblem<dim>::stop_if_cooled_down(const double dt)
   {
-    return time_prm.stop_temperature > 0 && heat_enabled &&
-           control->time() + dt >= laser->end_time() * (1 - 1e-12) &&
-           attached_metal_max_temperature(*grid, heat->temperature(),
-                                          heat->metal_fraction()) <
-             time_prm.stop_temperature;
+    const bool cooled =
+      time_prm.stop_temperature > 0 && heat_enabled &&
+      control->time() + dt >= laser->end_time() * (1 - 1e-12) &&
+      attached_metal_max_temperature(*grid, heat->temperature(),
+                                     heat->metal_fraction()) <
+        time_prm.stop_temperature;
+    if (!cooled)
+      return;
+    control->request_stop();
+    std::ostringstream T_peak; // to 0.01 K: it lies just below
+    T_peak << std::fixed << std::setprecision(2)
+           << attached_metal_max_temperature(*grid,
+                                             heat->temperature(),
+                                             heat->metal_fraction());
+    pcout << "Stopping at t = " << control->time() + dt
+          << " s: the laser's path has ended and the peak "
+             "temperature of the metal attached to the substrate "
+          << T_peak.str() << " K is below "
+          << time_prm.stop_temperature << " K" << std::endl;
   }
 
 

@@ -60,6 +60,34 @@ namespace
   }
 
 
+  /// For an entry that an older femp declared elsewhere, where it is now
+  /// (appended to deal.II's "No entry with name <...>" message).
+  std::string
+  moved_parameter_hint(const std::string &msg)
+  {
+    static const std::pair<const char *, const char *> moved[] = {
+      {"Gravity",
+       "'Melt flow/Gravity' and 'Solid/Gravity' are now the one "
+       "'Physics/Gravity' (magnitude in m/s^2, acting along -y in 2D, -z in "
+       "3D; 0 for none)"},
+      {"Latent heat of evaporation",
+       "'Heat transfer/Latent heat of evaporation' is now 'Material/Latent "
+       "heat of evaporation'"},
+      {"Evaporation temperature",
+       "'Heat transfer/Evaporation temperature' is now 'Material/Evaporation "
+       "temperature'"},
+      {"Molar mass",
+       "'Heat transfer/Molar mass' is now 'Material/Molar mass'"},
+      {"Ambient pressure",
+       "'Heat transfer/Ambient pressure' is now 'Material/Ambient pressure'"}};
+    for (const auto &m : moved)
+      if (msg.find("No entry with name <" + std::string(m.first) + ">") !=
+          std::string::npos)
+        return std::string(" (") + m.second + ")";
+    return "";
+  }
+
+
   /// One line of an exception's message: deal.II's explanation without its
   /// boilerplate and stack trace.
   std::string
@@ -131,8 +159,9 @@ namespace
       }
     catch (const std::exception &e)
       {
-        throw std::runtime_error("Invalid input in '" + scene +
-                                 "': " + clean_message(e));
+        const std::string msg = clean_message(e);
+        throw std::runtime_error("Invalid input in '" + scene + "': " + msg +
+                                 moved_parameter_hint(msg));
       }
     for (const auto &o : overrides)
       {
@@ -143,9 +172,10 @@ namespace
           }
         catch (const std::exception &e)
           {
+            const std::string msg = clean_message(e);
             throw std::runtime_error("Invalid input in --set '" +
-                                     femp::short_value(o) +
-                                     "': " + clean_message(e));
+                                     femp::short_value(o) + "': " + msg +
+                                     moved_parameter_hint(msg));
           }
       }
   }

@@ -29,6 +29,15 @@ namespace femp
                       "fraction rises linearly from T_s to T_l.");
     prm.declare_entry("Latent heat of fusion", "2.68e5", Patterns::Double(),
                       "L_m, J/kg; range [0, inf).");
+    prm.declare_entry("Latent heat of evaporation", "7.41e6", Patterns::Double(0.),
+                      "L_v of the surface loss of eq. (1) and of the recoil "
+                      "pressure, J/kg; range [0, inf).");
+    prm.declare_entry("Evaporation temperature", "3090", Patterns::Double(0.),
+                      "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
+    prm.declare_entry("Molar mass", "0.0558", Patterns::Double(0.),
+                      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
+    prm.declare_entry("Ambient pressure", "101325", Patterns::Double(0.),
+                      "Ambient pressure p_0, Pa; range [0, inf).");
     prm.declare_entry("Gas density", "1.6", Patterns::Double(),
                       "Ambient gas density rho_g, kg/m^3; range [0, inf). "
                       "Enters partially filled cells and the surface weighting "
@@ -57,7 +66,15 @@ namespace femp
     gas_density        = prm.get_double("Gas density");
     gas_specific_heat  = prm.get_double("Gas specific heat");
     gas_conductivity   = prm.get_double("Gas thermal conductivity");
+    latent_heat_evaporation = prm.get_double("Latent heat of evaporation");
+    evaporation_temperature = prm.get_double("Evaporation temperature");
+    molar_mass              = prm.get_double("Molar mass");
+    ambient_pressure        = prm.get_double("Ambient pressure");
     prm.leave_subsection();
+    require(evaporation_temperature > 0, "Material/Evaporation temperature",
+            evaporation_temperature, "it must be positive (K)");
+    require(molar_mass > 0, "Material/Molar mass", molar_mass,
+            "it must be positive (kg/mol)");
 
     require(density > 0, "Material/Density", density, "it must be positive (kg/m^3)");
     require(specific_heat.min_value() > 0, "Material/Specific heat",

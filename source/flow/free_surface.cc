@@ -60,9 +60,11 @@ namespace femp
 
   template <int dim>
   FreeSurface<dim>::FreeSurface(const Parameters &         prm,
+                                const Material &           material,
                                 const BackgroundGrid<dim> &grid,
                                 const MaterialPoints<dim> &points)
     : prm(prm)
+    , mat(material)
     , grid(grid)
     , points(points)
     , corner_offset(flow_cells::corner_offsets(grid, true))
@@ -351,8 +353,8 @@ namespace femp
     if (prm.recoil_coefficient == 0)
       return;
     const double R_gas = 8.314462618;
-    const double Tv    = prm.evaporation_temperature;
-    const double a     = prm.latent_heat_evaporation * prm.molar_mass /
+    const double Tv    = mat.evaporation_temperature;
+    const double a     = mat.latent_heat_evaporation * mat.molar_mass /
                      (R_gas * Tv);
     std::array<double, 27> Ts;
     for (const auto c : fluid_cells)
@@ -366,7 +368,7 @@ namespace femp
         std::sort(Ts.begin(), Ts.begin() + n);
         const double T = (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
         if (T > 0)
-          p_surface[c] += prm.recoil_coefficient * prm.ambient_pressure *
+          p_surface[c] += prm.recoil_coefficient * mat.ambient_pressure *
                           std::exp(a * (T - Tv) / T);
       }
   }

@@ -72,9 +72,6 @@ namespace femp
     prm.enter_subsection("Melt flow");
     prm.declare_entry("Viscosity", "6e-3", Patterns::Double(0.),
                       "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
-    prm.declare_entry("Gravity", "9.81", Patterns::Double(0.),
-                      "Magnitude of the gravitational acceleration g, m/s^2, "
-                      "acting along -y (2D) or -z (3D); range [0, inf).");
     prm.declare_entry("Darcy constant", "1e8", Patterns::Double(0.),
                       "Mushy-zone constant K_c of the Darcy damping "
                       "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
@@ -132,8 +129,6 @@ namespace femp
   {
     prm.enter_subsection("Melt flow");
     viscosity = prm.get_double("Viscosity");
-    gravity          = Tensor<1, dim>();
-    gravity[dim - 1] = -prm.get_double("Gravity");
     darcy_constant   = prm.get_double("Darcy constant");
     darcy_epsilon    = prm.get_double("Darcy epsilon");
     flip_fraction    = prm.get_double("FLIP fraction");
@@ -185,10 +180,6 @@ namespace femp
     s.surface_tension_gradient = surface_tension_gradient;
     s.recoil_coefficient       = recoil_coefficient;
     s.curvature_smoothing      = curvature_smoothing;
-    s.latent_heat_evaporation  = latent_heat_evaporation;
-    s.evaporation_temperature  = evaporation_temperature;
-    s.molar_mass               = molar_mass;
-    s.ambient_pressure         = ambient_pressure;
     return s;
   }
 
@@ -261,7 +252,7 @@ namespace femp
     , corner_offset(flow_cells::corner_offsets(grid, true))
     , around_offset(flow_cells::corner_offsets(grid, false))
     , stencil(flow_cells::neighbourhood(grid))
-    , surface(prm.surface_parameters(), grid, points)
+    , surface(prm.surface_parameters(), material, grid, points)
     , pressure_solver(prm.solver_parameters(), grid, prm.volume_correction > 0, timer)
   {
     // Q1 stiffness int grad N_a . grad N_b over a cell of size h

@@ -61,14 +61,6 @@ namespace femp
     prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
                       "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
                       "evaporative cooling off; range [0, 1].");
-    prm.declare_entry("Latent heat of evaporation", "7.41e6", Patterns::Double(0.),
-                      "L_v, J/kg; range [0, inf).");
-    prm.declare_entry("Evaporation temperature", "3090", Patterns::Double(0.),
-                      "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
-    prm.declare_entry("Molar mass", "0.0558", Patterns::Double(0.),
-                      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
-    prm.declare_entry("Ambient pressure", "101325", Patterns::Double(0.),
-                      "Ambient pressure p_0, Pa; range [0, inf).");
     prm.declare_entry("Fixed temperatures", "",
                       Patterns::Map(Patterns::Selection("x-|x+|y-|y+|z-|z+"),
                                     Patterns::Double(0.)),
@@ -162,10 +154,6 @@ namespace femp
     convection_coefficient  = prm.get_double("Convection coefficient");
     emissivity              = prm.get_double("Emissivity");
     evaporation_coefficient = prm.get_double("Evaporation coefficient");
-    latent_heat_evaporation = prm.get_double("Latent heat of evaporation");
-    evaporation_temperature = prm.get_double("Evaporation temperature");
-    molar_mass              = prm.get_double("Molar mass");
-    ambient_pressure        = prm.get_double("Ambient pressure");
     laser_deposition        = prm.get("Laser deposition");
     prescribed_velocity     = Utilities::trim(prm.get("Prescribed velocity"));
     advection_by_melt_flow  = prm.get("Advection by melt flow");
@@ -184,10 +172,6 @@ namespace femp
     if (initial_temperature_expression.empty())
       require(initial_temperature > 0, "Heat transfer/Initial temperature",
               initial_temperature, "it must be positive (K)");
-    require(evaporation_temperature > 0, "Heat transfer/Evaporation temperature",
-            evaporation_temperature, "it must be positive (K)");
-    require(molar_mass > 0, "Heat transfer/Molar mass", molar_mass,
-            "it must be positive (kg/mol)");
   }
 
 
@@ -248,12 +232,12 @@ namespace femp
     , mat(material)
     , laser(laser)
     , grid(grid)
-    , evap_pref(prm.evaporation_coefficient * prm.latent_heat_evaporation *
-                prm.molar_mass /
-                std::sqrt(2 * M_PI * prm.molar_mass * gas_constant) *
-                prm.ambient_pressure)
-    , evap_exp(prm.latent_heat_evaporation * prm.molar_mass /
-               (gas_constant * prm.evaporation_temperature))
+    , evap_pref(prm.evaporation_coefficient *
+                material.latent_heat_evaporation * material.molar_mass /
+                std::sqrt(2 * M_PI * material.molar_mass * gas_constant) *
+                material.ambient_pressure)
+    , evap_exp(material.latent_heat_evaporation * material.molar_mass /
+               (gas_constant * material.evaporation_temperature))
   {}
 
 
@@ -482,13 +466,13 @@ namespace femp
     const double Tref4 = Tref * Tref * Tref * Tref;
     // Evaporation; exp() of exponents below -40 (relative 4e-18 of the flux
     // at T_v) is skipped.
-    const double exponent = evap_exp * (T - prm.evaporation_temperature) / T;
+    const double exponent = evap_exp * (T - mat.evaporation_temperature) / T;
     q_evap = (evap_pref > 0 && exponent > -40) ?
                evap_pref / std::sqrt(T) * std::exp(exponent) :
                0.;
     q_conv = prm.convection_coefficient * (T - Tref);
     q_rad  = stefan_boltzmann * prm.emissivity * (T * T * T * T - Tref4);
-    dq_dT  = q_evap * (evap_exp * prm.evaporation_temperature / (T * T) -
+    dq_dT  = q_evap * (evap_exp * mat.evaporation_temperature / (T * T) -
                       0.5 / T) +
             prm.convection_coefficient +
             4 * stefan_boltzmann * prm.emissivity * T * T * T;

@@ -200,7 +200,10 @@ namespace femp
     , comm(grid.communicator())
     , tria(grid.communicator())
     , fe(1)
-  {}
+  {
+    Assert(prm.enabled, ExcMessage("SolidFEM is built only for an FE zone "
+                                   "that is switched on"));
+  }
 
 
   template <int dim>
@@ -225,11 +228,9 @@ namespace femp
     const double b = 1. / (std::pow(2., dim - 1) * h);
     bb             = n_corners * dim * b * b;
     in_zone_cell.assign(grid.n_local(), 0);
-    if (!prm.enabled)
-      return;
     set_zone();
     create_mesh();
-    const double m_el = mat.density * V * mass_scaling / n_corners;
+    const double m_el = mat.density() * V * mass_scaling / n_corners;
     std::vector<std::array<int, dim>> node_ijk(n_local);
     const auto cells = local_elements(node_ijk);
     set_node_box(node_ijk);
@@ -621,8 +622,6 @@ namespace femp
   void
   SolidFEM<dim>::new_temperatures(const std::vector<double> &T)
   {
-    if (!prm.enabled)
-      return;
     T_start = T_end;
     for (std::size_t i = 0; i < grid_zone_cells.size(); ++i)
       T_send[i] = T[grid_zone_cells[i]];
@@ -635,7 +634,7 @@ namespace femp
   void
   SolidFEM<dim>::set_external_forces(const std::array<std::vector<double>, dim> *f)
   {
-    if (!prm.enabled || (f == nullptr && ext_nodes.empty()))
+    if (f == nullptr && ext_nodes.empty())
       return;
     for (const auto n : ext_nodes)
       for (int d = 0; d < dim; ++d)
@@ -770,8 +769,6 @@ namespace femp
   std::array<double, 2>
   SolidFEM<dim>::update_nodes(const double dt)
   {
-    if (!prm.enabled)
-      return {{0., 0.}};
     // Element forces summed over ranks; velocities of the transition
     // nodes (zero inverse mass below keeps them).
     sum_shared(frc);
@@ -846,9 +843,243 @@ namespace femp
   double
   SolidFEM<dim>::update_elements(const double dt, const double w)
   {
-    if (!prm.enabled)
-      return 0;
     return element_loop<true>(dt, w);
+  }
+
+
+  template <int dim>
+  typename SolidFEM<dim>::LoopConstants
+  SolidFEM<dim>::loop_constants(const double dt) const
+  {
+    const double  h  = grid.h();
+    const double  B  = 1. / (std::pow(2., dim - 1) * h);
+    const double  nu = mat.poisson_ratio;
+    const double  mfac = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    LoopConstants c;
+    c.Bdt  = B * dt;
+    c.VB   = V * B;
+    c.kfac = prm.hourglass_coefficient * mfac * V * bb / n_corners;
+    c.vfac = mat.bulk_viscosity * h *
+             std::sqrt(mfac * mat.density() * mass_scale) / (dt > 0 ? dt : 1.);
+    for (int d = 0; d < dim; ++d)
+      c.mg[d] = mat.density() * V / n_corners * g[d];
+    return c;
+  }
+
+
+  template <int dim>
+  std::size_t
+  SolidFEM<dim>::corner_row_offset(const unsigned int a) const
+  {
+    // Box offset of corner a (bit d: upper side in direction d) from
+    // corner 0, in the directions other than x.
+    std::size_t o = 0;
+    for (int d = 1; d < dim; ++d)
+      o += ((a >> d) & 1u) * box_stride[d];
+    return o;
+  }
+
+
+  // Gather pass: the velocities of the corners of block b (lanes el) as
+  // coefficients of the Walsh-Hadamard transform over the corners:
+  // coefficient m of x is sum_a (prod_{d in m} s_a,d) x_a, so the one-bit
+  // coefficients give the velocity gradient (b_a = s_a B) and the
+  // coefficients with two or more bits the hourglass modes (Gamma =
+  // products of s).
+  template <int dim>
+  [[gnu::always_inline]] inline void
+  SolidFEM<dim>::gather_velocities(const std::size_t b,
+                                   const std::size_t (&el)[simd_lanes],
+                                   const double *const (&vl)[dim],
+                                   simd_double (&Vc)[n_corners][dim]) const
+  {
+    using VD                  = simd_double;
+    constexpr unsigned int nc = n_corners;
+    static_assert(simd_lanes == 4, "the gathers below are written for 4 lanes");
+    if (block_row[b] >= 0)
+      // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
+      // row(a) + l, corner a + 1 node row(a) + l + 1.
+#pragma GCC unroll 4
+      for (unsigned int a = 0; a < nc; a += 2)
+        {
+          const std::size_t r = block_row[b] + corner_row_offset(a);
+          for (int i = 0; i < dim; ++i)
+            {
+              std::memcpy(&Vc[a][i], vl[i] + r, sizeof(VD));
+              std::memcpy(&Vc[a + 1][i], vl[i] + r + 1, sizeof(VD));
+            }
+        }
+    else
+      {
+        const std::uint32_t *c0 = &conn[nc * el[0]], *c1 = &conn[nc * el[1]],
+                            *c2 = &conn[nc * el[2]], *c3 = &conn[nc * el[3]];
+#pragma GCC unroll 8
+        for (unsigned int a = 0; a < nc; ++a)
+          for (int i = 0; i < dim; ++i)
+            Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
+                          vl[i][c3[a]]};
+      }
+    fwht<dim>(Vc);
+  }
+
+
+  // Constitutive pass of block @p eb over the step dt: hourglass mode
+  // amplitudes q_alpha += dt Gamma_alpha . v (kept per element), the
+  // temperature at weight w of the advance, E(T_new) read once (for the
+  // constitutive kernel, the hourglass stiffness and the viscous pressure:
+  // returned in E), the velocity gradient, the stress update (eq. 5), the
+  // new viscous pressure; sb holds the new stress. Returns the stress work
+  // of each lane, (sigma_old + sigma_new)/2 : L V plus the viscous work.
+  template <int dim>
+  [[gnu::always_inline]] inline simd_double
+  SolidFEM<dim>::update_block(ElementBlock &                  eb,
+                              const std::size_t (&el)[simd_lanes],
+                              const unsigned int              nl,
+                              const simd_double (&Vc)[n_corners][dim],
+                              const double                    dt,
+                              const double                    w,
+                              const LoopConstants &           c,
+                              StressBlock &                   sb,
+                              simd_double &                   E) const
+  {
+    using VD                 = simd_double;
+    constexpr unsigned int W = simd_lanes;
+    for (unsigned int al = 0; al < n_hg; ++al)
+      for (int i = 0; i < dim; ++i)
+        eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
+    VD Ts, Te;
+    if (nl == W)
+      {
+        std::memcpy(&Ts, &T_start[el[0]], sizeof(VD));
+        std::memcpy(&Te, &T_end[el[0]], sizeof(VD));
+      }
+    else
+      {
+        Ts = VD{T_start[el[0]], T_start[el[1]], T_start[el[2]], T_start[el[3]]};
+        Te = VD{T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
+      }
+    sb.T_old = eb.T;
+    sb.T_new = Ts + w * (Te - Ts);
+    auto Ef  = [&](const unsigned int l) {
+      return mat.youngs_modulus.value(sb.T_new[l]);
+    };
+    sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
+    auto Eo  = [&](const unsigned int l) {
+      return mat.youngs_modulus.value(sb.T_old[l]);
+    };
+    sb.E_old = VD{Eo(0), Eo(1), Eo(2), Eo(3)};
+    sb.eps_p = eb.eps_p;
+    VD trL   = {};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        sb.L[i][j] = i < dim && j < dim ? c.Bdt * Vc[1u << j][i] : VD{};
+    for (int i = 0; i < dim; ++i)
+      trL += sb.L[i][i];
+    update_stress_block(mat, sb);
+    // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts summed in
+    // two independent chains; the new viscous pressure.
+    VD sd = {}, so = {};
+    for (int i = 0; i < dim; ++i)
+      {
+        sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
+        for (int j = i + 1; j < dim; ++j)
+          so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
+                (sb.L[i][j] + sb.L[j][i]);
+      }
+    const VD sw = sd + so;
+    const VD wk = 0.5 * V * sw + V * eb.visc * trL;
+    if (mat.bulk_viscosity > 0)
+      eb.visc = c.vfac * simd_sqrt(E) * trL;
+    for (unsigned int k = 0; k < 6; ++k)
+      eb.s[k] = sb.s[k];
+    eb.eps_p = sb.eps_p;
+    eb.T     = sb.T_new;
+    return wk;
+  }
+
+
+  // Force and scatter pass: the corner forces of the next step of block b
+  // (stress @p s, Young's modulus @p E, viscous pressure and hourglass
+  // amplitudes of the block) as coefficients of the same transform:
+  // gravity (m = 0), internal force -V sigma b_a with the viscous pressure
+  // (one-bit m, eq. 9), hourglass -k Gamma q (the others); the transposed
+  // transform gives the corner forces, added to the nodes.
+  template <int dim>
+  [[gnu::always_inline]] inline void
+  SolidFEM<dim>::scatter_forces(const std::size_t    b,
+                                const unsigned int   nl,
+                                const simd_double (&s)[6],
+                                const simd_double    E,
+                                const LoopConstants &c,
+                                double *const (&F)[dim])
+  {
+    using VD                  = simd_double;
+    constexpr unsigned int W  = simd_lanes;
+    constexpr unsigned int nc = n_corners;
+    const ElementBlock &   eb = blocks[b];
+    const VD               k  = c.kfac * E;
+    VD                     C[nc][dim];
+    for (unsigned int al = 0; al < n_hg; ++al)
+      for (int i = 0; i < dim; ++i)
+        C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
+    for (int i = 0; i < dim; ++i)
+      {
+        C[0][i] = VD{} + c.mg[i];
+        for (int j = 0; j < dim; ++j)
+          C[1u << j][i] = -c.VB * (s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
+      }
+    fwht_transpose<dim>(C);
+    if (block_row[b] >= 0)
+      // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1) get
+      // C_a from lane l at node l and C_a+1 at node l + 1, added as one
+      // vector (no two lanes write the same node) and the last one.
+#pragma GCC unroll 4
+      for (unsigned int a = 0; a < nc; a += 2)
+        {
+          const std::size_t r = block_row[b] + corner_row_offset(a);
+          for (int i = 0; i < dim; ++i)
+            {
+              const VD hi = C[a + 1][i];
+              const VD sh = __builtin_shufflevector(hi, VD{}, 4, 0, 1, 2);
+              VD       f;
+              std::memcpy(&f, F[i] + r, sizeof(VD));
+              f += C[a][i] + sh;
+              std::memcpy(F[i] + r, &f, sizeof(VD));
+              F[i][r + W] += hi[W - 1];
+            }
+        }
+    else
+      for (unsigned int l = 0; l < nl; ++l)
+        {
+          const std::uint32_t *cn = &conn[nc * (W * b + l)];
+#pragma GCC unroll 8
+          for (unsigned int a = 0; a < nc; ++a)
+            for (int i = 0; i < dim; ++i)
+              F[i][cn[a]] += C[a][i][l];
+        }
+  }
+
+
+  // Hourglass pass at the transition nodes: the hourglass forces of this
+  // rank's elements there, kept out of the grid's force and added back
+  // locally (eq. 17).
+  template <int dim>
+  void
+  SolidFEM<dim>::transition_hourglass_forces(const double kfac)
+  {
+    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
+    if (!(kfac > 0))
+      return;
+    for (const auto &tc : tr_corners)
+      {
+        const ElementBlock &eb = blocks[tc[0] / simd_lanes];
+        const unsigned int  l  = tc[0] % simd_lanes;
+        const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
+        for (int i = 0; i < dim; ++i)
+          for (unsigned int al = 0; al < n_hg; ++al)
+            tr_hg[dim * tc[2] + i] -=
+              k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
+      }
   }
 
 
@@ -857,45 +1088,26 @@ namespace femp
   double
   SolidFEM<dim>::element_loop(const double dt, const double w)
   {
-    constexpr unsigned int nc = n_corners;
-    const double           h  = grid.h();
-    const double           B  = 1. / (std::pow(2., dim - 1) * h);
-    const double           Bdt   = B * dt;
-    const double           VB    = V * B;
-    const double           nu    = mat.poisson_ratio;
-    const double           mfac  = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
-    const double           kfac  = prm.hourglass_coefficient * mfac * V * bb / nc;
-    const double           vfac  = mat.bulk_viscosity * h *
-                          std::sqrt(mfac * mat.density * mass_scale) /
-                          (dt > 0 ? dt : 1.);
-    double                 mg[dim];
-    for (int d = 0; d < dim; ++d)
-      mg[d] = mat.density * V / nc * g[d];
-    // The node forces are zero here (zeroed by the node update, or at
-    // setup); the elements add theirs.
-    double       *F[dim];
-    const double *vl[dim];
-    for (int d = 0; d < dim; ++d)
-      F[d] = frc[d].data(), vl[d] = vel[d].data();
-    double work = 0;
-    const std::size_t n_el = element_id.size();
     // Blocks of simd_lanes elements, one element per lane of simd_double
     // (GCC vector extension, see constitutive.h); a partial last block
     // repeats its last element in the spare lanes and stores nothing from
     // them. Per element the arithmetic is that of the scalar formulation,
     // and the work is summed in element order. The nodal force sums are in
     // lexicographic element order, the two elements of a block that share a
-    // node summed first (round-off against other orders).
-    using VD               = simd_double;
+    // node summed first (round-off against other orders). The node forces
+    // are zero here (zeroed by the node update, or at setup); the elements
+    // add theirs. The passes of a block (gather, constitutive update,
+    // forces and scatter) run one after the other on the block, fused, so
+    // that its data stay in registers.
+    using VD                 = simd_double;
     constexpr unsigned int W = simd_lanes;
-    static_assert(W == 4, "the gathers below are written for 4 lanes");
-    // Box offset of corner a (bit d: upper side in direction d) from corner 0.
-    auto row_offset = [&](const unsigned int a) {
-      std::size_t o = 0;
-      for (int d = 1; d < dim; ++d)
-        o += ((a >> d) & 1u) * box_stride[d];
-      return o;
-    };
+    const LoopConstants    c = loop_constants(dt);
+    double *               F[dim];
+    const double *         vl[dim];
+    for (int d = 0; d < dim; ++d)
+      F[d] = frc[d].data(), vl[d] = vel[d].data();
+    double                 work = 0;
+    const std::size_t      n_el = element_id.size();
     for (std::size_t b = 0; b < blocks.size(); ++b)
       {
         const std::size_t  e0 = W * b;
@@ -904,100 +1116,17 @@ namespace femp
         for (unsigned int l = 0; l < W; ++l)
           el[l] = e0 + std::min(l, nl - 1);
         ElementBlock &eb = blocks[b];
-        // Walsh-Hadamard transforms over the corners: coefficient m of x is
-        // sum_a (prod_{d in m} s_a,d) x_a, so the one-bit coefficients give
-        // the velocity gradient (b_a = s_a B) and the coefficients with two
-        // or more bits the hourglass modes q_alpha (Gamma = products of s).
-        VD          E;
-        StressBlock sb;
-        for (unsigned int c = 0; c < 6; ++c)
-          sb.s[c] = eb.s[c];
+        VD            E;
+        StressBlock   sb;
+        for (unsigned int k = 0; k < 6; ++k)
+          sb.s[k] = eb.s[k];
         if constexpr (update)
           {
-            VD Vc[nc][dim];
-            if (block_row[b] >= 0)
-              // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
-              // row(a) + l, corner a + 1 node row(a) + l + 1.
-#pragma GCC unroll 4
-              for (unsigned int a = 0; a < nc; a += 2)
-                {
-                  const std::size_t r = block_row[b] + row_offset(a);
-                  for (int i = 0; i < dim; ++i)
-                    {
-                      std::memcpy(&Vc[a][i], vl[i] + r, sizeof(VD));
-                      std::memcpy(&Vc[a + 1][i], vl[i] + r + 1, sizeof(VD));
-                    }
-                }
-            else
-              {
-                const std::uint32_t *c0 = &conn[nc * el[0]],
-                                    *c1 = &conn[nc * el[1]],
-                                    *c2 = &conn[nc * el[2]],
-                                    *c3 = &conn[nc * el[3]];
-#pragma GCC unroll 8
-                for (unsigned int a = 0; a < nc; ++a)
-                  for (int i = 0; i < dim; ++i)
-                    Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
-                                  vl[i][c3[a]]};
-              }
-            fwht<dim>(Vc);
-            // Hourglass mode amplitudes q_alpha = Gamma_alpha . u, kept per
-            // element: q += dt Gamma_alpha . v (the same transform).
-            for (unsigned int al = 0; al < n_hg; ++al)
-              for (int i = 0; i < dim; ++i)
-                eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
-            // E(T_new) read once: the constitutive kernel, the hourglass
-            // stiffness and the viscous pressure.
-            VD Ts, Te;
-            if (nl == W)
-              {
-                std::memcpy(&Ts, &T_start[e0], sizeof(VD));
-                std::memcpy(&Te, &T_end[e0], sizeof(VD));
-              }
-            else
-              {
-                Ts = VD{T_start[el[0]], T_start[el[1]], T_start[el[2]],
-                        T_start[el[3]]};
-                Te = VD{T_end[el[0]], T_end[el[1]], T_end[el[2]], T_end[el[3]]};
-              }
-            sb.T_old    = eb.T;
-            sb.T_new    = Ts + w * (Te - Ts);
-            auto Ef     = [&](const unsigned int l) {
-              return mat.youngs_modulus.value(sb.T_new[l]);
-            };
-            sb.E = E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
-            auto Eo  = [&](const unsigned int l) {
-              return mat.youngs_modulus.value(sb.T_old[l]);
-            };
-            sb.E_old = VD{Eo(0), Eo(1), Eo(2), Eo(3)};
-            sb.eps_p = eb.eps_p;
-            VD trL   = {};
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j)
-                sb.L[i][j] = i < dim && j < dim ? Bdt * Vc[1u << j][i] : VD{};
-            for (int i = 0; i < dim; ++i)
-              trL += sb.L[i][i];
-            update_stress_block(mat, sb);
-            // Stress work (sigma_old + sigma_new)/2 : L, symmetric parts
-            // summed in two independent chains; the new viscous pressure.
-            VD sd = {}, so = {};
-            for (int i = 0; i < dim; ++i)
-              {
-                sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
-                for (int j = i + 1; j < dim; ++j)
-                  so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
-                        (sb.L[i][j] + sb.L[j][i]);
-              }
-            const VD sw = sd + so;
-            const VD wk = 0.5 * V * sw + V * eb.visc * trL;
+            VD Vc[n_corners][dim];
+            gather_velocities(b, el, vl, Vc);
+            const VD wk = update_block(eb, el, nl, Vc, dt, w, c, sb, E);
             for (unsigned int l = 0; l < nl; ++l)
               work += wk[l];
-            if (mat.bulk_viscosity > 0)
-              eb.visc = vfac * simd_sqrt(E) * trL;
-            for (unsigned int c = 0; c < 6; ++c)
-              eb.s[c] = sb.s[c];
-            eb.eps_p = sb.eps_p;
-            eb.T     = sb.T_new;
           }
         else
           {
@@ -1006,67 +1135,9 @@ namespace femp
             };
             E = VD{Ef(0), Ef(1), Ef(2), Ef(3)};
           }
-        // Forces of the next step as coefficients of the same transform:
-        // gravity (m = 0), internal force -V sigma b_a with the viscous
-        // pressure (one-bit m, eq. 9), hourglass -k Gamma q (the others);
-        // the transposed transform gives the corner forces.
-        const VD k = kfac * E;
-        VD       C[nc][dim];
-        for (unsigned int al = 0; al < n_hg; ++al)
-          for (int i = 0; i < dim; ++i)
-            C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
-        for (int i = 0; i < dim; ++i)
-          {
-            C[0][i] = VD{} + mg[i];
-            for (int j = 0; j < dim; ++j)
-              C[1u << j][i] =
-                -VB * (sb.s[sidx(i, j)] + (i == j ? eb.visc : VD{}));
-          }
-        fwht_transpose<dim>(C);
-        if (block_row[b] >= 0)
-          // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1)
-          // get C_a from lane l at node l and C_a+1 at node l + 1, added as
-          // one vector (no two lanes write the same node) and the last one.
-#pragma GCC unroll 4
-          for (unsigned int a = 0; a < nc; a += 2)
-            {
-              const std::size_t r = block_row[b] + row_offset(a);
-              for (int i = 0; i < dim; ++i)
-                {
-                  const VD hi = C[a + 1][i];
-                  const VD sh = __builtin_shufflevector(hi, VD{}, 4, 0, 1, 2);
-                  VD       f;
-                  std::memcpy(&f, F[i] + r, sizeof(VD));
-                  f += C[a][i] + sh;
-                  std::memcpy(F[i] + r, &f, sizeof(VD));
-                  F[i][r + W] += hi[W - 1];
-                }
-            }
-        else
-          for (unsigned int l = 0; l < nl; ++l)
-            {
-              const std::uint32_t *c = &conn[nc * (e0 + l)];
-#pragma GCC unroll 8
-              for (unsigned int a = 0; a < nc; ++a)
-                for (int i = 0; i < dim; ++i)
-                  F[i][c[a]] += C[a][i][l];
-            }
+        scatter_forces(b, nl, sb.s, E, c, F);
       }
-
-    // Hourglass forces of this rank's elements at the transition nodes
-    // (kept out of the grid's force, added back locally, eq. 17).
-    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
-    if (kfac > 0)
-      for (const auto &tc : tr_corners)
-        {
-          const ElementBlock &eb = blocks[tc[0] / simd_lanes];
-          const unsigned int  l  = tc[0] % simd_lanes;
-          const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
-          for (int i = 0; i < dim; ++i)
-            for (unsigned int al = 0; al < n_hg; ++al)
-              tr_hg[dim * tc[2] + i] -=
-                k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
-        }
+    transition_hourglass_forces(c.kfac);
     return work;
   }
 
@@ -1076,7 +1147,7 @@ namespace femp
   SolidFEM<dim>::hourglass_energy(const bool reference) const
   {
     const double kappa = reference ? 0.05 : prm.hourglass_coefficient;
-    if (kappa == 0 || !prm.enabled)
+    if (kappa == 0)
       return 0;
     double energy = 0;
     for (std::size_t e = 0; e < element_id.size(); ++e)
@@ -1096,8 +1167,6 @@ namespace femp
   bool
   SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
   {
-    if (!prm.enabled)
-      return false;
     const auto    ijk = grid.cell_of(x);
     std::uint64_t id  = 0;
     for (int d = dim - 1; d >= 0; --d)
@@ -1121,8 +1190,6 @@ namespace femp
   void
   SolidFEM<dim>::cell_fields(std::vector<std::vector<double>> &f) const
   {
-    if (!prm.enabled)
-      return;
     // Element values to the grid ranks owning their cells.
     std::vector<types::global_dof_index> have(element_id.begin(),
                                               element_id.end()),
@@ -1160,8 +1227,6 @@ namespace femp
   {
     const double old = mass_scale, r = s / old;
     mass_scale       = s;
-    if (!prm.enabled)
-      return;
     if (mass_scale_setup == 0)
       {
         mass_scale_setup = old;
@@ -1184,8 +1249,6 @@ namespace femp
   double
   SolidFEM<dim>::elastic_energy() const
   {
-    if (!prm.enabled)
-      return 0;
     double u = 0;
     double s[6];
     for (std::size_t e = 0; e < element_id.size(); ++e)
@@ -1366,8 +1429,45 @@ namespace femp
     // restored state.
     for (int d = 0; d < dim; ++d)
       std::fill(frc[d].begin(), frc[d].end(), 0.);
-    if (prm.enabled)
-      element_loop<false>(0, 1);
+    element_loop<false>(0, 1);
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::save_no_zone(StateWriter &out)
+  {
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    out.put_vector(std::vector<std::uint64_t>()); // element ids
+    for (unsigned int k = 0; k < n_values; ++k)
+      out.put_vector(std::vector<double>());
+    out.put_vector(std::vector<std::uint64_t>()); // node ids
+    for (int d = 0; d < dim; ++d)
+      out.put_vector(std::vector<double>());
+    out.put_vector(std::vector<double>()); // transition-node velocities
+  }
+
+
+  template <int dim>
+  void
+  SolidFEM<dim>::load_no_zone(std::vector<StateReader> &parts)
+  {
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        StateReader &in  = parts[f];
+        const auto   ids = in.get_vector<std::uint64_t>();
+        for (unsigned int k = 0; k < n_values; ++k)
+          AssertThrow(in.get_vector<double>().size() == ids.size(),
+                      ExcMessage("checkpoint: FE element data damaged"));
+        in.get_vector<std::uint64_t>();
+        for (int d = 0; d < dim; ++d)
+          in.get_vector<double>();
+        const auto tv = in.get_vector<double>();
+        AssertThrow(f > 0 || tv.empty(),
+                    ExcMessage("checkpoint: another number of FE "
+                               "transition nodes"));
+      }
   }
 
 

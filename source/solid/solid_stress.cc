@@ -107,8 +107,6 @@ namespace femp
                       "not make the explicit update unstable; 0 is off. "
                       "Dimensionless, range [0, 1) (doc/solid.md \"Small "
                       "node masses\").");
-    prm.declare_entry("Gravity", "0, 0, 0", Patterns::Anything(),
-                      "Gravitational acceleration, m/s^2 (dim components).");
     prm.declare_entry("Fixed faces", "", Patterns::Anything(),
                       "Domain faces whose grid nodes are fixed (zero "
                       "velocity): a comma-separated list of x-, x+, y-, y+, "
@@ -166,9 +164,6 @@ namespace femp
     max_factor        = prm.get_double("Maximum factor");
     prm.leave_subsection();
     small_mass_cutoff = prm.get_double("Small mass cutoff");
-    const Point<dim> g = parse_point<dim>(prm.get("Gravity"), "Solid/Gravity");
-    for (int d = 0; d < dim; ++d)
-      gravity[d] = g[d];
     fixed_faces  = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
     roller_faces = parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
     energy_file  = prm.get("Energy file");
@@ -216,7 +211,7 @@ namespace femp
                                              const double         s) const
   {
     const double c  = std::sqrt(m.max_p_wave_modulus() /
-                               ((s > 0 ? s : mass_scaling) * m.density));
+                               ((s > 0 ? s : mass_scaling) * m.density()));
     const double b1 = m.bulk_viscosity;
     return h / (std::sqrt(double(dim)) * c) * (std::sqrt(1 + b1 * b1) - b1);
   }
@@ -234,7 +229,7 @@ namespace femp
          "- b1) = "
       << limit
       << " s (h = " << g.cell_size << " m, largest P-wave modulus "
-      << m.max_p_wave_modulus() << " Pa, density " << m.density
+      << m.max_p_wave_modulus() << " Pa, density " << m.density()
       << " kg/m^3, mass scaling " << mass_scaling
       << "); use 0 (automatic) or a smaller step";
     require(time_step <= limit, "Solid/Time step", time_step, s.str());
@@ -256,7 +251,9 @@ namespace femp
     , grid(grid)
     , comm(grid.communicator())
     , mpm(grid, material, points)
-    , fem(fem_prm, grid, material)
+    , fem(fem_prm.enabled ?
+            std::make_unique<SolidFEM<dim>>(fem_prm, grid, material) :
+            nullptr)
   {
     scaling.factor = prm.mass_scaling;
   }
@@ -275,7 +272,10 @@ namespace femp
     scaling              = MassScalingState();
     scaling.factor       = prm.mass_scaling;
     phase_K_dt = phase_time = 0;
-    fem.setup(scaling.factor, face_bits, prm.gravity, T);
+    if (fem)
+      fem->setup(scaling.factor, face_bits, prm.gravity, T);
+    else
+      no_fe_zone.assign(grid.n_local(), 0);
     find_active_nodes();
 
     T_solid = T;
@@ -283,8 +283,9 @@ namespace femp
     T_next  = T;
     t_solid = t_prev = 0;
     steps            = 0;
-    mpm.gather(fem.zone_mask(), scaling.factor);
-    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() + fem.kinetic_energy(),
+    mpm.gather(zone_mask(), scaling.factor);
+    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() +
+                                   (fem ? fem->kinetic_energy() : 0.),
                                  comm);
     W_ext = W_int = 0;
     D_transfer = K_melted = K_solidified = W_remap = 0;
@@ -355,7 +356,7 @@ namespace femp
       for (const auto n : grid.owned_cell_nodes())
         owned_node[n] = 1;
       for (const auto c : grid.owned_cells())
-        if (!fem.zone_mask()[c])
+        if (!zone_mask()[c])
           {
             const std::size_t n0 = grid.first_node_of_cell(c);
             for (unsigned int a = 0; a < (1u << dim); ++a)
@@ -370,13 +371,13 @@ namespace femp
       mpm_cells.clear();
       fe_cells.clear();
       for (const auto c : grid.owned_cells())
-        (fem.zone_mask()[c] ? fe_cells : mpm_cells).push_back(c);
+        (zone_mask()[c] ? fe_cells : mpm_cells).push_back(c);
       guard_fe_zone = Utilities::MPI::max(int(!fe_cells.empty()), comm) > 0;
       grid_transition.clear();
       const auto &size = grid.box_size();
-      for (std::size_t t = 0; t < fem.n_transition(); ++t)
+      for (std::size_t t = 0; t < n_transition(); ++t)
         {
-          const auto &ijk = fem.transition_node(t);
+          const auto &ijk = fem->transition_node(t);
           bool        in  = true;
           for (int d = 0; d < dim; ++d)
             in = in && ijk[d] >= lo[d] && ijk[d] <= lo[d] + size[d];
@@ -392,8 +393,8 @@ namespace femp
       for (std::size_t n = 0; n < active.size(); ++n)
         if (active[n])
           active_nodes.push_back(n);
-      tr_buffer.assign(SolidFEM<dim>::tr_width * fem.n_transition(), 0.);
-      tr_fgrid.assign(dim * fem.n_transition(), 0.);
+      tr_buffer.assign(SolidFEM<dim>::tr_width * n_transition(), 0.);
+      tr_fgrid.assign(dim * n_transition(), 0.);
 
       // Nodes whose point kinetic energy this rank counts (see header).
       std::vector<std::int32_t> tr_of(grid.n_local_nodes(), -1);
@@ -460,8 +461,11 @@ namespace femp
                             const NodalForces *        external_forces)
   {
     check_fe_zone_solid(T, t);
-    fem.new_temperatures(T);
-    fem.set_external_forces(external_forces);
+    if (fem)
+      {
+        fem->new_temperatures(T);
+        fem->set_external_forces(external_forces);
+      }
     // Same decision on every rank (gather_points() is collective).
     const bool gathered = t_solid < t * (1 - 1e-12) &&
                           (final || t_solid + dt_solid <= t * (1 + 1e-12));
@@ -526,7 +530,8 @@ namespace femp
 
     // 5. Stresses (eq. 5).
     double work = mpm.update_stresses(nodes, dt, T_solid, T_next);
-    work += fem.update_elements(dt, w);
+    if (fem)
+      work += fem->update_elements(dt, w);
     ++steps;
     book_energies(dt, ext_power, fe_energy, transfer, work, remap_work);
   }
@@ -561,7 +566,7 @@ namespace femp
     // the totals and computes the same grid and FE velocities there.
     constexpr unsigned int W          = SolidFEM<dim>::tr_width;
     double                 merge_loss = 0;
-    if (fem.n_transition() > 0)
+    if (n_transition() > 0)
       {
         std::fill(tr_buffer.begin(), tr_buffer.end(), 0.);
         for (const auto &[t, n] : grid_transition)
@@ -573,7 +578,7 @@ namespace femp
                 tr_buffer[W * t + 1 + dim + d] += nodes.force[d][n];
               }
           }
-        fem.add_transition_partials(tr_buffer);
+        fem->add_transition_partials(tr_buffer);
         if (Utilities::MPI::n_mpi_processes(comm) > 1)
           MPI_Allreduce(MPI_IN_PLACE, tr_buffer.data(), tr_buffer.size(),
                         MPI_DOUBLE, MPI_SUM, comm);
@@ -583,22 +588,22 @@ namespace femp
         // mu = m_g m_FE / (m_g + m_FE). The buffer holds the global sums:
         // counted on the first rank.
         if (Utilities::MPI::this_mpi_process(comm) == 0)
-          for (std::size_t t = 0; t < fem.n_transition(); ++t)
+          for (std::size_t t = 0; t < n_transition(); ++t)
             {
-              const double mg = tr_buffer[W * t], mf = fem.transition_mass(t);
+              const double mg = tr_buffer[W * t], mf = fem->transition_mass(t);
               if (mg <= 0 || mf <= 0)
                 continue;
               for (int d = 0; d < dim; ++d)
-                if (!(fem.transition_constraint(t) & (1u << d)))
+                if (!(fem->transition_constraint(t) & (1u << d)))
                   {
                     const double dv = tr_buffer[W * t + 1 + d] / mg -
-                                      fem.transition_velocity(t)[d];
+                                      fem->transition_velocity(t)[d];
                     merge_loss += 0.5 * mg * mf / (mg + mf) * dv * dv;
                   }
             }
-        const double *u0 = fem.transition_velocity(0);
-        tr_u.assign(u0, u0 + dim * fem.n_transition());
-        fem.update_transition(tr_buffer, dt, tr_v, tr_a);
+        const double *u0 = fem->transition_velocity(0);
+        tr_u.assign(u0, u0 + dim * n_transition());
+        fem->update_transition(tr_buffer, dt, tr_v, tr_a);
       }
     return merge_loss;
   }
@@ -660,7 +665,7 @@ namespace femp
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
     for (const auto &[t, n] : grid_transition)
       {
-        nodes.mass[n] = tr_buffer[W * t] + fem.transition_mass(t);
+        nodes.mass[n] = tr_buffer[W * t] + fem->transition_mass(t);
         for (int d = 0; d < dim; ++d)
           {
             nodes.velocity[d][n] = tr_v[dim * t + d];
@@ -693,13 +698,14 @@ namespace femp
       for (const auto n : active_nodes)
         nodes.momentum[d][n] = 0;
     mpm.g2p(nodes, dt);
-    const auto fe_energy = fem.update_nodes(dt);
+    const std::array<double, 2> fe_energy =
+      fem ? fem->update_nodes(dt) : std::array<double, 2>{{0., 0.}};
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(nodes.momentum[d]);
     for (const auto &[t, n] : grid_transition)
       for (int d = 0; d < dim; ++d)
         nodes.momentum[d][n] +=
-          fem.transition_mass(t) * fem.transition_velocity(t)[d];
+          fem->transition_mass(t) * fem->transition_velocity(t)[d];
     return fe_energy;
   }
 
@@ -742,14 +748,14 @@ namespace femp
                 }
               const double *b  = &tr_buffer[W * t];
               const double  fg = tr_fgrid[dim * t + d];
-              const double  mf = fem.transition_mass(t);
+              const double  mf = fem->transition_mass(t);
               const double  u  = tr_u[dim * t + d];
               const double  vm = (b[1 + d] + mf * u) / (b[0] + mf);
               remap_work +=
                 0.5 * dt *
                 (fg * (vI - vr) +
                  (f - fg + b[1 + 2 * dim + d]) *
-                   (vI - fem.transition_velocity(t)[d] + vm - u));
+                   (vI - fem->transition_velocity(t)[d] + vm - u));
             }
     return remap_work;
   }
@@ -797,7 +803,8 @@ namespace femp
         Point<dim> where;
         bool       found = false;
         if (blown)
-          found = mpm.find_non_finite(where) || fem.find_non_finite(where);
+          found = mpm.find_non_finite(where) ||
+                  (fem && fem->find_non_finite(where));
         else if (mpm.point_lost())
           where = mpm.escaped_point(), found = true;
         const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
@@ -883,7 +890,7 @@ namespace femp
   SolidStress<dim>::set_small_mass_cutoff(const double fraction)
   {
     small_mass_fraction = fraction;
-    small_mass = fraction * scaling.factor * mat.density *
+    small_mass = fraction * scaling.factor * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
 
@@ -915,7 +922,7 @@ namespace femp
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
-        mpm.gather(fem.zone_mask(), scaling.factor);
+        mpm.gather(zone_mask(), scaling.factor);
       }
     have_pending_exchange = false;
     double sums[7] = {e.n_melted,     e.n_solidified,         e.n_lost,
@@ -962,8 +969,10 @@ namespace femp
     e.internal        = W_int;
     e.kinetic         = K;
     e.initial_kinetic = K0;
-    e.hourglass      = Utilities::MPI::sum(fem.hourglass_energy(false), comm);
-    e.hourglass_mode = Utilities::MPI::sum(fem.hourglass_energy(true), comm);
+    e.hourglass = Utilities::MPI::sum(fem ? fem->hourglass_energy(false) : 0.,
+                                      comm);
+    e.hourglass_mode =
+      Utilities::MPI::sum(fem ? fem->hourglass_energy(true) : 0., comm);
     e.transfer        = D_transfer;
     e.remap           = W_remap;
     e.melted          = K_melted;
@@ -981,7 +990,7 @@ namespace femp
     for (std::size_t i = 0; i < x.size(); ++i)
       {
         double fe_sxx, fe_T;
-        if (fem.probe(x[i], fe_sxx, fe_T)) // element of this rank
+        if (fem && fem->probe(x[i], fe_sxx, fe_T)) // element of this rank
           {
             v[3 * i] = fe_sxx, v[3 * i + 1] = fe_T, v[3 * i + 2] = 1;
             continue;
@@ -991,7 +1000,7 @@ namespace femp
           continue;
         const auto idx = grid.local_index(ijk);
         if (grid.cell_status()[idx] != BackgroundGrid<dim>::owned ||
-            fem.zone_mask()[idx])
+            zone_mask()[idx])
           continue;
         const auto [sxx, n] = mpm.cell_stress_xx(idx);
         v[3 * i]            = sxx;
@@ -1037,7 +1046,8 @@ namespace femp
       if (count[c] > 0)
         for (auto &field : f)
           field[c] /= count[c];
-    fem.cell_fields(f);
+    if (fem)
+      fem->cell_fields(f);
   }
 
 
@@ -1048,7 +1058,7 @@ namespace femp
   {
     if (!guard_fe_zone)
       return;
-    const double T_s    = mat.melt_temperature;
+    const double T_s    = mat.melt_temperature();
     double       T_max  = -std::numeric_limits<double>::infinity();
     for (const auto c : fe_cells)
       T_max = std::max(T_max, T[c]);
@@ -1101,7 +1111,8 @@ namespace femp
   double
   SolidStress<dim>::fe_elements_off_rank() const
   {
-    return Utilities::MPI::sum(double(fem.n_elements_off_rank()), comm);
+    return Utilities::MPI::sum(fem ? double(fem->n_elements_off_rank()) : 0.,
+                               comm);
   }
 
 
@@ -1110,7 +1121,7 @@ namespace femp
   SolidStress<dim>::sizes() const
   {
     return {{Utilities::MPI::sum(double(mpm.n_points()), comm),
-             Utilities::MPI::sum(double(fem.n_elements()), comm)}};
+             Utilities::MPI::sum(fem ? double(fem->n_elements()) : 0., comm)}};
   }
 
 
@@ -1208,7 +1219,10 @@ namespace femp
     out.put(size(energy_out, prm.energy_file));
     out.put(size(probe_out, prm.probe_file));
     mpm.save_state(out);
-    fem.save_state(out);
+    if (fem)
+      fem->save_state(out);
+    else
+      SolidFEM<dim>::save_no_zone(out);
     // The mass-scaling factor (adaptive mass scaling changes it) and its
     // measurement over the current solid phase.
     for (const double a : {scaling.factor, scaling.last_ratio,
@@ -1225,7 +1239,7 @@ namespace femp
     // the mean kinetic energy of the advance's steps over the elastic
     // energy stored at its end (cell temperatures of the last step).
     const double u = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
-                                           fem.elastic_energy(),
+                                           (fem ? fem->elastic_energy() : 0.),
                                          comm);
     const double k_mean = phase_time > 0 ? phase_K_dt / phase_time : K;
     scaling.last_ratio =
@@ -1282,7 +1296,10 @@ namespace femp
           energy_size = e, probe_size = p;
       }
     mpm.load_state(parts);
-    fem.load_state(parts);
+    if (fem)
+      fem->load_state(parts);
+    else
+      SolidFEM<dim>::load_no_zone(parts);
     {
       double b[5] = {};
       for (std::size_t f = 0; f < parts.size(); ++f)
@@ -1295,7 +1312,8 @@ namespace femp
       // The MPM side restored its factor with its state; the FE zone's
       // masses and the small-mass threshold follow the factor from the one
       // of the setup.
-      fem.set_mass_scaling(b[0]);
+      if (fem)
+        fem->set_mass_scaling(b[0]);
       scaling.factor = b[0];
       set_small_mass_cutoff(small_mass_fraction);
       scaling.last_ratio   = b[1];
@@ -1352,7 +1370,8 @@ namespace femp
     K *= r;
     K_points *= r;
     mpm.set_mass_scaling(s);
-    fem.set_mass_scaling(s);
+    if (fem)
+      fem->set_mass_scaling(s);
     scaling.factor = s;
     set_small_mass_cutoff(small_mass_fraction); // from the factor, not by r
     dt_solid       = prm.safety_factor * prm.stable_limit(mat, grid.h(), s);

@@ -84,7 +84,11 @@ namespace femp
     /// Wall time (s) after which a long melt-flow sub-cycle reports.
     double             next_substep_report = 30;
     TimeParameters     time_prm;
+    /// The material, owner of the data that several modules read (density,
+    /// solidus, liquidus, evaporation data), passed by const reference.
     Material           material;
+    /// Physics/Gravity, m/s^2: the one gravity of the flow and the solid.
+    Tensor<1, dim>     gravity;
     typename BackgroundGrid<dim>::Parameters  grid_prm;
     typename MaterialPoints<dim>::Parameters  points_prm;
     typename HeatTransfer<dim>::Parameters    heat_prm;
@@ -100,7 +104,8 @@ namespace femp
     bool                                      heat_enabled = true;
     typename IncompressibleFlow<dim>::Parameters flow_prm;
     bool                                      solid_enabled = false;
-    SolidMaterial                             solid_material;
+    /// Reads the density and solidus of @ref material.
+    SolidMaterial                             solid_material{material};
     typename SolidStress<dim>::Parameters     solid_prm;
     typename SolidFEM<dim>::Parameters        fem_prm;
     typename TrackShape<dim>::Parameters      track_prm;
@@ -179,11 +184,12 @@ namespace femp
     /// 4. The solid to the end of the step, loaded by those forces.
     void
     solid_step();
-    /// 'Time stepping/Stop when peak temperature below': true once the
-    /// laser's path has ended by the end of the step of @p dt and the
-    /// hottest metal cell is below that temperature.
-    bool
-    cooled_down(const double dt) const;
+    /// 'Time stepping/Stop when peak temperature below': once the laser's
+    /// path has ended by the end of the step of @p dt and the hottest metal
+    /// cell is below that temperature, make this step the last (the
+    /// SimulationControl stops after it) and say so.
+    void
+    stop_if_cooled_down(const double dt);
     /// 5. Time series, field output and progress line when due.
     void
     output_results();

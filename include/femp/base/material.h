@@ -1,6 +1,7 @@
 // femp: thermophysical material data of the metal and the ambient gas,
 // used by eq. (1): density, temperature tables of specific heat and
-// conductivity, solidus/liquidus, latent heats and the liquid fraction
+// conductivity, solidus/liquidus, latent heats, the evaporation data
+// (also read by the recoil pressure of the flow) and the liquid fraction
 // gamma = clamp((T - T_s)/(T_l - T_s), 0, 1) of doc/method.md, "Zones and discretizations".
 #ifndef femp_material_h
 #define femp_material_h
@@ -26,6 +27,12 @@ namespace femp
     double          gas_density        = 1.6;    ///< rho_g, kg/m^3
     double          gas_specific_heat  = 520.;   ///< c_g, J/(kg K)
     double          gas_conductivity   = 0.018;  ///< lambda_g, W/(m K)
+    // Evaporation: the surface loss of eq. (1) (HeatTransfer) and the
+    // recoil pressure (FreeSurface) read these.
+    double latent_heat_evaporation = 7.41e6;  ///< L_v, J/kg
+    double evaporation_temperature = 3090.;   ///< T_v at p_0, K
+    double molar_mass              = 0.0558;  ///< M of the vapour, kg/mol
+    double ambient_pressure        = 101325.; ///< p_0, Pa
 
     static void
     declare_parameters(ParameterHandler &prm);

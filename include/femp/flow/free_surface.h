@@ -23,6 +23,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/material.h>
 #include <femp/flow/flow_cells.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
@@ -46,12 +47,6 @@ namespace femp
       double       recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
-      // Evaporation data for the recoil pressure (from Heat transfer, not
-      // declared in Melt flow): L_v J/kg, M kg/mol, T_v K, p0 Pa.
-      double latent_heat_evaporation = 7.41e6;
-      double evaporation_temperature = 3090.;
-      double molar_mass              = 0.0558;
-      double ambient_pressure        = 101325.;
 
       /// The free-surface entries of the subsection Melt flow (the caller
       /// has entered it): Curvature smoothing, Surface tension, Surface
@@ -71,7 +66,9 @@ namespace femp
       }
     };
 
+    /// The recoil pressure takes the evaporation data of @p material.
     FreeSurface(const Parameters &         prm,
+                const Material &           material,
                 const BackgroundGrid<dim> &grid,
                 const MaterialPoints<dim> &points);
 
@@ -167,6 +164,7 @@ namespace femp
     smooth_capillary_pressure(const std::vector<std::uint32_t> &fluid_cells);
 
     const Parameters           prm;
+    const Material &           mat;
     const BackgroundGrid<dim> &grid;
     const MaterialPoints<dim> &points;
 

@@ -62,7 +62,9 @@ namespace femp
     struct Parameters
     {
       double         viscosity = 6e-3; ///< mu, Pa s
-      Tensor<1, dim> gravity;          ///< g, m/s^2 (default: -9.81 vertical)
+      /// g, m/s^2 (default: -9.81 vertical); not an input of Melt flow:
+      /// FempProblem sets it from Physics/Gravity.
+      Tensor<1, dim> gravity;
       double         darcy_constant = 1e8;  ///< K_c, kg/(m^3 s)
       double         darcy_epsilon  = 1e-3; ///< eps0, -
       double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
@@ -83,13 +85,8 @@ namespace femp
       double         volume_correction = 0;
       double         surface_tension = 0;   ///< sigma, N/m (0: off)
       double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
-      double         recoil_coefficient = 0; ///< zeta_p (0: no recoil)
-      // Evaporation data for the recoil pressure (from Heat transfer, not
-      // declared in Melt flow): L_v J/kg, M kg/mol, T_v K, p0 Pa.
-      double latent_heat_evaporation = 7.41e6;
-      double evaporation_temperature = 3090.;
-      double molar_mass              = 0.0558;
-      double ambient_pressure        = 101325.;
+      /// zeta_p (0: no recoil); the evaporation data are the Material's.
+      double         recoil_coefficient = 0;
       double         solver_tolerance = 1e-10; ///< relative CG residual
       unsigned int   max_iterations   = 1000;
 

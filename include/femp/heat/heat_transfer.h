@@ -57,11 +57,8 @@ namespace femp
       double reference_temperature = 300.;
       double convection_coefficient = 10.;
       double emissivity             = 0.4;
+      /// zeta_q of eq. (1); the evaporation data are the Material's.
       double evaporation_coefficient = 0.82;
-      double latent_heat_evaporation = 7.41e6;
-      double evaporation_temperature = 3090.;
-      double molar_mass              = 0.0558;
-      double ambient_pressure        = 101325.;
       std::map<std::string, double> fixed_temperatures;
       std::string                   laser_deposition = "first surface";
       std::string                   prescribed_velocity;

@@ -46,6 +46,7 @@
 #include <deal.II/base/tensor.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/material.h>
 
 #include <cmath>
 
@@ -55,13 +56,17 @@ namespace femp
 
   struct SolidMaterial
   {
+    /// The solid data of the metal of @p thermal, whose density and solidus
+    /// it reads (declared once, in Material); @p thermal must outlive it.
+    explicit SolidMaterial(const Material &thermal)
+      : thermal(&thermal)
+    {}
+
     PiecewiseLinear youngs_modulus{1.93e11}; ///< E(T), Pa
     PiecewiseLinear plastic_modulus{1e9};    ///< H(T), Pa
     PiecewiseLinear yield_stress{2.5e8};     ///< sigma_y(T), Pa
     double          poisson_ratio = 0.3;     ///< nu, -
     double          expansion     = 1.7e-5;  ///< alpha, 1/K (linear)
-    double          density       = 7955.;   ///< rho, kg/m^3 (from Material)
-    double          melt_temperature = 1670.; ///< solidus, K (from Material)
     /// Linear artificial bulk viscosity b1 (numerical, -): a viscous
     /// pressure q = b1 rho c h tr(D) added to the stress in the force
     /// computation (not stored), which damps the ringing behind stress
@@ -81,10 +86,24 @@ namespace femp
     /// Declares the entries of subsection "Solid/Material".
     static void
     declare_parameters(ParameterHandler &prm);
-    /// Reads subsection "Solid/Material"; density and solidus are taken from
-    /// the thermal material by the caller.
+    /// Reads subsection "Solid/Material" (density and solidus are the
+    /// Material's).
     void
     parse_parameters(ParameterHandler &prm);
+
+    /// rho, kg/m^3: Material/Density.
+    double
+    density() const
+    {
+      return thermal->density;
+    }
+    /// The solidus T_s, K (Material/Solidus temperature): a point at or
+    /// above it is melted and carries no stress.
+    double
+    melt_temperature() const
+    {
+      return thermal->solidus;
+    }
 
     /// Largest P-wave modulus M = E (1-nu) / ((1+nu)(1-2nu)) of the table, Pa.
     double
@@ -96,6 +115,9 @@ namespace femp
       const double nu = poisson_ratio;
       return youngs_modulus.value(T) * (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     }
+
+  private:
+    const Material *thermal;
   };
 
   /// Stored elastic energy density sigma : C(T)^-1 : sigma / 2 (J/m^3) of
@@ -161,7 +183,7 @@ namespace femp
                       double (&s)[6],
                       double &eps_p)
   {
-    if (T_new >= m.melt_temperature)
+    if (T_new >= m.melt_temperature())
       {
         for (auto &c : s)
           c = 0;
@@ -187,7 +209,7 @@ namespace femp
                       double (&s)[6],
                       double &eps_p)
   {
-    if (T_new >= m.melt_temperature)
+    if (T_new >= m.melt_temperature())
       {
         for (auto &c : s)
           c = 0;
@@ -232,7 +254,8 @@ namespace femp
     const double mu2    = E / (1 + nu);
     const double lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
     const double dth =
-      m.expansion * (T_new - (T_old < m.melt_temperature ? T_old : m.melt_temperature));
+      m.expansion *
+      (T_new - (T_old < m.melt_temperature() ? T_old : m.melt_temperature()));
     const double dxx = L_dt[0][0] - dth, dyy = L_dt[1][1] - dth,
                  dzz = L_dt[2][2] - dth;
     const double lt  = lambda * (dxx + dyy + dzz);
@@ -364,7 +387,7 @@ namespace femp
   {
     constexpr unsigned int W  = simd_width<V>;
     const double           nu = m.poisson_ratio;
-    const V      Tm     = V{} + m.melt_temperature;
+    const V      Tm     = V{} + m.melt_temperature();
     // Total-form elasticity (see the top of this file): r = 1 exactly for a
     // constant E.
     const V r = b.E / b.E_old;

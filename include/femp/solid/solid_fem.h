@@ -247,6 +247,16 @@ namespace femp
     /// arithmetic as at the end of update_elements()).
     void
     load_state(std::vector<StateReader> &parts);
+    /// The checkpoint section of an FE zone that is off (SolidStress then
+    /// holds no SolidFEM): the layout of save_state() without elements,
+    /// nodes or transition nodes, so that the solid's section keeps one
+    /// format.
+    static void
+    save_no_zone(StateWriter &out);
+    /// Read that section from each of @p parts; like load_state() on an
+    /// empty zone, a checkpoint with transition nodes is refused.
+    static void
+    load_no_zone(std::vector<StateReader> &parts);
 
   private:
     Parameters                 prm;
@@ -404,6 +414,49 @@ namespace femp
     fix_bits(const std::array<int, dim> &             ijk,
              const std::array<std::uint8_t, 2 * dim> &face_bits) const;
 
+    /// Constants of one element loop over the step dt: B dt, V B, the
+    /// hourglass stiffness per unit E, the factor of the viscous pressure
+    /// and the gravity force per corner.
+    struct LoopConstants
+    {
+      double Bdt, VB, kfac, vfac;
+      double mg[dim];
+    };
+    LoopConstants
+    loop_constants(const double dt) const;
+    /// Box offset of corner @p a from corner 0 of an element.
+    std::size_t
+    corner_row_offset(const unsigned int a) const;
+    /// The passes of element_loop() over one block of simd_lanes elements
+    /// (lanes @p el, @p nl of them real; see solid_fem.cc): the corner
+    /// velocities as transform coefficients; the constitutive update
+    /// (returns the stress work per lane); the forces of the next step
+    /// added to the nodes; after all blocks, the hourglass forces at the
+    /// transition nodes.
+    void
+    gather_velocities(const std::size_t b,
+                      const std::size_t (&el)[simd_lanes],
+                      const double *const (&vl)[dim],
+                      simd_double (&Vc)[n_corners][dim]) const;
+    simd_double
+    update_block(ElementBlock &                  eb,
+                 const std::size_t (&el)[simd_lanes],
+                 const unsigned int              nl,
+                 const simd_double (&Vc)[n_corners][dim],
+                 const double                    dt,
+                 const double                    w,
+                 const LoopConstants &           c,
+                 StressBlock &                   sb,
+                 simd_double &                   E) const;
+    void
+    scatter_forces(const std::size_t    b,
+                   const unsigned int   nl,
+                   const simd_double (&s)[6],
+                   const simd_double    E,
+                   const LoopConstants &c,
+                   double *const (&F)[dim]);
+    void
+    transition_hourglass_forces(const double kfac);
     template <bool update>
     double
     element_loop(const double dt, const double w);

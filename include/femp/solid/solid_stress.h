@@ -96,6 +96,8 @@ namespace femp
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
       double                   small_mass_cutoff = 0.05;
+      /// m/s^2 (default: none); not an input of Solid: FempProblem sets
+      /// it from Physics/Gravity.
       Tensor<1, dim>           gravity;
       std::vector<std::string> fixed_faces, roller_faces;
       std::string              energy_file = "solid_energy.csv";
@@ -293,7 +295,22 @@ namespace femp
     const BackgroundGrid<dim> &grid;
     MPI_Comm                   comm;
     SolidMPM<dim>              mpm;
-    SolidFEM<dim>              fem;
+    /// The FE zone; null when 'Solid FEM/Use finite elements' is false (all
+    /// the solid is then material points).
+    std::unique_ptr<SolidFEM<dim>> fem;
+    /// 1 for the grid's local cells in the FE zone (all 0 without one).
+    std::vector<std::uint8_t> no_fe_zone;
+    const std::vector<std::uint8_t> &
+    zone_mask() const
+    {
+      return fem ? fem->zone_mask() : no_fe_zone;
+    }
+    /// Transition nodes of the FE zone (0 without one).
+    std::size_t
+    n_transition() const
+    {
+      return fem ? fem->n_transition() : 0;
+    }
 
     SolidNodeFields<dim>                  nodes;
     /// Grid nodes of this rank's owned cells outside the FE zone plus the
