@@ -117,16 +117,6 @@ namespace femp
     checkpoint = std::make_unique<Checkpoint<dim>>(checkpoint_prm,
                                                    output_prm.directory,
                                                    checkpoint_scene(), comm);
-    // The HDF5 output's XDMF indices and mesh are not in the checkpoint
-    // yet.
-    require(output_prm.format == "vtu" ||
-              !(checkpoint->enabled() || checkpoint->resuming()),
-            "Output/Format", output_prm.format,
-            std::string("'vtu' ") +
-              (checkpoint->resuming() ? "with 'Checkpoint/Resume from'" :
-                                        "with a 'Checkpoint' trigger on") +
-              " (the XDMF indices of the HDF5 output are not in the "
-              "checkpoint yet; doc/checkpoint.md)");
     if (checkpoint->resuming())
       checkpoint->read(); // refuses a corrupt or mismatched one here
     control = std::make_unique<SimulationControl>(

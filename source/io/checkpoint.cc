@@ -17,7 +17,7 @@ namespace femp
   {
     const char         magic[8]       = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
     // 2: the solid's sections (Physics/Solid stress) added.
-    const std::uint32_t format_version = 2;
+    const std::uint32_t format_version = 3;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p.
     std::uint64_t

@@ -825,14 +825,17 @@ namespace femp
             {"subdomain", true, true,
              std::vector<double>(flat.size(),
                                  Utilities::MPI::this_mpi_process(comm))});
-        const std::string mesh = "grid_mesh.h5";
+        const std::string &mesh = grid_mesh_file;
         const std::string file =
           "grid_" + Utilities::int_to_string(n, 5) + ".h5";
         auto layout = write_h5(prm.directory + "/" + mesh,
                                prm.directory + "/" + file, !grid_mesh_written,
                                part, comm);
         if (!grid_mesh_written)
-          grid_mesh_nodes = layout.nodes;
+          {
+            grid_mesh_nodes = layout.nodes;
+            grid_mesh_ranks = Utilities::MPI::n_mpi_processes(comm);
+          }
         layout.nodes      = grid_mesh_nodes;
         grid_mesh_written = true;
         grid_entries.push_back(xdmf_entry(time, mesh, file, part, layout));
@@ -1021,6 +1024,18 @@ namespace femp
     };
     out.put(size(pool_csv, "melt_pool.csv"));
     out.put(size(probe_csv, "probe_points.csv"));
+    // HDF5 output: the XDMF entries written so far and the grid's mesh
+    // file (empty with VTU output).
+    auto strings = [&](const std::vector<std::string> &v) {
+      out.put<std::uint64_t>(v.size());
+      for (const auto &x : v)
+        out.put_string(x);
+    };
+    strings(grid_entries);
+    strings(point_entries);
+    out.put_string(grid_mesh_written ? grid_mesh_file : std::string());
+    out.put<std::uint64_t>(grid_mesh_nodes);
+    out.put<std::uint32_t>(grid_mesh_ranks);
   }
 
 
@@ -1041,7 +1056,33 @@ namespace femp
     records(point_records);
     const auto pool_size  = in.get<std::uint64_t>();
     const auto probe_size = in.get<std::uint64_t>();
-    const MPI_Comm comm   = grid.communicator();
+    auto       strings    = [&](std::vector<std::string> &v) {
+      v.resize(in.get<std::uint64_t>());
+      for (auto &x : v)
+        x = in.get_string();
+    };
+    strings(grid_entries);
+    strings(point_entries);
+    const std::string mesh_file = in.get_string();
+    grid_mesh_nodes             = in.get<std::uint64_t>();
+    grid_mesh_ranks             = in.get<std::uint32_t>();
+    const MPI_Comm comm = grid.communicator();
+    if (!mesh_file.empty() &&
+        grid_mesh_ranks == Utilities::MPI::n_mpi_processes(comm))
+      {
+        // Same partition (p4est's is deterministic): the mesh file stands.
+        grid_mesh_file    = mesh_file;
+        grid_mesh_written = true;
+      }
+    else
+      {
+        // None yet, or the cells of this partition lie in another order:
+        // the next grid output writes a mesh file of its own (the earlier
+        // outputs keep theirs).
+        grid_mesh_file =
+          "grid_mesh_" + Utilities::int_to_string(grid_entries.size(), 5) + ".h5";
+        grid_mesh_written = false;
+      }
     std::string    error;
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
@@ -1075,11 +1116,22 @@ namespace femp
         throw InputError("Checkpoint/Resume from", prm.directory, msg);
       }
     // The indices list the outputs up to the checkpoint (none: removed).
+    const bool hdf5 = prm.format == "hdf5";
     for (const auto &[name, r] :
          {std::make_pair(std::string("grid.pvd"), &grid_records),
           std::make_pair(std::string("points.pvd"), &point_records)})
-      if (!r->empty())
+      if (!r->empty() && !hdf5)
         write_pvd(prm.directory + "/" + name, *r, comm);
+      else if (Utilities::MPI::this_mpi_process(comm) == 0)
+        {
+          std::error_code ec;
+          std::filesystem::remove(prm.directory + "/" + name, ec);
+        }
+    for (const auto &[name, e] :
+         {std::make_pair(std::string("grid.xdmf"), &grid_entries),
+          std::make_pair(std::string("points.xdmf"), &point_entries)})
+      if (!e->empty())
+        write_xdmf(prm.directory + "/" + name, *e, comm);
       else if (Utilities::MPI::this_mpi_process(comm) == 0)
         {
           std::error_code ec;
