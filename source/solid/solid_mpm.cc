@@ -866,6 +866,171 @@ namespace femp
       return block_kinetic_in_cell<dim, A>(vp, xn, cn, Cp, st.h, st.ih, use,
                                            m, mg, kinetic_v, momentum_v);
     }
+
+    /// Software prefetch for the block of g2p() at @p p0 (of @p n points):
+    /// the arrays of point p0 + prefetch_distance.
+    template <int dim, bool A>
+    [[gnu::always_inline]] inline void
+    prefetch_g2p_block(const PointArrays<dim> &pa, const std::size_t p0,
+                       const std::size_t n)
+    {
+      if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+        {
+          const std::size_t q = p0 + prefetch_distance;
+          prefetch<0>(pa.x, q), prefetch<0>(pa.corner, q);
+          prefetch<0>(pa.true_mass, q);
+          if (q % 16 == 0)
+            prefetch<0>(pa.node0, q);
+          if constexpr (A)
+            prefetch<1>(pa.C, q), prefetch<1>(pa.v, q);
+          else
+            prefetch<0>(pa.v, q), prefetch<1>(pa.xdot, q);
+        }
+    }
+
+    /// Monomial coefficients @p cv of the nodal velocities @p vel (and
+    /// FLIP, !A: @p ca of the nodal accelerations @p acc) of the cells of
+    /// the block with first nodes @p n0, for g2p(): one load and a
+    /// broadcast when the points lie in the same cell (the usual case: the
+    /// points are sorted by cell), turned into monomial coefficients once
+    /// per cell (@p coef_cell: the cell whose coefficients @p cv, @p ca
+    /// hold, none (-1) after a block of several cells); mixed blocks gather
+    /// lane by lane (the same coefficients per lane).
+    template <int dim, bool A, std::size_t W, typename VD>
+    [[gnu::always_inline]] inline void
+    g2p_coefficients(const double *const *                          vel,
+                     const double *const *                          acc,
+                     const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
+                     const std::size_t (&n0)[W],
+                     VD (&cv)[dim][1u << dim],
+                     VD (&ca)[dim][1u << dim],
+                     std::size_t &coef_cell)
+    {
+      constexpr std::size_t  none      = std::size_t(-1);
+      constexpr unsigned int n_corners = 1u << dim;
+      auto coefficients = [&](auto &&nodal) {
+        for (int i = 0; i < dim; ++i)
+          {
+            for (unsigned int a = 0; a < n_corners; ++a)
+              {
+                cv[i][a] = nodal(vel[i], corner_offset[a]);
+                if constexpr (!A)
+                  ca[i][a] = nodal(acc[i], corner_offset[a]);
+              }
+            monomial_coefficients<dim>(cv[i]);
+            if constexpr (!A)
+              monomial_coefficients<dim>(ca[i]);
+          }
+      };
+      if (one_cell(n0))
+        {
+          if (n0[0] != coef_cell)
+            {
+              coefficients([&](const double *f, const std::ptrdiff_t o) {
+                return VD{} + f[n0[0] + o];
+              });
+              coef_cell = n0[0];
+            }
+        }
+      else
+        {
+          coefficients([&](const double *f, const std::ptrdiff_t o) {
+            VD r;
+            for (unsigned int l = 0; l < W; ++l)
+              r[l] = f[n0[l] + o];
+            return r;
+          });
+          coef_cell = none;
+        }
+    }
+
+    /// New velocity of the points of block @p blk (at @p p0) of g2p() at
+    /// their local coordinates @p xi, from the coefficients @p cv (@p ca)
+    /// of their cells: v_g = sum N_a v_a, C = sum v_a (x) grad N_a (the
+    /// gradient of the interpolant), FLIP: a_g = sum N_a a_a. APIC: v =
+    /// v_g and C into @p Cn (stored by remap_momentum()); FLIP: v += dt a_g
+    /// and the grid velocity v_g stored in xdot (it moves the point at the
+    /// end of the step, update_stresses()). The new v is stored and
+    /// returned in @p vp.
+    template <int dim, bool A, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline void
+    g2p_velocity(PointArrays<dim> &   pa,
+                 const PointBlock<W> &blk,
+                 const std::size_t    p0,
+                 const VD (&xi)[dim],
+                 const VD (&cv)[dim][1u << dim],
+                 const VD (&ca)[dim][1u << dim],
+                 const double ih,
+                 const double dt,
+                 VD (&vp)[dim],
+                 VD (&Cn)[dim][dim])
+    {
+      VD vg[dim], ag[dim];
+      for (int i = 0; i < dim; ++i)
+        {
+          VD g[dim];
+          multilinear<dim>(cv[i], xi, vg[i], g);
+          if constexpr (A)
+            for (int j = 0; j < dim; ++j)
+              Cn[i][j] = ih * g[j];
+          else
+            multilinear<dim>(ca[i], xi, ag[i], g);
+        }
+      for (int i = 0; i < dim; ++i)
+        {
+          vp[i] =
+            A ? vg[i] : simd_load(pa.v[i], blk.pl, blk.full) + dt * ag[i];
+          simd_store(pa.v[i], p0, blk.nl, vp[i]);
+          if constexpr (!A)
+            simd_store(pa.xdot[i], p0, blk.nl, vg[i]);
+        }
+    }
+
+    /// Re-map (MUSL) of the new momentum of the points of block @p blk (at
+    /// @p p0) of g2p() with the weights @p N of the step (those of the
+    /// P2G, so that the re-mapped nodal velocity of a node is a mean of
+    /// point velocities with the node mass): the contributions m N_a
+    /// v_p(x_a) to the corners into @p nmom, with (APIC) v_p(x_a) = v_p +
+    /// C_p (x_a - x_p), C_p = @p Cn stored; FLIP: v_p.
+    template <int dim, bool A, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline void
+    remap_momentum(PointArrays<dim> &   pa,
+                   const PointBlock<W> &blk,
+                   const std::size_t    p0,
+                   const VD (&xi)[dim],
+                   const VD (&N)[1u << dim],
+                   const VD (&vp)[dim],
+                   const VD (&Cn)[dim][dim],
+                   const double h,
+                   const double scaling,
+                   VD (&nmom)[1u << dim][dim])
+    {
+      const VD m = simd_load(pa.true_mass, blk.pl, blk.full) * scaling;
+      VD       v0[dim], Ch[dim][dim];
+      for (int i = 0; i < dim; ++i)
+        v0[i] = vp[i];
+      if constexpr (A)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            {
+              simd_store(pa.C[i * dim + j], p0, blk.nl, Cn[i][j]);
+              Ch[i][j] = h * Cn[i][j];
+              v0[i] -= Ch[i][j] * xi[j];
+            }
+      for (unsigned int a = 0; a < (1u << dim); ++a)
+        {
+          const VD mN = m * N[a];
+          for (int i = 0; i < dim; ++i)
+            {
+              VD va = v0[i];
+              if constexpr (A)
+                for (int j = 0; j < dim; ++j)
+                  if ((a >> j) & 1)
+                    va += Ch[i][j];
+              nmom[a][i] = mN * va;
+            }
+        }
+    }
   } // namespace
 
 
@@ -1234,6 +1399,8 @@ namespace femp
     // re-map added to the nodes in point order.
     constexpr unsigned int W = point_lanes<dim>;
     using VD                 = typename SimdOf<W>::type;
+    PointArrays<dim> pa{x,      corner, v,     xdot,  C,    true_mass,
+                        volume, visc,   sigma, eps_p, cell, node0};
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
@@ -1245,122 +1412,25 @@ namespace femp
       constexpr std::size_t none      = std::size_t(-1);
       std::size_t           coef_cell = none;
       VD                    cv[dim][n_corners], ca[dim][n_corners];
-    for (std::size_t p0 = 0; p0 < n; p0 += W)
-      {
-        const PointBlock<W> blk(p0, n);
-        const unsigned int nl   = blk.nl;
-        const bool         full = blk.full;
-        const auto &       pl   = blk.pl;
-        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
-          {
-            const std::size_t q = p0 + prefetch_distance;
-            prefetch<0>(x, q), prefetch<0>(corner, q);
-            prefetch<0>(true_mass, q);
-            if (q % 16 == 0)
-              prefetch<0>(node0, q);
-            if constexpr (A)
-              prefetch<1>(C, q), prefetch<1>(v, q);
-            else
-              prefetch<0>(v, q), prefetch<1>(xdot, q);
-          }
-        VD                 xi[dim], N[n_corners];
-        block_xi<dim>(x, corner, blk, ih, xi);
-        weights<dim>(xi, N);
-        std::size_t n0[W];
-        for (unsigned int l = 0; l < W; ++l)
-          n0[l] = node0[pl[l]];
-        // Nodal values: one load and a broadcast when the four points lie
-        // in the same cell (the usual case: the points are sorted by cell),
-        // turned into monomial coefficients once per cell; mixed blocks
-        // gather lane by lane (the same coefficients per lane).
-        auto coefficients = [&](auto &&nodal) {
-          for (int i = 0; i < dim; ++i)
-            {
-              for (unsigned int a = 0; a < n_corners; ++a)
-                {
-                  cv[i][a] = nodal(vel[i], corner_offset[a]);
-                  if constexpr (!A)
-                    ca[i][a] = nodal(acc[i], corner_offset[a]);
-                }
-              monomial_coefficients<dim>(cv[i]);
-              if constexpr (!A)
-                monomial_coefficients<dim>(ca[i]);
-            }
-        };
-        if (one_cell(n0))
-          {
-            if (n0[0] != coef_cell)
-              {
-                coefficients([&](const double *f, const std::ptrdiff_t o) {
-                  return VD{} + f[n0[0] + o];
-                });
-                coef_cell = n0[0];
-              }
-          }
-        else
-          {
-            coefficients([&](const double *f, const std::ptrdiff_t o) {
-              VD r;
-              for (unsigned int l = 0; l < W; ++l)
-                r[l] = f[n0[l] + o];
-              return r;
-            });
-            coef_cell = none;
-          }
-        // v_g = sum N_a v_a, C = sum v_a (x) grad N_a (the gradient of the
-        // interpolant), FLIP: a_g = sum N_a a_a.
-        VD vg[dim], ag[dim], Cn[dim][dim];
-        for (int i = 0; i < dim; ++i)
-          {
-            VD g[dim];
-            multilinear<dim>(cv[i], xi, vg[i], g);
-            if constexpr (A)
-              for (int j = 0; j < dim; ++j)
-                Cn[i][j] = ih * g[j];
-            else
-              multilinear<dim>(ca[i], xi, ag[i], g);
-          }
-        // New velocity and affine matrix; the grid velocity at the point
-        // moves it at the end of the step (update_stresses()).
-        VD vp[dim];
-        for (int i = 0; i < dim; ++i)
-          {
-            vp[i] = A ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
-            simd_store(v[i], p0, nl, vp[i]);
-            if constexpr (!A)
-              simd_store(xdot[i], p0, nl, vg[i]);
-          }
-        // Re-map (MUSL) of the new momentum with the weights of the step
-        // (those of the P2G, so that the re-mapped nodal velocity of a node
-        // is a mean of point velocities with the node mass).
-        const VD m = simd_load(true_mass, pl, full) * scaling;
-        VD       v0[dim], Ch[dim][dim];
-        for (int i = 0; i < dim; ++i)
-          v0[i] = vp[i];
-        if constexpr (A)
-          for (int i = 0; i < dim; ++i)
-            for (int j = 0; j < dim; ++j)
-              {
-                simd_store(C[i * dim + j], p0, nl, Cn[i][j]);
-                Ch[i][j] = h * Cn[i][j];
-                v0[i] -= Ch[i][j] * xi[j];
-              }
-        VD nmom[n_corners][dim];
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const VD mN = m * N[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                VD va = v0[i];
-                if constexpr (A)
-                  for (int j = 0; j < dim; ++j)
-                    if ((a >> j) & 1)
-                      va += Ch[i][j];
-                nmom[a][i] = mN * va;
-              }
-          }
-        remap.add(nmom, n0, nl);
-      }
+      for (std::size_t p0 = 0; p0 < n; p0 += W)
+        {
+          const PointBlock<W> blk(p0, n);
+          prefetch_g2p_block<dim, A>(pa, p0, n);
+          VD xi[dim], N[n_corners];
+          block_xi<dim>(pa.x, pa.corner, blk, ih, xi);
+          weights<dim>(xi, N);
+          std::size_t n0[W];
+          for (unsigned int l = 0; l < W; ++l)
+            n0[l] = pa.node0[blk.pl[l]];
+          g2p_coefficients<dim, A>(vel, acc, corner_offset, n0, cv, ca,
+                                   coef_cell);
+          VD vp[dim], Cn[dim][dim];
+          g2p_velocity<dim, A>(pa, blk, p0, xi, cv, ca, ih, dt, vp, Cn);
+          VD nmom[n_corners][dim];
+          remap_momentum<dim, A>(pa, blk, p0, xi, N, vp, Cn, h, scaling,
+                                 nmom);
+          remap.add(nmom, n0, blk.nl);
+        }
     };
     if (apic)
       loop(std::true_type());
