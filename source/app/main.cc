@@ -187,161 +187,240 @@ namespace
     std::unique_ptr<femp::FempProblem<2>> p2;
     std::unique_ptr<femp::FempProblem<3>> p3;
   };
+
+
+  /// What the command line asks for: the scene, its --set and --resume
+  /// overrides, and whether it was a request that is answered on the spot
+  /// (--help, --print-parameters: nothing to run).
+  struct CommandLine
+  {
+    std::string              scene;
+    std::vector<std::string> overrides;
+    bool                     answered = false;
+  };
+
+
+  /// --print-parameters[=prm|=json] (@p arg): every parameter of @p prm
+  /// on std::cout, in declaration order.
+  void
+  print_parameters(dealii::ParameterHandler &prm, const std::string &arg)
+  {
+    using dealii::ParameterHandler;
+    prm.print_parameters(
+      std::cout,
+      ParameterHandler::OutputStyle(
+        (arg == "--print-parameters=json" ? ParameterHandler::JSON :
+                                            ParameterHandler::PRM) |
+        ParameterHandler::KeepDeclarationOrder));
+  }
+
+
+  /// Reads the command line, in order: --help and --print-parameters are
+  /// answered at once (on rank 0, @p root), the others collected; a bad
+  /// argument throws an InputError naming it.
+  CommandLine
+  parse_command_line(const int                 argc,
+                     char *                    argv[],
+                     dealii::ParameterHandler &prm,
+                     const bool                root)
+  {
+    CommandLine cl;
+    for (int i = 1; i < argc; ++i)
+      {
+        const std::string arg = argv[i];
+        if (arg == "--help" || arg == "-h")
+          {
+            if (root)
+              print_help(std::cout);
+            cl.answered = true;
+          }
+        else if (arg == "--print-parameters" ||
+                 arg == "--print-parameters=prm" ||
+                 arg == "--print-parameters=json")
+          {
+            if (root)
+              print_parameters(prm, arg);
+            cl.answered = true;
+          }
+        else if (arg == "--set" || arg.rfind("--set=", 0) == 0)
+          {
+            if (arg == "--set")
+              {
+                femp::require(i + 1 < argc, "--set (command line)", "",
+                              "it needs an argument 'Section/Name=value'");
+                cl.overrides.push_back(argv[++i]);
+              }
+            else
+              cl.overrides.push_back(arg.substr(6));
+          }
+        else if (arg == "--resume" || arg.rfind("--resume=", 0) == 0)
+          {
+            // The same as --set 'Checkpoint/Resume from=DIR'.
+            std::string dir;
+            if (arg == "--resume")
+              {
+                femp::require(i + 1 < argc, "--resume (command line)", "",
+                              "it needs a checkpoint directory");
+                dir = argv[++i];
+              }
+            else
+              dir = arg.substr(9);
+            cl.overrides.push_back("Checkpoint/Resume from=" + dir);
+          }
+        else if (arg.size() > 1 && arg[0] == '-')
+          femp::require(false, "command line", femp::short_value(arg),
+                        "it is not an option of femp; the options are "
+                        "--set 'Section/Name=value', --resume DIR, "
+                        "--print-parameters[=json] and --help");
+        else
+          {
+            femp::require(cl.scene.empty(), "command line",
+                          femp::short_value(arg),
+                          "only one scene file may be given (the first was '" +
+                            femp::short_value(cl.scene) + "')");
+            cl.scene = arg;
+          }
+      }
+    return cl;
+  }
+
+
+  /// Phase 1 on this rank: the command line, the input and every check,
+  /// then the problem of the scene's dimension. Returns 0 (run), 1 (error,
+  /// its one-line message in @p error) or 2 (done: help or listing).
+  int
+  set_up(const int                 argc,
+         char *                    argv[],
+         const MPI_Comm            comm,
+         dealii::ParameterHandler &prm,
+         Problem &                 problem,
+         std::string &             error)
+  {
+    const bool root = dealii::Utilities::MPI::this_mpi_process(comm) == 0;
+    try
+      {
+        femp::declare_all_parameters(prm);
+        femp::declare_run_limits(prm);
+        const CommandLine cl = parse_command_line(argc, argv, prm, root);
+        if (cl.answered)
+          return 2;
+        if (cl.scene.empty())
+          {
+            if (root)
+              print_help(std::cerr);
+            throw std::runtime_error("no scene file given");
+          }
+        read_input(prm, cl.scene, cl.overrides);
+        femp::check_output_file_names(prm);
+        femp::check_values(prm);
+        femp::check_memory(prm,
+                           dealii::Utilities::MPI::n_mpi_processes(comm));
+        femp::check_disk(prm);
+        if (prm.get_integer("Dimension") == 2)
+          problem.p2 = std::make_unique<femp::FempProblem<2>>(prm, comm);
+        else
+          problem.p3 = std::make_unique<femp::FempProblem<3>>(prm, comm);
+        femp::prepare_output_directory(prm, comm);
+        return 0;
+      }
+    catch (const std::exception &e)
+      {
+        error = clean_message(e);
+        return 1;
+      }
+  }
+
+
+  /// The ranks agree on a failure of phase 1 (@p status 1 on some rank):
+  /// the lowest failing rank prints its @p error. True if any rank failed.
+  bool
+  report_set_up_failure(const int          status,
+                        const std::string &error,
+                        const MPI_Comm     comm)
+  {
+    const unsigned int rank    = dealii::Utilities::MPI::this_mpi_process(comm);
+    const unsigned int n_ranks = dealii::Utilities::MPI::n_mpi_processes(comm);
+    const unsigned int first_failed =
+      dealii::Utilities::MPI::min(status == 1 ? rank : n_ranks, comm);
+    if (first_failed < n_ranks && rank == first_failed)
+      std::cerr << "femp: error: " << error << std::endl;
+    return first_failed < n_ranks;
+  }
+
+
+  /// An error of the run met by this rank alone (not a CollectiveError):
+  /// printed by this rank, then (several ranks) every rank is ended with
+  /// MPI_Abort so that none waits in a collective operation. Returns the
+  /// exit status (1).
+  int
+  abort_run(const std::exception &e, const MPI_Comm comm)
+  {
+    const unsigned int rank    = dealii::Utilities::MPI::this_mpi_process(comm);
+    const unsigned int n_ranks = dealii::Utilities::MPI::n_mpi_processes(comm);
+    const bool         root    = rank == 0;
+    if (!root)
+      {
+        // If rank 0 fails too (the same error everywhere), let it speak.
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      }
+    std::cerr << "femp: error" << (root ? std::string() :
+                                          " (rank " + std::to_string(rank) + ")")
+              << ": " << clean_message(e) << std::endl;
+    std::cerr.flush();
+    std::cout.flush();
+    if (n_ranks > 1)
+      MPI_Abort(comm, 1);
+    return 1;
+  }
+
+
+  /// Phase 2: the run. Returns the exit status; an error on one rank ends
+  /// every rank.
+  int
+  run(Problem &problem, const MPI_Comm comm)
+  {
+    try
+      {
+        if (problem.p2)
+          problem.p2->run();
+        else
+          problem.p3->run();
+      }
+    catch (const femp::CollectiveError &e)
+      {
+        // Every rank stops here with the same message: print it once and
+        // end normally (no MPI_Abort, whose banner would bury the message).
+        std::cout.flush();
+        if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
+          std::cerr << "femp: error: " << clean_message(e) << std::endl;
+        return 1;
+      }
+    catch (const std::exception &e)
+      {
+        return abort_run(e, comm);
+      }
+    return 0;
+  }
 } // namespace
 
 
 int
 main(int argc, char *argv[])
 {
-  using namespace dealii;
-  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
-  const MPI_Comm     comm    = MPI_COMM_WORLD;
-  const unsigned int rank    = Utilities::MPI::this_mpi_process(comm);
-  const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
-  const bool         root    = rank == 0;
+  dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  const MPI_Comm                           comm = MPI_COMM_WORLD;
 
   // Phase 1: command line, input and every check, on all ranks. A failure
   // on any rank ends all of them here, with one message.
-  ParameterHandler prm;
-  Problem          problem;
-  std::string      error;
-  int              status = 0; // 0: run, 1: error, 2: done (help, listing)
-  try
-    {
-      femp::declare_all_parameters(prm);
-      femp::declare_run_limits(prm);
-      std::vector<std::string> overrides;
-      std::string              scene;
-      for (int i = 1; i < argc; ++i)
-        {
-          const std::string arg = argv[i];
-          if (arg == "--help" || arg == "-h")
-            {
-              if (root)
-                print_help(std::cout);
-              status = 2;
-            }
-          else if (arg == "--print-parameters" ||
-                   arg == "--print-parameters=prm" ||
-                   arg == "--print-parameters=json")
-            {
-              if (root)
-                prm.print_parameters(
-                  std::cout,
-                  ParameterHandler::OutputStyle(
-                    (arg == "--print-parameters=json" ?
-                       ParameterHandler::JSON :
-                       ParameterHandler::PRM) |
-                    ParameterHandler::KeepDeclarationOrder));
-              status = 2;
-            }
-          else if (arg == "--set" || arg.rfind("--set=", 0) == 0)
-            {
-              if (arg == "--set")
-                {
-                  femp::require(i + 1 < argc, "--set (command line)", "",
-                                "it needs an argument 'Section/Name=value'");
-                  overrides.push_back(argv[++i]);
-                }
-              else
-                overrides.push_back(arg.substr(6));
-            }
-          else if (arg == "--resume" || arg.rfind("--resume=", 0) == 0)
-            {
-              // The same as --set 'Checkpoint/Resume from=DIR'.
-              std::string dir;
-              if (arg == "--resume")
-                {
-                  femp::require(i + 1 < argc, "--resume (command line)", "",
-                                "it needs a checkpoint directory");
-                  dir = argv[++i];
-                }
-              else
-                dir = arg.substr(9);
-              overrides.push_back("Checkpoint/Resume from=" + dir);
-            }
-          else if (arg.size() > 1 && arg[0] == '-')
-            femp::require(false, "command line", femp::short_value(arg),
-                          "it is not an option of femp; the options are "
-                          "--set 'Section/Name=value', --resume DIR, "
-                          "--print-parameters[=json] and --help");
-          else
-            {
-              femp::require(scene.empty(), "command line",
-                            femp::short_value(arg),
-                            "only one scene file may be given (the first was '" +
-                              femp::short_value(scene) + "')");
-              scene = arg;
-            }
-        }
-      if (status == 0)
-        {
-          if (scene.empty())
-            {
-              if (root)
-                print_help(std::cerr);
-              throw std::runtime_error("no scene file given");
-            }
-          read_input(prm, scene, overrides);
-          femp::check_output_file_names(prm);
-          femp::check_values(prm);
-          femp::check_memory(prm, n_ranks);
-          femp::check_disk(prm);
-          if (prm.get_integer("Dimension") == 2)
-            problem.p2 = std::make_unique<femp::FempProblem<2>>(prm, comm);
-          else
-            problem.p3 = std::make_unique<femp::FempProblem<3>>(prm, comm);
-          femp::prepare_output_directory(prm, comm);
-        }
-    }
-  catch (const std::exception &e)
-    {
-      error  = clean_message(e);
-      status = 1;
-    }
-  const unsigned int first_failed =
-    Utilities::MPI::min(status == 1 ? rank : n_ranks, comm);
-  if (first_failed < n_ranks)
-    {
-      if (rank == first_failed)
-        std::cerr << "femp: error: " << error << std::endl;
-      return 1;
-    }
+  dealii::ParameterHandler prm;
+  Problem                  problem;
+  std::string              error;
+  const int status = set_up(argc, argv, comm, prm, problem, error);
+  if (report_set_up_failure(status, error, comm))
+    return 1;
   if (status == 2)
     return 0;
 
   // Phase 2: the run. An error on one rank ends every rank.
-  try
-    {
-      if (problem.p2)
-        problem.p2->run();
-      else
-        problem.p3->run();
-    }
-  catch (const femp::CollectiveError &e)
-    {
-      // Every rank stops here with the same message: print it once and end
-      // normally (no MPI_Abort, whose banner would bury the message).
-      std::cout.flush();
-      if (root)
-        std::cerr << "femp: error: " << clean_message(e) << std::endl;
-      return 1;
-    }
-  catch (const std::exception &e)
-    {
-      if (!root)
-        {
-          // If rank 0 fails too (the same error everywhere), let it speak.
-          std::this_thread::sleep_for(std::chrono::milliseconds(500));
-        }
-      std::cerr << "femp: error" << (root ? std::string() :
-                                            " (rank " + std::to_string(rank) + ")")
-                << ": " << clean_message(e) << std::endl;
-      std::cerr.flush();
-      std::cout.flush();
-      if (n_ranks > 1)
-        MPI_Abort(comm, 1);
-      return 1;
-    }
-  return 0;
+  return run(problem, comm);
 }

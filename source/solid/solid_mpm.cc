@@ -666,6 +666,371 @@ namespace femp
         momentum_v[d] += use * (mg * vp[d]);
       return true;
     }
+
+    /// The point arrays of SolidMPM that the block loops of g2p() and
+    /// update_stresses() read and write.
+    template <int dim>
+    struct PointArrays
+    {
+      std::array<std::vector<double>, dim> &      x, &corner, &v, &xdot;
+      std::array<std::vector<double>, dim * dim> &C;
+      std::vector<double> &                       true_mass, &volume, &visc;
+      std::array<std::vector<double>, 6> &        sigma;
+      std::vector<double> &                       eps_p;
+      const std::vector<std::uint32_t> &          cell, &node0;
+    };
+
+    /// The constants of one update_stresses() step: nodal velocities
+    /// @p vel, temperatures, time step, cell size and the viscous pressure
+    /// q = b1 h sqrt(M m / V) tr(D) / dt with M = E M_per_E.
+    template <int dim>
+    struct StressStep
+    {
+      const SolidMaterial &                          mat;
+      const double *const *                          vel;
+      const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset;
+      const std::vector<double> &                    T_old, &T_new;
+      const double dt, h, ih, dt_ih, b1, b1h, M_per_E, idt, scaling;
+    };
+
+    /// The constants of an update_stresses() step of @p dt with cell size
+    /// @p h: M_per_E = (1 - nu) / ((1 + nu) (1 - 2 nu)) (M = E M_per_E, the
+    /// P-wave modulus) and b1 the bulk viscosity of the viscous pressure.
+    template <int dim>
+    StressStep<dim>
+    stress_step(const SolidMaterial &                          mat,
+                const double *const *                          vel,
+                const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
+                const std::vector<double> &                    T_old,
+                const std::vector<double> &                    T_new,
+                const double                                   dt,
+                const double                                   h,
+                const double                                   scaling)
+    {
+      const double b1 = mat.bulk_viscosity, ih = 1. / h;
+      const double nu      = mat.poisson_ratio;
+      const double M_per_E = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+      const double b1h = b1 * h, idt = 1. / dt;
+      return {mat, vel,     corner_offset, T_old, T_new,   dt,
+              h,   ih,      dt * ih,       b1,    b1h,     M_per_E,
+              idt, scaling};
+    }
+
+    /// The moduli of the cell of the first of @p n points (none: zero), to
+    /// start the cache of block_moduli().
+    inline CellModuli
+    first_cell_moduli(const SolidMaterial &             mat,
+                      const std::vector<std::uint32_t> &cell,
+                      const std::size_t                 n,
+                      const std::vector<double> &       T_old,
+                      const std::vector<double> &       T_new)
+    {
+      const unsigned int E_cell = cell.empty() ? 0 : cell[0];
+      return {E_cell,
+              n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.,
+              n > 0 ? mat.youngs_modulus.value(T_old[E_cell]) : 0.,
+              n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.};
+    }
+
+    /// Software prefetch for the block of update_stresses() at @p p0 (of
+    /// @p n points): the arrays of point p0 + prefetch_distance.
+    template <int dim, bool A>
+    [[gnu::always_inline]] inline void
+    prefetch_stress_block(const PointArrays<dim> &pa, const std::size_t p0,
+                          const std::size_t n)
+    {
+      if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+        {
+          const std::size_t q = p0 + prefetch_distance;
+          prefetch<1>(pa.x, q), prefetch<0>(pa.corner, q);
+          prefetch<1>(pa.sigma, q), prefetch<1>(pa.eps_p, q);
+          prefetch<1>(pa.volume, q), prefetch<1>(pa.visc, q);
+          prefetch<0>(pa.true_mass, q), prefetch<0>(pa.v, q);
+          if (q % 16 == 0)
+            prefetch<0>(pa.node0, q), prefetch<0>(pa.cell, q);
+          if constexpr (A)
+            prefetch<0>(pa.C, q);
+          else
+            prefetch<0>(pa.xdot, q);
+        }
+    }
+
+    /// Constitutive update of the points of block @p blk (at @p p0) of
+    /// update_stresses(): velocity gradient L dt (block_velocity_gradient(),
+    /// with the shared @p coef_cell and @p cv), stress and plastic strain
+    /// (update_stress_block(), stored), the stress work and the work of the
+    /// viscous pressure of the step added to @p work_v, the new viscous
+    /// pressure and volume stored. Returns in @p use the mask of the lanes
+    /// in use and in @p m, @p mg the inertial and true masses.
+    template <int dim, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline void
+    stress_block(const StressStep<dim> &st,
+                 PointArrays<dim> &     pa,
+                 const PointBlock<W> &  blk,
+                 const std::size_t      p0,
+                 std::size_t &          coef_cell,
+                 VD (&cv)[dim][1u << dim],
+                 CellModuli &moduli,
+                 VD &        work_v,
+                 VD &        use,
+                 VD &        m,
+                 VD &        mg)
+    {
+      constexpr unsigned int n_stress = 6;
+      const unsigned int     nl       = blk.nl;
+      const bool             full     = blk.full;
+      const auto &           pl       = blk.pl;
+      VD                     xi[dim];
+      block_xi<dim>(pa.x, pa.corner, blk, st.ih, xi);
+      StressBlockOf<VD> sb;
+      VD(&L)[3][3] = sb.L;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          L[i][j] = VD{};
+      std::size_t n0[W];
+      for (unsigned int l = 0; l < W; ++l)
+        n0[l] = pa.node0[pl[l]];
+      block_velocity_gradient<dim>(st.vel, st.corner_offset, n0, xi,
+                                   st.dt_ih, cv, coef_cell, L);
+      VD s_old[n_stress];
+      for (unsigned int c = 0; c < n_stress; ++c)
+        sb.s[c] = s_old[c] = simd_load(pa.sigma[c], pl, full);
+      sb.eps_p = simd_load(pa.eps_p, pl, full);
+      VD sy;
+      block_moduli(st.mat, pa.cell, pl, n0, st.T_old, st.T_new, moduli, sb,
+                   sy);
+      update_stress_block(st.mat, sb, sy);
+      for (unsigned int c = 0; c < n_stress; ++c)
+        simd_store(pa.sigma[c], p0, nl, sb.s[c]);
+      simd_store(pa.eps_p, p0, nl, sb.eps_p);
+      // Stress work of the step, sum (sigma_old + sigma_new)/2 : D dt
+      // (in-plane components; plane strain has no zz strain).
+      VD w = {}, trL = {};
+      for (int i = 0; i < dim; ++i)
+        {
+          trL += L[i][i];
+          for (int j = 0; j < dim; ++j)
+            w += (s_old[sidx(i, j)] + sb.s[sidx(i, j)]) * L[i][j];
+        }
+      // Viscous pressure of the forces of this step, then the new one.
+      const VD V = simd_load(pa.volume, pl, full);
+      mg         = simd_load(pa.true_mass, pl, full);
+      m          = mg * st.scaling;
+      VD q       = simd_load(pa.visc, pl, full);
+      use        = full ? VD{} + 1. : lane_mask<VD>(nl);
+      work_v += use * (0.5 * V * w + V * q * trL);
+      if (st.b1 > 0)
+        {
+          q = st.b1h * simd_sqrt(sb.E * st.M_per_E * m / V) * trL * st.idt;
+          simd_store(pa.visc, p0, nl, q);
+        }
+      const VD V_new = V * (1 + trL);
+      simd_store(pa.volume, p0, nl, V_new);
+    }
+
+    /// Moves the points of block @p blk (at @p p0) of update_stresses()
+    /// with the grid velocity of the step (APIC: that is the point
+    /// velocity), then their kinetic energy and momentum and the cell check
+    /// (block_kinetic_in_cell()): false when a point left its cell (nothing
+    /// added; SolidMPM::finish_points() then takes the block).
+    template <int dim, bool A, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline bool
+    move_block(const StressStep<dim> &st,
+               PointArrays<dim> &     pa,
+               const PointBlock<W> &  blk,
+               const std::size_t      p0,
+               const VD               use,
+               const VD               m,
+               const VD               mg,
+               VD &                   kinetic_v,
+               VD (&momentum_v)[dim])
+    {
+      const unsigned int nl   = blk.nl;
+      const bool         full = blk.full;
+      const auto &       pl   = blk.pl;
+      VD                 vp[dim], xn[dim], cn[dim];
+      for (int d = 0; d < dim; ++d)
+        {
+          vp[d] = simd_load(pa.v[d], pl, full);
+          xn[d] = simd_load(pa.x[d], pl, full) +
+                  st.dt * (A ? vp[d] : simd_load(pa.xdot[d], pl, full));
+          simd_store(pa.x[d], p0, nl, xn[d]);
+          cn[d] = simd_load(pa.corner[d], pl, full);
+        }
+      VD Cp[dim * dim];
+      if constexpr (A)
+        for (unsigned int c = 0; c < dim * dim; ++c)
+          Cp[c] = simd_load(pa.C[c], pl, full);
+      // Kinetic energy and momentum, the cell check: in SIMD when every
+      // point stays in its cell, else point by point.
+      return block_kinetic_in_cell<dim, A>(vp, xn, cn, Cp, st.h, st.ih, use,
+                                           m, mg, kinetic_v, momentum_v);
+    }
+
+    /// Software prefetch for the block of g2p() at @p p0 (of @p n points):
+    /// the arrays of point p0 + prefetch_distance.
+    template <int dim, bool A>
+    [[gnu::always_inline]] inline void
+    prefetch_g2p_block(const PointArrays<dim> &pa, const std::size_t p0,
+                       const std::size_t n)
+    {
+      if (p0 % 8 == 0 && p0 + prefetch_distance < n)
+        {
+          const std::size_t q = p0 + prefetch_distance;
+          prefetch<0>(pa.x, q), prefetch<0>(pa.corner, q);
+          prefetch<0>(pa.true_mass, q);
+          if (q % 16 == 0)
+            prefetch<0>(pa.node0, q);
+          if constexpr (A)
+            prefetch<1>(pa.C, q), prefetch<1>(pa.v, q);
+          else
+            prefetch<0>(pa.v, q), prefetch<1>(pa.xdot, q);
+        }
+    }
+
+    /// Monomial coefficients @p cv of the nodal velocities @p vel (and
+    /// FLIP, !A: @p ca of the nodal accelerations @p acc) of the cells of
+    /// the block with first nodes @p n0, for g2p(): one load and a
+    /// broadcast when the points lie in the same cell (the usual case: the
+    /// points are sorted by cell), turned into monomial coefficients once
+    /// per cell (@p coef_cell: the cell whose coefficients @p cv, @p ca
+    /// hold, none (-1) after a block of several cells); mixed blocks gather
+    /// lane by lane (the same coefficients per lane).
+    template <int dim, bool A, std::size_t W, typename VD>
+    [[gnu::always_inline]] inline void
+    g2p_coefficients(const double *const *                          vel,
+                     const double *const *                          acc,
+                     const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
+                     const std::size_t (&n0)[W],
+                     VD (&cv)[dim][1u << dim],
+                     VD (&ca)[dim][1u << dim],
+                     std::size_t &coef_cell)
+    {
+      constexpr std::size_t  none      = std::size_t(-1);
+      constexpr unsigned int n_corners = 1u << dim;
+      auto coefficients = [&](auto &&nodal) {
+        for (int i = 0; i < dim; ++i)
+          {
+            for (unsigned int a = 0; a < n_corners; ++a)
+              {
+                cv[i][a] = nodal(vel[i], corner_offset[a]);
+                if constexpr (!A)
+                  ca[i][a] = nodal(acc[i], corner_offset[a]);
+              }
+            monomial_coefficients<dim>(cv[i]);
+            if constexpr (!A)
+              monomial_coefficients<dim>(ca[i]);
+          }
+      };
+      if (one_cell(n0))
+        {
+          if (n0[0] != coef_cell)
+            {
+              coefficients([&](const double *f, const std::ptrdiff_t o) {
+                return VD{} + f[n0[0] + o];
+              });
+              coef_cell = n0[0];
+            }
+        }
+      else
+        {
+          coefficients([&](const double *f, const std::ptrdiff_t o) {
+            VD r;
+            for (unsigned int l = 0; l < W; ++l)
+              r[l] = f[n0[l] + o];
+            return r;
+          });
+          coef_cell = none;
+        }
+    }
+
+    /// New velocity of the points of block @p blk (at @p p0) of g2p() at
+    /// their local coordinates @p xi, from the coefficients @p cv (@p ca)
+    /// of their cells: v_g = sum N_a v_a, C = sum v_a (x) grad N_a (the
+    /// gradient of the interpolant), FLIP: a_g = sum N_a a_a. APIC: v =
+    /// v_g and C into @p Cn (stored by remap_momentum()); FLIP: v += dt a_g
+    /// and the grid velocity v_g stored in xdot (it moves the point at the
+    /// end of the step, update_stresses()). The new v is stored and
+    /// returned in @p vp.
+    template <int dim, bool A, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline void
+    g2p_velocity(PointArrays<dim> &   pa,
+                 const PointBlock<W> &blk,
+                 const std::size_t    p0,
+                 const VD (&xi)[dim],
+                 const VD (&cv)[dim][1u << dim],
+                 const VD (&ca)[dim][1u << dim],
+                 const double ih,
+                 const double dt,
+                 VD (&vp)[dim],
+                 VD (&Cn)[dim][dim])
+    {
+      VD vg[dim], ag[dim];
+      for (int i = 0; i < dim; ++i)
+        {
+          VD g[dim];
+          multilinear<dim>(cv[i], xi, vg[i], g);
+          if constexpr (A)
+            for (int j = 0; j < dim; ++j)
+              Cn[i][j] = ih * g[j];
+          else
+            multilinear<dim>(ca[i], xi, ag[i], g);
+        }
+      for (int i = 0; i < dim; ++i)
+        {
+          vp[i] =
+            A ? vg[i] : simd_load(pa.v[i], blk.pl, blk.full) + dt * ag[i];
+          simd_store(pa.v[i], p0, blk.nl, vp[i]);
+          if constexpr (!A)
+            simd_store(pa.xdot[i], p0, blk.nl, vg[i]);
+        }
+    }
+
+    /// Re-map (MUSL) of the new momentum of the points of block @p blk (at
+    /// @p p0) of g2p() with the weights @p N of the step (those of the
+    /// P2G, so that the re-mapped nodal velocity of a node is a mean of
+    /// point velocities with the node mass): the contributions m N_a
+    /// v_p(x_a) to the corners into @p nmom, with (APIC) v_p(x_a) = v_p +
+    /// C_p (x_a - x_p), C_p = @p Cn stored; FLIP: v_p.
+    template <int dim, bool A, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline void
+    remap_momentum(PointArrays<dim> &   pa,
+                   const PointBlock<W> &blk,
+                   const std::size_t    p0,
+                   const VD (&xi)[dim],
+                   const VD (&N)[1u << dim],
+                   const VD (&vp)[dim],
+                   const VD (&Cn)[dim][dim],
+                   const double h,
+                   const double scaling,
+                   VD (&nmom)[1u << dim][dim])
+    {
+      const VD m = simd_load(pa.true_mass, blk.pl, blk.full) * scaling;
+      VD       v0[dim], Ch[dim][dim];
+      for (int i = 0; i < dim; ++i)
+        v0[i] = vp[i];
+      if constexpr (A)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            {
+              simd_store(pa.C[i * dim + j], p0, blk.nl, Cn[i][j]);
+              Ch[i][j] = h * Cn[i][j];
+              v0[i] -= Ch[i][j] * xi[j];
+            }
+      for (unsigned int a = 0; a < (1u << dim); ++a)
+        {
+          const VD mN = m * N[a];
+          for (int i = 0; i < dim; ++i)
+            {
+              VD va = v0[i];
+              if constexpr (A)
+                for (int j = 0; j < dim; ++j)
+                  if ((a >> j) & 1)
+                    va += Ch[i][j];
+              nmom[a][i] = mN * va;
+            }
+        }
+    }
   } // namespace
 
 
@@ -1034,6 +1399,8 @@ namespace femp
     // re-map added to the nodes in point order.
     constexpr unsigned int W = point_lanes<dim>;
     using VD                 = typename SimdOf<W>::type;
+    PointArrays<dim> pa{x,      corner, v,     xdot,  C,    true_mass,
+                        volume, visc,   sigma, eps_p, cell, node0};
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
@@ -1045,122 +1412,25 @@ namespace femp
       constexpr std::size_t none      = std::size_t(-1);
       std::size_t           coef_cell = none;
       VD                    cv[dim][n_corners], ca[dim][n_corners];
-    for (std::size_t p0 = 0; p0 < n; p0 += W)
-      {
-        const PointBlock<W> blk(p0, n);
-        const unsigned int nl   = blk.nl;
-        const bool         full = blk.full;
-        const auto &       pl   = blk.pl;
-        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
-          {
-            const std::size_t q = p0 + prefetch_distance;
-            prefetch<0>(x, q), prefetch<0>(corner, q);
-            prefetch<0>(true_mass, q);
-            if (q % 16 == 0)
-              prefetch<0>(node0, q);
-            if constexpr (A)
-              prefetch<1>(C, q), prefetch<1>(v, q);
-            else
-              prefetch<0>(v, q), prefetch<1>(xdot, q);
-          }
-        VD                 xi[dim], N[n_corners];
-        block_xi<dim>(x, corner, blk, ih, xi);
-        weights<dim>(xi, N);
-        std::size_t n0[W];
-        for (unsigned int l = 0; l < W; ++l)
-          n0[l] = node0[pl[l]];
-        // Nodal values: one load and a broadcast when the four points lie
-        // in the same cell (the usual case: the points are sorted by cell),
-        // turned into monomial coefficients once per cell; mixed blocks
-        // gather lane by lane (the same coefficients per lane).
-        auto coefficients = [&](auto &&nodal) {
-          for (int i = 0; i < dim; ++i)
-            {
-              for (unsigned int a = 0; a < n_corners; ++a)
-                {
-                  cv[i][a] = nodal(vel[i], corner_offset[a]);
-                  if constexpr (!A)
-                    ca[i][a] = nodal(acc[i], corner_offset[a]);
-                }
-              monomial_coefficients<dim>(cv[i]);
-              if constexpr (!A)
-                monomial_coefficients<dim>(ca[i]);
-            }
-        };
-        if (one_cell(n0))
-          {
-            if (n0[0] != coef_cell)
-              {
-                coefficients([&](const double *f, const std::ptrdiff_t o) {
-                  return VD{} + f[n0[0] + o];
-                });
-                coef_cell = n0[0];
-              }
-          }
-        else
-          {
-            coefficients([&](const double *f, const std::ptrdiff_t o) {
-              VD r;
-              for (unsigned int l = 0; l < W; ++l)
-                r[l] = f[n0[l] + o];
-              return r;
-            });
-            coef_cell = none;
-          }
-        // v_g = sum N_a v_a, C = sum v_a (x) grad N_a (the gradient of the
-        // interpolant), FLIP: a_g = sum N_a a_a.
-        VD vg[dim], ag[dim], Cn[dim][dim];
-        for (int i = 0; i < dim; ++i)
-          {
-            VD g[dim];
-            multilinear<dim>(cv[i], xi, vg[i], g);
-            if constexpr (A)
-              for (int j = 0; j < dim; ++j)
-                Cn[i][j] = ih * g[j];
-            else
-              multilinear<dim>(ca[i], xi, ag[i], g);
-          }
-        // New velocity and affine matrix; the grid velocity at the point
-        // moves it at the end of the step (update_stresses()).
-        VD vp[dim];
-        for (int i = 0; i < dim; ++i)
-          {
-            vp[i] = A ? vg[i] : simd_load(v[i], pl, full) + dt * ag[i];
-            simd_store(v[i], p0, nl, vp[i]);
-            if constexpr (!A)
-              simd_store(xdot[i], p0, nl, vg[i]);
-          }
-        // Re-map (MUSL) of the new momentum with the weights of the step
-        // (those of the P2G, so that the re-mapped nodal velocity of a node
-        // is a mean of point velocities with the node mass).
-        const VD m = simd_load(true_mass, pl, full) * scaling;
-        VD       v0[dim], Ch[dim][dim];
-        for (int i = 0; i < dim; ++i)
-          v0[i] = vp[i];
-        if constexpr (A)
-          for (int i = 0; i < dim; ++i)
-            for (int j = 0; j < dim; ++j)
-              {
-                simd_store(C[i * dim + j], p0, nl, Cn[i][j]);
-                Ch[i][j] = h * Cn[i][j];
-                v0[i] -= Ch[i][j] * xi[j];
-              }
-        VD nmom[n_corners][dim];
-        for (unsigned int a = 0; a < n_corners; ++a)
-          {
-            const VD mN = m * N[a];
-            for (int i = 0; i < dim; ++i)
-              {
-                VD va = v0[i];
-                if constexpr (A)
-                  for (int j = 0; j < dim; ++j)
-                    if ((a >> j) & 1)
-                      va += Ch[i][j];
-                nmom[a][i] = mN * va;
-              }
-          }
-        remap.add(nmom, n0, nl);
-      }
+      for (std::size_t p0 = 0; p0 < n; p0 += W)
+        {
+          const PointBlock<W> blk(p0, n);
+          prefetch_g2p_block<dim, A>(pa, p0, n);
+          VD xi[dim], N[n_corners];
+          block_xi<dim>(pa.x, pa.corner, blk, ih, xi);
+          weights<dim>(xi, N);
+          std::size_t n0[W];
+          for (unsigned int l = 0; l < W; ++l)
+            n0[l] = pa.node0[blk.pl[l]];
+          g2p_coefficients<dim, A>(vel, acc, corner_offset, n0, cv, ca,
+                                   coef_cell);
+          VD vp[dim], Cn[dim][dim];
+          g2p_velocity<dim, A>(pa, blk, p0, xi, cv, ca, ih, dt, vp, Cn);
+          VD nmom[n_corners][dim];
+          remap_momentum<dim, A>(pa, blk, p0, xi, N, vp, Cn, h, scaling,
+                                 nmom);
+          remap.add(nmom, n0, blk.nl);
+        }
     };
     if (apic)
       loop(std::true_type());
@@ -1176,7 +1446,7 @@ namespace femp
                                  const std::vector<double> & T_old,
                                  const std::vector<double> & T_new)
   {
-    const double  b1 = mat.bulk_viscosity, h = grid.h(), ih = 1. / h;
+    const double  h = grid.h();
     const double *vel[dim];
     for (int d = 0; d < dim; ++d)
       vel[d] = nodes.velocity[d].data();
@@ -1186,15 +1456,9 @@ namespace femp
     lost                   = false;
     kinetic                = 0;
     weight_momentum.fill(0.);
-    const double nu     = mat.poisson_ratio;
-    // Viscous pressure q = b1 h sqrt(M m / V) tr(D), M = E M_per_E.
-    const double M_per_E = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
-    const double b1h = b1 * h, idt = 1. / dt;
-    const unsigned int E_cell = cell.empty() ? 0 : cell[0];
-    CellModuli         moduli{E_cell,
-                      n > 0 ? mat.youngs_modulus.value(T_new[E_cell]) : 0.,
-                      n > 0 ? mat.youngs_modulus.value(T_old[E_cell]) : 0.,
-                      n > 0 ? mat.yield_stress.value(T_new[E_cell]) : 0.};
+    const StressStep<dim> st = stress_step<dim>(mat, vel, corner_offset, T_old,
+                                                T_new, dt, h, scaling);
+    CellModuli moduli = first_cell_moduli(mat, cell, n, T_old, T_new);
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
     // run's sub-cycling), so that a run of one step per gather pays nothing
@@ -1221,6 +1485,8 @@ namespace femp
     // arithmetic per point is that of the scalar formulation.
     constexpr unsigned int W = point_lanes<dim>;
     using VD                 = typename SimdOf<W>::type;
+    PointArrays<dim> pa{x,      corner, v,     xdot,  C,    true_mass,
+                        volume, visc,   sigma, eps_p, cell, node0};
     auto loop = [&](auto transfer, auto fused) {
       constexpr bool A = decltype(transfer)::value;
       constexpr bool F = decltype(fused)::value;
@@ -1236,103 +1502,26 @@ namespace femp
       constexpr std::size_t none      = std::size_t(-1);
       std::size_t           coef_cell = none;
       VD                    cv[dim][n_corners];
-      const double          dt_ih = dt * ih;
       // Sums of the lanes of the blocks (lanes of a partial block that
       // are not in use are masked by use); summed at the end.
       VD work_v = {}, kinetic_v = {}, momentum_v[dim] = {};
-    for (std::size_t c0 = 0; c0 < n; c0 += chunk)
-      {
-    const std::size_t c1 = std::min(n, c0 + chunk);
-    // (the block loop keeps its indentation of before the chunks)
-    for (std::size_t p0 = c0; p0 < c1; p0 += W)
-      {
-        const PointBlock<W> blk(p0, n);
-        const unsigned int nl   = blk.nl;
-        const bool         full = blk.full;
-        const auto &       pl   = blk.pl;
-        if (p0 % 8 == 0 && p0 + prefetch_distance < n)
-          {
-            const std::size_t q = p0 + prefetch_distance;
-            prefetch<1>(x, q), prefetch<0>(corner, q);
-            prefetch<1>(sigma, q), prefetch<1>(eps_p, q);
-            prefetch<1>(volume, q), prefetch<1>(visc, q);
-            prefetch<0>(true_mass, q), prefetch<0>(v, q);
-            if (q % 16 == 0)
-              prefetch<0>(node0, q), prefetch<0>(cell, q);
-            if constexpr (A)
-              prefetch<0>(C, q);
-            else
-              prefetch<0>(xdot, q);
-          }
-        VD                 xi[dim];
-        block_xi<dim>(x, corner, blk, ih, xi);
-        StressBlockOf<VD> sb;
-        VD(&L)[3][3] = sb.L;
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            L[i][j] = VD{};
-        std::size_t n0[W];
-        for (unsigned int l = 0; l < W; ++l)
-          n0[l] = node0[pl[l]];
-        block_velocity_gradient<dim>(vel, corner_offset, n0, xi, dt_ih, cv,
-                                     coef_cell, L);
-        VD s_old[n_stress];
-        for (unsigned int c = 0; c < n_stress; ++c)
-          sb.s[c] = s_old[c] = simd_load(sigma[c], pl, full);
-        sb.eps_p = simd_load(eps_p, pl, full);
-        VD sy;
-        block_moduli(mat, cell, pl, n0, T_old, T_new, moduli, sb, sy);
-        update_stress_block(mat, sb, sy);
-        for (unsigned int c = 0; c < n_stress; ++c)
-          simd_store(sigma[c], p0, nl, sb.s[c]);
-        simd_store(eps_p, p0, nl, sb.eps_p);
-        // Stress work of the step, sum (sigma_old + sigma_new)/2 : D dt
-        // (in-plane components; plane strain has no zz strain).
-        VD w = {}, trL = {};
-        for (int i = 0; i < dim; ++i)
-          {
-            trL += L[i][i];
-            for (int j = 0; j < dim; ++j)
-              w += (s_old[sidx(i, j)] + sb.s[sidx(i, j)]) * L[i][j];
-          }
-        // Viscous pressure of the forces of this step, then the new one.
-        const VD V  = simd_load(volume, pl, full);
-        const VD mg = simd_load(true_mass, pl, full), m = mg * scaling;
-        VD       q  = simd_load(visc, pl, full);
-        const VD use = full ? VD{} + 1. : lane_mask<VD>(nl);
-        work_v += use * (0.5 * V * w + V * q * trL);
-        if (b1 > 0)
-          {
-            q = b1h * simd_sqrt(sb.E * M_per_E * m / V) * trL * idt;
-            simd_store(visc, p0, nl, q);
-          }
-        const VD V_new = V * (1 + trL);
-        simd_store(volume, p0, nl, V_new);
-
-        // Move the point with the grid velocity of the step (APIC: that is
-        // the point velocity).
-        VD vp[dim], xn[dim], cn[dim];
-        for (int d = 0; d < dim; ++d)
-          {
-            vp[d] = simd_load(v[d], pl, full);
-            xn[d] = simd_load(x[d], pl, full) +
-                    dt * (A ? vp[d] : simd_load(xdot[d], pl, full));
-            simd_store(x[d], p0, nl, xn[d]);
-            cn[d] = simd_load(corner[d], pl, full);
-          }
-        VD Cp[dim * dim];
-        if constexpr (A)
-          for (unsigned int c = 0; c < dim * dim; ++c)
-            Cp[c] = simd_load(C[c], pl, full);
-        // Kinetic energy and momentum, the cell check: in SIMD when every
-        // point stays in its cell, else point by point.
-        if (!block_kinetic_in_cell<dim, A>(vp, xn, cn, Cp, h, ih, use, m, mg,
-                                           kinetic_v, momentum_v))
-          finish_points<A>(p0, nl);
-      }
-    if constexpr (F)
-      p2g_blocks<A>(in, c0, c1, n, out);
-      }
+      for (std::size_t c0 = 0; c0 < n; c0 += chunk)
+        {
+          const std::size_t c1 = std::min(n, c0 + chunk);
+          for (std::size_t p0 = c0; p0 < c1; p0 += W)
+            {
+              const PointBlock<W> blk(p0, n);
+              prefetch_stress_block<dim, A>(pa, p0, n);
+              VD use, m, mg;
+              stress_block(st, pa, blk, p0, coef_cell, cv, moduli, work_v,
+                           use, m, mg);
+              if (!move_block<dim, A>(st, pa, blk, p0, use, m, mg, kinetic_v,
+                                      momentum_v))
+                finish_points<A>(p0, blk.nl);
+            }
+          if constexpr (F)
+            p2g_blocks<A>(in, c0, c1, n, out);
+        }
       work += lane_total(work_v);
       kinetic += lane_total(kinetic_v);
       for (int d = 0; d < dim; ++d)
