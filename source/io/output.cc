@@ -1116,11 +1116,10 @@ namespace femp
         throw InputError("Checkpoint/Resume from", prm.directory, msg);
       }
     // The indices list the outputs up to the checkpoint (none: removed).
-    const bool hdf5 = prm.format == "hdf5";
     for (const auto &[name, r] :
          {std::make_pair(std::string("grid.pvd"), &grid_records),
           std::make_pair(std::string("points.pvd"), &point_records)})
-      if (!r->empty() && !hdf5)
+      if (!r->empty())
         write_pvd(prm.directory + "/" + name, *r, comm);
       else if (Utilities::MPI::this_mpi_process(comm) == 0)
         {
