@@ -106,6 +106,40 @@ namespace femp
       return r;
     }
 
+    /// Calls @p coefficients with the loader of the corner values of the
+    /// block @p n0: one cell's node values broadcast to all lanes when the
+    /// W points lie in one cell (and only if @p coef_cell does not hold that
+    /// cell's coefficients already), else gathered lane by lane.
+    /// @p coef_cell becomes the cell whose coefficients were computed, or
+    /// none (-1) after a block of several cells.
+    template <typename VD, std::size_t W, typename Coefficients>
+    [[gnu::always_inline]] inline void
+    corner_coefficients(const std::size_t (&n0)[W],
+                        std::size_t &coef_cell,
+                        Coefficients &&coefficients)
+    {
+      if (one_cell(n0))
+        {
+          if (n0[0] != coef_cell)
+            {
+              coefficients([&](const double *f, const std::ptrdiff_t o) {
+                return VD{} + f[n0[0] + o];
+              });
+              coef_cell = n0[0];
+            }
+        }
+      else
+        {
+          coefficients([&](const double *f, const std::ptrdiff_t o) {
+            VD r;
+            for (unsigned int l = 0; l < W; ++l)
+              r[l] = f[n0[l] + o];
+            return r;
+          });
+          coef_cell = std::size_t(-1);
+        }
+    }
+
     /// Lanes of @p a summed as a tree: (a0 + a1) + (a2 + a3), and for 8
     /// lanes the sum of the two halves so formed.
     template <typename VD>
@@ -533,7 +567,6 @@ namespace femp
       std::size_t &coef_cell,
       VD (&L)[3][3])
     {
-      constexpr std::size_t none = std::size_t(-1);
       auto coefficients = [&](auto &&nodal) {
         for (int i = 0; i < dim; ++i)
           {
@@ -542,26 +575,7 @@ namespace femp
             monomial_coefficients<dim>(cv[i]);
           }
       };
-      if (one_cell(n0))
-        {
-          if (n0[0] != coef_cell)
-            {
-              coefficients([&](const double *f, const std::ptrdiff_t o) {
-                return VD{} + f[n0[0] + o];
-              });
-              coef_cell = n0[0];
-            }
-        }
-      else
-        {
-          coefficients([&](const double *f, const std::ptrdiff_t o) {
-            VD r;
-            for (unsigned int l = 0; l < W; ++l)
-              r[l] = f[n0[l] + o];
-            return r;
-          });
-          coef_cell = none;
-        }
+      corner_coefficients<VD>(n0, coef_cell, coefficients);
       for (int i = 0; i < dim; ++i)
         {
           VD val, g[dim];
@@ -906,7 +920,6 @@ namespace femp
                      VD (&ca)[dim][1u << dim],
                      std::size_t &coef_cell)
     {
-      constexpr std::size_t  none      = std::size_t(-1);
       constexpr unsigned int n_corners = 1u << dim;
       auto coefficients = [&](auto &&nodal) {
         for (int i = 0; i < dim; ++i)
@@ -922,26 +935,7 @@ namespace femp
               monomial_coefficients<dim>(ca[i]);
           }
       };
-      if (one_cell(n0))
-        {
-          if (n0[0] != coef_cell)
-            {
-              coefficients([&](const double *f, const std::ptrdiff_t o) {
-                return VD{} + f[n0[0] + o];
-              });
-              coef_cell = n0[0];
-            }
-        }
-      else
-        {
-          coefficients([&](const double *f, const std::ptrdiff_t o) {
-            VD r;
-            for (unsigned int l = 0; l < W; ++l)
-              r[l] = f[n0[l] + o];
-            return r;
-          });
-          coef_cell = none;
-        }
+      corner_coefficients<VD>(n0, coef_cell, coefficients);
     }
 
     /// New velocity of the points of block @p blk (at @p p0) of g2p() at
