@@ -369,7 +369,8 @@ namespace femp
       differs("Solid FEM/Zone upper corner", triple(s.fe_upper, dim),
               triple(scene.fe_upper, dim));
     if (s.n_point_properties != scene.n_point_properties)
-      differs("the point properties (Solid/Velocity transfer)",
+      differs("the point properties (Material points/Carry points, "
+              "Solid/Velocity transfer)",
               std::to_string(s.n_point_properties) + " per point",
               std::to_string(scene.n_point_properties));
     if (image.size() - header_size != size)
