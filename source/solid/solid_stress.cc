@@ -858,7 +858,8 @@ namespace femp
     double buf[dim + 2] = {value, point ? 1. : 0.};
     for (int d = 0; d < dim; ++d)
       buf[2 + d] = where[d];
-    MPI_Bcast(buf, dim + 2, MPI_DOUBLE, root, comm);
+    if (root < (1u << 30))
+      MPI_Bcast(buf, dim + 2, MPI_DOUBLE, root, comm);
     for (int d = 0; d < dim; ++d)
       where[d] = buf[2 + d];
     std::ostringstream s;
