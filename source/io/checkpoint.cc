@@ -16,8 +16,9 @@ namespace femp
   namespace
   {
     const char         magic[8]       = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
-    // 2: the solid's sections (Physics/Solid stress) added.
-    const std::uint32_t format_version = 3;
+    // 2: the solid's sections (Physics/Solid stress) added; 4: the FE
+    // elements' volume change.
+    const std::uint32_t format_version = 4;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p.
     std::uint64_t
