@@ -234,6 +234,146 @@ def study_stefan(args):
                   "CPU seconds", "relative front error")
 
 
+def study_danilovskaya(args):
+    exe = os.path.join(args.build, "tests", "test_solid_danilovskaya")
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first (cmake --build %s --target "
+                         "test_solid_danilovskaya)" % (exe, args.build))
+    exe = os.path.abspath(exe)
+    rows = []
+    keys = ("points", "elements", "steps", "max_error_away", "rms_error",
+            "front_error", "balance")
+    for method in ("mpm", "femp", "fe"):
+        for h in (0.04, 0.02, 0.01, 0.005):
+            for ppc in ((1, 2) if method != "fe" else (1,)):
+                for tr in (("apic", "flip") if method != "fe" else ("apic",)):
+                    for bv in (0, 0.1, 0.3):
+                        def make(d, a=(method, h, ppc, tr, bv)):
+                            cmd = [exe, "--study"] + [str(v) for v in a]
+                            rc, cpu, wall = run_timed(
+                                cmd, d, os.path.join(d, "log.txt"))
+                            text = open(os.path.join(d, "log.txt")).read()
+                            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+                            for k in keys:
+                                m = re.search(r"\b%s ([-0-9.e+naif]+)" % k, text)
+                                r[k] = float(m.group(1)) if m else None
+                            return r
+                        d = os.path.join(args.out, "danilovskaya",
+                                         "%s_h%g_p%d_%s_b%g" % (method, h, ppc,
+                                                                 tr, bv))
+                        r = cached(d, make)
+                        r.update(method=method, h=h, points_per_cell=ppc,
+                                 transfer=tr, bulk_viscosity=bv,
+                                 error=r["max_error_away"],
+                                 label="%s %g%s%s b%g" % (
+                                     method, h,
+                                     " p%d" % ppc if ppc > 1 else "",
+                                     " F" if tr == "flip" else "", bv))
+                        rows.append(r)
+    write_outputs("danilovskaya", rows,
+                  ["method", "h", "points_per_cell", "transfer",
+                   "bulk_viscosity", "cpu_s", "wall_s", "error", "rms_error",
+                   "front_error", "balance", "points", "elements", "steps",
+                   "rc"], args,
+                  "Danilovskaya (case 3.1): max |S - exact| away from the "
+                  "front vs CPU time", "CPU seconds",
+                  "max |sigma - exact| / (beta T0), |t - x/c| > 5h/c")
+
+
+def study_physics(args):
+    """The default scene (reduced case 3.2) with the physics switched on one
+    by one: what each costs and what it changes."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    scene = os.path.join(ROOT, "prm", "case_3_2_reduced.prm")
+    rows = []
+    for name, flow, solid in (("thermal", "false", "false"),
+                              ("thermo-fluid", "true", "false"),
+                              ("coupled", "true", "true")):
+        def make(d, flow=flow, solid=solid):
+            sets = {"Physics/Melt flow": flow, "Physics/Solid stress": solid,
+                    "Output/Directory": d, "Output/Output interval": "0",
+                    "Output/Write material points": "never"}
+            cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np",
+                   str(args.np), exe] if args.np > 1 else [exe]
+            for k, v in sets.items():
+                cmd += ["--set", "%s=%s" % (k, v)]
+            rc, cpu, wall = run_timed(cmd + [scene], d,
+                                      os.path.join(d, "log.txt"))
+            text = open(os.path.join(d, "log.txt")).read()
+            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+            m = re.search(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
+                          r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)", text)
+            if m:
+                r.update(laser_J=float(m.group(1)), losses_J=float(m.group(2)),
+                         evaporation_J=float(m.group(3)))
+            pool = read_csv(os.path.join(d, "melt_pool.csv"))
+            for k in ("length", "width", "depth", "T_max",
+                      "depth_solidus_substrate", "width_solidus_substrate"):
+                r["max_" + k] = max(float(p[k]) for p in pool)
+            return r
+        d = os.path.join(args.out, "physics", name)
+        r = cached(d, make)
+        r.update(physics=name, label=name, error=None)
+        rows.append(r)
+    fields = ["physics", "cpu_s", "wall_s", "max_length", "max_width",
+              "max_depth", "max_depth_solidus_substrate",
+              "max_width_solidus_substrate", "max_T_max", "laser_J",
+              "evaporation_J", "losses_J", "rc"]
+    os.makedirs(args.out, exist_ok=True)
+    f = os.path.join(args.out, "physics.csv")
+    with open(f, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+    print("wrote", f)
+    for r in rows:
+        print("  ".join("%s=%s" % (k, r.get(k, "")) for k in fields))
+
+
+def study_droplet(args):
+    """Oscillating 2D droplet (tests/oscillating_droplet.cc, Lamb's mode-2
+    period with the viscous shift): radius in cells x capillary step
+    fraction x FLIP fraction; error: |period error| of the first full
+    period."""
+    exe = os.path.join(args.build, "tests", "test_oscillating_droplet")
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first (cmake --build %s --target "
+                         "test_oscillating_droplet)" % (exe, args.build))
+    exe = os.path.abspath(exe)
+    rows = []
+    for r_h in (10, 15, 20, 30):
+        for frac in (0.25, 0.5, 1.0):
+            for flip in (0.9, 0.95, 0.99):
+                def make(d, a=(frac, r_h, flip)):
+                    cmd = [exe, str(a[0]), str(a[1]), "", "0.5", "0.1",
+                           str(a[2])]
+                    rc, cpu, wall = run_timed(cmd, d,
+                                              os.path.join(d, "log.txt"))
+                    text = open(os.path.join(d, "log.txt")).read()
+                    r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+                    m = re.search(r"\|period error\|[^=]*= ([-0-9.e+]+)", text)
+                    r["period_error"] = float(m.group(1)) if m else None
+                    m = re.search(r"\nsteps = ([0-9]+)", text)
+                    r["steps"] = int(m.group(1)) if m else None
+                    m = re.search(r"max point speed / \(omega eps R\) = "
+                                  r"([-0-9.e+]+)", text)
+                    r["max_speed"] = float(m.group(1)) if m else None
+                    return r
+                d = os.path.join(args.out, "droplet",
+                                 "R%g_c%g_f%g" % (r_h, frac, flip))
+                r = cached(d, make)
+                r.update(R_over_h=r_h, step_fraction=frac, flip=flip,
+                         error=r["period_error"],
+                         label="R%gh c%g f%g" % (r_h, frac, flip))
+                rows.append(r)
+    write_outputs("droplet", rows,
+                  ["R_over_h", "step_fraction", "flip", "cpu_s", "wall_s",
+                   "error", "steps", "max_speed", "rc"], args,
+                  "Oscillating droplet: period error vs CPU time",
+                  "CPU seconds", "|period error| / T")
+
+
 def adaptive_block(r_max, s_min=1, s_max=1e4):
     """The Solid entries of the adaptive mass scaling (appended to a scene:
     a subsection may be opened again)."""
@@ -340,14 +480,16 @@ def study_mass_scaling(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("study", choices=["stefan", "mass_scaling"])
+    ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet"])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
                     help="folder for run directories and CSV")
     ap.add_argument("--img", default=os.path.join(ROOT, "doc", "img"))
     ap.add_argument("--np", type=int, default=1, help="MPI ranks of femp runs")
     args = ap.parse_args()
-    {"stefan": study_stefan, "mass_scaling": study_mass_scaling}[args.study](args)
+    {"stefan": study_stefan, "mass_scaling": study_mass_scaling,
+     "danilovskaya": study_danilovskaya, "physics": study_physics,
+     "droplet": study_droplet}[args.study](args)
 
 
 if __name__ == "__main__":
