@@ -12,6 +12,7 @@ with the standard library only (matplotlib is not needed).
   contrib/study.py stefan       [--build build] [--out study] [--img doc/img]
   contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
                                 [--np 1]
+  contrib/study.py danilovskaya | droplet | physics | track  [same options]
 
 stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
   form of Neumann) over cell size h x step fraction of the stable step;
@@ -26,6 +27,17 @@ mass_scaling: the reduced coupled single track (prm/single_track_coupled.prm
   to the RMS of that run's values. Also written: the stress work and
   the booked transfer dissipation at the end, the largest
   kinetic-to-internal ratio (doc/speed_accuracy.md explains them).
+danilovskaya: case 3.1 (tests/solid_danilovskaya.cc --study) over all-MPM /
+  FEMP / all-FE x cell size x points per cell x APIC/FLIP x bulk viscosity;
+  error: mean |sigma - exact| / (beta T0) at x = 1 m over the 2 s.
+droplet: the oscillating 2D droplet (tests/oscillating_droplet.cc) over
+  R/h x capillary step fraction x FLIP fraction; error: |period error|.
+physics: the default scene (prm/case_3_2_reduced.prm) thermal only,
+  thermo-fluid and fully coupled: cost, pool size, peak temperature, energy
+  lost to evaporation (no error: a table).
+track: the default scene with heat and flow to 50 us over cell size x
+  temperature step; error: fusion-zone depth and width (solidus, in the
+  substrate) against the finest run.
 """
 import argparse
 import csv
@@ -385,6 +397,66 @@ def study_droplet(args):
                   "CPU seconds", "|period error| / T")
 
 
+def study_track(args):
+    """The default scene's track with heat and melt flow (no solid), to
+    50 us: cell size x temperature step; error: the largest fusion-zone
+    depth and width (solidus, in the substrate) against the finest run."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    scene = os.path.join(ROOT, "prm", "case_3_2_reduced.prm")
+    rows = []
+    for h in (8e-6, 4e-6):
+        for dt in (2e-7, 1e-7, 5e-8):
+            def make(d, h=h, dt=dt):
+                sets = {"Physics/Solid stress": "false",
+                        "Time stepping/End time": "5e-5",
+                        "Time stepping/Time step": str(dt),
+                        "Background grid/Cell size": str(h),
+                        "Material points/Point spacing": str(h / 2),
+                        "Output/Directory": d, "Output/Output interval": "0",
+                        "Output/Write material points": "never"}
+                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
+                       "-np", str(args.np), exe] if args.np > 1 else [exe]
+                for k, v in sets.items():
+                    cmd += ["--set", "%s=%s" % (k, v)]
+                rc, cpu, wall = run_timed(cmd + [scene], d,
+                                          os.path.join(d, "log.txt"))
+                r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+                try:
+                    pool = read_csv(os.path.join(d, "melt_pool.csv"))
+                    for k in ("depth_solidus_substrate",
+                              "width_solidus_substrate", "T_max", "depth",
+                              "width", "length"):
+                        r["max_" + k] = max(float(p[k]) for p in pool)
+                except (OSError, ValueError, KeyError) as ex:
+                    r["read_error"] = str(ex)
+                return r
+            d = os.path.join(args.out, "track", "h%g_dt%g" % (h, dt))
+            r = cached(d, make)
+            r.update(h=h, dt=dt, label="h=%gum dt=%gns" % (h * 1e6, dt * 1e9))
+            rows.append(r)
+    ref = rows[-1]
+    for r in rows:
+        try:
+            e_d = abs(r["max_depth_solidus_substrate"] /
+                      ref["max_depth_solidus_substrate"] - 1)
+            e_w = abs(r["max_width_solidus_substrate"] /
+                      ref["max_width_solidus_substrate"] - 1)
+            r["depth_error"], r["width_error"] = e_d, e_w
+            r["error"] = max(e_d, e_w)
+        except (KeyError, ZeroDivisionError, TypeError):
+            r["error"] = None
+        if r is ref:
+            r["error"], r["reference"] = None, True
+    write_outputs("track", rows,
+                  ["h", "dt", "cpu_s", "wall_s", "error", "depth_error",
+                   "width_error", "max_depth_solidus_substrate",
+                   "max_width_solidus_substrate", "max_T_max", "max_depth",
+                   "max_width", "max_length", "rc"], args,
+                  "Reduced case 3.2, heat + flow to 50 us: fusion zone vs "
+                  "the 4 um / 50 ns run", "CPU seconds",
+                  "max relative error of fusion depth, width")
+
+
 def adaptive_block(r_max, s_min=1, s_max=1e4):
     """The Solid entries of the adaptive mass scaling (appended to a scene:
     a subsection may be opened again)."""
@@ -492,7 +564,7 @@ def study_mass_scaling(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet"])
+    ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet", "track"])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
                     help="folder for run directories and CSV")
@@ -501,7 +573,7 @@ def main():
     args = ap.parse_args()
     {"stefan": study_stefan, "mass_scaling": study_mass_scaling,
      "danilovskaya": study_danilovskaya, "physics": study_physics,
-     "droplet": study_droplet}[args.study](args)
+     "droplet": study_droplet, "track": study_track}[args.study](args)
 
 
 if __name__ == "__main__":
