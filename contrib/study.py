@@ -12,7 +12,8 @@ with the standard library only (matplotlib is not needed).
   contrib/study.py stefan       [--build build] [--out study] [--img doc/img]
   contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
                                 [--np 1]
-  contrib/study.py danilovskaya | droplet | physics | track  [same options]
+  contrib/study.py danilovskaya | droplet | physics | track | rosenthal |
+                   dam_break | static_droplet  [same options]
 
 stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
   form of Neumann) over cell size h x step fraction of the stable step;
@@ -38,6 +39,18 @@ physics: the default scene (prm/case_3_2_reduced.prm) thermal only,
 track: the default scene with heat and flow to 50 us over cell size x
   temperature step; error: fusion-zone depth and width (solidus, in the
   substrate) against the finest run.
+rosenthal: the moving Gaussian source on a half space (tests/rosenthal.cc)
+  over cell size x temperature step fraction of the stable step; error: the
+  largest relative error of pool length, width and depth at t = 1 against
+  the Eagar-Tsai (Rosenthal) closed form.
+dam_break: the dam break (tests/dam_break.cc) over cells per column width
+  x FLIP fraction x Courant number; error: relative error of the front
+  speed after the release phase (T >= 1.19) against Martin & Moyce; the
+  largest relative column-height error is written as well.
+static_droplet: the 2D static drop (tests/static_droplet.cc, solver
+  defaults) over R/h x FLIP fraction x capillary step fraction, to
+  2.5 sqrt(rho R^3/sigma); error: relative error of the Laplace pressure
+  jump; the spurious-current capillary number is written as well.
 """
 import argparse
 import csv
@@ -457,6 +470,129 @@ def study_track(args):
                   "max relative error of fusion depth, width")
 
 
+def run_test_sweep(args, name, target, points):
+    """Run build/tests/TARGET once per (folder, argv, extra columns) of
+    points, each in its own folder under args.out/name; return the rows
+    with rc, cpu_s, wall_s, the log text under 'log' (not stored)."""
+    exe = os.path.join(args.build, "tests", target)
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first (cmake --build %s --target "
+                         "%s)" % (exe, args.build, target))
+    exe = os.path.abspath(exe)
+    rows = []
+    for folder, argv, extra in points:
+        def make(d, argv=argv):
+            rc, cpu, wall = run_timed([exe] + argv, d,
+                                      os.path.join(d, "log.txt"))
+            return {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+        d = os.path.join(args.out, name, folder)
+        r = cached(d, make)
+        with open(os.path.join(d, "log.txt")) as fh:
+            r["log"] = fh.read()
+        r.update(extra)
+        rows.append(r)
+    return rows
+
+
+def number(pattern, text):
+    """The float of the first group of pattern in text, or None."""
+    m = re.search(pattern, text)
+    return float(m.group(1)) if m else None
+
+
+NUM = r"([-0-9.e+naif]+)"
+
+
+def study_rosenthal(args):
+    """Moving Gaussian source (tests/rosenthal.cc): cell size x step
+    fraction C of the stable temperature step; error: the largest relative
+    error of the pool's length, width and depth at t = 1 against the
+    closed form (unrounded, from the test's log)."""
+    points = []
+    for n in (10, 20, 30, 40, 50):  # cells per 2 (h = 2/n)
+        for c in ((0.25, 0.5, 1.0) if n < 50 else (0.5, 1.0)):
+            h = 2.0 / n
+            points.append(("h%.4g_c%g" % (h, c), [repr(h), str(c)],
+                           {"h": round(h, 5), "step_fraction": c,
+                            "label": "h=%.3g,C=%g" % (h, c)}))
+    rows = run_test_sweep(args, "rosenthal", "test_rosenthal", points)
+    for r in rows:
+        text = r.pop("log")
+        for k in ("length", "width", "depth"):
+            r[k + "_error"] = number(r"unrounded relative errors:.*\b%s %s"
+                                     % (k, NUM), text)
+        r["steps"] = number(r"\nsteps ([0-9]+)", text)
+        e = [r[k + "_error"] for k in ("length", "width", "depth")]
+        r["error"] = max(e) if None not in e else None
+    write_outputs("rosenthal", rows,
+                  ["h", "step_fraction", "cpu_s", "wall_s", "error",
+                   "length_error", "width_error", "depth_error", "steps",
+                   "rc"], args,
+                  "Moving source (Rosenthal/Eagar-Tsai): pool size error vs "
+                  "CPU time", "CPU seconds",
+                  "max relative error of length, width, depth")
+
+
+def study_dam_break(args):
+    """Dam break (tests/dam_break.cc, point shifting 2, volume correction
+    0.5, free-slip floor): cells per column width a x FLIP fraction x
+    Courant number; error: relative front-speed error after the release
+    phase against Martin & Moyce (what the test gates)."""
+    points = []
+    for n in (8, 16, 32):
+        for flip in (0.9, 0.95, 0.99):
+            for cfl in (0.125, 0.25, 0.5):
+                points.append(("n%d_f%g_c%g" % (n, flip, cfl),
+                               [str(n), "-", "2", "0.5", "slip", str(cfl),
+                                str(flip)],
+                               {"n_per_a": n, "flip": flip, "courant": cfl,
+                                "label": "a/%d f%g C%g" % (n, flip, cfl)}))
+    rows = run_test_sweep(args, "dam_break", "test_dam_break", points)
+    for r in rows:
+        text = r.pop("log")
+        r["front_speed"] = number(r"unrounded: front speed for T >= 1.19 " + NUM,
+                                  text)
+        r["error"] = number(r"relative front speed deviation " + NUM, text)
+        r["height_error"] = number(r"max relative height deviation " + NUM,
+                                   text)
+        r["height_error_early"] = number(r"for t sqrt\(g/a\) <= 2.7 " + NUM,
+                                         text)
+        r["front_error"] = number(r"max relative front deviation " + NUM, text)
+        r["steps"] = number(r"fluid steps = ([0-9]+)", text)
+    write_outputs("dam_break", rows,
+                  ["n_per_a", "flip", "courant", "cpu_s", "wall_s", "error",
+                   "front_speed", "height_error", "height_error_early",
+                   "front_error", "steps", "rc"], args,
+                  "Dam break: front speed error (T >= 1.19) vs CPU time",
+                  "CPU seconds", "|dZ/dT / Martin-Moyce - 1|")
+
+
+def study_static_droplet(args):
+    """Static 2D drop (tests/static_droplet.cc with the solver defaults):
+    R/h x FLIP fraction x capillary step fraction, to 2.5 capillary times;
+    error: relative Laplace jump error of the mean inside pressure."""
+    points = []
+    for r_h in (5, 10, 20, 40):
+        for flip in (0.9, 0.95, 0.99):
+            for c in (0.25, 0.5, 1.0):
+                points.append(("R%g_f%g_c%g" % (r_h, flip, c),
+                               [str(r_h), str(flip), str(c)],
+                               {"R_over_h": r_h, "flip": flip,
+                                "step_fraction": c,
+                                "label": "R%gh f%g c%g" % (r_h, flip, c)}))
+    rows = run_test_sweep(args, "static_droplet", "test_static_droplet", points)
+    for r in rows:
+        text = r.pop("log")
+        r["error"] = number(r"unrounded: Laplace jump error " + NUM, text)
+        r["capillary_number"] = number(r"mu u_max/sigma " + NUM + ",", text)
+        r["steps"] = number(r", steps ([0-9]+)", text)
+    write_outputs("static_droplet", rows,
+                  ["R_over_h", "flip", "step_fraction", "cpu_s", "wall_s",
+                   "error", "capillary_number", "steps", "rc"], args,
+                  "Static droplet: Laplace jump error vs CPU time",
+                  "CPU seconds", "|p_in / (sigma/R) - 1|")
+
+
 def adaptive_block(r_max, s_min=1, s_max=1e4):
     """The Solid entries of the adaptive mass scaling (appended to a scene:
     a subsection may be opened again)."""
@@ -564,7 +700,8 @@ def study_mass_scaling(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet", "track"])
+    ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet", "track",
+                             "rosenthal", "dam_break", "static_droplet"])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
                     help="folder for run directories and CSV")
@@ -573,7 +710,9 @@ def main():
     args = ap.parse_args()
     {"stefan": study_stefan, "mass_scaling": study_mass_scaling,
      "danilovskaya": study_danilovskaya, "physics": study_physics,
-     "droplet": study_droplet, "track": study_track}[args.study](args)
+     "droplet": study_droplet, "track": study_track,
+     "rosenthal": study_rosenthal, "dam_break": study_dam_break,
+     "static_droplet": study_static_droplet}[args.study](args)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,17 @@
 // with point shifting (A = 2) and two passes of curvature smoothing, the
 // settings of the oscillating-droplet test (doc/flow.md). 1 and 2 ranks
 // give the same output.
+//
+// Optional arguments (for contrib/study.py static_droplet; the test runs
+// without them): R/h (default 10; 4 R/h an integer), Melt flow/FLIP
+// fraction (default 0.95) and Melt flow/Capillary step fraction (default
+// 0.5). With them only the run with the solver's defaults is made, to the
+// fixed time 2.5 sqrt(rho R^3/sigma) instead of 400 steps, and the
+// unrounded errors go to stderr.
 #include "flow_tools.h"
+
+#include <cstdlib>
+#include <iostream>
 
 using namespace femp_test;
 
@@ -18,12 +28,28 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
   constexpr int                    dim = 2;
-  const double L = 1, h = L / 40, R = 0.25, rho = 1000, sigma = 1, mu = 0.5;
+  const bool   study  = argc > 1;
+  const double R_h    = study ? std::atof(argv[1]) : 10;
+  const double flip   = argc > 2 ? std::atof(argv[2]) : 0.95;
+  const double c_frac = argc > 3 ? std::atof(argv[3]) : 0.5;
+  if (!(R_h >= 2 && R_h <= 100) || std::abs(4 * R_h - std::round(4 * R_h)) > 1e-9 ||
+      !(flip >= 0 && flip <= 1) || !(c_frac > 0 && c_frac <= 1))
+    {
+      std::cerr << "usage: test_static_droplet [R/h in [2, 100], 4 R/h an "
+                   "integer] [FLIP fraction in [0, 1]] [capillary step "
+                   "fraction in (0, 1]]\n";
+      return 1;
+    }
+  const double L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1, mu = 0.5;
   const Point<dim> centre(0.5, 0.5);
   for (const bool smoothed : {false, true})
   try
     {
+      if (study && smoothed)
+        break;
       typename IncompressibleFlow<dim>::Parameters prm;
+      prm.flip_fraction      = flip;
+      prm.capillary_fraction = c_frac;
       if (smoothed)
         {
           prm.point_shifting      = 2;
@@ -41,7 +67,9 @@ main(int argc, char **argv)
                            prm, comm);
       const auto limits = scene.flow->stable_time_step();
       const double dt   = limits.min();
-      const unsigned int n_steps = 400;
+      const double t_sigma = std::sqrt(rho * R * R * R / sigma);
+      const unsigned int n_steps =
+        study ? static_cast<unsigned int>(std::ceil(2.5 * t_sigma / dt)) : 400;
       for (unsigned int n = 0; n < n_steps; ++n)
         scene.flow->step(dt);
       const auto &p    = scene.flow->pressure();
@@ -53,7 +81,11 @@ main(int argc, char **argv)
                           Utilities::MPI::sum(count, comm);
       const double umax = scene.max_over_points(
         [](const Point<dim> &, auto v) { return point_speed<dim>(v); });
-      const double t_sigma = std::sqrt(rho * R * R * R / sigma);
+      if (study && Utilities::MPI::this_mpi_process(comm) == 0)
+        std::cerr << std::setprecision(8) << "unrounded: Laplace jump error "
+                  << std::abs(p_in - sigma / R) / (sigma / R)
+                  << ", mu u_max/sigma " << mu * umax / sigma << ", steps "
+                  << n_steps << ", dt " << dt << std::endl;
       checks.print("capillary time step limit, s", limits.capillary);
       checks.print("steps", n_steps);
       checks.print("time / sqrt(rho R^3/sigma)",
