@@ -12,6 +12,7 @@ with the standard library only (matplotlib is not needed).
   contrib/study.py stefan       [--build build] [--out study] [--img doc/img]
   contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
                                 [--np 1]
+  contrib/study.py danilovskaya | droplet | physics | track  [same options]
 
 stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
   form of Neumann) over cell size h x step fraction of the stable step;
@@ -26,6 +27,17 @@ mass_scaling: the reduced coupled single track (prm/single_track_coupled.prm
   to the RMS of that run's values. Also written: the stress work and
   the booked transfer dissipation at the end, the largest
   kinetic-to-internal ratio (doc/speed_accuracy.md explains them).
+danilovskaya: case 3.1 (tests/solid_danilovskaya.cc --study) over all-MPM /
+  FEMP / all-FE x cell size x points per cell x APIC/FLIP x bulk viscosity;
+  error: mean |sigma - exact| / (beta T0) at x = 1 m over the 2 s.
+droplet: the oscillating 2D droplet (tests/oscillating_droplet.cc) over
+  R/h x capillary step fraction x FLIP fraction; error: |period error|.
+physics: the default scene (prm/case_3_2_reduced.prm) thermal only,
+  thermo-fluid and fully coupled: cost, pool size, peak temperature, energy
+  lost to evaporation (no error: a table).
+track: the default scene with heat and flow to 50 us over cell size x
+  temperature step; error: fusion-zone depth and width (solidus, in the
+  substrate) against the finest run.
 """
 import argparse
 import csv
@@ -159,8 +171,9 @@ def svg_loglog(path, rows, xkey, ykey, label, title, xlabel, ylabel):
         on = i in front
         o.append('<circle cx="%.1f" cy="%.1f" r="%d" fill="%s"/>'
                  % (X(p[0]), Y(p[1]), 4 if on else 3, "red" if on else "#36c"))
-        o.append('<text x="%.1f" y="%.1f" font-size="9">%s</text>'
-                 % (X(p[0]) + 5, Y(p[1]) - 4, p[2]))
+        if on or len(pts) <= 30:  # crowded charts: only the front named
+            o.append('<text x="%.1f" y="%.1f" font-size="9">%s</text>'
+                     % (X(p[0]) + 5, Y(p[1]) - 4, p[2]))
     o.append('<text x="%d" y="%d" fill="red">red: Pareto front (no run both '
              'cheaper and more accurate)</text>' % (L + 8, T + 14))
     o.append("</svg>")
@@ -192,6 +205,12 @@ def write_outputs(name, rows, fields, args, title, xlabel, ylabel):
     print("wrote", f, "and", svg)
     for r in rows:
         print("  ".join("%s=%s" % (k, r.get(k, "")) for k in fields + ["pareto"]))
+    missing = [r["label"] for r in rows
+               if r.get("error") is None and not r.get("reference")]
+    if missing:
+        raise SystemExit("study.py: no result from the runs %s (see log.txt "
+                         "in their folders under %s)" % (", ".join(missing),
+                                                         args.out))
 
 
 # ---------------------------------------------------------------- studies
@@ -232,6 +251,210 @@ def study_stefan(args):
                    "profile_error", "rc"], args,
                   "Stefan problem: front error at t = 1 vs CPU time",
                   "CPU seconds", "relative front error")
+
+
+def study_danilovskaya(args):
+    exe = os.path.join(args.build, "tests", "test_solid_danilovskaya")
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first (cmake --build %s --target "
+                         "test_solid_danilovskaya)" % (exe, args.build))
+    exe = os.path.abspath(exe)
+    rows = []
+    keys = ("points", "elements", "steps", "max_error_away", "max_error_far",
+            "mean_error", "rms_error", "front_error", "balance")
+    for method in ("mpm", "femp", "fe"):
+        for h in (0.04, 0.02, 0.01, 0.005):
+            for ppc in ((1, 2) if method != "fe" else (1,)):
+                for tr in (("apic", "flip") if method != "fe" else ("apic",)):
+                    for bv in (0, 0.1, 0.3):
+                        def make(d, a=(method, h, ppc, tr, bv)):
+                            cmd = [exe, "--study"] + [str(v) for v in a]
+                            rc, cpu, wall = run_timed(
+                                cmd, d, os.path.join(d, "log.txt"))
+                            text = open(os.path.join(d, "log.txt")).read()
+                            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+                            for k in keys:
+                                m = re.search(r"\b%s ([-0-9.e+naif]+)" % k, text)
+                                r[k] = float(m.group(1)) if m else None
+                            return r
+                        d = os.path.join(args.out, "danilovskaya",
+                                         "%s_h%g_p%d_%s_b%g" % (method, h, ppc,
+                                                                 tr, bv))
+                        r = cached(d, make)
+                        r.update(method=method, h=h, points_per_cell=ppc,
+                                 transfer=tr, bulk_viscosity=bv,
+                                 error=r["mean_error"],
+                                 label="%s %g%s%s b%g" % (
+                                     method, h,
+                                     " p%d" % ppc if ppc > 1 else "",
+                                     " F" if tr == "flip" else "", bv))
+                        rows.append(r)
+    write_outputs("danilovskaya", rows,
+                  ["method", "h", "points_per_cell", "transfer",
+                   "bulk_viscosity", "cpu_s", "wall_s", "error", "rms_error",
+                   "max_error_away", "max_error_far", "front_error", "balance", "points", "elements", "steps",
+                   "rc"], args,
+                  "Danilovskaya (case 3.1): mean |S - exact| at x = 1 m "
+                  "over 2 s vs CPU time", "CPU seconds",
+                  "mean |sigma - exact| / (beta T0)")
+
+
+def study_physics(args):
+    """The default scene (reduced case 3.2) with the physics switched on one
+    by one: what each costs and what it changes."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    scene = os.path.join(ROOT, "prm", "case_3_2_reduced.prm")
+    rows = []
+    for name, flow, solid in (("thermal", "false", "false"),
+                              ("thermo-fluid", "true", "false"),
+                              ("coupled", "true", "true")):
+        def make(d, flow=flow, solid=solid):
+            sets = {"Physics/Melt flow": flow, "Physics/Solid stress": solid,
+                    "Output/Directory": d, "Output/Output interval": "0",
+                    "Output/Write material points": "never"}
+            cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np",
+                   str(args.np), exe] if args.np > 1 else [exe]
+            for k, v in sets.items():
+                cmd += ["--set", "%s=%s" % (k, v)]
+            rc, cpu, wall = run_timed(cmd + [scene], d,
+                                      os.path.join(d, "log.txt"))
+            text = open(os.path.join(d, "log.txt")).read()
+            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+            m = re.search(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
+                          r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)", text)
+            if m:
+                r.update(laser_J=float(m.group(1)), losses_J=float(m.group(2)),
+                         evaporation_J=float(m.group(3)))
+            pool = read_csv(os.path.join(d, "melt_pool.csv"))
+            for k in ("length", "width", "depth", "T_max",
+                      "depth_solidus_substrate", "width_solidus_substrate"):
+                r["max_" + k] = max(float(p[k]) for p in pool)
+            return r
+        d = os.path.join(args.out, "physics", name)
+        r = cached(d, make)
+        r.update(physics=name, label=name, error=None)
+        rows.append(r)
+    fields = ["physics", "cpu_s", "wall_s", "max_length", "max_width",
+              "max_depth", "max_depth_solidus_substrate",
+              "max_width_solidus_substrate", "max_T_max", "laser_J",
+              "evaporation_J", "losses_J", "rc"]
+    os.makedirs(args.out, exist_ok=True)
+    f = os.path.join(args.out, "physics.csv")
+    with open(f, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+    print("wrote", f)
+    for r in rows:
+        print("  ".join("%s=%s" % (k, r.get(k, "")) for k in fields))
+    failed = [r["physics"] for r in rows if r["rc"] != 0]
+    if failed:
+        raise SystemExit("study.py: the runs %s failed (log.txt under %s)"
+                         % (", ".join(failed), args.out))
+
+
+def study_droplet(args):
+    """Oscillating 2D droplet (tests/oscillating_droplet.cc, Lamb's mode-2
+    period with the viscous shift): radius in cells x capillary step
+    fraction x FLIP fraction; error: |period error| of the first full
+    period."""
+    exe = os.path.join(args.build, "tests", "test_oscillating_droplet")
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first (cmake --build %s --target "
+                         "test_oscillating_droplet)" % (exe, args.build))
+    exe = os.path.abspath(exe)
+    rows = []
+    for r_h in (10, 15, 20, 30):
+        for frac in (0.25, 0.5, 1.0):
+            for flip in (0.9, 0.95, 0.99):
+                def make(d, a=(frac, r_h, flip)):
+                    cmd = [exe, str(a[0]), str(a[1]), "", "0.5", "0.1",
+                           str(a[2])]
+                    rc, cpu, wall = run_timed(cmd, d,
+                                              os.path.join(d, "log.txt"))
+                    text = open(os.path.join(d, "log.txt")).read()
+                    r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+                    m = re.search(r"\|period error\|[^=]*= ([-0-9.e+]+)", text)
+                    r["period_error"] = float(m.group(1)) if m else None
+                    m = re.search(r"\nsteps = ([0-9]+)", text)
+                    r["steps"] = int(m.group(1)) if m else None
+                    m = re.search(r"max point speed / \(omega eps R\) = "
+                                  r"([-0-9.e+]+)", text)
+                    r["max_speed"] = float(m.group(1)) if m else None
+                    return r
+                d = os.path.join(args.out, "droplet",
+                                 "R%g_c%g_f%g" % (r_h, frac, flip))
+                r = cached(d, make)
+                r.update(R_over_h=r_h, step_fraction=frac, flip=flip,
+                         error=r["period_error"],
+                         label="R%gh c%g f%g" % (r_h, frac, flip))
+                rows.append(r)
+    write_outputs("droplet", rows,
+                  ["R_over_h", "step_fraction", "flip", "cpu_s", "wall_s",
+                   "error", "steps", "max_speed", "rc"], args,
+                  "Oscillating droplet: period error vs CPU time",
+                  "CPU seconds", "|period error| / T")
+
+
+def study_track(args):
+    """The default scene's track with heat and melt flow (no solid), to
+    50 us: cell size x temperature step; error: the largest fusion-zone
+    depth and width (solidus, in the substrate) against the finest run."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    scene = os.path.join(ROOT, "prm", "case_3_2_reduced.prm")
+    rows = []
+    for h in (8e-6, 4e-6):
+        for dt in (2e-7, 1e-7, 5e-8):
+            def make(d, h=h, dt=dt):
+                sets = {"Physics/Solid stress": "false",
+                        "Time stepping/End time": "5e-5",
+                        "Time stepping/Time step": str(dt),
+                        "Background grid/Cell size": str(h),
+                        "Material points/Point spacing": str(h / 2),
+                        "Output/Directory": d, "Output/Output interval": "0",
+                        "Output/Write material points": "never"}
+                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
+                       "-np", str(args.np), exe] if args.np > 1 else [exe]
+                for k, v in sets.items():
+                    cmd += ["--set", "%s=%s" % (k, v)]
+                rc, cpu, wall = run_timed(cmd + [scene], d,
+                                          os.path.join(d, "log.txt"))
+                r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+                try:
+                    pool = read_csv(os.path.join(d, "melt_pool.csv"))
+                    for k in ("depth_solidus_substrate",
+                              "width_solidus_substrate", "T_max", "depth",
+                              "width", "length"):
+                        r["max_" + k] = max(float(p[k]) for p in pool)
+                except (OSError, ValueError, KeyError) as ex:
+                    r["read_error"] = str(ex)
+                return r
+            d = os.path.join(args.out, "track", "h%g_dt%g" % (h, dt))
+            r = cached(d, make)
+            r.update(h=h, dt=dt, label="h=%gum dt=%gns" % (h * 1e6, dt * 1e9))
+            rows.append(r)
+    ref = rows[-1]
+    for r in rows:
+        try:
+            e_d = abs(r["max_depth_solidus_substrate"] /
+                      ref["max_depth_solidus_substrate"] - 1)
+            e_w = abs(r["max_width_solidus_substrate"] /
+                      ref["max_width_solidus_substrate"] - 1)
+            r["depth_error"], r["width_error"] = e_d, e_w
+            r["error"] = max(e_d, e_w)
+        except (KeyError, ZeroDivisionError, TypeError):
+            r["error"] = None
+        if r is ref:
+            r["error"], r["reference"] = None, True
+    write_outputs("track", rows,
+                  ["h", "dt", "cpu_s", "wall_s", "error", "depth_error",
+                   "width_error", "max_depth_solidus_substrate",
+                   "max_width_solidus_substrate", "max_T_max", "max_depth",
+                   "max_width", "max_length", "rc"], args,
+                  "Reduced case 3.2, heat + flow to 50 us: fusion zone vs "
+                  "the 4 um / 50 ns run", "CPU seconds",
+                  "max relative error of fusion depth, width")
 
 
 def adaptive_block(r_max, s_min=1, s_max=1e4):
@@ -329,6 +552,7 @@ def study_mass_scaling(args):
             r["error"] = None
         if r is rows[0]:
             r["error"] = None  # the reference itself
+            r["reference"] = True
     write_outputs("mass_scaling", rows,
                   ["factor", "r_max", "cpu_s", "wall_s", "error", "solid_steps",
                    "stress_work", "transfer", "remap", "max_k_over_i",
@@ -340,14 +564,16 @@ def study_mass_scaling(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("study", choices=["stefan", "mass_scaling"])
+    ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet", "track"])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
                     help="folder for run directories and CSV")
     ap.add_argument("--img", default=os.path.join(ROOT, "doc", "img"))
     ap.add_argument("--np", type=int, default=1, help="MPI ranks of femp runs")
     args = ap.parse_args()
-    {"stefan": study_stefan, "mass_scaling": study_mass_scaling}[args.study](args)
+    {"stefan": study_stefan, "mass_scaling": study_mass_scaling,
+     "danilovskaya": study_danilovskaya, "physics": study_physics,
+     "droplet": study_droplet, "track": study_track}[args.study](args)
 
 
 if __name__ == "__main__":

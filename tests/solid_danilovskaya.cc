@@ -40,7 +40,8 @@ using namespace femp_test;
 namespace
 {
   constexpr int dim = 2;
-  const double  h   = 0.02;
+  // Cell size; the study mode (below) changes it.
+  double h = 0.02;
 
   double
   theta_exact(const double x, const double t)
@@ -83,7 +84,8 @@ namespace
   History
   run(const double fe_end, MPI_Comm comm,
       const SolidMaterial::VelocityTransfer transfer =
-        SolidMaterial::VelocityTransfer::apic)
+        SolidMaterial::VelocityTransfer::apic,
+      const unsigned int points_per_cell = 1, const double bulk_viscosity = 0.1)
   {
     const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(5, h), h);
     BackgroundGrid<dim> grid(gp, comm);
@@ -92,7 +94,7 @@ namespace
     Laser<dim> laser(laser_off<dim>());
 
     typename MaterialPoints<dim>::Parameters pp;
-    pp.point_spacing   = h;
+    pp.point_spacing   = h / points_per_cell;
     pp.substrate_top   = h;
     pp.layer_thickness = 0;
     pp.subcells        = 1;
@@ -110,7 +112,7 @@ namespace
     sm.yield_stress     = PiecewiseLinear(1e30);
     sm.poisson_ratio    = 0;
     sm.expansion        = 1;
-    sm.bulk_viscosity   = 0.1;
+    sm.bulk_viscosity   = bulk_viscosity;
     sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;
     sp.safety_factor = 0.9;
@@ -168,6 +170,58 @@ namespace
       }
     return r;
   }
+  /// Study mode, one discretization per call (contrib/study.py danilovskaya):
+  ///   test_solid_danilovskaya --study METHOD H PPC TRANSFER BV
+  /// METHOD mpm | femp | fe, H the cell size (m), PPC points per cell and
+  /// direction, TRANSFER apic | flip, BV the bulk viscosity coefficient.
+  /// Prints the errors at the probe cell (centre x_A) against the closed
+  /// form, in units of beta T0: the largest away from the front
+  /// (|t - x_A/c| > 5 h/c, the window of the test's gate, and > 0.2 s, a
+  /// window that does not shrink with h), the mean and the RMS of |S -
+  /// exact| over the history (time-weighted, front included), the front
+  /// arrival error, and the energy balance over the largest kinetic energy.
+  int
+  study(char **argv, MPI_Comm comm)
+  {
+    const std::string method = argv[2];
+    h                        = std::stod(argv[3]);
+    const unsigned int ppc   = std::stoi(argv[4]);
+    const auto transfer = std::string(argv[5]) == "flip" ?
+                            SolidMaterial::VelocityTransfer::flip :
+                            SolidMaterial::VelocityTransfer::apic;
+    const double bv = std::stod(argv[6]);
+    AssertThrow(method == "mpm" || method == "femp" || method == "fe",
+                ExcMessage("METHOD must be mpm, femp or fe"));
+    const double fe_end = method == "mpm" ? 0 : method == "femp" ? 0.6 : 5;
+    const History r     = run(fe_end, comm, transfer, ppc, bv);
+    const double  xA    = (std::floor(1 / h + 1e-9) + 0.5) * h;
+    double        err_S = 0, err_far = 0, sum1 = 0, sum2 = 0, t_front = -1;
+    const double  mid = S_exact(xA, xA * (1 - 1e-12)) + 0.5;
+    for (std::size_t i = 0; i < r.t.size(); ++i)
+      {
+        const double e = std::abs(r.S[i] - S_exact(xA, r.t[i]));
+        const double dt_i = r.t[i] - (i > 0 ? r.t[i - 1] : 0.);
+        sum1 += e * dt_i;
+        sum2 += e * e * dt_i;
+        if (std::abs(r.t[i] - xA) > 5 * h)
+          err_S = std::max(err_S, e);
+        if (std::abs(r.t[i] - xA) > 0.2)
+          err_far = std::max(err_far, e);
+        if (t_front < 0 && i > 0 && r.t[i] > 0.5 && r.S[i - 1] < mid &&
+            r.S[i] >= mid)
+          t_front = r.t[i - 1] + (mid - r.S[i - 1]) / (r.S[i] - r.S[i - 1]) *
+                                   (r.t[i] - r.t[i - 1]);
+      }
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      std::cout << "points " << r.sizes[0] << " elements " << r.sizes[1]
+                << " steps " << r.t.size() << " max_error_away " << err_S
+                << " max_error_far " << err_far << " mean_error "
+                << sum1 / r.t.back() << " rms_error "
+                << std::sqrt(sum2 / r.t.back())
+                << " front_error " << std::abs(t_front - xA) << " balance "
+                << r.balance / r.K_max << std::endl;
+    return 0;
+  }
 } // namespace
 
 int
@@ -175,6 +229,8 @@ main(int argc, char **argv)
 {
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
+  if (argc == 7 && std::string(argv[1]) == "--study")
+    return study(argv, comm);
   Checks                           checks(comm);
   const double                     xA = 1.01, c = 1;
 

@@ -99,6 +99,10 @@ namespace femp
     output_prm.parse_parameters(prm);
     history_prm.parse_parameters(prm);
     track_prm.parse_parameters(prm);
+    // A bare plate without flow or solid carries no points (Material
+    // points/Carry points = auto).
+    points_prm.resolve_carry(melt_flow, solid_enabled,
+                             track_prm.enabled(melt_flow));
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     if (solid_enabled)
       {
@@ -316,9 +320,22 @@ namespace femp
           << grid->h() << " m (";
     for (int d = 0; d < dim; ++d)
       pcout << grid->n_cells()[d] << (d + 1 < dim ? " x " : ")\n");
-    pcout << "  material points: " << points->n_global_points() << " ("
-          << points->n_powder_grains() << " powder grains, packing fraction "
-          << std::setprecision(3) << points->achieved_packing_fraction() << ")\n"
+    if (points->carried())
+      pcout << "  material points: " << points->n_global_points() << " ("
+            << points->n_powder_grains() << " powder grains, packing fraction "
+            << std::setprecision(3) << points->achieved_packing_fraction()
+            << ")\n";
+    else
+      pcout << "  material points: none (Material points/Carry points = auto: "
+               "a bare plate without melt flow or solid; alpha from the "
+               "substrate's lattice)"
+            << (output_prm.write_points != "never" ?
+                  "; 'Output/Write material points = " +
+                    output_prm.write_points +
+                    "' writes nothing (Carry points = always for point files)" :
+                  std::string())
+            << "\n";
+    pcout << std::setprecision(3)
           << (solid ? "  solid: " + std::to_string(int(solid->sizes()[0])) +
                         " material points, " +
                         std::to_string(int(solid->sizes()[1])) +
@@ -326,7 +343,10 @@ namespace femp
                         num(solid->time_step()) + " s\n" :
                       std::string())
           << "  output: " << output_prm.directory << "/grid" << index
-          << ", " << output_prm.directory << "/points" << index << ", "
+          << ", "
+          << (points->carried() ?
+                output_prm.directory + "/points" + index + ", " :
+                std::string())
           << output_prm.directory << "/melt_pool.csv\n";
     if (dim == 3 && heat_enabled)
       print_melting_regime();
@@ -732,7 +752,8 @@ namespace femp
     const auto &        g = heat->liquid_fraction();
     for (std::size_t i = 0; i < phase.size(); ++i)
       phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
-    const std::vector<double> zone = points->zone_tags();
+    const std::vector<double> zone =
+      points->zone_tags(heat->metal_fraction(), heat->temperature());
     auto fields = output_fields();
     // Solid: sigma_xx, sigma_yy, sigma_zz, von Mises, equivalent plastic
     // strain (FE element or mean over the cell's solid points); also on the
@@ -749,8 +770,9 @@ namespace femp
     fields.push_back({"laser_source", &heat->laser_source()});
     fields.push_back({"phase", &phase, false});
     fields.push_back({"zone", &zone, false});
-    const bool with_points = output_prm.write_points == "always" ||
-                             (output_prm.write_points == "last" && last);
+    const bool with_points = points->carried() &&
+                             (output_prm.write_points == "always" ||
+                              (output_prm.write_points == "last" && last));
     output->write_fields(n, time, fields,
                          with_points ? &points->particle_handler() : nullptr,
                          points->used_property_names());
@@ -797,8 +819,11 @@ namespace femp
         }
     const bool affine = solid_enabled && solid_material.velocity_transfer ==
                                            SolidMaterial::VelocityTransfer::apic;
+    // 0 without carried points: a checkpoint resumes only the same choice.
     s.n_point_properties =
-      MaterialPoints<dim>::PropertyIndex::n_used(solid_enabled, affine);
+      points_prm.carry_points ?
+        MaterialPoints<dim>::PropertyIndex::n_used(solid_enabled, affine) :
+        0;
     return s;
   }
 

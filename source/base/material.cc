@@ -11,17 +11,20 @@ namespace femp
     prm.declare_entry("Density", "7955", Patterns::Double(),
                       "Metal density rho_m, kg/m^3; range (0, inf). Default: "
                       "316L stainless steel (Kim 1975).");
-    prm.declare_entry("Specific heat", "300:426.6, 1670:608.6, 1730:770.4",
+    prm.declare_entry("Specific heat", "300:499.2, 1670:681.2, 1730:770.4",
                       Patterns::Anything(),
                       "Metal specific heat c_m(T), J/(kg K), > 0: a number, or "
                       "'T1:c1, T2:c2, ...' piecewise linear in T (K), held "
-                      "constant outside. Default: 316L (Kim 1975).");
+                      "constant outside. Default: 316L (Kim 1975, type 316: "
+                      "459.3 + 0.1329 T solid, 300-1670 K; 770.4 liquid).");
     prm.declare_entry("Thermal conductivity",
-                      "300:5.378, 1670:26.9, 1730:16.28, 3000:20.45",
+                      "300:13.96, 1670:35.48, 1730:18.08, 3000:22.25",
                       Patterns::Anything(),
                       "Metal thermal conductivity lambda_m(T), W/(m K), > 0: "
                       "a number or a 'T:value' table as for the specific heat. "
-                      "Default: 316L (Kim 1975).");
+                      "Default: 316L (Kim 1975, type 316: 9.248 + 0.01571 T "
+                      "solid, 300-1670 K; 12.41 + 0.003279 T liquid, "
+                      "1730-3000 K).");
     prm.declare_entry("Solidus temperature", "1670", Patterns::Double(),
                       "Solidus T_s, K; range (0, liquidus).");
     prm.declare_entry("Liquidus temperature", "1730", Patterns::Double(),

@@ -35,6 +35,17 @@ namespace femp
                       "fraction alpha by occupation (cells holding melt, i.e. "
                       "a point that is or has been fluid, take the volume of "
                       "their points instead); range 1..4.");
+    prm.declare_entry(
+      "Carry points", "auto", Patterns::Selection("auto|always"),
+      "Whether the scene carries material points. 'auto': only where "
+      "something needs them, i.e. a powder layer (Layer thickness > 0), "
+      "initial bodies, Physics/Melt flow, Physics/Solid stress or the "
+      "track shape output (the points' melt history); a bare plate under "
+      "a laser carries none: its metal fraction alpha comes from the "
+      "substrate's lattice (the same alpha the points would give), the "
+      "per-step transfer of temperatures to points costs nothing, and "
+      "no point files are written. 'always': points in every scene (to "
+      "write them).");
     prm.enter_subsection("Powder layer");
     prm.declare_entry("Layer thickness", "5e-5", Patterns::Double(0.),
                       "Thickness of the powder layer on the substrate, m; 0 for "
@@ -80,6 +91,7 @@ namespace femp
     point_spacing = prm.get_double("Point spacing");
     substrate_top = prm.get_double("Substrate top");
     subcells      = prm.get_integer("Sub-cell divisions");
+    carry         = prm.get("Carry points");
     prm.enter_subsection("Powder layer");
     layer_thickness  = prm.get_double("Layer thickness");
     mean_diameter    = prm.get_double("Mean grain diameter");
@@ -205,6 +217,17 @@ namespace femp
 
 
   template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::resolve_carry(const bool melt_flow,
+                                                 const bool solid,
+                                                 const bool track_shape)
+  {
+    carry_points = carry == "always" || layer_thickness > 0 ||
+                   !bodies.empty() || melt_flow || solid || track_shape;
+  }
+
+
+  template <int dim>
   bool
   MaterialPoints<dim>::Parameters::Body::inside(const Point<dim> &p) const
   {
@@ -270,6 +293,13 @@ namespace femp
   MaterialPoints<dim>::create(const double T0)
   {
     handler.initialize(grid.triangulation(), mapping, n_props);
+    if (!prm.carry_points)
+      {
+        // A bare plate: no points (metal_fraction() from the lattice).
+        occupied.clear();
+        cache_point_handles();
+        return;
+      }
 
     const double s  = prm.point_spacing;
     const double h  = grid.h();
@@ -513,6 +543,8 @@ namespace femp
     // Sub-cell occupancy (doc/method.md, "Heat transfer") everywhere, and, when some point
     // is fluid, the volume of the points in the cells that hold a fluid
     // point (see the header; doc/flow.md, "Volume-based alpha").
+    if (!prm.carry_points)
+      return lattice_fraction();
     using P                = PropertyIndex;
     const unsigned int n   = prm.subcells;
     const double       ih  = n / grid.h();
@@ -552,6 +584,64 @@ namespace femp
       alpha[i] = std::bitset<64>(mask[i]).count() * inv_nsub;
     if (Utilities::MPI::logical_or(any_fluid, grid.communicator()))
       volume_fraction_of_fluid_cells(volume, fluid_cell, alpha);
+    grid.update_ghosts(alpha);
+    return alpha;
+  }
+
+
+  template <int dim>
+  std::vector<double>
+  MaterialPoints<dim>::lattice_fraction() const
+  {
+    // The substrate's lattice is a tensor product of one row of points per
+    // direction (vertically the points below the substrate top), and
+    // metal_fraction() bins a point into its sub-cell direction by
+    // direction: the sub-cells of a cell that hold a point are the product
+    // of the sub-cells hit along each direction. Each row is generated as
+    // add_lattice_points() places it (cell by cell, the same arithmetic)
+    // and binned as metal_fraction() bins, so alpha is the same number,
+    // bit for bit, as the points give on one rank.
+    const unsigned int n  = prm.subcells;
+    const double       s  = prm.point_spacing;
+    const double       h  = grid.h();
+    const double       ih = n / h;
+    const auto &       x0 = grid.origin();
+    std::array<std::vector<unsigned int>, dim> hits;
+    for (int d = 0; d < dim; ++d)
+      {
+        const int                  N = grid.n_cells()[d];
+        std::vector<std::uint64_t> mask(N, 0);
+        for (int c = 0; c < N; ++c)
+          {
+            const double lo = c * h;
+            double       hi = (c + 1) * h;
+            if (d == dim - 1)
+              hi = std::min(hi, prm.substrate_top - x0[d]);
+            const long first = static_cast<long>(std::ceil(lo / s - 0.5));
+            const long last  = static_cast<long>(std::ceil(hi / s - 0.5)) - 1;
+            for (long i = first; i <= last; ++i)
+              {
+                const double p   = x0[d] + (i + 0.5) * s;
+                const int    sub = static_cast<int>(std::floor((p - x0[d]) * ih));
+                const int    b   = std::min(std::max(sub / int(n), 0), N - 1);
+                mask[b] |= std::uint64_t(1)
+                           << std::min(std::max(sub - b * int(n), 0), int(n) - 1);
+              }
+          }
+        hits[d].resize(N);
+        for (int c = 0; c < N; ++c)
+          hits[d][c] = std::bitset<64>(mask[c]).count();
+      }
+    const double        inv_nsub = 1. / std::pow(n, dim);
+    std::vector<double> alpha(grid.n_local(), 0.);
+    for (const auto idx : grid.owned_cells())
+      {
+        const auto   ijk   = grid.global_index(idx);
+        std::size_t  count = 1;
+        for (int d = 0; d < dim; ++d)
+          count *= hits[d][ijk[d]];
+        alpha[idx] = count * inv_nsub;
+      }
     grid.update_ghosts(alpha);
     return alpha;
   }
@@ -646,6 +736,9 @@ namespace femp
     // same set of points has nothing to change (temperature, peak and state
     // follow from it alone): far from the laser most cells are such. The
     // record is forgotten for every cell whose points change.
+    temperatures_passed = true;
+    if (!prm.carry_points)
+      return;
     using P         = PropertyIndex;
     const double Ts = mat.solidus;
     if (pushed_temperature.size() != grid.n_local())
@@ -708,9 +801,20 @@ namespace femp
 
   template <int dim>
   std::vector<double>
-  MaterialPoints<dim>::zone_tags() const
+  MaterialPoints<dim>::zone_tags(const std::vector<double> &alpha,
+                                 const std::vector<double> &T) const
   {
     std::vector<double> zone(grid.n_local(), 0.);
+    if (!prm.carry_points)
+      {
+        // The substrate's points would all be solid at the start, and
+        // fluid exactly above the solidus once they took the cells'
+        // temperatures (cells_to_points()).
+        for (const auto idx : grid.owned_cells())
+          if (alpha[idx] > 0)
+            zone[idx] = temperatures_passed && T[idx] > mat.solidus ? 3 : 2;
+        return zone;
+      }
     for (const auto &[idx, cell] : occupied)
       {
         bool any_fluid = false, any_powder = false;

@@ -774,6 +774,12 @@ namespace femp
     const double  *Tp = T.data(), *kp = conductance.data(), *cp = capacity.data(),
                   *gp = gamma.data();
     double        *Tn = T_new.data();
+    // Peak, lowest temperature and fastest rate over owned cells only: on
+    // several ranks the box interior also holds ghost cells and cells this
+    // rank does not know, whose new values here use stale neighbours (their
+    // owners compute them; the ghost exchange after the step overwrites
+    // them). One rank owns every interior cell.
+    const std::uint8_t *own = grid.cell_status().data();
     const std::ptrdiff_t sy = dim > 1 ? st[1] : 0, sz = dim > 2 ? st[2] : 0;
     const int            ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
     const int            j0 = dim > 1 ? 1 : 0, k0 = dim > 2 ? 1 : 0;
@@ -822,11 +828,12 @@ namespace femp
               const double inv_c = 1. / cp[i];
               const double Tnew  = Tc + dt * ih2 * flux * inv_c;
               Tn[i]              = Tnew;
-              const double rate  = sumk * ih2 * inv_c;
+              const bool   owned = own[i] == BackgroundGrid<dim>::owned;
+              const double rate  = owned ? sumk * ih2 * inv_c : 0.;
               row_rate           = rate > row_rate ? rate : row_rate;
               // metal cells only: gas may keep a stale T after points moved
-              row_max = (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
-              row_min = (kc > 0) & (Tnew < row_min) ? Tnew : row_min;
+              row_max = owned & (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
+              row_min = owned & (kc > 0) & (Tnew < row_min) ? Tnew : row_min;
               row_bad += Tnew - Tnew; // NaN if Tnew is not finite
               // Flag: a cell may change phase (unless clearly solid or
               // clearly liquid) or, with c(T) tables, takes a large step.
@@ -1058,20 +1065,22 @@ namespace femp
     budget.boundary += e_boundary;
     budget.advection += e_advection * V * dt;
 
-    // Peak temperature over metal cells and finiteness: the box interior
-    // holds owned cells and true ghost values, so its maximum over metal
-    // cells is the global one.
-    // Cells changed after pass B (sources, phase change) are added here.
+    // Peak and lowest temperature over owned metal cells (the sweep took
+    // owned cells only), reduced over the ranks below; finiteness over the
+    // box. Cells changed after pass B (sources, phase change) are added
+    // here.
+    const auto &status = grid.cell_status();
     double Tmax = box_max, Tmin = sums.box_min;
     for (const auto idx : source_cells)
-      if (alpha[idx] > 0)
+      if (alpha[idx] > 0 && status[idx] == BackgroundGrid<dim>::owned)
         {
           Tmax = std::max(Tmax, T_new[idx]);
           Tmin = std::min(Tmin, T_new[idx]);
         }
     for (const std::size_t row : flagged_rows)
       for (int ii = 1; ii < size[0] - 1; ++ii)
-        if (alpha[row + ii] > 0)
+        if (alpha[row + ii] > 0 &&
+            status[row + ii] == BackgroundGrid<dim>::owned)
           {
             Tmax = std::max(Tmax, T_new[row + ii]);
             Tmin = std::min(Tmin, T_new[row + ii]);

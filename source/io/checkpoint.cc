@@ -16,8 +16,9 @@ namespace femp
   namespace
   {
     const char         magic[8]       = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
-    // 2: the solid's sections (Physics/Solid stress) added.
-    const std::uint32_t format_version = 3;
+    // 2: the solid's sections (Physics/Solid stress) added; 4: the FE
+    // elements' volume change.
+    const std::uint32_t format_version = 4;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p.
     std::uint64_t
@@ -369,7 +370,8 @@ namespace femp
       differs("Solid FEM/Zone upper corner", triple(s.fe_upper, dim),
               triple(scene.fe_upper, dim));
     if (s.n_point_properties != scene.n_point_properties)
-      differs("the point properties (Solid/Velocity transfer)",
+      differs("the point properties (Material points/Carry points, "
+              "Solid/Velocity transfer)",
               std::to_string(s.n_point_properties) + " per point",
               std::to_string(scene.n_point_properties));
     if (image.size() - header_size != size)

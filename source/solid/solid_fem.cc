@@ -857,6 +857,7 @@ namespace femp
     const double  mfac = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     LoopConstants c;
     c.Bdt  = B * dt;
+    c.hgB  = prm.hourglass_coefficient > 0 ? B : 0.;
     c.VB   = V * B;
     c.kfac = prm.hourglass_coefficient * mfac * V * bb / n_corners;
     c.vfac = mat.bulk_viscosity * h *
@@ -990,6 +991,7 @@ namespace femp
     const VD wk = 0.5 * V * sw + V * eb.visc * trL;
     if (mat.bulk_viscosity > 0)
       eb.visc = c.vfac * simd_sqrt(E) * trL;
+    eb.dJ += trL + eb.dJ * trL; // J <- J (1 + tr L dt)
     for (unsigned int k = 0; k < 6; ++k)
       eb.s[k] = sb.s[k];
     eb.eps_p = sb.eps_p;
@@ -1084,6 +1086,19 @@ namespace femp
 
 
   template <int dim>
+  [[gnu::always_inline]] inline simd_double
+  SolidFEM<dim>::jacobian_low(const ElementBlock &eb, const double hgB) const
+  {
+    simd_double hq = {};
+    for (unsigned int al = 0; al < n_hg; ++al)
+      for (int i = 0; i < dim; ++i)
+        if (hg_mask<dim>(al) & (1u << i))
+          hq += eb.q[al][i] < 0 ? -eb.q[al][i] : eb.q[al][i];
+    return 1. + eb.dJ - hgB * hq;
+  }
+
+
+  template <int dim>
   template <bool update>
   double
   SolidFEM<dim>::element_loop(const double dt, const double w)
@@ -1108,6 +1123,8 @@ namespace femp
       F[d] = frc[d].data(), vl[d] = vel[d].data();
     double                 work = 0;
     const std::size_t      n_el = element_id.size();
+    // Smallest corner Jacobian ratio (spare lanes repeat an element).
+    VD jmin = VD{} + std::numeric_limits<double>::infinity();
     for (std::size_t b = 0; b < blocks.size(); ++b)
       {
         const std::size_t  e0 = W * b;
@@ -1127,6 +1144,8 @@ namespace femp
             const VD wk = update_block(eb, el, nl, Vc, dt, w, c, sb, E);
             for (unsigned int l = 0; l < nl; ++l)
               work += wk[l];
+            const VD j = jacobian_low(eb, c.hgB);
+            jmin       = j < jmin ? j : jmin;
           }
         else
           {
@@ -1138,6 +1157,12 @@ namespace femp
         scatter_forces(b, nl, sb.s, E, c, F);
       }
     transition_hourglass_forces(c.kfac);
+    if constexpr (update)
+      {
+        min_jacobian = std::numeric_limits<double>::infinity();
+        for (unsigned int l = 0; l < W; ++l)
+          min_jacobian = std::min(min_jacobian, jmin[l]);
+      }
     return work;
   }
 
@@ -1282,13 +1307,39 @@ namespace femp
 
 
   template <int dim>
+  bool
+  SolidFEM<dim>::find_inverted(Point<dim> &where, double &J) const
+  {
+    const double hgB = loop_constants(1.).hgB;
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      {
+        const double j = jacobian_low(blocks[e / simd_lanes], hgB)[e % simd_lanes];
+        if (!(j > 0))
+          {
+            std::uint64_t r = element_id[e];
+            for (int d = 0; d < dim; ++d)
+              {
+                where[d] = grid.origin()[d] +
+                           (zlo[d] + double(r % zn[d]) + 0.5) * grid.h();
+                r /= zn[d];
+              }
+            J = j;
+            return true;
+          }
+      }
+    return false;
+  }
+
+
+  template <int dim>
   void
   SolidFEM<dim>::save_state(StateWriter &out) const
   {
     // Element state, one array per value (stress components, plastic
     // strain, viscous pressure, temperature of the last step, hourglass
-    // amplitudes, end temperature of the advance), keyed by zone index.
-    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    // amplitudes, end temperature of the advance, volume change J - 1),
+    // keyed by zone index.
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 2;
     const std::size_t      n_el     = element_id.size();
     out.put_vector(element_id);
     std::vector<double> v(n_el);
@@ -1302,9 +1353,10 @@ namespace femp
                    k == 6 ? eb.eps_p[l] :
                    k == 7 ? eb.visc[l] :
                    k == 8 ? eb.T[l] :
-                   k < n_values - 1 ?
+                   k < n_values - 2 ?
                             eb.q[(k - 9) / dim][(k - 9) % dim][l] :
-                            T_end[e];
+                   k == n_values - 2 ? T_end[e] :
+                                       eb.dJ[l];
           }
         out.put_vector(v);
       }
@@ -1329,7 +1381,7 @@ namespace femp
   void
   SolidFEM<dim>::load_state(std::vector<StateReader> &parts)
   {
-    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 2;
     const std::size_t      n_el     = element_id.size();
     // Local nodes (owned and ghost) by zone node index.
     std::vector<std::pair<std::uint64_t, std::uint32_t>> node_by_id;
@@ -1369,10 +1421,12 @@ namespace femp
                     eb.visc[l] = v[i];
                   else if (k == 8)
                     eb.T[l] = v[i];
-                  else if (k < n_values - 1)
+                  else if (k < n_values - 2)
                     eb.q[(k - 9) / dim][(k - 9) % dim][l] = v[i];
-                  else
+                  else if (k == n_values - 2)
                     T_end[e] = v[i];
+                  else
+                    eb.dJ[l] = v[i];
                 }
           }
         const auto node_ids = in.get_vector<std::uint64_t>();
@@ -1417,6 +1471,7 @@ namespace femp
             eb.eps_p[l] = eb.eps_p[last];
             eb.visc[l]  = eb.visc[last];
             eb.T[l]     = eb.T[last];
+            eb.dJ[l]    = eb.dJ[last];
             for (unsigned int al = 0; al < n_hg; ++al)
               for (int i = 0; i < dim; ++i)
                 eb.q[al][i][l] = eb.q[al][i][last];
@@ -1437,7 +1492,7 @@ namespace femp
   void
   SolidFEM<dim>::save_no_zone(StateWriter &out)
   {
-    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 2;
     out.put_vector(std::vector<std::uint64_t>()); // element ids
     for (unsigned int k = 0; k < n_values; ++k)
       out.put_vector(std::vector<double>());
@@ -1452,7 +1507,7 @@ namespace femp
   void
   SolidFEM<dim>::load_no_zone(std::vector<StateReader> &parts)
   {
-    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 1;
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 2;
     for (std::size_t f = 0; f < parts.size(); ++f)
       {
         StateReader &in  = parts[f];

@@ -774,8 +774,9 @@ namespace femp
     /// with the shared @p coef_cell and @p cv), stress and plastic strain
     /// (update_stress_block(), stored), the stress work and the work of the
     /// viscous pressure of the step added to @p work_v, the new viscous
-    /// pressure and volume stored. Returns in @p use the mask of the lanes
-    /// in use and in @p m, @p mg the inertial and true masses.
+    /// pressure and volume stored, the smallest new volume of the lanes
+    /// into @p vmin. Returns in @p use the mask of the lanes in use and in
+    /// @p m, @p mg the inertial and true masses.
     template <int dim, unsigned int W, typename VD>
     [[gnu::always_inline]] inline void
     stress_block(const StressStep<dim> &st,
@@ -786,6 +787,7 @@ namespace femp
                  VD (&cv)[dim][1u << dim],
                  CellModuli &moduli,
                  VD &        work_v,
+                 VD &        vmin,
                  VD &        use,
                  VD &        m,
                  VD &        mg)
@@ -840,6 +842,8 @@ namespace femp
         }
       const VD V_new = V * (1 + trL);
       simd_store(pa.volume, p0, nl, V_new);
+      // Volume check (the spare lanes of a partial block repeat a point).
+      vmin = V_new < vmin ? V_new : vmin;
     }
 
     /// Moves the points of block @p blk (at @p p0) of update_stresses()
@@ -1455,6 +1459,7 @@ namespace femp
     left_rank              = 0;
     lost                   = false;
     kinetic                = 0;
+    min_volume             = std::numeric_limits<double>::infinity();
     weight_momentum.fill(0.);
     const StressStep<dim> st = stress_step<dim>(mat, vel, corner_offset, T_old,
                                                 T_new, dt, h, scaling);
@@ -1505,6 +1510,7 @@ namespace femp
       // Sums of the lanes of the blocks (lanes of a partial block that
       // are not in use are masked by use); summed at the end.
       VD work_v = {}, kinetic_v = {}, momentum_v[dim] = {};
+      VD vmin = VD{} + std::numeric_limits<double>::infinity();
       for (std::size_t c0 = 0; c0 < n; c0 += chunk)
         {
           const std::size_t c1 = std::min(n, c0 + chunk);
@@ -1514,7 +1520,7 @@ namespace femp
               prefetch_stress_block<dim, A>(pa, p0, n);
               VD use, m, mg;
               stress_block(st, pa, blk, p0, coef_cell, cv, moduli, work_v,
-                           use, m, mg);
+                           vmin, use, m, mg);
               if (!move_block<dim, A>(st, pa, blk, p0, use, m, mg, kinetic_v,
                                       momentum_v))
                 finish_points<A>(p0, blk.nl);
@@ -1524,6 +1530,8 @@ namespace femp
         }
       work += lane_total(work_v);
       kinetic += lane_total(kinetic_v);
+      for (unsigned int l = 0; l < W; ++l)
+        min_volume = std::min(min_volume, vmin[l]);
       for (int d = 0; d < dim; ++d)
         weight_momentum[d] += lane_total(momentum_v[d]);
     };
@@ -1671,6 +1679,22 @@ namespace femp
             return true;
           }
       }
+    return false;
+  }
+
+
+  template <int dim>
+  bool
+  SolidMPM<dim>::find_collapsed(Point<dim> &where, double &V) const
+  {
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      if (!(volume[p] > 0))
+        {
+          for (int d = 0; d < dim; ++d)
+            where[d] = x[d][p];
+          V = volume[p];
+          return true;
+        }
     return false;
   }
 

@@ -949,11 +949,14 @@ namespace femp
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
-    double sums[8] = {mpm.kinetic_energy(), work, dt * local_ext,
+    // sums[8]: a point volume or element Jacobian <= 0 on this rank.
+    double sums[9] = {mpm.kinetic_energy(), work, dt * local_ext,
                       mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
-                      transfer, fe_energy[0], remap_work};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 8), comm,
-                        ArrayView<double>(sums, 8));
+                      transfer, fe_energy[0], remap_work,
+                      mpm.volume_collapsed() || (fem && fem->element_inverted()) ?
+                        1. : 0.};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 9), comm,
+                        ArrayView<double>(sums, 9));
     K = sums[0] + sums[6];
     W_int += sums[1];
     W_ext += sums[2];
@@ -961,6 +964,8 @@ namespace femp
     W_remap += sums[7];
     K_points = sums[0];
     const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
+    if (!blown && sums[8] > 0)
+      stop_inverted(dt);
     if (blown || sums[3] > 0)
       {
         Point<dim> where;
@@ -999,6 +1004,44 @@ namespace femp
         check_point_count(after[1], n_points_global, "re-sorting",
                           t_solid + dt);
       }
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::stop_inverted(const double dt) const
+  {
+    // The first collapsed point, else the first inverted element, of the
+    // lowest rank that has one (collective: every rank throws).
+    Point<dim> where;
+    double     value = 0;
+    const bool point = mpm.find_collapsed(where, value);
+    const bool found = point || (fem && fem->find_inverted(where, value));
+    const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
+    const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
+    double buf[dim + 2] = {value, point ? 1. : 0.};
+    for (int d = 0; d < dim; ++d)
+      buf[2 + d] = where[d];
+    if (root < (1u << 30))
+      MPI_Bcast(buf, dim + 2, MPI_DOUBLE, root, comm);
+    for (int d = 0; d < dim; ++d)
+      where[d] = buf[2 + d];
+    std::ostringstream s;
+    s << "solid: ";
+    if (buf[1] > 0)
+      s << "a material point collapsed (its volume V (1 + tr L dt) became "
+        << buf[0] << " m^" << dim << ", not positive)";
+    else
+      s << "a finite element inverted (its lowest corner Jacobian ratio "
+           "det(dx/dX) became "
+        << buf[0] << ")";
+    s << " at solid step " << steps << ", time " << t_solid + dt
+      << " s, near x = " << where
+      << " m. The solid step is too large for the deformation there, or "
+         "hourglass modes grew: use a smaller 'Solid/Safety factor' (or "
+         "'Solid/Time step'), more 'Solid/Bulk viscosity', or a larger "
+         "'Solid FEM/Hourglass coefficient'";
+    throw CollectiveError(s.str()); // the flag was reduced over all ranks
   }
 
 

@@ -185,6 +185,15 @@ namespace femp
     ///    required when either is switched on.
     void
     step(const double dt, const CellFields<dim> &fields = CellFields<dim>());
+    /// step() without the refusal of a step above the viscous or capillary
+    /// limit (the step rejection and the non-finite check remain): for the
+    /// forced-step experiments of doc/stability.md only.
+    void
+    forced_step(const double                 dt,
+                const CellFields<dim> &fields = CellFields<dim>())
+    {
+      advance(dt, 0, fields);
+    }
 
     /// Pressure per cell of the local box (ghosts exchanged), Pa; zero
     /// outside fluid cells.

@@ -94,6 +94,12 @@ namespace femp
       double       max_diameter     = 45e-6;
       double       packing_fraction = 0.45;
       unsigned int seed             = 1;
+      /// Material points/Carry points: "auto" or "always".
+      std::string  carry            = "auto";
+      /// Whether the scene carries points at all (resolve_carry()); false:
+      /// create() makes none, alpha comes from the substrate's lattice
+      /// geometry and the per-step transfer to points does nothing.
+      bool         carry_points     = true;
 
       /// An initial body (Material points/Initial bodies): a box from
       /// @p a (lower corner) to @p b (upper corner), or an ellipsoid
@@ -118,6 +124,15 @@ namespace femp
       /// Checks against the grid that need both parameter sets.
       void
       check(const typename BackgroundGrid<dim>::Parameters &grid) const;
+      /// Set carry_points: with 'Carry points = auto' points are carried
+      /// only where something needs them: a powder layer, initial bodies,
+      /// the melt flow (@p melt_flow), the solid (@p solid) or the track
+      /// shape's melt history (@p track_shape). A bare plate under a laser
+      /// needs none: its points would never move nor hold anything the
+      /// cells do not.
+      void
+      resolve_carry(const bool melt_flow, const bool solid,
+                    const bool track_shape);
     };
 
     /// @p n_properties: how many properties each point carries
@@ -138,6 +153,7 @@ namespace femp
     /// initial temperature @p T0, then the initial bodies: lattice points
     /// inside a body (added above the substrate top, re-stated below it)
     /// take its state and temperature (a later body overrides an earlier).
+    /// Without carried points (Parameters::carry_points false) none.
     void
     create(const double T0);
 
@@ -200,6 +216,8 @@ namespace femp
     /// volume of the melt is kept as the points keep it, where occupancy
     /// lost it when points bunched (doc/flow.md, "Volume-based alpha").
     /// On the point lattice with spacing h/n both rules give the same alpha.
+    /// Without carried points: the occupancy the substrate's lattice points
+    /// would give, from the lattice alone (lattice_fraction()).
     /// Collective.
     std::vector<double>
     metal_fraction() const;
@@ -223,8 +241,19 @@ namespace femp
 
     /// Zone tag per cell of the local box, from the states of its points:
     /// 0 gas (no points), 1 powder, 2 solid, 3 fluid (any fluid point).
+    /// Without carried points from the cell's metal fraction @p alpha and
+    /// temperature @p T: what the substrate's points would hold (solid,
+    /// fluid above the solidus once temperatures passed to points).
     std::vector<double>
-    zone_tags() const;
+    zone_tags(const std::vector<double> &alpha,
+              const std::vector<double> &T) const;
+
+    /// True if this scene carries points (Parameters::resolve_carry()).
+    bool
+    carried() const
+    {
+      return prm.carry_points;
+    }
 
     const Particles::ParticleHandler<dim> &
     particle_handler() const
@@ -298,8 +327,17 @@ namespace femp
     // Per local cell, the temperature cells_to_points() last gave its
     // points (NaN: not given since the cell's points changed).
     std::vector<double> pushed_temperature;
+    // Without carried points: true once cells_to_points() was called (the
+    // points' states would follow the cell temperatures from then on).
+    bool temperatures_passed = false;
     void
     cache_point_handles();
+    /// metal_fraction() without carried points: per direction, the
+    /// sub-cells that the lattice points of the substrate (below its top)
+    /// fall in, binned as metal_fraction() bins points; alpha of a cell is
+    /// the product of the counts over n^dim.
+    std::vector<double>
+    lattice_fraction() const;
     /// Rebuild occupied (and the pointer cache) from the handler.
     void
     index_occupied_cells();

@@ -65,6 +65,7 @@
 #include <femp/solid/constitutive.h>
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -233,6 +234,17 @@ namespace femp
     cell_fields(std::vector<std::vector<double>> &f) const;
     bool
     find_non_finite(Point<dim> &where) const;
+    /// True if after the last update_elements() an element is inverted:
+    /// its lowest corner Jacobian ratio (jacobian_low()) is zero or below.
+    bool
+    element_inverted() const
+    {
+      return !(min_jacobian > 0);
+    }
+    /// Centre of the first inverted element (and its lowest corner
+    /// Jacobian ratio in @p J), if any.
+    bool
+    find_inverted(Point<dim> &where, double &J) const;
 
     /// Checkpoint, between two solid steps: per owned element, keyed by its
     /// zone index, the stress, plastic strain, viscous pressure,
@@ -305,6 +317,10 @@ namespace femp
       /// Hourglass mode amplitudes q_alpha,i = sum_a Gamma_alpha,a u_a,i,
       /// advanced with the element's velocities.
       simd_double q[n_hg][dim];
+      /// J - 1: volume change of the element centre, J the product of
+      /// (1 + tr L dt) over the steps (the one-point element's Jacobian
+      /// ratio; small-displacement forces keep the reference volume).
+      simd_double dJ;
     };
     std::vector<ElementBlock>  blocks;
     std::vector<double>        T_start, T_end;
@@ -352,6 +368,9 @@ namespace femp
     std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
     std::vector<std::uint32_t> ext_nodes;    ///< box indices
     double                     kinetic = 0;
+    /// Smallest jacobian_low() of the elements after the last
+    /// update_elements() (infinite without elements).
+    double min_jacobian = std::numeric_limits<double>::infinity();
     /// Sums of the force components (@p f) of the shared nodes over ranks
     /// (compress(add), update_ghost_values of the vector @p force).
     void
@@ -420,10 +439,21 @@ namespace femp
     struct LoopConstants
     {
       double Bdt, VB, kfac, vfac;
+      /// B where hourglass control is on (the corner check), else 0.
+      double hgB;
       double mg[dim];
     };
     LoopConstants
     loop_constants(const double dt) const;
+    /// Lowest corner Jacobian ratio det(dx/dX) of the elements of @p eb,
+    /// to first order in the displacement: 1 + dJ - hgB sum over the
+    /// hourglass modes alpha and the directions i of alpha of |q_alpha,i|
+    /// (the hourglass displacement gradient at a corner is B q_alpha,i
+    /// times a sign; exact minimum over the corners in 2D, a lower bound
+    /// in 3D). With hourglass control off (hgB = 0) the centre only: the
+    /// elements then do not see their corners.
+    simd_double
+    jacobian_low(const ElementBlock &eb, const double hgB) const;
     /// Box offset of corner @p a from corner 0 of an element.
     std::size_t
     corner_row_offset(const unsigned int a) const;

@@ -81,6 +81,7 @@
 #include <femp/grid/material_points.h>
 
 #include <array>
+#include <limits>
 #include <vector>
 
 namespace femp
@@ -182,6 +183,14 @@ namespace femp
     {
       return lost;
     }
+    /// True if in the last update_stresses() a point's volume V (1 + tr L
+    /// dt) became zero or negative (compressed through zero in one step:
+    /// the step is too large for the deformation; see find_collapsed()).
+    bool
+    volume_collapsed() const
+    {
+      return !(min_volume > 0);
+    }
 
     /// Exchange with the melt since the last gather(), on this rank; call
     /// before gather(). Points that took part in the last gather and are no
@@ -245,6 +254,10 @@ namespace femp
     /// Position of the first point with a non-finite state, if any.
     bool
     find_non_finite(Point<dim> &where) const;
+    /// Position of the first point with a volume <= 0 (and that volume in
+    /// @p V), if any.
+    bool
+    find_collapsed(Point<dim> &where, double &V) const;
     /// Position of a point that entered the FE zone or left the domain.
     const Point<dim> &
     escaped_point() const
@@ -311,6 +324,9 @@ namespace femp
     std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
     double                    scaling = 1; ///< inertial mass / true_mass
     double                    kinetic = 0;
+    /// Smallest point volume after the last update_stresses(), m^dim
+    /// (infinite without points).
+    double                    min_volume = std::numeric_limits<double>::infinity();
     std::array<double, dim>   weight_momentum{}; ///< sum m_true v
     bool                      moved_cell = false, lost = false;
     bool                      flow_owns_fluid = false;

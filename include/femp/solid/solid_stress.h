@@ -470,6 +470,12 @@ namespace femp
     /// the grid update (true); this rank's counted nodes.
     double
     grid_point_kinetic(const bool updated) const;
+    /// Stop with a diagnostic (step, time, position, what to change): a
+    /// point volume or an element's corner Jacobian became <= 0 in the
+    /// step of @p dt (the reduced flag of book_energies() was set).
+    /// Collective.
+    [[noreturn]] void
+    stop_inverted(const double dt) const;
     /// Stop with a diagnostic (@p where, step, @p time) if @p n_now
     /// differs from @p n_expected.
     void

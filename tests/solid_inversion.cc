@@ -1,0 +1,182 @@
+// Detection of a collapsed material point and of an inverted finite element
+// (doc/stability.md). A 2D block (16 x 8 cells of 0.1 m, E = 100 Pa,
+// nu = 0.3, rho = 1, elastic) is driven by nodal forces, calling
+// SolidStress directly:
+// 1. all material points, a converging force f = -F (x - x_c) at every
+//    node: the points are squeezed through the centre, a point volume
+//    V (1 + tr L dt) turns negative while everything is still finite;
+// 2. all finite elements, the same force: an element's centre Jacobian
+//    ratio J (product of 1 + tr L dt) turns negative;
+// 3. all finite elements, a checkerboard force f_y = F (-1)^(i + j), which
+//    drives only the hourglass mode: with hourglass control on, the corner
+//    Jacobian 1 + (J - 1) - B |q| (first order) reaches zero;
+// 4. the same with hourglass control off (a switch for stability studies:
+//    the elements then do not see their corners), not stopped: the mode
+//    grows without stiffness and stays finite.
+// Each stop must be an exception naming the solid step, the time, the
+// position and what to change, thrown on every rank at the same step.
+#include <femp/grid/material_points.h>
+#include <femp/solid/solid_stress.h>
+
+#include "test_tools.h"
+
+using namespace femp_test;
+
+namespace
+{
+  constexpr int dim = 2;
+
+  enum class Load
+  {
+    converging,
+    checkerboard
+  };
+
+  struct Outcome
+  {
+    bool        thrown = false;
+    std::string message;
+    double      hourglass_mode = 0; ///< at the end when not thrown
+  };
+
+  Outcome
+  run(const bool fe, const Load load, const double F, const double kappa,
+      MPI_Comm comm)
+  {
+    const double h  = 0.1;
+    const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
+    BackgroundGrid<dim> grid(gp, comm);
+    grid.create();
+    Material mat = unit_material();
+    typename MaterialPoints<dim>::Parameters pp;
+    pp.point_spacing   = h;
+    pp.substrate_top   = 0.8;
+    pp.layer_thickness = 0;
+    pp.subcells        = 1;
+    MaterialPoints<dim> points(pp, mat, grid);
+    points.create(300.);
+
+    SolidMaterial sm(mat); // density 1, solidus 1e6
+    sm.youngs_modulus  = PiecewiseLinear(100.);
+    sm.plastic_modulus = PiecewiseLinear(0.);
+    sm.yield_stress    = PiecewiseLinear(1e30);
+    sm.poisson_ratio   = 0.3;
+    sm.expansion       = 0;
+    typename SolidStress<dim>::Parameters sp;
+    sp.energy_file = "";
+    typename SolidFEM<dim>::Parameters fp;
+    fp.enabled               = fe;
+    fp.lower_corner          = Point<dim>(0, 0);
+    fp.upper_corner          = Point<dim>(1.6, 0.8);
+    fp.hourglass_coefficient = kappa;
+    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    const std::vector<double> T = grid.make_field(300.);
+    solid.initialize(T, "");
+
+    // Nodal forces, added by the rank that owns the cell named for the
+    // node (the forces are partial sums over ranks).
+    std::array<std::vector<double>, dim> force;
+    for (int d = 0; d < dim; ++d)
+      force[d] = grid.make_node_field(0.);
+    for (int i = 0; i <= 16; ++i)
+      for (int j = 0; j <= 8; ++j)
+        {
+          const std::array<int, dim> cell{{std::min(i, 15), std::min(j, 7)}};
+          if (!grid.in_box(cell) || grid.cell_status()[grid.local_index(
+                                      cell)] != BackgroundGrid<dim>::owned)
+            continue;
+          const unsigned int n = grid.local_node_index({{i, j}});
+          if (load == Load::converging)
+            {
+              force[0][n] += -F * (i * h - 0.8);
+              force[1][n] += -F * (j * h - 0.4);
+            }
+          else
+            force[1][n] += ((i + j) % 2 ? -F : F);
+        }
+
+    Outcome o;
+    try
+      {
+        solid.advance(1., T, true, &force);
+        o.hourglass_mode = solid.energies().hourglass_mode;
+      }
+    catch (const std::exception &e)
+      {
+        o.thrown  = true;
+        o.message = e.what();
+      }
+    // Every rank must have met the same outcome.
+    const int thrown = o.thrown;
+    if (Utilities::MPI::min(thrown, comm) != Utilities::MPI::max(thrown, comm))
+      o.message = "not thrown on every rank";
+    return o;
+  }
+
+  /// The solid step the message names (-1: none).
+  int
+  step_of(const std::string &m)
+  {
+    const auto k = m.find("at solid step ");
+    return k == std::string::npos ? -1 : std::atoi(m.c_str() + k + 14);
+  }
+
+  bool
+  has(const std::string &m, const std::string &what)
+  {
+    return m.find(what) != std::string::npos;
+  }
+
+  void
+  check_stop(Checks &checks, const std::string &name, const Outcome &o,
+             const std::string &kind)
+  {
+    checks.in_range(name + ": stopped with an exception", o.thrown, 1, 1);
+    checks.in_range(name + ": message says '" + kind + "'",
+                    has(o.message, kind), 1, 1);
+    checks.in_range(name + ": message names step, time, position and what "
+                           "to change",
+                    step_of(o.message) > 0 && has(o.message, " s, near x = ") &&
+                      has(o.message, "'Solid/Safety factor'") &&
+                      has(o.message, "'Solid FEM/Hourglass coefficient'"),
+                    1, 1);
+    checks.in_range(name + ": before anything non-finite",
+                    !has(o.message, "non-finite") &&
+                      !has(o.message, "nan") && !has(o.message, "inf"),
+                    1, 1);
+    checks.print(name + ": stopped at solid step", step_of(o.message));
+    if (std::getenv("FEMP_SHOW_MESSAGES"))
+      checks.print("  message: " + o.message, 0);
+  }
+} // namespace
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+
+  const double  F_c = argc > 1 ? std::atof(argv[1]) : 10;
+  const double  F_h = argc > 2 ? std::atof(argv[2]) : 3;
+  const Outcome points = run(false, Load::converging, F_c, 0.1, comm);
+  check_stop(checks, "points, converging force", points,
+             "a material point collapsed");
+  const Outcome squeezed = run(true, Load::converging, F_c, 0.1, comm);
+  check_stop(checks, "elements, converging force", squeezed,
+             "a finite element inverted");
+  const Outcome hourglass = run(true, Load::checkerboard, F_h, 0.1, comm);
+  check_stop(checks, "elements, checkerboard force, hourglass control on",
+             hourglass, "a finite element inverted");
+  const Outcome off = run(true, Load::checkerboard, F_h, 0, comm);
+  checks.in_range("elements, checkerboard force, hourglass control off: "
+                  "not stopped",
+                  off.thrown, 0, 0);
+  checks.in_range("elements, checkerboard force, hourglass control off: "
+                  "mode energy finite and large at t = 1 s",
+                  std::isfinite(off.hourglass_mode) && off.hourglass_mode > 1,
+                  1, 1);
+  if (off.thrown)
+    checks.print("  message: " + off.message, 0);
+  return checks.exit_code();
+}
