@@ -37,9 +37,10 @@ physics: the default scene (prm/case_3_2_reduced.prm) thermal only,
   lost to evaporation (no error: a table).
 track: the default scene with heat and flow (no solid) to 50 us over cell
   size 8, 4 um x temperature step (fixed 200, 100, 100.1, 50, 25 ns, and
-  automatic); error: fusion-zone depth (solidus, in the substrate; the
-  width's error is written too, but it scatters by up to 15 % under a
-  0.1 % change of the step) against the finest run (4 um, 25 ns).
+  automatic), 2 um at 50 and 50.05 ns; error: fusion-zone depth (solidus,
+  in the substrate; the width's error is written too, but it scatters by up
+  to 15 % under a 0.1 % change of the step) against the finest run (2 um,
+  50 ns).
 """
 import argparse
 import csv
@@ -424,58 +425,63 @@ def run_log_figures(text):
 def study_track(args):
     """The default scene's track with heat and melt flow (no solid), to
     50 us (the laser's whole path): cell size 8, 4 um (point spacing h/2)
-    x temperature step 'Time stepping/Time step' = 200, 100, 50, 25 ns and
-    0 (automatic: 0.5 x the stable limit of diffusion and convection,
-    variable). The scene's step is fixed (prescribed, refused above the
-    stable limit); the flow sub-cycles inside it with its own limits, in
-    equal pieces no longer than the temperature step, so a shorter
-    temperature step shortens the flow step as well wherever the flow's own
-    limit is longer. Error: the largest fusion-zone depth (solidus, in the
-    substrate, the run's maximum in melt_pool.csv) against the finest run
-    (4 um, 25 ns); the error of the largest fusion-zone width is written as
-    well. The step of 100.1 ns, 0.1 % off the 100 ns, measures the scatter
-    of these figures under a perturbation far below any discretization
-    error (the melt flow over the powder is chaotic): the width moves by
-    4-15 % under it, the depth by 0.03-1.5 %, so only the depth can rank the
-    settings and it is the plotted error. About 3 CPU minutes on one
-    rank."""
+    x temperature step 'Time stepping/Time step' = 200, 100, 100.1, 50,
+    25 ns and 0 (automatic: 0.5 x the stable limit of diffusion and
+    convection, variable), and 2 um at 50 ns (the reference) and 50.05 ns.
+    The scene's step is fixed (prescribed, refused above the stable limit);
+    the flow sub-cycles inside it with its own limits, in equal pieces no
+    longer than the temperature step, so a shorter temperature step
+    shortens the flow step as well wherever the flow's own limit is longer.
+    Error: the largest fusion-zone depth (solidus, in the substrate, the
+    run's maximum in melt_pool.csv) against the finest run (2 um, 50 ns);
+    the error of the largest fusion-zone width is written as well. The
+    steps of 100.1 and 50.05 ns, 0.1 % off 100 and 50 ns, measure the
+    scatter of these figures under a perturbation far below any
+    discretization error (the melt flow over the powder is chaotic): the
+    width moves by 4-15 % under it, the depth by 0.03-1.5 % (8 and 4 um),
+    so only the depth can rank the settings and it is the plotted error.
+    About 10 CPU minutes on one rank, 7 of them for the two 2 um runs."""
     exe = os.path.abspath(os.path.join(args.build, "femp"))
     scene = os.path.join(ROOT, "prm", "case_3_2_reduced.prm")
     rows = []
-    for h in (8e-6, 4e-6):
-        for dt in (0, 2e-7, 1e-7, 1.001e-7, 5e-8, 2.5e-8):
-            def make(d, h=h, dt=dt):
-                sets = {"Physics/Solid stress": "false",
-                        "Time stepping/End time": "5e-5",
-                        "Time stepping/Time step": str(dt),
-                        "Background grid/Cell size": str(h),
-                        "Material points/Point spacing": str(h / 2),
-                        "Output/Directory": d, "Output/Output interval": "0",
-                        "Output/Write material points": "never"}
-                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
-                       "-np", str(args.np), exe] if args.np > 1 else [exe]
-                for k, v in sets.items():
-                    cmd += ["--set", "%s=%s" % (k, v)]
-                rc, cpu, wall = run_timed(cmd + [scene], d,
-                                          os.path.join(d, "log.txt"))
-                r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
-                r.update(run_log_figures(
-                    open(os.path.join(d, "log.txt")).read()))
-                try:
-                    pool = read_csv(os.path.join(d, "melt_pool.csv"))
-                    for k in ("depth_solidus_substrate",
-                              "width_solidus_substrate", "T_max", "depth",
-                              "width", "length"):
-                        r["max_" + k] = max(float(p[k]) for p in pool)
-                except (OSError, ValueError, KeyError) as ex:
-                    r["read_error"] = str(ex)
-                return r
-            d = os.path.join(args.out, "track", "h%g_dt%g" % (h, dt))
-            r = cached(d, make)
-            r.update(h=h, dt=dt if dt > 0 else "auto",
-                     label="%gum %s" % (h * 1e6, "%gns" % (dt * 1e9) if dt > 0
-                                        else "auto"))
-            rows.append(r)
+    sweep = [(h, dt) for h in (8e-6, 4e-6)
+             for dt in (0, 2e-7, 1e-7, 1.001e-7, 5e-8, 2.5e-8)]
+    # The finest cells: the reference (50 ns; the flow takes 2-3 sub-steps
+    # of ~20 ns in it) and its 0.1 % perturbation.
+    sweep += [(2e-6, 5.005e-8), (2e-6, 5e-8)]
+    for h, dt in sweep:
+        def make(d, h=h, dt=dt):
+            sets = {"Physics/Solid stress": "false",
+                    "Time stepping/End time": "5e-5",
+                    "Time stepping/Time step": str(dt),
+                    "Background grid/Cell size": str(h),
+                    "Material points/Point spacing": str(h / 2),
+                    "Output/Directory": d, "Output/Output interval": "0",
+                    "Output/Write material points": "never"}
+            cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
+                   "-np", str(args.np), exe] if args.np > 1 else [exe]
+            for k, v in sets.items():
+                cmd += ["--set", "%s=%s" % (k, v)]
+            rc, cpu, wall = run_timed(cmd + [scene], d,
+                                      os.path.join(d, "log.txt"))
+            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+            r.update(run_log_figures(
+                open(os.path.join(d, "log.txt")).read()))
+            try:
+                pool = read_csv(os.path.join(d, "melt_pool.csv"))
+                for k in ("depth_solidus_substrate",
+                          "width_solidus_substrate", "T_max", "depth",
+                          "width", "length"):
+                    r["max_" + k] = max(float(p[k]) for p in pool)
+            except (OSError, ValueError, KeyError) as ex:
+                r["read_error"] = str(ex)
+            return r
+        d = os.path.join(args.out, "track", "h%g_dt%g" % (h, dt))
+        r = cached(d, make)
+        r.update(h=h, dt=dt if dt > 0 else "auto",
+                 label="%gum %s" % (h * 1e6, "%gns" % (dt * 1e9) if dt > 0
+                                    else "auto"))
+        rows.append(r)
     ref = rows[-1]
     for r in rows:
         try:
@@ -496,7 +502,7 @@ def study_track(args):
                    "max_width", "max_length", "steps", "fluid_steps",
                    "substeps", "evaporation_J", "rc"], args,
                   "Reduced case 3.2, heat + flow to 50 us: fusion depth vs "
-                  "the 4 um / 25 ns run", "CPU seconds",
+                  "the 2 um / 50 ns run", "CPU seconds",
                   "relative error of the fusion-zone depth")
 
 
