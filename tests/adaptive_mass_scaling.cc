@@ -31,27 +31,6 @@ namespace
 {
   constexpr int dim = 3;
 
-  /// Columns of a CSV file with a header row: name -> values.
-  std::map<std::string, std::vector<double>>
-  read_csv(const std::string &file)
-  {
-    std::ifstream in(file);
-    AssertThrow(in, ExcMessage("cannot read " + file));
-    std::string row;
-    std::getline(in, row);
-    const auto names = Utilities::split_string_list(row, ',');
-    std::map<std::string, std::vector<double>> columns;
-    while (std::getline(in, row))
-      {
-        const auto v = Utilities::split_string_list(row, ',');
-        for (std::size_t i = 0; i < names.size() && i < v.size(); ++i)
-          columns[names[i]].push_back(v[i] == "inf" ?
-                                        std::numeric_limits<double>::infinity() :
-                                        Utilities::string_to_double(v[i]));
-      }
-    return columns;
-  }
-
   /// sigma_xx of every probe at the last row of a solid probe file.
   std::vector<double>
   last_sigma_xx(const std::map<std::string, std::vector<double>> &probes)
@@ -82,8 +61,8 @@ main(int argc, char **argv)
             {{"Solid", "Mass scaling", run},
              {"Output", "Directory", "out_" + run}});
           MPI_Barrier(comm); // rank 0 wrote the CSV files
-          energy[run] = read_csv("out_" + run + "/solid_energy.csv");
-          probes[run] = read_csv("out_" + run + "/solid_probes.csv");
+          energy[run] = read_csv_columns("out_" + run + "/solid_energy.csv");
+          probes[run] = read_csv_columns("out_" + run + "/solid_probes.csv");
         }
 
       // (a) The controller's decisions.

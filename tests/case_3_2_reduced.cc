@@ -38,25 +38,6 @@ namespace
 {
   constexpr int dim = 3;
 
-  /// Columns of a probe-line CSV file: name -> values along the line.
-  std::map<std::string, std::vector<double>>
-  read_probe_line(const std::string &file)
-  {
-    std::ifstream in(file);
-    AssertThrow(in, ExcMessage("cannot read " + file));
-    std::string row;
-    std::getline(in, row); // "# time = ..."
-    std::getline(in, row);
-    const auto names = Utilities::split_string_list(row, ',');
-    std::map<std::string, std::vector<double>> columns;
-    while (std::getline(in, row))
-      {
-        const auto v = Utilities::split_string_list(row, ',');
-        for (std::size_t i = 0; i < names.size() && i < v.size(); ++i)
-          columns[names[i]].push_back(Utilities::string_to_double(v[i]));
-      }
-    return columns;
-  }
 } // namespace
 
 int
@@ -80,7 +61,7 @@ main(int argc, char **argv)
           MPI_Barrier(comm); // rank 0 wrote the probe files
           for (const std::string l : {"CD", "EF"})
             line[run + l] =
-              read_probe_line(dir + run + "/probe_line_" + l + "_00001.csv");
+              read_csv_columns(dir + run + "/probe_line_" + l + "_00001.csv");
         }
 
       const double T0     = 300;

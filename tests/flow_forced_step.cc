@@ -76,25 +76,6 @@ namespace
     return o;
   }
 
-  /// Shape measure S = (xx - yy) / (xx + yy) of the points about their
-  /// centre of mass (collective).
-  double
-  shape(const FlowScene<dim> &scene, MPI_Comm comm)
-  {
-    double s[5] = {0, 0, 0, 0, 0};
-    for (const auto &p : scene.points->particle_handler())
-      {
-        const auto x = p.get_location();
-        s[0] += 1, s[1] += x[0], s[2] += x[1], s[3] += x[0] * x[0],
-          s[4] += x[1] * x[1];
-      }
-    Utilities::MPI::sum(ArrayView<const double>(s, 5), comm,
-                        ArrayView<double>(s, 5));
-    const double xx = s[3] / s[0] - std::pow(s[1] / s[0], 2);
-    const double yy = s[4] / s[0] - std::pow(s[2] / s[0], 2);
-    return (xx - yy) / (xx + yy);
-  }
-
   double
   max_speed(const FlowScene<dim> &scene)
   {
@@ -143,7 +124,7 @@ namespace
     const double gamma = 4 * mu / rho / (R * R);
     const auto   lim0  = scene.flow->stable_time_step();
     checks.print("viscous limit / capillary limit", lim0.viscous / lim0.capillary, 3);
-    double t = 0, S = shape(scene, comm);
+    double t = 0, S = shape_measure(scene, comm);
     const double S0 = S;
     if (!visc)
       {
@@ -153,7 +134,7 @@ namespace
         const Outcome o = advance(
           scene, which, C, 2 * T, t,
           [&](const double t_now) {
-            const double S_new = shape(scene, comm);
+            const double S_new = shape_measure(scene, comm);
             if ((S > 0) != (S_new > 0)) // linear interpolation
               crossings.push_back(t_now -
                                   (t_now - t_prev) * S_new / (S_new - S));

@@ -69,6 +69,27 @@ namespace femp_test
       }
     return std::sqrt(s);
   }
+
+  /// Shape measure S = (xx - yy) / (xx + yy) of the points about their
+  /// centre of mass, xx and yy the variances of x and y (collective): 0
+  /// for a circle, the sign tells which axis is the longer.
+  template <int dim>
+  double
+  shape_measure(const FlowScene<dim> &scene, MPI_Comm comm)
+  {
+    double s[5] = {0, 0, 0, 0, 0}; // n, sum x, sum y, sum x^2, sum y^2
+    for (const auto &p : scene.points->particle_handler())
+      {
+        const auto x = p.get_location();
+        s[0] += 1, s[1] += x[0], s[2] += x[1], s[3] += x[0] * x[0],
+          s[4] += x[1] * x[1];
+      }
+    Utilities::MPI::sum(ArrayView<const double>(s, 5), comm,
+                        ArrayView<double>(s, 5));
+    const double xx = s[3] / s[0] - std::pow(s[1] / s[0], 2);
+    const double yy = s[4] / s[0] - std::pow(s[2] / s[0], 2);
+    return (xx - yy) / (xx + yy);
+  }
 } // namespace femp_test
 
 #endif

@@ -74,21 +74,7 @@ run(const double fraction, const double R_over_h, const bool gated,
       const double gamma   = 4 * mu / rho / (R * R);
       const double T_exact = 2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
 
-      // Shape measure S over all points (collective).
-      const auto shape = [&]() {
-        double s[5] = {0, 0, 0, 0, 0}; // n, sum x, sum y, sum x^2, sum y^2
-        for (const auto &p : scene.points->particle_handler())
-          {
-            const auto x = p.get_location();
-            s[0] += 1, s[1] += x[0], s[2] += x[1], s[3] += x[0] * x[0],
-              s[4] += x[1] * x[1];
-          }
-        Utilities::MPI::sum(ArrayView<const double>(s, 5), comm,
-                            ArrayView<double>(s, 5));
-        const double xx = s[3] / s[0] - std::pow(s[1] / s[0], 2);
-        const double yy = s[4] / s[0] - std::pow(s[2] / s[0], 2);
-        return (xx - yy) / (xx + yy);
-      };
+      const auto shape = [&]() { return shape_measure(scene, comm); };
 
       // Void diagnostics (collective): points per cell over the whole
       // grid; a hole is an empty cell not connected through empty cells to

@@ -4,6 +4,8 @@
 
 #include <femp/app/femp_problem.h>
 
+#include <limits>
+#include <map>
 #include <string>
 #include <vector>
 #include <fstream>
@@ -51,6 +53,35 @@ namespace femp_test
     problem.run();
     std::cout.rdbuf(old);
     return problem.summary();
+  }
+
+  /// Columns of a CSV file written by femp: lines starting with '#' are
+  /// skipped, the first other line names the columns; returns name ->
+  /// values ("inf" read as infinity).
+  inline std::map<std::string, std::vector<double>>
+  read_csv_columns(const std::string &file)
+  {
+    std::ifstream in(file);
+    AssertThrow(in, dealii::ExcMessage("cannot read " + file));
+    std::string              row;
+    std::vector<std::string> names;
+    std::map<std::string, std::vector<double>> columns;
+    while (std::getline(in, row))
+      {
+        if (row.empty() || row[0] == '#')
+          continue;
+        const auto v = dealii::Utilities::split_string_list(row, ',');
+        if (names.empty())
+          {
+            names = v;
+            continue;
+          }
+        for (std::size_t i = 0; i < names.size() && i < v.size(); ++i)
+          columns[names[i]].push_back(
+            v[i] == "inf" ? std::numeric_limits<double>::infinity() :
+                            dealii::Utilities::string_to_double(v[i]));
+      }
+    return columns;
   }
 } // namespace femp_test
 

@@ -18,7 +18,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "test_tools.h"
+#include "solid_tools.h"
 
 using namespace femp_test;
 
@@ -43,32 +43,15 @@ namespace
   run(const bool fe, const Load load, const double F, const double kappa,
       MPI_Comm comm)
   {
-    const double h  = 0.1;
-    const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
-    BackgroundGrid<dim> grid(gp, comm);
-    grid.create();
-    Material mat = unit_material();
-    typename MaterialPoints<dim>::Parameters pp;
-    pp.point_spacing   = h;
-    pp.substrate_top   = 0.8;
-    pp.layer_thickness = 0;
-    pp.subcells        = 1;
-    MaterialPoints<dim> points(pp, mat, grid);
-    points.create(300.);
-
-    SolidMaterial sm(mat); // density 1, solidus 1e6
-    sm.youngs_modulus  = PiecewiseLinear(100.);
-    sm.plastic_modulus = PiecewiseLinear(0.);
-    sm.yield_stress    = PiecewiseLinear(1e30);
-    sm.poisson_ratio   = 0.3;
-    sm.expansion       = 0;
+    const double      h = 0.1;
+    const Point<dim>  size(1.6, 0.8);
+    SolidBlock<dim>   block(size, h, 0.8, unit_material(), comm, 300., 1);
+    auto &            grid   = block.grid;
+    auto &            points = *block.points;
+    const SolidMaterial sm   = elastic_block_material(block.material);
     typename SolidStress<dim>::Parameters sp;
     sp.energy_file = "";
-    typename SolidFEM<dim>::Parameters fp;
-    fp.enabled               = fe;
-    fp.lower_corner          = Point<dim>(0, 0);
-    fp.upper_corner          = Point<dim>(1.6, 0.8);
-    fp.hourglass_coefficient = kappa;
+    const auto fp  = fe_block<dim>(fe, size, kappa);
     SolidStress<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");

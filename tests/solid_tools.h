@@ -15,9 +15,10 @@
 
 namespace femp_test
 {
-  /// Box [0, size] with cells of size h; solid material points (2 x 2 per
-  /// cell, spacing h/2) filling it up to y = @p top, at @p T0, of @p
-  /// material (the grid is created first, then the points).
+  /// Box [0, size] with cells of size h; solid material points (@p n_per_h
+  /// per cell and direction, spacing h / n_per_h, as many sub-cells for the
+  /// metal fraction) filling it up to y = @p top, at @p T0, of @p material
+  /// (the grid is created first, then the points).
   template <int dim>
   struct SolidBlock
   {
@@ -26,16 +27,17 @@ namespace femp_test
                const double      top,
                const Material &  material,
                MPI_Comm          comm,
-               const double      T0 = 300.)
+               const double      T0      = 300.,
+               const unsigned    n_per_h = 2)
       : grid(box<dim>(Point<dim>(), size, h), comm)
       , material(material)
     {
       grid.create();
       typename MaterialPoints<dim>::Parameters pp;
-      pp.point_spacing   = h / 2;
+      pp.point_spacing   = h / n_per_h;
       pp.substrate_top   = top;
       pp.layer_thickness = 0;
-      pp.subcells        = 2;
+      pp.subcells        = n_per_h;
       points = std::make_unique<MaterialPoints<dim>>(pp, this->material, grid);
       points->create(T0);
     }
@@ -58,6 +60,35 @@ namespace femp_test
     sm.yield_stress     = PiecewiseLinear::parse(yield, "yield");
     sm.expansion        = 1e-4;
     return sm;
+  }
+
+  /// The linear-elastic block material of the stability tests: E = 100 Pa,
+  /// nu = 0.3, no plasticity (yield stress 1e30 Pa), no thermal expansion;
+  /// density and solidus those of @p thermal.
+  inline SolidMaterial
+  elastic_block_material(const Material &thermal)
+  {
+    SolidMaterial sm(thermal);
+    sm.youngs_modulus  = PiecewiseLinear(100.);
+    sm.plastic_modulus = PiecewiseLinear(0.);
+    sm.yield_stress    = PiecewiseLinear(1e30);
+    sm.poisson_ratio   = 0.3;
+    sm.expansion       = 0;
+    return sm;
+  }
+
+  /// A finite-element zone (on when @p enabled) covering [0, @p size], with
+  /// hourglass coefficient @p kappa.
+  template <int dim>
+  typename SolidFEM<dim>::Parameters
+  fe_block(const bool enabled, const Point<dim> &size, const double kappa)
+  {
+    typename SolidFEM<dim>::Parameters fp;
+    fp.enabled               = enabled;
+    fp.lower_corner          = Point<dim>();
+    fp.upper_corner          = size;
+    fp.hourglass_coefficient = kappa;
+    return fp;
   }
 
   /// Supports of the blocks: bottom fixed, sides on rollers; no energy

@@ -1073,6 +1073,10 @@ namespace femp
       node_mark[n] = 0;
     next_nodes.clear();
     node_mark.resize(grid.n_local_nodes(), 0);
+    for (const auto c : reached_cells)
+      cell_mark[c] = 0;
+    reached_cells.clear();
+    cell_mark.resize(grid.n_local(), 0);
     for (int d = 0; d < dim; ++d)
       x[d].clear(), v[d].clear(), corner[d].clear();
     for (auto &c : C)
@@ -1159,7 +1163,7 @@ namespace femp
     left_rank         = 0;
     for (std::size_t p = 0; p < node0.size(); ++p)
       if (p == 0 || node0[p] != node0[p - 1])
-        mark_cell_nodes(node0[p]);
+        mark_cell_nodes(cell[p], node0[p]);
     sum_energies();
     member_ids.resize(handle.size());
     for (std::size_t p = 0; p < handle.size(); ++p)
@@ -1170,8 +1174,10 @@ namespace femp
 
   template <int dim>
   void
-  SolidMPM<dim>::mark_cell_nodes(const std::size_t n0)
+  SolidMPM<dim>::mark_cell_nodes(const std::size_t idx, const std::size_t n0)
   {
+    if (!cell_mark[idx])
+      cell_mark[idx] = 1, reached_cells.push_back(idx);
     for (unsigned int a = 0; a < n_corners; ++a)
       {
         const std::size_t n = n0 + corner_offset[a];
@@ -1594,7 +1600,7 @@ namespace femp
             for (int d = 0; d < dim; ++d)
               corner[d][p] = grid.origin()[d] + ijk[d] * h;
             moved_cell = true;
-            mark_cell_nodes(node0[p]);
+            mark_cell_nodes(idx, node0[p]);
           }
         // APIC: affine part with the tents of the cell that now holds
         // the point (those of the next P2G). Points that left the rank

@@ -292,6 +292,7 @@ namespace femp
     n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
     K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
 
+    rebuild_live(nullptr, 0.);
     open_output_files(directory);
   }
 
@@ -415,7 +416,151 @@ namespace femp
                                     BackgroundGrid<dim>::owned)
             counted_nodes.emplace_back(n, tr_of[n]);
         }
+      counted_as.assign(grid.n_local_nodes(), -2);
+      for (const auto &[n, t] : counted_nodes)
+        counted_as[n] = t;
+
+      // Always live: the transition nodes, the nodes that another rank's
+      // cells share (sum_shared_nodes() writes them) and the probe cells.
+      fixed_live_nodes.clear();
+      for (const auto &[t, n] : grid_transition)
+        fixed_live_nodes.push_back(n);
+      for (const auto n : active_nodes)
+        {
+          std::array<int, dim> ijk;
+          std::size_t          r = n;
+          for (int d = dim - 1; d >= 0; --d)
+            {
+              ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
+              r %= ns[d];
+            }
+          bool shared = false;
+          for (unsigned int a = 0; a < (1u << dim) && !shared; ++a)
+            {
+              std::array<int, dim> c = ijk;
+              bool                 in = true;
+              for (int d = 0; d < dim; ++d)
+                {
+                  c[d] -= (a >> d) & 1u;
+                  in = in && c[d] >= 0 && c[d] < int(grid.n_cells()[d]);
+                }
+              shared = in && (!grid.in_box(c) ||
+                              grid.cell_status()[grid.local_index(c)] !=
+                                BackgroundGrid<dim>::owned);
+            }
+          if (shared)
+            fixed_live_nodes.push_back(n);
+        }
+      fixed_live_cells.clear();
+      for (const auto &x : prm.probes)
+        {
+          const auto ijk = grid.cell_of(x);
+          if (!grid.in_box(ijk))
+            continue;
+          const auto c = grid.local_index(ijk);
+          if (grid.cell_status()[c] == BackgroundGrid<dim>::owned &&
+              !zone_mask()[c])
+            fixed_live_cells.push_back(c);
+        }
+      node_live.assign(grid.n_local_nodes(), 0);
+      cell_live.assign(grid.n_local(), 0);
+      live_nodes.clear();
+      live_cells.clear();
+      live_counted.clear();
     }
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::rebuild_live(const std::vector<double> *T, const double w)
+  {
+    std::vector<std::uint32_t> old;
+    old.swap(live_nodes);
+    for (const auto n : old)
+      node_live[n] = 0;
+    auto add = [&](const std::uint32_t n) {
+      if (!node_live[n])
+        node_live[n] = 1, live_nodes.push_back(n);
+    };
+    for (const auto n : fixed_live_nodes)
+      add(n);
+    const auto &reached = mpm.nodes_reached();
+    for (const auto n : reached)
+      add(n);
+    nodes_seen = reached.size();
+    std::sort(live_nodes.begin(), live_nodes.end());
+    // Nodes that leave: zero, as the next step's update would leave them.
+    for (const auto n : old)
+      if (!node_live[n])
+        {
+          nodes.mass[n] = 0;
+          for (int d = 0; d < dim; ++d)
+            nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] =
+              0;
+        }
+    live_counted.clear();
+    for (const auto n : live_nodes)
+      if (counted_as[n] > -2)
+        live_counted.emplace_back(n, counted_as[n]);
+
+    for (const auto c : live_cells)
+      cell_live[c] = 0;
+    live_cells.clear();
+    for (const auto c : fixed_live_cells)
+      add_live_cell(c, T, w);
+    const auto &cells = mpm.cells_reached();
+    for (const auto c : cells)
+      add_live_cell(c, T, w);
+    cells_seen = cells.size();
+    regathered = false;
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::extend_live(const std::vector<double> &T, const double w)
+  {
+    const auto &reached = mpm.nodes_reached();
+    if (reached.size() > nodes_seen)
+      {
+        const std::size_t n0 = live_nodes.size(), c0 = live_counted.size();
+        for (std::size_t i = nodes_seen; i < reached.size(); ++i)
+          {
+            const auto n = reached[i];
+            if (node_live[n])
+              continue;
+            node_live[n] = 1;
+            live_nodes.push_back(n);
+            if (counted_as[n] > -2)
+              live_counted.emplace_back(n, counted_as[n]);
+          }
+        nodes_seen = reached.size();
+        std::sort(live_nodes.begin() + n0, live_nodes.end());
+        std::inplace_merge(live_nodes.begin(), live_nodes.begin() + n0,
+                           live_nodes.end());
+        std::sort(live_counted.begin() + c0, live_counted.end());
+        std::inplace_merge(live_counted.begin(), live_counted.begin() + c0,
+                           live_counted.end());
+      }
+    const auto &cells = mpm.cells_reached();
+    for (std::size_t i = cells_seen; i < cells.size(); ++i)
+      if (!cell_live[cells[i]])
+        add_live_cell(cells[i], &T, w);
+    cells_seen = cells.size();
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::add_live_cell(const std::uint32_t        c,
+                                  const std::vector<double> *T,
+                                  const double               w)
+  {
+    if (!cell_live[c])
+      cell_live[c] = 1, live_cells.push_back(c);
+    if (T)
+      T_next[c] = T_prev[c] + w * ((*T)[c] - T_prev[c]);
   }
 
 
@@ -470,7 +615,10 @@ namespace femp
     const bool gathered = t_solid < t * (1 - 1e-12) &&
                           (final || t_solid + dt_solid <= t * (1 + 1e-12));
     if (gathered)
-      gather_points();
+      {
+        gather_points();
+        rebuild_live(nullptr, 0.);
+      }
     while (t_solid < t * (1 - 1e-12))
       {
         double t_next = t_solid + dt_solid;
@@ -482,10 +630,19 @@ namespace femp
           }
         // Linear interpolation of the cell temperatures in [t_prev, t].
         const double w = t > t_prev ? (t_next - t_prev) / (t - t_prev) : 1.;
-        // (Cells of the FE zone: the elements interpolate their own.)
-        for (const auto c : mpm_cells)
+        // (Cells of the FE zone: the elements interpolate their own.) Only
+        // the cells that hold points (live_cells): the others follow at
+        // the end of the advance.
+        for (const auto c : live_cells)
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
         step(t_next - t_solid, w, external_forces);
+        // Cells and nodes that points reached in the step (their cells'
+        // temperature of this step into T_next).
+        if (regathered)
+          rebuild_live(&T, w);
+        else
+          extend_live(T, w);
+        last_w = w;
         T_solid.swap(T_next);
         phase_K_dt += K * (t_next - t_solid);
         phase_time += t_next - t_solid;
@@ -499,8 +656,14 @@ namespace femp
         measure_and_adapt_scaling(prm.adaptive_scaling && !final);
         mpm.scatter();
       }
+    // The temperature of the last step at the cells without points (as if
+    // interpolated at every step), for points that solidify there.
     for (const auto c : mpm_cells)
-      T_prev[c] = T[c];
+      {
+        if (gathered && !cell_live[c])
+          T_solid[c] = T_prev[c] + last_w * (T[c] - T_prev[c]);
+        T_prev[c] = T[c];
+      }
     t_prev = t;
   }
 
@@ -543,7 +706,7 @@ namespace femp
   {
     // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
     // partial sums of this rank, on the grid nodes of MPM cells.
-    for (const auto n : active_nodes)
+    for (const auto n : live_nodes)
       {
         nodes.mass[n] = 0;
         for (int d = 0; d < dim; ++d)
@@ -552,7 +715,7 @@ namespace femp
     mpm.p2g(nodes, prm.gravity);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
-        for (const auto n : active_nodes)
+        for (const auto n : live_nodes)
           nodes.force[d][n] += (*external_forces)[d][n];
   }
 
@@ -632,7 +795,7 @@ namespace femp
   {
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
-    for (const auto n : active_nodes)
+    for (const auto n : live_nodes)
       {
         const double m = nodes.mass[n];
         for (int d = 0; d < dim; ++d)
@@ -682,7 +845,7 @@ namespace femp
     double ext_power = 0;
     if (external_forces) // partial forces: the rank sum is the total
       for (int d = 0; d < dim; ++d)
-        for (const auto n : active_nodes)
+        for (const auto n : live_nodes) // velocity 0 at the others
           ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
     return ext_power;
   }
@@ -695,7 +858,7 @@ namespace femp
     // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
     // momenta (in the same loop as G2P), grid velocities.
     for (int d = 0; d < dim; ++d)
-      for (const auto n : active_nodes)
+      for (const auto n : live_nodes)
         nodes.momentum[d][n] = 0;
     mpm.g2p(nodes, dt);
     const std::array<double, 2> fe_energy =
@@ -733,7 +896,7 @@ namespace femp
     // grid force f_g keeps the re-map jump); without it the balance of the
     // elastic shock test was 0.12 (doc/solid.md).
     double remap_work = 0;
-    for (const auto &[n, t] : counted_nodes)
+    for (const auto &[n, t] : live_counted) // no mass at the others
       if (nodes.mass[n] > 0)
         for (int d = 0; d < dim; ++d)
           if (!(constrained[n] & (1u << d)))
@@ -765,7 +928,7 @@ namespace femp
   void
   SolidStress<dim>::set_grid_velocities()
   {
-    for (const auto n : active_nodes)
+    for (const auto n : live_nodes)
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
           (nodes.mass[n] > 0 && !(constrained[n] & (1u << d))) ?
@@ -831,6 +994,7 @@ namespace femp
         // Points that left a rank were not counted in sums[0]: count the
         // kinetic energy again after the resort, and every point.
         mpm.resort();
+        regathered = true;
         double after[2] = {mpm.kinetic_energy(), double(mpm.n_points())};
         Utilities::MPI::sum(ArrayView<const double>(after, 2), comm,
                             ArrayView<double>(after, 2));
@@ -886,7 +1050,7 @@ namespace femp
   SolidStress<dim>::grid_point_kinetic(const bool updated) const
   {
     double k = 0;
-    for (const auto &[n, t] : counted_nodes)
+    for (const auto &[n, t] : live_counted) // no mass at the others
       {
         const double m = nodes.mass[n];
         if (m <= 0)

@@ -264,6 +264,24 @@ namespace femp
     {
       return escaped;
     }
+    /// The grid nodes that a transfer of this rank may have written since
+    /// the last gather(): the corners of every cell that held one of its
+    /// points since then (local node indices, no repeats, in the order
+    /// found; new entries are appended when a point enters a cell). Zero
+    /// node mass elsewhere.
+    const std::vector<std::uint32_t> &
+    nodes_reached() const
+    {
+      return next_nodes;
+    }
+    /// The cells (local indices) that held one of this rank's points since
+    /// the last gather(), no repeats, in the order found, appended like
+    /// nodes_reached().
+    const std::vector<std::uint32_t> &
+    cells_reached() const
+    {
+      return reached_cells;
+    }
 
     /// Checkpoint, between two advances of the solid (after scatter()):
     /// what is read before the next gather() rebuilds the flat arrays: the
@@ -325,6 +343,8 @@ namespace femp
     std::array<std::vector<double>, 1 + 2 * dim> next;
     std::vector<std::uint32_t>                   next_nodes;
     std::vector<std::uint8_t>                    node_mark;
+    std::vector<std::uint32_t>                   reached_cells;
+    std::vector<std::uint8_t>                    cell_mark;
     bool                 next_ready = false; ///< next holds the next P2G
     bool                 next_dirty = false; ///< next is not all zero
     unsigned int         steps_since_gather = 0;
@@ -337,9 +357,10 @@ namespace femp
     template <bool A>
     void
     finish_points(const std::size_t p0, const unsigned int nl);
-    /// Marks the corners of the cell with first node @p n0 in next_nodes.
+    /// Marks the cell @p idx in reached_cells and its corners (first node
+    /// @p n0) in next_nodes.
     void
-    mark_cell_nodes(const std::size_t n0);
+    mark_cell_nodes(const std::size_t idx, const std::size_t n0);
     /// Zeroes next at next_nodes if it was written.
     void
     clear_next();

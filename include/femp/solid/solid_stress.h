@@ -346,6 +346,26 @@ namespace femp
     /// clamped at the upper domain faces), with their transition index or
     /// -1.
     std::vector<std::pair<std::uint32_t, std::int32_t>> counted_nodes;
+    /// The part of the above that a step visits (doc/performance.md,
+    /// "Solid steps visit only the nodes that carry mass"): the corners of
+    /// the cells that held points since the last gather
+    /// (SolidMPM::nodes_reached()), the transition nodes and the nodes
+    /// shared with another rank (live_nodes, ascending, so that sums keep
+    /// their order; live_counted: of counted_nodes, same order); the cells
+    /// that held points since the last gather and the probe cells
+    /// (live_cells: the cells whose temperature a step interpolates). All
+    /// node fields are zero at other nodes of active_nodes.
+    std::vector<std::uint32_t>                          live_nodes, live_cells;
+    std::vector<std::pair<std::uint32_t, std::int32_t>> live_counted;
+    std::vector<std::uint8_t>  node_live, cell_live;
+    std::vector<std::uint32_t> fixed_live_nodes, fixed_live_cells;
+    /// Per local node: its transition index in counted_nodes, -1 for a
+    /// counted node that is not one, -2 if not counted.
+    std::vector<std::int32_t> counted_as;
+    /// Entries of nodes_reached() and cells_reached() already live.
+    std::size_t nodes_seen = 0, cells_seen = 0;
+    bool        regathered = false; ///< a re-sort gathered the points
+    double      last_w     = -1;    ///< w of the last step of an advance
     std::unique_ptr<std::ofstream> energy_out, probe_out;
     std::string                    csv_directory; ///< of energy_out, probe_out
     /// State changes found by find_state_changes() for the next gather.
@@ -377,6 +397,19 @@ namespace femp
     set_boundary_flags();
     void
     find_active_nodes();
+    /// The live nodes and cells anew after a gather; nodes that leave the
+    /// set are zeroed. With @p T (after a re-sort within a step of weight
+    /// @p w), the new cells get the step's temperature in T_next.
+    void
+    rebuild_live(const std::vector<double> *T, const double w);
+    /// After a step: the nodes and cells that points reached in it become
+    /// live (their cells get the step's temperature in T_next).
+    void
+    extend_live(const std::vector<double> &T, const double w);
+    /// Marks @p c live; with @p T, T_next[c] of the step of weight @p w.
+    void
+    add_live_cell(const std::uint32_t c, const std::vector<double> *T,
+                  const double w);
     void
     open_output_files(const std::string &directory);
     /// The parts of step(), in this order: 1. P2G (partial sums of this
