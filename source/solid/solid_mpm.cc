@@ -1077,14 +1077,10 @@ namespace femp
       cell_mark[c] = 0;
     reached_cells.clear();
     cell_mark.resize(grid.n_local(), 0);
+    // (The arrays filled by index below are only resized: no zero fill.)
     for (int d = 0; d < dim; ++d)
-      x[d].clear(), v[d].clear(), corner[d].clear();
-    for (auto &c : C)
-      c.clear();
-    for (auto &s : sigma)
-      s.clear();
-    true_mass.clear(), volume.clear(), visc.clear();
-    eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
+      corner[d].clear();
+    cell.clear(), handle.clear();
     auto &     handler = points.particle_handler_for_update();
     const auto h       = grid.h();
     {
@@ -1101,31 +1097,21 @@ namespace femp
     }
     // A flat walk over the pool handles of all points in the handler's
     // order (the order of the arrays, as deal.II's iterator gives it),
-    // with prefetches ahead: the state of a point a long way ahead, the
-    // rest of a solid point's data a shorter way ahead (most points, the
-    // powder and those of the FE zone, are only looked at).
+    // with prefetches ahead. Most points (the powder, those of the FE
+    // zone) are only looked at; the first pass finds the points that take
+    // part (pool handle, cell, cell corner), the second copies their state
+    // into the arrays.
     auto &pool = handler.get_property_pool();
     collect_handles();
-    const std::size_t        n_walk = walk.size();
-    constexpr std::size_t    far = 16, near = 8;
-    types::particle_index    max_id = 0;
+    const std::size_t     n_walk = walk.size();
+    constexpr std::size_t ahead  = 16;
     for (std::size_t k = 0; k < n_walk; ++k)
       {
-        if (k + far < n_walk)
-          __builtin_prefetch(pool.get_properties(walk[k + far]).data() +
-                               P::state,
-                             1);
-        if (k + near < n_walk)
+        if (k + ahead < n_walk)
           {
-            const auto   hn = walk[k + near];
-            const double *r = pool.get_properties(hn).data();
-            if (r[P::state] == MaterialPoints<dim>::solid)
-              {
-                __builtin_prefetch(&pool.get_location(hn), 0);
-                for (unsigned int c = 0; c < pool.n_properties_per_slot();
-                     c += 8)
-                  __builtin_prefetch(r + c, 0);
-              }
+            const auto hn = walk[k + ahead];
+            __builtin_prefetch(pool.get_properties(hn).data() + P::state, 1);
+            __builtin_prefetch(&pool.get_location(hn), 0);
           }
         const auto              hp = walk[k];
         const ArrayView<double> q  = pool.get_properties(hp);
@@ -1152,40 +1138,68 @@ namespace femp
           }
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;
-        const Point<dim> p   = pool.get_location(hp);
-        const auto       ijk = grid.cell_of(p);
-        const auto       idx = grid.local_index(ijk);
+        const auto ijk = grid.cell_of(pool.get_location(hp));
+        const auto idx = grid.local_index(ijk);
         if (excluded[idx])
           continue;
+        handle.push_back(hp);
+        cell.push_back(idx);
+        for (int d = 0; d < dim; ++d)
+          corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+      }
+    const std::size_t n = handle.size();
+    for (int d = 0; d < dim; ++d)
+      x[d].resize(n), v[d].resize(n);
+    for (auto &c : C)
+      c.resize(apic ? n : 0);
+    for (auto &s : sigma)
+      s.resize(n);
+    true_mass.resize(n), volume.resize(n), visc.resize(n);
+    eps_p.resize(n), node0.resize(n);
+    // Membership by particle id, for exchange_since_gather().
+    member_bits.assign(handler.get_next_free_particle_index() / 64 + 1, 0);
+    for (std::size_t p = 0; p < n; ++p)
+      {
+        if (p + ahead < n)
+          {
+            const auto    hn = handle[p + ahead];
+            const double *r  = pool.get_properties(hn).data();
+            for (unsigned int c = 0; c < pool.n_properties_per_slot(); c += 8)
+              __builtin_prefetch(r + c, 0);
+            __builtin_prefetch(&pool.get_location(hn), 0);
+          }
+        const auto                    hp = handle[p];
+        const ArrayView<const double> q  = pool.get_properties(hp);
+        const Point<dim> &            xp = pool.get_location(hp);
         for (int d = 0; d < dim; ++d)
           {
-            x[d].push_back(p[d]);
-            v[d].push_back(q[P::velocity + d]);
-            corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+            x[d][p] = xp[d];
+            v[d][p] = q[P::velocity + d];
           }
         if (apic)
           for (unsigned int c = 0; c < dim * dim; ++c)
-            C[c].push_back(q[P::affine_velocity + c]);
-        true_mass.push_back(q[P::mass]);
-        volume.push_back(q[P::volume]);
-        visc.push_back(q[P::viscous_pressure]);
-        cell.push_back(idx);
-        node0.push_back(grid.first_node_of_cell(idx));
+            C[c][p] = q[P::affine_velocity + c];
+        true_mass[p] = q[P::mass];
+        volume[p]    = q[P::volume];
+        visc[p]      = q[P::viscous_pressure];
+        node0[p]     = grid.first_node_of_cell(cell[p]);
         if constexpr (dim == 2)
           {
-            sigma[0].push_back(q[P::stress + 0]);
-            sigma[1].push_back(q[P::stress + 1]);
-            sigma[2].push_back(q[P::stress_zz]);
-            sigma[3].push_back(q[P::stress + 2]);
-            sigma[4].push_back(0.);
-            sigma[5].push_back(0.);
+            sigma[0][p] = q[P::stress + 0];
+            sigma[1][p] = q[P::stress + 1];
+            sigma[2][p] = q[P::stress_zz];
+            sigma[3][p] = q[P::stress + 2];
+            sigma[4][p] = 0.;
+            sigma[5][p] = 0.;
           }
         else
           for (unsigned int c = 0; c < n_stress; ++c) // same order
-            sigma[c].push_back(q[P::stress + c]);
-        eps_p.push_back(q[P::plastic_strain]);
-        handle.push_back(hp);
-        max_id = std::max(max_id, pool.get_id(hp));
+            sigma[c][p] = q[P::stress + c];
+        eps_p[p]      = q[P::plastic_strain];
+        const auto id = pool.get_id(hp);
+        if (id / 64 >= member_bits.size())
+          member_bits.resize(id / 64 + 1, 0);
+        member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
       }
     moved_cell = lost = false;
     left_rank         = 0;
@@ -1193,12 +1207,6 @@ namespace femp
       if (p == 0 || node0[p] != node0[p - 1])
         mark_cell_nodes(cell[p], node0[p]);
     sum_energies();
-    member_bits.assign(handle.empty() ? 0 : max_id / 64 + 1, 0);
-    for (const auto hp : handle)
-      {
-        const auto id = pool.get_id(hp);
-        member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
-      }
   }
 
 
@@ -1252,7 +1260,7 @@ namespace femp
     auto &pool = points.particle_handler().get_property_pool();
     collect_handles();
     const std::size_t     n_walk = walk.size();
-    constexpr std::size_t ahead  = 12;
+    constexpr std::size_t ahead  = 16;
     for (std::size_t i = 0; i < n_walk; ++i)
       {
         if (i + ahead < n_walk)
@@ -1265,6 +1273,8 @@ namespace femp
         const ArrayView<const double> q      = pool.get_properties(hp);
         const bool                    member = is_member(pool.get_id(hp));
         const bool       solid = q[P::state] == MaterialPoints<dim>::solid;
+        if (!member && !solid) // (neither before nor now: the cell does not matter)
+          continue;
         const Point<dim> xp    = pool.get_location(hp);
         const auto       ijk   = grid.cell_of(xp);
         const bool       out   = excluded[grid.local_index(ijk)];
