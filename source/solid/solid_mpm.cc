@@ -1077,14 +1077,10 @@ namespace femp
       cell_mark[c] = 0;
     reached_cells.clear();
     cell_mark.resize(grid.n_local(), 0);
+    // (The arrays filled by index below are only resized: no zero fill.)
     for (int d = 0; d < dim; ++d)
-      x[d].clear(), v[d].clear(), corner[d].clear();
-    for (auto &c : C)
-      c.clear();
-    for (auto &s : sigma)
-      s.clear();
-    true_mass.clear(), volume.clear(), visc.clear();
-    eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
+      corner[d].clear();
+    cell.clear(), handle.clear();
     auto &     handler = points.particle_handler_for_update();
     const auto h       = grid.h();
     {
@@ -1099,9 +1095,26 @@ namespace femp
       true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
       eps_p.reserve(n), cell.reserve(n), node0.reserve(n), handle.reserve(n);
     }
-    for (auto it = handler.begin(); it != handler.end(); ++it)
+    // A flat walk over the pool handles of all points in the handler's
+    // order (the order of the arrays, as deal.II's iterator gives it),
+    // with prefetches ahead. Most points (the powder, those of the FE
+    // zone) are only looked at; the first pass finds the points that take
+    // part (pool handle, cell, cell corner), the second copies their state
+    // into the arrays.
+    auto &pool = handler.get_property_pool();
+    collect_handles();
+    const std::size_t     n_walk = walk.size();
+    constexpr std::size_t ahead  = 16;
+    for (std::size_t k = 0; k < n_walk; ++k)
       {
-        const ArrayView<double> q = it->get_properties();
+        if (k + ahead < n_walk)
+          {
+            const auto hn = walk[k + ahead];
+            __builtin_prefetch(pool.get_properties(hn).data() + P::state, 1);
+            __builtin_prefetch(&pool.get_location(hn), 0);
+          }
+        const auto              hp = walk[k];
+        const ArrayView<double> q  = pool.get_properties(hp);
         if (q[P::state] == MaterialPoints<dim>::fluid)
           {
             // Melted: no stress, no hardening memory, no momentum (without
@@ -1125,39 +1138,68 @@ namespace femp
           }
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;
-        const Point<dim> p   = it->get_location();
-        const auto       ijk = grid.cell_of(p);
-        const auto       idx = grid.local_index(ijk);
+        const auto ijk = grid.cell_of(pool.get_location(hp));
+        const auto idx = grid.local_index(ijk);
         if (excluded[idx])
           continue;
+        handle.push_back(hp);
+        cell.push_back(idx);
+        for (int d = 0; d < dim; ++d)
+          corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+      }
+    const std::size_t n = handle.size();
+    for (int d = 0; d < dim; ++d)
+      x[d].resize(n), v[d].resize(n);
+    for (auto &c : C)
+      c.resize(apic ? n : 0);
+    for (auto &s : sigma)
+      s.resize(n);
+    true_mass.resize(n), volume.resize(n), visc.resize(n);
+    eps_p.resize(n), node0.resize(n);
+    // Membership by particle id, for exchange_since_gather().
+    member_bits.assign(handler.get_next_free_particle_index() / 64 + 1, 0);
+    for (std::size_t p = 0; p < n; ++p)
+      {
+        if (p + ahead < n)
+          {
+            const auto    hn = handle[p + ahead];
+            const double *r  = pool.get_properties(hn).data();
+            for (unsigned int c = 0; c < pool.n_properties_per_slot(); c += 8)
+              __builtin_prefetch(r + c, 0);
+            __builtin_prefetch(&pool.get_location(hn), 0);
+          }
+        const auto                    hp = handle[p];
+        const ArrayView<const double> q  = pool.get_properties(hp);
+        const Point<dim> &            xp = pool.get_location(hp);
         for (int d = 0; d < dim; ++d)
           {
-            x[d].push_back(p[d]);
-            v[d].push_back(q[P::velocity + d]);
-            corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+            x[d][p] = xp[d];
+            v[d][p] = q[P::velocity + d];
           }
         if (apic)
           for (unsigned int c = 0; c < dim * dim; ++c)
-            C[c].push_back(q[P::affine_velocity + c]);
-        true_mass.push_back(q[P::mass]);
-        volume.push_back(q[P::volume]);
-        visc.push_back(q[P::viscous_pressure]);
-        cell.push_back(idx);
-        node0.push_back(grid.first_node_of_cell(idx));
+            C[c][p] = q[P::affine_velocity + c];
+        true_mass[p] = q[P::mass];
+        volume[p]    = q[P::volume];
+        visc[p]      = q[P::viscous_pressure];
+        node0[p]     = grid.first_node_of_cell(cell[p]);
         if constexpr (dim == 2)
           {
-            sigma[0].push_back(q[P::stress + 0]);
-            sigma[1].push_back(q[P::stress + 1]);
-            sigma[2].push_back(q[P::stress_zz]);
-            sigma[3].push_back(q[P::stress + 2]);
-            sigma[4].push_back(0.);
-            sigma[5].push_back(0.);
+            sigma[0][p] = q[P::stress + 0];
+            sigma[1][p] = q[P::stress + 1];
+            sigma[2][p] = q[P::stress_zz];
+            sigma[3][p] = q[P::stress + 2];
+            sigma[4][p] = 0.;
+            sigma[5][p] = 0.;
           }
         else
           for (unsigned int c = 0; c < n_stress; ++c) // same order
-            sigma[c].push_back(q[P::stress + c]);
-        eps_p.push_back(q[P::plastic_strain]);
-        handle.push_back(it);
+            sigma[c][p] = q[P::stress + c];
+        eps_p[p]      = q[P::plastic_strain];
+        const auto id = pool.get_id(hp);
+        if (id / 64 >= member_bits.size())
+          member_bits.resize(id / 64 + 1, 0);
+        member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
       }
     moved_cell = lost = false;
     left_rank         = 0;
@@ -1165,10 +1207,18 @@ namespace femp
       if (p == 0 || node0[p] != node0[p - 1])
         mark_cell_nodes(cell[p], node0[p]);
     sum_energies();
-    member_ids.resize(handle.size());
-    for (std::size_t p = 0; p < handle.size(); ++p)
-      member_ids[p] = handle[p]->get_id();
-    std::sort(member_ids.begin(), member_ids.end());
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::collect_handles() const
+  {
+    const auto &handler = points.particle_handler();
+    walk.clear();
+    walk.reserve(handler.n_locally_owned_particles());
+    for (auto it = handler.begin(); it != handler.end(); ++it)
+      walk.push_back(it->get_local_index());
   }
 
 
@@ -1206,14 +1256,26 @@ namespace femp
     using P = typename MaterialPoints<dim>::PropertyIndex;
     Exchange   e;
     const auto h = grid.h(), ih = 1. / h;
-    for (const auto &particle : points.particle_handler())
+    // The flat walk of gather(), prefetching state and position.
+    auto &pool = points.particle_handler().get_property_pool();
+    collect_handles();
+    const std::size_t     n_walk = walk.size();
+    constexpr std::size_t ahead  = 16;
+    for (std::size_t i = 0; i < n_walk; ++i)
       {
-        const ArrayView<const double> q = particle.get_properties();
-        const bool member = std::binary_search(member_ids.begin(),
-                                               member_ids.end(),
-                                               particle.get_id());
+        if (i + ahead < n_walk)
+          {
+            const auto hn = walk[i + ahead];
+            __builtin_prefetch(pool.get_properties(hn).data() + P::state, 0);
+            __builtin_prefetch(&pool.get_location(hn), 0);
+          }
+        const auto                    hp     = walk[i];
+        const ArrayView<const double> q      = pool.get_properties(hp);
+        const bool                    member = is_member(pool.get_id(hp));
         const bool       solid = q[P::state] == MaterialPoints<dim>::solid;
-        const Point<dim> xp    = particle.get_location();
+        if (!member && !solid) // (neither before nor now: the cell does not matter)
+          continue;
+        const Point<dim> xp    = pool.get_location(hp);
         const auto       ijk   = grid.cell_of(xp);
         const bool       out   = excluded[grid.local_index(ijk)];
         if (member == (solid && !out))
@@ -1253,18 +1315,29 @@ namespace femp
   void
   SolidMPM<dim>::write_back()
   {
-    using P = typename MaterialPoints<dim>::PropertyIndex;
-    for (std::size_t p = 0; p < true_mass.size(); ++p)
+    using P    = typename MaterialPoints<dim>::PropertyIndex;
+    auto &pool = points.particle_handler_for_update().get_property_pool();
+    const std::size_t     n     = true_mass.size();
+    constexpr std::size_t ahead = 8;
+    for (std::size_t p = 0; p < n; ++p)
       {
-        auto                    it = handle[p];
-        const ArrayView<double> q  = it->get_properties();
+        if (p + ahead < n) // the pool slots written a few points ahead
+          {
+            const auto hn = handle[p + ahead];
+            double *   r  = pool.get_properties(hn).data();
+            for (unsigned int c = 0; c < pool.n_properties_per_slot(); c += 8)
+              __builtin_prefetch(r + c, 1);
+            __builtin_prefetch(&pool.get_location(hn), 1);
+          }
+        const auto              hp = handle[p];
+        const ArrayView<double> q  = pool.get_properties(hp);
         Point<dim>              xp;
         for (int d = 0; d < dim; ++d)
           {
             xp[d]              = x[d][p];
             q[P::velocity + d] = v[d][p];
           }
-        it->set_location(xp);
+        pool.set_location(hp, xp);
         if constexpr (dim == 2)
           {
             q[P::stress + 0] = sigma[0][p];
@@ -1704,8 +1777,12 @@ namespace femp
   SolidMPM<dim>::save_state(StateWriter &out) const
   {
     out.put(scaling);
-    out.put_vector(std::vector<std::uint64_t>(member_ids.begin(),
-                                              member_ids.end()));
+    std::vector<std::uint64_t> ids; // sorted
+    for (std::size_t w = 0; w < member_bits.size(); ++w)
+      for (unsigned int b = 0; b < 64; ++b)
+        if ((member_bits[w] >> b) & 1u)
+          ids.push_back(64 * w + b);
+    out.put_vector(ids);
     const std::size_t          n = true_mass.size();
     std::vector<std::uint64_t> keys(n);
     for (std::size_t p = 0; p < n; ++p)
@@ -1733,7 +1810,7 @@ namespace femp
       s.clear();
     true_mass.clear(), volume.clear(), visc.clear();
     eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
-    member_ids.clear();
+    member_bits.clear();
     const double h = grid.h();
     for (std::size_t f = 0; f < parts.size(); ++f)
       {
@@ -1743,7 +1820,12 @@ namespace femp
           scaling = s;
         const auto ids = in.get_vector<std::uint64_t>();
         if (!same_ranks || f == me)
-          member_ids.insert(member_ids.end(), ids.begin(), ids.end());
+          for (const auto id : ids)
+            {
+              if (id / 64 >= member_bits.size())
+                member_bits.resize(id / 64 + 1, 0);
+              member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
+            }
         const auto                             keys = in.get_vector<std::uint64_t>();
         std::array<std::vector<double>, n_stress> sg;
         for (auto &c : sg)
@@ -1764,7 +1846,6 @@ namespace femp
             eps_p.push_back(ep[p]);
           }
       }
-    std::sort(member_ids.begin(), member_ids.end());
     // Read before the next gather(): cell, stress and plastic strain; the
     // other arrays keep the common length, zero.
     const std::size_t n = cell.size();

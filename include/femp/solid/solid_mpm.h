@@ -318,8 +318,12 @@ namespace femp
     std::array<std::vector<double>, n_stress> sigma;
     std::vector<double>                       eps_p;
     std::vector<std::uint32_t>                cell, node0;
-    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
-      handle;
+    /// Where each point lives in the handler's property pool (its local
+    /// index), for write_back().
+    std::vector<types::particle_index> handle;
+    /// Pool handles of all of this rank's points in the handler's order,
+    /// refilled by each walk (gather(), exchange_since_gather()).
+    mutable std::vector<types::particle_index> walk;
 
     std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
     double                    scaling = 1; ///< inertial mass / true_mass
@@ -333,8 +337,18 @@ namespace femp
     unsigned int              left_rank  = 0;
     Point<dim>                escaped;
 
-    /// Particle ids of the points of the last gather(), sorted.
-    std::vector<types::particle_index> member_ids;
+    /// Particle ids of the points of the last gather(): bit id % 64 of
+    /// word id / 64 is set (a membership test without a search).
+    std::vector<std::uint64_t> member_bits;
+    bool
+    is_member(const types::particle_index id) const
+    {
+      const std::size_t w = id / 64;
+      return w < member_bits.size() && (member_bits[w] >> (id % 64)) & 1u;
+    }
+    /// Fill walk with the pool handles of the handler's points, in order.
+    void
+    collect_handles() const;
 
     /// P2G sums of the next step from the fused pass of update_stresses():
     /// mass, momentum (dim), force (dim) per node of the local box, zero
