@@ -11,9 +11,11 @@
 // Optional arguments (for contrib/study.py static_droplet; the test runs
 // without them): R/h (default 10; 4 R/h an integer), Melt flow/FLIP
 // fraction (default 0.95) and Melt flow/Capillary step fraction (default
-// 0.5). With them only the run with the solver's defaults is made, to the
-// fixed time 2.5 sqrt(rho R^3/sigma) instead of 400 steps, and the
-// unrounded errors go to stderr.
+// 0.5), and 1 as a fourth argument for the smoothed settings (point
+// shifting 2, two smoothing passes; default 0: the solver's defaults).
+// With them only that one run is made, to the fixed time
+// 2.5 sqrt(rho R^3/sigma) instead of 400 steps, and the unrounded errors go
+// to stderr.
 #include "flow_tools.h"
 
 #include <cstdlib>
@@ -32,12 +34,13 @@ main(int argc, char **argv)
   const double R_h    = study ? std::atof(argv[1]) : 10;
   const double flip   = argc > 2 ? std::atof(argv[2]) : 0.95;
   const double c_frac = argc > 3 ? std::atof(argv[3]) : 0.5;
+  const bool   study_smoothed = argc > 4 && std::atoi(argv[4]) == 1;
   if (!(R_h >= 2 && R_h <= 100) || std::abs(4 * R_h - std::round(4 * R_h)) > 1e-9 ||
       !(flip >= 0 && flip <= 1) || !(c_frac > 0 && c_frac <= 1))
     {
       std::cerr << "usage: test_static_droplet [R/h in [2, 100], 4 R/h an "
                    "integer] [FLIP fraction in [0, 1]] [capillary step "
-                   "fraction in (0, 1]]\n";
+                   "fraction in (0, 1]] [1: smoothed]\n";
       return 1;
     }
   const double L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1, mu = 0.5;
@@ -45,8 +48,8 @@ main(int argc, char **argv)
   for (const bool smoothed : {false, true})
   try
     {
-      if (study && smoothed)
-        break;
+      if (study && smoothed != study_smoothed)
+        continue;
       typename IncompressibleFlow<dim>::Parameters prm;
       prm.flip_fraction      = flip;
       prm.capillary_fraction = c_frac;
