@@ -401,17 +401,23 @@ namespace femp
       std::vector<std::int32_t> tr_of(grid.n_local_nodes(), -1);
       for (const auto &[t, n] : grid_transition)
         tr_of[n] = t;
+      // Global grid index of the local node n (the node box starts at lo).
+      const auto node_ijk = [&](std::size_t r) {
+        std::array<int, dim> ijk;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
+            r %= ns[d];
+          }
+        return ijk;
+      };
       counted_nodes.clear();
       for (const auto n : active_nodes)
         {
-          std::array<int, dim> ijk;
-          std::size_t          r = n;
-          for (int d = dim - 1; d >= 0; --d)
-            {
-              ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
-              r %= ns[d];
-              ijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
-            }
+          // The cell named for the node (the last cell for nodes on a top face).
+          std::array<int, dim> ijk = node_ijk(n);
+          for (int d = 0; d < dim; ++d)
+            ijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
           if (grid.in_box(ijk) && grid.cell_status()[grid.local_index(ijk)] ==
                                     BackgroundGrid<dim>::owned)
             counted_nodes.emplace_back(n, tr_of[n]);
@@ -427,14 +433,8 @@ namespace femp
         fixed_live_nodes.push_back(n);
       for (const auto n : active_nodes)
         {
-          std::array<int, dim> ijk;
-          std::size_t          r = n;
-          for (int d = dim - 1; d >= 0; --d)
-            {
-              ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
-              r %= ns[d];
-            }
-          bool shared = false;
+          const std::array<int, dim> ijk    = node_ijk(n);
+          bool                       shared = false;
           for (unsigned int a = 0; a < (1u << dim) && !shared; ++a)
             {
               std::array<int, dim> c = ijk;
