@@ -12,6 +12,14 @@
 // 2. A solid step above the elastic limit (forced past the input check)
 //    blows up; the run must stop with a message naming the solid step and
 //    the location instead of carrying non-finite values.
+// Study mode (not part of the test without arguments):
+//   test_solid_stability forced C KIND [T_END]
+// runs the cantilever of check 1 (fixed at x = 0, tip shear load) with the
+// solid step forced to C times the computed limit, as material points
+// (KIND = mpm), finite elements with hourglass control 0.1 (fe) or without
+// (fe0), to T_END (default 20 s), and prints whether the run was stopped
+// and the energies against the same run at 0.5 x the limit
+// (doc/stability.md, "Solid, past the limit").
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
@@ -26,17 +34,21 @@ namespace
   struct Result
   {
     double mode_half = 0, mode_end = 0, internal = 0, hourglass = 0;
+    double kinetic = 0, balance = 0;
   };
 
   /// Run the block to t_end with hourglass coefficient @p kappa and solid
   /// step @p dt (0: automatic).
   Result
   run(const double kappa, const double dt, const double t_end, MPI_Comm comm,
-      const bool bending = false)
+      const bool bending = false, const bool fe = true)
   {
     const double      h = 0.1;
-    const Point<dim>  size(1.6, 0.8);
-    SolidBlock<dim>   block(size, h, 0.8, unit_material(), comm, 300., 1);
+    // All-MPM runs (fe = false): 2 x 2 points per cell, and instead of the
+    // cantilever a column suddenly loaded by its weight (g = 1 m/s^2, strain
+    // about 1 %; bottom fixed, sides on rollers) with room above it.
+    const Point<dim>  size(1.6, fe ? 0.8 : 1.6);
+    SolidBlock<dim>   block(size, h, 0.8, unit_material(), comm, 300., fe ? 1 : 2);
     auto &            grid   = block.grid;
     auto &            points = *block.points;
     const SolidMaterial sm   = elastic_block_material(block.material);
@@ -44,10 +56,16 @@ namespace
     sp.time_step   = dt;
     // Impact: free body (the checkerboard modes are zero-energy modes);
     // bending: a cantilever fixed at x = 0.
-    if (bending)
+    if (bending && fe)
       sp.fixed_faces = {"x-"};
+    if (bending && !fe)
+      {
+        sp.fixed_faces  = {"y-"};
+        sp.roller_faces = {"x-", "x+"};
+        sp.gravity[1]   = -1.;
+      }
     sp.energy_file = "";
-    const auto fp = fe_block<dim>(true, size, kappa);
+    const auto fp = fe_block<dim>(fe, size, kappa);
     SolidStress<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
@@ -65,8 +83,11 @@ namespace
         force[1][grid.local_node_index(node)] += f;
     };
     if (bending) // tip shear load, spread over the nodes of the face x+
-      for (int j = 0; j <= 8; ++j)
-        add_force({{16, j}}, {{15, std::min(j, 7)}}, -1. / 9);
+      {
+        if (fe)
+          for (int j = 0; j <= 8; ++j)
+            add_force({{16, j}}, {{15, std::min(j, 7)}}, -1. / 9);
+      }
     else // point force at the top centre node
       add_force({{8, 8}}, {{8, 7}}, -1.);
 
@@ -78,6 +99,8 @@ namespace
     r.mode_end   = e.hourglass_mode;
     r.internal   = e.internal;
     r.hourglass  = e.hourglass;
+    r.kinetic    = e.kinetic;
+    r.balance    = e.balance();
     return r;
   }
 } // namespace
@@ -88,6 +111,55 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
+
+  if (argc >= 4 && std::string(argv[1]) == "forced")
+    {
+      const double      C     = std::stod(argv[2]);
+      const std::string kind  = argv[3];
+      const double      t_end = argc >= 5 ? std::stod(argv[4]) : 20.;
+      AssertThrow(kind == "mpm" || kind == "fe" || kind == "fe0",
+                  ExcMessage("KIND must be mpm, fe or fe0"));
+      const Material thermal = unit_material(); // density 1
+      SolidMaterial  sm      = elastic_block_material(thermal);
+      typename SolidStress<dim>::Parameters sp;
+      const double limit = sp.stable_limit(sm, 0.1);
+      const double kappa = kind == "fe0" ? 0. : 0.1;
+      const bool   fe    = kind != "mpm";
+      const auto attempt = [&](const double c, Result &r) -> std::string {
+        try
+          {
+            r = run(kappa, c * limit, t_end, comm, true, fe);
+          }
+        catch (const std::exception &e)
+          {
+            return std::string("stopped: ") + e.what();
+          }
+        return "ran to the end";
+      };
+      Result            ref, r;
+      const std::string ref_outcome = attempt(0.5, ref);
+      const std::string outcome     = attempt(C, r);
+      if (ref_outcome != "ran to the end" &&
+          Utilities::MPI::this_mpi_process(comm) == 0)
+        std::cout << kind << ", dt = 0.5 x limit: " << ref_outcome << "\n";
+      if (Utilities::MPI::this_mpi_process(comm) == 0)
+        {
+          std::cout << kind << ", dt = " << C << " x limit (" << limit
+                    << " s), t_end = " << t_end << " s: " << outcome << "\n";
+          if (outcome == "ran to the end")
+            std::cout << "  stress work " << r.internal << " J (0.5 x: "
+                      << ref.internal << "), relative difference "
+                      << std::abs(r.internal - ref.internal) /
+                           std::abs(ref.internal)
+                      << "\n  kinetic " << r.kinetic << " J (0.5 x: "
+                      << ref.kinetic << ")\n  balance / stress work "
+                      << r.balance / r.internal << " (0.5 x: "
+                      << ref.balance / ref.internal
+                      << ")\n  hourglass mode energy " << r.mode_end
+                      << " (0.5 x: " << ref.mode_end << ")\n";
+        }
+      return 0;
+    }
 
   const Result off = run(0, 0, 2, comm);
   const Result on  = run(0.1, 0, 2, comm);
