@@ -13,7 +13,7 @@ with the standard library only (matplotlib is not needed).
   contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
                                 [--np 1]
   contrib/study.py danilovskaya | droplet | physics | track | rosenthal |
-                   dam_break | static_droplet  [same options]
+                   dam_break | static_droplet | solid_step  [same options]
 
 stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
   form of Neumann) over cell size h x step fraction of the stable step;
@@ -55,6 +55,13 @@ static_droplet: the 2D static drop (tests/static_droplet.cc, solver
   defaults) over R/h x FLIP fraction x capillary step fraction, to
   2.5 sqrt(rho R^3/sigma); error: relative error of the Laplace pressure
   jump; the spurious-current capillary number is written as well.
+solid_step: the reduced case 3.2 with its cooling (prm/case_3_2_cooling.prm,
+  melt flow off, so that every run sees the same temperatures) over
+  Solid/Mass scaling factor x Solid/Safety factor; error: the largest
+  difference of sigma_xx on the probe lines CD, EF and cross over the
+  field outputs from 100 us on, relative to the line's peak |sigma_xx|,
+  against the run with s = 100 and safety factor 0.5 (the paper's
+  factor and femp's default step); eta = sqrt(s) / C is written too.
 """
 import argparse
 import csv
@@ -758,10 +765,98 @@ def study_mass_scaling(args):
                   "coupled track", "CPU seconds", "relative RMS sigma_xx error")
 
 
+def probe_line_differences(run_out, ref_out, lines=("CD", "EF", "cross"),
+                           field="sigma_xx", t_min=1e-4):
+    """Largest |field(run) - field(ref)| / max |field(ref)| per probe line
+    and field output of equal time (>= t_min), as {line: [(t, d)]}."""
+    def load(path):
+        with open(path) as fh:
+            t = float(fh.readline().split("=")[1].split()[0])
+            return t, list(csv.DictReader(fh))
+    out = {}
+    for ln in lines:
+        for p in sorted(os.listdir(ref_out)):
+            if not (p.startswith("probe_line_%s_" % ln) and p.endswith(".csv")):
+                continue
+            q = os.path.join(run_out, p)
+            if not os.path.exists(q):
+                continue
+            t0, a = load(os.path.join(ref_out, p))
+            t1, b = load(q)
+            if t0 < t_min or abs(t0 - t1) > 1e-9 or len(a) != len(b):
+                continue
+            peak = max(abs(float(r[field])) for r in a)
+            d = max(abs(float(r[field]) - float(s[field])) for r, s in zip(a, b))
+            out.setdefault(ln, []).append((t0, d / peak if peak > 0 else 0.))
+    return out
+
+
+def study_solid_step(args):
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    if not os.path.exists(exe):
+        raise SystemExit("study.py: build %s first" % exe)
+    scene = os.path.join(ROOT, "prm", "case_3_2_cooling.prm")
+    # Pairs of equal sqrt(s) / C (s = 400, C = 1 and s = 100, C = 0.5;
+    # s = 2540, C = 0.8 and s = 1000, C = 0.5): the number that the answer
+    # depends on (doc/speed_accuracy.md, "The solid's safety factor").
+    points = [(100, 0.5), (100, 1.0), (400, 1.0), (1000, 0.3162), (1000, 0.5),
+              (1000, 0.7), (1000, 0.8), (1000, 1.0), (2540, 0.8)]
+    rows = []
+    for s, c in points:
+        def make(d, s=s, c=c):
+            cmd = [exe, "--set", "Physics/Melt flow=false",
+                   "--set", "Output/Write material points=never",
+                   "--set", "Solid/Mass scaling factor=%g" % s,
+                   "--set", "Solid/Safety factor=%g" % c,
+                   "--set", "Output/Directory=out", scene]
+            if args.np > 1:
+                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
+                       "-np", str(args.np)] + cmd
+            rc, cpu, wall = run_timed(cmd, d, os.path.join(d, "log.txt"))
+            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+            log = open(os.path.join(d, "log.txt")).read()
+            m = re.search(r"Solid: (\d+) steps of ([0-9.e+-]+) s", log)
+            if m:
+                r["solid_steps"], r["solid_dt"] = int(m.group(1)), float(m.group(2))
+            m = re.search(r"stress work ([0-9.e+-]+), kinetic [^,]+, hourglass "
+                          r"[^,]+, balance ([0-9.e+-]+)", log)
+            if m:
+                r["stress_work"], r["balance"] = float(m.group(1)), float(m.group(2))
+            return r
+        name = "s%g_c%g" % (s, c)
+        r = cached(os.path.join(args.out, "solid_step", name), make)
+        r.update(factor=s, safety=c, eta=round(math.sqrt(s) / c, 1),
+                 label="s=%g C=%g" % (s, c),
+                 dir=os.path.join(args.out, "solid_step", name))
+        rows.append(r)
+    ref_out = os.path.join(rows[0]["dir"], "out")
+    for r in rows:
+        diffs = probe_line_differences(os.path.join(r["dir"], "out"), ref_out)
+        for ln in ("CD", "EF", "cross"):
+            v = [d for _, d in diffs.get(ln, [])]
+            r["max_" + ln] = round(max(v), 4) if v else ""
+            r["end_" + ln] = round(v[-1], 4) if v else ""
+        worst = [r["max_" + ln] for ln in ("CD", "EF", "cross")
+                 if r["max_" + ln] != ""]
+        r["error"] = max(worst) if worst and r["rc"] == 0 else None
+        if r is rows[0]:
+            r["error"] = None
+            r["reference"] = True
+    write_outputs("solid_step", rows,
+                  ["factor", "safety", "eta", "cpu_s", "wall_s", "solid_steps",
+                   "solid_dt", "error", "max_CD", "max_EF", "max_cross",
+                   "end_CD", "end_EF", "end_cross", "stress_work", "balance",
+                   "rc"],
+                  args, "Solid mass scaling x safety factor: sigma_xx on the "
+                  "probe lines vs s = 100, C = 0.5, reduced track + cooling",
+                  "CPU seconds", "largest sigma_xx difference / peak")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet", "track",
-                             "rosenthal", "dam_break", "static_droplet"])
+                             "rosenthal", "dam_break", "static_droplet",
+                             "solid_step"])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
                     help="folder for run directories and CSV")
@@ -772,7 +867,8 @@ def main():
      "danilovskaya": study_danilovskaya, "physics": study_physics,
      "droplet": study_droplet, "track": study_track,
      "rosenthal": study_rosenthal, "dam_break": study_dam_break,
-     "static_droplet": study_static_droplet}[args.study](args)
+     "static_droplet": study_static_droplet,
+     "solid_step": study_solid_step}[args.study](args)
 
 
 if __name__ == "__main__":
