@@ -12,6 +12,9 @@
 // 2. A solid step above the elastic limit (forced past the input check)
 //    blows up; the run must stop with a message naming the solid step and
 //    the location instead of carrying non-finite values.
+// 3. Material points (a column under its weight) at 1.5 x the limit stay
+//    finite but create energy: the energy check stops the run; at 1 x they
+//    run to the end.
 // Study mode (not part of the test without arguments):
 //   test_solid_stability forced C KIND [T_END]
 // runs the cantilever of check 1 (fixed at x = 0, tip shear load) with the
@@ -202,6 +205,38 @@ main(int argc, char **argv)
     checks.in_range("dt = 3x limit: blow-up stopped with an exception", caught, 1, 1);
     checks.in_range("dt = 3x limit: message names the step and the location",
                     named, 1, 1);
+  }
+
+  // Material points at 1.5 x the limit: the column grows a mode that stays
+  // finite (no point collapses) and creates energy; the energy check must
+  // stop the run.
+  {
+    const Material      thermal = unit_material(); // density 1
+    const SolidMaterial sm      = elastic_block_material(thermal);
+    typename SolidStress<dim>::Parameters sp;
+    const double limit   = sp.stable_limit(sm, 0.1);
+    bool         created = false;
+    try
+      {
+        run(0.1, 1.5 * limit, 20, comm, true, false);
+      }
+    catch (const std::runtime_error &e)
+      {
+        created = std::string(e.what()).find("J created") != std::string::npos;
+      }
+    checks.in_range("MPM column, dt = 1.5x limit: stopped by the energy check",
+                    created, 1, 1);
+    // The same column at 1 x runs to the end.
+    bool stopped = false;
+    try
+      {
+        run(0.1, limit, 20, comm, true, false);
+      }
+    catch (const std::runtime_error &)
+      {
+        stopped = true;
+      }
+    checks.in_range("MPM column, dt = 1x limit: stopped", stopped, 0, 0);
   }
   return checks.exit_code();
 }

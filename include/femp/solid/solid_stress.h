@@ -456,6 +456,16 @@ namespace femp
     /// factor (kinetic energy jump booked, masses and step updated).
     void
     measure_and_adapt_scaling(const bool adapt);
+    /// Stops the run (CollectiveError, on every rank) when the energy
+    /// balance shows more energy created than energy_created_limit times
+    /// the stored elastic energy @p elastic_energy (global), the kinetic
+    /// energy, the external work and the booked exchanges together: an
+    /// unstable solid step that stayed finite (doc/stability.md).
+    void
+    check_energy_created(const double elastic_energy) const;
+    /// Fraction of that energy that a positive balance may reach before
+    /// check_energy_created() stops the run, -.
+    static constexpr double energy_created_limit = 0.25;
     /// Change the mass-scaling factor to @p s at kept velocities.
     void
     set_mass_scaling(const double s);
