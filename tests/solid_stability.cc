@@ -15,6 +15,8 @@
 // 3. Material points (a column under its weight) at 1.5 x the limit stay
 //    finite but create energy: the energy check stops the run; at 1 x they
 //    run to the end.
+// 4. Points that leave the domain stop the run, except in melt-flow scenes
+//    (solidified spatter), where they are held on the domain's face.
 // Study mode (not part of the test without arguments):
 //   test_solid_stability forced C KIND [T_END]
 // runs the cantilever of check 1 (fixed at x = 0, tip shear load) with the
@@ -238,5 +240,44 @@ main(int argc, char **argv)
       }
     checks.in_range("MPM column, dt = 1x limit: stopped", stopped, 0, 0);
   }
+
+  // A block filling the domain, free, accelerated upwards (g = +5 m/s^2)
+  // for 0.2 s (0.1 m, one cell): its top points leave the domain. Without
+  // the melt flow that stops the run; in a melt-flow scene (where such
+  // points are solidified spatter) they are held on the domain's face.
+  for (const bool flow : {false, true})
+    {
+      const double        h = 0.1;
+      const Point<dim>    size(1.6, 0.8);
+      SolidBlock<dim>     block(size, h, 0.8, unit_material(), comm, 300., 2);
+      const SolidMaterial sm = elastic_block_material(block.material);
+      typename SolidStress<dim>::Parameters sp;
+      sp.energy_file = "";
+      sp.gravity[1]  = 5.;
+      SolidStress<dim> solid(sp, fe_block<dim>(false, size, 0.1), sm,
+                             block.grid, *block.points);
+      solid.set_flow_owns_fluid_points(flow);
+      const std::vector<double> T = block.grid.make_field(300.);
+      solid.initialize(T, "");
+      bool left = false;
+      try
+        {
+          solid.advance(0.2, T, true);
+        }
+      catch (const std::runtime_error &e)
+        {
+          left = std::string(e.what()).find("left the domain") != std::string::npos;
+        }
+      if (flow)
+        {
+          checks.in_range("points leaving the domain, melt flow: run stopped",
+                          left, 0, 0);
+          checks.in_range("points leaving the domain, melt flow: points held",
+                          solid.n_points_held() > 0, 1, 1);
+        }
+      else
+        checks.in_range("points leaving the domain, no melt flow: stopped",
+                        left, 1, 1);
+    }
   return checks.exit_code();
 }

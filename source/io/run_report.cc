@@ -93,6 +93,12 @@ namespace femp
             << "; kinetic/internal "
             << se.kinetic / std::max(1e-300, std::abs(se.internal))
             << std::endl;
+        const unsigned long held = solid->n_points_held(); // collective
+        if (held > 0)
+          out << "Solid: " << held
+              << " time(s) a material point (spatter moving with the melt's "
+                 "velocity) reached a face of the domain and was held there"
+              << std::endl;
       }
     print_energy(s, e, heat_enabled, flow != nullptr);
     if (flow)

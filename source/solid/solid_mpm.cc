@@ -1626,6 +1626,33 @@ namespace femp
   // crossing (see solid_mpm.h) and the APIC affine part of the kinetic
   // energy with the tents of the new cell.
   template <int dim>
+  void
+  SolidMPM<dim>::hold_in_domain(const std::size_t p, Point<dim> &xp)
+  {
+    const double h = grid.h();
+    for (int d = 0; d < dim; ++d)
+      {
+        const double lo = grid.origin()[d];
+        const double hi = lo + (grid.n_cells()[d] - 1e-6) * h;
+        if (xp[d] < lo)
+          {
+            xp[d] = lo, v[d][p] = std::max(v[d][p], 0.);
+            if (!xdot[d].empty())
+              xdot[d][p] = std::max(xdot[d][p], 0.);
+          }
+        else if (xp[d] > hi)
+          {
+            xp[d] = hi, v[d][p] = std::min(v[d][p], 0.);
+            if (!xdot[d].empty())
+              xdot[d][p] = std::min(xdot[d][p], 0.);
+          }
+        x[d][p] = xp[d];
+      }
+    ++held;
+  }
+
+
+  template <int dim>
   template <bool A>
   void
   SolidMPM<dim>::finish_points(const std::size_t p0, const unsigned int nl)
@@ -1652,6 +1679,14 @@ namespace femp
             Point<dim> xp;
             for (int d = 0; d < dim; ++d)
               xp[d] = x[d][p];
+            // With the melt flow, points that solidified as spatter (ejected
+            // melt, moving with the fluid's velocity) can reach the domain's
+            // faces; like the flow's points they are held there: put back on
+            // the face, the outward velocity removed (its kinetic energy
+            // leaves through the next transfer). Without the melt flow a
+            // point leaving the domain stops the run.
+            if (flow_owns_fluid && !grid.in_domain(xp))
+              hold_in_domain(p, xp);
             const auto ijk = grid.cell_of(xp);
             if (!grid.in_domain(xp) ||
                 (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))

@@ -258,6 +258,13 @@ namespace femp
     /// @p V), if any.
     bool
     find_collapsed(Point<dim> &where, double &V) const;
+    /// Points of this rank held at the domain's faces so far (melt-flow
+    /// scenes: spatter that reached a face; see hold_in_domain()).
+    unsigned long
+    n_held() const
+    {
+      return held;
+    }
     /// Position of a point that entered the FE zone or left the domain.
     const Point<dim> &
     escaped_point() const
@@ -335,7 +342,12 @@ namespace femp
     bool                      moved_cell = false, lost = false;
     bool                      flow_owns_fluid = false;
     unsigned int              left_rank  = 0;
+    unsigned long             held       = 0; ///< see n_held()
     Point<dim>                escaped;
+    /// Puts point @p p (at @p xp, outside the domain) back on the domain's
+    /// faces and removes its outward velocity (melt-flow scenes).
+    void
+    hold_in_domain(const std::size_t p, Point<dim> &xp);
 
     /// Particle ids of the points of the last gather(): bit id % 64 of
     /// word id / 64 is set (a membership test without a search).

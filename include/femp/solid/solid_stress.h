@@ -227,6 +227,13 @@ namespace femp
     {
       return steps;
     }
+    /// Material points held at the domain's faces so far, all ranks
+    /// (melt-flow scenes; collective).
+    unsigned long
+    n_points_held() const
+    {
+      return Utilities::MPI::sum(mpm.n_held(), comm);
+    }
     /// State of the mass scaling (the adaptive controller's; constant with
     /// a fixed factor): what a checkpoint must keep.
     struct MassScalingState
