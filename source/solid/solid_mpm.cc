@@ -1621,10 +1621,6 @@ namespace femp
   }
 
 
-  // The points of a block of update_stresses() of which one left its cell
-  // or the rank, point by point: kinetic energy and momentum, the cell
-  // crossing (see solid_mpm.h) and the APIC affine part of the kinetic
-  // energy with the tents of the new cell.
   template <int dim>
   void
   SolidMPM<dim>::hold_in_domain(const std::size_t p, Point<dim> &xp)
@@ -1652,6 +1648,10 @@ namespace femp
   }
 
 
+  // The points of a block of update_stresses() of which one left its cell
+  // or the rank, point by point: kinetic energy and momentum, the cell
+  // crossing (see solid_mpm.h) and the APIC affine part of the kinetic
+  // energy with the tents of the new cell.
   template <int dim>
   template <bool A>
   void
