@@ -574,6 +574,23 @@ namespace femp
   FempProblem<dim>::solid_step()
   {
     TimerOutput::Scope t(timer, "solid");
+    // With the melt flow, once the workpiece has solidified after the
+    // laser's path (the metal attached to the substrate, attached_metal.h:
+    // spatter drops in the gas may stay liquid): the larger cooling step
+    // of the same accuracy.
+    if (fluid_solid && solid_prm.safety_factor_solidified > 0 &&
+        !solid->uses_cooling_step() &&
+        control->time() >= laser->end_time() * (1 - 1e-12) &&
+        attached_metal_max_temperature(*grid, heat->temperature(),
+                                       heat->metal_fraction()) <
+          material.solidus)
+      {
+        const std::string change = solid->use_cooling_step();
+        if (!change.empty())
+          pcout << "Solid: the melt has solidified after the laser's path "
+                   "(t = "
+                << control->time() << " s): " << change << std::endl;
+      }
     // Loaded by the fluid forces of step 3, with the flow.
     solid->advance(control->time(), heat->temperature(), control->is_last(),
                    fluid_solid ? &fluid_solid->nodal_forces() : nullptr);

@@ -66,6 +66,22 @@ namespace femp
                       "2.56 gives the answer of C = 0.5 for 2.56x fewer "
                       "steps without the melt flow (doc/speed_accuracy.md); "
                       "with it 0.8 and 1 went unstable. Range (0, 1].");
+    prm.declare_entry("Safety factor after solidification", "0",
+                      Patterns::Double(0., 1.),
+                      "With the melt flow only: the Courant number of the "
+                      "automatic solid step once the laser's path has ended "
+                      "and the workpiece has solidified (the metal attached "
+                      "to the substrate below the solidus; detached spatter "
+                      "may still be liquid). At that "
+                      "moment the mass-scaling factor s is multiplied by "
+                      "(this / Safety factor)^2, which keeps sqrt(s) / C and "
+                      "with it the stresses (see 'Safety factor'), and the "
+                      "solid step grows by this / Safety factor; the cooling "
+                      "that follows costs that much fewer solid steps. 0 "
+                      "(default) keeps 'Safety factor' to the end. Range 0 "
+                      "or [Safety factor, 1]; needs 'Time step = 0' and "
+                      "'Mass scaling = fixed' (doc/solid.md \"Cooling after "
+                      "the workpiece has solidified\").");
     prm.declare_entry("Mass scaling factor", "1", Patterns::Double(1.),
                       "Factor s >= 1 on the inertial mass of points and FE "
                       "nodes (gravity keeps the true mass): the stable step "
@@ -161,6 +177,8 @@ namespace femp
     prm.enter_subsection("Solid");
     time_step     = prm.get_double("Time step");
     safety_factor = prm.get_double("Safety factor");
+    safety_factor_solidified =
+      prm.get_double("Safety factor after solidification");
     mass_scaling  = prm.get_double("Mass scaling factor");
     adaptive_scaling = prm.get("Mass scaling") == "adaptive";
     prm.enter_subsection("Adaptive mass scaling");
@@ -181,6 +199,21 @@ namespace femp
     prm.leave_subsection();
     require(safety_factor > 0, "Solid/Safety factor", safety_factor,
             "it must lie in (0, 1]");
+    if (safety_factor_solidified != 0)
+      {
+        const std::string name = "Solid/Safety factor after solidification";
+        require(safety_factor_solidified >= safety_factor &&
+                  safety_factor_solidified <= 1,
+                name, safety_factor_solidified,
+                "it must be 0 (keep 'Safety factor') or lie in [Safety "
+                "factor, 1] = [" + num(safety_factor) + ", 1]");
+        require(time_step == 0, name, safety_factor_solidified,
+                "it sets the automatic step: it needs 'Solid/Time step = 0' "
+                "(now " + num(time_step) + " s)");
+        require(!adaptive_scaling, name, safety_factor_solidified,
+                "it changes the mass-scaling factor itself: it needs "
+                "'Solid/Mass scaling = fixed', not adaptive");
+      }
     require(small_mass_cutoff >= 0 && small_mass_cutoff < 1,
             "Solid/Small mass cutoff", small_mass_cutoff,
             "it must lie in [0, 1) (a fraction of a full node's mass)");
@@ -270,9 +303,10 @@ namespace femp
                                const std::string &        directory)
   {
     nodes.resize(grid.n_local_nodes());
+    safety       = prm.safety_factor;
+    cooling_step = false;
     dt_solid = prm.time_step > 0 ? prm.time_step :
-                                   prm.safety_factor *
-                                     prm.stable_limit(mat, grid.h());
+                                   safety * prm.stable_limit(mat, grid.h());
     const auto face_bits = set_boundary_flags();
     scaling              = MassScalingState();
     scaling.factor       = prm.mass_scaling;
@@ -1567,6 +1601,12 @@ namespace femp
         fem->set_mass_scaling(b[0]);
       scaling.factor = b[0];
       set_small_mass_cutoff(small_mass_fraction);
+      // The Courant number in use is the one the checkpoint's step was
+      // taken with (it may be the one after solidification).
+      if (prm.time_step == 0)
+        safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor);
+      cooling_step = prm.safety_factor_solidified > prm.safety_factor &&
+                     safety > prm.safety_factor * (1 + 1e-6);
       scaling.last_ratio   = b[1];
       scaling.kinetic_jump = b[2];
       phase_K_dt = b[3], phase_time = b[4];
@@ -1610,6 +1650,30 @@ namespace femp
 
 
   template <int dim>
+  std::string
+  SolidStress<dim>::use_cooling_step()
+  {
+    const double c2 = prm.safety_factor_solidified;
+    if (cooling_step || !(c2 > safety))
+      return "";
+    // The stresses depend on s and C through sqrt(s) / C
+    // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
+    // (C2 / C)^2, the step by C2 / C.
+    const double s_old = scaling.factor, c_old = safety, dt_old = dt_solid;
+    const double r     = c2 / c_old;
+    safety             = c2;
+    set_mass_scaling(s_old * r * r);
+    cooling_step = true;
+    std::ostringstream m;
+    m << "safety factor " << c_old << " -> " << c2 << ", mass scaling "
+      << s_old << " -> " << scaling.factor << " (sqrt(s)/C kept at "
+      << std::sqrt(scaling.factor) / safety << "), solid step " << dt_old
+      << " -> " << dt_solid << " s";
+    return m.str();
+  }
+
+
+  template <int dim>
   void
   SolidStress<dim>::set_mass_scaling(const double s)
   {
@@ -1625,7 +1689,7 @@ namespace femp
       fem->set_mass_scaling(s);
     scaling.factor = s;
     set_small_mass_cutoff(small_mass_fraction); // from the factor, not by r
-    dt_solid       = prm.safety_factor * prm.stable_limit(mat, grid.h(), s);
+    dt_solid       = safety * prm.stable_limit(mat, grid.h(), s);
   }
 
 

@@ -82,6 +82,9 @@ namespace femp
     {
       double                   time_step     = 0;
       double                   safety_factor = 0.5;
+      /// With the melt flow: the Courant number once the melt has
+      /// solidified after the laser's path (0: keep safety_factor).
+      double                   safety_factor_solidified = 0;
       /// Mass-scaling factor s: the fixed value, or the starting value of
       /// the adaptive controller.
       double                   mass_scaling  = 1;
@@ -210,6 +213,22 @@ namespace femp
     /// (local, no communication).
     void
     find_state_changes();
+
+    /// After the melt has solidified at the end of the laser's path:
+    /// switch the automatic step to 'Safety factor after solidification'
+    /// with the mass-scaling factor times (C_after / C)^2, so that
+    /// sqrt(s) / C, and with it the stresses, stay as they were, and the
+    /// step grows by C_after / C (velocities kept, the kinetic energy jump
+    /// booked). Once per run (a resumed run knows it from its step). Returns
+    /// what changed, for the log, or "" if nothing did (no such factor set,
+    /// or switched before). Local: every rank takes the same decision.
+    std::string
+    use_cooling_step();
+    bool
+    uses_cooling_step() const
+    {
+      return cooling_step;
+    }
 
     /// Solid step size in use, s.
     double
@@ -383,6 +402,10 @@ namespace femp
     double small_mass = 0;
     double small_mass_fraction = 0; ///< the cutoff it was set from
     MassScalingState scaling;
+    /// Courant number of the automatic step in use: safety_factor, or
+    /// safety_factor_solidified after use_cooling_step().
+    double safety       = 0.5;
+    bool   cooling_step = false;
     /// Integral of K over the solid steps of the current advance and its
     /// length (the mean kinetic energy of the controller), J s and s.
     double phase_K_dt = 0, phase_time = 0;
