@@ -76,8 +76,11 @@ namespace femp
                       "moment the mass-scaling factor s is multiplied by "
                       "(this / Safety factor)^2, which keeps sqrt(s) / C and "
                       "with it the stresses (see 'Safety factor'), and the "
-                      "solid step grows by this / Safety factor; the cooling "
-                      "that follows costs that much fewer solid steps. 0 "
+                      "solid step grows by this / Safety factor, and 'Small "
+                      "mass cutoff' by (this / Safety factor)^2 (light nodes "
+                      "are stable only above a mass fraction ~ C^2); the "
+                      "cooling that follows costs that much fewer solid "
+                      "steps. 0 "
                       "(default) keeps 'Safety factor' to the end. Range 0 "
                       "or [Safety factor, 1]; needs 'Time step = 0' and "
                       "'Mass scaling = fixed' (doc/solid.md \"Cooling after "
@@ -294,6 +297,7 @@ namespace femp
             nullptr)
   {
     scaling.factor = prm.mass_scaling;
+    safety         = prm.safety_factor;
   }
 
 
@@ -1135,8 +1139,15 @@ namespace femp
   void
   SolidStress<dim>::set_small_mass_cutoff(const double fraction)
   {
+    // A node of mass fraction eps of a full node's, next to a point whose
+    // stiffness it feels in full (shape-function gradient ~ 1/h), is
+    // stable for eps above about C^2 / (4 dim), twice that with the
+    // coupling to its neighbours: the cutoff set for 'Safety factor'
+    // grows with the square of the Courant number in use (the cooling
+    // step, doc/solid.md "Cooling after the workpiece has solidified").
     small_mass_fraction = fraction;
-    small_mass = fraction * scaling.factor * mat.density() *
+    const double c      = safety / prm.safety_factor;
+    small_mass = fraction * c * c * scaling.factor * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
 
@@ -1600,13 +1611,13 @@ namespace femp
       if (fem)
         fem->set_mass_scaling(b[0]);
       scaling.factor = b[0];
-      set_small_mass_cutoff(small_mass_fraction);
       // The Courant number in use is the one the checkpoint's step was
       // taken with (it may be the one after solidification).
       if (prm.time_step == 0)
         safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor);
       cooling_step = prm.safety_factor_solidified > prm.safety_factor &&
                      safety > prm.safety_factor * (1 + 1e-6);
+      set_small_mass_cutoff(small_mass_fraction);
       scaling.last_ratio   = b[1];
       scaling.kinetic_jump = b[2];
       phase_K_dt = b[3], phase_time = b[4];
@@ -1668,7 +1679,8 @@ namespace femp
     m << "safety factor " << c_old << " -> " << c2 << ", mass scaling "
       << s_old << " -> " << scaling.factor << " (sqrt(s)/C kept at "
       << std::sqrt(scaling.factor) / safety << "), solid step " << dt_old
-      << " -> " << dt_solid << " s";
+      << " -> " << dt_solid << " s, small-mass cutoff " << small_mass_fraction
+      << " -> " << small_mass_fraction * r * r;
     return m.str();
   }
 
