@@ -76,7 +76,8 @@ namespace femp
                       "moment the mass-scaling factor s is multiplied by "
                       "(this / Safety factor)^2, which keeps sqrt(s) / C and "
                       "with it the stresses (see 'Safety factor'), and the "
-                      "solid step grows by this / Safety factor, and 'Small "
+                      "solid step grows by (this / Safety factor)^2 (C "
+                      "times sqrt(s)), and 'Small "
                       "mass cutoff' by (this / Safety factor)^2 (light nodes "
                       "are stable only above a mass fraction ~ C^2); the "
                       "cooling that follows costs that much fewer solid "
@@ -1669,7 +1670,7 @@ namespace femp
       return "";
     // The stresses depend on s and C through sqrt(s) / C
     // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
-    // (C2 / C)^2, the step by C2 / C.
+    // (C2 / C)^2, and the step, C sqrt(s), by (C2 / C)^2 as well.
     const double s_old = scaling.factor, c_old = safety, dt_old = dt_solid;
     const double r     = c2 / c_old;
     safety             = c2;

@@ -218,7 +218,7 @@ namespace femp
     /// switch the automatic step to 'Safety factor after solidification'
     /// with the mass-scaling factor times (C_after / C)^2, so that
     /// sqrt(s) / C, and with it the stresses, stay as they were, and the
-    /// step grows by C_after / C (velocities kept, the kinetic energy jump
+    /// step (C sqrt(s)) grows by (C_after / C)^2 (velocities kept, the kinetic energy jump
     /// booked). Once per run (a resumed run knows it from its step). Returns
     /// what changed, for the log, or "" if nothing did (no such factor set,
     /// or switched before). Local: every rank takes the same decision.
