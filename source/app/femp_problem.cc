@@ -578,7 +578,8 @@ namespace femp
     // laser's path (the metal attached to the substrate, attached_metal.h:
     // spatter drops in the gas may stay liquid): the larger cooling step
     // of the same accuracy.
-    if (fluid_solid && solid_prm.safety_factor_solidified > 0 &&
+    if (fluid_solid &&
+        solid_prm.safety_factor_solidified > solid_prm.safety_factor &&
         !solid->uses_cooling_step() &&
         control->time() >= laser->end_time() * (1 - 1e-12) &&
         attached_metal_max_temperature(*grid, heat->temperature(),
