@@ -407,6 +407,7 @@ namespace femp
     while (control->running())
       {
         const double dt = control->next_time_step();
+        workpiece_peak.reset();
 
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
         //    points move (the melt-flow and solid modules, step 3), so
@@ -582,9 +583,7 @@ namespace femp
         solid_prm.safety_factor_solidified > solid_prm.safety_factor &&
         !solid->uses_cooling_step() &&
         control->time() >= laser->end_time() * (1 - 1e-12) &&
-        attached_metal_max_temperature(*grid, heat->temperature(),
-                                       heat->metal_fraction()) <
-          material.solidus)
+        workpiece_peak_temperature() < material.solidus)
       {
         const std::string change = solid->use_cooling_step();
         if (!change.empty())
@@ -605,22 +604,29 @@ namespace femp
     const bool cooled =
       time_prm.stop_temperature > 0 && heat_enabled &&
       control->time() + dt >= laser->end_time() * (1 - 1e-12) &&
-      attached_metal_max_temperature(*grid, heat->temperature(),
-                                     heat->metal_fraction()) <
-        time_prm.stop_temperature;
+      workpiece_peak_temperature() < time_prm.stop_temperature;
     if (!cooled)
       return;
     control->request_stop();
     std::ostringstream T_peak; // to 0.01 K: it lies just below
     T_peak << std::fixed << std::setprecision(2)
-           << attached_metal_max_temperature(*grid,
-                                             heat->temperature(),
-                                             heat->metal_fraction());
+           << workpiece_peak_temperature();
     pcout << "Stopping at t = " << control->time() + dt
           << " s: the laser's path has ended and the peak "
              "temperature of the metal attached to the substrate "
           << T_peak.str() << " K is below "
           << time_prm.stop_temperature << " K" << std::endl;
+  }
+
+
+  template <int dim>
+  double
+  FempProblem<dim>::workpiece_peak_temperature()
+  {
+    if (!workpiece_peak)
+      workpiece_peak = attached_metal_max_temperature(
+        *grid, heat->temperature(), heat->metal_fraction());
+    return *workpiece_peak;
   }
 
 

@@ -37,6 +37,7 @@
 
 #include <fstream>
 #include <memory>
+#include <optional>
 
 namespace femp
 {
@@ -83,6 +84,8 @@ namespace femp
     ConditionalOStream pcout;
     /// Wall time (s) after which a long melt-flow sub-cycle reports.
     double             next_substep_report = 30;
+    /// workpiece_peak_temperature() of the current step (reset at its start).
+    std::optional<double> workpiece_peak;
     TimeParameters     time_prm;
     /// The material, owner of the data that several modules read (density,
     /// solidus, liquidus, evaporation data), passed by const reference.
@@ -190,6 +193,12 @@ namespace femp
     /// SimulationControl stops after it) and say so.
     void
     stop_if_cooled_down(const double dt);
+    /// Peak temperature of the metal attached to the substrate
+    /// (attached_metal.h), computed once per temperature step: the stop
+    /// test and the solid's cooling switch read the same T and alpha.
+    /// Collective.
+    double
+    workpiece_peak_temperature();
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
