@@ -186,6 +186,11 @@ namespace femp
             "Time stepping/Time step", time_prm.time_step,
             "with 'Physics/Heat transfer = false' and no melt flow nothing "
             "sets the step: prescribe it (s, > 0)");
+    require(time_prm.time_step_solidified == 0 || heat_enabled,
+            "Time stepping/Time step after solidification",
+            time_prm.time_step_solidified,
+            "0: with 'Physics/Heat transfer = false' nothing melts or "
+            "solidifies");
     if (time_prm.time_step > 0 && heat_enabled)
       {
         // Upper bound of the stable diffusion step of any cell full of
@@ -201,6 +206,9 @@ namespace femp
                 << " m and these material tables); use 0 (automatic)";
         require(time_prm.time_step <= bound, "Time stepping/Time step",
                 time_prm.time_step, allowed.str());
+        require(time_prm.time_step_solidified <= bound,
+                "Time stepping/Time step after solidification",
+                time_prm.time_step_solidified, allowed.str());
       }
   }
 
@@ -703,6 +711,34 @@ namespace femp
     const double stable =
       step == 0 ? heat->stable_time_step(cell_fields()) :
                   heat->last_stable_time_step();
+    if (time_prm.time_step_solidified > 0)
+      {
+        // The cooling step, while the laser's path has ended and the
+        // workpiece is below the solidus (checked at every step, the same
+        // test as the solid's cooling switch), within the stable limit.
+        const bool cooling = time >= laser->end_time() * (1 - 1e-12) &&
+                             workpiece_peak_temperature() < material.solidus;
+        if (cooling != cooling_step)
+          pcout << "Time stepping: at t = " << time << " s "
+                << (cooling ? "the laser's path has ended and the workpiece "
+                              "is below the solidus: temperature step " :
+                              "metal attached to the workpiece is above the "
+                              "solidus again: temperature step ")
+                << (cooling ? std::min(time_prm.time_step_solidified,
+                                       time_prm.safety_factor * stable) :
+                              time_prm.time_step)
+                << " s" << std::endl;
+        cooling_step = cooling;
+        if (cooling)
+          {
+            const double dt = std::max(
+              time_prm.time_step,
+              std::min(time_prm.time_step_solidified,
+                       time_prm.safety_factor * stable));
+            if (dt <= stable)
+              return dt;
+          }
+      }
     const double dt = time_prm.time_step > 0 ? time_prm.time_step :
                                          time_prm.safety_factor * stable;
     if (time_prm.time_step > stable)

@@ -22,6 +22,20 @@ namespace femp
                       "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
                       "(diffusion) and h/|u| (convection) used as the "
                       "automatic step; range (0, 1].");
+    prm.declare_entry("Time step after solidification", "0",
+                      Patterns::Double(0.),
+                      "Temperature step, s, while the laser's path has "
+                      "ended and the workpiece (the metal attached to the "
+                      "substrate; detached spatter may still be liquid) is "
+                      "below the solidus: the cooling, where temperatures "
+                      "change slowly, in fewer steps; the flow and the solid "
+                      "sub-cycle inside it as before. At most 'Safety "
+                      "factor' times the stable limit of the step (the "
+                      "smaller is taken). Checked at every step: metal that "
+                      "melts again brings 'Time step' back. 0 (default): "
+                      "'Time step' to the end. Range 0 or [Time step, inf) "
+                      "with a prescribed 'Time step' (doc/cases.md, "
+                      "\"Longer temperature steps in the cooling\").");
     prm.declare_entry("Maximum number of steps", "100000000", Patterns::Integer(1),
                       "Stop after this many steps even before the end time.");
     prm.declare_entry("Stop when peak temperature below", "0",
@@ -49,6 +63,7 @@ namespace femp
     end_time      = prm.get_double("End time");
     time_step     = prm.get_double("Time step");
     safety_factor = prm.get_double("Safety factor");
+    time_step_solidified = prm.get_double("Time step after solidification");
     max_steps     = prm.get_integer("Maximum number of steps");
     stop_temperature = prm.get_double("Stop when peak temperature below");
     prm.leave_subsection();
@@ -56,6 +71,17 @@ namespace femp
             "it must be positive (s)");
     require(safety_factor > 0, "Time stepping/Safety factor", safety_factor,
             "it must lie in (0, 1]");
+    if (time_step_solidified != 0)
+      {
+        const std::string name = "Time stepping/Time step after solidification";
+        require(time_step > 0, name, time_step_solidified,
+                "it replaces a prescribed step: it needs 'Time stepping/Time "
+                "step' > 0 (the automatic step 0 is already the largest "
+                "stable one)");
+        require(time_step_solidified >= time_step, name, time_step_solidified,
+                "it must be 0 (keep 'Time step') or at least 'Time step' = " +
+                  num(time_step) + " s");
+      }
   }
 
 

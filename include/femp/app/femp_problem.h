@@ -86,6 +86,8 @@ namespace femp
     double             next_substep_report = 30;
     /// workpiece_peak_temperature() of the current step (reset at its start).
     std::optional<double> workpiece_peak;
+    /// 'Time stepping/Time step after solidification' in use at this step.
+    bool               cooling_step = false;
     TimeParameters     time_prm;
     /// The material, owner of the data that several modules read (density,
     /// solidus, liquidus, evaporation data), passed by const reference.

@@ -31,6 +31,11 @@ namespace femp
       double       end_time      = 1e-3; ///< s
       double       time_step     = 0;    ///< s, 0: automatic
       double       safety_factor = 0.5;  ///< of the stable limit, (0, 1]
+      /// s, 0: off. With a prescribed time_step: the temperature step
+      /// while the laser's path has ended and the workpiece is below the
+      /// solidus (the driver decides; at most safety_factor times the
+      /// stable limit).
+      double       time_step_solidified = 0;
       unsigned int max_steps     = 100000000;
       /// K; 0: off. After the laser's path, end the run once the hottest
       /// metal cell is below this temperature (the driver asks for it).
