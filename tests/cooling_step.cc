@@ -21,13 +21,11 @@
 // Over a whole cooling the switch costs more accuracy than here (its
 // cooling after the switch is short): doc/solid.md.
 // Runs on 1 and 2 ranks with the same output.
+#include "resume_tools.h"
 #include "scene_driver.h"
 #include "test_tools.h"
 
-#include <filesystem>
-
 using namespace femp_test;
-namespace fs = std::filesystem;
 
 namespace
 {
@@ -68,7 +66,6 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
   try
     {
       const std::string scene = argv[1];
@@ -121,22 +118,12 @@ main(int argc, char **argv)
                       1);
 
       // 4. Resumed after the switch, in a copy of the output directory.
-      std::ifstream index("cooling/checkpoint/index");
-      // Newest first: the one after the switch is the last line but one
-      // if the end wrote one too.
-      std::vector<std::string> steps;
-      for (std::string line; index >> line;)
-        steps.push_back(line);
-      AssertThrow(!steps.empty(), ExcMessage("no checkpoint written"));
-      const std::string resume_from = steps.size() > 1 ? steps[1] : steps[0];
-      if (root)
-        fs::copy("cooling", "resumed", fs::copy_options::recursive);
-      MPI_Barrier(comm);
+      const std::string resume_from =
+        copy_for_resume("cooling", "resumed", comm);
       run_scene<3>(scene, comm,
                    {{"Output", "Directory", "resumed"},
                     {"Solid", C2, "0.8"},
-                    {"Checkpoint", "Resume from",
-                     "resumed/checkpoint/" + resume_from}});
+                    {"Checkpoint", "Resume from", resume_from}});
       const auto e_res = read_csv_columns("resumed/solid_energy.csv");
       checks.print("checkpoint resumed (us)",
                    std::round(1e6 * 1.15e-4), 3);

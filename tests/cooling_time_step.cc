@@ -16,14 +16,13 @@
 //      with the same probe lines and solid energy rows as run 2 (the step
 //      is decided from the state at every step, nothing to restore).
 // Runs on 1 and 2 ranks with the same output.
+#include "resume_tools.h"
 #include "scene_driver.h"
 #include "test_tools.h"
 
-#include <filesystem>
 #include <regex>
 
 using namespace femp_test;
-namespace fs = std::filesystem;
 
 namespace
 {
@@ -85,7 +84,6 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
   try
     {
       const std::string scene = argv[1];
@@ -130,20 +128,12 @@ main(int argc, char **argv)
                      1e-3);
 
       // 3. Resumed after the switch, in a copy of the output directory.
-      std::ifstream            index("cooling/checkpoint/index");
-      std::vector<std::string> steps;
-      for (std::string line; index >> line;)
-        steps.push_back(line);
-      AssertThrow(!steps.empty(), ExcMessage("no checkpoint written"));
-      const std::string resume_from = steps.size() > 1 ? steps[1] : steps[0];
-      if (root)
-        fs::copy("cooling", "resumed", fs::copy_options::recursive);
-      MPI_Barrier(comm);
+      const std::string resume_from =
+        copy_for_resume("cooling", "resumed", comm);
       run_scene<3>(scene, comm,
                    {{"Output", "Directory", "resumed"},
                     {"Time stepping", dt2, "5e-7"},
-                    {"Checkpoint", "Resume from",
-                     "resumed/checkpoint/" + resume_from}});
+                    {"Checkpoint", "Resume from", resume_from}});
       checks.print("checkpoint resumed (us)", std::round(1e6 * 1.15e-4), 3);
       const auto e_cool = read_csv_columns("cooling/solid_energy.csv");
       const auto e_res  = read_csv_columns("resumed/solid_energy.csv");
