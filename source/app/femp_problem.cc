@@ -718,26 +718,22 @@ namespace femp
         // test as the solid's cooling switch), within the stable limit.
         const bool cooling = time >= laser->end_time() * (1 - 1e-12) &&
                              workpiece_peak_temperature() < material.solidus;
+        const double dt_cooling =
+          std::max(time_prm.time_step,
+                   std::min(time_prm.time_step_solidified,
+                            time_prm.safety_factor * stable));
         if (cooling != cooling_step)
           pcout << "Time stepping: at t = " << time << " s "
                 << (cooling ? "the laser's path has ended and the workpiece "
                               "is below the solidus: temperature step " :
                               "metal attached to the workpiece is above the "
                               "solidus again: temperature step ")
-                << (cooling ? std::min(time_prm.time_step_solidified,
-                                       time_prm.safety_factor * stable) :
-                              time_prm.time_step)
-                << " s" << std::endl;
+                << (cooling ? dt_cooling : time_prm.time_step) << " s"
+                << std::endl;
         cooling_step = cooling;
-        if (cooling)
-          {
-            const double dt = std::max(
-              time_prm.time_step,
-              std::min(time_prm.time_step_solidified,
-                       time_prm.safety_factor * stable));
-            if (dt <= stable)
-              return dt;
-          }
+        // (Above the limit only if 'Time step' itself is: refused below.)
+        if (cooling && dt_cooling <= stable)
+          return dt_cooling;
       }
     const double dt = time_prm.time_step > 0 ? time_prm.time_step :
                                          time_prm.safety_factor * stable;
