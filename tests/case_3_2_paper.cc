@@ -87,7 +87,8 @@ main(int argc, char **argv)
           std::regex_search(t, m, std::regex("background grid: ([0-9]+) cells"));
           checks.print(name + ": grid cells", std::stod(m[1]), 8);
           std::regex_search(t, m,
-                            std::regex("solid: ([0-9]+) material points, "
+                            std::regex("solid: ([0-9]+) material points"
+                                       "(?: \\([^)]*\\))?, "
                                        "([0-9]+) finite elements"));
           checks.print(name + ": solid material points", std::stod(m[1]), 8);
           checks.print(name + ": finite elements", std::stod(m[2]), 8);

@@ -213,6 +213,46 @@ namespace femp
   }
 
 
+  namespace
+  {
+    // Relative cost of a background cell, for the partition of the grid
+    // over the ranks (doc/performance.md, "Balancing the ranks"), from the
+    // scene's geometry at the start: 1 per cell (the heat and flow passes
+    // over the box), 2 per material point expected in it (metal fraction,
+    // temperatures to the points, relocation) and 40 more per point that
+    // the solid steps by MPM (the substrate outside the FE zone: its point
+    // loops run at every solid step, 7 to 17 times per temperature step).
+    // Without points every cell costs the same: no function.
+    template <int dim>
+    std::function<unsigned int(const Point<dim> &)>
+    partition_cost(const typename MaterialPoints<dim>::Parameters &points,
+                   const typename SolidFEM<dim>::Parameters &      fem,
+                   const double                                    h,
+                   const bool                                      solid)
+    {
+      if (!points.carry_points)
+        return {};
+      const double full = std::pow(h / points.point_spacing, dim);
+      const double top  = points.substrate_top;
+      const double powder_top =
+        top + std::max(0., points.layer_thickness);
+      const double packing = points.packing_fraction;
+      return [=](const Point<dim> &c) {
+        const double z = c[dim - 1];
+        bool         in_fe = fem.enabled;
+        for (int d = 0; d < dim && in_fe; ++d)
+          in_fe = c[d] > fem.lower_corner[d] && c[d] < fem.upper_corner[d];
+        double n = 0, n_mpm = 0;
+        if (z < top)
+          n = full, n_mpm = solid && !in_fe ? full : 0.;
+        else if (z < powder_top)
+          n = packing * full;
+        return static_cast<unsigned int>(std::lround(1 + 2 * n + 40 * n_mpm));
+      };
+    }
+  } // namespace
+
+
   template <int dim>
   void
   FempProblem<dim>::setup()
@@ -220,7 +260,8 @@ namespace femp
     {
       TimerOutput::Scope t(timer, "setup: grid");
       grid = std::make_unique<BackgroundGrid<dim>>(grid_prm, comm);
-      grid->create();
+      grid->create(partition_cost<dim>(points_prm, fem_prm,
+                                       grid_prm.cell_size, solid_enabled));
     }
     {
       TimerOutput::Scope t(timer, "setup: material points");
@@ -343,13 +384,24 @@ namespace femp
                     "' writes nothing (Carry points = always for point files)" :
                   std::string())
             << "\n";
-    pcout << std::setprecision(3)
-          << (solid ? "  solid: " + std::to_string(int(solid->sizes()[0])) +
-                        " material points, " +
-                        std::to_string(int(solid->sizes()[1])) +
-                        " finite elements, step " +
-                        num(solid->time_step()) + " s\n" :
-                      std::string())
+    const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
+    std::string        solid_line;
+    if (solid)
+      {
+        // With several ranks, the largest share of the MPM points on one
+        // rank: what the partition leaves for the solid's point loops.
+        const auto   n     = solid->sizes();
+        const double n_max = solid->largest_rank_points();
+        std::ostringstream s;
+        s << "  solid: " << int(n[0]) << " material points";
+        if (n_ranks > 1 && n[0] > 0)
+          s << " (at most " << std::fixed << std::setprecision(1)
+            << 100 * n_max / n[0] << " % on one rank)" << std::defaultfloat;
+        s << ", " << int(n[1]) << " finite elements, step "
+          << num(solid->time_step()) << " s\n";
+        solid_line = s.str();
+      }
+    pcout << std::setprecision(3) << solid_line
           << "  output: " << output_prm.directory << "/grid" << index
           << ", "
           << (points->carried() ?

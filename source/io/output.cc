@@ -31,6 +31,31 @@ namespace femp
 {
   namespace
   {
+    /// Identifies the partition of @p grid: p4est's cells follow one fixed
+    /// order, cut into consecutive pieces, so the number of ranks and
+    /// their owned cell counts fix it (FNV-1a over them; never 0).
+    /// Collective.
+    template <int dim>
+    std::uint32_t
+    partition_fingerprint(const BackgroundGrid<dim> &grid)
+    {
+      const auto counts = Utilities::MPI::all_gather(
+        grid.communicator(), std::uint64_t(grid.owned_cells().size()));
+      std::uint64_t h = 1469598103934665603ull;
+      auto mix = [&](std::uint64_t x) {
+        for (int b = 0; b < 8; ++b, x >>= 8)
+          h = (h ^ (x & 0xff)) * 1099511628211ull;
+      };
+      mix(counts.size());
+      for (const auto c : counts)
+        mix(c);
+      const std::uint32_t f = std::uint32_t(h ^ (h >> 32));
+      return f == 0 ? 1 : f;
+    }
+  } // namespace
+
+  namespace
+  {
     /// Throw, naming the file, if a write to @p out failed.
     void
     check_stream(const std::ostream &out, const std::string &file)
@@ -834,7 +859,7 @@ namespace femp
         if (!grid_mesh_written)
           {
             grid_mesh_nodes = layout.nodes;
-            grid_mesh_ranks = Utilities::MPI::n_mpi_processes(comm);
+            grid_mesh_partition = partition_fingerprint(grid);
           }
         layout.nodes      = grid_mesh_nodes;
         grid_mesh_written = true;
@@ -1035,7 +1060,7 @@ namespace femp
     strings(point_entries);
     out.put_string(grid_mesh_written ? grid_mesh_file : std::string());
     out.put<std::uint64_t>(grid_mesh_nodes);
-    out.put<std::uint32_t>(grid_mesh_ranks);
+    out.put<std::uint32_t>(grid_mesh_partition);
   }
 
 
@@ -1065,12 +1090,14 @@ namespace femp
     strings(point_entries);
     const std::string mesh_file = in.get_string();
     grid_mesh_nodes             = in.get<std::uint64_t>();
-    grid_mesh_ranks             = in.get<std::uint32_t>();
+    grid_mesh_partition         = in.get<std::uint32_t>();
     const MPI_Comm comm = grid.communicator();
     if (!mesh_file.empty() &&
-        grid_mesh_ranks == Utilities::MPI::n_mpi_processes(comm))
+        grid_mesh_partition == partition_fingerprint(grid))
       {
-        // Same partition (p4est's is deterministic): the mesh file stands.
+        // Same partition: the mesh file stands. (Checkpoints of earlier
+        // versions stored the number of ranks here: they get a new mesh
+        // file, which is always right.)
         grid_mesh_file    = mesh_file;
         grid_mesh_written = true;
       }

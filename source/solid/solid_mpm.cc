@@ -1833,10 +1833,6 @@ namespace femp
   void
   SolidMPM<dim>::load_state(std::vector<StateReader> &parts)
   {
-    const MPI_Comm comm = grid.communicator();
-    const bool     same_ranks =
-      parts.size() == Utilities::MPI::n_mpi_processes(comm);
-    const unsigned int me = Utilities::MPI::this_mpi_process(comm);
     for (int d = 0; d < dim; ++d)
       x[d].clear(), v[d].clear(), corner[d].clear(), xdot[d].clear();
     for (auto &c : C)
@@ -1853,9 +1849,12 @@ namespace femp
         const double s  = in.get<double>();
         if (f == 0)
           scaling = s;
+        // The members of every part: the partition of the resumed run may
+        // differ from the one that wrote them (another number of ranks, or
+        // the same number with other cell costs), and only this rank's
+        // points are ever looked up.
         const auto ids = in.get_vector<std::uint64_t>();
-        if (!same_ranks || f == me)
-          for (const auto id : ids)
+        for (const auto id : ids)
             {
               if (id / 64 >= member_bits.size())
                 member_bits.resize(id / 64 + 1, 0);

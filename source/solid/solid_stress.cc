@@ -1384,6 +1384,14 @@ namespace femp
 
 
   template <int dim>
+  double
+  SolidStress<dim>::largest_rank_points() const
+  {
+    return Utilities::MPI::max(double(mpm.n_points()), comm);
+  }
+
+
+  template <int dim>
   bool
   SolidStress<dim>::row_due(const double t_old, const double t_new) const
   {

@@ -20,6 +20,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace femp
@@ -35,6 +36,9 @@ namespace femp
       Point<dim> lower_corner;
       Point<dim> upper_corner;
       double     cell_size = 8e-6; ///< as declared ("Cell size")
+      /// "Partition": balance the cells' costs (true, 'cost') or their
+      /// number (false, 'cells') over the ranks.
+      bool       partition_by_cost = true;
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -53,8 +57,13 @@ namespace femp
     BackgroundGrid(const Parameters &parameters, MPI_Comm comm);
 
     /// Build the triangulation, the local index box and the ghost pattern.
+    /// @p cell_cost, if given, returns the relative cost (>= 1) of the cell
+    /// centred at a point; with several ranks p4est then balances the sum of
+    /// the costs instead of the number of cells (doc/performance.md,
+    /// "Balancing the ranks").
     void
-    create();
+    create(const std::function<unsigned int(const Point<dim> &)> &cell_cost =
+             {});
 
     const parallel::distributed::Triangulation<dim> &
     triangulation() const
@@ -305,11 +314,12 @@ namespace femp
       std::vector<std::pair<std::array<int, dim>,
                             typename Triangulation<dim>::active_cell_iterator>>;
     /// The parts of create(): the p4est triangulation (coarse blocks
-    /// refined globally); the local box, the cell status and the owned
+    /// refined globally), partitioned by @p cell_cost if given; the local box, the cell status and the owned
     /// cells (fills @p known); the ghost exchange pattern; the node layout
     /// and the shared-node pattern.
     void
-    create_triangulation();
+    create_triangulation(
+      const std::function<unsigned int(const Point<dim> &)> &cell_cost);
     void
     set_local_box(KnownCells &known);
     void

@@ -133,11 +133,12 @@ namespace femp
     std::vector<std::string>   grid_entries, point_entries;
     bool                       grid_mesh_written = false;
     std::uint64_t              grid_mesh_nodes   = 0; ///< all ranks'
-    /// HDF5 mesh file of the grid outputs (a run resumed on another number
-    /// of ranks, whose cells lie in another order, writes a new one).
+    /// HDF5 mesh file of the grid outputs (a run resumed on another
+    /// partition, whose cells lie in another order, writes a new one).
     std::string                grid_mesh_file    = "grid_mesh.h5";
-    /// Number of ranks that wrote grid_mesh_file (0: none yet).
-    unsigned int               grid_mesh_ranks   = 0;
+    /// Fingerprint of the partition that wrote grid_mesh_file (the number
+    /// of ranks and their cell counts; 0: none yet).
+    unsigned int               grid_mesh_partition = 0;
 
 
     /// Write the selected grid fields in the chosen format, and the index.

@@ -299,6 +299,9 @@ namespace femp
     /// Number of material points and finite elements in the solid (global).
     std::array<double, 2>
     sizes() const;
+    /// The most material points of the solid on one rank (collective).
+    double
+    largest_rank_points() const;
 
     /// Checkpoint (doc/checkpoint.md), after an advance(): the sub-step
     /// clock, the temperatures it interpolates between, the energy
