@@ -29,33 +29,13 @@ using namespace femp_test;
 
 namespace
 {
-  /// sigma_xx (column sigma_xx) along the probe line @p line in the
-  /// output directory @p dir at output @p n.
-  std::vector<double>
-  sigma_xx(const std::string &dir, const std::string &line, const int n = 1)
-  {
-    const auto c = read_csv_columns(dir + "/probe_line_" + line + "_" +
-                                    Utilities::int_to_string(n, 5) + ".csv");
-    AssertThrow(c.count("sigma_xx"), ExcMessage("no sigma_xx in " + dir));
-    return c.at("sigma_xx");
-  }
-
-  /// Largest |a - b| over both lines, relative to the peak |a|.
+  /// Largest |a - b| of sigma_xx over both lines, relative to the peak
+  /// |a|.
   double
   relative_difference(const std::string &a, const std::string &b)
   {
-    double diff = 0, peak = 0;
-    for (const std::string line : {"CD", "EF"})
-      {
-        const auto x = sigma_xx(a, line), y = sigma_xx(b, line);
-        AssertThrow(x.size() == y.size() && !x.empty(),
-                    ExcMessage("probe lines of different length"));
-        for (std::size_t i = 0; i < x.size(); ++i)
-          {
-            diff = std::max(diff, std::abs(x[i] - y[i]));
-            peak = std::max(peak, std::abs(x[i]));
-          }
-      }
+    const auto [diff, peak] =
+      probe_line_difference(a, b, {"CD", "EF"}, "sigma_xx");
     return diff / peak;
   }
 } // namespace

@@ -26,38 +26,6 @@ using namespace femp_test;
 
 namespace
 {
-  /// Column @p col along the probe line @p line in the output directory
-  /// @p dir at output 1 (the end: Output interval = 0).
-  std::vector<double>
-  probe(const std::string &dir, const std::string &line, const std::string &col)
-  {
-    const auto c = read_csv_columns(dir + "/probe_line_" + line + "_00001.csv");
-    AssertThrow(c.count(col), ExcMessage("no " + col + " in " + dir));
-    return c.at(col);
-  }
-
-  /// Largest |a - b| of column @p col over @p lines, and the largest
-  /// |a - offset| of the reference @p a there.
-  std::pair<double, double>
-  difference(const std::string &a, const std::string &b,
-             const std::vector<std::string> &lines, const std::string &col,
-             const double offset = 0)
-  {
-    double diff = 0, peak = 0;
-    for (const auto &line : lines)
-      {
-        const auto x = probe(a, line, col), y = probe(b, line, col);
-        AssertThrow(x.size() == y.size() && !x.empty(),
-                    ExcMessage("probe lines of different length"));
-        for (std::size_t i = 0; i < x.size(); ++i)
-          {
-            diff = std::max(diff, std::abs(x[i] - y[i]));
-            peak = std::max(peak, std::abs(x[i] - offset));
-          }
-      }
-    return {diff, peak};
-  }
-
   /// Heat balance of a run, relative to the laser's energy.
   template <typename S>
   double
@@ -115,11 +83,11 @@ main(int argc, char **argv)
                      std::round(100. * cool.steps / ref.steps) / 100, 0.9);
 
       const auto [dT, T_rise] =
-        difference("fixed", "cooling", {"CD"}, "T", 300.);
+        probe_line_difference("fixed", "cooling", {"CD"}, "T", 300.);
       checks.at_most("T on CD with the switch against without, / peak rise",
                      one_digit_up(dT / T_rise), 0.01);
       const auto [ds, s_peak] =
-        difference("fixed", "cooling", {"CD", "EF"}, "sigma_xx");
+        probe_line_difference("fixed", "cooling", {"CD", "EF"}, "sigma_xx");
       checks.at_most("sigma_xx with the switch against without, / peak",
                      one_digit_up(ds / s_peak), 0.02);
       checks.at_most("|heat balance with - without| / laser energy",
@@ -151,7 +119,7 @@ main(int argc, char **argv)
       double d_lines = 0;
       for (const std::string col : {"T", "sigma_xx"})
         d_lines = std::max(d_lines,
-                           difference("cooling", "resumed", {"CD", "EF"}, col)
+                           probe_line_difference("cooling", "resumed", {"CD", "EF"}, col)
                              .first);
       checks.at_most("resumed against straight: T and sigma_xx on the lines",
                      d_lines, 1e-12);

@@ -41,29 +41,16 @@ namespace
     return Utilities::MPI::max(share, comm);
   }
 
-  /// Largest |a - b| over the lines CD and EF for column @p col, relative
-  /// to the largest |a| there (T: of the rise above 300 K).
+  /// Largest |a - b| of column @p col over the lines CD and EF, relative
+  /// to the largest |a - offset| there.
   double
   relative_difference(const std::string &a, const std::string &b,
                       const std::string &col, const double offset)
   {
-    double diff = 0, peak = 0;
-    for (const std::string line : {"CD", "EF"})
-      {
-        const auto x = read_csv_columns(a + "/probe_line_" + line + "_00001.csv");
-        const auto y = read_csv_columns(b + "/probe_line_" + line + "_00001.csv");
-        AssertThrow(x.count(col) && y.count(col) &&
-                      x.at(col).size() == y.at(col).size(),
-                    ExcMessage("probe lines differ in " + col));
-        for (std::size_t i = 0; i < x.at(col).size(); ++i)
-          {
-            diff = std::max(diff, std::abs(x.at(col)[i] - y.at(col)[i]));
-            peak = std::max(peak, std::abs(x.at(col)[i] - offset));
-          }
-      }
+    const auto [diff, peak] =
+      probe_line_difference(a, b, {"CD", "EF"}, col, offset);
     return diff / peak;
   }
-
 } // namespace
 
 int

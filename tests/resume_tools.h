@@ -1,13 +1,19 @@
-// femp tests: helpers for the tests that resume a run from its checkpoint.
+// femp tests: helpers for the tests that resume a run from its checkpoint
+// and compare the probe lines of two runs.
 #ifndef femp_resume_tools_h
 #define femp_resume_tools_h
 
 #include <deal.II/base/exceptions.h>
 #include <deal.II/base/mpi.h>
 
+#include "scene_driver.h"
+
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace femp_test
@@ -31,6 +37,35 @@ namespace femp_test
                             std::filesystem::copy_options::recursive);
     MPI_Barrier(comm);
     return to + "/checkpoint/" + (steps.size() > 1 ? steps[1] : steps[0]);
+  }
+  /// Largest |a - b| of column @p col over the probe lines @p lines (at
+  /// output 1: the end, with 'Output interval = 0') of the output
+  /// directories @p a and @p b, and the largest |a - offset| there (the
+  /// reference's peak; T: its rise above @p offset).
+  inline std::pair<double, double>
+  probe_line_difference(const std::string &a, const std::string &b,
+                        const std::vector<std::string> &lines,
+                        const std::string &col, const double offset = 0)
+  {
+    double diff = 0, peak = 0;
+    for (const auto &line : lines)
+      {
+        const std::string file = "/probe_line_" + line + "_00001.csv";
+        const auto        x    = read_csv_columns(a + file);
+        const auto        y    = read_csv_columns(b + file);
+        AssertThrow(x.count(col) && y.count(col) &&
+                      x.at(col).size() == y.at(col).size() &&
+                      !x.at(col).empty(),
+                    dealii::ExcMessage("probe lines " + line + " of " + a +
+                                       " and " + b + " differ in " + col));
+        const auto &u = x.at(col), &v = y.at(col);
+        for (std::size_t i = 0; i < u.size(); ++i)
+          {
+            diff = std::max(diff, std::abs(u[i] - v[i]));
+            peak = std::max(peak, std::abs(u[i] - offset));
+          }
+      }
+    return {diff, peak};
   }
 } // namespace femp_test
 
