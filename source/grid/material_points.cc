@@ -521,7 +521,9 @@ namespace femp
     // until points are inserted, removed or re-sorted: call again then.
     point_properties.clear();
     point_locations.clear();
+    point_handles.clear();
     cell_begin.assign(1, 0);
+    ++layout_generation; // handles kept elsewhere may be stale now
     pushed_temperature.assign(grid.n_local(),
                               std::numeric_limits<double>::quiet_NaN());
     for (const auto &[idx, cell] : occupied)
@@ -530,6 +532,7 @@ namespace femp
           {
             point_properties.push_back(particle.get_properties().data());
             point_locations.push_back(&particle.get_location());
+            point_handles.push_back(particle.get_local_index());
           }
         cell_begin.push_back(point_properties.size());
       }
@@ -1003,6 +1006,13 @@ namespace femp
       handler.update_cached_numbers();
     std::sort(changed.begin(), changed.end());
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    if (!changed.empty())
+      {
+        ++relocations;
+        cell_moved_at.resize(grid.n_local(), 0);
+        for (const auto idx : changed)
+          cell_moved_at[idx] = relocations;
+      }
     refresh_occupied_cells(changed);
     return true;
   }
@@ -1047,10 +1057,12 @@ namespace femp
     decltype(occupied)         new_occupied;
     std::vector<double *>      new_pointers;
     std::vector<const Point<dim> *> new_locations;
+    std::vector<unsigned int>  new_handles;
     std::vector<std::uint32_t> new_begin(1, 0);
     new_occupied.reserve(occupied.size() + changed.size());
     new_pointers.reserve(point_properties.size());
     new_locations.reserve(point_locations.size());
+    new_handles.reserve(point_handles.size());
     std::size_t c = 0, k = 0;
     while (c < occupied.size() || k < changed.size())
       {
@@ -1073,6 +1085,7 @@ namespace femp
                   {
                     new_pointers.push_back(particle.get_properties().data());
                     new_locations.push_back(&particle.get_location());
+                    new_handles.push_back(particle.get_local_index());
                   }
                 new_begin.push_back(new_pointers.size());
               }
@@ -1089,6 +1102,9 @@ namespace femp
             new_locations.insert(new_locations.end(),
                                  point_locations.begin() + cell_begin[c],
                                  point_locations.begin() + cell_begin[c + 1]);
+            new_handles.insert(new_handles.end(),
+                               point_handles.begin() + cell_begin[c],
+                               point_handles.begin() + cell_begin[c + 1]);
             new_begin.push_back(new_pointers.size());
             ++c;
           }
@@ -1096,6 +1112,7 @@ namespace femp
     occupied.swap(new_occupied);
     point_properties.swap(new_pointers);
     point_locations.swap(new_locations);
+    point_handles.swap(new_handles);
     cell_begin.swap(new_begin);
 #ifdef DEBUG
     // Debug builds: the refreshed lists must equal a full rebuild, and the
@@ -1109,10 +1126,14 @@ namespace femp
       const auto o = occupied;
       const auto p = point_properties;
       const auto l = point_locations;
+      const auto hd = point_handles;
       const auto b = cell_begin;
+      const auto g = layout_generation;
       index_occupied_cells();
+      layout_generation = g; // (a check, not a change of the handler)
       Assert(o.size() == occupied.size() && p == point_properties &&
-               l == point_locations && b == cell_begin,
+               l == point_locations && hd == point_handles &&
+               b == cell_begin,
              ExcMessage("refreshed point cache differs from a rebuild"));
       for (std::size_t i = 0; i < o.size(); ++i)
         Assert(o[i].first == occupied[i].first,

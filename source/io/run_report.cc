@@ -93,6 +93,13 @@ namespace femp
             << "; kinetic/internal "
             << se.kinetic / std::max(1e-300, std::abs(se.internal))
             << std::endl;
+        const auto gathers = solid->gathers_kept(); // collective
+        if (gathers[0] > 0)
+          out << "Solid: " << gathers[0] << " of " << gathers[1]
+              << " gathers of the MPM points (all ranks) kept the arrays "
+                 "(no point melted, solidified or moved into or out of a "
+                 "member's cell since the last)"
+              << std::endl;
         const unsigned long held = solid->n_points_held(); // collective
         if (held > 0)
           out << "Solid: " << held

@@ -1055,16 +1055,32 @@ namespace femp
   template <int dim>
   void
   SolidMPM<dim>::gather(const std::vector<std::uint8_t> &excluded_cell,
-                        const double                     mass_scaling)
+                        const double                     mass_scaling,
+                        const bool                       same_members)
   {
     using P = typename MaterialPoints<dim>::PropertyIndex;
-    apic     = mat.velocity_transfer == SolidMaterial::VelocityTransfer::apic;
+    const bool apic_now =
+      mat.velocity_transfer == SolidMaterial::VelocityTransfer::apic;
     AssertThrow(points.n_properties() >=
-                  P::n_used(true, apic),
+                  P::n_used(true, apic_now),
                 ExcMessage("SolidMPM: the material points do not carry the "
                            "solid (or APIC) properties"));
-    excluded = excluded_cell;
-    scaling  = mass_scaling;
+    // The same members in the same pool slots and order as at the last
+    // gather: nobody but write_back() has changed their state since (the
+    // flow writes fluid points only, the temperature step their state,
+    // which exchange_since_gather() checked), so the arrays are kept.
+    const bool keep = same_members && gathered && apic_now == apic &&
+                      excluded_cell == excluded &&
+                      points.layout_unchanged(gathered_layout, cell);
+    apic = apic_now;
+    if (!gathered || excluded_cell != excluded)
+      {
+        excluded = excluded_cell;
+        set_exchange_cells();
+      }
+    scaling = mass_scaling;
+    ++gathers;
+    left_cells.clear();
     // The P2G buffer of the fused pass: zero again, and its node list anew.
     clear_next();
     next_ready         = false;
@@ -1077,6 +1093,26 @@ namespace femp
       cell_mark[c] = 0;
     reached_cells.clear();
     cell_mark.resize(grid.n_local(), 0);
+    if (keep)
+      ++gathers_kept;
+    else
+      copy_members();
+    gathered        = true;
+    gathered_layout = points.layout_mark();
+    moved_cell = lost = false;
+    left_rank         = 0;
+    for (std::size_t p = 0; p < node0.size(); ++p)
+      if (p == 0 || node0[p] != node0[p - 1])
+        mark_cell_nodes(cell[p], node0[p]);
+    sum_energies();
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::copy_members()
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
     // (The arrays filled by index below are only resized: no zero fill.)
     for (int d = 0; d < dim; ++d)
       corner[d].clear();
@@ -1201,12 +1237,34 @@ namespace femp
           member_bits.resize(id / 64 + 1, 0);
         member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
       }
-    moved_cell = lost = false;
-    left_rank         = 0;
-    for (std::size_t p = 0; p < node0.size(); ++p)
-      if (p == 0 || node0[p] != node0[p - 1])
-        mark_cell_nodes(cell[p], node0[p]);
-    sum_energies();
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::set_exchange_cells()
+  {
+    // Outside the FE zone, and the zone's cells with a neighbour (faces,
+    // edges, corners) outside it or beyond the local box.
+    exchange_cell.assign(grid.n_local(), 1);
+    if (excluded.size() != grid.n_local())
+      return;
+    for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
+      {
+        if (!excluded[idx])
+          continue;
+        const auto ijk  = grid.global_index(idx);
+        bool       near = false;
+        for (unsigned int k = 0; k < std::pow(3u, dim) && !near; ++k)
+          {
+            auto         nb = ijk;
+            unsigned int r  = k;
+            for (int d = 0; d < dim; ++d, r /= 3)
+              nb[d] += int(r % 3) - 1;
+            near = !grid.in_box(nb) || !excluded[grid.local_index(nb)];
+          }
+        exchange_cell[idx] = near;
+      }
   }
 
 
@@ -1256,20 +1314,28 @@ namespace femp
     using P = typename MaterialPoints<dim>::PropertyIndex;
     Exchange   e;
     const auto h = grid.h(), ih = 1. / h;
-    // The flat walk of gather(), prefetching state and position.
+    // Over the points of the cells outside the FE zone and its first
+    // layer (exchange_cell; the zone's deeper points are solid, below the
+    // solidus by the zone's guard, and never members), cell by cell from
+    // MaterialPoints' cache, prefetching state and position.
     auto &pool = points.particle_handler().get_property_pool();
-    collect_handles();
-    const std::size_t     n_walk = walk.size();
-    constexpr std::size_t ahead  = 16;
-    for (std::size_t i = 0; i < n_walk; ++i)
+    const auto &          occupied = points.occupied_cells();
+    constexpr std::size_t ahead    = 16;
+    for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-        if (i + ahead < n_walk)
+      if (!exchange_cell.empty() && !exchange_cell[occupied[c].first])
+        continue;
+      const auto handles = points.cell_point_handles(c);
+      const std::size_t n_cell = handles.size();
+      for (std::size_t i = 0; i < n_cell; ++i)
+      {
+        if (i + ahead < n_cell)
           {
-            const auto hn = walk[i + ahead];
+            const auto hn = handles[i + ahead];
             __builtin_prefetch(pool.get_properties(hn).data() + P::state, 0);
             __builtin_prefetch(&pool.get_location(hn), 0);
           }
-        const auto                    hp     = walk[i];
+        const auto                    hp     = handles[i];
         const ArrayView<const double> q      = pool.get_properties(hp);
         const bool                    member = is_member(pool.get_id(hp));
         const bool       solid = q[P::state] == MaterialPoints<dim>::solid;
@@ -1306,6 +1372,7 @@ namespace femp
           e.n_melted += 1, e.k_melted += k;
         else
           e.n_solidified += 1, e.k_solidified += k;
+      }
       }
     return e;
   }
@@ -1364,10 +1431,17 @@ namespace femp
   {
     write_back();
     // Points bound to new cells of this rank: move them in the handler
-    // (cell by cell; deal.II's global sort only if that fails).
+    // (cell by cell, looking only in the cells they left; deal.II's global
+    // sort only if that fails).
     if (Utilities::MPI::logical_or(moved_cell, grid.communicator()))
-      if (!points.relocate_points())
-        points.points_moved();
+      {
+        std::sort(left_cells.begin(), left_cells.end());
+        left_cells.erase(std::unique(left_cells.begin(), left_cells.end()),
+                         left_cells.end());
+        if (!points.relocate_points(&left_cells))
+          points.points_moved();
+      }
+    left_cells.clear();
     moved_cell = false;
   }
 
@@ -1703,6 +1777,7 @@ namespace femp
                 ++left_rank;
                 continue;
               }
+            left_cells.push_back(cell[p]);
             cell[p]  = idx;
             node0[p] = grid.first_node_of_cell(idx);
             for (int d = 0; d < dim; ++d)
@@ -1842,6 +1917,8 @@ namespace femp
     true_mass.clear(), volume.clear(), visc.clear();
     eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
     member_bits.clear();
+    left_cells.clear();
+    gathered = false; // the next gather() copies
     const double h = grid.h();
     for (std::size_t f = 0; f < parts.size(); ++f)
       {

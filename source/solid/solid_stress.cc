@@ -1180,7 +1180,10 @@ namespace femp
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
-        mpm.gather(zone_mask(), scaling.factor);
+        // Nothing melted, solidified or lost here: the gather may keep
+        // the arrays of the last one (SolidMPM::gather()).
+        mpm.gather(zone_mask(), scaling.factor,
+                   e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
     have_pending_exchange = false;
     double sums[7] = {e.n_melted,     e.n_solidified,         e.n_lost,

@@ -199,6 +199,47 @@ namespace femp
               cell_begin[c + 1] - cell_begin[c]};
     }
 
+    /// Pool handles of the points of occupied_cells()[@p c] (same order
+    /// and validity as cell_point_properties()): for the property pool's
+    /// ids and for writers that keep handles between steps.
+    ArrayView<const unsigned int>
+    cell_point_handles(const std::size_t c) const
+    {
+      return {point_handles.data() + cell_begin[c],
+              cell_begin[c + 1] - cell_begin[c]};
+    }
+
+    /// Where the handler's points stand now, for a writer that keeps pool
+    /// handles of some points between steps (the solid's gather): see
+    /// layout_unchanged().
+    struct LayoutMark
+    {
+      std::uint64_t generation = 0; ///< re-indexings (sorts, loads, inserts)
+      std::uint64_t moves      = 0; ///< relocate_points() calls that moved points
+    };
+    LayoutMark
+    layout_mark() const
+    {
+      return {layout_generation, relocations};
+    }
+    /// True when, since @p mark, the handler was not re-sorted, re-indexed
+    /// or filled anew, and relocate_points() moved no point into or out of
+    /// any of the local cells @p cells (increasing or not): the points of
+    /// these cells keep their pool handles and their order in the handler.
+    bool
+    layout_unchanged(const LayoutMark &               mark,
+                     const std::vector<std::uint32_t> &cells) const
+    {
+      if (mark.generation != layout_generation)
+        return false;
+      if (mark.moves == relocations)
+        return true;
+      for (const auto c : cells)
+        if (cell_moved_at[c] > mark.moves)
+          return false;
+      return true;
+    }
+
     /// Owned cells that hold points: (flat index, cell iterator).
     const std::vector<
       std::pair<std::uint32_t, typename Triangulation<dim>::active_cell_iterator>> &
@@ -324,6 +365,14 @@ namespace femp
     // Where the positions of the same points live in the pool (valid and
     // refreshed together with point_properties).
     std::vector<const Point<dim> *> point_locations;
+    // Their pool handles (same order).
+    std::vector<unsigned int> point_handles;
+    // See layout_mark(): bumped by every full re-index of the cache; the
+    // count of relocate_points() calls that moved points, and per local
+    // cell the last such call that moved a point into or out of it.
+    std::uint64_t              layout_generation = 0;
+    std::uint64_t              relocations       = 0;
+    std::vector<std::uint64_t> cell_moved_at;
     // Per local cell, the temperature cells_to_points() last gave its
     // points (NaN: not given since the cell's points changed).
     std::vector<double> pushed_temperature;

@@ -125,9 +125,22 @@ namespace femp
     /// state fluid get zero stress, plastic strain, viscous pressure and
     /// affine velocity, and, unless the melt flow owns them
     /// (set_flow_owns_fluid_points()), zero velocity.
+    /// With @p same_members (exchange_since_gather() found no point melted,
+    /// solidified or lost on this rank) and the same mask: when the handler
+    /// has not moved a point into or out of a cell of the members since the
+    /// last gather (MaterialPoints::layout_unchanged()), the arrays written
+    /// back by the last scatter() are still the points' state, in the
+    /// handler's order: they are kept, not copied again (the same result).
     void
     gather(const std::vector<std::uint8_t> &excluded_cell,
-           const double                      mass_scaling);
+           const double                      mass_scaling,
+           const bool                        same_members = false);
+    /// gather() calls that kept the arrays (see there), and all calls.
+    std::array<unsigned long, 2>
+    gather_counts() const
+    {
+      return {{gathers_kept, gathers}};
+    }
     /// With the melt flow running beside the solid: gather() leaves the
     /// velocity of fluid points alone (the flow owns it).
     void
@@ -329,8 +342,25 @@ namespace femp
     /// index), for write_back().
     std::vector<types::particle_index> handle;
     /// Pool handles of all of this rank's points in the handler's order,
-    /// refilled by each walk (gather(), exchange_since_gather()).
+    /// refilled by each gather() that copies.
     mutable std::vector<types::particle_index> walk;
+    /// Cells whose points exchange_since_gather() looks at: those outside
+    /// the FE zone and the zone's layer next to them (members never lie
+    /// deeper: a member that enters the zone stops the run in the step).
+    std::vector<std::uint8_t> exchange_cell;
+    /// The handler's layout at the last gather() (for keeping the arrays).
+    typename MaterialPoints<dim>::LayoutMark gathered_layout;
+    bool                                     gathered = false;
+    unsigned long                            gathers = 0, gathers_kept = 0;
+    /// Cells that points left in the steps since the gather (their cells in
+    /// the handler, where scatter() has MaterialPoints look for moves).
+    std::vector<std::uint32_t> left_cells;
+    /// gather()'s copy: the members' pool handles, cells and state.
+    void
+    copy_members();
+    /// exchange_cell from the mask.
+    void
+    set_exchange_cells();
 
     std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
     double                    scaling = 1; ///< inertial mass / true_mass

@@ -253,6 +253,17 @@ namespace femp
     {
       return Utilities::MPI::sum(mpm.n_held(), comm);
     }
+    /// Gathers of the MPM points at the temperature steps, summed over the
+    /// ranks: those that kept the arrays of the last one (nothing melted,
+    /// solidified or moved in or out of the members' cells there) and all
+    /// (collective).
+    std::array<double, 2>
+    gathers_kept() const
+    {
+      const auto c = mpm.gather_counts();
+      return {{Utilities::MPI::sum(double(c[0]), comm),
+               Utilities::MPI::sum(double(c[1]), comm)}};
+    }
     /// State of the mass scaling (the adaptive controller's; constant with
     /// a fixed factor): what a checkpoint must keep.
     struct MassScalingState
