@@ -1131,12 +1131,12 @@ namespace femp
       true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
       eps_p.reserve(n), cell.reserve(n), node0.reserve(n), handle.reserve(n);
     }
-    // A flat walk over the pool handles of all points in the handler's
-    // order (the order of the arrays, as deal.II's iterator gives it),
-    // with prefetches ahead. Most points (the powder, those of the FE
-    // zone) are only looked at; the first pass finds the points that take
-    // part (pool handle, cell, cell corner), the second copies their state
-    // into the arrays.
+    // A flat walk over the pool handles of the points in the handler's
+    // order (the order of the arrays, as deal.II's iterator gives it) but
+    // those of the FE zone's deeper cells, with prefetches ahead. Many
+    // points (the powder, the zone's first layer) are only looked at; the
+    // first pass finds the points that take part (pool handle, cell, cell
+    // corner), the second copies their state into the arrays.
     auto &pool = handler.get_property_pool();
     collect_handles();
     const std::size_t     n_walk = walk.size();
@@ -1272,11 +1272,31 @@ namespace femp
   void
   SolidMPM<dim>::collect_handles() const
   {
-    const auto &handler = points.particle_handler();
+    // The points of the FE zone's deeper cells (exchange_cell 0) are
+    // neither members nor fluid (see exchange_cell): marked by their pool
+    // handles from MaterialPoints' per-cell cache (a sequential pass), left
+    // out of the walk without a look into the pool.
+    const auto &handler  = points.particle_handler();
+    const auto &occupied = points.occupied_cells();
+    skip_bits.assign(skip_bits.size(), 0);
+    if (!exchange_cell.empty())
+      for (std::size_t c = 0; c < occupied.size(); ++c)
+        if (!exchange_cell[occupied[c].first])
+          for (const auto hp : points.cell_point_handles(c))
+            {
+              if (hp / 64 >= skip_bits.size())
+                skip_bits.resize(hp / 64 + 1, 0);
+              skip_bits[hp / 64] |= std::uint64_t(1) << (hp % 64);
+            }
     walk.clear();
     walk.reserve(handler.n_locally_owned_particles());
     for (auto it = handler.begin(); it != handler.end(); ++it)
-      walk.push_back(it->get_local_index());
+      {
+        const auto hp = it->get_local_index();
+        if (hp / 64 >= skip_bits.size() ||
+            !((skip_bits[hp / 64] >> (hp % 64)) & 1u))
+          walk.push_back(hp);
+      }
   }
 
 

@@ -341,9 +341,11 @@ namespace femp
     /// Where each point lives in the handler's property pool (its local
     /// index), for write_back().
     std::vector<types::particle_index> handle;
-    /// Pool handles of all of this rank's points in the handler's order,
-    /// refilled by each gather() that copies.
+    /// Pool handles of this rank's points in the handler's order but
+    /// those of the FE zone's deeper cells, refilled by each gather() that
+    /// copies; skip_bits marks the latter by pool handle.
     mutable std::vector<types::particle_index> walk;
+    mutable std::vector<std::uint64_t>         skip_bits;
     /// Cells whose points exchange_since_gather() looks at: those outside
     /// the FE zone and the zone's layer next to them (members never lie
     /// deeper: a member that enters the zone stops the run in the step).
@@ -388,7 +390,8 @@ namespace femp
       const std::size_t w = id / 64;
       return w < member_bits.size() && (member_bits[w] >> (id % 64)) & 1u;
     }
-    /// Fill walk with the pool handles of the handler's points, in order.
+    /// Fill walk with the pool handles of the handler's points, in order,
+    /// but those of the FE zone's deeper cells.
     void
     collect_handles() const;
 
