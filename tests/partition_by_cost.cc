@@ -40,17 +40,6 @@ namespace
         share = std::stod(m[1]) / 100;
     return Utilities::MPI::max(share, comm);
   }
-
-  /// Largest |a - b| of column @p col over the lines CD and EF, relative
-  /// to the largest |a - offset| there.
-  double
-  relative_difference(const std::string &a, const std::string &b,
-                      const std::string &col, const double offset)
-  {
-    const auto [diff, peak] =
-      probe_line_difference(a, b, {"CD", "EF"}, col, offset);
-    return diff / peak;
-  }
 } // namespace
 
 int
@@ -85,7 +74,7 @@ main(int argc, char **argv)
            std::vector<std::pair<std::string, double>>{{"T", 300.},
                                                         {"sigma_xx", 0.}})
         checks.at_most(col + ": 'cost' against 'cells', / peak",
-                       relative_difference("cost", "cells", col, offset),
+                       probe_line_relative_difference("cost", "cells", col, offset),
                        1e-6);
 
       // 3. The 'cells' checkpoint at 8 us, resumed with 'cost'.
@@ -97,7 +86,7 @@ main(int argc, char **argv)
            std::vector<std::pair<std::string, double>>{{"T", 300.},
                                                         {"sigma_xx", 0.}})
         checks.at_most(col + ": resumed with 'cost' against 'cost', / peak",
-                       relative_difference("cost", "resumed", col, offset),
+                       probe_line_relative_difference("cost", "resumed", col, offset),
                        1e-6);
     }
   catch (const std::exception &e)

@@ -67,6 +67,19 @@ namespace femp_test
       }
     return {diff, peak};
   }
+
+  /// probe_line_difference() over both probe lines (CD and EF), as a
+  /// fraction of the reference's peak.
+  inline double
+  probe_line_relative_difference(const std::string &a, const std::string &b,
+                                 const std::string &col,
+                                 const double       offset = 0)
+  {
+    const auto [diff, peak] =
+      probe_line_difference(a, b, {"CD", "EF"}, col, offset);
+    return diff / peak;
+  }
+
 } // namespace femp_test
 
 #endif
