@@ -26,8 +26,8 @@ namespace femp
   void
   FluidSolidForces<dim>::update(const IncompressibleFlow<dim> &flow)
   {
-    flow.fluid_forces_on_solid(face_force);
-    spread(face_force);
+    flow.fluid_forces_on_solid(face_force, face_cells);
+    spread(face_force, &face_cells);
   }
 
 
@@ -75,11 +75,10 @@ namespace femp
 
   template <int dim>
   void
-  FluidSolidForces<dim>::spread(const FaceForces &F)
+  FluidSolidForces<dim>::spread(const FaceForces &                F,
+                                const std::vector<std::uint32_t> *cells)
   {
     constexpr unsigned int n_corners = 1u << dim;
-    for (int d = 0; d < dim; ++d)
-      std::fill(node_force[d].begin(), node_force[d].end(), 0.);
     const auto &ns = grid.node_strides();
     std::array<std::size_t, n_corners> offset;
     for (unsigned int k = 0; k < n_corners; ++k)
@@ -89,13 +88,20 @@ namespace femp
           if ((k >> d) & 1)
             offset[k] += ns[d];
       }
-    for (const auto c : grid.owned_cells())
+    // Only the corners of the cells spread last time hold forces.
+    for (const auto c : spread_cells)
+      for (unsigned int k = 0; k < n_corners; ++k)
+        for (int d = 0; d < dim; ++d)
+          node_force[d][grid.first_node_of_cell(c) + offset[k]] = 0;
+    spread_cells.clear();
+    for (const auto c : cells ? *cells : grid.owned_cells())
       {
         bool any = false;
         for (const auto &f : F)
           any = any || f[c] != 0;
         if (!any)
           continue;
+        spread_cells.push_back(c);
         const std::size_t n0    = grid.first_node_of_cell(c);
         const auto        share = corner_shares(c);
         for (int d = 0; d < dim; ++d)

@@ -368,11 +368,23 @@ namespace femp
     const auto &handler = points.particle_handler();
     const bool  count_volume = prm.volume_correction > 0;
     const auto &occupied     = points.occupied_cells();
+    // Only cells that held a fluid point at the last classification, or
+    // that points entered or whose points melted since, can hold one now:
+    // the others (the substrate and powder far from the melt, most cells
+    // while only a few drops are liquid) stay solid without a look at
+    // their points.
+    const bool all_cells = !classified;
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         // Cells without a fluid point (powder, substrate) are found from
         // the cached property arrays; only fluid cells need the positions.
         const auto &[idx, cell] = occupied[c];
+        if (!all_cells && type_old[idx] != fluid &&
+            !points.may_have_new_fluid(classified_at, idx))
+          {
+            type[idx] = solid; // (occupancy is read in fluid cells only)
+            continue;
+          }
         bool        any_fluid   = false;
         double      V_cell      = 0;
         for (const double *v : points.cell_point_properties(c))
@@ -416,6 +428,8 @@ namespace femp
               }
           }
       }
+    classified_at = points.layout_mark();
+    classified    = true;
     grid.update_ghosts(type);
 
     // Active nodes (nodes of owned fluid cells) and their wall flags.
@@ -1089,7 +1103,8 @@ namespace femp
   template <int dim>
   void
   IncompressibleFlow<dim>::fluid_forces_on_solid(
-    std::array<std::vector<double>, 2 * dim * dim> &F) const
+    std::array<std::vector<double>, 2 * dim * dim> &F,
+    std::vector<std::uint32_t> &                    cells) const
   {
     // (Flow and solid together, doc/solid.md; a separate entry point, not
     // part of the fluid step.) From the solid side, so that a fluid
@@ -1100,8 +1115,10 @@ namespace femp
         if (f.size() != grid.n_local())
           f = grid.make_field(0.);
         else
-          std::fill(f.begin(), f.end(), 0.);
+          for (const auto c : cells)
+            f[c] = 0;
       }
+    cells.clear();
     if (stats.n_fluid_cells == 0) // global
       return;
     const auto & cs   = grid.strides();
@@ -1111,12 +1128,16 @@ namespace femp
       {
         if (type[c] != solid)
           continue;
+        bool written = false;
         for (int d = 0; d < dim; ++d)
           for (unsigned int side = 0; side < 2; ++side)
             {
               const std::size_t n = side ? c + cs[d] : c - cs[d];
               if (type[n] != fluid)
                 continue;
+              if (!written)
+                cells.push_back(c);
+              written = true;
               const double s = side ? 1. : -1.;
               const double p = p_cell[n] - 0.5 * h * s * rho * prm.gravity[d];
               const unsigned int f = dim * (2 * d + side);
@@ -1161,6 +1182,7 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       fields.push_back(&u_cell[d]);
     load_cell_fields(parts, grid, fields);
+    classified = false; // the points were loaded anew
     auto &in = parts[0];
     auto &s  = stats;
     for (unsigned int *v : {&s.steps, &s.matrix_rebuilds, &s.amg_setups,

@@ -747,6 +747,7 @@ namespace femp
     if (pushed_temperature.size() != grid.n_local())
       pushed_temperature.assign(grid.n_local(),
                                 std::numeric_limits<double>::quiet_NaN());
+    bool counted = false; // this call in melt_events
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         const auto   idx = occupied[c].first;
@@ -754,6 +755,7 @@ namespace femp
         if (Tc == pushed_temperature[idx])
           continue;
         pushed_temperature[idx] = Tc;
+        bool melted = false;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           {
             double *const v   = point_properties[k];
@@ -761,10 +763,23 @@ namespace femp
             if (Tc > v[P::peak_temperature])
               v[P::peak_temperature] = Tc;
             if (Tc > Ts)
-              v[P::state] = fluid;
+              {
+                melted      = melted || v[P::state] != fluid;
+                v[P::state] = fluid;
+              }
             else if (v[P::state] == fluid)
               v[P::state] = solid;
           }
+        if (!melted)
+          continue;
+        // For may_have_new_fluid().
+        if (!counted)
+          {
+            ++melt_events;
+            cell_melted_at.resize(grid.n_local(), 0);
+            counted = true;
+          }
+        cell_melted_at[idx] = melt_events;
       }
   }
 

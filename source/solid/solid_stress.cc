@@ -1223,7 +1223,7 @@ namespace femp
 
   template <int dim>
   typename SolidStress<dim>::Energies
-  SolidStress<dim>::energies() const
+  SolidStress<dim>::energies(const bool with_hourglass_mode) const
   {
     Energies e;
     e.external        = W_ext;
@@ -1232,8 +1232,9 @@ namespace femp
     e.initial_kinetic = K0;
     e.hourglass = Utilities::MPI::sum(fem ? fem->hourglass_energy(false) : 0.,
                                       comm);
-    e.hourglass_mode =
-      Utilities::MPI::sum(fem ? fem->hourglass_energy(true) : 0., comm);
+    if (with_hourglass_mode)
+      e.hourglass_mode =
+        Utilities::MPI::sum(fem ? fem->hourglass_energy(true) : 0., comm);
     e.transfer        = D_transfer;
     e.remap           = W_remap;
     e.melted          = K_melted;
@@ -1552,7 +1553,7 @@ namespace femp
     // melting, solidification, re-map, scaling jumps) together is taken
     // as the sign of an instability.
     // Global sums: every rank decides the same.
-    const auto   e       = energies();
+    const auto   e       = energies(false);
     const double created = e.balance();
     const double scale   = elastic_energy + e.kinetic + std::abs(e.external) +
                          std::abs(e.transfer) + e.melted + e.solidified +

@@ -55,8 +55,11 @@ namespace femp
 
     /// Spread @p face_force to the nodes of the owned cells (partial sums
     /// of this rank over the local node box; the solid sums over ranks).
+    /// @p cells: the owned cells (increasing) outside which @p face_force
+    /// is zero; nullptr: look at every owned cell.
     void
-    spread(const FaceForces &face_force);
+    spread(const FaceForces &                face_force,
+           const std::vector<std::uint32_t> *cells = nullptr);
 
     /// The nodal forces, one array per direction over the local node box.
     const NodeForces &
@@ -72,6 +75,10 @@ namespace femp
     const typename SolidFEM<dim>::Parameters &fe_zone;
     FaceForces                                 face_force;
     NodeForces                                 node_force;
+    // The cells where face_force may be non-zero (the flow's last call),
+    // and those whose corners the last spread wrote: only they are reset,
+    // so a few liquid drops cost a few cells, not passes over the grid.
+    std::vector<std::uint32_t> face_cells, spread_cells;
 
     /// Share of each corner of owned cell @p c (the rule above).
     std::array<double, (1u << dim)>

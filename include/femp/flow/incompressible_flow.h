@@ -242,9 +242,13 @@ namespace femp
     ///    wall, linear profile).
     /// @p F[dim * (2 d + side) + e]: component e of the force through face
     /// (d, side) (side 1: the upper face), one cell field over the local box
-    /// each (resized and overwritten), N (2D: N/m); zero elsewhere.
+    /// each, N (2D: N/m); zero elsewhere. @p cells: on entry the cells
+    /// where @p F may be non-zero (those of the last call: only they are
+    /// reset, unless @p F is resized), on return the owned cells written
+    /// now, increasing (a few cells at the melt's edge, not the grid).
     void
-    fluid_forces_on_solid(std::array<std::vector<double>, 2 * dim * dim> &F) const;
+    fluid_forces_on_solid(std::array<std::vector<double>, 2 * dim * dim> &F,
+                          std::vector<std::uint32_t> &cells) const;
 
     /// Checkpoint: the cell pressure, velocity and types of the last step
     /// (the temperature step and the fluid forces read them) and the
@@ -359,6 +363,11 @@ namespace femp
     std::vector<std::uint8_t>            node_mark;   // in active
     std::vector<std::uint8_t>            node_fix;    // bit d: u_d = 0
     std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
+    // Where the points stood at the last classify_cells() (false: none
+    // yet, or the points were loaded since): cells with no fluid point
+    // then and no change of their points since are skipped.
+    typename MaterialPoints<dim>::LayoutMark classified_at;
+    bool                                     classified = false;
     std::vector<double>                  divergence;  // per owned fluid cell
     std::vector<double> volume_source; // -c e per owned fluid cell
 

@@ -280,9 +280,11 @@ namespace femp
     {
       return scaling;
     }
-    /// Global energies (collective).
+    /// Global energies (collective). Without @p with_hourglass_mode the
+    /// reference hourglass energy (a diagnostic of the output, not of the
+    /// balance) is left 0: one pass over the elements less.
     Energies
-    energies() const;
+    energies(const bool with_hourglass_mode = true) const;
     /// sigma_xx (Pa) and temperature (K) at the cell holding each probe
     /// point (element stress, or the mean over the cell's points; collective).
     std::vector<std::array<double, 2>>
