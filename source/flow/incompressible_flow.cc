@@ -380,7 +380,7 @@ namespace femp
         // the cached property arrays; only fluid cells need the positions.
         const auto &[idx, cell] = occupied[c];
         if (!all_cells && type_old[idx] != fluid &&
-            !points.may_have_new_fluid(classified_at, idx))
+            !points.cell_changed_since(classified_at, idx))
           {
             type[idx] = solid; // (occupancy is read in fluid cells only)
             continue;

@@ -747,7 +747,7 @@ namespace femp
     if (pushed_temperature.size() != grid.n_local())
       pushed_temperature.assign(grid.n_local(),
                                 std::numeric_limits<double>::quiet_NaN());
-    bool counted = false; // this call in melt_events
+    bool counted = false; // this call in state_events
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         const auto   idx = occupied[c].first;
@@ -755,7 +755,7 @@ namespace femp
         if (Tc == pushed_temperature[idx])
           continue;
         pushed_temperature[idx] = Tc;
-        bool melted = false;
+        bool changed = false;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           {
             double *const v   = point_properties[k];
@@ -764,22 +764,25 @@ namespace femp
               v[P::peak_temperature] = Tc;
             if (Tc > Ts)
               {
-                melted      = melted || v[P::state] != fluid;
+                changed     = changed || v[P::state] != fluid;
                 v[P::state] = fluid;
               }
             else if (v[P::state] == fluid)
-              v[P::state] = solid;
+              {
+                v[P::state] = solid;
+                changed     = true;
+              }
           }
-        if (!melted)
+        if (!changed)
           continue;
-        // For may_have_new_fluid().
+        // For cell_changed_since().
         if (!counted)
           {
-            ++melt_events;
-            cell_melted_at.resize(grid.n_local(), 0);
+            ++state_events;
+            cell_state_at.resize(grid.n_local(), 0);
             counted = true;
           }
-        cell_melted_at[idx] = melt_events;
+        cell_state_at[idx] = state_events;
       }
   }
 

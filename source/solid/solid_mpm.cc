@@ -1338,12 +1338,22 @@ namespace femp
     // layer (exchange_cell; the zone's deeper points are solid, below the
     // solidus by the zone's guard, and never members), cell by cell from
     // MaterialPoints' cache, prefetching state and position.
+    // At a gather every point is a member exactly when it is solid and
+    // outside the excluded cells (a kept gather: the exchange found no
+    // point for which this failed). A cell whose points neither changed
+    // state nor came or went since (MaterialPoints::cell_changed_since())
+    // keeps that, so only the others are looked at: in the cooling a few
+    // cells where points solidify or members crossed a face, not every
+    // point of the powder and the MPM zone.
     auto &pool = points.particle_handler().get_property_pool();
     const auto &          occupied = points.occupied_cells();
     constexpr std::size_t ahead    = 16;
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-      if (!exchange_cell.empty() && !exchange_cell[occupied[c].first])
+      const auto idx = occupied[c].first;
+      if (!exchange_cell.empty() && !exchange_cell[idx])
+        continue;
+      if (gathered && !points.cell_changed_since(gathered_layout, idx))
         continue;
       const auto handles = points.cell_point_handles(c);
       const std::size_t n_cell = handles.size();

@@ -216,12 +216,12 @@ namespace femp
     {
       std::uint64_t generation = 0; ///< re-indexings (sorts, loads, inserts)
       std::uint64_t moves      = 0; ///< relocate_points() calls that moved points
-      std::uint64_t melts      = 0; ///< cells_to_points() calls that melted points
+      std::uint64_t states     = 0; ///< cells_to_points() calls that changed states
     };
     LayoutMark
     layout_mark() const
     {
-      return {layout_generation, relocations, melt_events};
+      return {layout_generation, relocations, state_events};
     }
     /// True when, since @p mark, the handler was not re-sorted, re-indexed
     /// or filled anew, and relocate_points() moved no point into or out of
@@ -243,15 +243,17 @@ namespace femp
 
     /// True unless, since @p mark, the handler kept its layout (see
     /// layout_unchanged()), no point entered or left local cell @p c and
-    /// cells_to_points() turned none of its points fluid: a cell that held
-    /// no fluid point at @p mark holds none now (states change only there,
-    /// points change cells only by relocate_points() or a re-index).
+    /// cells_to_points() changed the state of none of its points. States
+    /// change only there and points change cells only by relocate_points()
+    /// or a re-index, so a false answer means: the cell holds the same
+    /// points in the same states as at @p mark (their positions inside the
+    /// cell and other properties may differ).
     bool
-    may_have_new_fluid(const LayoutMark &mark, const std::uint32_t c) const
+    cell_changed_since(const LayoutMark &mark, const std::uint32_t c) const
     {
       return mark.generation != layout_generation ||
              (mark.moves != relocations && cell_moved_at[c] > mark.moves) ||
-             (mark.melts != melt_events && cell_melted_at[c] > mark.melts);
+             (mark.states != state_events && cell_state_at[c] > mark.states);
     }
 
     /// Owned cells that hold points: (flat index, cell iterator).
@@ -387,10 +389,10 @@ namespace femp
     std::uint64_t              layout_generation = 0;
     std::uint64_t              relocations       = 0;
     std::vector<std::uint64_t> cell_moved_at;
-    // The count of cells_to_points() calls that turned a point fluid, and
-    // per local cell the last such call that did so there.
-    std::uint64_t              melt_events = 0;
-    std::vector<std::uint64_t> cell_melted_at;
+    // The count of cells_to_points() calls that changed a point's state,
+    // and per local cell the last such call that did so there.
+    std::uint64_t              state_events = 0;
+    std::vector<std::uint64_t> cell_state_at;
     // Per local cell, the temperature cells_to_points() last gave its
     // points (NaN: not given since the cell's points changed).
     std::vector<double> pushed_temperature;
