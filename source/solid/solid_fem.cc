@@ -1168,21 +1168,32 @@ namespace femp
 
 
   template <int dim>
-  double
-  SolidFEM<dim>::hourglass_energy(const bool reference) const
+  std::array<double, 2>
+  SolidFEM<dim>::hourglass_energy(const bool with_reference) const
   {
-    const double kappa = reference ? 0.05 : prm.hourglass_coefficient;
-    if (kappa == 0)
-      return 0;
-    double energy = 0;
+    // Each energy summed element by element in the same order as a pass of
+    // its own would (k as hourglass_stiffness() computes it).
+    const double kappa = prm.hourglass_coefficient, kappa_ref = 0.05;
+    std::array<double, 2> energy{{0., 0.}};
+    const bool            scene = kappa != 0;
+    if (!scene && !with_reference)
+      return energy;
     for (std::size_t e = 0; e < element_id.size(); ++e)
       {
         const ElementBlock &eb = blocks[e / simd_lanes];
         const unsigned int  l  = e % simd_lanes;
-        const double        k  = hourglass_stiffness(eb.T[l], kappa);
+        const double        M  = mat.p_wave_modulus(eb.T[l]);
+        const double        k  = kappa * M * V * bb / n_corners;
+        const double        kr = kappa_ref * M * V * bb / n_corners;
         for (unsigned int al = 0; al < n_hg; ++al)
           for (int i = 0; i < dim; ++i)
-            energy += 0.5 * k * eb.q[al][i][l] * eb.q[al][i][l];
+            {
+              const double q = eb.q[al][i][l];
+              if (scene)
+                energy[0] += 0.5 * k * q * q;
+              if (with_reference)
+                energy[1] += 0.5 * kr * q * q;
+            }
       }
     return energy;
   }

@@ -1230,11 +1230,13 @@ namespace femp
     e.internal        = W_int;
     e.kinetic         = K;
     e.initial_kinetic = K0;
-    e.hourglass = Utilities::MPI::sum(fem ? fem->hourglass_energy(false) : 0.,
-                                      comm);
-    if (with_hourglass_mode)
-      e.hourglass_mode =
-        Utilities::MPI::sum(fem ? fem->hourglass_energy(true) : 0., comm);
+    std::array<double, 2> hg{{0., 0.}};
+    if (fem)
+      hg = fem->hourglass_energy(with_hourglass_mode);
+    Utilities::MPI::sum(ArrayView<const double>(hg.data(), 2), comm,
+                        ArrayView<double>(hg.data(), 2));
+    e.hourglass      = hg[0];
+    e.hourglass_mode = hg[1];
     e.transfer        = D_transfer;
     e.remap           = W_remap;
     e.melted          = K_melted;

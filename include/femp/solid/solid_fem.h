@@ -218,10 +218,12 @@ namespace femp
     /// rank's elements, J (2D: J/m).
     double
     elastic_energy() const;
-    /// Hourglass energy 1/2 k sum q^2 with the scene's kappa, or with the
-    /// reference kappa = 0.05 if @p reference (mode amplitude measure).
-    double
-    hourglass_energy(const bool reference) const;
+    /// Hourglass energy 1/2 k sum q^2 of this rank's elements, J: with the
+    /// scene's kappa (entry 0) and, if @p with_reference, with the
+    /// reference kappa = 0.05 (entry 1, a mode amplitude measure; else 0),
+    /// in one pass over the elements.
+    std::array<double, 2>
+    hourglass_energy(const bool with_reference) const;
 
     /// sigma_xx (Pa) and temperature (K) of the owned element containing
     /// @p x, or false if none.
