@@ -369,7 +369,8 @@ namespace femp
     const bool  count_volume = prm.volume_correction > 0;
     const auto &occupied     = points.occupied_cells();
     // Only cells that held a fluid point at the last classification, or
-    // that points entered or whose points melted since, can hold one now:
+    // that points entered or whose points changed state since, can hold
+    // one now (MaterialPoints::cell_changed_since()):
     // the others (the substrate and powder far from the melt, most cells
     // while only a few drops are liquid) stay solid without a look at
     // their points.

@@ -236,7 +236,7 @@ namespace femp
       if (mark.moves == relocations)
         return true;
       for (const auto c : cells)
-        if (cell_moved_at[c] > mark.moves)
+        if (moved_since(mark, c))
           return false;
       return true;
     }
@@ -251,8 +251,7 @@ namespace femp
     bool
     cell_changed_since(const LayoutMark &mark, const std::uint32_t c) const
     {
-      return mark.generation != layout_generation ||
-             (mark.moves != relocations && cell_moved_at[c] > mark.moves) ||
+      return mark.generation != layout_generation || moved_since(mark, c) ||
              (mark.states != state_events && cell_state_at[c] > mark.states);
     }
 
@@ -389,6 +388,13 @@ namespace femp
     std::uint64_t              layout_generation = 0;
     std::uint64_t              relocations       = 0;
     std::vector<std::uint64_t> cell_moved_at;
+    // Whether relocate_points() moved a point into or out of local cell
+    // @p c since @p mark (same generation assumed).
+    bool
+    moved_since(const LayoutMark &mark, const std::uint32_t c) const
+    {
+      return mark.moves != relocations && cell_moved_at[c] > mark.moves;
+    }
     // The count of cells_to_points() calls that changed a point's state,
     // and per local cell the last such call that did so there.
     std::uint64_t              state_events = 0;
