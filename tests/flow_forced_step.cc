@@ -24,6 +24,10 @@
 // Each prints how the run ended: to the end, or the message of the
 // exception that stopped it.
 //
+// The test's second run, with the single argument viscous_detection: the
+// viscous droplet at 1 x its limit must run through and at 8 x be stopped
+// by the viscous energy check (IncompressibleFlow::check_viscous_energy).
+//
 // Usage: test_flow_forced_step [capillary|viscous|convective] [C] [R/h or
 // cells per a] [FLIP fraction, -1: the solver's] [droplet viscosity mu,
 // Pa s, -1: 0.5 (capillary) or 50 (viscous)] [curvature smoothing passes,
@@ -182,6 +186,19 @@ namespace
                                     u_max = std::max(u_max, max_speed(scene));
                                   },
                                   []() { return false; });
+        if (gated) // the detection test: the message is not printed whole
+          {
+            checks.print("steps", scene.flow->statistics().steps, 8);
+            const bool caught =
+              o.stopped &&
+              o.message.find("viscous update") != std::string::npos;
+            if (C <= 1)
+              checks.in_range("runs to the end", !o.stopped, 1, 1);
+            else
+              checks.in_range("stopped by the viscous energy check", caught,
+                              1, 1);
+            return;
+          }
         report(checks, o, scene);
         checks.print("largest point speed, m/s", u_max, 3);
         checks.print("point speed at the end, m/s", max_speed(scene), 3);
@@ -230,6 +247,18 @@ main(int argc, char **argv)
   const double      mu    = argc > 5 ? std::atof(argv[5]) : -1;
   const int         pass  = argc > 6 ? std::atoi(argv[6]) : -1;
   const double      eps   = argc > 7 ? std::atof(argv[7]) : -1;
+  if (which == "viscous_detection")
+    {
+      // The detection test: at the limit the viscous droplet runs through,
+      // at 8 x it is stopped by the viscous energy check (not only bounded
+      // by the step rejection, as before that check).
+      for (const double c : {1., 8.})
+        {
+          checks.print("viscous limit x", c);
+          droplet("viscous", c, n, flip, mu, pass, eps, true, checks, comm);
+        }
+      return checks.exit_code();
+    }
   checks.print(which + " limit x", C);
   if (which == "convective")
     column(C, n, checks, comm);

@@ -28,12 +28,16 @@
 // the point shifting A (-1: 2), the curvature smoothing passes (-1: 2) and
 // the volume correction c (Melt flow/Volume correction; -1: the solver's
 // default 0 -- doc/studies/flow.md, "Volume correction": with c = 0.5 the period
-// error grows to 10-21 %, so the droplet runs without it).
+// error grows to 10-21 %, so the droplet runs without it), and 1 for the
+// height-function curvature (Melt flow/Curvature; default: alpha gradient).
 #include "flow_tools.h"
 
 #include <fstream>
 
 using namespace femp_test;
+
+/// Melt flow/Curvature = height function (tenth argument 1; the test: off).
+static bool height_function = false;
 
 /// One droplet run; returns false when it threw.
 bool
@@ -62,6 +66,7 @@ run(const double fraction, const double R_over_h, const bool gated,
       prm.curvature_smoothing = smoothing >= 0 ? smoothing : 2;
       if (volume >= 0)
         prm.volume_correction = volume;
+      prm.height_function = height_function;
       FlowScene<dim> scene(Point<dim>(L, L), h, rho,
                            [&](const Point<dim> &x) {
                              const Tensor<1, dim> d = x - centre;
@@ -248,6 +253,7 @@ main(int argc, char **argv)
   const double      shift  = argc > 7 ? std::atof(argv[7]) : -1;
   const int         smooth = argc > 8 ? std::atoi(argv[8]) : -1;
   const double      volume = argc > 9 ? std::atof(argv[9]) : -1;
+  height_function            = argc > 10 && std::atoi(argv[10]) == 1;
   for (const auto &c : cases)
     {
       checks.print("R / h", c.R_over_h);

@@ -11,8 +11,10 @@
 // Optional arguments (for contrib/study.py static_droplet; the test runs
 // without them): R/h (default 10; 4 R/h an integer), Melt flow/FLIP
 // fraction (default 0.95) and Melt flow/Capillary step fraction (default
-// 0.5), and 1 as a fourth argument for the smoothed settings (point
-// shifting 2, two smoothing passes; default 0: the solver's defaults).
+// 0.5), and as a fourth argument 1 for the smoothed settings (point
+// shifting 2, two smoothing passes; default 0: the solver's defaults),
+// plus 2 for the height-function curvature (Melt flow/Curvature), then
+// the number of smoothing passes of the smoothed settings (default 2).
 // With them only that one run is made, to the fixed time
 // 2.5 sqrt(rho R^3/sigma) instead of 400 steps, and the unrounded errors go
 // to stderr.
@@ -34,7 +36,10 @@ main(int argc, char **argv)
   const double R_h    = study ? std::atof(argv[1]) : 10;
   const double flip   = argc > 2 ? std::atof(argv[2]) : 0.95;
   const double c_frac = argc > 3 ? std::atof(argv[3]) : 0.5;
-  const bool   study_smoothed = argc > 4 && std::atoi(argv[4]) == 1;
+  const int    variant = argc > 4 ? std::atoi(argv[4]) : 0;
+  const bool   study_smoothed = (variant & 1) != 0;
+  const bool   height_function = (variant & 2) != 0;
+  const int    passes = argc > 5 ? std::atoi(argv[5]) : 2;
   if (!(R_h >= 2 && R_h <= 100) || std::abs(4 * R_h - std::round(4 * R_h)) > 1e-9 ||
       !(flip >= 0 && flip <= 1) || !(c_frac > 0 && c_frac <= 1))
     {
@@ -53,13 +58,16 @@ main(int argc, char **argv)
       typename IncompressibleFlow<dim>::Parameters prm;
       prm.flip_fraction      = flip;
       prm.capillary_fraction = c_frac;
+      prm.height_function    = height_function;
       if (smoothed)
         {
           prm.point_shifting      = 2;
-          prm.curvature_smoothing = 2;
+          prm.curvature_smoothing = passes;
         }
       checks.print("point shifting A", prm.point_shifting);
       checks.print("curvature smoothing passes", prm.curvature_smoothing);
+      if (height_function)
+        checks.print("height-function curvature", 1);
       prm.viscosity       = mu;
       prm.gravity         = Tensor<1, dim>();
       prm.surface_tension = sigma;

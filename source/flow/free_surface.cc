@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace femp
 {
@@ -27,6 +28,18 @@ namespace femp
                       "the capillary pressure of a free-surface cell by the "
                       "mean over the free-surface cells among its 3^dim "
                       "neighbours (see doc/flow.md); 0: none. Range [0, 4].");
+    prm.declare_entry("Curvature", "alpha gradient",
+                      Patterns::Selection("alpha gradient|height function"),
+                      "How the curvature div(n) of a free-surface cell is "
+                      "computed (doc/flow.md): 'alpha gradient' (default), "
+                      "the divergence of the normalized gradient of the "
+                      "smoothed metal fraction at the cell's corners; "
+                      "'height function', the heights of the metal fraction "
+                      "summed over columns of 7 cells along the normal's "
+                      "largest component, 3 (2D) or 3 x 3 (3D) columns, "
+                      "falling back to the alpha gradient where a column "
+                      "does not cross the surface (melt thinner than about "
+                      "3 cells, walls).");
     prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
                       "Surface tension coefficient sigma, N/m (0: no surface "
                       "tension); enters as the capillary pressure sigma div(n) "
@@ -49,6 +62,7 @@ namespace femp
   FreeSurface<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     curvature_smoothing = prm.get_integer("Curvature smoothing");
+    height_function     = prm.get("Curvature") == "height function";
     surface_tension     = prm.get_double("Surface tension");
     surface_tension_gradient =
       prm.get_double("Surface tension temperature derivative");
@@ -101,6 +115,8 @@ namespace femp
     locate_interface(type, fluid_cells);
     if (!prm.any())
       return;
+    if (prm.height_function && prm.surface_tension > 0)
+      height_columns(type);
     capillary_and_marangoni(type, fluid_cells, temperature);
     if (prm.recoil_coefficient > 0 ||
         (prm.curvature_smoothing > 0 && prm.surface_tension > 0))
@@ -224,6 +240,103 @@ namespace femp
   }
 
 
+  // Height-function curvature (Cummins, Francois and Kothe 2005; Popinet
+  // 2009): across a surface that is a graph over the directions other than
+  // d, the column sums H of alpha along d (in cells) are the surface's
+  // height up to a constant, and div(n) = -H''/(h (1 + H'^2)^(3/2)) in 2D
+  // with central differences over three columns (both orientations of the
+  // metal give the same sign), in 3D with the mixed derivative over 3 x 3
+  // columns. The columns are 7 cells long, centred on the surface cell's
+  // row. Unlike the divergence of alpha's gradient, whose error relative
+  // to 1/R grows with R/h, this is consistent: the smoothing of alpha by
+  // the tent weights moves a column sum only by the curvature of the
+  // surface times h^2.
+  template <int dim>
+  void
+  FreeSurface<dim>::height_columns(const std::vector<double> &type)
+  {
+    const auto &cs     = grid.strides();
+    const auto &status = grid.cell_status();
+    const double nan   = std::numeric_limits<double>::quiet_NaN();
+    // alpha where it is known: near1 cells (computed) and gas cells (no
+    // metal); NaN elsewhere, so that a column through such a cell is NaN.
+    const auto a = [&](const std::size_t c) {
+      if (status[c] == BackgroundGrid<dim>::outside)
+        return nan;
+      return (near1[c] != 0 || type[c] == gas) ? alpha_cell[c] : nan;
+    };
+    for (int d = 0; d < dim; ++d)
+      {
+        if (col3[d].empty())
+          {
+            col3[d] = grid.make_field(nan);
+            col5[d] = grid.make_field(nan);
+          }
+        auto &c3 = col3[d];
+        auto &c5 = col5[d];
+        for (const auto c : grid.owned_cells())
+          c3[c] = near2[c] != 0 ? a(c - cs[d]) + a(c) + a(c + cs[d]) : nan;
+        grid.update_ghosts(c3);
+        for (const auto c : grid.owned_cells())
+          c5[c] = near1[c] != 0 ? c3[c - cs[d]] + c3[c + cs[d]] - a(c) : nan;
+        grid.update_ghosts(c5);
+      }
+  }
+
+
+  template <int dim>
+  double
+  FreeSurface<dim>::height_function_curvature(const std::size_t c,
+                                              const double *    n) const
+  {
+    const auto &cs  = grid.strides();
+    int         d   = 0;
+    for (int e = 1; e < dim; ++e)
+      if (std::abs(n[e]) > std::abs(n[d]))
+        d = e;
+    const auto &c3 = col3[d];
+    const auto &c5 = col5[d];
+    // 7-cell sum of the column through x: cells x - 3 ... x + 3 along d.
+    const auto column = [&](const std::size_t x) {
+      return c5[x - cs[d]] + c5[x + cs[d]] - c3[x];
+    };
+    // The other directions (one in 2D, two in 3D).
+    int e[2] = {0, 0}, ne = 0;
+    for (int k = 0; k < dim; ++k)
+      if (k != d)
+        e[ne++] = k;
+    double H[3][3];
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        {
+          if (dim == 2 && j != 0)
+            continue;
+          std::ptrdiff_t o = i * cs[e[0]];
+          if (dim == 3)
+            o += j * cs[e[1]];
+          const double Hij = column(std::size_t(std::ptrdiff_t(c) + o));
+          // Each column must cross the surface well inside its 7 cells.
+          if (!(Hij > 0.5 && Hij < 6.5))
+            return std::numeric_limits<double>::quiet_NaN();
+          H[i + 1][j + 1] = Hij;
+        }
+    const double h = grid.h();
+    if (dim == 2)
+      {
+        const double Hx  = 0.5 * (H[2][1] - H[0][1]);
+        const double Hxx = H[2][1] - 2 * H[1][1] + H[0][1];
+        return -Hxx / (h * std::pow(1 + Hx * Hx, 1.5));
+      }
+    const double Hx  = 0.5 * (H[2][1] - H[0][1]);
+    const double Hy  = 0.5 * (H[1][2] - H[1][0]);
+    const double Hxx = H[2][1] - 2 * H[1][1] + H[0][1];
+    const double Hyy = H[1][2] - 2 * H[1][1] + H[1][0];
+    const double Hxy = 0.25 * (H[2][2] - H[2][0] - H[0][2] + H[0][0]);
+    return -((1 + Hy * Hy) * Hxx + (1 + Hx * Hx) * Hyy - 2 * Hx * Hy * Hxy) /
+           (h * std::pow(1 + Hx * Hx + Hy * Hy, 1.5));
+  }
+
+
   template <int dim>
   void
   FreeSurface<dim>::capillary_and_marangoni(
@@ -280,6 +393,12 @@ namespace femp
                 }
           }
         double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
+        if (prm.height_function && prm.surface_tension > 0)
+          {
+            const double k = height_function_curvature(c, nc);
+            if (std::isfinite(k))
+              ps = prm.surface_tension * k;
+          }
         p_capillary[c]  = ps;
         surface_mark[c] = 1;
         p_surface[c]    = ps; // the recoil is added by add_recoil_pressure()

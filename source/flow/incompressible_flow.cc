@@ -41,6 +41,7 @@
 
 #include <femp/flow/incompressible_flow.h>
 #include <femp/base/collective_error.h>
+#include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
 #include <femp/io/checkpoint.h>
 
@@ -143,6 +144,7 @@ namespace femp
     surface_tension_gradient = surface.surface_tension_gradient;
     recoil_coefficient       = surface.recoil_coefficient;
     curvature_smoothing      = surface.curvature_smoothing;
+    height_function          = surface.height_function;
     typename PressureSolver<dim>::Parameters solver;
     solver.parse_parameters(prm);
     solver_tolerance = solver.solver_tolerance;
@@ -180,6 +182,7 @@ namespace femp
     s.surface_tension_gradient = surface_tension_gradient;
     s.recoil_coefficient       = recoil_coefficient;
     s.curvature_smoothing      = curvature_smoothing;
+    s.height_function          = height_function;
     return s;
   }
 
@@ -511,15 +514,18 @@ namespace femp
   {
     Section section(timer, "flow: predictor");
     const auto &surface_force = surface.marangoni_force();
-    // Viscous force -mu K u per fluid cell, summed over ranks.
+    // Viscous force -mu K u per fluid cell, summed over ranks; per cell
+    // also its dissipation mu u^T K u, for check_viscous_energy().
     const bool viscous = prm.viscosity > 0;
     if (viscous)
       {
         for (int d = 0; d < dim; ++d)
           std::fill(force[d].begin(), force[d].end(), 0.);
-        for (const auto c : fluid_cells)
+        cell_dissipation.resize(fluid_cells.size());
+        for (std::size_t i = 0; i < fluid_cells.size(); ++i)
           {
-            const std::size_t n0 = grid.first_node_of_cell(c);
+            const std::size_t n0 = grid.first_node_of_cell(fluid_cells[i]);
+            double            uKu = 0;
             for (int d = 0; d < dim; ++d)
               {
                 double u[n_corners];
@@ -531,11 +537,14 @@ namespace femp
                     for (unsigned int b = 0; b < n_corners; ++b)
                       f += stiffness[a][b] * u[b];
                     force[d][n0 + corner_offset[a]] -= prm.viscosity * f;
+                    uKu += u[a] * f;
                   }
               }
+            cell_dissipation[i] = prm.viscosity * uKu;
           }
         for (int d = 0; d < dim; ++d)
           grid.sum_shared_nodes(force[d]);
+        check_viscous_energy(dt);
       }
     const double darcy = dt * prm.darcy_constant / rho;
     for (std::size_t a = 0; a < active.size(); ++a)
@@ -565,6 +574,76 @@ namespace femp
       }
     apply_boundary_conditions(u_new);
   }
+
+  // The explicit viscous update u -> u + dt M^-1 f, f = -mu K u, with K the
+  // fluid cells' Q1 stiffness and M their lumped masses rho V_n, changes
+  // the kinetic energy by
+  //   dE = dt (-u^T mu K u + dt/2 f^T M^-1 f),
+  // which no step within the stable limit of forward Euler (dt mu lambda <=
+  // 2 for every eigenvalue lambda of M^-1 K) can make positive: the viscous
+  // term only dissipates. A step above it makes the grid-scale modes grow,
+  // and the step rejection of advance() can keep them bounded and wrong
+  // instead of non-finite. So dE > 0 beyond round-off stops the run. Both
+  // sums go cell by cell over the owned fluid cells (a node's share of
+  // f^T M^-1 f divided among its fluid cells), so no node is counted
+  // twice on two ranks; one reduction of three numbers per step.
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::check_viscous_energy(const double dt) const
+  {
+    const double node_vol = std::pow(0.5 * grid.h(), dim);
+    double       sums[3]  = {0, 0, 0}; // dissipation, f M^-1 f, 2 E
+    double       worst = -std::numeric_limits<double>::max();
+    std::size_t  worst_cell = 0;
+    for (std::size_t i = 0; i < fluid_cells.size(); ++i)
+      {
+        const std::size_t n0 = grid.first_node_of_cell(fluid_cells[i]);
+        double            fMf = 0, uMu = 0;
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t n = n0 + corner_offset[a];
+            double            f2 = 0, u2 = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                f2 += force[d][n] * force[d][n];
+                u2 += u_old[d][n] * u_old[d][n];
+              }
+            fMf += f2 * node_vol / (rho * volume[n] * volume[n]);
+            uMu += u2;
+          }
+        sums[0] += cell_dissipation[i];
+        sums[1] += fMf;
+        sums[2] += rho * node_vol * uMu;
+        const double gain = 0.5 * dt * fMf - cell_dissipation[i];
+        if (gain > worst)
+          worst = gain, worst_cell = fluid_cells[i];
+      }
+    Utilities::MPI::sum(ArrayView<const double>(sums, 3), grid.communicator(),
+                        ArrayView<double>(sums, 3));
+    const double dE = dt * (0.5 * dt * sums[1] - sums[0]);
+    const double E  = 0.5 * sums[2];
+    if (!(dE > 1e-10 * E))
+      return;
+    // Where the gain is largest: the rank holding the global maximum says.
+    const double global_worst =
+      Utilities::MPI::max(worst, grid.communicator());
+    Point<dim> where;
+    const bool found = fluid_cells.size() > 0 && worst >= global_worst;
+    if (found)
+      where = grid.cell_center(worst_cell);
+    share_location(found, where, grid.communicator());
+    const auto l = stable_time_step();
+    throw CollectiveError(
+      "Melt flow: the explicit viscous update of a step of " + num(dt) +
+      " s raised the melt's kinetic energy by " + num(dE / std::max(E, 1e-300)) +
+      " of itself, which no stable step can do (viscosity only dissipates); "
+      "the grid-scale velocity mode grows fastest in the cell at " +
+      location_text(where) + " m. The step exceeds the stable limit of the "
+      "explicit viscous term (femp's viscous limit h^2 rho/(2 dim mu) is " +
+      num(l.viscous) + " s here): use 'Melt flow/Time step = 0' (steps "
+      "chosen within the limits) or a smaller prescribed step.");
+  }
+
 
   template <int dim>
   void

@@ -7,6 +7,7 @@
 #include <femp/heat/heat_transfer.h>
 #include <femp/io/checkpoint.h>
 #include <femp/base/collective_error.h>
+#include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
 
 #include <algorithm>
@@ -22,17 +23,6 @@ namespace femp
   {
     constexpr double stefan_boltzmann = 5.670374419e-8; // W/(m^2 K^4)
     constexpr double gas_constant     = 8.314462618;    // J/(mol K)
-
-    /// A position for a message: "(x, y[, z])".
-    template <int dim>
-    std::string
-    point_text(const Point<dim> &p)
-    {
-      std::string s = "(";
-      for (int d = 0; d < dim; ++d)
-        s += (d > 0 ? ", " : "") + num(p[d]);
-      return s + ")";
-    }
   } // namespace
 
 
@@ -1119,11 +1109,11 @@ namespace femp
               where = grid.cell_center(idx), found = true;
               break;
             }
-        broadcast_location(found, where);
+        share_location(found, where, grid.communicator());
         throw CollectiveError(
           "The temperature became non-finite at time " + num(time + dt) +
           " s (step size " + num(dt) + " s). First non-finite temperature in "
-          "the cell at " + point_text(where) + " m. The step may exceed the "
+          "the cell at " + location_text(where) + " m. The step may exceed the "
           "stable limit, or a surface loss (evaporation) may be too stiff.");
       }
     check_temperature_floor(-global[2], dt, time);
@@ -1376,33 +1366,17 @@ namespace femp
         lowest = T[idx], where = grid.cell_center(idx);
     // The rank that holds the global minimum tells the others.
     found = lowest <= T_min;
-    broadcast_location(found, where);
+    share_location(found, where, grid.communicator());
     throw CollectiveError(
       "The temperature step broke the discrete maximum principle at time " +
       num(time + dt) + " s (step size " + num(dt) + " s): the cell at " +
-      point_text(where) + " m fell to " + num(T_min) + " K, below " +
+      location_text(where) + " m fell to " + num(T_min) + " K, below " +
       num(T_floor) + " K, the lowest initial, fixed-face or reference "
       "temperature, which no stable step can undershoot. The step exceeds "
       "the stable limit of the explicit temperature step (an unstable step "
       "can stay finite: the latent heat clamps it into a wrong "
       "checkerboard). Use a smaller 'Time stepping/Safety factor' or "
       "'Time stepping/Time step'.");
-  }
-
-
-  template <int dim>
-  void
-  HeatTransfer<dim>::broadcast_location(const bool found,
-                                        Point<dim> &where) const
-  {
-    const MPI_Comm     comm = grid.communicator();
-    const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
-    const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
-    if (root < (1u << 30))
-      {
-        const int ierr = MPI_Bcast(&where[0], dim, MPI_DOUBLE, root, comm);
-        AssertThrowMPI(ierr);
-      }
   }
 
 

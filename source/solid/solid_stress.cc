@@ -9,6 +9,7 @@
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
 #include <femp/base/collective_error.h>
+#include <femp/base/error_location.h>
 
 #include <cmath>
 #include <filesystem>
@@ -1019,10 +1020,7 @@ namespace femp
                   (fem && fem->find_non_finite(where));
         else if (mpm.point_lost())
           where = mpm.escaped_point(), found = true;
-        const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
-        const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
-        if (root < (1u << 30))
-          MPI_Bcast(&where[0], dim, MPI_DOUBLE, root, comm);
+        share_location(found, where, comm);
         std::ostringstream s;
         s << "solid: "
           << (blown ? "the solution became non-finite (unstable: check "
@@ -1193,11 +1191,8 @@ namespace femp
                         ArrayView<double>(sums, 7));
     if (sums[2] > 0)
       {
-        const unsigned int me = Utilities::MPI::this_mpi_process(comm);
-        const unsigned int root =
-          Utilities::MPI::min(e.n_lost > 0 ? me : 1u << 30, comm);
         Point<dim> where = e.lost_at;
-        MPI_Bcast(&where[0], dim, MPI_DOUBLE, root, comm);
+        share_location(e.n_lost > 0, where, comm);
         std::ostringstream s;
         s << "solid: " << sums[2]
           << " material point(s) entered the finite-element zone before solid "

@@ -47,10 +47,13 @@ namespace femp
       double       recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
+      /// Curvature from heights of alpha in columns of 7 cells (true) or
+      /// from the divergence of alpha's normalized gradient (false).
+      bool height_function = false;
 
       /// The free-surface entries of the subsection Melt flow (the caller
-      /// has entered it): Curvature smoothing, Surface tension, Surface
-      /// tension temperature derivative, Recoil coefficient.
+      /// has entered it): Curvature, Curvature smoothing, Surface tension,
+      /// Surface tension temperature derivative, Recoil coefficient.
       static void
       declare_parameters(ParameterHandler &prm);
       /// Read them (inside Melt flow) and check their ranges.
@@ -148,6 +151,21 @@ namespace femp
                      const std::vector<std::uint32_t> &fluid_cells);
     /// Capillary pressure of the surface cells, and their Marangoni
     /// traction.
+    /// Column sums of alpha along each direction for the height-function
+    /// curvature: col3[d] (3 cells) on the owned near2 cells and col5[d]
+    /// (5 cells) on the owned near1 cells, with ghosts; NaN where a
+    /// column meets a cell whose alpha is not known (a non-gas cell beyond
+    /// near1, or outside the domain). Two ghost exchanges per direction
+    /// stand in for the three-cell reach that the one-cell ghost layer
+    /// does not have.
+    void
+    height_columns(const std::vector<double> &type);
+    /// div(n) of the surface cell @p c from the heights of the 7-cell
+    /// columns along the largest component of its outward normal @p n
+    /// through c and its 3^(dim-1) - 1 neighbours across; NaN where a
+    /// column is not known or does not cross the surface.
+    double
+    height_function_curvature(const std::size_t c, const double *n) const;
     void
     capillary_and_marangoni(const std::vector<double> &       type,
                             const std::vector<std::uint32_t> &fluid_cells,
@@ -175,6 +193,7 @@ namespace femp
 
     std::vector<double>                      near1, near2; // 0/1
     std::vector<double>                      alpha_node, alpha_cell;
+    std::array<std::vector<double>, dim>     col3, col5; // height function
     std::array<std::vector<double>, 2 * dim> theta;
     std::vector<double>                      p_surface;
     std::vector<double> p_capillary, surface_mark; // sigma div(n), 0/1

@@ -79,6 +79,9 @@ namespace femp
       double         point_shifting = 0;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int   curvature_smoothing = 0;
+      /// Curvature by the height function (Melt flow/Curvature); false:
+      /// from the gradient of alpha.
+      bool           height_function = false;
       /// Relaxation c of the volume correction (0: off): the points move,
       /// besides their advection, by grad(psi) with lap(psi) = c (V_c/h^dim
       /// - 1), V_c the point volume in the cell (doc/flow.md).
@@ -282,6 +285,12 @@ namespace femp
     /// u*; @p gamma: the liquid fraction of the Darcy term (nullptr: 1).
     void
     predictor(const double dt, const std::vector<double> *gamma);
+    /// Stop the run (CollectiveError) if the explicit viscous update of
+    /// the step @p dt would raise the kinetic energy (beyond round-off): the
+    /// step is above the stable limit. Collective; after the viscous
+    /// forces are summed.
+    void
+    check_viscous_energy(const double dt) const;
     /// The fluid cells as the pressure solver sees them.
     typename PressureSolver<dim>::FluidCells
     fluid_cell_set() const;
@@ -369,6 +378,7 @@ namespace femp
     typename MaterialPoints<dim>::LayoutMark classified_at;
     bool                                     classified = false;
     std::vector<double>                  divergence;  // per owned fluid cell
+    std::vector<double>                  cell_dissipation; // mu u^T K u per owned fluid cell, W (W/m in 2D)
     std::vector<double> volume_source; // -c e per owned fluid cell
 
     Statistics stats;

@@ -359,10 +359,6 @@ namespace femp
     void
     check_temperature_floor(const double T_min, const double dt,
                             const double time) const;
-    /// The lowest rank with @p found sends its @p where to all. Collective.
-    void
-    broadcast_location(const bool found, Point<dim> &where) const;
-
     /// What the passes of advance() hand on to each other.
     struct StepSums
     {
