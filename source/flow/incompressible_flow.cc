@@ -753,26 +753,39 @@ namespace femp
           }
       }
     apply_boundary_conditions(u_new);
+  }
 
+
+  template <int dim>
+  void
+  IncompressibleFlow<dim>::stop_non_finite_velocity(const double dt) const
+  {
+    // Every rank knows (max_nodal_speed() is global); the lowest rank with
+    // a non-finite nodal velocity says where.
+    Point<dim> where;
+    bool       found = false;
     for (const auto n : active)
-      for (int d = 0; d < dim; ++d)
-        if (!std::isfinite(u_new[d][n]))
+      {
+        bool finite = true;
+        for (int d = 0; d < dim; ++d)
+          finite = finite && std::isfinite(u_new[d][n]);
+        if (finite)
+          continue;
+        std::size_t rest = n;
+        for (int e = dim - 1; e >= 0; --e)
           {
-            std::size_t          rest = n;
-            std::array<int, dim> ijk;
-            for (int e = dim - 1; e >= 0; --e)
-              {
-                ijk[e] = grid.box_lower()[e] + int(rest / grid.node_strides()[e]);
-                rest %= grid.node_strides()[e];
-              }
-            std::ostringstream msg;
-            msg << "Melt flow became unstable: non-finite velocity at the grid "
-                << "node at x =";
-            for (int e = 0; e < dim; ++e)
-              msg << ' ' << grid.origin()[e] + ijk[e] * grid.h();
-            msg << " m (time step " << dt << " s). Reduce the time step.";
-            throw std::runtime_error(msg.str());
+            const int i = grid.box_lower()[e] + int(rest / grid.node_strides()[e]);
+            rest %= grid.node_strides()[e];
+            where[e] = grid.origin()[e] + i * grid.h();
           }
+        found = true;
+        break;
+      }
+    share_location(found, where, grid.communicator());
+    throw CollectiveError("Melt flow became unstable: non-finite velocity at "
+                          "the grid node at x = " + location_text(where) +
+                          " m (time step " + num(dt) +
+                          " s). Reduce the time step.");
   }
 
 
@@ -1118,6 +1131,8 @@ namespace femp
     // than a cell (e.g. a sudden recoil or capillary pressure that the
     // limits of the last step did not foresee), redo the step as two halves.
     const double umax = max_nodal_speed();
+    if (!std::isfinite(umax))
+      stop_non_finite_velocity(dt);
     if (umax * dt > grid.h())
       {
         if (depth >= 20)
@@ -1150,7 +1165,9 @@ namespace femp
         double s2 = 0;
         for (int d = 0; d < dim; ++d)
           s2 += u_new[d][n] * u_new[d][n];
-        umax = std::max(umax, s2);
+        // A non-finite velocity makes the maximum infinite on every rank.
+        umax = std::isfinite(s2) ? std::max(umax, s2) :
+                                   std::numeric_limits<double>::infinity();
       }
     return std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
   }

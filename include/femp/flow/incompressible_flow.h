@@ -304,9 +304,14 @@ namespace femp
     copy_solver_statistics();
     void
     correction(const double dt);
-    /// Largest nodal speed |u| over the active nodes (collective), m/s.
+    /// Largest nodal speed |u| over the active nodes (collective), m/s;
+    /// infinite where any rank has a non-finite nodal velocity.
     double
     max_nodal_speed() const;
+    /// Stop the run (CollectiveError) naming a grid node with a
+    /// non-finite velocity after the step @p dt. Collective.
+    [[noreturn]] void
+    stop_non_finite_velocity(const double dt) const;
     /// u_cell: mean of the nodes of the fluid cells.
     void
     update_cell_velocity();
