@@ -49,6 +49,21 @@ namespace femp_test
       return Utilities::MPI::max(m, grid.communicator());
     }
 
+    /// Mean pressure of the cells whose centre lies within @p r of
+    /// @p centre, over all ranks (collective), Pa.
+    double
+    mean_pressure_within(const Point<dim> &centre, const double r) const
+    {
+      const auto &p   = flow->pressure();
+      double      s[2] = {0, 0};
+      for (const auto idx : grid.owned_cells())
+        if (grid.cell_center(idx).distance(centre) < r)
+          s[0] += p[idx], s[1] += 1;
+      Utilities::MPI::sum(ArrayView<const double>(s, 2), grid.communicator(),
+                          ArrayView<double>(s, 2));
+      return s[0] / s[1];
+    }
+
     Material                                  material;
     BackgroundGrid<dim>                       grid;
     typename MaterialPoints<dim>::Parameters  points_prm;

@@ -83,13 +83,7 @@ main(int argc, char **argv)
         study ? static_cast<unsigned int>(std::ceil(2.5 * t_sigma / dt)) : 400;
       for (unsigned int n = 0; n < n_steps; ++n)
         scene.flow->step(dt);
-      const auto &p    = scene.flow->pressure();
-      double      sum = 0, count = 0;
-      for (const auto idx : scene.grid.owned_cells())
-        if (scene.grid.cell_center(idx).distance(centre) < R / 2)
-          sum += p[idx], ++count;
-      const double p_in = Utilities::MPI::sum(sum, comm) /
-                          Utilities::MPI::sum(count, comm);
+      const double p_in = scene.mean_pressure_within(centre, R / 2);
       const double umax = scene.max_over_points(
         [](const Point<dim> &, auto v) { return point_speed<dim>(v); });
       if (study && Utilities::MPI::this_mpi_process(comm) == 0)
