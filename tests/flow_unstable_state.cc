@@ -65,7 +65,6 @@ namespace
     checks.in_range("message says '" + expect + "'",
                     stopped && message.find(expect) != std::string::npos, 1,
                     1);
-    (void)stopped;
   }
 } // namespace
 

@@ -149,8 +149,6 @@ namespace femp
     void
     locate_interface(const std::vector<double> &       type,
                      const std::vector<std::uint32_t> &fluid_cells);
-    /// Capillary pressure of the surface cells, and their Marangoni
-    /// traction.
     /// Column sums of alpha along each direction for the height-function
     /// curvature: col3[d] (3 cells) on the owned near2 cells and col5[d]
     /// (5 cells) on the owned near1 cells, with ghosts; NaN where a
@@ -166,6 +164,8 @@ namespace femp
     /// column is not known or does not cross the surface.
     double
     height_function_curvature(const std::size_t c, const double *n) const;
+    /// Capillary pressure of the surface cells, and their Marangoni
+    /// traction.
     void
     capillary_and_marangoni(const std::vector<double> &       type,
                             const std::vector<std::uint32_t> &fluid_cells,
