@@ -67,8 +67,8 @@
 // bound to its new cell when that cell is owned by this rank (flat arrays
 // only; the ParticleHandler is updated by MaterialPoints::relocate_points()
 // when the state is written back). When a point enters a cell of another
-// rank, SolidStress calls resort() after the step: write back, deal.II's
-// global sort (MaterialPoints::points_moved()), gather again. A point that
+// rank, SolidStress calls resort() after the step: write back, send it to
+// that rank (MaterialPoints::relocate_points()), gather again. A point that
 // enters the finite-element zone or leaves the domain stops the run with a
 // message (the FE zone has no place for it).
 #ifndef femp_solid_mpm_h
@@ -154,7 +154,7 @@ namespace femp
     void
     scatter();
     /// After a step in which some point (on any rank) entered a cell of
-    /// another rank: scatter, global sort, gather (collective).
+    /// another rank: scatter, send to the neighbours, gather (collective).
     void
     resort();
 
