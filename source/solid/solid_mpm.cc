@@ -1460,9 +1460,9 @@ namespace femp
   SolidMPM<dim>::scatter()
   {
     write_back();
-    // Points bound to new cells of this rank: move them in the handler
-    // (cell by cell, looking only in the cells they left; deal.II's global
-    // sort only if that fails).
+    // Points that changed cells: move them in the handler, to the owner
+    // where the new cell is a ghost cell (cell by cell, looking only in the
+    // cells they left; deal.II's global sort only if that fails).
     if (Utilities::MPI::logical_or(moved_cell, grid.communicator()))
       {
         std::sort(left_cells.begin(), left_cells.end());
@@ -1481,18 +1481,11 @@ namespace femp
   SolidMPM<dim>::resort()
   {
     // Points that entered a cell of a neighbour rank go there with the
-    // others that changed cells, looking only in the cells they left (their
-    // new cells are ghost cells here); deal.II's global sort of every point
-    // (about 500 ns per point) only if that fails. Then gather again: the
-    // members of this rank changed.
-    write_back();
-    std::sort(left_cells.begin(), left_cells.end());
-    left_cells.erase(std::unique(left_cells.begin(), left_cells.end()),
-                     left_cells.end());
-    if (!points.relocate_points(&left_cells))
-      points.points_moved();
-    left_cells.clear();
-    moved_cell = false;
+    // others that changed cells (scatter(): only the cells they left are
+    // looked at, their new cells are ghost cells here; deal.II's global sort
+    // of every point, about 500 ns per point, only if that fails). Then
+    // gather again: the members of this rank changed.
+    scatter();
     const std::vector<std::uint8_t> mask = excluded;
     gather(mask, scaling);
   }
@@ -1815,9 +1808,10 @@ namespace femp
             if (!grid.in_box(ijk) ||
                 grid.cell_status()[idx] != BackgroundGrid<dim>::owned)
               {
-                // Its old cell, where resort() finds it to send it to the
+                // Its old cell, where scatter() finds it to send it to the
                 // neighbour rank.
                 left_cells.push_back(cell[p]);
+                moved_cell = true;
                 ++left_rank;
                 continue;
               }
