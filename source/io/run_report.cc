@@ -94,11 +94,13 @@ namespace femp
             << se.kinetic / std::max(1e-300, std::abs(se.internal))
             << std::endl;
         const auto gathers = solid->gathers_kept(); // collective
-        if (gathers[0] > 0)
-          out << "Solid: " << gathers[0] << " of " << gathers[1]
-              << " gathers of the MPM points (all ranks) kept the arrays "
-                 "(no point melted, solidified or moved into or out of a "
-                 "member's cell since the last)"
+        if (gathers[0] + gathers[1] > 0)
+          out << "Solid: of " << gathers[2]
+              << " gathers of the MPM points (all ranks), " << gathers[0]
+              << " kept the arrays (no point melted, solidified or moved into "
+                 "or out of a member's cell since the last) and "
+              << gathers[1]
+              << " read again only the cells whose points changed"
               << std::endl;
         const unsigned long held = solid->n_points_held(); // collective
         if (held > 0)

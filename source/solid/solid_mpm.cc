@@ -1072,6 +1072,12 @@ namespace femp
     const bool keep = same_members && gathered && apic_now == apic &&
                       excluded_cell == excluded &&
                       points.layout_unchanged(gathered_layout, cell);
+    // Otherwise, the same handler layout (no re-sort or re-index): only the
+    // cells whose points changed are read again.
+    const bool merge = !keep && gathered && apic_now == apic &&
+                       excluded_cell == excluded &&
+                       points.layout_mark().generation ==
+                         gathered_layout.generation;
     apic = apic_now;
     if (!gathered || excluded_cell != excluded)
       {
@@ -1095,6 +1101,27 @@ namespace femp
     cell_mark.resize(grid.n_local(), 0);
     if (keep)
       ++gathers_kept;
+    else if (merge)
+      {
+        ++gathers_merged;
+        merge_members();
+#ifdef DEBUG
+        // Debug builds: the merge must give what a full copy gives.
+        {
+          const auto xs = x, vs = v, cs = corner, ss = sigma;
+          const auto Cs = C;
+          const auto m = true_mass, vo = volume, vi = visc, e = eps_p;
+          const auto ce = cell, no = node0;
+          const auto ha = handle, mi = member_id;
+          copy_members();
+          Assert(xs == x && vs == v && cs == corner && Cs == C &&
+                   ss == sigma && m == true_mass && vo == volume &&
+                   vi == visc && e == eps_p && ce == cell && no == node0 &&
+                   ha == handle && mi == member_id,
+                 ExcMessage("the merged gather differs from a full copy"));
+        }
+#endif
+      }
     else
       copy_members();
     gathered        = true;
@@ -1110,46 +1137,24 @@ namespace femp
 
   template <int dim>
   void
-  SolidMPM<dim>::copy_members()
+  SolidMPM<dim>::find_members(
+    const std::size_t                                    c,
+    std::vector<std::pair<unsigned int, std::uint32_t>> &out)
   {
-    using P = typename MaterialPoints<dim>::PropertyIndex;
-    // (The arrays filled by index below are only resized: no zero fill.)
-    for (int d = 0; d < dim; ++d)
-      corner[d].clear();
-    cell.clear(), handle.clear();
-    auto &     handler = points.particle_handler_for_update();
-    const auto h       = grid.h();
-    {
-      const std::size_t n = handler.n_locally_owned_particles();
-      for (int d = 0; d < dim; ++d)
-        x[d].reserve(n), v[d].reserve(n), corner[d].reserve(n);
-      if (apic)
-        for (auto &c : C)
-          c.reserve(n);
-      for (auto &s : sigma)
-        s.reserve(n);
-      true_mass.reserve(n), volume.reserve(n), visc.reserve(n);
-      eps_p.reserve(n), cell.reserve(n), node0.reserve(n), handle.reserve(n);
-    }
-    // A flat walk over the pool handles of the points in the handler's
-    // order (the order of the arrays, as deal.II's iterator gives it) but
-    // those of the FE zone's deeper cells, with prefetches ahead. Many
-    // points (the powder, the zone's first layer) are only looked at; the
-    // first pass finds the points that take part (pool handle, cell, cell
-    // corner), the second copies their state into the arrays.
-    auto &pool = handler.get_property_pool();
-    collect_handles();
-    const std::size_t     n_walk = walk.size();
+    using P     = typename MaterialPoints<dim>::PropertyIndex;
+    auto &pool  = points.particle_handler_for_update().get_property_pool();
+    const auto  handles = points.cell_point_handles(c);
+    const std::size_t     n_cell = handles.size();
     constexpr std::size_t ahead  = 16;
-    for (std::size_t k = 0; k < n_walk; ++k)
+    for (std::size_t i = 0; i < n_cell; ++i)
       {
-        if (k + ahead < n_walk)
+        if (i + ahead < n_cell)
           {
-            const auto hn = walk[k + ahead];
+            const auto hn = handles[i + ahead];
             __builtin_prefetch(pool.get_properties(hn).data() + P::state, 1);
             __builtin_prefetch(&pool.get_location(hn), 0);
           }
-        const auto              hp = walk[k];
+        const auto              hp = handles[i];
         const ArrayView<double> q  = pool.get_properties(hp);
         if (q[P::state] == MaterialPoints<dim>::fluid)
           {
@@ -1159,8 +1164,8 @@ namespace femp
             // again stress-free and at rest (doc/solid.md "Melting and
             // re-solidification"). With the flow, its velocity is the
             // flow's (doc/solid.md "Flow and solid together").
-            for (unsigned int c = P::stress; c < P::stress + dim * (dim + 1) / 2; ++c)
-              q[c] = 0;
+            for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
+              q[k] = 0;
             if (!flow_owns_fluid)
               for (int d = 0; d < dim; ++d)
                 q[P::velocity + d] = 0;
@@ -1169,74 +1174,194 @@ namespace femp
             if constexpr (dim == 2)
               q[P::stress_zz] = 0;
             if (apic)
-              for (unsigned int c = 0; c < dim * dim; ++c)
-                q[P::affine_velocity + c] = 0;
+              for (unsigned int k = 0; k < dim * dim; ++k)
+                q[P::affine_velocity + k] = 0;
           }
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;
-        const auto ijk = grid.cell_of(pool.get_location(hp));
-        const auto idx = grid.local_index(ijk);
-        if (excluded[idx])
-          continue;
-        handle.push_back(hp);
-        cell.push_back(idx);
-        for (int d = 0; d < dim; ++d)
-          corner[d].push_back(grid.origin()[d] + ijk[d] * h);
+        const auto idx = grid.local_index(grid.cell_of(pool.get_location(hp)));
+        if (!excluded[idx])
+          out.emplace_back(hp, idx);
       }
-    const std::size_t n = handle.size();
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::read_member(const std::size_t   p,
+                             const unsigned int  hp,
+                             const std::uint32_t idx)
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    auto &pool = points.particle_handler_for_update().get_property_pool();
+    const ArrayView<const double> q  = pool.get_properties(hp);
+    const Point<dim> &            xp = pool.get_location(hp);
+    const auto                    ijk = grid.global_index(idx);
+    handle[p] = hp;
+    cell[p]   = idx;
     for (int d = 0; d < dim; ++d)
-      x[d].resize(n), v[d].resize(n);
+      {
+        corner[d][p] = grid.origin()[d] + ijk[d] * grid.h();
+        x[d][p]      = xp[d];
+        v[d][p]      = q[P::velocity + d];
+      }
+    if (apic)
+      for (unsigned int c = 0; c < dim * dim; ++c)
+        C[c][p] = q[P::affine_velocity + c];
+    true_mass[p] = q[P::mass];
+    volume[p]    = q[P::volume];
+    visc[p]      = q[P::viscous_pressure];
+    node0[p]     = grid.first_node_of_cell(idx);
+    if constexpr (dim == 2)
+      {
+        sigma[0][p] = q[P::stress + 0];
+        sigma[1][p] = q[P::stress + 1];
+        sigma[2][p] = q[P::stress_zz];
+        sigma[3][p] = q[P::stress + 2];
+        sigma[4][p] = 0.;
+        sigma[5][p] = 0.;
+      }
+    else
+      for (unsigned int c = 0; c < n_stress; ++c) // same order
+        sigma[c][p] = q[P::stress + c];
+    eps_p[p]      = q[P::plastic_strain];
+    const auto id = pool.get_id(hp);
+    member_id[p]  = id;
+    if (id / 64 >= member_bits.size())
+      member_bits.resize(id / 64 + 1, 0);
+    member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
+  }
+
+
+  namespace
+  {
+    /// Resizes every per-point array of @p arrays to @p n (the arrays
+    /// filled by index: no zero fill needed, but resize() does it).
+    template <typename... V>
+    void
+    resize_all(const std::size_t n, V &...arrays)
+    {
+      (arrays.resize(n), ...);
+    }
+  } // namespace
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::copy_members()
+  {
+    // Cell by cell in increasing flat index, from MaterialPoints' per-cell
+    // cache of pool handles, but the FE zone's deeper cells (neither
+    // members nor fluid there, see exchange_cell): a first pass finds the
+    // points that take part (pool handle, cell), the second copies their
+    // state into the arrays, with prefetches ahead.
+    const auto &occupied = points.occupied_cells();
+    found.clear();
+    found.reserve(points.particle_handler().n_locally_owned_particles());
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      if (exchange_cell.empty() || exchange_cell[occupied[c].first])
+        find_members(c, found);
+    const std::size_t n = found.size();
+    for (int d = 0; d < dim; ++d)
+      resize_all(n, x[d], v[d], corner[d]);
     for (auto &c : C)
       c.resize(apic ? n : 0);
     for (auto &s : sigma)
       s.resize(n);
-    true_mass.resize(n), volume.resize(n), visc.resize(n);
-    eps_p.resize(n), node0.resize(n);
+    resize_all(n, true_mass, volume, visc, eps_p, cell, node0, handle, member_id);
     // Membership by particle id, for exchange_since_gather().
-    member_bits.assign(handler.get_next_free_particle_index() / 64 + 1, 0);
+    member_bits.assign(points.particle_handler().get_next_free_particle_index() / 64 + 1, 0);
+    auto &                pool  = points.particle_handler_for_update().get_property_pool();
+    constexpr std::size_t ahead = 16;
     for (std::size_t p = 0; p < n; ++p)
       {
         if (p + ahead < n)
           {
-            const auto    hn = handle[p + ahead];
+            const auto    hn = found[p + ahead].first;
             const double *r  = pool.get_properties(hn).data();
             for (unsigned int c = 0; c < pool.n_properties_per_slot(); c += 8)
               __builtin_prefetch(r + c, 0);
             __builtin_prefetch(&pool.get_location(hn), 0);
           }
-        const auto                    hp = handle[p];
-        const ArrayView<const double> q  = pool.get_properties(hp);
-        const Point<dim> &            xp = pool.get_location(hp);
-        for (int d = 0; d < dim; ++d)
-          {
-            x[d][p] = xp[d];
-            v[d][p] = q[P::velocity + d];
-          }
-        if (apic)
-          for (unsigned int c = 0; c < dim * dim; ++c)
-            C[c][p] = q[P::affine_velocity + c];
-        true_mass[p] = q[P::mass];
-        volume[p]    = q[P::volume];
-        visc[p]      = q[P::viscous_pressure];
-        node0[p]     = grid.first_node_of_cell(cell[p]);
-        if constexpr (dim == 2)
-          {
-            sigma[0][p] = q[P::stress + 0];
-            sigma[1][p] = q[P::stress + 1];
-            sigma[2][p] = q[P::stress_zz];
-            sigma[3][p] = q[P::stress + 2];
-            sigma[4][p] = 0.;
-            sigma[5][p] = 0.;
-          }
-        else
-          for (unsigned int c = 0; c < n_stress; ++c) // same order
-            sigma[c][p] = q[P::stress + c];
-        eps_p[p]      = q[P::plastic_strain];
-        const auto id = pool.get_id(hp);
-        if (id / 64 >= member_bits.size())
-          member_bits.resize(id / 64 + 1, 0);
-        member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
+        read_member(p, found[p].first, found[p].second);
       }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::merge_members()
+  {
+    // The members of the cells whose points neither came, went nor changed
+    // state since the last gather (MaterialPoints::cell_changed_since())
+    // are the same points in the same order, and the arrays hold their
+    // state (written back by the last scatter(); handles are stable while
+    // the handler is not re-indexed): they stay. The changed cells are
+    // looked at as copy_members() would, and both are merged in increasing
+    // cell index, the order of copy_members().
+    const auto &occupied = points.occupied_cells();
+    found.clear();
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      {
+        const auto idx = occupied[c].first;
+        if ((exchange_cell.empty() || exchange_cell[idx]) &&
+            points.cell_changed_since(gathered_layout, idx))
+          find_members(c, found);
+      }
+    const std::size_t n_old = handle.size();
+    merge_source.clear();
+    merge_source.reserve(n_old + found.size());
+    std::size_t j = 0;
+    for (std::size_t p = 0; p < n_old; ++p)
+      {
+        const auto idx = cell[p];
+        if (points.cell_changed_since(gathered_layout, idx))
+          {
+            // Dropped: read again below if still a member here.
+            member_bits[member_id[p] / 64] &=
+              ~(std::uint64_t(1) << (member_id[p] % 64));
+            continue;
+          }
+        while (j < found.size() && found[j].second < idx)
+          merge_source.push_back(~std::int64_t(j++));
+        merge_source.push_back(std::int64_t(p));
+      }
+    while (j < found.size())
+      merge_source.push_back(~std::int64_t(j++));
+    const std::size_t n = merge_source.size();
+    // Field by field: the kept entries move to their new places.
+    auto move_field = [&](auto &field) {
+      using T   = typename std::decay_t<decltype(field)>::value_type;
+      auto &out = [&]() -> std::vector<T> & {
+        if constexpr (std::is_same_v<T, double>)
+          return merge_buffer_double;
+        else if constexpr (std::is_same_v<T, std::uint32_t>)
+          return merge_buffer_u32;
+        else
+          return merge_buffer_index;
+      }();
+      out.resize(n);
+      for (std::size_t k = 0; k < n; ++k)
+        if (merge_source[k] >= 0)
+          out[k] = field[merge_source[k]];
+      field.swap(out);
+    };
+    for (int d = 0; d < dim; ++d)
+      move_field(x[d]), move_field(v[d]), move_field(corner[d]);
+    if (apic)
+      for (auto &c : C)
+        move_field(c);
+    for (auto &s : sigma)
+      move_field(s);
+    move_field(true_mass), move_field(volume), move_field(visc);
+    move_field(eps_p), move_field(cell), move_field(node0);
+    move_field(handle), move_field(member_id);
+    for (std::size_t k = 0; k < n; ++k)
+      if (merge_source[k] < 0)
+        {
+          const auto &f = found[~merge_source[k]];
+          read_member(k, f.first, f.second);
+        }
   }
 
 
@@ -1264,38 +1389,6 @@ namespace femp
             near = !grid.in_box(nb) || !excluded[grid.local_index(nb)];
           }
         exchange_cell[idx] = near;
-      }
-  }
-
-
-  template <int dim>
-  void
-  SolidMPM<dim>::collect_handles() const
-  {
-    // The points of the FE zone's deeper cells (exchange_cell 0) are
-    // neither members nor fluid (see exchange_cell): marked by their pool
-    // handles from MaterialPoints' per-cell cache (a sequential pass), left
-    // out of the walk without a look into the pool.
-    const auto &handler  = points.particle_handler();
-    const auto &occupied = points.occupied_cells();
-    skip_bits.assign(skip_bits.size(), 0);
-    if (!exchange_cell.empty())
-      for (std::size_t c = 0; c < occupied.size(); ++c)
-        if (!exchange_cell[occupied[c].first])
-          for (const auto hp : points.cell_point_handles(c))
-            {
-              if (hp / 64 >= skip_bits.size())
-                skip_bits.resize(hp / 64 + 1, 0);
-              skip_bits[hp / 64] |= std::uint64_t(1) << (hp % 64);
-            }
-    walk.clear();
-    walk.reserve(handler.n_locally_owned_particles());
-    for (auto it = handler.begin(); it != handler.end(); ++it)
-      {
-        const auto hp = it->get_local_index();
-        if (hp / 64 >= skip_bits.size() ||
-            !((skip_bits[hp / 64] >> (hp % 64)) & 1u))
-          walk.push_back(hp);
       }
   }
 

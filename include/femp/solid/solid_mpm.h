@@ -135,11 +135,12 @@ namespace femp
     gather(const std::vector<std::uint8_t> &excluded_cell,
            const double                      mass_scaling,
            const bool                        same_members = false);
-    /// gather() calls that kept the arrays (see there), and all calls.
-    std::array<unsigned long, 2>
+    /// gather() calls that kept the arrays (see there), those that
+    /// updated them only in the cells whose points changed, and all calls.
+    std::array<unsigned long, 3>
     gather_counts() const
     {
-      return {{gathers_kept, gathers}};
+      return {{gathers_kept, gathers_merged, gathers}};
     }
     /// With the melt flow running beside the solid: gather() leaves the
     /// velocity of fluid points alone (the flow owns it).
@@ -339,13 +340,8 @@ namespace femp
     std::vector<double>                       eps_p;
     std::vector<std::uint32_t>                cell, node0;
     /// Where each point lives in the handler's property pool (its local
-    /// index), for write_back().
-    std::vector<types::particle_index> handle;
-    /// Pool handles of this rank's points in the handler's order but
-    /// those of the FE zone's deeper cells, refilled by each gather() that
-    /// copies; skip_bits marks the latter by pool handle.
-    mutable std::vector<types::particle_index> walk;
-    mutable std::vector<std::uint64_t>         skip_bits;
+    /// index), for write_back(), and its particle id.
+    std::vector<types::particle_index> handle, member_id;
     /// Cells whose points exchange_since_gather() looks at: those outside
     /// the FE zone and the zone's layer next to them (members never lie
     /// deeper: a member that enters the zone stops the run in the step).
@@ -353,13 +349,38 @@ namespace femp
     /// The handler's layout at the last gather() (for keeping the arrays).
     typename MaterialPoints<dim>::LayoutMark gathered_layout;
     bool                                     gathered = false;
-    unsigned long                            gathers = 0, gathers_kept = 0;
+    unsigned long gathers = 0, gathers_kept = 0, gathers_merged = 0;
     /// Cells that points left in the steps since the gather (their cells in
     /// the handler, where scatter() has MaterialPoints look for moves).
     std::vector<std::uint32_t> left_cells;
-    /// gather()'s copy: the members' pool handles, cells and state.
+    /// gather()'s copy: the members' pool handles, cells and state, cell
+    /// by cell in increasing flat cell index (the order of the arrays).
     void
     copy_members();
+    /// gather()'s update of the arrays of the last gather where only some
+    /// cells changed: the members of the other cells stay as they are (the
+    /// last scatter() wrote them back), those of the changed cells are
+    /// read anew; the result equals copy_members().
+    void
+    merge_members();
+    /// The points of local cell @p idx (occupied_cells()[@p c]) that take
+    /// part: melted points cleared of their solid state on the way, the
+    /// members' (pool handle, cell) appended to @p out.
+    void
+    find_members(const std::size_t                                   c,
+                 std::vector<std::pair<unsigned int, std::uint32_t>> &out);
+    /// Reads the state of member @p p (pool handle @p hp in local cell
+    /// @p idx) from the pool into the arrays at index @p p.
+    void
+    read_member(const std::size_t p, const unsigned int hp, const std::uint32_t idx);
+    /// (hp, cell) of the members found by find_members(), and the merge's
+    /// source of each new entry (an old index, or ~j for found entry j).
+    std::vector<std::pair<unsigned int, std::uint32_t>> found;
+    std::vector<std::int64_t>                           merge_source;
+    /// The merge's buffers (swapped with the arrays: their memory stays).
+    std::vector<double>                merge_buffer_double;
+    std::vector<std::uint32_t>         merge_buffer_u32;
+    std::vector<types::particle_index> merge_buffer_index;
     /// exchange_cell from the mask.
     void
     set_exchange_cells();
@@ -390,10 +411,6 @@ namespace femp
       const std::size_t w = id / 64;
       return w < member_bits.size() && (member_bits[w] >> (id % 64)) & 1u;
     }
-    /// Fill walk with the pool handles of the handler's points, in order,
-    /// but those of the FE zone's deeper cells.
-    void
-    collect_handles() const;
 
     /// P2G sums of the next step from the fused pass of update_stresses():
     /// mass, momentum (dim), force (dim) per node of the local box, zero

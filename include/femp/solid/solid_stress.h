@@ -255,14 +255,16 @@ namespace femp
     }
     /// Gathers of the MPM points at the temperature steps, summed over the
     /// ranks: those that kept the arrays of the last one (nothing melted,
-    /// solidified or moved in or out of the members' cells there) and all
+    /// solidified or moved in or out of the members' cells there), those
+    /// that read again only the cells whose points changed, and all
     /// (collective).
-    std::array<double, 2>
+    std::array<double, 3>
     gathers_kept() const
     {
       const auto c = mpm.gather_counts();
       return {{Utilities::MPI::sum(double(c[0]), comm),
-               Utilities::MPI::sum(double(c[1]), comm)}};
+               Utilities::MPI::sum(double(c[1]), comm),
+               Utilities::MPI::sum(double(c[2]), comm)}};
     }
     /// State of the mass scaling (the adaptive controller's; constant with
     /// a fixed factor): what a checkpoint must keep.
