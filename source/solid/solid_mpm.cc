@@ -1124,6 +1124,7 @@ namespace femp
       }
     else
       copy_members();
+    left_rank_points.clear();
     gathered        = true;
     gathered_layout = points.layout_mark();
     moved_cell = lost = false;
@@ -1311,11 +1312,21 @@ namespace femp
     const std::size_t n_old = handle.size();
     merge_source.clear();
     merge_source.reserve(n_old + found.size());
+    // Points that left for another rank: cell[] holds the last cell they
+    // crossed into on this rank, which need not be a cell the relocation
+    // changed (a point that moved A -> B here and then on to the other
+    // rank was removed from A, where the handler still had it).
+    std::sort(left_rank_points.begin(), left_rank_points.end());
+    std::size_t l = 0;
     std::size_t j = 0;
     for (std::size_t p = 0; p < n_old; ++p)
       {
         const auto idx = cell[p];
-        if (points.cell_changed_since(gathered_layout, idx))
+        while (l < left_rank_points.size() && left_rank_points[l] < p)
+          ++l;
+        const bool left =
+          l < left_rank_points.size() && left_rank_points[l] == p;
+        if (left || points.cell_changed_since(gathered_layout, idx))
           {
             // Dropped: read again below if still a member here.
             member_bits[member_id[p] / 64] &=
@@ -1904,6 +1915,7 @@ namespace femp
                 // Its old cell, where scatter() finds it to send it to the
                 // neighbour rank.
                 left_cells.push_back(cell[p]);
+                left_rank_points.push_back(p);
                 moved_cell = true;
                 ++left_rank;
                 continue;
@@ -2101,6 +2113,7 @@ namespace femp
     weight_momentum.fill(0.);
     moved_cell = lost = false;
     left_rank         = 0;
+    left_rank_points.clear();
   }
 
 

@@ -353,6 +353,9 @@ namespace femp
     /// Cells that points left in the steps since the gather (their cells in
     /// the handler, where scatter() has MaterialPoints look for moves).
     std::vector<std::uint32_t> left_cells;
+    /// Array indices of the points that left for another rank since the
+    /// last gather (merge_members() drops them).
+    std::vector<std::size_t> left_rank_points;
     /// gather()'s copy: the members' pool handles, cells and state, cell
     /// by cell in increasing flat cell index (the order of the arrays).
     void
