@@ -355,6 +355,9 @@ namespace femp
     solid->initialize(heat->temperature(), checkpoint->resuming() ?
                                              std::string() :
                                              output_prm.directory);
+    // The FE zone's points never move nor melt (the solid stops the run
+    // otherwise): the metal fraction bins them once.
+    points->set_fixed_cells(solid->fe_zone_cells());
   }
 
 

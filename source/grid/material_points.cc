@@ -560,26 +560,82 @@ namespace femp
     // Over the cached position and property pointers (the points of each
     // occupied cell, in the handler's order), not deal.II's iterator.
     AssertDimension(point_locations.size(), handler.n_locally_owned_particles());
-    for (std::size_t k = 0; k < point_locations.size(); ++k)
+    // The cell and sub-cell bit point k falls in.
+    auto bin = [&](const std::size_t k, std::size_t &idx, unsigned int &bit) {
+      const Point<dim> &   p = *point_locations[k];
+      std::array<int, dim> ijk;
+      unsigned int         m = 1;
+      bit                    = 0;
+      for (int d = 0; d < dim; ++d)
+        {
+          const int sub = static_cast<int>(std::floor((p[d] - x0[d]) * ih));
+          const int c   = std::min(std::max(sub / int(n), 0),
+                                 int(grid.n_cells()[d]) - 1);
+          ijk[d] = c;
+          bit += m * std::min(std::max(sub - c * int(n), 0), int(n) - 1);
+          m *= n;
+        }
+      idx = grid.local_index(ijk);
+    };
+    constexpr std::uint32_t not_binned = std::numeric_limits<std::uint32_t>::max();
+    if (!fixed_cell.empty() && fixed_count.size() != grid.n_local())
       {
-        const Point<dim> &p = *point_locations[k];
-        std::array<int, dim> ijk;
-        unsigned int         bit = 0, m = 1;
-        for (int d = 0; d < dim; ++d)
+        fixed_bits.assign(grid.n_local(), 0);
+        fixed_volume.assign(grid.n_local(), 0.);
+        fixed_count.assign(grid.n_local(), not_binned);
+      }
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      {
+        const std::uint32_t cell_idx = occupied[c].first;
+        const std::uint32_t n_here   = cell_begin[c + 1] - cell_begin[c];
+        const bool fixed = !fixed_cell.empty() && fixed_cell[cell_idx] != 0;
+        if (fixed && fixed_count[cell_idx] == n_here)
           {
-            const int sub = static_cast<int>(std::floor((p[d] - x0[d]) * ih));
-            const int c   = std::min(std::max(sub / int(n), 0),
-                                   int(grid.n_cells()[d]) - 1);
-            ijk[d] = c;
-            bit += m * std::min(std::max(sub - c * int(n), 0), int(n) - 1);
-            m *= n;
+            // The same points at the same places as when they were binned.
+            mask[cell_idx] |= fixed_bits[cell_idx];
+            volume[cell_idx] += fixed_volume[cell_idx];
+#ifdef DEBUG
+            std::uint64_t bits = 0;
+            for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+              {
+                std::size_t  idx;
+                unsigned int bit;
+                bin(k, idx, bit);
+                Assert(idx == cell_idx, ExcInternalError());
+                bits |= std::uint64_t(1) << bit;
+              }
+            Assert(bits == fixed_bits[cell_idx], ExcInternalError());
+#endif
+            continue;
           }
-        const auto idx = grid.local_index(ijk);
-        mask[idx] |= (std::uint64_t(1) << bit);
-        const double *const v = point_properties[k];
-        volume[idx] += v[P::volume];
-        if (v[P::state] == fluid || v[P::peak_temperature] > Ts)
-          fluid_cell[idx] = 1, any_fluid = true;
+        std::uint64_t bits     = 0;
+        double        vol      = 0;
+        bool          reusable = fixed;
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          {
+            std::size_t  idx;
+            unsigned int bit;
+            bin(k, idx, bit);
+            mask[idx] |= (std::uint64_t(1) << bit);
+            const double *const v = point_properties[k];
+            volume[idx] += v[P::volume];
+            const bool is_fluid =
+              v[P::state] == fluid || v[P::peak_temperature] > Ts;
+            if (is_fluid)
+              fluid_cell[idx] = 1, any_fluid = true;
+            if (reusable)
+              {
+                reusable = idx == cell_idx && !is_fluid;
+                bits |= std::uint64_t(1) << bit;
+                vol += v[P::volume];
+              }
+          }
+        if (reusable)
+          {
+            fixed_bits[cell_idx]   = bits;
+            fixed_volume[cell_idx] = vol;
+            fixed_count[cell_idx]  = n_here;
+          }
       }
     const double        inv_nsub = 1. / std::pow(n, dim);
     std::vector<double> alpha(grid.n_local(), 0.);
@@ -589,6 +645,21 @@ namespace femp
       volume_fraction_of_fluid_cells(volume, fluid_cell, alpha);
     grid.update_ghosts(alpha);
     return alpha;
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::set_fixed_cells(const std::vector<std::uint8_t> &fixed)
+  {
+    Assert(fixed.empty() || fixed.size() == grid.n_local(),
+           ExcDimensionMismatch(fixed.size(), grid.n_local()));
+    fixed_cell.clear();
+    if (std::any_of(fixed.begin(), fixed.end(), [](auto f) { return f != 0; }))
+      fixed_cell = fixed;
+    fixed_bits.clear();
+    fixed_volume.clear();
+    fixed_count.clear();
   }
 
 
@@ -793,13 +864,20 @@ namespace femp
     const std::function<double(double)> &e) const
   {
     // Only cells where some point brought another temperature need the
-    // sums; a comparison per point finds them (~1 ns), e is evaluated
-    // only there.
+    // sums: not the cells whose points all took the cell's present
+    // temperature in cells_to_points() and stayed (one comparison per
+    // cell); in the others a comparison per point finds them (~1 ns), e is
+    // evaluated only there.
     using P = PropertyIndex;
     std::vector<std::pair<std::uint32_t, double>> mean;
+    const bool pushed = pushed_temperature.size() == grid.n_local();
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         const double Tc  = T[occupied[c].first];
+        // All points of a cell hold the temperature cells_to_points() gave
+        // them until one enters or leaves it (which forgets the record).
+        if (pushed && Tc == pushed_temperature[occupied[c].first])
+          continue;
         bool         any = false;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           any = any || point_properties[k][P::temperature] != Tc;
@@ -1202,6 +1280,7 @@ namespace femp
   MaterialPoints<dim>::load_state(std::vector<StateReader> &parts)
   {
     handler.clear_particles();
+    fixed_count.clear(); // other points: bin them again
     std::vector<double> props(n_props);
     for (auto &in : parts)
       {

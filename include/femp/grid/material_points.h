@@ -278,6 +278,16 @@ namespace femp
     std::vector<double>
     metal_fraction() const;
 
+    /// Mark the local cells whose points never move, melt or change their
+    /// volume while the run goes on (@p fixed: 1 per such cell of the local
+    /// box): the finite-element zone of the solid, whose points carry only
+    /// temperatures (a point that enters the zone stops the run, and so
+    /// does zone metal at the solidus). metal_fraction() bins the points of
+    /// such a cell once and reuses its sub-cell bits afterwards, unless the
+    /// cell's number of points changed. An empty @p fixed: none.
+    void
+    set_fixed_cells(const std::vector<std::uint8_t> &fixed);
+
     /// Points take the temperature of their cell; states and melt history
     /// follow (powder or solid -> fluid above the solidus, fluid -> solid at
     /// or below it).
@@ -402,6 +412,14 @@ namespace femp
     // Per local cell, the temperature cells_to_points() last gave its
     // points (NaN: not given since the cell's points changed).
     std::vector<double> pushed_temperature;
+    // set_fixed_cells(), and metal_fraction()'s record for those cells:
+    // the sub-cell bits and summed volume of their points and how many
+    // points gave them (max: not binned yet, or not reusable because a
+    // point lies outside the cell's box or is fluid).
+    std::vector<std::uint8_t>          fixed_cell;
+    mutable std::vector<std::uint64_t> fixed_bits;
+    mutable std::vector<double>        fixed_volume;
+    mutable std::vector<std::uint32_t> fixed_count;
     // Without carried points: true once cells_to_points() was called (the
     // points' states would follow the cell temperatures from then on).
     bool temperatures_passed = false;

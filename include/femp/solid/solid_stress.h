@@ -307,6 +307,13 @@ namespace femp
     /// without solid (fluid, powder, gas). Collective.
     void
     cell_fields(std::vector<std::vector<double>> &fields) const;
+    /// 1 for the cells of the local box in the FE zone, 0 elsewhere (all 0
+    /// without the zone): their points carry only temperatures.
+    const std::vector<std::uint8_t> &
+    fe_zone_cells() const
+    {
+      return zone_mask();
+    }
     /// FE elements whose grid cell is owned by another rank (global; the
     /// two meshes are partitioned independently).
     double
