@@ -48,8 +48,11 @@ namespace femp
     prm.declare_entry("Gas specific heat", "520", Patterns::Double(),
                       "Ambient gas specific heat c_g, J/(kg K); range [0, inf).");
     prm.declare_entry("Gas thermal conductivity", "0.018", Patterns::Double(),
-                      "Ambient gas conductivity lambda_g, W/(m K); range [0, "
-                      "inf). Cells without metal are not solved.");
+                      "Ambient gas conductivity lambda_g, W/(m K): the gas "
+                      "share of a partly filled cell's conductivity and the "
+                      "conduction from detached drops (Heat transfer/"
+                      "Detached drops); range [0, inf). Cells without metal "
+                      "are not solved.");
     prm.leave_subsection();
   }
 

@@ -46,6 +46,22 @@ namespace femp
                       "losses, K; range (0, inf).");
     prm.declare_entry("Convection coefficient", "10", Patterns::Double(0.),
                       "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
+    prm.declare_entry("Detached drops", "off",
+                      Patterns::Selection("off|sphere"),
+                      "Heat loss of detached metal: a metal cell whose face "
+                      "neighbours inside the domain hold no metal (a spatter "
+                      "drop or a loose grain of one cell). 'off' (default): "
+                      "such a cell has no surface for the central difference "
+                      "of alpha (or a small one at a face of the domain) and "
+                      "no metal to conduct to, so it keeps its heat. "
+                      "'sphere': it loses heat as a sphere of its metal "
+                      "volume in still gas (2D: a cylinder), over the "
+                      "sphere's surface: the convection, radiation and "
+                      "evaporation losses plus conduction to the gas with "
+                      "the coefficient 2 k_g/d (Nusselt number 2, d the "
+                      "sphere's diameter, k_g = Material/Gas thermal "
+                      "conductivity; argon: 0.018 W/(m K) at 300 K, 0.043 at "
+                      "1000 K, 0.065 at 2000 K). doc/equations.md.");
     prm.declare_entry("Emissivity", "0.4", Patterns::Double(0., 1.),
                       "Surface emissivity eps for radiation losses; range [0, 1].");
     prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
@@ -142,6 +158,7 @@ namespace femp
     }
     reference_temperature   = prm.get_double("Reference temperature");
     convection_coefficient  = prm.get_double("Convection coefficient");
+    detached_drops          = prm.get("Detached drops") == "sphere";
     emissivity              = prm.get_double("Emissivity");
     evaporation_coefficient = prm.get_double("Evaporation coefficient");
     laser_deposition        = prm.get("Laser deposition");
@@ -252,6 +269,9 @@ namespace femp
     source        = grid.make_field(0.);
     laser_density = grid.make_field(0.);
     loss_weight   = grid.make_field(0.);
+    if (prm.detached_drops)
+      gas_coefficient = grid.make_field(0.);
+    detached.clear();
     budget        = EnergyBudget();
 
     // Fixed-temperature faces: owned cells touching them.
@@ -350,6 +370,7 @@ namespace femp
         if (norm > 1e-12 / h)
           surface.push_back({idx, norm});
       }
+    find_detached_cells();
 
     // First-surface cells: per vertical column, the topmost cell with
     // alpha >= 1/2 over all ranks (one reduction per change of alpha). The
@@ -438,9 +459,58 @@ namespace femp
       source_cells.push_back(lc.index);
     for (const auto &f : fixed_faces)
       source_cells.push_back(f.index);
+    for (const auto &dc : detached)
+      source_cells.push_back(dc.index);
     std::sort(source_cells.begin(), source_cells.end());
     source_cells.erase(std::unique(source_cells.begin(), source_cells.end()),
                        source_cells.end());
+  }
+
+
+  // Detached metal (Heat transfer/Detached drops = sphere): an owned metal
+  // cell whose face neighbours inside the domain hold no metal has no
+  // surface for the central differences of alpha (or, at a face of the
+  // domain, only a small one) and no metal to conduct to, so without a
+  // model of the gas round it a spatter drop keeps its temperature. It is
+  // taken as a sphere of its metal volume V = alpha h^3 (2D: a cylinder of
+  // section alpha h^2) in still gas, diameter d = (6 V/pi)^(1/3) (2D:
+  // (4 V/pi)^(1/2)): surface per cell volume A/h^dim = 2 dim alpha/d, over
+  // which it loses q(T) (convection, radiation, evaporation) plus the
+  // conduction of a sphere in still gas, Nu k_g/d (T - T_ref) with Nu = 2
+  // (a drop of 2-10 um at 1 m/s relative to argon has Re < 1, where Nu
+  // stays near 2).
+  template <int dim>
+  void
+  HeatTransfer<dim>::find_detached_cells()
+  {
+    for (const auto &dc : detached)
+      gas_coefficient[dc.index] = 0;
+    detached.clear();
+    if (!prm.detached_drops)
+      return;
+    const auto & st = grid.strides();
+    const auto & n  = grid.n_cells();
+    const double h  = grid.h();
+    for (const auto idx : grid.owned_cells())
+      {
+        if (alpha[idx] <= 0)
+          continue;
+        const auto ijk      = grid.global_index(idx);
+        bool       detached_cell = true;
+        for (int d = 0; d < dim && detached_cell; ++d)
+          detached_cell =
+            !(ijk[d] > 0 && alpha[idx - st[d]] > 0) &&
+            !(ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0);
+        if (!detached_cell)
+          continue;
+        const double V = alpha[idx] * std::pow(h, dim);
+        const double d = dim == 3 ? std::cbrt(6 * V / M_PI) :
+                                    std::sqrt(4 * V / M_PI);
+        const double area = 2 * dim * alpha[idx] / d;
+        const double gas_h = 2 * mat.gas_conductivity / d;
+        detached.push_back({idx, area, gas_h});
+        gas_coefficient[idx] = gas_h;
+      }
   }
 
 
@@ -450,7 +520,8 @@ namespace femp
                                   double &     q_evap,
                                   double &     q_conv,
                                   double &     q_rad,
-                                  double &     dq_dT) const
+                                  double &     dq_dT,
+                                  const double gas_h) const
   {
     const double Tref  = prm.reference_temperature;
     const double Tref4 = Tref * Tref * Tref * Tref;
@@ -460,11 +531,11 @@ namespace femp
     q_evap = (evap_pref > 0 && exponent > -40) ?
                evap_pref / std::sqrt(T) * std::exp(exponent) :
                0.;
-    q_conv = prm.convection_coefficient * (T - Tref);
+    q_conv = (prm.convection_coefficient + gas_h) * (T - Tref);
     q_rad  = stefan_boltzmann * prm.emissivity * (T * T * T * T - Tref4);
     dq_dT  = q_evap * (evap_exp * mat.evaporation_temperature / (T * T) -
                       0.5 / T) +
-            prm.convection_coefficient +
+            prm.convection_coefficient + gas_h +
             4 * stefan_boltzmann * prm.emissivity * T * T * T;
   }
 
@@ -503,6 +574,9 @@ namespace femp
         loss_weight[s.index]   = wg;
         e_laser += q_laser;
       }
+    // Detached cells lose over their sphere's surface instead.
+    for (const auto &dc : detached)
+      loss_weight[dc.index] = dc.area;
     if (tracer)
       e_laser += deposit_traced_laser(time, dt);
     else if (!gradient_mode)
@@ -964,20 +1038,21 @@ namespace femp
         const double rc  = capacity[idx];
         const double dH  = (T_new[idx] - Tc) * rc + dt * source[idx];
         const double W   = loss_weight[idx];
+        const double hg  = gas_coefficient.empty() ? 0. : gas_coefficient[idx];
         double       Tnew = Tc + dH / rc;
         if (W > 0)
           Tnew = solve_cell(alpha[idx], Tc, gamma[idx], rc, dH, dt * W,
-                            false, Tnew);
+                            false, Tnew, hg);
         if (needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
           {
             ++nphase;
             Tnew = solve_cell(alpha[idx], Tc, gamma[idx], rc, dH, dt * W,
-                              true, Tnew);
+                              true, Tnew, hg);
           }
         if (W > 0)
           {
             double qe, qc, qr, dq;
-            surface_loss(Tnew, qe, qc, qr, dq);
+            surface_loss(Tnew, qe, qc, qr, dq, hg);
             e_evap += qe * W;
             e_conv += qc * W;
             e_rad += qr * W;
@@ -1140,7 +1215,8 @@ namespace femp
                                 const double dH,
                                 const double dtW,
                                 const bool   enthalpy,
-                                const double guess) const
+                                const double guess,
+                                const double gas_h) const
   {
     // f(T) = H(T) - H(Tc) + dtW q(T) - dH, increasing in T (q grows with T
     // below ~2 L_v M/R, 1e5 K for steel). With the sensible part only,
@@ -1154,7 +1230,7 @@ namespace femp
     auto f = [&](const double T, double &slope) {
       double qe = 0, qc = 0, qr = 0, dq = 0;
       if (dtW > 0)
-        surface_loss(T, qe, qc, qr, dq);
+        surface_loss(T, qe, qc, qr, dq, gas_h);
       if (enthalpy)
         {
           slope = a * mat.density *

@@ -56,6 +56,12 @@ namespace femp
       std::string initial_temperature_expression;
       double reference_temperature = 300.;
       double convection_coefficient = 10.;
+      /// 'Detached drops = sphere': a metal cell whose face neighbours
+      /// inside the domain hold no metal loses heat as a sphere of its
+      /// metal volume (diameter d) in still gas: over the sphere's surface,
+      /// the losses q(T) plus conduction with the coefficient Nu k_g/d,
+      /// Nu = 2, k_g = Material/Gas thermal conductivity. false: off.
+      bool detached_drops = false;
       double emissivity             = 0.4;
       /// zeta_q of eq. (1); the evaporation data are the Material's.
       double evaporation_coefficient = 0.82;
@@ -294,6 +300,21 @@ namespace femp
     /// Laser density of the last step, W/m^3; surface-loss weight
     /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
     std::vector<double> laser_density, loss_weight;
+    /// Detached metal cells (with Heat transfer/Detached drops = sphere): the
+    /// owned metal cells whose face neighbours inside the domain hold no
+    /// metal. Each loses heat as a sphere (2D: a cylinder) of its metal
+    /// volume in still gas: area per cell volume 2 dim alpha/d (1/m) and
+    /// gas coefficient 2 k_g/d (W/(m^2 K)), d the sphere's diameter.
+    struct DetachedCell
+    {
+      std::uint32_t index;
+      double        area;   ///< sphere surface / cell volume, 1/m
+      double        gas_h;  ///< Nu k_g / d, W/(m^2 K)
+    };
+    std::vector<DetachedCell> detached;
+    /// gas_h of the detached cells per cell of the local box, 0 elsewhere
+    /// (empty when Detached drops = off).
+    std::vector<double> gas_coefficient;
     /// 'Prescribed velocity' (empty arrays when none).
     std::array<std::vector<double>, dim> prescribed;
     /// The velocity that convects T in a step with @p fields (see
@@ -419,17 +440,23 @@ namespace femp
     }
     void
     compute_surface_sources(const double dt, const double time);
+    /// Fill detached and gas_coefficient from alpha (after the surface
+    /// cells; nothing when Detached drops = off).
+    void
+    find_detached_cells();
     /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
     double
     enthalpy_density(const double a, const double T) const;
     /// Surface loss flux q_evap + q_conv + q_rad at @p T (W/m^2), its parts
-    /// and its derivative dq/dT.
+    /// and its derivative dq/dT; @p gas_h (W/(m^2 K)) is added to the
+    /// convection coefficient (the gas conduction of a detached cell).
     void
     surface_loss(const double T,
                  double &     q_evap,
                  double &     q_conv,
                  double &     q_rad,
-                 double &     dq_dT) const;
+                 double &     dq_dT,
+                 const double gas_h = 0) const;
     /// New temperature of a cell with metal fraction @p a that starts from
     /// @p Tc, gamma @p gc and receives the explicit enthalpy change @p dH
     /// (J/m^3) and loses dtW q(T) with the loss q at the new temperature
@@ -445,7 +472,8 @@ namespace femp
                const double dH,
                const double dtW,
                const bool   enthalpy,
-               const double guess) const;
+               const double guess,
+               const double gas_h = 0) const;
     double
     heat_capacity(const double T, const double a) const
     {
