@@ -555,7 +555,7 @@ namespace femp
   {
     {
       TimerOutput::Scope t(timer, "cells to points");
-      points->cells_to_points(heat->temperature());
+      points->cells_to_points(heat->temperature(), &heat->metal_fraction());
     }
     if (flow && solid)
       {

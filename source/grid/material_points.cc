@@ -804,7 +804,8 @@ namespace femp
 
   template <int dim>
   void
-  MaterialPoints<dim>::cells_to_points(const std::vector<double> &T)
+  MaterialPoints<dim>::cells_to_points(const std::vector<double> &T,
+                                       const std::vector<double> *metal)
   {
     // A cell whose temperature is bit-for-bit the one last pushed to the
     // same set of points has nothing to change (temperature, peak and state
@@ -824,6 +825,10 @@ namespace femp
         const auto   idx = occupied[c].first;
         const double Tc  = T[idx];
         if (Tc == pushed_temperature[idx])
+          continue;
+        // A stale temperature (gas at the last alpha pass): the points keep
+        // theirs, the record stays unset for volume_mean_over_points().
+        if (metal != nullptr && !((*metal)[idx] > 0))
           continue;
         pushed_temperature[idx] = Tc;
         bool changed = false;

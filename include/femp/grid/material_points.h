@@ -290,9 +290,15 @@ namespace femp
 
     /// Points take the temperature of their cell; states and melt history
     /// follow (powder or solid -> fluid above the solidus, fluid -> solid at
-    /// or below it).
+    /// or below it). With @p metal (the metal fraction the heat equation
+    /// solves, from the last alpha pass): the points of a cell where it is
+    /// 0 keep their temperature. Such a cell was gas at that pass, and its
+    /// temperature is stale: points entered it since (moved by the solid,
+    /// whose moves are followed by no alpha pass), and the next pass gives
+    /// it their enthalpy.
     void
-    cells_to_points(const std::vector<double> &T);
+    cells_to_points(const std::vector<double> &T,
+                    const std::vector<double> *metal = nullptr);
 
     /// Heat carried by the points (Heat transfer/Advection by melt flow =
     /// points): for each owned cell holding a point whose temperature
