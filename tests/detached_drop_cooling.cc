@@ -15,9 +15,11 @@
 //  - with 'off' the cell keeps its temperature (no surface, no conduction),
 //    and a drop of two cells is no detached metal (no gas conduction).
 // Also printed, not gated: a one-point drop of the default 316L data at
-// 4 um cells, from 2500 K with the default convection, radiation and
-// evaporation and k_g = 0.043 W/(m K) (argon near 1000 K): the time it takes
-// to reach the solidus and 500 K, and the same without the model.
+// 4 um cells with the default convection, radiation and evaporation: the
+// time it takes to reach the solidus and 500 K from 2500 K with k_g =
+// 0.043 W/(m K) (argon near 1000 K), the same without the model, and with
+// the default k_g = 0.018 (argon at 300 K) from 2500 K and from 4830 K (the
+// temperature of spatter held on the top face of the paper-scale track).
 #include "test_tools.h"
 
 using namespace femp_test;
@@ -167,17 +169,18 @@ namespace
 
   /// Not gated: cooling of a one-point 316L drop at 4 um cells.
   void
-  steel_drop(Checks &checks, MPI_Comm comm, const bool on)
+  steel_drop(Checks &checks, MPI_Comm comm, const bool on, const double T0,
+             const double k_g)
   {
     const double h = 4e-6;
     const int    n = 8;
     Material     mat; // 316L-like defaults
-    mat.gas_conductivity = 0.043;
+    mat.gas_conductivity = k_g;
     Drop<3>    drop(h, n, comm);
     Point<3>   x((n / 2 + 0.5) * h, (n / 2 + 0.5) * h, (n / 2 + 0.5) * h);
     drop.put(x, 0.125);
     auto p = HeatTransfer<3>::Parameters(); // default losses
-    p.initial_temperature = 2500;
+    p.initial_temperature = T0;
     p.detached_drops      = on;
     HeatTransfer<3> heat(p, mat, drop.laser, drop.grid);
     heat.initialize();
@@ -193,7 +196,9 @@ namespace
         if (t_500 < 0 && T < 500)
           t_500 = (k + 1) * dt;
       }
-    const std::string at = std::string("316L one-point drop from 2500 K, ") +
+    const std::string at = "316L one-point drop from " +
+                           std::to_string(int(T0)) + " K, k_g = " +
+                           std::to_string(k_g).substr(0, 5) + ", " +
                            (on ? "sphere" : "off") + ": ";
     checks.print(at + "time to the solidus, us (-1: not within 2 ms)",
                  t_solid > 0 ? std::round(t_solid * 1e7) / 10 : -1, 3);
@@ -217,8 +222,10 @@ main(int argc, char **argv)
         }
       off_and_pair_check<3>(checks, comm);
       off_and_pair_check<2>(checks, comm);
-      steel_drop(checks, comm, true);
-      steel_drop(checks, comm, false);
+      steel_drop(checks, comm, true, 2500, 0.043);
+      steel_drop(checks, comm, false, 2500, 0.043);
+      steel_drop(checks, comm, true, 2500, 0.018);
+      steel_drop(checks, comm, true, 4830, 0.018);
     }
   catch (const std::exception &e)
     {
