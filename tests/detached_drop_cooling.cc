@@ -1,19 +1,21 @@
 // Heat loss of detached metal (Heat transfer/Detached drops = sphere,
-// doc/equations.md "Detached drops"): a metal cell whose face neighbours
-// inside the domain hold no metal cools as a sphere (2D: a cylinder) of its
-// metal volume in still gas. With conduction to the gas the only loss
+// doc/equations.md "Detached drops"): a drop of one or two metal cells (no
+// other metal face neighbour inside the domain) cools as a sphere (2D: a
+// cylinder) of its metal volume in still gas. With conduction to the gas the only loss
 // (Nusselt number 2, coefficient 2 k_g/d, d the sphere's diameter) and a
 // constant specific heat, the cell's temperature obeys
 //   C dT/dt = -(2 dim alpha/d) (2 k_g/d) (T - T_ref),
 // C = alpha rho c + (1 - alpha) rho_g c_g the cell's heat capacity, so it
-// decays as exp(-lambda t). Checked, in 3D and 2D, for a one-point drop
-// (alpha = 1/8 in 3D, 1/4 in 2D) inside the domain and on its top face:
+// decays as exp(-lambda t), d from the drop's metal volume. Checked, in 3D
+// and 2D, for a one-point drop (alpha = 1/8 in 3D, 1/4 in 2D) inside the
+// domain and on its top face, and for a drop of two such cells:
 //  - the computed temperature against the implicit step's own recursion
 //    T_{n+1} - T_ref = (T_n - T_ref)/(1 + lambda dt) (round-off), and
 //    against the exponential (the step's O(lambda dt) error);
 //  - the booked convection loss against the enthalpy the cell lost;
-//  - with 'off' the cell keeps its temperature (no surface, no conduction),
-//    and a drop of two cells is no detached metal (no gas conduction).
+//  - with 'off' a drop of one or two cells keeps its temperature (no
+//    surface, no conduction), and a line of three cells is no detached
+//    metal (no gas conduction).
 // Also printed, not gated: a one-point drop of the default 316L data at
 // 4 um cells with the default convection, radiation and evaporation: the
 // time it takes to reach the solidus and 500 K from 2500 K with k_g =
@@ -74,7 +76,8 @@ namespace
 
   template <int dim>
   void
-  closed_form_check(Checks &checks, MPI_Comm comm, const bool on_face)
+  closed_form_check(Checks &checks, MPI_Comm comm, const bool on_face,
+                    const int cells = 1)
   {
     const double h = 4e-6, T0 = 1500, Tref = 300;
     const int    n = 8;
@@ -91,13 +94,19 @@ namespace
       x[dim - 1] = (n - 0.5) * h;
     const double a = 1. / (1 << dim); // one point of 2^dim per cell
     drop.put(x, a);
+    if (cells == 2)
+      {
+        Point<dim> y = x;
+        y[0] += h;
+        drop.put(y, a);
+      }
     auto p = heat_parameters<dim>(T0, {});
     p.reference_temperature = Tref;
     p.detached_drops        = true;
     HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
     heat.initialize();
     heat.set_metal_fraction(drop.alpha);
-    const double V  = a * std::pow(h, dim);
+    const double V  = cells * a * std::pow(h, dim);
     const double d  = dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
     const double C  = a * mat.density * 500. +
                      (1 - a) * mat.gas_density * mat.gas_specific_heat;
@@ -111,7 +120,8 @@ namespace
       }
     const double T = drop.temperature_at(heat, x);
     const double T_exp = Tref + (T0 - Tref) * std::exp(-lambda * 100 * dt);
-    const std::string at = std::to_string(dim) + "D drop " +
+    const std::string at = std::to_string(dim) + "D drop of " +
+                           std::to_string(cells) + " cell(s) " +
                            (on_face ? "on the top face" : "inside") + ": ";
     checks.print(at + "decay rate lambda, 1/s", lambda);
     checks.print(at + "(T - T_ref)/(T0 - T_ref) at t = 1/lambda",
@@ -120,33 +130,33 @@ namespace
                    std::abs(T - T_rec) / (T0 - Tref), 1e-10);
     checks.at_most(at + "|T - exponential| / (T0 - T_ref)",
                    std::abs(T - T_exp) / (T0 - Tref), 0.01);
-    const double lost = C * std::pow(h, dim) * (T0 - T);
+    const double lost = cells * C * std::pow(h, dim) * (T0 - T);
     checks.at_most(at + "|booked convection / enthalpy lost - 1|",
                    std::abs(heat.energy_budget().convection / lost - 1), 1e-9);
   }
 
   template <int dim>
   void
-  off_and_pair_check(Checks &checks, MPI_Comm comm)
+  off_and_line_check(Checks &checks, MPI_Comm comm)
   {
     const double h = 4e-6, T0 = 1500;
     const int    n = 8;
     Material     mat;
     mat.gas_conductivity = 0.043;
-    for (const int cells : {1, 2})
+    for (const int cells : {1, 2, 3})
       for (const bool on : {false, true})
         {
-          if (cells == 1 && on)
-            continue; // the closed-form check above
+          if (on != (cells == 3))
+            continue; // 1, 2 on: the closed-form checks above
           Drop<dim>  drop(h, n, comm);
           Point<dim> x;
           for (int d = 0; d < dim; ++d)
             x[d] = (n / 2 + 0.5) * h;
           drop.put(x, 0.5);
-          if (cells == 2)
+          for (int c = 1; c < cells; ++c)
             {
               Point<dim> y = x;
-              y[0] += h;
+              y[0] += c * h;
               drop.put(y, 0.5);
             }
           auto p = heat_parameters<dim>(T0, {});
@@ -220,8 +230,10 @@ main(int argc, char **argv)
           closed_form_check<3>(checks, comm, face);
           closed_form_check<2>(checks, comm, face);
         }
-      off_and_pair_check<3>(checks, comm);
-      off_and_pair_check<2>(checks, comm);
+      closed_form_check<3>(checks, comm, false, 2);
+      closed_form_check<2>(checks, comm, false, 2);
+      off_and_line_check<3>(checks, comm);
+      off_and_line_check<2>(checks, comm);
       steel_drop(checks, comm, true, 2500, 0.043);
       steel_drop(checks, comm, false, 2500, 0.043);
       steel_drop(checks, comm, true, 2500, 0.018);

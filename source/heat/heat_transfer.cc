@@ -48,14 +48,14 @@ namespace femp
                       "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
     prm.declare_entry("Detached drops", "off",
                       Patterns::Selection("off|sphere"),
-                      "Heat loss of detached metal: a metal cell whose face "
-                      "neighbours inside the domain hold no metal (a spatter "
-                      "drop or a loose grain of one cell). 'off' (default): "
-                      "such a cell has no surface for the central difference "
-                      "of alpha (or a small one at a face of the domain) and "
-                      "no metal to conduct to, so it keeps its heat. "
-                      "'sphere': it loses heat as a sphere of its metal "
-                      "volume in still gas (2D: a cylinder), over the "
+                      "Heat loss of detached metal: a drop of one or two "
+                      "metal cells with no other metal face neighbour inside "
+                      "the domain (spatter, or a loose grain). 'off' "
+                      "(default): such a drop has no surface for the central "
+                      "difference of alpha (or a small one) and no metal to "
+                      "conduct to, so it keeps its heat. 'sphere': it loses "
+                      "heat as a sphere of its metal volume in still gas "
+                      "(2D: a cylinder), over the "
                       "sphere's surface: the convection, radiation and "
                       "evaporation losses plus conduction to the gas with "
                       "the coefficient 2 k_g/d (Nusselt number 2, d the "
@@ -468,13 +468,14 @@ namespace femp
 
 
   // Detached metal (Heat transfer/Detached drops = sphere): an owned metal
-  // cell whose face neighbours inside the domain hold no metal has no
-  // surface for the central differences of alpha (or, at a face of the
-  // domain, only a small one) and no metal to conduct to, so without a
-  // model of the gas round it a spatter drop keeps its temperature. It is
-  // taken as a sphere of its metal volume V = alpha h^3 (2D: a cylinder of
-  // section alpha h^2) in still gas, diameter d = (6 V/pi)^(1/3) (2D:
-  // (4 V/pi)^(1/2)): surface per cell volume A/h^dim = 2 dim alpha/d, over
+  // cell whose face neighbours inside the domain hold no metal, or one of
+  // two face neighbours that have no other, has no surface for the central
+  // differences of alpha (or only a small one) and no metal to conduct to,
+  // so without a model of the gas round it a spatter drop keeps its
+  // temperature. The drop (one or two cells) is taken as a sphere of its
+  // metal volume V = sum alpha h^3 (2D: a cylinder of section sum alpha
+  // h^2) in still gas, diameter d = (6 V/pi)^(1/3) (2D: (4 V/pi)^(1/2)):
+  // surface per cell volume 2 dim alpha/d for each of its cells, over
   // which it loses q(T) (convection, radiation, evaporation) plus the
   // conduction of a sphere in still gas, Nu k_g/d (T - T_ref) with Nu = 2
   // (a drop of 2-10 um at 1 m/s relative to argon has Re < 1, where Nu
@@ -491,26 +492,49 @@ namespace femp
     const auto & st = grid.strides();
     const auto & n  = grid.n_cells();
     const double h  = grid.h();
+    // Per owned metal cell the number of its face neighbours (inside the
+    // domain) that hold metal, and the last of them; the counts go to the
+    // ghost layer, so that a cell sees whether its one metal neighbour has
+    // no other (the pair is a drop of two cells) on every partition.
+    std::vector<double> &count = gas_coefficient; // reused, zero here
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> one_neighbour;
     for (const auto idx : grid.owned_cells())
       {
         if (alpha[idx] <= 0)
           continue;
-        const auto ijk      = grid.global_index(idx);
-        bool       detached_cell = true;
-        for (int d = 0; d < dim && detached_cell; ++d)
-          detached_cell =
-            !(ijk[d] > 0 && alpha[idx - st[d]] > 0) &&
-            !(ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0);
-        if (!detached_cell)
+        const auto    ijk = grid.global_index(idx);
+        unsigned int  m   = 0;
+        std::uint32_t last = 0;
+        for (int d = 0; d < dim; ++d)
+          {
+            if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
+              ++m, last = idx - st[d];
+            if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
+              ++m, last = idx + st[d];
+          }
+        count[idx] = m;
+        if (m == 0)
+          one_neighbour.emplace_back(idx, idx);
+        else if (m == 1)
+          one_neighbour.emplace_back(idx, last);
+      }
+    grid.update_ghosts(count);
+    for (const auto &[idx, other] : one_neighbour)
+      {
+        // A single cell, or one of a pair whose other cell has no other
+        // metal neighbour: a drop of the pair's metal volume.
+        if (other != idx && count[other] != 1)
           continue;
-        const double V = alpha[idx] * std::pow(h, dim);
+        const double a = alpha[idx] + (other != idx ? alpha[other] : 0.);
+        const double V = a * std::pow(h, dim);
         const double d = dim == 3 ? std::cbrt(6 * V / M_PI) :
                                     std::sqrt(4 * V / M_PI);
-        const double area = 2 * dim * alpha[idx] / d;
-        const double gas_h = 2 * mat.gas_conductivity / d;
-        detached.push_back({idx, area, gas_h});
-        gas_coefficient[idx] = gas_h;
+        detached.push_back(
+          {idx, 2 * dim * alpha[idx] / d, 2 * mat.gas_conductivity / d});
       }
+    std::fill(count.begin(), count.end(), 0.);
+    for (const auto &dc : detached)
+      gas_coefficient[dc.index] = dc.gas_h;
   }
 
 

@@ -56,9 +56,10 @@ namespace femp
       std::string initial_temperature_expression;
       double reference_temperature = 300.;
       double convection_coefficient = 10.;
-      /// 'Detached drops = sphere': a metal cell whose face neighbours
-      /// inside the domain hold no metal loses heat as a sphere of its
-      /// metal volume (diameter d) in still gas: over the sphere's surface,
+      /// 'Detached drops = sphere': a drop of one or two metal cells (no
+      /// other metal face neighbour inside the domain) loses heat as a
+      /// sphere of its metal volume (diameter d) in still gas: over the
+      /// sphere's surface,
       /// the losses q(T) plus conduction with the coefficient Nu k_g/d,
       /// Nu = 2, k_g = Material/Gas thermal conductivity. false: off.
       bool detached_drops = false;
@@ -301,10 +302,11 @@ namespace femp
     /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
     std::vector<double> laser_density, loss_weight;
     /// Detached metal cells (with Heat transfer/Detached drops = sphere): the
-    /// owned metal cells whose face neighbours inside the domain hold no
-    /// metal. Each loses heat as a sphere (2D: a cylinder) of its metal
-    /// volume in still gas: area per cell volume 2 dim alpha/d (1/m) and
-    /// gas coefficient 2 k_g/d (W/(m^2 K)), d the sphere's diameter.
+    /// owned metal cells of drops of one or two cells (no other metal face
+    /// neighbour inside the domain). Each loses heat as part of a sphere
+    /// (2D: a cylinder) of the drop's metal volume in still gas: area per
+    /// cell volume 2 dim alpha/d (1/m) and gas coefficient 2 k_g/d
+    /// (W/(m^2 K)), d the sphere's diameter.
     struct DetachedCell
     {
       std::uint32_t index;
