@@ -577,6 +577,19 @@ namespace femp
     // the report at the end of the run.
     const unsigned int resorts = flow->statistics().resorts;
     auto &             r       = result.flow_limits;
+    // Nothing to flow, and nothing can start to: the last flow step had no
+    // fluid cell (its pressure, nodal velocities and forces on the solid
+    // are zero) and no metal cell is above the solidus, so cells_to_points()
+    // left no point fluid. A flow step would change nothing; skip it (in
+    // the cooling after the laser's path, once the last drop has
+    // solidified).
+    if (heat_enabled && flow->statistics().steps > 0 &&
+        flow->statistics().n_fluid_cells == 0 &&
+        heat->max_temperature() < material.solidus)
+      {
+        ++r.idle_steps;
+        return;
+      }
     double             t       = 0;
     unsigned int       n_sub   = 0;
     while (t < dt * (1 - 1e-12))

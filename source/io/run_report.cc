@@ -203,6 +203,9 @@ namespace femp
         << "; sub-steps per temperature step "
         << (r.max_substeps > 0 ? r.min_substeps : 0) << " to "
         << r.max_substeps << std::endl;
+    if (r.idle_steps > 0)
+      out << "  melt flow idle (no fluid, no metal above the solidus) in "
+          << r.idle_steps << " temperature steps" << std::endl;
   }
 
 

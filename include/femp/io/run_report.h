@@ -58,6 +58,9 @@ namespace femp
       std::array<unsigned long, 4> governed{};
       unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
       unsigned int max_substeps = 0;
+      /// Temperature steps without a flow step: no fluid cell at the last
+      /// flow step and no metal above the solidus.
+      unsigned long idle_steps = 0;
 
       /// Book the limits @p l of one fluid sub-step; @p prescribed: the
       /// step was Melt flow/Time step.
