@@ -557,6 +557,11 @@ namespace femp
       TimerOutput::Scope t(timer, "cells to points");
       points->cells_to_points(heat->temperature(), &heat->metal_fraction());
     }
+    // Solid points in detached drops stay out of the solid (they may
+    // change with alpha in each flow sub-cycle; read once per temperature
+    // step, before the state changes are looked for).
+    if (solid)
+      solid->set_detached_cells(heat->detached_cells());
     if (flow && solid)
       {
         // Points that melted leave the solid with the velocity they had

@@ -108,6 +108,11 @@ namespace femp
               << " time(s) a material point (spatter moving with the melt's "
                  "velocity) reached a face of the domain and was held there"
               << std::endl;
+        if (solid->n_points_set_aside() > 0)
+          out << "Solid: " << solid->n_points_set_aside()
+              << " time(s) a solid point in a detached drop (Heat "
+                 "transfer/Detached drops) was set aside, out of the solid"
+              << std::endl;
       }
     print_energy(s, e, heat_enabled, flow != nullptr);
     if (flow)

@@ -1070,12 +1070,12 @@ namespace femp
     // flow writes fluid points only, the temperature step their state,
     // which exchange_since_gather() checked), so the arrays are kept.
     const bool keep = same_members && gathered && apic_now == apic &&
-                      excluded_cell == excluded &&
+                      excluded_cell == excluded && aside_changed.empty() &&
                       points.layout_unchanged(gathered_layout, cell);
     // Otherwise, the same handler layout (no re-sort or re-index): only the
     // cells whose points changed are read again.
     const bool merge = !keep && gathered && apic_now == apic &&
-                       excluded_cell == excluded &&
+                       excluded_cell == excluded && aside_changed.empty() &&
                        points.layout_mark().generation ==
                          gathered_layout.generation;
     apic = apic_now;
@@ -1124,6 +1124,9 @@ namespace femp
       }
     else
       copy_members();
+    for (const auto c : aside_changed)
+      aside_changed_mark[c] = 0;
+    aside_changed.clear();
     left_rank_points.clear();
     gathered        = true;
     gathered_layout = points.layout_mark();
@@ -1181,9 +1184,50 @@ namespace femp
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;
         const auto idx = grid.local_index(grid.cell_of(pool.get_location(hp)));
-        if (!excluded[idx])
-          out.emplace_back(hp, idx);
+        if (excluded[idx])
+          continue;
+        if (set_aside(idx))
+          {
+            // A detached drop (set_aside_cells()): at rest and
+            // stress-free, out of the solid.
+            for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
+              q[k] = 0;
+            for (int d = 0; d < dim; ++d)
+              q[P::velocity + d] = 0;
+            q[P::plastic_strain]   = 0;
+            q[P::viscous_pressure] = 0;
+            if constexpr (dim == 2)
+              q[P::stress_zz] = 0;
+            if (apic)
+              for (unsigned int k = 0; k < dim * dim; ++k)
+                q[P::affine_velocity + k] = 0;
+            continue;
+          }
+        out.emplace_back(hp, idx);
       }
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::set_aside_cells(const std::vector<std::uint32_t> &cells)
+  {
+    if (cells == aside_cells)
+      return;
+    if (aside.empty())
+      {
+        aside.assign(grid.n_local(), 0);
+        aside_changed_mark.assign(grid.n_local(), 0);
+      }
+    const auto mark = [this](const std::uint32_t c) {
+      if (!aside_changed_mark[c])
+        aside_changed_mark[c] = 1, aside_changed.push_back(c);
+    };
+    for (const auto c : aside_cells)
+      aside[c] = 0, mark(c);
+    for (const auto c : cells)
+      aside[c] = 1, mark(c);
+    aside_cells = cells;
   }
 
 
@@ -1457,7 +1501,8 @@ namespace femp
       const auto idx = occupied[c].first;
       if (!exchange_cell.empty() && !exchange_cell[idx])
         continue;
-      if (gathered && !points.cell_changed_since(gathered_layout, idx))
+      if (gathered && !points.cell_changed_since(gathered_layout, idx) &&
+          !(!aside_changed.empty() && aside_changed_mark[idx]))
         continue;
       const auto handles = points.cell_point_handles(c);
       const std::size_t n_cell = handles.size();
@@ -1477,10 +1522,12 @@ namespace femp
           continue;
         const Point<dim> xp    = pool.get_location(hp);
         const auto       ijk   = grid.cell_of(xp);
-        const bool       out   = excluded[grid.local_index(ijk)];
-        if (member == (solid && !out))
+        const auto       cidx  = grid.local_index(ijk);
+        const bool       out   = excluded[cidx];
+        const bool       away  = set_aside(cidx);
+        if (member == (solid && !out && !away))
           continue;
-        if (member && solid) // now in a cell of the FE zone
+        if (member && solid && out) // now in a cell of the FE zone
           {
             if (e.n_lost == 0)
               e.lost_at = xp;
@@ -1502,7 +1549,9 @@ namespace femp
                       q[P::affine_velocity + i * dim + j] * D;
             }
         const double k = 0.5 * q[P::mass] * scaling * v2;
-        if (member)
+        if (member && solid) // now in a detached drop
+          e.n_set_aside += 1, e.k_set_aside += k;
+        else if (member)
           e.n_melted += 1, e.k_melted += k;
         else
           e.n_solidified += 1, e.k_solidified += k;

@@ -1184,11 +1184,15 @@ namespace femp
                    e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
     have_pending_exchange = false;
-    double sums[7] = {e.n_melted,     e.n_solidified,         e.n_lost,
-                      e.k_melted,     e.k_solidified,         double(mpm.n_points()),
-                      mpm.kinetic_energy()};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 7), comm,
-                        ArrayView<double>(sums, 7));
+    // Points set aside in detached drops leave the solid as melted ones
+    // do: counted with them, their kinetic energy booked with theirs.
+    double sums[8] = {e.n_melted + e.n_set_aside, e.n_solidified, e.n_lost,
+                      e.k_melted + e.k_set_aside, e.k_solidified,
+                      double(mpm.n_points()),   mpm.kinetic_energy(),
+                      e.n_set_aside};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 8), comm,
+                        ArrayView<double>(sums, 8));
+    n_set_aside += sums[7];
     if (sums[2] > 0)
       {
         Point<dim> where = e.lost_at;

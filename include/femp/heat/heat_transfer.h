@@ -247,6 +247,17 @@ namespace femp
     /// sum V [alpha rho_m (int c_m dT + L_m gamma) + (1-alpha) rho_g c_g dT].
     double
     stored_enthalpy() const;
+    /// The owned cells of the detached drops (Detached drops = sphere;
+    /// empty when off), in increasing local index; they change with alpha.
+    std::vector<std::uint32_t>
+    detached_cells() const
+    {
+      std::vector<std::uint32_t> c;
+      c.reserve(detached.size());
+      for (const auto &d : detached)
+        c.push_back(d.index);
+      return c;
+    }
     /// Global maximum temperature over metal cells after the last step.
     double
     max_temperature() const

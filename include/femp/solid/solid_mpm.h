@@ -135,6 +135,24 @@ namespace femp
     gather(const std::vector<std::uint8_t> &excluded_cell,
            const double                      mass_scaling,
            const bool                        same_members = false);
+    /// Cells (local indices, owned) whose solid points stay out of the
+    /// solid: the detached drops of the heat transfer ('Heat
+    /// transfer/Detached drops = sphere'), spatter of one or two cells
+    /// with no metal face neighbour. A drop that solidifies in the gas is
+    /// not part of the workpiece, and a body of a few points whose nodes
+    /// carry a small share of a full node's mass has next to no
+    /// stiffness on the grid: such points collapsed in the paper-scale
+    /// track (doc/solid.md "Detached drops"). Their points are set aside:
+    /// the next exchange_since_gather() counts members in these cells as
+    /// set aside (with their kinetic energy), the next gather() leaves
+    /// them out and zeroes their velocity, stress and plastic strain
+    /// (they stay where they are, carry heat and count as metal), and a
+    /// cell that leaves the list gives its solid points back to the solid
+    /// at rest and stress-free (counted as solidified). An empty list (the
+    /// default) sets nothing aside.
+    void
+    set_aside_cells(const std::vector<std::uint32_t> &cells);
+
     /// gather() calls that kept the arrays (see there), those that
     /// updated them only in the cells whose points changed, and all calls.
     std::array<unsigned long, 3>
@@ -216,6 +234,8 @@ namespace femp
     {
       double     n_melted = 0, n_solidified = 0, n_lost = 0;
       double     k_melted = 0, k_solidified = 0;
+      /// Members now in a cell of set_aside_cells().
+      double     n_set_aside = 0, k_set_aside = 0;
       Point<dim> lost_at;
     };
     Exchange
@@ -387,6 +407,17 @@ namespace femp
     /// exchange_cell from the mask.
     void
     set_exchange_cells();
+    /// set_aside_cells(): the list, its mask per local cell (empty: none
+    /// yet), and the cells whose flag changed since the last gather()
+    /// (marked; the exchange looks at them, the gather copies anew).
+    std::vector<std::uint32_t> aside_cells;
+    std::vector<std::uint8_t>  aside, aside_changed_mark;
+    std::vector<std::uint32_t> aside_changed;
+    bool
+    set_aside(const std::size_t idx) const
+    {
+      return !aside.empty() && aside[idx];
+    }
 
     std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
     double                    scaling = 1; ///< inertial mass / true_mass

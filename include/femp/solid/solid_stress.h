@@ -213,6 +213,25 @@ namespace femp
     /// (local, no communication).
     void
     find_state_changes();
+    /// The owned cells of the heat transfer's detached drops ('Heat
+    /// transfer/Detached drops = sphere'; empty when off): their solid
+    /// points are set aside, out of the solid, until the cell is no longer
+    /// detached (SolidMPM::set_aside_cells()). Call before
+    /// find_state_changes() and advance(); local.
+    void
+    set_detached_cells(const std::vector<std::uint32_t> &cells)
+    {
+      if (!mpm_cells.empty())
+        mpm.set_aside_cells(cells);
+    }
+    /// Solid points set aside in detached drops so far (global count of
+    /// the set-aside events; a point that rejoins and leaves again counts
+    /// twice).
+    double
+    n_points_set_aside() const
+    {
+      return n_set_aside;
+    }
 
     /// After the melt has solidified at the end of the laser's path:
     /// switch the automatic step to 'Safety factor after solidification'
@@ -387,6 +406,9 @@ namespace femp
     unsigned int              steps   = 0;
     double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
     double D_transfer = 0, K_melted = 0, K_solidified = 0; // global
+    /// Points set aside in detached drops (n_points_set_aside()); not
+    /// saved in checkpoints (a resumed run counts from there).
+    double n_set_aside = 0;
     /// re-map work of the MUSL update, with the velocity jumps of the FE
     /// node forces at the transition nodes (global)
     double W_remap = 0;
