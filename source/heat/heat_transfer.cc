@@ -61,7 +61,9 @@ namespace femp
                       "the coefficient 2 k_g/d (Nusselt number 2, d the "
                       "sphere's diameter, k_g = Material/Gas thermal "
                       "conductivity; argon: 0.018 W/(m K) at 300 K, 0.043 at "
-                      "1000 K, 0.065 at 2000 K). doc/equations.md.");
+                      "1000 K, 0.065 at 2000 K). With the solid, the "
+                      "solid points of such drops are left out of the solid, "
+                      "at rest (doc/solid.md). doc/equations.md.");
     prm.declare_entry("Emissivity", "0.4", Patterns::Double(0., 1.),
                       "Surface emissivity eps for radiation losses; range [0, 1].");
     prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
