@@ -1075,7 +1075,7 @@ namespace femp
     // Otherwise, the same handler layout (no re-sort or re-index): only the
     // cells whose points changed are read again.
     const bool merge = !keep && gathered && apic_now == apic &&
-                       excluded_cell == excluded && aside_changed.empty() &&
+                       excluded_cell == excluded &&
                        points.layout_mark().generation ==
                          gathered_layout.generation;
     apic = apic_now;
@@ -1341,7 +1341,8 @@ namespace femp
     // state since the last gather (MaterialPoints::cell_changed_since())
     // are the same points in the same order, and the arrays hold their
     // state (written back by the last scatter(); handles are stable while
-    // the handler is not re-indexed): they stay. The changed cells are
+    // the handler is not re-indexed): they stay, unless the cell was set
+    // aside or given back since (set_aside_cells()). The changed cells are
     // looked at as copy_members() would, and both are merged in increasing
     // cell index, the order of copy_members().
     const auto &occupied = points.occupied_cells();
@@ -1349,8 +1350,7 @@ namespace femp
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         const auto idx = occupied[c].first;
-        if ((exchange_cell.empty() || exchange_cell[idx]) &&
-            points.cell_changed_since(gathered_layout, idx))
+        if ((exchange_cell.empty() || exchange_cell[idx]) && changed_since_gather(idx))
           find_members(c, found);
       }
     const std::size_t n_old = handle.size();
@@ -1370,7 +1370,7 @@ namespace femp
           ++l;
         const bool left =
           l < left_rank_points.size() && left_rank_points[l] == p;
-        if (left || points.cell_changed_since(gathered_layout, idx))
+        if (left || changed_since_gather(idx))
           {
             // Dropped: read again below if still a member here.
             member_bits[member_id[p] / 64] &=
@@ -1501,8 +1501,7 @@ namespace femp
       const auto idx = occupied[c].first;
       if (!exchange_cell.empty() && !exchange_cell[idx])
         continue;
-      if (gathered && !points.cell_changed_since(gathered_layout, idx) &&
-          !(!aside_changed.empty() && aside_changed_mark[idx]))
+      if (gathered && !changed_since_gather(idx))
         continue;
       const auto handles = points.cell_point_handles(c);
       const std::size_t n_cell = handles.size();

@@ -418,6 +418,14 @@ namespace femp
     {
       return !aside.empty() && aside[idx];
     }
+    /// The points of cell @p idx came, went or changed state, or the
+    /// cell was set aside or given back, since the last gather().
+    bool
+    changed_since_gather(const std::size_t idx) const
+    {
+      return points.cell_changed_since(gathered_layout, idx) ||
+             (!aside_changed.empty() && aside_changed_mark[idx]);
+    }
 
     std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
     double                    scaling = 1; ///< inertial mass / true_mass
