@@ -1086,6 +1086,7 @@ namespace femp
       }
     scaling = mass_scaling;
     ++gathers;
+    gather_aside_n = gather_aside_k = 0;
     left_cells.clear();
     // The P2G buffer of the fused pass: zero again, and its node list anew.
     clear_next();
@@ -1189,7 +1190,31 @@ namespace femp
         if (set_aside(idx))
           {
             // A detached drop (set_aside_cells()): at rest and
-            // stress-free, out of the solid.
+            // stress-free, out of the solid. A point still moving was
+            // carried in by the solid since the last gather (points set
+            // aside before are at rest): counted, with its kinetic
+            // energy (inertial mass, APIC affine part), for resort().
+            double v2 = 0;
+            for (int d = 0; d < dim; ++d)
+              v2 += q[P::velocity + d] * q[P::velocity + d];
+            if (apic)
+              {
+                const auto &xp  = pool.get_location(hp);
+                const auto  ijk = grid.global_index(idx);
+                const double h  = grid.h();
+                for (int j = 0; j < dim; ++j)
+                  {
+                    const double xi =
+                      (xp[j] - grid.origin()[j]) / h - ijk[j];
+                    for (int i = 0; i < dim; ++i)
+                      v2 += q[P::affine_velocity + i * dim + j] *
+                            q[P::affine_velocity + i * dim + j] * h * h * xi *
+                            (1 - xi);
+                  }
+              }
+            if (v2 > 0)
+              gather_aside_n += 1,
+                gather_aside_k += 0.5 * q[P::mass] * scaling * v2;
             for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
               q[k] = 0;
             for (int d = 0; d < dim; ++d)

@@ -1037,14 +1037,22 @@ namespace femp
         // kinetic energy again after the resort, and every point.
         mpm.resort();
         regathered = true;
-        double after[2] = {mpm.kinetic_energy(), double(mpm.n_points())};
-        Utilities::MPI::sum(ArrayView<const double>(after, 2), comm,
-                            ArrayView<double>(after, 2));
-        D_transfer -= after[0] - sums[0];
+        // Members carried into a detached drop's cell leave the solid
+        // there (SolidMPM::set_aside_cells()): counted and booked as at
+        // an exchange.
+        const auto aside = mpm.set_aside_by_last_gather();
+        double     after[4] = {mpm.kinetic_energy(), double(mpm.n_points()),
+                               aside[0], aside[1]};
+        Utilities::MPI::sum(ArrayView<const double>(after, 4), comm,
+                            ArrayView<double>(after, 4));
+        D_transfer -= after[0] + after[3] - sums[0];
+        K_melted += after[3];
+        n_set_aside += after[2];
         K = after[0] + sums[6];
         K_points = after[0];
-        check_point_count(after[1], n_points_global, "re-sorting",
+        check_point_count(after[1], n_points_global - after[2], "re-sorting",
                           t_solid + dt);
+        n_points_global = after[1];
       }
   }
 

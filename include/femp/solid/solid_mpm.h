@@ -152,6 +152,17 @@ namespace femp
     /// default) sets nothing aside.
     void
     set_aside_cells(const std::vector<std::uint32_t> &cells);
+    /// Points that the last gather() set aside while they moved (members
+    /// that the solid carried into a cell of set_aside_cells(), on this
+    /// rank or from the other one through resort()): their number and
+    /// kinetic energy before they were stopped (this rank). A gather after
+    /// exchange_since_gather() finds them there too; resort() has no
+    /// exchange, and its caller books them from here.
+    std::array<double, 2>
+    set_aside_by_last_gather() const
+    {
+      return {{gather_aside_n, gather_aside_k}};
+    }
 
     /// gather() calls that kept the arrays (see there), those that
     /// updated them only in the cells whose points changed, and all calls.
@@ -411,6 +422,7 @@ namespace femp
     /// yet), and the cells whose flag changed since the last gather()
     /// (marked; the exchange looks at them, the gather copies anew).
     std::vector<std::uint32_t> aside_cells;
+    double gather_aside_n = 0, gather_aside_k = 0;
     std::vector<std::uint8_t>  aside, aside_changed_mark;
     std::vector<std::uint32_t> aside_changed;
     bool
