@@ -1151,6 +1151,23 @@ namespace femp
     const auto  handles = points.cell_point_handles(c);
     const std::size_t     n_cell = handles.size();
     constexpr std::size_t ahead  = 16;
+    // No stress, hardening memory, viscous pressure or affine velocity
+    // (and, with @p velocity, no velocity): a point that left the solid.
+    const auto clear_solid_state = [this](const ArrayView<double> &q,
+                                          const bool velocity) {
+      for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
+        q[k] = 0;
+      if (velocity)
+        for (int d = 0; d < dim; ++d)
+          q[P::velocity + d] = 0;
+      q[P::plastic_strain]   = 0;
+      q[P::viscous_pressure] = 0;
+      if constexpr (dim == 2)
+        q[P::stress_zz] = 0;
+      if (apic)
+        for (unsigned int k = 0; k < dim * dim; ++k)
+          q[P::affine_velocity + k] = 0;
+    };
     for (std::size_t i = 0; i < n_cell; ++i)
       {
         if (i + ahead < n_cell)
@@ -1169,18 +1186,7 @@ namespace femp
             // again stress-free and at rest (doc/solid.md "Melting and
             // re-solidification"). With the flow, its velocity is the
             // flow's (doc/solid.md "Flow and solid together").
-            for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
-              q[k] = 0;
-            if (!flow_owns_fluid)
-              for (int d = 0; d < dim; ++d)
-                q[P::velocity + d] = 0;
-            q[P::plastic_strain]   = 0;
-            q[P::viscous_pressure] = 0;
-            if constexpr (dim == 2)
-              q[P::stress_zz] = 0;
-            if (apic)
-              for (unsigned int k = 0; k < dim * dim; ++k)
-                q[P::affine_velocity + k] = 0;
+            clear_solid_state(q, !flow_owns_fluid);
           }
         if (q[P::state] != MaterialPoints<dim>::solid)
           continue;
@@ -1215,17 +1221,7 @@ namespace femp
             if (v2 > 0)
               gather_aside_n += 1,
                 gather_aside_k += 0.5 * q[P::mass] * scaling * v2;
-            for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
-              q[k] = 0;
-            for (int d = 0; d < dim; ++d)
-              q[P::velocity + d] = 0;
-            q[P::plastic_strain]   = 0;
-            q[P::viscous_pressure] = 0;
-            if constexpr (dim == 2)
-              q[P::stress_zz] = 0;
-            if (apic)
-              for (unsigned int k = 0; k < dim * dim; ++k)
-                q[P::affine_velocity + k] = 0;
+            clear_solid_state(q, true);
             continue;
           }
         out.emplace_back(hp, idx);
