@@ -89,8 +89,10 @@ namespace femp
             << " steps of " << solid->time_step() << " s; energies (J"
             << (dim == 2 ? "/m" : "") << "): external work " << se.external
             << ", stress work " << se.internal << ", kinetic " << se.kinetic
-            << ", hourglass " << se.hourglass << ", balance " << se.balance()
-            << "; kinetic/internal "
+            << ", hourglass " << se.hourglass;
+        if (se.withheld != 0) // light nodes with the melt flow
+          out << ", withheld at light nodes " << se.withheld;
+        out << ", balance " << se.balance() << "; kinetic/internal "
             << se.kinetic / std::max(1e-300, std::abs(se.internal))
             << std::endl;
         const auto gathers = solid->gathers_kept(); // collective

@@ -127,10 +127,13 @@ namespace femp
                       "Used only with the melt flow (Physics/Melt flow and "
                       "Solid stress both true): grid nodes whose inertial "
                       "mass is below this fraction of a full cell's node "
-                      "(rho h^dim / 2^dim times the mass scaling) take no "
-                      "force in the solid's grid update, so that points left "
-                      "by the flow near a cell face (solidified fragments) do "
-                      "not make the explicit update unstable; 0 is off. "
+                      "(rho h^dim / 2^dim times the mass scaling) are "
+                      "accelerated in the solid's grid update as if they had "
+                      "that mass (they take the part m / m_cut of their "
+                      "force; the work of the rest is booked in the energy "
+                      "file as withheld_work), so that points left by the "
+                      "flow near a cell face (solidified fragments) do not "
+                      "make the explicit update unstable; 0 is off. "
                       "Dimensionless, range [0, 1) (doc/solid.md \"Small "
                       "node masses\").");
     prm.declare_entry("Fixed faces", "", Patterns::Anything(),
@@ -333,7 +336,7 @@ namespace femp
                                    (fem ? fem->kinetic_energy() : 0.),
                                  comm);
     W_ext = W_int = 0;
-    D_transfer = K_melted = K_solidified = W_remap = 0;
+    D_transfer = K_melted = K_solidified = W_remap = W_withheld = 0;
     n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
     K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
 
@@ -626,7 +629,8 @@ namespace femp
                            "hourglass,balance,kinetic_to_internal,hourglass_mode,"
                            "transfer_dissipation,removed_by_melting,"
                            "added_by_solidification,remap_work,mass_scaling,"
-                           "kinetic_to_elastic,mass_scaling_kinetic_jump\n";
+                           "kinetic_to_elastic,mass_scaling_kinetic_jump,"
+                           "withheld_work\n";
           }
         if (!prm.probe_file.empty() && !prm.probes.empty())
           {
@@ -726,7 +730,7 @@ namespace femp
     // the step minus that of the points' grid momenta.
     double transfer =
       mpm.kinetic_energy() - grid_point_kinetic(false) + merge_loss;
-    update_grid_momentum(dt);                         // 3. grid update
+    const double withheld = update_grid_momentum(dt); // 3. grid update
     // G2P part (completed below): grid kinetic energy of the points' mass
     // after the update (nodes.mass is still the point mass here).
     transfer += grid_point_kinetic(true);
@@ -741,7 +745,8 @@ namespace femp
     if (fem)
       work += fem->update_elements(dt, w);
     ++steps;
-    book_energies(dt, ext_power, fe_energy, transfer, work, remap_work);
+    book_energies(dt, ext_power, fe_energy, transfer, work, remap_work,
+                  withheld);
   }
 
 
@@ -835,11 +840,12 @@ namespace femp
 
 
   template <int dim>
-  void
+  double
   SolidStress<dim>::update_grid_momentum(const double dt)
   {
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
+    double withheld = 0;
     for (const auto n : live_nodes)
       {
         const double m = nodes.mass[n];
@@ -853,7 +859,22 @@ namespace femp
               }
             if (m < small_mass) // off (0) without the melt flow
               {
-                nodes.force[d][n]    = 0;
+                // A node lighter than the cutoff m_cut is accelerated as
+                // if it had that mass: of its force f (internal, external
+                // and gravity) it applies the part m / m_cut, while the
+                // stress rate of the points around it sees the node's
+                // velocity in full. The work of the withheld part over the
+                // step, dt (1 - m / m_cut) f (v_start + v_end) / 2 (the
+                // mid-step velocity, as the kinetic energy of an explicit
+                // update sees a force), is booked (Energies::withheld),
+                // each node on the rank that counts it (a transition node,
+                // counted_as >= 0, takes the merged update of step 2).
+                const double f = nodes.force[d][n], a = f / small_mass;
+                if (counted_as[n] == -1)
+                  withheld += dt * (1 - m / small_mass) * f *
+                              (nodes.momentum[d][n] / m + 0.5 * dt * a);
+                nodes.momentum[d][n] += dt * m * a;
+                nodes.force[d][n]    = a;
                 nodes.velocity[d][n] = nodes.momentum[d][n] / m;
                 continue;
               }
@@ -862,6 +883,7 @@ namespace femp
             nodes.velocity[d][n] = nodes.momentum[d][n] / m;
           }
       }
+    return withheld;
   }
 
 
@@ -989,24 +1011,27 @@ namespace femp
                                   const std::array<double, 2> &fe_energy,
                                   const double                 transfer,
                                   const double                 work,
-                                  const double                 remap_work)
+                                  const double                 remap_work,
+                                  const double                 withheld)
   {
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
     // sums[8]: a point volume or element Jacobian <= 0 on this rank.
-    double sums[9] = {mpm.kinetic_energy(), work, dt * local_ext,
-                      mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
-                      transfer, fe_energy[0], remap_work,
-                      mpm.volume_collapsed() || (fem && fem->element_inverted()) ?
-                        1. : 0.};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 9), comm,
-                        ArrayView<double>(sums, 9));
+    double sums[10] = {mpm.kinetic_energy(), work, dt * local_ext,
+                       mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
+                       transfer, fe_energy[0], remap_work,
+                       mpm.volume_collapsed() || (fem && fem->element_inverted()) ?
+                         1. : 0.,
+                       withheld};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 10), comm,
+                        ArrayView<double>(sums, 10));
     K = sums[0] + sums[6];
     W_int += sums[1];
     W_ext += sums[2];
     D_transfer += sums[5] - sums[0]; // sums[0]: point kinetic energy now
     W_remap += sums[7];
+    W_withheld += sums[9];
     K_points = sums[0];
     const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
     if (!blown && sums[8] > 0)
@@ -1246,6 +1271,7 @@ namespace femp
     e.hourglass_mode = hg[1];
     e.transfer        = D_transfer;
     e.remap           = W_remap;
+    e.withheld        = W_withheld;
     e.melted          = K_melted;
     e.solidified      = K_solidified;
     e.scaling_jump    = scaling.kinetic_jump;
@@ -1441,7 +1467,7 @@ namespace femp
                       << "," << e.hourglass_mode << "," << e.transfer << ","
                       << e.melted << "," << e.solidified << "," << e.remap
                       << "," << scaling.factor << "," << scaling.last_ratio
-                      << "," << e.scaling_jump << "\n";
+                      << "," << e.scaling_jump << "," << e.withheld << "\n";
         if (probe_out)
           {
             *probe_out << std::setprecision(10) << t_solid;
@@ -1507,6 +1533,8 @@ namespace femp
     for (const double a : {scaling.factor, scaling.last_ratio,
                            scaling.kinetic_jump, phase_K_dt, phase_time})
       out.put(a);
+    // Added last, so that checkpoints written without it still load (as 0).
+    out.put(W_withheld);
   }
 
 
@@ -1566,7 +1594,8 @@ namespace femp
     const double created = e.balance();
     const double scale   = elastic_energy + e.kinetic + std::abs(e.external) +
                          std::abs(e.transfer) + e.melted + e.solidified +
-                         std::abs(e.remap) + std::abs(e.scaling_jump);
+                         std::abs(e.remap) + std::abs(e.scaling_jump) +
+                         std::abs(e.withheld);
     if (!(scale > 0) || !(created > energy_created_limit * scale))
       return;
     std::ostringstream s;
@@ -1644,6 +1673,14 @@ namespace femp
       scaling.kinetic_jump = b[2];
       phase_K_dt = b[3], phase_time = b[4];
     }
+    W_withheld = 0; // not in checkpoints written before it was booked
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      if (!parts[f].at_end())
+        {
+          const double x = parts[f].get<double>();
+          if (f == 0)
+            W_withheld = x;
+        }
     have_pending_exchange = false;
 
     // The CSV files: drop the rows after the checkpoint, then append.

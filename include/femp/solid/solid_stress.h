@@ -96,8 +96,8 @@ namespace femp
       double                   max_kinetic_ratio = 1e-3;
       double                   min_factor = 1, max_factor = 1e4;
       /// With the melt flow only: nodes whose inertial mass is below this
-      /// fraction of a full cell's node take no force (doc/solid.md "Small
-      /// node masses"), -.
+      /// fraction m_cut of a full cell's node are accelerated as if they had
+      /// that mass (doc/solid.md "Small node masses"), -.
       double                   small_mass_cutoff = 0.05;
       /// m/s^2 (default: none); not an input of Solid: FempProblem sets
       /// it from Physics/Gravity.
@@ -152,11 +152,18 @@ namespace femp
       /// mass-scaling factor at kept velocities (adaptive mass scaling:
       /// (s_new / s_old - 1) K at each change), summed over the run.
       double scaling_jump = 0;
+      /// Work that the forces withheld at light nodes (below 'Small mass
+      /// cutoff') would have done on those nodes' velocities, dt f_I . v_I
+      /// summed over the steps: the stress work counts these nodes, the
+      /// kinetic energy does not (< 0 when the withheld forces oppose the
+      /// motion: energy the cutoff leaves in it).
+      double withheld = 0;
       double
       balance() const
       {
         return external + remap - (kinetic - initial_kinetic) - internal -
-               hourglass - transfer - melted + solidified + scaling_jump;
+               hourglass - transfer - melted + solidified + scaling_jump -
+               withheld;
       }
     };
 
@@ -197,8 +204,9 @@ namespace femp
     }
     /// With the melt flow: grid nodes whose (inertial) mass is below
     /// @p fraction of that of a node of a full cell, s rho h^dim / 2^dim,
-    /// take no force in the grid update (their velocity is their momentum
-    /// over their mass). Such nodes appear round solid fragments that
+    /// are accelerated in the grid update as if they had that mass m_cut
+    /// (they take the part m / m_cut of their force; the work of the rest
+    /// is booked, Energies::withheld). Such nodes appear round solid fragments that
     /// solidified at the positions where the flow left them (a point near
     /// a cell face gives the opposite face's nodes a tiny mass but a full
     /// shape-function gradient: the explicit update of those nodes is
@@ -412,6 +420,8 @@ namespace femp
     /// re-map work of the MUSL update, with the velocity jumps of the FE
     /// node forces at the transition nodes (global)
     double W_remap = 0;
+    /// Energies::withheld, summed over the steps, J.
+    double W_withheld = 0;
     double K_points        = 0; ///< kinetic energy of the points (global)
     double n_points_global = 0; ///< solid points after the last step
     /// Grid nodes whose point kinetic energy this rank counts (each node
@@ -503,7 +513,9 @@ namespace femp
     merge_transition_nodes(const double dt);
     void
     sum_grid_partials();
-    void
+    /// Returns Energies::withheld of the step (the light nodes this rank
+    /// counts).
+    double
     update_grid_momentum(const double dt);
     void
     set_transition_velocities();
@@ -521,7 +533,8 @@ namespace femp
                   const std::array<double, 2> &fe_energy,
                   const double                 transfer,
                   const double                 work,
-                  const double                 remap_work);
+                  const double                 remap_work,
+                  const double                 withheld);
     /// Whether the step from @p t_old to @p t_new ends with a row of the
     /// energy and probe files ('Row interval').
     bool
