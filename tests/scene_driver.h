@@ -3,6 +3,7 @@
 #define femp_scene_driver_h
 
 #include <femp/app/femp_problem.h>
+#include <femp/base/parameter_file.h>
 
 #include <limits>
 #include <map>
@@ -27,7 +28,8 @@ namespace femp_test
               const std::vector<Override> &overrides)
   {
     femp::declare_all_parameters(prm);
-    prm.parse_input(file);
+    // 'include' lines relative to the scene's folder, as femp reads them.
+    femp::parse_parameter_file(prm, file);
     for (const auto &[section, entry, value] : overrides)
       {
         prm.enter_subsection(section);
