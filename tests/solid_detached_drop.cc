@@ -75,24 +75,8 @@ main(int argc, char **argv)
   const Point<dim> size(1.6, 0.8);
   SolidBlock<dim>  block(size, h, 0.3, unit_material(), comm);
   auto &           grid = block.grid;
-  {
-    // The substrate and the drop (an initial body of solid points).
-    typename MaterialPoints<dim>::Parameters pp;
-    pp.point_spacing   = h / 2;
-    pp.substrate_top   = 0.3;
-    pp.layer_thickness = 0;
-    pp.subcells        = 2;
-    typename MaterialPoints<dim>::Parameters::Body drop;
-    drop.state = MaterialPoints<dim>::solid;
-    drop.box   = true;
-    drop.a     = Point<dim>(0.8, 0.5);
-    drop.b     = Point<dim>(0.9, 0.6);
-    drop.T     = 300;
-    pp.bodies  = {drop};
-    block.points =
-      std::make_unique<MaterialPoints<dim>>(pp, block.material, grid);
-    block.points->create(300.);
-  }
+  // The substrate and the drop (an initial body of solid points).
+  add_solid_box(block, h, 0.3, Point<dim>(0.8, 0.5), Point<dim>(0.9, 0.6));
   auto &points = *block.points;
   for (auto &p : points.particle_handler_for_update())
     if (p.get_location()[1] > 0.45)

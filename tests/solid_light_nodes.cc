@@ -40,23 +40,7 @@ namespace
     const Point<dim> size(1.6, 0.8);
     SolidBlock<dim>  block(size, h, 0.3, unit_material(), comm);
     auto &           grid = block.grid;
-    {
-      typename MaterialPoints<dim>::Parameters pp;
-      pp.point_spacing   = h / 2;
-      pp.substrate_top   = 0.3;
-      pp.layer_thickness = 0;
-      pp.subcells        = 2;
-      typename MaterialPoints<dim>::Parameters::Body fragment;
-      fragment.state = MaterialPoints<dim>::solid;
-      fragment.box   = true;
-      fragment.a     = Point<dim>(0.8, 0.3);
-      fragment.b     = Point<dim>(0.85, 0.35);
-      fragment.T     = 300;
-      pp.bodies      = {fragment};
-      block.points =
-        std::make_unique<MaterialPoints<dim>>(pp, block.material, grid);
-      block.points->create(300.);
-    }
+    add_solid_box(block, h, 0.3, Point<dim>(0.8, 0.3), Point<dim>(0.85, 0.35));
     auto & points     = *block.points;
     double n_fragment = 0;
     for (auto &p : points.particle_handler_for_update())

@@ -47,6 +47,34 @@ namespace femp_test
     std::unique_ptr<MaterialPoints<dim>> points;
   };
 
+  /// Rebuild the points of @p block (cells of size @p h, 2 x 2 points per
+  /// cell) as its substrate up to @p top plus one solid body at 300 K
+  /// filling the box [@p a, @p b] (a drop or a fragment).
+  template <int dim>
+  void
+  add_solid_box(SolidBlock<dim> & block,
+                const double      h,
+                const double      top,
+                const Point<dim> &a,
+                const Point<dim> &b)
+  {
+    typename MaterialPoints<dim>::Parameters pp;
+    pp.point_spacing   = h / 2;
+    pp.substrate_top   = top;
+    pp.layer_thickness = 0;
+    pp.subcells        = 2;
+    typename MaterialPoints<dim>::Parameters::Body body;
+    body.state = MaterialPoints<dim>::solid;
+    body.box   = true;
+    body.a     = a;
+    body.b     = b;
+    body.T     = 300;
+    pp.bodies  = {body};
+    block.points =
+      std::make_unique<MaterialPoints<dim>>(pp, block.material, block.grid);
+    block.points->create(300.);
+  }
+
   /// The elastic-plastic block material: E = 100 Pa, hardening 5 Pa,
   /// yield stress table @p yield (T:sigma_y), alpha = 1e-4 1/K; density and
   /// solidus those of @p thermal (the block's material); Poisson ratio as
