@@ -127,13 +127,12 @@ namespace femp
                       "Used only with the melt flow (Physics/Melt flow and "
                       "Solid stress both true): grid nodes whose inertial "
                       "mass is below this fraction of a full cell's node "
-                      "(rho h^dim / 2^dim times the mass scaling) are "
-                      "accelerated in the solid's grid update as if they had "
-                      "that mass (they take the part m / m_cut of their "
-                      "force; the work of the rest is booked in the energy "
-                      "file as withheld_work), so that points left by the "
-                      "flow near a cell face (solidified fragments) do not "
-                      "make the explicit update unstable; 0 is off. "
+                      "(rho h^dim / 2^dim times the mass scaling) take no "
+                      "force in the solid's grid update (the work the force "
+                      "would have done is booked in the energy file as "
+                      "withheld_work), so that points left by the flow near "
+                      "a cell face (solidified fragments) do not make the "
+                      "explicit update unstable; 0 is off. "
                       "Dimensionless, range [0, 1) (doc/solid.md \"Small "
                       "node masses\").");
     prm.declare_entry("Fixed faces", "", Patterns::Anything(),
@@ -859,22 +858,18 @@ namespace femp
               }
             if (m < small_mass) // off (0) without the melt flow
               {
-                // A node lighter than the cutoff m_cut is accelerated as
-                // if it had that mass: of its force f (internal, external
-                // and gravity) it applies the part m / m_cut, while the
-                // stress rate of the points around it sees the node's
-                // velocity in full. The work of the withheld part over the
-                // step, dt (1 - m / m_cut) f (v_start + v_end) / 2 (the
-                // mid-step velocity, as the kinetic energy of an explicit
-                // update sees a force), is booked (Energies::withheld),
-                // each node on the rank that counts it (a transition node,
-                // counted_as >= 0, takes the merged update of step 2).
-                const double f = nodes.force[d][n], a = f / small_mass;
+                // A node lighter than the cutoff takes no force (internal,
+                // external and gravity) and keeps its velocity, while the
+                // stress rate of the points around it sees that velocity:
+                // the work the withheld force would have done over the
+                // step, dt f v (the velocity does not change), is booked
+                // (Energies::withheld), each node on the rank that counts
+                // it (a transition node, counted_as >= 0, takes the merged
+                // update of step 2).
                 if (counted_as[n] == -1)
-                  withheld += dt * (1 - m / small_mass) * f *
-                              (nodes.momentum[d][n] / m + 0.5 * dt * a);
-                nodes.momentum[d][n] += dt * m * a;
-                nodes.force[d][n]    = a;
+                  withheld +=
+                    dt * nodes.force[d][n] * nodes.momentum[d][n] / m;
+                nodes.force[d][n]    = 0;
                 nodes.velocity[d][n] = nodes.momentum[d][n] / m;
                 continue;
               }

@@ -96,8 +96,8 @@ namespace femp
       double                   max_kinetic_ratio = 1e-3;
       double                   min_factor = 1, max_factor = 1e4;
       /// With the melt flow only: nodes whose inertial mass is below this
-      /// fraction m_cut of a full cell's node are accelerated as if they had
-      /// that mass (doc/solid.md "Small node masses"), -.
+      /// fraction of a full cell's node take no force (doc/solid.md "Small
+      /// node masses"), -.
       double                   small_mass_cutoff = 0.05;
       /// m/s^2 (default: none); not an input of Solid: FempProblem sets
       /// it from Physics/Gravity.
@@ -204,9 +204,9 @@ namespace femp
     }
     /// With the melt flow: grid nodes whose (inertial) mass is below
     /// @p fraction of that of a node of a full cell, s rho h^dim / 2^dim,
-    /// are accelerated in the grid update as if they had that mass m_cut
-    /// (they take the part m / m_cut of their force; the work of the rest
-    /// is booked, Energies::withheld). Such nodes appear round solid fragments that
+    /// take no force in the grid update (their velocity is their momentum
+    /// over their mass; the work the force would have done is booked,
+    /// Energies::withheld). Such nodes appear round solid fragments that
     /// solidified at the positions where the flow left them (a point near
     /// a cell face gives the opposite face's nodes a tiny mass but a full
     /// shape-function gradient: the explicit update of those nodes is
