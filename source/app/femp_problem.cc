@@ -342,11 +342,15 @@ namespace femp
         // fluid points' velocities; its forces on the solid enter
         // through the solid's external nodal forces.
         solid->set_flow_owns_fluid_points(true);
-        // Fragments that solidify where the flow left them: no force
-        // on nodes with less than `Solid/Small mass cutoff` (default
-        // 5 %) of a full node's mass (stability estimate and choice:
-        // doc/solid.md).
-        solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
+        // Fragments that solidify where the flow left them: light nodes
+        // accelerated as if they had the mass at which the step is
+        // stable for them, or (`Solid/Light nodes = no force`) no force
+        // on nodes with less than `Solid/Small mass cutoff` of a full
+        // node's mass (stability estimate and choice: doc/solid.md).
+        if (solid_prm.light_nodes == "mass floor")
+          solid->set_mass_floor(true);
+        else
+          solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
         fluid_solid = std::make_unique<FluidSolidForces<dim>>(
           *grid, *points, material.density, fem_prm);
       }

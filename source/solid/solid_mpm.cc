@@ -358,7 +358,7 @@ namespace femp
       static constexpr std::size_t  none     = std::size_t(-1);
 
       CellScatter(const std::array<std::ptrdiff_t, n_corners> &offset,
-                  double *(&fields)[n])
+                  double *const *fields)
         : offset(offset)
         , fields(fields)
       {}
@@ -414,7 +414,7 @@ namespace femp
       }
 
       const std::array<std::ptrdiff_t, n_corners> &offset;
-      double *(&fields)[n];
+      double *const *fields; ///< n node arrays
       std::size_t cell0 = none;
       VD          acc[n_groups];
     };
@@ -423,14 +423,16 @@ namespace femp
     /// nodes (eqs. 11-13): per corner a, c[a] = {m N, m N v_p(x_I) (dim),
     /// g m_true N - V (sigma + q I) grad N (dim)}. @p s: stress {xx yy zz
     /// xy xz yz}; A (APIC): v_p(x_I) = v_p + C_p (x_I - x_p) with
-    /// x_I - x_p = h (b - xi), FLIP: v_p.
-    template <bool A, int dim, unsigned int n_corners, typename VD>
+    /// x_I - x_p = h (b - xi), FLIP: v_p. G (the light-node mass floor):
+    /// also c[a][1 + 2 dim] = m h |grad N_a| sum_b h |grad N_b|, the
+    /// point's part of the row sum of the corner's stiffness over c^2.
+    template <bool A, bool G, int dim, unsigned int n_corners, typename VD>
     [[gnu::always_inline]] inline void
     p2g_block(const VD (&xi)[dim], const VD (&N)[n_corners],
               const VD (&dN)[n_corners][dim], const VD m, const VD mg,
               const VD V, const VD q, const VD (&s)[6], const VD (&v)[dim],
               const VD (&C)[dim * dim], const double h,
-              const Tensor<1, dim> &gravity, VD (&c)[n_corners][1 + 2 * dim])
+              const Tensor<1, dim> &gravity, VD (&c)[n_corners][1 + 2 * dim + G])
     {
       VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
       for (int i = 0; i < dim; ++i)
@@ -467,6 +469,21 @@ namespace femp
               c[a][1 + dim + i] = f;
             }
         }
+      if constexpr (G)
+        {
+          VD g_norm[n_corners], sum = {};
+          for (unsigned int a = 0; a < n_corners; ++a)
+            {
+              VD g2 = {};
+              for (int j = 0; j < dim; ++j)
+                g2 += dN[a][j] * dN[a][j];
+              g_norm[a] = h * simd_sqrt(g2);
+              sum += g_norm[a];
+            }
+          const VD ms = m * sum;
+          for (unsigned int a = 0; a < n_corners; ++a)
+            c[a][1 + 2 * dim] = ms * g_norm[a];
+        }
     }
 
     /// The point arrays that the P2G reads (see SolidMPM).
@@ -488,11 +505,11 @@ namespace femp
     /// Not inlined: update_stresses() calls it for chunks of points that it
     /// just updated (still in the L1 cache), and the two loop bodies
     /// compiled apart keep their values in registers.
-    template <bool A, int dim, std::size_t n_corners>
+    template <bool A, bool G, int dim, std::size_t n_corners>
     [[gnu::noinline]] void
     p2g_blocks(const P2GInput<dim> &in, const std::size_t b,
                const std::size_t e, const std::size_t n,
-               CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> &out)
+               CellScatter<n_corners, 1 + 2 * dim + G, point_lanes<dim>> &out)
     {
       constexpr unsigned int W  = point_lanes<dim>;
       using VD                  = typename SimdOf<W>::type;
@@ -514,9 +531,9 @@ namespace femp
           if constexpr (A)
             for (unsigned int c = 0; c < dim * dim; ++c)
               Cp[c] = simd_load(in.C[c], pl, full);
-          // Per corner: mass, momentum (dim), force (dim).
-          VD c[n_corners][1 + 2 * dim];
-          p2g_block<A>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
+          // Per corner: mass, momentum (dim), force (dim) (, stiffness).
+          VD c[n_corners][1 + 2 * dim + G];
+          p2g_block<A, G>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
                        simd_load(in.visc, pl, full), sp, vp, Cp, in.h,
                        in.gravity, c);
           std::size_t n0[W];
@@ -1490,8 +1507,9 @@ namespace femp
   {
     if (next_dirty)
       for (auto &f : next)
-        for (const auto n : next_nodes)
-          f[n] = 0;
+        if (!f.empty()) // the stiffness rows: with the floor only
+          for (const auto n : next_nodes)
+            f[n] = 0;
     next_dirty = false;
   }
 
@@ -1691,16 +1709,24 @@ namespace femp
   SolidMPM<dim>::p2g(SolidNodeFields<dim> &nodes,
                      const Tensor<1, dim> &gravity)
   {
-    double *nodes_out[1 + 2 * dim] = {nodes.mass.data()};
+    // Mass, momentum (dim), force (dim) and, with the light-node mass
+    // floor, the stiffness row sums.
+    const unsigned int nf = 1 + 2 * dim + (stiffness_rows ? 1 : 0);
+    double *nodes_out[2 + 2 * dim] = {nodes.mass.data()};
     for (int d = 0; d < dim; ++d)
       nodes_out[1 + d]       = nodes.momentum[d].data(),
       nodes_out[1 + dim + d] = nodes.force[d].data();
+    if (stiffness_rows)
+      {
+        AssertDimension(nodes.stiffness.size(), nodes.mass.size());
+        nodes_out[1 + 2 * dim] = nodes.stiffness.data();
+      }
     // Sums of the fused pass of the last update_stresses(): add them (the
     // caller zeroed the nodes; a plain copy would not do for nodes it did
     // not zero) and leave the buffer zero.
     if (next_ready && gravity == p2g_gravity)
       {
-        for (unsigned int k = 0; k < 1 + 2 * dim; ++k)
+        for (unsigned int k = 0; k < nf; ++k)
           {
             double *const out = nodes_out[k];
             double *const buf = next[k].data();
@@ -1719,20 +1745,34 @@ namespace femp
     const P2GInput<dim> in{x,      corner, v,     C,           true_mass,
                            volume, visc,   sigma, node0,       scaling,
                            grid.h(), gravity};
-    // The transfer is a compile-time constant inside the loop (measured:
-    // 7-20 % faster than a run-time branch per point).
-    if (apic)
-      {
-        CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> out(
-          corner_offset, nodes_out);
-        p2g_blocks<true>(in, 0, n, n, out);
-      }
+    // The transfer and the floor are compile-time constants inside the
+    // loop (measured: 7-20 % faster than a run-time branch per point).
+    auto run = [&](auto transfer, auto floor) {
+      constexpr bool A = decltype(transfer)::value;
+      constexpr bool G = decltype(floor)::value;
+      CellScatter<n_corners, 1 + 2 * dim + G, point_lanes<dim>> out(
+        corner_offset, nodes_out);
+      p2g_blocks<A, G>(in, 0, n, n, out);
+    };
+    if (apic && stiffness_rows)
+      run(std::true_type(), std::true_type());
+    else if (apic)
+      run(std::true_type(), std::false_type());
+    else if (stiffness_rows)
+      run(std::false_type(), std::true_type());
     else
-      {
-        CellScatter<n_corners, 1 + 2 * dim, point_lanes<dim>> out(
-          corner_offset, nodes_out);
-        p2g_blocks<false>(in, 0, n, n, out);
-      }
+      run(std::false_type(), std::false_type());
+  }
+
+
+  template <int dim>
+  void
+  SolidMPM<dim>::set_stiffness_rows(const bool on)
+  {
+    // The fused buffer of the next P2G was summed with or without them.
+    clear_next();
+    next_ready     = false;
+    stiffness_rows = on;
   }
 
 
@@ -1825,10 +1865,11 @@ namespace femp
     // here (p2g() consumed or cleared it).
     const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity;
     ++steps_since_gather;
-    double *   next_out[1 + 2 * dim];
+    const unsigned int nf = 1 + 2 * dim + (stiffness_rows ? 1 : 0);
+    double *           next_out[2 + 2 * dim] = {};
     if (fuse)
       {
-        for (unsigned int k = 0; k < 1 + 2 * dim; ++k)
+        for (unsigned int k = 0; k < nf; ++k)
           {
             next[k].resize(grid.n_local_nodes(), 0.);
             next_out[k] = next[k].data();
@@ -1846,10 +1887,12 @@ namespace femp
     using VD                 = typename SimdOf<W>::type;
     PointArrays<dim> pa{x,      corner, v,     xdot,  C,    true_mass,
                         volume, visc,   sigma, eps_p, cell, node0};
-    auto loop = [&](auto transfer, auto fused) {
+    auto loop = [&](auto transfer, auto fused, auto floor) {
       constexpr bool A = decltype(transfer)::value;
       constexpr bool F = decltype(fused)::value;
-      CellScatter<n_corners, 1 + 2 * dim, W> out(corner_offset, next_out);
+      constexpr bool G = decltype(floor)::value;
+      CellScatter<n_corners, 1 + 2 * dim + G, W> out(
+        corner_offset, next_out);
       const P2GInput<dim> in{x,      corner, v,     C,     true_mass,
                              volume, visc,   sigma, node0, scaling,
                              h,      p2g_gravity};
@@ -1880,7 +1923,7 @@ namespace femp
                 finish_points<A>(p0, blk.nl);
             }
           if constexpr (F)
-            p2g_blocks<A>(in, c0, c1, n, out);
+            p2g_blocks<A, G>(in, c0, c1, n, out);
         }
       work += lane_total(work_v);
       kinetic += lane_total(kinetic_v);
@@ -1889,14 +1932,20 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         weight_momentum[d] += lane_total(momentum_v[d]);
     };
-    if (apic && fuse)
-      loop(std::true_type(), std::true_type());
+    const std::true_type  yes;
+    const std::false_type no;
+    if (apic && fuse && stiffness_rows)
+      loop(yes, yes, yes);
+    else if (apic && fuse)
+      loop(yes, yes, no);
     else if (apic)
-      loop(std::true_type(), std::false_type());
+      loop(yes, no, no);
+    else if (fuse && stiffness_rows)
+      loop(no, yes, yes);
     else if (fuse)
-      loop(std::false_type(), std::true_type());
+      loop(no, yes, no);
     else
-      loop(std::false_type(), std::false_type());
+      loop(no, no, no);
     next_ready = fuse && !lost && left_rank == 0;
     return work;
   }

@@ -123,10 +123,28 @@ namespace femp
                       "controller (dimensionless); range [Minimum factor, "
                       "1e12].");
     prm.leave_subsection();
-    prm.declare_entry("Small mass cutoff", "0.05", Patterns::Double(),
+    prm.declare_entry("Light nodes", "mass floor",
+                      Patterns::Selection("mass floor|no force"),
                       "Used only with the melt flow (Physics/Melt flow and "
-                      "Solid stress both true): grid nodes whose inertial "
-                      "mass is below this fraction of a full cell's node "
+                      "Solid stress both true): how the solid's grid update "
+                      "treats nodes of small mass, which appear round solid "
+                      "fragments that solidified where the flow left them "
+                      "(a point near a cell face gives the opposite face's "
+                      "nodes a tiny mass but a full shape-function gradient, "
+                      "and their explicit update is unstable). 'mass floor': "
+                      "each node is accelerated as if its mass were at least "
+                      "C^2 / (4 dim) times the row sum of its stiffness over "
+                      "c^2 (C the safety factor in use), the mass at which "
+                      "the solid step is stable for it; the work of the part "
+                      "of the force that it does not take is booked in the "
+                      "energy file as withheld_work. 'no force': nodes below "
+                      "'Small mass cutoff' take no force and keep their "
+                      "velocity (fragments held by heavier nodes are then "
+                      "strained without bound). doc/solid.md \"Small node "
+                      "masses\".");
+    prm.declare_entry("Small mass cutoff", "0.05", Patterns::Double(),
+                      "Used only with the melt flow and 'Light nodes = no "
+                      "force': grid nodes whose inertial mass is below this fraction of a full cell's node "
                       "(rho h^dim / 2^dim times the mass scaling) take no "
                       "force in the solid's grid update (the work the force "
                       "would have done is booked in the energy file as "
@@ -193,6 +211,7 @@ namespace femp
     min_factor        = prm.get_double("Minimum factor");
     max_factor        = prm.get_double("Maximum factor");
     prm.leave_subsection();
+    light_nodes       = prm.get("Light nodes");
     small_mass_cutoff = prm.get_double("Small mass cutoff");
     fixed_faces  = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
     roller_faces = parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
@@ -311,6 +330,8 @@ namespace femp
                                const std::string &        directory)
   {
     nodes.resize(grid.n_local_nodes());
+    if (mass_floor)
+      nodes.stiffness.assign(grid.n_local_nodes(), 0.);
     safety       = prm.safety_factor;
     cooling_step = false;
     dt_solid = prm.time_step > 0 ? prm.time_step :
@@ -761,6 +782,9 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           nodes.momentum[d][n] = nodes.force[d][n] = 0;
       }
+    if (mass_floor)
+      for (const auto n : live_nodes)
+        nodes.stiffness[n] = 0;
     mpm.p2g(nodes, prm.gravity);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
@@ -831,6 +855,8 @@ namespace femp
         grid.sum_shared_nodes(nodes.momentum[d]);
         grid.sum_shared_nodes(nodes.force[d]);
       }
+    if (mass_floor)
+      grid.sum_shared_nodes(nodes.stiffness);
     // The grid (point) force at the transition nodes, for the re-map work.
     for (const auto &[t, n] : grid_transition)
       for (int d = 0; d < dim; ++d)
@@ -845,15 +871,40 @@ namespace femp
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
     double withheld = 0;
+    // The light-node mass floor (set_mass_floor()): kappa times the
+    // node's stiffness row sum.
+    const double kappa = mass_floor ? safety * safety / (4. * dim) : 0.;
     for (const auto n : live_nodes)
       {
         const double m = nodes.mass[n];
+        const double m_floor = mass_floor ? kappa * nodes.stiffness[n] : 0.;
         for (int d = 0; d < dim; ++d)
           {
             if (m <= 0 || (constrained[n] & (1u << d)))
               {
                 nodes.force[d][n] = nodes.momentum[d][n] = 0;
                 nodes.velocity[d][n]                     = 0;
+                continue;
+              }
+            if (m < m_floor)
+              {
+                // A node below its floor is accelerated as if it had that
+                // mass: of its force f (internal, external and gravity) it
+                // applies the part m / m_floor, while the stress rate of
+                // the points around it sees the node's velocity in full.
+                // The work of the withheld part over the step, dt (1 - m /
+                // m_floor) f (v_start + v_end) / 2 (the mid-step velocity,
+                // as the kinetic energy of an explicit update sees a
+                // force), is booked (Energies::withheld), each node on the
+                // rank that counts it (a transition node, counted_as >= 0,
+                // takes the merged update of step 2).
+                const double f = nodes.force[d][n], a = f / m_floor;
+                if (counted_as[n] == -1)
+                  withheld += dt * (1 - m / m_floor) * f *
+                              (nodes.momentum[d][n] / m + 0.5 * dt * a);
+                nodes.momentum[d][n] += dt * m * a;
+                nodes.force[d][n]    = a;
+                nodes.velocity[d][n] = nodes.momentum[d][n] / m;
                 continue;
               }
             if (m < small_mass) // off (0) without the melt flow
@@ -1176,6 +1227,19 @@ namespace femp
     const double c      = safety / prm.safety_factor;
     small_mass = fraction * c * c * scaling.factor * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
+  }
+
+
+  template <int dim>
+  void
+  SolidStress<dim>::set_mass_floor(const bool on)
+  {
+    mass_floor = on;
+    mpm.set_stiffness_rows(on);
+    if (on)
+      nodes.stiffness.assign(nodes.mass.size(), 0.); // again by initialize()
+    else
+      nodes.stiffness.clear();
   }
 
 
@@ -1733,8 +1797,12 @@ namespace femp
     m << "safety factor " << c_old << " -> " << c2 << ", mass scaling "
       << s_old << " -> " << scaling.factor << " (sqrt(s)/C kept at "
       << std::sqrt(scaling.factor) / safety << "), solid step " << dt_old
-      << " -> " << dt_solid << " s, small-mass cutoff " << small_mass_fraction
-      << " -> " << small_mass_fraction * r * r;
+      << " -> " << dt_solid << " s";
+    if (mass_floor)
+      m << ", light-node mass floor x " << r * r;
+    else
+      m << ", small-mass cutoff " << small_mass_fraction << " -> "
+        << small_mass_fraction * r * r;
     return m.str();
   }
 

@@ -97,6 +97,11 @@ namespace femp
   {
     std::vector<double>                 mass;
     std::array<std::vector<double>, dim> momentum, force, velocity;
+    /// With SolidMPM::set_stiffness_rows(true) only: per node I, the sum
+    /// over the points of m_p h |grad N_Ip| h sum_J |grad N_Jp| (kg), the
+    /// row sum that bounds the node's stiffness over its mass (doc/solid.md
+    /// "Small node masses"); empty otherwise (sized by its owner).
+    std::vector<double> stiffness;
 
     void
     resize(const std::size_t n)
@@ -200,6 +205,11 @@ namespace femp
     /// zeroes it before).
     void
     g2p(SolidNodeFields<dim> &nodes, const double dt);
+    /// Whether p2g() also sums nodes.stiffness (the light-node mass floor
+    /// of the solid's grid update; off by default, and then the P2G costs
+    /// nothing more).
+    void
+    set_stiffness_rows(const bool on);
     /// Step 5: stress update from node velocities; @p T_old and @p T_new are
     /// cell temperatures at the start and end of the step. Returns the
     /// stress work sum V sigma : D dt of this rank. Then moves the points by
@@ -359,6 +369,9 @@ namespace femp
     static constexpr unsigned int n_stress  = 6; // xx yy zz xy xz yz
     std::array<std::ptrdiff_t, n_corners> corner_offset;
     bool                                  apic;
+    /// p2g() and the fused pass also sum nodes.stiffness
+    /// (set_stiffness_rows()).
+    bool stiffness_rows = false;
 
     // Structure of arrays, one vector per component.
     std::array<std::vector<double>, dim>       x, v, corner;
@@ -470,7 +483,7 @@ namespace femp
     /// mass, momentum (dim), force (dim) per node of the local box, zero
     /// outside the nodes written (next_nodes, the corners of the cells that
     /// hold points since the last gather(), marked in node_mark).
-    std::array<std::vector<double>, 1 + 2 * dim> next;
+    std::array<std::vector<double>, 2 + 2 * dim> next;
     std::vector<std::uint32_t>                   next_nodes;
     std::vector<std::uint8_t>                    node_mark;
     std::vector<std::uint32_t>                   reached_cells;

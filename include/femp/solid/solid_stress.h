@@ -98,6 +98,9 @@ namespace femp
       /// With the melt flow only: nodes whose inertial mass is below this
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
+      /// With the melt flow only: how nodes of small mass are updated,
+      /// "mass floor" (set_mass_floor()) or "no force" (the cutoff below).
+      std::string              light_nodes = "mass floor";
       double                   small_mass_cutoff = 0.05;
       /// m/s^2 (default: none); not an input of Solid: FempProblem sets
       /// it from Physics/Gravity.
@@ -213,6 +216,16 @@ namespace femp
     /// unstable). 0 (default): off, the update is unchanged.
     void
     set_small_mass_cutoff(const double fraction);
+    /// With the melt flow, instead of the cutoff: every grid node is
+    /// accelerated as if its mass were at least the mass floor
+    /// m_floor = C^2 / (4 dim) sum_p m_p h |grad N_Ip| h sum_J |grad N_Jp|
+    /// (C the safety factor in use), the mass at which the row sum of the
+    /// node's stiffness allows the solid step; the work of the part of the
+    /// force that a node below its floor does not take is booked
+    /// (Energies::withheld). Full nodes lie below their floor only for
+    /// C above about 0.92 (doc/solid.md "Small node masses").
+    void
+    set_mass_floor(const bool on);
     /// With the melt flow: find the points that melted or solidified since
     /// the last gather now, right after the temperature step changed their
     /// states and before the flow changes the velocities of the melted
@@ -457,6 +470,8 @@ namespace femp
     /// Node mass below which the grid update applies no force (kg, 2D
     /// kg/m; 0: off).
     double small_mass = 0;
+    /// set_mass_floor(): the light-node mass floor is on.
+    bool mass_floor = false;
     double small_mass_fraction = 0; ///< the cutoff it was set from
     MassScalingState scaling;
     /// Courant number of the automatic step in use: safety_factor, or
