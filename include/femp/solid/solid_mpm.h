@@ -14,6 +14,9 @@
 //   1. P2G of mass, momentum and forces (eqs. 11-13):
 //        m_I = sum N m_p, p_I = sum N m_p v_p(x_I),
 //        f_I = -sum V_p sigma_p grad N + sum N m_p g (+ fluid forces);
+//      with the melt flow also the stiffness row sums of the light-node
+//      mass floor, r_I = sum m_p h |grad N_I| h sum_J |grad N_J|
+//      (set_stiffness_rows(), doc/solid.md "Small node masses");
 //   2. p_I += dt f_I on the grid (with boundary conditions);
 //   3. G2P of the new point velocity, then (same loop)
 //   4. P2G of the new point momentum (re-map), v_I = p_I / m_I;
