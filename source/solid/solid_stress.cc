@@ -781,10 +781,9 @@ namespace femp
         nodes.mass[n] = 0;
         for (int d = 0; d < dim; ++d)
           nodes.momentum[d][n] = nodes.force[d][n] = 0;
+        if (mass_floor)
+          nodes.stiffness[n] = 0;
       }
-    if (mass_floor)
-      for (const auto n : live_nodes)
-        nodes.stiffness[n] = 0;
     mpm.p2g(nodes, prm.gravity);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
