@@ -50,8 +50,14 @@ namespace femp
     prm.declare_entry("Hourglass coefficient", "0.1", Patterns::Double(),
                       "kappa of the Flanagan-Belytschko hourglass stiffness "
                       "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
-                      "switches hourglass control off (for stability studies "
-                      "only).");
+                      "switches hourglass control off. The stiffness also "
+                      "resists the bending that a track's thermal expansion "
+                      "imposes on the zone: the case 3.2 scenes use 0, with "
+                      "which FEMP agrees with all-MPM (0.1 moved their "
+                      "stresses by 18-67 % of the peaks; doc/solid.md "
+                      "\"Hourglass control and the thermal stress\"). Keep "
+                      "it for elements under loads that can excite the "
+                      "zero-energy modes.");
     prm.leave_subsection();
   }
 
