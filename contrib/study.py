@@ -804,8 +804,11 @@ def study_solid_step(args):
     rows = []
     for s, c in points:
         def make(d, s=s, c=c):
+            # The scene's switch of the safety factor after solidification
+            # off: every run keeps its (s, C) to the end.
             cmd = [exe, "--set", "Physics/Melt flow=false",
                    "--set", "Output/Write material points=never",
+                   "--set", "Solid/Safety factor after solidification=0",
                    "--set", "Solid/Mass scaling factor=%g" % s,
                    "--set", "Solid/Safety factor=%g" % c,
                    "--set", "Output/Directory=out", scene]
