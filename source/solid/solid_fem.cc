@@ -47,17 +47,20 @@ namespace femp
                       "T_s and 'Heat transfer/Initial temperature' T0 "
                       "(doc/cases.md). With either choice the run stops if a "
                       "finite element reaches the solidus.");
-    prm.declare_entry("Hourglass coefficient", "0.1", Patterns::Double(),
+    prm.declare_entry("Hourglass coefficient", "0", Patterns::Double(),
                       "kappa of the Flanagan-Belytschko hourglass stiffness "
                       "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
-                      "switches hourglass control off. The stiffness also "
-                      "resists the bending that a track's thermal expansion "
-                      "imposes on the zone: the case 3.2 scenes use 0, with "
-                      "which FEMP agrees with all-MPM (0.1 moved their "
-                      "stresses by 18-67 % of the peaks; doc/solid.md "
-                      "\"Hourglass control and the thermal stress\"). Keep "
-                      "it for elements under loads that can excite the "
-                      "zero-energy modes.");
+                      "(the default) switches hourglass control off. The "
+                      "stiffness also resists the bending that a track's "
+                      "thermal expansion imposes on the zone: with 0.1 "
+                      "FEMP's stresses near a track lay 18-67 % of their "
+                      "peaks from all-MPM, without control within 1-12 % "
+                      "(doc/solid.md \"Hourglass control and the thermal "
+                      "stress\"). With or without control the elements' "
+                      "corners are checked: a mode that inverts one stops "
+                      "the run. Use 0.01-0.1 for elements under loads that "
+                      "drive the zero-energy modes (point or alternating "
+                      "nodal loads).");
     prm.leave_subsection();
   }
 
@@ -863,7 +866,7 @@ namespace femp
     const double  mfac = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     LoopConstants c;
     c.Bdt  = B * dt;
-    c.hgB  = prm.hourglass_coefficient > 0 ? B : 0.;
+    c.hgB  = B;
     c.VB   = V * B;
     c.kfac = prm.hourglass_coefficient * mfac * V * bb / n_corners;
     c.vfac = mat.bulk_viscosity * h *

@@ -85,7 +85,7 @@ namespace femp
       bool       enabled = false;
       Point<dim> lower_corner;
       Point<dim> upper_corner;
-      double     hourglass_coefficient = 0.1;
+      double     hourglass_coefficient = 0;
       /// 'Zone upper corner = auto': the driver places the top below the
       /// estimated melt depth (fe_zone_depth.h) before check().
       bool automatic_top = false;
@@ -441,7 +441,7 @@ namespace femp
     struct LoopConstants
     {
       double Bdt, VB, kfac, vfac;
-      /// B where hourglass control is on (the corner check), else 0.
+      /// B: the corner check (with hourglass control on or off).
       double hgB;
       double mg[dim];
     };
@@ -452,8 +452,9 @@ namespace femp
     /// hourglass modes alpha and the directions i of alpha of |q_alpha,i|
     /// (the hourglass displacement gradient at a corner is B q_alpha,i
     /// times a sign; exact minimum over the corners in 2D, a lower bound
-    /// in 3D). With hourglass control off (hgB = 0) the centre only: the
-    /// elements then do not see their corners.
+    /// in 3D). The hourglass displacements q are integrated with control
+    /// off as well, so that a mode growing without stiffness stops the run
+    /// when it inverts a corner.
     simd_double
     jacobian_low(const ElementBlock &eb, const double hgB) const;
     /// Box offset of corner @p a from corner 0 of an element.
