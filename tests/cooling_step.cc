@@ -1,7 +1,7 @@
 // 'Solid/Safety factor after solidification' (doc/solid.md, "Cooling after
 // the workpiece has solidified") on a short coupled track with melt flow
 // and solid (tests/cooling_step.prm: the laser is off after 20 us, the
-// workpiece falls below the solidus near 100 us, the run ends at 130 us).
+// workpiece falls below the solidus near 100-115 us, the run ends at 130 us).
 //   1. The reference run keeps C = 0.5 and s = 1000 to the end.
 //   2. The run with the factor 0.8 must switch once, after the laser's
 //      path, to s = 1000 x (0.8 / 0.5)^2 = 2560 (energy file), take fewer
