@@ -1,7 +1,7 @@
 // 'Solid/Safety factor after solidification' (doc/solid.md, "Cooling after
 // the workpiece has solidified") on a short coupled track with melt flow
 // and solid (tests/cooling_step.prm: the laser is off after 20 us, the
-// workpiece falls below the solidus near 100-115 us, the run ends at 130 us).
+// workpiece falls below the solidus near 100 us, the run ends at 130 us).
 //   1. The reference run keeps C = 0.5 and s = 1000 to the end.
 //   2. The run with the factor 0.8 must switch once, after the laser's
 //      path, to s = 1000 x (0.8 / 0.5)^2 = 2560 (energy file), take fewer
@@ -10,12 +10,10 @@
 //      (doc/speed_accuracy.md). Measure: the largest |sigma_xx| difference
 //      on the probe lines CD (material points) and EF (finite elements) at
 //      the end over the reference's peak |sigma_xx| on them; gate 1 %
-//      (measured when the test was written, with hourglass control 0.1:
-//      0.19 % on CD, 0.14 % on EF; without it, femp's default: 0.04 %).
+//      (measured when the test was written: 0.19 % on CD, 0.14 % on EF).
 //   3. A control, the naive larger step: C = 0.8 from the start with the
 //      same s (sqrt(s) / C 1.6x smaller), must differ from the reference by
-//      at least 5x more than run 2 (measured: 4-9 % of the peak with
-//      hourglass control 0.1, 2 % without), so that
+//      at least 5x more than run 2 (measured: 4-9 % of the peak), so that
 //      the measure of 2 resolves what the kept sqrt(s) / C buys.
 //   4. Run 2 resumed from a checkpoint written after the switch must end
 //      with the same probe lines and energy rows as run 2 (the Courant
