@@ -1,21 +1,25 @@
 // Heat loss of detached metal (Heat transfer/Detached drops = sphere,
-// doc/equations.md "Detached drops"): a drop of one or two metal cells (no
-// other metal face neighbour inside the domain) cools as a sphere (2D: a
-// cylinder) of its metal volume in still gas. With conduction to the gas the only loss
-// (Nusselt number 2, coefficient 2 k_g/d, d the sphere's diameter) and a
-// constant specific heat, the cell's temperature obeys
+// doc/equations.md "Detached drops"): a drop of at most 'Detached drop
+// cells' face-connected metal cells (no other metal face neighbour inside
+// the domain) cools as a sphere (2D: a cylinder) of its metal volume in
+// still gas. With conduction to the gas the only loss (Nusselt number 2,
+// coefficient 2 k_g/d, d the sphere's diameter), equal metal fractions and
+// a constant specific heat, each cell's temperature obeys
 //   C dT/dt = -(2 dim alpha/d) (2 k_g/d) (T - T_ref),
 // C = alpha rho c + (1 - alpha) rho_g c_g the cell's heat capacity, so it
 // decays as exp(-lambda t), d from the drop's metal volume. Checked, in 3D
 // and 2D, for a one-point drop (alpha = 1/8 in 3D, 1/4 in 2D) inside the
-// domain and on its top face, and for a drop of two such cells:
+// domain and on its top face, for a drop of two such cells, and for
+// drops of three (an L) and four cells (a vertical line across the middle
+// of the box, where two ranks split it, and a square):
 //  - the computed temperature against the implicit step's own recursion
 //    T_{n+1} - T_ref = (T_n - T_ref)/(1 + lambda dt) (round-off), and
 //    against the exponential (the step's O(lambda dt) error);
 //  - the booked convection loss against the enthalpy the cell lost;
 //  - with 'off' a drop of one or two cells keeps its temperature (no
-//    surface, no conduction), and a line of three cells is no detached
-//    metal (no gas conduction).
+//    surface, no conduction); a line of five cells is no detached metal
+//    with the default largest drop of four cells, nor a line of three
+//    with 'Detached drop cells = 2' (no gas conduction).
 // Also printed, not gated: a one-point drop of the default 316L data at
 // 4 um cells with the default convection, radiation and evaporation: the
 // time it takes to reach the solidus and 500 K from 2500 K with k_g =
@@ -23,6 +27,9 @@
 // the default k_g = 0.018 (argon at 300 K) from 2500 K and from 4830 K (the
 // temperature of spatter held on the top face of the paper-scale track).
 #include "test_tools.h"
+
+#include <array>
+#include <tuple>
 
 using namespace femp_test;
 
@@ -74,11 +81,16 @@ namespace
     }
   };
 
+  /// Cell offsets (in cells, x y z) of the drops checked.
+  using Shape = std::vector<std::array<int, 3>>;
+
   template <int dim>
   void
   closed_form_check(Checks &checks, MPI_Comm comm, const bool on_face,
-                    const int cells = 1)
+                    const Shape &shape = {{0, 0, 0}},
+                    const std::string &name = "")
   {
+    const int cells = shape.size();
     const double h = 4e-6, T0 = 1500, Tref = 300;
     const int    n = 8;
     Material     mat;
@@ -93,11 +105,11 @@ namespace
     if (on_face)
       x[dim - 1] = (n - 0.5) * h;
     const double a = 1. / (1 << dim); // one point of 2^dim per cell
-    drop.put(x, a);
-    if (cells == 2)
+    for (const auto &o : shape)
       {
         Point<dim> y = x;
-        y[0] += h;
+        for (int d = 0; d < dim; ++d)
+          y[d] += o[d] * h;
         drop.put(y, a);
       }
     auto p = heat_parameters<dim>(T0, {});
@@ -121,7 +133,7 @@ namespace
     const double T = drop.temperature_at(heat, x);
     const double T_exp = Tref + (T0 - Tref) * std::exp(-lambda * 100 * dt);
     const std::string at = std::to_string(dim) + "D drop of " +
-                           std::to_string(cells) + " cell(s) " +
+                           std::to_string(cells) + " cell(s) " + name +
                            (on_face ? "on the top face" : "inside") + ": ";
     checks.print(at + "decay rate lambda, 1/s", lambda);
     checks.print(at + "(T - T_ref)/(T0 - T_ref) at t = 1/lambda",
@@ -143,15 +155,17 @@ namespace
     const int    n = 8;
     Material     mat;
     mat.gas_conductivity = 0.043;
-    for (const int cells : {1, 2, 3})
-      for (const bool on : {false, true})
+    // (cells, on, largest drop): 1 and 2 on are the closed-form checks.
+    const std::vector<std::tuple<int, bool, unsigned int>> cases = {
+      {1, false, 4}, {2, false, 4}, {5, true, 4}, {3, true, 2}};
+    for (const auto &[cells, on, largest] : cases)
         {
-          if (on != (cells == 3))
-            continue; // 1, 2 on: the closed-form checks above
+          // A line along x from cell 2 (the first cell) in the box of 8.
           Drop<dim>  drop(h, n, comm);
           Point<dim> x;
           for (int d = 0; d < dim; ++d)
             x[d] = (n / 2 + 0.5) * h;
+          x[0] = 2.5 * h;
           drop.put(x, 0.5);
           for (int c = 1; c < cells; ++c)
             {
@@ -162,6 +176,7 @@ namespace
           auto p = heat_parameters<dim>(T0, {});
           p.reference_temperature = 300;
           p.detached_drops        = on;
+          p.detached_drop_cells   = largest;
           HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
           heat.initialize();
           heat.set_metal_fraction(drop.alpha);
@@ -169,7 +184,9 @@ namespace
             heat.advance(1e-7, k * 1e-7);
           const std::string at = std::to_string(dim) + "D, " +
                                  std::to_string(cells) + " cell(s), " +
-                                 (on ? "sphere" : "off") + ": ";
+                                 (on ? "sphere, largest drop " +
+                                         std::to_string(largest) :
+                                       "off") + ": ";
           checks.at_most(at + "|T - T0| of the first cell, K",
                          std::abs(drop.temperature_at(heat, x) - T0), 1e-9);
           checks.at_most(at + "convection loss, J",
@@ -230,8 +247,22 @@ main(int argc, char **argv)
           closed_form_check<3>(checks, comm, face);
           closed_form_check<2>(checks, comm, face);
         }
-      closed_form_check<3>(checks, comm, false, 2);
-      closed_form_check<2>(checks, comm, false, 2);
+      closed_form_check<3>(checks, comm, false, {{0, 0, 0}, {1, 0, 0}});
+      closed_form_check<2>(checks, comm, false, {{0, 0, 0}, {1, 0, 0}});
+      const Shape el = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}};
+      closed_form_check<3>(checks, comm, false, el, "(L) ");
+      closed_form_check<2>(checks, comm, false, el, "(L) ");
+      // Across the middle of the box in z (3D) or y (2D): split between
+      // two ranks.
+      closed_form_check<3>(checks, comm, false,
+                           {{0, 0, -2}, {0, 0, -1}, {0, 0, 0}, {0, 0, 1}},
+                           "(vertical line) ");
+      closed_form_check<2>(checks, comm, false,
+                           {{0, -2, 0}, {0, -1, 0}, {0, 0, 0}, {0, 1, 0}},
+                           "(vertical line) ");
+      const Shape square = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+      closed_form_check<3>(checks, comm, false, square, "(square) ");
+      closed_form_check<2>(checks, comm, false, square, "(square) ");
       off_and_line_check<3>(checks, comm);
       off_and_line_check<2>(checks, comm);
       steel_drop(checks, comm, true, 2500, 0.043);

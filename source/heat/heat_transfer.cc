@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <type_traits>
 #include <limits>
+#include <map>
 #include <sstream>
 
 namespace femp
@@ -48,8 +49,9 @@ namespace femp
                       "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
     prm.declare_entry("Detached drops", "off",
                       Patterns::Selection("off|sphere"),
-                      "Heat loss of detached metal: a drop of one or two "
-                      "metal cells with no other metal face neighbour inside "
+                      "Heat loss of detached metal: a drop of a few "
+                      "face-connected metal cells (at most 'Detached drop "
+                      "cells') with no other metal face neighbour inside "
                       "the domain (spatter, or a loose grain). 'off' "
                       "(default): such a drop has no surface for the central "
                       "difference of alpha (or a small one) and no metal to "
@@ -64,6 +66,17 @@ namespace femp
                       "1000 K, 0.065 at 2000 K). With the solid, the "
                       "solid points of such drops are left out of the solid, "
                       "at rest (doc/solid.md). doc/equations.md.");
+    prm.declare_entry("Detached drop cells", "4", Patterns::Integer(1, 4),
+                      "With 'Detached drops = sphere': the largest drop, "
+                      "in cells, that counts as detached: a set of at most "
+                      "this many face-connected metal cells with no other "
+                      "metal face neighbour inside the domain. 1: single "
+                      "cells; 2: single cells and pairs; 3 and 4 also lines, "
+                      "L shapes and squares of cells, whose central "
+                      "differences of alpha give a few per cent to a quarter "
+                      "of the sphere's surface. Range 1 to 4 (finding a drop "
+                      "of N cells takes N exchanges of the ghost layer). "
+                      "doc/equations.md.");
     prm.declare_entry("Emissivity", "0.4", Patterns::Double(0., 1.),
                       "Surface emissivity eps for radiation losses; range [0, 1].");
     prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
@@ -161,6 +174,7 @@ namespace femp
     reference_temperature   = prm.get_double("Reference temperature");
     convection_coefficient  = prm.get_double("Convection coefficient");
     detached_drops          = prm.get("Detached drops") == "sphere";
+    detached_drop_cells     = prm.get_integer("Detached drop cells");
     emissivity              = prm.get_double("Emissivity");
     evaporation_coefficient = prm.get_double("Evaporation coefficient");
     laser_deposition        = prm.get("Laser deposition");
@@ -469,19 +483,30 @@ namespace femp
   }
 
 
-  // Detached metal (Heat transfer/Detached drops = sphere): an owned metal
-  // cell whose face neighbours inside the domain hold no metal, or one of
-  // two face neighbours that have no other, has no surface for the central
-  // differences of alpha (or only a small one) and no metal to conduct to,
-  // so without a model of the gas round it a spatter drop keeps its
-  // temperature. The drop (one or two cells) is taken as a sphere of its
-  // metal volume V = sum alpha h^3 (2D: a cylinder of section sum alpha
-  // h^2) in still gas, diameter d = (6 V/pi)^(1/3) (2D: (4 V/pi)^(1/2)):
-  // surface per cell volume 2 dim alpha/d for each of its cells, over
-  // which it loses q(T) (convection, radiation, evaporation) plus the
-  // conduction of a sphere in still gas, Nu k_g/d (T - T_ref) with Nu = 2
-  // (a drop of 2-10 um at 1 m/s relative to argon has Re < 1, where Nu
-  // stays near 2).
+  // Detached metal (Heat transfer/Detached drops = sphere): a drop of at
+  // most K = 'Detached drop cells' face-connected metal cells with no other
+  // metal face neighbour inside the domain has no surface for the central
+  // differences of alpha (a cell between two metal neighbours, or between
+  // two gas cells, sees a zero difference) or only a small one, and no
+  // metal to conduct to, so without a model of the gas round it a spatter
+  // drop keeps its temperature. The drop is taken as a sphere of its metal
+  // volume V = sum alpha h^3 (2D: a cylinder of section sum alpha h^2) in
+  // still gas, diameter d = (6 V/pi)^(1/3) (2D: (4 V/pi)^(1/2)): surface per
+  // cell volume 2 dim alpha/d for each of its cells, over which it loses
+  // q(T) (convection, radiation, evaporation) plus the conduction of a
+  // sphere in still gas, Nu k_g/d (T - T_ref) with Nu = 2 (a drop of 2-10
+  // um at 1 m/s relative to argon has Re < 1, where Nu stays near 2).
+  //
+  // Finding the drops, on any partition: a metal cell with K or more metal
+  // face neighbours lies in a body of more than K cells; the others
+  // (candidates, a few per cent of the metal cells: edges and corners)
+  // collect the global indices of the cells they reach, one layer of face
+  // neighbours per round, the sets passing through the ghost layer. A set
+  // that exceeds K cells, or meets a cell with K or more neighbours, marks
+  // a larger body. After K rounds a set of at most K cells is a whole drop
+  // (a body of more than K cells has more than K cells within K steps of
+  // each of its cells). The drop's volume sums the metal fractions of its
+  // cells in the order of their global indices, the same on every rank.
   template <int dim>
   void
   HeatTransfer<dim>::find_detached_cells()
@@ -491,49 +516,106 @@ namespace femp
     detached.clear();
     if (!prm.detached_drops)
       return;
-    const auto & st = grid.strides();
-    const auto & n  = grid.n_cells();
-    const double h  = grid.h();
-    // Per owned metal cell the number of its face neighbours (inside the
-    // domain) that hold metal, and the last of them; the counts go to the
-    // ghost layer, so that a cell sees whether its one metal neighbour has
-    // no other (the pair is a drop of two cells) on every partition.
+    const unsigned int K  = prm.detached_drop_cells;
+    const auto &       st = grid.strides();
+    const auto &       n  = grid.n_cells();
+    const double       h  = grid.h();
+    const auto global_id = [&](const std::size_t idx) {
+      const auto ijk = grid.global_index(idx);
+      double     id  = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * n[d] + ijk[d];
+      return id;
+    };
+    // Visit the metal face neighbours inside the domain of local cell idx.
+    const auto for_metal_neighbours = [&](const std::size_t idx, auto &&f) {
+      const auto ijk = grid.global_index(idx);
+      for (int d = 0; d < dim; ++d)
+        {
+          if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
+            f(idx - st[d]);
+          if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
+            f(idx + st[d]);
+        }
+    };
+    // Metal face neighbours per owned metal cell, to the ghost layer.
     std::vector<double> &count = gas_coefficient; // reused, zero here
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> one_neighbour;
+    std::vector<std::uint32_t> active;
     for (const auto idx : grid.owned_cells())
       {
         if (alpha[idx] <= 0)
           continue;
-        const auto    ijk = grid.global_index(idx);
-        unsigned int  m   = 0;
-        std::uint32_t last = 0;
-        for (int d = 0; d < dim; ++d)
-          {
-            if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
-              ++m, last = idx - st[d];
-            if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
-              ++m, last = idx + st[d];
-          }
+        unsigned int m = 0;
+        for_metal_neighbours(idx, [&](std::size_t) { ++m; });
         count[idx] = m;
-        if (m == 0)
-          one_neighbour.emplace_back(idx, idx);
-        else if (m == 1)
-          one_neighbour.emplace_back(idx, last);
+        if (m < K)
+          active.push_back(idx);
+      }
+    if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
+      {
+        std::fill(count.begin(), count.end(), 0.);
+        return;
       }
     grid.update_ghosts(count);
-    for (const auto &[idx, other] : one_neighbour)
+    if (drop_sets.size() != K + 1 || drop_sets[0].size() != alpha.size())
+      drop_sets.assign(K + 1, std::vector<double>(alpha.size(), 0.));
+    std::vector<double> &size = drop_sets[K];
+    for (const auto idx : active)
+      size[idx] = 1, drop_sets[0][idx] = global_id(idx);
+    std::vector<double> set;
+    for (unsigned int round = 0; round < K; ++round)
       {
-        // A single cell, or one of a pair whose other cell has no other
-        // metal neighbour: a drop of the pair's metal volume.
-        if (other != idx && count[other] != 1)
-          continue;
-        const double a = alpha[idx] + (other != idx ? alpha[other] : 0.);
-        const double V = a * std::pow(h, dim);
-        const double d = dim == 3 ? std::cbrt(6 * V / M_PI) :
-                                    std::sqrt(4 * V / M_PI);
-        detached.push_back(
-          {idx, 2 * dim * alpha[idx] / d, 2 * mat.gas_conductivity / d});
+        for (auto &field : drop_sets)
+          grid.update_ghosts(field);
+        for (const auto idx : active)
+          {
+            if (size[idx] > K)
+              continue; // a larger body
+            set.clear();
+            for (unsigned int k = 0; k < size[idx]; ++k)
+              set.push_back(drop_sets[k][idx]);
+            bool larger = false;
+            for_metal_neighbours(idx, [&](const std::size_t nb) {
+              if (count[nb] >= K || size[nb] > K)
+                larger = true;
+              else
+                for (unsigned int k = 0; k < size[nb]; ++k)
+                  set.push_back(drop_sets[k][nb]);
+            });
+            std::sort(set.begin(), set.end());
+            set.erase(std::unique(set.begin(), set.end()), set.end());
+            if (larger || set.size() > K)
+              {
+                size[idx] = K + 1;
+                continue;
+              }
+            for (unsigned int k = 0; k < set.size(); ++k)
+              drop_sets[k][idx] = set[k];
+            size[idx] = set.size();
+          }
       }
+    // The metal fractions of the drops' cells, from all ranks (drops are
+    // few).
+    std::vector<double> mine; // global index, alpha, ...
+    for (const auto idx : active)
+      if (size[idx] <= K)
+        mine.insert(mine.end(), {global_id(idx), alpha[idx]});
+    std::map<double, double> alpha_of;
+    for (const auto &part : Utilities::MPI::all_gather(grid.communicator(), mine))
+      for (std::size_t i = 0; i + 1 < part.size(); i += 2)
+        alpha_of[part[i]] = part[i + 1];
+    for (const auto idx : active)
+      if (size[idx] <= K)
+        {
+          double a = 0;
+          for (unsigned int k = 0; k < size[idx]; ++k)
+            a += alpha_of.at(drop_sets[k][idx]);
+          const double V = a * std::pow(h, dim);
+          const double d = dim == 3 ? std::cbrt(6 * V / M_PI) :
+                                      std::sqrt(4 * V / M_PI);
+          detached.push_back(
+            {idx, 2 * dim * alpha[idx] / d, 2 * mat.gas_conductivity / d});
+        }
     std::fill(count.begin(), count.end(), 0.);
     for (const auto &dc : detached)
       gas_coefficient[dc.index] = dc.gas_h;

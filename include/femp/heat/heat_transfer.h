@@ -56,13 +56,16 @@ namespace femp
       std::string initial_temperature_expression;
       double reference_temperature = 300.;
       double convection_coefficient = 10.;
-      /// 'Detached drops = sphere': a drop of one or two metal cells (no
-      /// other metal face neighbour inside the domain) loses heat as a
-      /// sphere of its metal volume (diameter d) in still gas: over the
-      /// sphere's surface,
-      /// the losses q(T) plus conduction with the coefficient Nu k_g/d,
-      /// Nu = 2, k_g = Material/Gas thermal conductivity. false: off.
+      /// 'Detached drops = sphere': a drop of at most detached_drop_cells
+      /// metal cells (face-connected, no other metal face neighbour inside
+      /// the domain) loses heat as a sphere of its metal volume (diameter
+      /// d) in still gas: over the sphere's surface, the losses q(T) plus
+      /// conduction with the coefficient Nu k_g/d, Nu = 2, k_g =
+      /// Material/Gas thermal conductivity. false: off.
       bool detached_drops = false;
+      /// 'Detached drop cells': the largest drop (in cells) that counts as
+      /// detached; 1 to 4.
+      unsigned int detached_drop_cells = 4;
       double emissivity             = 0.4;
       /// zeta_q of eq. (1); the evaporation data are the Material's.
       double evaporation_coefficient = 0.82;
@@ -325,6 +328,11 @@ namespace femp
       double        gas_h;  ///< Nu k_g / d, W/(m^2 K)
     };
     std::vector<DetachedCell> detached;
+    /// find_detached_cells(): per cell of the local box, the global indices
+    /// of the drop found so far (detached_drop_cells fields) and their
+    /// number (the last field; more than detached_drop_cells: a larger
+    /// body). Read only at cells with few metal neighbours.
+    std::vector<std::vector<double>> drop_sets;
     /// gas_h of the detached cells per cell of the local box, 0 elsewhere
     /// (empty when Detached drops = off).
     std::vector<double> gas_coefficient;
