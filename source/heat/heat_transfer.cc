@@ -576,14 +576,17 @@ namespace femp
               set.push_back(drop_sets[k][idx]);
             bool larger = false;
             for_metal_neighbours(idx, [&](const std::size_t nb) {
-              if (count[nb] >= K || size[nb] > K)
-                larger = true;
-              else
-                for (unsigned int k = 0; k < size[nb]; ++k)
-                  set.push_back(drop_sets[k][nb]);
+              larger = larger || count[nb] >= K || size[nb] > K;
             });
-            std::sort(set.begin(), set.end());
-            set.erase(std::unique(set.begin(), set.end()), set.end());
+            if (!larger)
+              {
+                for_metal_neighbours(idx, [&](const std::size_t nb) {
+                  for (unsigned int k = 0; k < size[nb]; ++k)
+                    set.push_back(drop_sets[k][nb]);
+                });
+                std::sort(set.begin(), set.end());
+                set.erase(std::unique(set.begin(), set.end()), set.end());
+              }
             if (larger || set.size() > K)
               {
                 size[idx] = K + 1;
@@ -593,29 +596,36 @@ namespace femp
               drop_sets[k][idx] = set[k];
             size[idx] = set.size();
           }
+        // Cells of larger bodies keep their mark (K + 1) for the
+        // neighbours; only the others go on.
+        active.erase(std::remove_if(active.begin(), active.end(),
+                                    [&](const std::uint32_t idx) {
+                                      return size[idx] > K;
+                                    }),
+                     active.end());
+        if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
+          break;
       }
-    // The metal fractions of the drops' cells, from all ranks (drops are
-    // few).
+    // What is left are the drops' cells. Their metal fractions, from all
+    // ranks (drops are few).
     std::vector<double> mine; // global index, alpha, ...
     for (const auto idx : active)
-      if (size[idx] <= K)
-        mine.insert(mine.end(), {global_id(idx), alpha[idx]});
+      mine.insert(mine.end(), {global_id(idx), alpha[idx]});
     std::map<double, double> alpha_of;
     for (const auto &part : Utilities::MPI::all_gather(grid.communicator(), mine))
       for (std::size_t i = 0; i + 1 < part.size(); i += 2)
         alpha_of[part[i]] = part[i + 1];
     for (const auto idx : active)
-      if (size[idx] <= K)
-        {
-          double a = 0;
-          for (unsigned int k = 0; k < size[idx]; ++k)
-            a += alpha_of.at(drop_sets[k][idx]);
-          const double V = a * std::pow(h, dim);
-          const double d = dim == 3 ? std::cbrt(6 * V / M_PI) :
-                                      std::sqrt(4 * V / M_PI);
-          detached.push_back(
-            {idx, 2 * dim * alpha[idx] / d, 2 * mat.gas_conductivity / d});
-        }
+      {
+        double a = 0;
+        for (unsigned int k = 0; k < size[idx]; ++k)
+          a += alpha_of.at(drop_sets[k][idx]);
+        const double V = a * std::pow(h, dim);
+        const double d =
+          dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
+        detached.push_back(
+          {idx, 2 * dim * alpha[idx] / d, 2 * mat.gas_conductivity / d});
+      }
     std::fill(count.begin(), count.end(), 0.);
     for (const auto &dc : detached)
       gas_coefficient[dc.index] = dc.gas_h;
