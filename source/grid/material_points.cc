@@ -578,22 +578,25 @@ namespace femp
       idx = grid.local_index(ijk);
     };
     constexpr std::uint32_t not_binned = std::numeric_limits<std::uint32_t>::max();
-    if (!fixed_cell.empty() && fixed_count.size() != grid.n_local())
+    if (binned_count.size() != grid.n_local())
       {
-        fixed_bits.assign(grid.n_local(), 0);
-        fixed_volume.assign(grid.n_local(), 0.);
-        fixed_count.assign(grid.n_local(), not_binned);
+        binned_bits.assign(grid.n_local(), 0);
+        binned_volume.assign(grid.n_local(), 0.);
+        binned_count.assign(grid.n_local(), not_binned);
       }
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         const std::uint32_t cell_idx = occupied[c].first;
         const std::uint32_t n_here   = cell_begin[c + 1] - cell_begin[c];
         const bool fixed = !fixed_cell.empty() && fixed_cell[cell_idx] != 0;
-        if (fixed && fixed_count[cell_idx] == n_here)
+        // The same points at the same places as when they were binned: a
+        // fixed cell with as many points, or a powder cell that did not
+        // change since (powder points move only once they melted).
+        if (binned_count[cell_idx] == n_here &&
+            (fixed || !cell_changed_since(binned_mark, cell_idx)))
           {
-            // The same points at the same places as when they were binned.
-            mask[cell_idx] |= fixed_bits[cell_idx];
-            volume[cell_idx] += fixed_volume[cell_idx];
+            mask[cell_idx] |= binned_bits[cell_idx];
+            volume[cell_idx] += binned_volume[cell_idx];
 #ifdef DEBUG
             std::uint64_t bits = 0;
             for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
@@ -604,13 +607,13 @@ namespace femp
                 Assert(idx == cell_idx, ExcInternalError());
                 bits |= std::uint64_t(1) << bit;
               }
-            Assert(bits == fixed_bits[cell_idx], ExcInternalError());
+            Assert(bits == binned_bits[cell_idx], ExcInternalError());
 #endif
             continue;
           }
         std::uint64_t bits     = 0;
         double        vol      = 0;
-        bool          reusable = fixed;
+        bool          reusable = true;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           {
             std::size_t  idx;
@@ -625,18 +628,20 @@ namespace femp
               fluid_cell[idx] = 1, any_fluid = true;
             if (reusable)
               {
-                reusable = idx == cell_idx && !is_fluid;
+                reusable = idx == cell_idx && !is_fluid &&
+                           (fixed || v[P::state] == powder);
                 bits |= std::uint64_t(1) << bit;
                 vol += v[P::volume];
               }
           }
+        binned_count[cell_idx] = reusable ? n_here : not_binned;
         if (reusable)
           {
-            fixed_bits[cell_idx]   = bits;
-            fixed_volume[cell_idx] = vol;
-            fixed_count[cell_idx]  = n_here;
+            binned_bits[cell_idx]   = bits;
+            binned_volume[cell_idx] = vol;
           }
       }
+    binned_mark = layout_mark();
     const double        inv_nsub = 1. / std::pow(n, dim);
     std::vector<double> alpha(grid.n_local(), 0.);
     for (std::size_t i = 0; i < alpha.size(); ++i)
@@ -657,9 +662,9 @@ namespace femp
     fixed_cell.clear();
     if (std::any_of(fixed.begin(), fixed.end(), [](auto f) { return f != 0; }))
       fixed_cell = fixed;
-    fixed_bits.clear();
-    fixed_volume.clear();
-    fixed_count.clear();
+    binned_bits.clear();
+    binned_volume.clear();
+    binned_count.clear();
   }
 
 
@@ -754,14 +759,40 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         n_fluid[idx] += is_fluid[idx - st[d]] + is_fluid[idx + st[d]];
     grid.update_ghosts(n_fluid);
-    std::vector<double> deficit(grid.n_local(), 0.), v_new(fluid.size());
+    // Only the over-full cells and their fluid neighbours change in a
+    // sweep (a cell at or below 1 with no over-full neighbour keeps v), and
+    // only the over-full cells need their neighbours' deficit: each sweep
+    // visits these (and the owned fluid cells next to a ghost, which an
+    // over-full cell of the other rank may feed), with the same arithmetic
+    // in the same order as a sweep over all fluid cells, so the result is
+    // the same to the bit at a fraction of the cost (a re-solidified track
+    // counts as fluid and can keep the sweeps going to max_sweeps).
+    const auto &status = grid.cell_status();
+    std::vector<std::uint32_t> at_rank_boundary;
+    for (const auto idx : fluid)
+      {
+        bool near_ghost = false;
+        for (int d = 0; d < dim; ++d)
+          for (const std::ptrdiff_t s : {-st[d], st[d]})
+            near_ghost = near_ghost || (is_fluid[idx + s] > 0 &&
+                                        status[idx + s] != BackgroundGrid<dim>::owned);
+        if (near_ghost)
+          at_rank_boundary.push_back(idx);
+      }
+    std::vector<std::uint32_t> over;
+    for (const auto idx : fluid)
+      if (n_fluid[idx] > 0 && v[idx] > 1)
+        over.push_back(idx);
+    std::vector<double>        deficit(grid.n_local(), 0.), v_new;
+    std::vector<std::uint8_t>  in_sweep(grid.n_local(), 0);
+    std::vector<std::uint32_t> sweep_cells;
     for (unsigned int sweep = 0; sweep < max_sweeps; ++sweep)
       {
         grid.update_ghosts(v);
         double excess = 0;
-        for (const auto idx : fluid)
+        for (const auto idx : over)
           {
-            excess = std::max(excess, n_fluid[idx] > 0 ? v[idx] - 1 : 0.);
+            excess   = std::max(excess, v[idx] - 1);
             double D = 0;
             for (int d = 0; d < dim; ++d)
               for (const std::ptrdiff_t s : {-st[d], st[d]})
@@ -772,9 +803,28 @@ namespace femp
         if (Utilities::MPI::max(excess, grid.communicator()) <= 1e-12)
           break;
         grid.update_ghosts(deficit);
-        for (std::size_t k = 0; k < fluid.size(); ++k)
+        // The cells of this sweep: the over-full ones, their owned fluid
+        // neighbours and the fluid cells at the rank boundary.
+        sweep_cells.clear();
+        auto add = [&](const std::uint32_t idx) {
+          if (!in_sweep[idx])
+            in_sweep[idx] = 1, sweep_cells.push_back(idx);
+        };
+        for (const auto idx : over)
           {
-            const auto   idx = fluid[k];
+            add(idx);
+            for (int d = 0; d < dim; ++d)
+              for (const std::ptrdiff_t s : {-st[d], st[d]})
+                if (is_fluid[idx + s] > 0 &&
+                    status[idx + s] == BackgroundGrid<dim>::owned)
+                  add(idx + s);
+          }
+        for (const auto idx : at_rank_boundary)
+          add(idx);
+        v_new.resize(sweep_cells.size());
+        for (std::size_t k = 0; k < sweep_cells.size(); ++k)
+          {
+            const auto   idx = sweep_cells[k];
             const double own = std::max(0., 1 - v[idx]);
             double       vc  = v[idx];
             if (vc > 1 && n_fluid[idx] > 0)
@@ -794,8 +844,15 @@ namespace femp
                 }
             v_new[k] = vc;
           }
-        for (std::size_t k = 0; k < fluid.size(); ++k)
-          v[fluid[k]] = v_new[k];
+        over.clear();
+        for (std::size_t k = 0; k < sweep_cells.size(); ++k)
+          {
+            const auto idx = sweep_cells[k];
+            v[idx]         = v_new[k];
+            in_sweep[idx]  = 0;
+            if (n_fluid[idx] > 0 && v[idx] > 1)
+              over.push_back(idx);
+          }
       }
     for (const auto idx : fluid)
       alpha[idx] = std::min(1., v[idx]);
@@ -1285,7 +1342,7 @@ namespace femp
   MaterialPoints<dim>::load_state(std::vector<StateReader> &parts)
   {
     handler.clear_particles();
-    fixed_count.clear(); // other points: bin them again
+    binned_count.clear(); // other points: bin them again
     std::vector<double> props(n_props);
     for (auto &in : parts)
       {

@@ -369,11 +369,18 @@ namespace femp
     const auto & st = grid.strides();
     const auto & n  = grid.n_cells();
     const double h  = grid.h();
-    for (const auto idx : grid.owned_cells())
-      {
+    // Per vertical column (3D: i + n_x j), the topmost owned cell with
+    // alpha >= 1/2 (below); found in the same pass.
+    const unsigned int n_columns = dim == 3 ? n[0] * n[1] : n[0];
+    std::vector<int>   top(n_columns, -1);
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
         if (alpha[idx] <= 0)
-          continue;
-        const auto ijk = grid.global_index(idx);
+          return;
+        if (alpha[idx] >= 0.5)
+          {
+            const auto col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+            top[col]       = std::max(top[col], ijk[dim - 1]);
+          }
         Tensor<1, dim> g;
         for (int d = 0; d < dim; ++d)
           {
@@ -384,8 +391,8 @@ namespace femp
           }
         const double norm = g.norm();
         if (norm > 1e-12 / h)
-          surface.push_back({idx, norm});
-      }
+          surface.push_back({std::uint32_t(idx), norm});
+      });
     find_detached_cells();
 
     // First-surface cells: per vertical column, the topmost cell with
@@ -400,15 +407,6 @@ namespace femp
     // column sum to 1/h, the absorbed power stays eta P. A column without
     // surface cells there (a metal top at the box face) gives q/h to its
     // topmost cell with alpha >= 1/2, as before.
-    const unsigned int n_columns = dim == 3 ? n[0] * n[1] : n[0];
-    std::vector<int>   top(n_columns, -1);
-    for (const auto idx : grid.owned_cells())
-      if (alpha[idx] >= 0.5)
-        {
-          const auto   ijk = grid.global_index(idx);
-          const auto   col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
-          top[col]         = std::max(top[col], ijk[dim - 1]);
-        }
     MPI_Allreduce(MPI_IN_PLACE, top.data(), n_columns, MPI_INT, MPI_MAX,
                   grid.communicator());
     const double rho_c_ref =
@@ -443,13 +441,11 @@ namespace femp
           first_surface.push_back(
             {sc.index, weight(sc) / (column_weight[col] * h)});
       }
-    for (const auto idx : grid.owned_cells())
-      {
-        int        k;
-        const auto col = column_of(idx, k);
-        if (top[col] == k && !(column_weight[col] > 0))
-          first_surface.push_back({idx, 1. / h});
-      }
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      const auto col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+      if (top[col] == ijk[dim - 1] && !(column_weight[col] > 0))
+        first_surface.push_back({std::uint32_t(idx), 1. / h});
+    });
     // Stale values of cells that left the lists.
     std::fill(laser_density.begin(), laser_density.end(), 0.);
     std::fill(loss_weight.begin(), loss_weight.end(), 0.);
@@ -461,9 +457,10 @@ namespace femp
       const auto &size = grid.box_size();
       const int   ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
       row_has_metal.assign(std::size_t(ny) * nz, 0);
-      for (std::size_t idx = 0; idx < alpha.size(); ++idx)
-        if (alpha[idx] > 0)
-          row_has_metal[idx / size[0]] = 1;
+      for (std::size_t r = 0, idx = 0; r < row_has_metal.size(); ++r)
+        for (int i = 0; i < size[0]; ++i, ++idx)
+          if (alpha[idx] > 0)
+            row_has_metal[r] = 1;
       compute_properties();
     }
 
@@ -527,9 +524,11 @@ namespace femp
         id = id * n[d] + ijk[d];
       return id;
     };
-    // Visit the metal face neighbours inside the domain of local cell idx.
-    const auto for_metal_neighbours = [&](const std::size_t idx, auto &&f) {
-      const auto ijk = grid.global_index(idx);
+    // Visit the metal face neighbours inside the domain of local cell idx
+    // (global index ijk).
+    const auto for_metal_neighbours_at = [&](const std::size_t idx,
+                                             const auto &       ijk,
+                                             auto &&            f) {
       for (int d = 0; d < dim; ++d)
         {
           if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
@@ -538,19 +537,21 @@ namespace femp
             f(idx + st[d]);
         }
     };
+    const auto for_metal_neighbours = [&](const std::size_t idx, auto &&f) {
+      for_metal_neighbours_at(idx, grid.global_index(idx), f);
+    };
     // Metal face neighbours per owned metal cell, to the ghost layer.
     std::vector<double> &count = gas_coefficient; // reused, zero here
     std::vector<std::uint32_t> active;
-    for (const auto idx : grid.owned_cells())
-      {
-        if (alpha[idx] <= 0)
-          continue;
-        unsigned int m = 0;
-        for_metal_neighbours(idx, [&](std::size_t) { ++m; });
-        count[idx] = m;
-        if (m < K)
-          active.push_back(idx);
-      }
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      if (alpha[idx] <= 0)
+        return;
+      unsigned int m = 0;
+      for_metal_neighbours_at(idx, ijk, [&](std::size_t) { ++m; });
+      count[idx] = m;
+      if (m < K)
+        active.push_back(idx);
+    });
     if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
       {
         std::fill(count.begin(), count.end(), 0.);

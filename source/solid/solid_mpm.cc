@@ -1422,6 +1422,23 @@ namespace femp
     while (j < found.size())
       merge_source.push_back(~std::int64_t(j++));
     const std::size_t n = merge_source.size();
+    // The kept entries as runs of consecutive entries (most of them: only
+    // the changed cells break them), copied run by run.
+    struct Run
+    {
+      std::size_t to, from, length;
+    };
+    std::vector<Run> runs;
+    for (std::size_t k = 0; k < n; ++k)
+      if (merge_source[k] >= 0)
+        {
+          const auto from = static_cast<std::size_t>(merge_source[k]);
+          if (!runs.empty() && runs.back().to + runs.back().length == k &&
+              runs.back().from + runs.back().length == from)
+            ++runs.back().length;
+          else
+            runs.push_back({k, from, 1});
+        }
     // Field by field: the kept entries move to their new places.
     auto move_field = [&](auto &field) {
       using T   = typename std::decay_t<decltype(field)>::value_type;
@@ -1434,9 +1451,10 @@ namespace femp
           return merge_buffer_index;
       }();
       out.resize(n);
-      for (std::size_t k = 0; k < n; ++k)
-        if (merge_source[k] >= 0)
-          out[k] = field[merge_source[k]];
+      for (const auto &r : runs)
+        std::copy(field.begin() + r.from,
+                  field.begin() + r.from + r.length,
+                  out.begin() + r.to);
       field.swap(out);
     };
     for (int d = 0; d < dim; ++d)

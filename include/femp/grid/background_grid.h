@@ -202,6 +202,27 @@ namespace femp
     {
       return owned_list;
     }
+    /// Call @p f(idx, ijk) for each locally owned cell, in increasing flat
+    /// index idx, with its global structured index ijk: the same cells as
+    /// owned_cells(), without the divisions of global_index() (for passes
+    /// over the whole grid).
+    template <typename Function>
+    void
+    for_each_owned_cell(Function &&f) const
+    {
+      std::array<int, dim> ijk = lo;
+      for (std::size_t idx = 0; idx < status.size(); ++idx)
+        {
+          if (status[idx] == owned)
+            f(idx, static_cast<const std::array<int, dim> &>(ijk));
+          for (int d = 0; d < dim; ++d)
+            {
+              if (++ijk[d] < lo[d] + size[d])
+                break;
+              ijk[d] = lo[d];
+            }
+        }
+    }
     /// Local flat index of every active cell of the triangulation, by
     /// active_cell_index(); numbers::invalid_unsigned_int for artificial ones.
     const std::vector<std::uint32_t> &

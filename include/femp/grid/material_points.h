@@ -284,7 +284,9 @@ namespace femp
     /// temperatures (a point that enters the zone stops the run, and so
     /// does zone metal at the solidus). metal_fraction() bins the points of
     /// such a cell once and reuses its sub-cell bits afterwards, unless the
-    /// cell's number of points changed. An empty @p fixed: none.
+    /// cell's number of points changed (it does the same for the cells
+    /// that hold only unmelted powder, until a point comes, goes or melts
+    /// there). An empty @p fixed: none.
     void
     set_fixed_cells(const std::vector<std::uint8_t> &fixed);
 
@@ -418,14 +420,18 @@ namespace femp
     // Per local cell, the temperature cells_to_points() last gave its
     // points (NaN: not given since the cell's points changed).
     std::vector<double> pushed_temperature;
-    // set_fixed_cells(), and metal_fraction()'s record for those cells:
+    // set_fixed_cells(), and metal_fraction()'s record of the cells whose
+    // points stay put (the fixed cells, and cells of unmelted powder only):
     // the sub-cell bits and summed volume of their points and how many
     // points gave them (max: not binned yet, or not reusable because a
-    // point lies outside the cell's box or is fluid).
+    // point lies outside the cell's box or may move), and the layout at
+    // the end of the last binning (a powder cell's record holds while the
+    // cell did not change since, cell_changed_since()).
     std::vector<std::uint8_t>          fixed_cell;
-    mutable std::vector<std::uint64_t> fixed_bits;
-    mutable std::vector<double>        fixed_volume;
-    mutable std::vector<std::uint32_t> fixed_count;
+    mutable std::vector<std::uint64_t> binned_bits;
+    mutable std::vector<double>        binned_volume;
+    mutable std::vector<std::uint32_t> binned_count;
+    mutable LayoutMark                 binned_mark;
     // Without carried points: true once cells_to_points() was called (the
     // points' states would follow the cell temperatures from then on).
     bool temperatures_passed = false;
