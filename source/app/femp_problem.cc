@@ -509,6 +509,7 @@ namespace femp
           write_checkpoint();
       }
 
+    points->flush_point_temperatures();
     report->finish(*control, *heat, *points, flow.get(), solid.get(),
                    point_heat->moved_points_energy(), result);
     if (history)
@@ -880,6 +881,7 @@ namespace femp
     const unsigned int n    = control->output_number();
     const double       time = control->time();
     TimerOutput::Scope t(timer, "output");
+    points->flush_point_temperatures();
     std::vector<double> phase(grid->n_local(), 0.);
     const auto &        a = heat->metal_fraction();
     const auto &        g = heat->liquid_fraction();

@@ -657,6 +657,7 @@ namespace femp
   void
   MaterialPoints<dim>::set_fixed_cells(const std::vector<std::uint8_t> &fixed)
   {
+    flush_point_temperatures();
     Assert(fixed.empty() || fixed.size() == grid.n_local(),
            ExcDimensionMismatch(fixed.size(), grid.n_local()));
     fixed_cell.clear();
@@ -888,6 +889,27 @@ namespace femp
         if (metal != nullptr && !((*metal)[idx] > 0))
           continue;
         pushed_temperature[idx] = Tc;
+        // A fixed cell (FE zone: solid points that stay put, never fluid)
+        // below the solidus: its points would all take Tc, a peak of at
+        // least Tc and no state change; keep that for the flush.
+        const bool fixed = !fixed_cell.empty() && fixed_cell[idx] != 0;
+        if (fixed && Tc <= Ts)
+          {
+            if (pending_temperature.size() != grid.n_local())
+              {
+                pending_temperature.assign(
+                  grid.n_local(), std::numeric_limits<double>::quiet_NaN());
+                pending_peak.assign(grid.n_local(), 0.);
+              }
+            pending_peak[idx] = std::isnan(pending_temperature[idx]) ?
+                                  Tc :
+                                  std::max(pending_peak[idx], Tc);
+            pending_temperature[idx] = Tc;
+            any_pending              = true;
+            continue;
+          }
+        if (fixed)
+          flush_cell(c);
         bool changed = false;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           {
@@ -920,6 +942,40 @@ namespace femp
   }
 
   template <int dim>
+  void
+  MaterialPoints<dim>::flush_cell(const std::size_t c) const
+  {
+    using P        = PropertyIndex;
+    const auto idx = occupied[c].first;
+    if (idx >= pending_temperature.size() ||
+        std::isnan(pending_temperature[idx]))
+      return;
+    const double Tc = pending_temperature[idx], peak = pending_peak[idx];
+    for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+      {
+        double *const v = point_properties[k];
+        Assert(v[P::state] != fluid, ExcInternalError());
+        v[P::temperature] = Tc;
+        if (peak > v[P::peak_temperature])
+          v[P::peak_temperature] = peak;
+      }
+    pending_temperature[idx] = std::numeric_limits<double>::quiet_NaN();
+  }
+
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::flush_point_temperatures() const
+  {
+    if (!any_pending)
+      return;
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      flush_cell(c);
+    any_pending = false;
+  }
+
+
+  template <int dim>
   std::vector<std::pair<std::uint32_t, double>>
   MaterialPoints<dim>::volume_mean_over_points(
     const std::vector<double> &          T,
@@ -940,6 +996,7 @@ namespace femp
         // them until one enters or leaves it (which forgets the record).
         if (pushed && Tc == pushed_temperature[occupied[c].first])
           continue;
+        flush_cell(c);
         bool         any = false;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           any = any || point_properties[k][P::temperature] != Tc;
@@ -1313,6 +1370,7 @@ namespace femp
   void
   MaterialPoints<dim>::save_state(StateWriter &out) const
   {
+    flush_point_temperatures();
     // Fixed-size records: id, cell (global number), position, reference
     // position, properties.
     // Cell by cell in the order of the owned cells (the handler's own
@@ -1343,6 +1401,8 @@ namespace femp
   {
     handler.clear_particles();
     binned_count.clear(); // other points: bin them again
+    pending_temperature.clear();
+    any_pending = false;
     std::vector<double> props(n_props);
     for (auto &in : parts)
       {

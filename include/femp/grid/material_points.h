@@ -298,9 +298,22 @@ namespace femp
     /// temperature is stale: points entered it since (moved by the solid,
     /// whose moves are followed by no alpha pass), and the next pass gives
     /// it their enthalpy.
+    /// In the cells marked by set_fixed_cells() (the FE zone, whose points
+    /// never move or melt) at or below the solidus, only the cell's
+    /// temperature and its highest value are recorded; the points get them
+    /// from flush_point_temperatures().
     void
     cells_to_points(const std::vector<double> &T,
                     const std::vector<double> *metal = nullptr);
+
+    /// Give the points of the fixed cells the temperature and the peak that
+    /// cells_to_points() recorded for them since the last flush (the
+    /// values the points would hold had they been written at every call).
+    /// Call before reading the temperatures or peaks of all points (output,
+    /// checkpoint, report); volume_mean_over_points() and save_state() do
+    /// it for the cells they read.
+    void
+    flush_point_temperatures() const;
 
     /// Heat carried by the points (Heat transfer/Advection by melt flow =
     /// points): for each owned cell holding a point whose temperature
@@ -432,6 +445,15 @@ namespace femp
     mutable std::vector<double>        binned_volume;
     mutable std::vector<std::uint32_t> binned_count;
     mutable LayoutMark                 binned_mark;
+    // cells_to_points()'s record for the fixed cells: per local cell the
+    // temperature last passed and the highest one passed since the last
+    // flush (NaN: nothing pending), and whether any cell has one.
+    mutable std::vector<double> pending_temperature;
+    mutable std::vector<double> pending_peak;
+    mutable bool                any_pending = false;
+    // Flush the record of occupied_cells()[c] (if any) into its points.
+    void
+    flush_cell(const std::size_t c) const;
     // Without carried points: true once cells_to_points() was called (the
     // points' states would follow the cell temperatures from then on).
     bool temperatures_passed = false;
