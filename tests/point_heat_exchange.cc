@@ -10,7 +10,9 @@
 //  - 'upwind': cells that gained metal take the mean temperature of their
 //    points; the account holds the change of the stored enthalpy;
 //  - a cell that was gas at the last alpha pass gives its new points no
-//    stale temperature (stale_gas_cell below).
+//    stale temperature (stale_gas_cell below);
+//  - the points of fixed cells (the FE zone) get the temperatures and
+//    peaks passed to their cells when flushed (fixed_cells below).
 
 #include <femp/coupling/point_heat_exchange.h>
 
@@ -168,6 +170,106 @@ stale_gas_cell(Checks &checks, MPI_Comm comm)
     }
 }
 
+// Fixed cells (the FE zone): cells_to_points() only records their
+// temperature and peak, flush_point_temperatures() writes them. Two equal
+// sets of points, one with the left half of the strip fixed, take the
+// same sequence of cell temperatures (a hot one, then cooler ones, and one
+// fixed cell above the solidus, written at once); after the flush every
+// point's temperature, peak and state must equal the unfixed set's, and so
+// must the volume means over the points after the cells' temperatures
+// changed without a push. Without the flush the fixed points would hold
+// their first temperature (printed as the contrast).
+void
+fixed_cells(Checks &checks, MPI_Comm comm)
+{
+  const int    dim = 2;
+  const double h   = 1. / 20;
+  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h),
+                           comm);
+  grid.create();
+  Material mat = unit_material();
+  mat.solidus  = 1.4;
+  mat.liquidus = 1.6;
+  MaterialPoints<dim>::Parameters pp;
+  pp.point_spacing   = h / 2;
+  pp.subcells        = 2;
+  pp.layer_thickness = 0;
+  auto make = [&]() {
+    auto p = std::make_unique<MaterialPoints<dim>>(pp, mat, grid);
+    p->create_region([](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
+                     1., MaterialPoints<dim>::solid);
+    return p;
+  };
+  auto eager = make(), lazy = make();
+  std::vector<std::uint8_t> fixed(grid.n_local(), 0);
+  for (const auto idx : grid.owned_cells())
+    fixed[idx] = grid.cell_center(idx)[0] < 0.5;
+  lazy->set_fixed_cells(fixed);
+  (void)lazy->metal_fraction();
+  // Cell temperatures: a + b x; the cell at x = 0.475 (fixed) goes above
+  // the solidus at the third push.
+  auto field = [&](const double a, const double b, const bool hot_cell) {
+    std::vector<double> T(grid.n_local(), 0.);
+    for (const auto idx : grid.owned_cells())
+      {
+        const double x = grid.cell_center(idx)[0];
+        T[idx]         = a + b * x;
+        if (hot_cell && std::abs(x - 0.475) < 0.01)
+          T[idx] = 1.5;
+      }
+    grid.update_ghosts(T);
+    return T;
+  };
+  const std::vector<std::vector<double>> pushes = {
+    field(1.3, 0.1, false), field(1.1, 0.2, false), field(1.0, 0.1, true),
+    field(0.9, 0.1, false)};
+  using P = MaterialPoints<dim>::PropertyIndex;
+  auto largest_difference = [&](const unsigned int property) {
+    double d = 0;
+    AssertDimension(eager->occupied_cells().size(), lazy->occupied_cells().size());
+    for (std::size_t c = 0; c < eager->occupied_cells().size(); ++c)
+      {
+        const auto a = eager->cell_point_properties(c);
+        const auto b = lazy->cell_point_properties(c);
+        AssertDimension(a.size(), b.size());
+        for (std::size_t k = 0; k < a.size(); ++k)
+          d = std::max(d, std::abs(a[k][property] - b[k][property]));
+      }
+    return Utilities::MPI::max(d, comm);
+  };
+  for (const auto &T : pushes)
+    {
+      eager->cells_to_points(T);
+      lazy->cells_to_points(T);
+    }
+  checks.print("fixed cells: largest temperature difference before the flush "
+               "(the contrast)",
+               std::round(largest_difference(P::temperature) * 1e6) / 1e6);
+  lazy->flush_point_temperatures();
+  checks.at_most("fixed cells: largest temperature difference after the flush",
+                 largest_difference(P::temperature), 0.);
+  checks.at_most("fixed cells: largest peak temperature difference",
+                 largest_difference(P::peak_temperature), 0.);
+  checks.at_most("fixed cells: largest state difference",
+                 largest_difference(P::state), 0.);
+  // Pushed again, then the cells' temperatures change without a push: the
+  // volume means over the points (the cells with points at another
+  // temperature) must be the same.
+  eager->cells_to_points(pushes[1]);
+  lazy->cells_to_points(pushes[1]);
+  const auto e  = [](const double T) { return 2 * T; };
+  const auto me = eager->volume_mean_over_points(pushes[0], e);
+  const auto ml = lazy->volume_mean_over_points(pushes[0], e);
+  double     d  = me.size() == ml.size() ? 0. : 1.;
+  for (std::size_t i = 0; i < std::min(me.size(), ml.size()); ++i)
+    d = std::max({d, std::abs(me[i].second - ml[i].second),
+                  me[i].first == ml[i].first ? 0. : 1.});
+  checks.at_most("fixed cells: largest difference of the volume means",
+                 Utilities::MPI::max(d, comm), 0.);
+  checks.print("fixed cells: cells with a volume mean (all ranks)",
+               Utilities::MPI::sum(me.size(), comm));
+}
+
 int
 main(int argc, char **argv)
 {
@@ -177,5 +279,6 @@ main(int argc, char **argv)
   run(true, checks, comm);
   run(false, checks, comm);
   stale_gas_cell(checks, comm);
+  fixed_cells(checks, comm);
   return checks.exit_code();
 }

@@ -892,15 +892,20 @@ namespace femp
         // A fixed cell (FE zone: solid points that stay put, never fluid)
         // below the solidus: its points would all take Tc, a peak of at
         // least Tc and no state change; keep that for the flush.
+        // (A fixed cell that once went above the solidus holds fluid
+        // points: it is written at every call from then on.)
         const bool fixed = !fixed_cell.empty() && fixed_cell[idx] != 0;
-        if (fixed && Tc <= Ts)
+        if (fixed && pending_temperature.size() != grid.n_local())
           {
-            if (pending_temperature.size() != grid.n_local())
-              {
-                pending_temperature.assign(
-                  grid.n_local(), std::numeric_limits<double>::quiet_NaN());
-                pending_peak.assign(grid.n_local(), 0.);
-              }
+            pending_temperature.assign(grid.n_local(),
+                                       std::numeric_limits<double>::quiet_NaN());
+            pending_peak.assign(grid.n_local(), 0.);
+            melted_fixed_cell.assign(grid.n_local(), 0);
+          }
+        if (fixed && Tc > Ts)
+          melted_fixed_cell[idx] = 1;
+        if (fixed && !melted_fixed_cell[idx])
+          {
             pending_peak[idx] = std::isnan(pending_temperature[idx]) ?
                                   Tc :
                                   std::max(pending_peak[idx], Tc);
@@ -1402,6 +1407,7 @@ namespace femp
     handler.clear_particles();
     binned_count.clear(); // other points: bin them again
     pending_temperature.clear();
+    melted_fixed_cell.clear();
     any_pending = false;
     std::vector<double> props(n_props);
     for (auto &in : parts)

@@ -450,6 +450,8 @@ namespace femp
     // flush (NaN: nothing pending), and whether any cell has one.
     mutable std::vector<double> pending_temperature;
     mutable std::vector<double> pending_peak;
+    // Fixed cells that went above the solidus (written at once since).
+    std::vector<std::uint8_t> melted_fixed_cell;
     mutable bool                any_pending = false;
     // Flush the record of occupied_cells()[c] (if any) into its points.
     void
