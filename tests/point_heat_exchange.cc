@@ -20,28 +20,43 @@
 
 using namespace femp_test;
 
+constexpr int dim = 2;
+
+// The strip of all three tests: 1 x 2h with h = 1/20, a unit material
+// melting over [1.4, 1.6], points at h/2 with 2 x 2 sub-cells.
+struct Strip
+{
+  const double                    h = 1. / 20;
+  BackgroundGrid<dim>             grid;
+  Material                        mat = unit_material();
+  MaterialPoints<dim>::Parameters pp;
+
+  explicit Strip(MPI_Comm comm)
+    : grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h), comm)
+  {
+    grid.create();
+    mat.solidus        = 1.4;
+    mat.liquidus       = 1.6;
+    pp.point_spacing   = h / 2;
+    pp.subcells        = 2;
+    pp.layer_thickness = 0;
+  }
+};
+
 void
 run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
 {
-  const int  dim = 2;
-  const double h = 1. / 20;
-  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h),
-                           comm);
-  grid.create();
-  Material mat           = unit_material();
-  mat.solidus            = 1.4;
-  mat.liquidus           = 1.6;
+  Strip        strip(comm);
+  const double h    = strip.h;
+  auto &       grid = strip.grid;
+  auto &       mat  = strip.mat;
   mat.latent_heat_fusion = 0.5;
   Laser<dim>        laser(laser_off<dim>());
   auto              hp = heat_parameters<dim>(1., {});
   HeatTransfer<dim> heat(hp, mat, laser, grid);
   heat.initialize();
 
-  MaterialPoints<dim>::Parameters pp;
-  pp.point_spacing   = h / 2;
-  pp.subcells        = 2;
-  pp.layer_thickness = 0;
-  MaterialPoints<dim> points(pp, mat, grid);
+  MaterialPoints<dim> points(strip.pp, mat, grid);
   points.create_region([](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
                        2., MaterialPoints<dim>::fluid);
   heat.set_metal_fraction(points.metal_fraction());
@@ -109,21 +124,14 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
 void
 stale_gas_cell(Checks &checks, MPI_Comm comm)
 {
-  const int  dim = 2;
-  const double h = 1. / 20;
-  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h),
-                           comm);
-  grid.create();
-  Material mat = unit_material();
-  mat.solidus  = 1.4;
-  mat.liquidus = 1.6;
+  Strip        strip(comm);
+  const double h    = strip.h;
+  const auto & grid = strip.grid;
+  const auto & mat  = strip.mat;
+  const auto & pp   = strip.pp;
   Laser<dim>        laser(laser_off<dim>());
   HeatTransfer<dim> heat(heat_parameters<dim>(1., {}), mat, laser, grid);
   heat.initialize();
-  MaterialPoints<dim>::Parameters pp;
-  pp.point_spacing   = h / 2;
-  pp.subcells        = 2;
-  pp.layer_thickness = 0;
   for (const bool with_metal : {true, false})
     {
       MaterialPoints<dim> points(pp, mat, grid);
@@ -182,18 +190,10 @@ stale_gas_cell(Checks &checks, MPI_Comm comm)
 void
 fixed_cells(Checks &checks, MPI_Comm comm)
 {
-  const int    dim = 2;
-  const double h   = 1. / 20;
-  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h),
-                           comm);
-  grid.create();
-  Material mat = unit_material();
-  mat.solidus  = 1.4;
-  mat.liquidus = 1.6;
-  MaterialPoints<dim>::Parameters pp;
-  pp.point_spacing   = h / 2;
-  pp.subcells        = 2;
-  pp.layer_thickness = 0;
+  Strip       strip(comm);
+  const auto &grid = strip.grid;
+  const auto &mat  = strip.mat;
+  const auto &pp   = strip.pp;
   auto make = [&]() {
     auto p = std::make_unique<MaterialPoints<dim>>(pp, mat, grid);
     p->create_region([](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
