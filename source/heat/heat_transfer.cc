@@ -372,13 +372,16 @@ namespace femp
     // Per vertical column (3D: i + n_x j), the topmost owned cell with
     // alpha >= 1/2 (below); found in the same pass.
     const unsigned int n_columns = dim == 3 ? n[0] * n[1] : n[0];
-    std::vector<int>   top(n_columns, -1);
+    const auto column = [&](const auto &ijk) {
+      return dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+    };
+    std::vector<int> top(n_columns, -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
         if (alpha[idx] <= 0)
           return;
         if (alpha[idx] >= 0.5)
           {
-            const auto col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+            const auto col = column(ijk);
             top[col]       = std::max(top[col], ijk[dim - 1]);
           }
         Tensor<1, dim> g;
@@ -420,7 +423,7 @@ namespace femp
     auto column_of = [&](const std::uint32_t idx, int &k) {
       const auto ijk = grid.global_index(idx);
       k              = ijk[dim - 1];
-      return dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+      return column(ijk);
     };
     std::vector<double> column_weight(n_columns, 0.);
     for (const auto &sc : surface)
@@ -442,7 +445,7 @@ namespace femp
             {sc.index, weight(sc) / (column_weight[col] * h)});
       }
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
-      const auto col = dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
+      const auto col = column(ijk);
       if (top[col] == ijk[dim - 1] && !(column_weight[col] > 0))
         first_surface.push_back({std::uint32_t(idx), 1. / h});
     });
