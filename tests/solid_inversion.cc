@@ -12,7 +12,11 @@
 //    Jacobian 1 + (J - 1) - B |q| (first order) reaches zero;
 // 4. the same with hourglass control off: the mode grows without stiffness
 //    until a corner inverts (the corners are checked with control off as
-//    well), which must stop the run in the same way.
+//    well), which must stop the run in the same way;
+// 5. a weaker checkerboard force without control: with femp's hourglass
+//    distortion limit (B sum |q| of a corner) the run stops on the
+//    distorted corners, at an earlier step than the inversion (cases 1-4
+//    run with the limit 1, which leaves only the inversion check).
 // Each stop must be an exception naming the solid step, the time, the
 // position and what to change, thrown on every rank at the same step.
 #include <femp/grid/material_points.h>
@@ -40,7 +44,7 @@ namespace
 
   Outcome
   run(const bool fe, const Load load, const double F, const double kappa,
-      MPI_Comm comm)
+      MPI_Comm comm, const double distortion_limit = 1)
   {
     const double      h = 0.1;
     const Point<dim>  size(1.6, 0.8);
@@ -50,7 +54,7 @@ namespace
     const SolidMaterial sm   = elastic_block_material(block.material);
     typename SolidStress<dim>::Parameters sp;
     sp.energy_file = "";
-    const auto fp  = fe_block<dim>(fe, size, kappa);
+    const auto fp  = fe_block<dim>(fe, size, kappa, distortion_limit);
     SolidStress<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
@@ -140,6 +144,7 @@ main(int argc, char **argv)
 
   const double  F_c = argc > 1 ? std::atof(argv[1]) : 10;
   const double  F_h = argc > 2 ? std::atof(argv[2]) : 3;
+  const double  F_w = argc > 3 ? std::atof(argv[3]) : 0.1;
   const Outcome points = run(false, Load::converging, F_c, 0.1, comm);
   check_stop(checks, "points, converging force", points,
              "a material point collapsed");
@@ -152,5 +157,17 @@ main(int argc, char **argv)
   const Outcome off = run(true, Load::checkerboard, F_h, 0, comm);
   check_stop(checks, "elements, checkerboard force, hourglass control off",
              off, "a finite element inverted");
+  // A weaker checkerboard force without control: the mode grows for many
+  // steps before it inverts a corner. With femp's distortion limit the run
+  // stops on the distorted corners, earlier.
+  const double  limit = SolidFEM<dim>::Parameters().hourglass_distortion_limit;
+  const Outcome weak_inverted = run(true, Load::checkerboard, F_w, 0, comm);
+  check_stop(checks, "elements, weak checkerboard force, distortion limit 1",
+             weak_inverted, "a finite element inverted");
+  const Outcome weak = run(true, Load::checkerboard, F_w, 0, comm, limit);
+  check_stop(checks, "elements, weak checkerboard force, femp's distortion limit",
+             weak, "hourglass modes of a finite element distorted its corners");
+  checks.in_range("weak checkerboard force: the distortion check stops first",
+                  step_of(weak.message) < step_of(weak_inverted.message), 1, 1);
   return checks.exit_code();
 }

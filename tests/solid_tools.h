@@ -106,16 +106,20 @@ namespace femp_test
   }
 
   /// A finite-element zone (on when @p enabled) covering [0, @p size], with
-  /// hourglass coefficient @p kappa.
+  /// hourglass coefficient @p kappa and hourglass distortion limit
+  /// @p distortion_limit (femp's default unless given).
   template <int dim>
   typename SolidFEM<dim>::Parameters
-  fe_block(const bool enabled, const Point<dim> &size, const double kappa)
+  fe_block(const bool enabled, const Point<dim> &size, const double kappa,
+           const double distortion_limit =
+             typename SolidFEM<dim>::Parameters().hourglass_distortion_limit)
   {
     typename SolidFEM<dim>::Parameters fp;
-    fp.enabled               = enabled;
-    fp.lower_corner          = Point<dim>();
-    fp.upper_corner          = size;
-    fp.hourglass_coefficient = kappa;
+    fp.enabled                    = enabled;
+    fp.lower_corner               = Point<dim>();
+    fp.upper_corner               = size;
+    fp.hourglass_coefficient      = kappa;
+    fp.hourglass_distortion_limit = distortion_limit;
     return fp;
   }
 

@@ -95,6 +95,12 @@ namespace femp
         out << ", balance " << se.balance() << "; kinetic/internal "
             << se.kinetic / std::max(1e-300, std::abs(se.internal))
             << std::endl;
+        const auto hd = solid->largest_hourglass_distortion(); // collective
+        if (hd[0] >= 0)
+          out << "Solid: largest hourglass distortion of a finite element's "
+                 "corners "
+              << std::setprecision(3) << hd[0] << " (limit " << hd[1] << ")"
+              << std::setprecision(6) << std::endl;
         const auto gathers = solid->gathers_kept(); // collective
         if (gathers[0] + gathers[1] > 0)
           out << "Solid: of " << gathers[2]

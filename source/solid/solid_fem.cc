@@ -61,6 +61,21 @@ namespace femp
                       "the run. Use 0.01-0.1 for elements under loads that "
                       "drive the zero-energy modes (point or alternating "
                       "nodal loads).");
+    prm.declare_entry("Hourglass distortion limit", "0.1", Patterns::Double(),
+                      "Largest change of an element corner's volume ratio "
+                      "det(dx/dX) that the hourglass modes may make, -; "
+                      "range (0, 1]. Measured per element at every solid "
+                      "step as B sum |q| (B = 1 / (2^(dim-1) h), q the "
+                      "hourglass mode amplitudes, first order); above the "
+                      "limit the run stops with the element's position. "
+                      "The modes carry no strain at the element centre, so "
+                      "they do not show in the stresses or the energies, "
+                      "but their corner displacements move the zone's "
+                      "nodes and the points near it. femp's solid is a "
+                      "small-strain model: the shipped scenes stay below "
+                      "0.006 (the largest of a run is in the end report, "
+                      "doc/stability.md). 1 leaves only the inverted-corner "
+                      "check.");
     prm.leave_subsection();
   }
 
@@ -72,6 +87,7 @@ namespace femp
     prm.enter_subsection("Solid FEM");
     enabled      = prm.get_bool("Use finite elements");
     hourglass_coefficient = prm.get_double("Hourglass coefficient");
+    hourglass_distortion_limit = prm.get_double("Hourglass distortion limit");
     if (enabled)
       {
         lower_corner = parse_point<dim>(prm.get("Zone lower corner"),
@@ -85,6 +101,9 @@ namespace femp
     require(hourglass_coefficient >= 0 && hourglass_coefficient <= 1,
             "Solid FEM/Hourglass coefficient", hourglass_coefficient,
             "it must lie in [0, 1]");
+    require(hourglass_distortion_limit > 0 && hourglass_distortion_limit <= 1,
+            "Solid FEM/Hourglass distortion limit", hourglass_distortion_limit,
+            "it must lie in (0, 1]");
   }
 
 
@@ -1096,14 +1115,23 @@ namespace femp
 
   template <int dim>
   [[gnu::always_inline]] inline simd_double
-  SolidFEM<dim>::jacobian_low(const ElementBlock &eb, const double hgB) const
+  SolidFEM<dim>::hourglass_distortion(const ElementBlock &eb,
+                                      const double        hgB) const
   {
     simd_double hq = {};
     for (unsigned int al = 0; al < n_hg; ++al)
       for (int i = 0; i < dim; ++i)
         if (hg_mask<dim>(al) & (1u << i))
           hq += eb.q[al][i] < 0 ? -eb.q[al][i] : eb.q[al][i];
-    return 1. + eb.dJ - hgB * hq;
+    return hgB * hq;
+  }
+
+
+  template <int dim>
+  simd_double
+  SolidFEM<dim>::jacobian_low(const ElementBlock &eb, const double hgB) const
+  {
+    return 1. + eb.dJ - hourglass_distortion(eb, hgB);
   }
 
 
@@ -1132,8 +1160,10 @@ namespace femp
       F[d] = frc[d].data(), vl[d] = vel[d].data();
     double                 work = 0;
     const std::size_t      n_el = element_id.size();
-    // Smallest corner Jacobian ratio (spare lanes repeat an element).
+    // Smallest corner Jacobian ratio and largest hourglass distortion
+    // (spare lanes repeat an element).
     VD jmin = VD{} + std::numeric_limits<double>::infinity();
+    VD dmax = {};
     for (std::size_t b = 0; b < blocks.size(); ++b)
       {
         const std::size_t  e0 = W * b;
@@ -1153,8 +1183,10 @@ namespace femp
             const VD wk = update_block(eb, el, nl, Vc, dt, w, c, sb, E);
             for (unsigned int l = 0; l < nl; ++l)
               work += wk[l];
-            const VD j = jacobian_low(eb, c.hgB);
-            jmin       = j < jmin ? j : jmin;
+            const VD hd = hourglass_distortion(eb, c.hgB);
+            const VD j  = 1. + eb.dJ - hd;
+            jmin        = j < jmin ? j : jmin;
+            dmax        = hd > dmax ? hd : dmax;
           }
         else
           {
@@ -1168,9 +1200,17 @@ namespace femp
     transition_hourglass_forces(c.kfac);
     if constexpr (update)
       {
-        min_jacobian = std::numeric_limits<double>::infinity();
+        min_jacobian   = std::numeric_limits<double>::infinity();
+        max_distortion = 0;
         for (unsigned int l = 0; l < W; ++l)
-          min_jacobian = std::min(min_jacobian, jmin[l]);
+          {
+            min_jacobian = std::min(min_jacobian, jmin[l]);
+            // Written so that a NaN is kept (and fails element_failed()).
+            max_distortion = dmax[l] > max_distortion ? dmax[l] :
+                             dmax[l] <= max_distortion ? max_distortion :
+                                                         dmax[l];
+          }
+        max_distortion_seen = std::max(max_distortion_seen, max_distortion);
       }
     return work;
   }
@@ -1328,13 +1368,18 @@ namespace femp
 
   template <int dim>
   bool
-  SolidFEM<dim>::find_inverted(Point<dim> &where, double &J) const
+  SolidFEM<dim>::find_failed(Point<dim> &where,
+                             double &    J,
+                             bool &      distorted) const
   {
     const double hgB = loop_constants(1.).hgB;
     for (std::size_t e = 0; e < element_id.size(); ++e)
       {
-        const double j = jacobian_low(blocks[e / simd_lanes], hgB)[e % simd_lanes];
-        if (!(j > 0))
+        const ElementBlock &eb = blocks[e / simd_lanes];
+        const double j  = jacobian_low(eb, hgB)[e % simd_lanes];
+        const double hd = hourglass_distortion(eb, hgB)[e % simd_lanes];
+        distorted       = j > 0 && !(hd <= prm.hourglass_distortion_limit);
+        if (!(j > 0) || distorted)
           {
             std::uint64_t r = element_id[e];
             for (int d = 0; d < dim; ++d)
@@ -1343,11 +1388,19 @@ namespace femp
                            (zlo[d] + double(r % zn[d]) + 0.5) * grid.h();
                 r /= zn[d];
               }
-            J = j;
+            J = distorted ? hd : j;
             return true;
           }
       }
     return false;
+  }
+
+
+  template <int dim>
+  double
+  SolidFEM<dim>::largest_distortion() const
+  {
+    return Utilities::MPI::max(max_distortion_seen, comm);
   }
 
 

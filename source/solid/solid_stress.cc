@@ -1066,7 +1066,7 @@ namespace femp
     double sums[10] = {mpm.kinetic_energy(), work, dt * local_ext,
                        mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
                        transfer, fe_energy[0], remap_work,
-                       mpm.volume_collapsed() || (fem && fem->element_inverted()) ?
+                       mpm.volume_collapsed() || (fem && fem->element_failed()) ?
                          1. : 0.,
                        withheld};
     Utilities::MPI::sum(ArrayView<const double>(sums, 10), comm,
@@ -1131,15 +1131,19 @@ namespace femp
   void
   SolidStress<dim>::stop_inverted(const double dt) const
   {
-    // The first collapsed point, else the first inverted element, of the
-    // lowest rank that has one (collective: every rank throws).
+    // The first collapsed point, else the first inverted or distorted
+    // element, of the lowest rank that has one (collective: every rank
+    // throws).
     Point<dim> where;
-    double     value = 0;
-    const bool point = mpm.find_collapsed(where, value);
-    const bool found = point || (fem && fem->find_inverted(where, value));
+    double     value     = 0;
+    bool       distorted = false;
+    const bool point     = mpm.find_collapsed(where, value);
+    const bool found =
+      point || (fem && fem->find_failed(where, value, distorted));
     const unsigned int me   = Utilities::MPI::this_mpi_process(comm);
     const unsigned int root = Utilities::MPI::min(found ? me : 1u << 30, comm);
-    double buf[dim + 2] = {value, point ? 1. : 0.};
+    // buf[1]: 1 a point, 2 a distorted element, 0 an inverted one.
+    double buf[dim + 2] = {value, point ? 1. : distorted ? 2. : 0.};
     for (int d = 0; d < dim; ++d)
       buf[2 + d] = where[d];
     if (root < (1u << 30))
@@ -1148,9 +1152,16 @@ namespace femp
       where[d] = buf[2 + d];
     std::ostringstream s;
     s << "solid: ";
-    if (buf[1] > 0)
+    if (buf[1] == 1.)
       s << "a material point collapsed (its volume V (1 + tr L dt) became "
         << buf[0] << " m^" << dim << ", not positive)";
+    else if (buf[1] == 2.)
+      s << "the hourglass modes of a finite element distorted its corners "
+           "by "
+        << buf[0]
+        << " (the change of a corner's volume ratio; 'Solid FEM/Hourglass "
+           "distortion limit' is "
+        << (fem ? fem->parameters().hourglass_distortion_limit : 0.) << ")";
     else
       s << "a finite element inverted (its lowest corner Jacobian ratio "
            "det(dx/dX) became "

@@ -86,6 +86,9 @@ namespace femp
       Point<dim> lower_corner;
       Point<dim> upper_corner;
       double     hourglass_coefficient = 0;
+      /// Largest hourglass distortion of an element's corners
+      /// (hourglass_distortion()) before the run stops, -.
+      double hourglass_distortion_limit = 0.1;
       /// 'Zone upper corner = auto': the driver places the top below the
       /// estimated melt depth (fe_zone_depth.h) before check().
       bool automatic_top = false;
@@ -108,6 +111,12 @@ namespace femp
     SolidFEM(const Parameters &         prm,
              const BackgroundGrid<dim> &grid,
              const SolidMaterial &      material);
+
+    const Parameters &
+    parameters() const
+    {
+      return prm;
+    }
 
     /// Build the FE triangulation, node numbering, element arrays, lumped
     /// masses (times @p mass_scaling), the transition nodes and the initial
@@ -236,17 +245,25 @@ namespace femp
     cell_fields(std::vector<std::vector<double>> &f) const;
     bool
     find_non_finite(Point<dim> &where) const;
-    /// True if after the last update_elements() an element is inverted:
-    /// its lowest corner Jacobian ratio (jacobian_low()) is zero or below.
+    /// True if after the last update_elements() an element is inverted
+    /// (its lowest corner Jacobian ratio, jacobian_low(), is zero or below)
+    /// or its hourglass modes distort its corners by more than 'Hourglass
+    /// distortion limit'.
     bool
-    element_inverted() const
+    element_failed() const
     {
-      return !(min_jacobian > 0);
+      return !(min_jacobian > 0) ||
+             !(max_distortion <= prm.hourglass_distortion_limit);
     }
-    /// Centre of the first inverted element (and its lowest corner
-    /// Jacobian ratio in @p J), if any.
+    /// Centre of the first failed element (see element_failed()), its
+    /// lowest corner Jacobian ratio in @p J if it is inverted, else its
+    /// hourglass distortion in @p J and @p distorted set; false if none.
     bool
-    find_inverted(Point<dim> &where, double &J) const;
+    find_failed(Point<dim> &where, double &J, bool &distorted) const;
+    /// Largest hourglass distortion of an element since setup (or the
+    /// resume), over all ranks. Collective.
+    double
+    largest_distortion() const;
 
     /// Checkpoint, between two solid steps: per owned element, keyed by its
     /// zone index, the stress, plastic strain, viscous pressure,
@@ -373,6 +390,9 @@ namespace femp
     /// Smallest jacobian_low() of the elements after the last
     /// update_elements() (infinite without elements).
     double min_jacobian = std::numeric_limits<double>::infinity();
+    /// Largest hourglass_distortion() after the last update_elements(), and
+    /// since setup (this rank's elements).
+    double max_distortion = 0, max_distortion_seen = 0;
     /// Sums of the force components (@p f) of the shared nodes over ranks
     /// (compress(add), update_ghost_values of the vector @p force).
     void
@@ -457,6 +477,11 @@ namespace femp
     /// when it inverts a corner.
     simd_double
     jacobian_low(const ElementBlock &eb, const double hgB) const;
+    /// The hourglass part of jacobian_low(): hgB sum |q_alpha,i|, the
+    /// largest change of a corner's volume ratio that the hourglass modes
+    /// make (first order; 1 inverts a corner of an unstrained element).
+    simd_double
+    hourglass_distortion(const ElementBlock &eb, const double hgB) const;
     /// Box offset of corner @p a from corner 0 of an element.
     std::size_t
     corner_row_offset(const unsigned int a) const;

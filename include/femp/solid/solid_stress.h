@@ -286,6 +286,17 @@ namespace femp
     {
       return steps;
     }
+    /// Largest hourglass distortion of a finite element so far (since setup
+    /// or the resume; SolidFEM::hourglass_distortion()), all ranks, and the
+    /// limit; {-1, 0} without an FE zone. Collective.
+    std::array<double, 2>
+    largest_hourglass_distortion() const
+    {
+      if (!fem)
+        return {{-1., 0.}};
+      return {{fem->largest_distortion(),
+               fem->parameters().hourglass_distortion_limit}};
+    }
     /// Material points held at the domain's faces so far, all ranks
     /// (melt-flow scenes; collective).
     unsigned long
