@@ -19,7 +19,7 @@ check(Checks &checks, MPI_Comm comm, const unsigned int n_steps, const double H)
   size[dim - 1] = 0.4;
   typename IncompressibleFlow<dim>::Parameters prm;
   prm.viscosity        = 1e-3;
-  prm.solver_tolerance = 1e-12;
+  prm.pressure.solver_tolerance = 1e-12;
   FlowScene<dim> scene(size, h, rho,
                        [&](const Point<dim> &x) { return x[dim - 1] < H; },
                        prm, comm);

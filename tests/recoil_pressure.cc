@@ -49,7 +49,7 @@ namespace
   {
     IncompressibleFlow<dim>::Parameters prm;
     prm.viscosity          = 1e-3;
-    prm.solver_tolerance   = 1e-12;
+    prm.pressure.solver_tolerance = 1e-12;
     prm.gravity            = Tensor<1, dim>();
     prm.gravity[dim - 1]   = -g;
     prm.recoil_coefficient = 0.54;

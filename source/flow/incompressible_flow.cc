@@ -145,10 +145,7 @@ namespace femp
     recoil_coefficient       = surface.recoil_coefficient;
     curvature_smoothing      = surface.curvature_smoothing;
     height_function          = surface.height_function;
-    typename PressureSolver<dim>::Parameters solver;
-    solver.parse_parameters(prm);
-    solver_tolerance = solver.solver_tolerance;
-    max_iterations   = solver.max_iterations;
+    pressure.parse_parameters(prm);
     prm.leave_subsection();
     require(viscosity >= 0, "Melt flow/Viscosity", viscosity,
             "it must be non-negative (Pa s)");
@@ -183,17 +180,6 @@ namespace femp
     s.recoil_coefficient       = recoil_coefficient;
     s.curvature_smoothing      = curvature_smoothing;
     s.height_function          = height_function;
-    return s;
-  }
-
-
-  template <int dim>
-  typename PressureSolver<dim>::Parameters
-  IncompressibleFlow<dim>::Parameters::solver_parameters() const
-  {
-    typename PressureSolver<dim>::Parameters s;
-    s.solver_tolerance = solver_tolerance;
-    s.max_iterations   = max_iterations;
     return s;
   }
 
@@ -256,7 +242,7 @@ namespace femp
     , around_offset(flow_cells::corner_offsets(grid, false))
     , stencil(flow_cells::neighbourhood(grid))
     , surface(prm.surface_parameters(), material, grid, points)
-    , pressure_solver(prm.solver_parameters(), grid, prm.volume_correction > 0, timer)
+    , pressure_solver(prm.pressure, grid, prm.volume_correction > 0, timer)
   {
     // Q1 stiffness int grad N_a . grad N_b over a cell of size h
     // (2-point Gauss rule per direction, exact for Q1).

@@ -90,8 +90,9 @@ namespace femp
       double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
       double         recoil_coefficient = 0;
-      double         solver_tolerance = 1e-10; ///< relative CG residual
-      unsigned int   max_iterations   = 1000;
+      /// Tolerance, iteration limit and preconditioner of the pressure
+      /// solve.
+      typename PressureSolver<dim>::Parameters pressure;
 
       Parameters();
       static void
@@ -104,11 +105,9 @@ namespace femp
       void
       check_time_step(const double h, const double rho) const;
       /// The parameters of the free surface (surface tension, Marangoni,
-      /// recoil, curvature smoothing) and of the pressure solver.
+      /// recoil, curvature smoothing).
       typename FreeSurface<dim>::Parameters
       surface_parameters() const;
-      typename PressureSolver<dim>::Parameters
-      solver_parameters() const;
     };
 
     /// Cell classes used by the flow (cell_type()).

@@ -30,6 +30,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace femp
@@ -44,6 +45,11 @@ namespace femp
     {
       double       solver_tolerance = 1e-10; ///< relative CG residual
       unsigned int max_iterations   = 1000;
+      /// "auto", "amg" or "jacobi": the CG preconditioner; auto takes
+      /// Jacobi for bands of fewer than amg_minimum_rows rows (all ranks),
+      /// ML AMG otherwise.
+      std::string  preconditioner   = "auto";
+      unsigned int amg_minimum_rows = 10000;
 
       /// The solver entries of the subsection Melt flow (the caller has
       /// entered it): Solver tolerance, Maximum iterations.
@@ -169,6 +175,10 @@ namespace femp
     TrilinosWrappers::SparseMatrix    matrix;
     TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
     TrilinosWrappers::PreconditionAMG amg;
+    /// The band of the current system is preconditioned by Jacobi (no
+    /// setup) instead of the AMG hierarchy (Parameters::preconditioner).
+    bool                                 use_jacobi = false;
+    TrilinosWrappers::PreconditionJacobi jacobi;
     TrilinosWrappers::MPI::Vector     solution, rhs, psi_solution;
     bool                              have_matrix = false;
 
