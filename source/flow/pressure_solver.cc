@@ -1,5 +1,6 @@
 // femp: the pressure Poisson equation of the melt flow on a band of cells
-// round the fluid, Trilinos ML AMG + CG, and the volume-correction solve
+// round the fluid, CG with point Jacobi (small bands) or Trilinos ML AMG,
+// and the volume-correction solve
 // with the same operator (paper sec. 2.3, eq. 4; doc/flow.md). See
 // include/femp/flow/pressure_solver.h.
 #include <deal.II/base/mpi.h>
@@ -39,8 +40,9 @@ namespace femp
                       "the fluid set), 'jacobi' (the matrix diagonal, no "
                       "setup), or 'auto': Jacobi while the band round the "
                       "fluid has fewer than 'AMG minimum rows' rows over all "
-                      "ranks, AMG from there on (doc/flow.md \"Pressure "
-                      "solver\").");
+                      "ranks and its solves need at most 'Jacobi iteration "
+                      "limit' iterations, AMG otherwise (doc/flow.md, \"One "
+                      "fluid step\", step 4).");
     prm.declare_entry("AMG minimum rows", "10000", Patterns::Integer(0),
                       "With 'Pressure preconditioner = auto': the smallest "
                       "band, in rows (cells) over all ranks, that the AMG "
@@ -49,6 +51,14 @@ namespace femp
                       "more than Jacobi's extra iterations: measured faster "
                       "with Jacobi up to 7,300 rows (the paper-scale track "
                       "at 100 W), larger bands not measured.");
+    prm.declare_entry("Jacobi iteration limit", "60", Patterns::Integer(1),
+                      "With 'Pressure preconditioner = auto': a Jacobi solve "
+                      "that needs more CG iterations than this hands the "
+                      "pressure to the AMG for the rest of the run (or until "
+                      "a resume); range [1, inf). Tracks need 23-32 per solve (at most 55 "
+                      "measured), a resting drop or a closed cavity 60-230, "
+                      "where a hierarchy that is kept across steps is "
+                      "cheaper.");
   }
 
 
@@ -60,6 +70,7 @@ namespace femp
     max_iterations   = prm.get_integer("Maximum iterations");
     preconditioner   = prm.get("Pressure preconditioner");
     amg_minimum_rows = prm.get_integer("AMG minimum rows");
+    jacobi_iteration_limit = prm.get_integer("Jacobi iteration limit");
     require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
             "Melt flow/Solver tolerance", solver_tolerance,
             "it must lie in (0, 1e-2]");
@@ -125,16 +136,21 @@ namespace femp
     // track took 19.5 s against about 14 s. With the same set only the
     // free-surface diagonal 1/theta changed, and the kept hierarchy is
     // tried first (run_cg()).
-    new_hierarchy = renumbered || set_changed;
-    use_jacobi    = prm.preconditioner == "jacobi" ||
+    // Jacobi (auto) on small bands until one of its solves needs more
+    // than 'Jacobi iteration limit' iterations, then AMG for the rest of
+    // the run: a flow whose fluid set changes seldom, such as a resting
+    // drop or a closed cavity, is better served by kept hierarchies.
+    use_jacobi = prm.preconditioner == "jacobi" ||
                  (prm.preconditioner == "auto" &&
-                  matrix.m() < prm.amg_minimum_rows);
+                  matrix.m() < prm.amg_minimum_rows && !jacobi_too_slow);
+    new_hierarchy = !use_jacobi && (renumbered || set_changed || !amg_current);
     if (use_jacobi)
       {
         // No hierarchy: the diagonal of the current values, at every
         // change of the matrix (it costs a pass over the owned rows).
         jacobi.initialize(matrix);
         have_matrix = true;
+        amg_current = false;
       }
     else if (new_hierarchy)
       setup_amg();
@@ -319,6 +335,7 @@ namespace femp
         amg.initialize(amg_matrix, data);
       }
     have_matrix = true;
+    amg_current = true;
     ++stats.amg_setups;
   }
 
@@ -404,7 +421,10 @@ namespace femp
             else
               cg.solve(matrix, solution, rhs, amg);
             total += control.last_step();
-            if (fresh)
+            if (use_jacobi && prm.preconditioner == "auto" &&
+                control.last_step() > prm.jacobi_iteration_limit)
+              jacobi_too_slow = true;
+            else if (fresh && !use_jacobi)
               iterations_after_setup = std::max(1u, control.last_step());
             break;
           }

@@ -11,9 +11,12 @@
 // within one cell of the fluid; rows of band cells that are not fluid are
 // identity rows (p = 0), so that the numbering, the matrix graph and the
 // Trilinos ML AMG hierarchy survive changes of the fluid set inside the
-// band. CG with the AMG preconditioner solves the system; the same matrix
-// and hierarchy serve the volume correction lap(psi) = c e (IncompressibleFlow,
-// Melt flow/Volume correction).
+// band. CG solves the system, preconditioned by point Jacobi while the
+// band is small (no setup: the fluid set, and with it an AMG hierarchy,
+// changes at nearly every step of a track) and by the AMG hierarchy
+// above 'Melt flow/AMG minimum rows'; the same matrix and preconditioner
+// serve the volume correction lap(psi) = c e (IncompressibleFlow, Melt
+// flow/Volume correction).
 #ifndef femp_pressure_solver_h
 #define femp_pressure_solver_h
 
@@ -46,10 +49,12 @@ namespace femp
       double       solver_tolerance = 1e-10; ///< relative CG residual
       unsigned int max_iterations   = 1000;
       /// "auto", "amg" or "jacobi": the CG preconditioner; auto takes
-      /// Jacobi for bands of fewer than amg_minimum_rows rows (all ranks),
-      /// ML AMG otherwise.
-      std::string  preconditioner   = "auto";
-      unsigned int amg_minimum_rows = 10000;
+      /// Jacobi for bands of fewer than amg_minimum_rows rows (all ranks)
+      /// until a Jacobi solve needs more than jacobi_iteration_limit
+      /// iterations (then AMG for the rest of the run), ML AMG otherwise.
+      std::string  preconditioner         = "auto";
+      unsigned int amg_minimum_rows       = 10000;
+      unsigned int jacobi_iteration_limit = 60;
 
       /// The solver entries of the subsection Melt flow (the caller has
       /// entered it): Solver tolerance, Maximum iterations.
@@ -134,7 +139,8 @@ namespace femp
     void
     restart(const Statistics &s)
     {
-      have_matrix = false;
+      have_matrix     = false;
+      jacobi_too_slow = false;
       stats       = s;
     }
 
@@ -179,6 +185,10 @@ namespace femp
     /// setup) instead of the AMG hierarchy (Parameters::preconditioner).
     bool                                 use_jacobi = false;
     TrilinosWrappers::PreconditionJacobi jacobi;
+    /// A Jacobi solve needed more than the limit (auto: AMG from then on).
+    bool jacobi_too_slow = false;
+    /// The AMG hierarchy was set up on the current band and fluid set.
+    bool amg_current = false;
     TrilinosWrappers::MPI::Vector     solution, rhs, psi_solution;
     bool                              have_matrix = false;
 
