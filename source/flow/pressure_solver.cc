@@ -136,6 +136,7 @@ namespace femp
     // track took 19.5 s against about 14 s. With the same set only the
     // free-surface diagonal 1/theta changed, and the kept hierarchy is
     // tried first (run_cg()).
+    //
     // Jacobi (auto) on small bands until one of its solves needs more
     // than 'Jacobi iteration limit' iterations, then AMG for the rest of
     // the run: a flow whose fluid set changes seldom, such as a resting

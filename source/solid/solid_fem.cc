@@ -1129,9 +1129,10 @@ namespace femp
 
   template <int dim>
   simd_double
-  SolidFEM<dim>::jacobian_low(const ElementBlock &eb, const double hgB) const
+  SolidFEM<dim>::jacobian_low(const ElementBlock &eb,
+                              const simd_double & distortion) const
   {
-    return 1. + eb.dJ - hourglass_distortion(eb, hgB);
+    return 1. + eb.dJ - distortion;
   }
 
 
@@ -1184,7 +1185,7 @@ namespace femp
             for (unsigned int l = 0; l < nl; ++l)
               work += wk[l];
             const VD hd = hourglass_distortion(eb, c.hgB);
-            const VD j  = 1. + eb.dJ - hd;
+            const VD j  = jacobian_low(eb, hd);
             jmin        = j < jmin ? j : jmin;
             dmax        = hd > dmax ? hd : dmax;
           }
@@ -1375,9 +1376,10 @@ namespace femp
     const double hgB = loop_constants(1.).hgB;
     for (std::size_t e = 0; e < element_id.size(); ++e)
       {
-        const ElementBlock &eb = blocks[e / simd_lanes];
-        const double j  = jacobian_low(eb, hgB)[e % simd_lanes];
-        const double hd = hourglass_distortion(eb, hgB)[e % simd_lanes];
+        const ElementBlock &eb  = blocks[e / simd_lanes];
+        const simd_double   hdb = hourglass_distortion(eb, hgB);
+        const double        j   = jacobian_low(eb, hdb)[e % simd_lanes];
+        const double        hd  = hdb[e % simd_lanes];
         distorted       = j > 0 && !(hd <= prm.hourglass_distortion_limit);
         if (!(j > 0) || distorted)
           {

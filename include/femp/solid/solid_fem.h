@@ -468,7 +468,8 @@ namespace femp
     LoopConstants
     loop_constants(const double dt) const;
     /// Lowest corner Jacobian ratio det(dx/dX) of the elements of @p eb,
-    /// to first order in the displacement: 1 + dJ - hgB sum over the
+    /// to first order in the displacement: 1 + dJ - @p distortion, the
+    /// distortion (hourglass_distortion()) being hgB times the sum over the
     /// hourglass modes alpha and the directions i of alpha of |q_alpha,i|
     /// (the hourglass displacement gradient at a corner is B q_alpha,i
     /// times a sign; exact minimum over the corners in 2D, a lower bound
@@ -476,7 +477,7 @@ namespace femp
     /// off as well, so that a mode growing without stiffness stops the run
     /// when it inverts a corner.
     simd_double
-    jacobian_low(const ElementBlock &eb, const double hgB) const;
+    jacobian_low(const ElementBlock &eb, const simd_double &distortion) const;
     /// The hourglass part of jacobian_low(): hgB sum |q_alpha,i|, the
     /// largest change of a corner's volume ratio that the hourglass modes
     /// make (first order; 1 inverts a corner of an unstrained element).
