@@ -17,7 +17,7 @@
 // and the shape measure S of tests/flow_tools.h; at the end the largest dE.
 //
 // Usage (one rank): drop_energy R/h C passes shifting eps t_end [height
-// function 0|1] [mu, Pa s, default 0.5]
+// function 0|1] [mu, Pa s, default 0.5] [FLIP fraction, default 0.95]
 //   R/h      cells per radius; C the step as a multiple of the capillary
 //   limit (forced past it above 1); passes of curvature smoothing; point
 //   shifting A; eps the mode-2 amplitude (0: a static drop); t_end in
@@ -40,7 +40,7 @@ main(int argc, char **argv)
   if (argc < 7 || Utilities::MPI::n_mpi_processes(comm) != 1)
     {
       std::cerr << "usage (one rank): drop_energy R/h C passes shifting eps "
-                   "t_end [height function 0|1] [mu]\n";
+                   "t_end [height function 0|1] [mu] [FLIP fraction]\n";
       return 1;
     }
   const double R_h    = std::atof(argv[1]);
@@ -51,6 +51,7 @@ main(int argc, char **argv)
   const double t_end  = std::atof(argv[6]);
   const bool   hf     = argc > 7 && std::atoi(argv[7]) != 0;
   const double mu     = argc > 8 ? std::atof(argv[8]) : 0.5;
+  const double flip   = argc > 9 ? std::atof(argv[9]) : 0.95;
   const double L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1;
   const Point<dim> centre(0.5, 0.5);
 
@@ -58,6 +59,7 @@ main(int argc, char **argv)
   prm.viscosity           = mu;
   prm.gravity             = Tensor<1, dim>();
   prm.surface_tension     = sigma;
+  prm.flip_fraction       = flip;
   prm.point_shifting      = shift;
   prm.curvature_smoothing = passes;
   prm.height_function     = hf;

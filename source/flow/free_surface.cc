@@ -27,7 +27,10 @@ namespace femp
                       "Passes of the curvature smoothing: each pass replaces "
                       "the capillary pressure of a free-surface cell by the "
                       "mean over the free-surface cells among its 3^dim "
-                      "neighbours (see doc/flow.md); 0: none. Range [0, 4].");
+                      "neighbours (see doc/flow.md); 0: none. Allowed: 0, "
+                      "2 or 4 (an odd number of passes flips the sign of the "
+                      "curvature's cell-to-cell noise, and the surface goes "
+                      "unstable; doc/stability.md).");
     prm.declare_entry("Curvature", "alpha gradient",
                       Patterns::Selection("alpha gradient|height function"),
                       "How the curvature div(n) of a free-surface cell is "
@@ -69,6 +72,16 @@ namespace femp
     recoil_coefficient = prm.get_double("Recoil coefficient");
     require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
             "it must be non-negative (N/m)");
+    // One pass maps the curvature's cell-to-cell alternation on a chain of
+    // surface cells to -1/3 of itself (the mean of a cell and its two
+    // neighbours): an odd number of passes turns the restoring capillary
+    // pressure of a one-cell wrinkle into one that pushes it further, and
+    // the drops of doc/stability.md ("Curvature smoothing") go unstable.
+    require(curvature_smoothing % 2 == 0, "Melt flow/Curvature smoothing",
+            curvature_smoothing,
+            "it must be 0, 2 or 4: an odd number of passes reverses the sign "
+            "of the curvature's cell-to-cell noise, which makes the free "
+            "surface unstable (doc/stability.md, \"Curvature smoothing\")");
   }
 
 
