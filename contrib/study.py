@@ -12,7 +12,8 @@ with the standard library only (matplotlib is not needed).
   contrib/study.py stefan       [--build build] [--out study] [--img doc/img]
   contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
                                 [--np 1]
-  contrib/study.py danilovskaya | droplet | physics | track | rosenthal |
+  contrib/study.py danilovskaya | droplet | physics | track |
+                   track_surface | rosenthal |
                    dam_break | static_droplet | solid_step  [same options]
 
 stefan: the two-phase Stefan problem (tests/stefan_two_phase.cc, closed
@@ -42,6 +43,10 @@ track: the default scene with heat and flow (no solid) to 50 us over cell
   in the substrate; the width's error is written too, but it scatters by up
   to 15 % under a 0.1 % change of the step) against the finest run (2 um,
   50 ns).
+track_surface: that track with femp's default free surface and with the
+  height-function curvature, two smoothing passes and point shifting 2, at
+  8, 4 um (100, 100.1 ns) and 2 um (50, 50.05 ns); error: fusion-zone
+  depth against the 2 um, 50 ns run of the same setting.
 rosenthal: the moving Gaussian source on a half space (tests/rosenthal.cc)
   over cell size x temperature step fraction of the stable step; error: the
   largest relative error of pool length, width and depth at t = 1 against
@@ -443,6 +448,88 @@ def run_log_figures(text):
     return r
 
 
+def track_run(args, exe, scene, d, h, dt, extra):
+    """One run of the track studies: the default scene with heat and flow
+    (no solid) to 50 us at cell size h, point spacing h/2 and the fixed
+    temperature step dt (0: automatic), plus the settings @p extra; returns
+    the cost, the log's figures and the maxima of melt_pool.csv."""
+    sets = {"Physics/Solid stress": "false",
+            "Time stepping/End time": "5e-5",
+            "Time stepping/Time step": str(dt),
+            "Background grid/Cell size": str(h),
+            "Material points/Point spacing": str(h / 2),
+            "Output/Directory": d, "Output/Output interval": "0",
+            "Output/Write material points": "never"}
+    sets.update(extra)
+    cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
+           "-np", str(args.np), exe] if args.np > 1 else [exe]
+    for k, v in sets.items():
+        cmd += ["--set", "%s=%s" % (k, v)]
+    rc, cpu, wall = run_timed(cmd + [scene], d, os.path.join(d, "log.txt"))
+    r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
+    r.update(run_log_figures(open(os.path.join(d, "log.txt")).read()))
+    try:
+        pool = read_csv(os.path.join(d, "melt_pool.csv"))
+        for k in ("depth_solidus_substrate", "width_solidus_substrate",
+                  "T_max", "depth", "width", "length"):
+            r["max_" + k] = max(float(p[k]) for p in pool)
+    except (OSError, ValueError, KeyError) as ex:
+        r["read_error"] = str(ex)
+    return r
+
+
+def study_track_surface(args):
+    """The track of study 'track' (heat and flow, no solid, 50 us) with
+    femp's default free surface (alpha-gradient curvature, no smoothing, no
+    point shifting) and with the setting that carries finely resolved
+    surfaces (Melt flow/Curvature = height function, Curvature smoothing =
+    2, Point shifting = 2; doc/stability.md "A capillary wave on a flat
+    layer"), each at 8 and 4 um (100 ns and 100.1 ns) and 2 um (50 and
+    50.05 ns, the reference of its setting). Error: the largest fusion-zone
+    depth against the 2 um, 50 ns run of the same setting; the 0.1 %
+    perturbed steps show the scatter. About 20 CPU minutes, 15 of them at
+    2 um."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    scene = os.path.join(ROOT, "prm", "case_3_2_reduced.prm")
+    fine = {"Melt flow/Curvature": "height function",
+            "Melt flow/Curvature smoothing": "2",
+            "Melt flow/Point shifting": "2"}
+    rows = []
+    for name, extra in (("defaults", {}), ("fine surface", fine)):
+        mine = []
+        for h, dt in ((8e-6, 1e-7), (8e-6, 1.001e-7), (4e-6, 1e-7),
+                      (4e-6, 1.001e-7), (2e-6, 5.005e-8), (2e-6, 5e-8)):
+            def make(d, h=h, dt=dt, extra=extra):
+                return track_run(args, exe, scene, d, h, dt, extra)
+            d = os.path.join(args.out, "track_surface",
+                             "%s_h%g_dt%g" % (name.replace(" ", "_"), h, dt))
+            r = cached(d, make)
+            r.update(setting=name, h=h, dt=dt,
+                     label="%s %gum %gns" % (name, h * 1e6, dt * 1e9))
+            mine.append(r)
+        ref = mine[-1]
+        for r in mine:
+            try:
+                r["error"] = abs(r["max_depth_solidus_substrate"] /
+                                 ref["max_depth_solidus_substrate"] - 1)
+                r["width_error"] = abs(r["max_width_solidus_substrate"] /
+                                       ref["max_width_solidus_substrate"] - 1)
+            except (KeyError, ZeroDivisionError, TypeError):
+                r["error"] = None
+            if r is ref:
+                r["error"], r["reference"] = None, True
+        rows += mine
+    write_outputs("track_surface", rows,
+                  ["setting", "h", "dt", "cpu_s", "wall_s", "error",
+                   "width_error", "max_depth_solidus_substrate",
+                   "max_width_solidus_substrate", "max_T_max", "max_depth",
+                   "max_width", "max_length", "steps", "fluid_steps",
+                   "substeps", "evaporation_J", "rc"], args,
+                  "Reduced case 3.2, heat + flow to 50 us, default and fine "
+                  "free surface: fusion depth vs each setting's 2 um run",
+                  "CPU seconds", "relative error of the fusion-zone depth")
+
+
 def study_track(args):
     """The default scene's track with heat and melt flow (no solid), to
     50 us (the laser's whole path): cell size 8, 4 um (point spacing h/2)
@@ -472,31 +559,7 @@ def study_track(args):
     sweep += [(2e-6, 5.005e-8), (2e-6, 5e-8)]
     for h, dt in sweep:
         def make(d, h=h, dt=dt):
-            sets = {"Physics/Solid stress": "false",
-                    "Time stepping/End time": "5e-5",
-                    "Time stepping/Time step": str(dt),
-                    "Background grid/Cell size": str(h),
-                    "Material points/Point spacing": str(h / 2),
-                    "Output/Directory": d, "Output/Output interval": "0",
-                    "Output/Write material points": "never"}
-            cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe",
-                   "-np", str(args.np), exe] if args.np > 1 else [exe]
-            for k, v in sets.items():
-                cmd += ["--set", "%s=%s" % (k, v)]
-            rc, cpu, wall = run_timed(cmd + [scene], d,
-                                      os.path.join(d, "log.txt"))
-            r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
-            r.update(run_log_figures(
-                open(os.path.join(d, "log.txt")).read()))
-            try:
-                pool = read_csv(os.path.join(d, "melt_pool.csv"))
-                for k in ("depth_solidus_substrate",
-                          "width_solidus_substrate", "T_max", "depth",
-                          "width", "length"):
-                    r["max_" + k] = max(float(p[k]) for p in pool)
-            except (OSError, ValueError, KeyError) as ex:
-                r["read_error"] = str(ex)
-            return r
+            return track_run(args, exe, scene, d, h, dt, {})
         d = os.path.join(args.out, "track", "h%g_dt%g" % (h, dt))
         r = cached(d, make)
         r.update(h=h, dt=dt if dt > 0 else "auto",
@@ -858,7 +921,7 @@ def study_solid_step(args):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("study", choices=["stefan", "mass_scaling", "danilovskaya", "physics", "droplet", "track",
-                             "rosenthal", "dam_break", "static_droplet",
+                             "track_surface", "rosenthal", "dam_break", "static_droplet",
                              "solid_step"])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "study"),
@@ -869,6 +932,7 @@ def main():
     {"stefan": study_stefan, "mass_scaling": study_mass_scaling,
      "danilovskaya": study_danilovskaya, "physics": study_physics,
      "droplet": study_droplet, "track": study_track,
+     "track_surface": study_track_surface,
      "rosenthal": study_rosenthal, "dam_break": study_dam_break,
      "static_droplet": study_static_droplet,
      "solid_step": study_solid_step}[args.study](args)
