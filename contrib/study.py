@@ -525,8 +525,8 @@ def study_track_surface(args):
                    "max_width_solidus_substrate", "max_T_max", "max_depth",
                    "max_width", "max_length", "steps", "fluid_steps",
                    "substeps", "evaporation_J", "rc"], args,
-                  "Reduced case 3.2, heat + flow to 50 us, default and fine "
-                  "free surface: fusion depth vs each setting's 2 um run",
+                  "Track to 50 us, default and fine free surface: depth "
+                  "vs own 2 um run",
                   "CPU seconds", "relative error of the fusion-zone depth")
 
 
