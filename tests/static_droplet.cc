@@ -49,7 +49,9 @@ main(int argc, char **argv)
     {
       std::cerr << "usage: test_static_droplet [R/h in [2, 100], 4 R/h an "
                    "integer] [FLIP fraction in [0, 1]] [capillary step "
-                   "fraction in (0, 1]] [1: smoothed]\n";
+                   "fraction in (0, 1]] [variant: 1 smoothed, +2 height "
+                   "function, +4 without point shifting] [smoothing "
+                   "passes] [end time / sqrt(rho R^3/sigma)]\n";
       return 1;
     }
   const double L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1, mu = 0.5;
