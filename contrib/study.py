@@ -448,6 +448,23 @@ def run_log_figures(text):
     return r
 
 
+def fusion_errors(rows, ref):
+    """Relative errors of the largest fusion-zone depth ('depth_error', also
+    the plotted 'error') and width ('width_error') of the track runs @p rows
+    against the run @p ref, which is marked as the reference."""
+    for r in rows:
+        try:
+            r["depth_error"] = abs(r["max_depth_solidus_substrate"] /
+                                   ref["max_depth_solidus_substrate"] - 1)
+            r["width_error"] = abs(r["max_width_solidus_substrate"] /
+                                   ref["max_width_solidus_substrate"] - 1)
+            r["error"] = r["depth_error"]
+        except (KeyError, ZeroDivisionError, TypeError):
+            r["error"] = None
+        if r is ref:
+            r["error"], r["reference"] = None, True
+
+
 def track_run(args, exe, scene, d, h, dt, extra):
     """One run of the track studies: the default scene with heat and flow
     (no solid) to 50 us at cell size h, point spacing h/2 and the fixed
@@ -507,17 +524,7 @@ def study_track_surface(args):
             r.update(setting=name, h=h, dt=dt,
                      label="%s %gum %gns" % (name, h * 1e6, dt * 1e9))
             mine.append(r)
-        ref = mine[-1]
-        for r in mine:
-            try:
-                r["error"] = abs(r["max_depth_solidus_substrate"] /
-                                 ref["max_depth_solidus_substrate"] - 1)
-                r["width_error"] = abs(r["max_width_solidus_substrate"] /
-                                       ref["max_width_solidus_substrate"] - 1)
-            except (KeyError, ZeroDivisionError, TypeError):
-                r["error"] = None
-            if r is ref:
-                r["error"], r["reference"] = None, True
+        fusion_errors(mine, mine[-1])
         rows += mine
     write_outputs("track_surface", rows,
                   ["setting", "h", "dt", "cpu_s", "wall_s", "error",
@@ -566,19 +573,7 @@ def study_track(args):
                  label="%gum %s" % (h * 1e6, "%gns" % (dt * 1e9) if dt > 0
                                     else "auto"))
         rows.append(r)
-    ref = rows[-1]
-    for r in rows:
-        try:
-            e_d = abs(r["max_depth_solidus_substrate"] /
-                      ref["max_depth_solidus_substrate"] - 1)
-            e_w = abs(r["max_width_solidus_substrate"] /
-                      ref["max_width_solidus_substrate"] - 1)
-            r["depth_error"], r["width_error"] = e_d, e_w
-            r["error"] = e_d
-        except (KeyError, ZeroDivisionError, TypeError):
-            r["error"] = None
-        if r is ref:
-            r["error"], r["reference"] = None, True
+    fusion_errors(rows, rows[-1])
     write_outputs("track", rows,
                   ["h", "dt", "cpu_s", "wall_s", "error", "depth_error",
                    "width_error", "max_depth_solidus_substrate",
