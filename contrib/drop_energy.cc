@@ -23,11 +23,11 @@
 //   shifting A; eps the mode-2 amplitude (0: a static drop); t_end in
 //   capillary times sqrt(rho R^3/sigma).
 // Example: build/contrib/drop_energy 40 0.5 0 0 0 2.5
-#include "../tests/flow_tools.h"
-
 #include <array>
 #include <cstdlib>
 #include <iostream>
+
+#include "../tests/flow_tools.h"
 
 using namespace femp_test;
 
@@ -43,16 +43,16 @@ main(int argc, char **argv)
                    "t_end [height function 0|1] [mu] [FLIP fraction]\n";
       return 1;
     }
-  const double R_h    = std::atof(argv[1]);
-  const double C      = std::atof(argv[2]);
-  const int    passes = std::atoi(argv[3]);
-  const double shift  = std::atof(argv[4]);
-  const double eps    = std::atof(argv[5]);
-  const double t_end  = std::atof(argv[6]);
-  const bool   hf     = argc > 7 && std::atoi(argv[7]) != 0;
-  const double mu     = argc > 8 ? std::atof(argv[8]) : 0.5;
-  const double flip   = argc > 9 ? std::atof(argv[9]) : 0.95;
-  const double L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1;
+  const double     R_h    = std::atof(argv[1]);
+  const double     C      = std::atof(argv[2]);
+  const int        passes = std::atoi(argv[3]);
+  const double     shift  = std::atof(argv[4]);
+  const double     eps    = std::atof(argv[5]);
+  const double     t_end  = std::atof(argv[6]);
+  const bool       hf     = argc > 7 && std::atoi(argv[7]) != 0;
+  const double     mu     = argc > 8 ? std::atof(argv[8]) : 0.5;
+  const double     flip   = argc > 9 ? std::atof(argv[9]) : 0.95;
+  const double     L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1;
   const Point<dim> centre(0.5, 0.5);
 
   typename IncompressibleFlow<dim>::Parameters prm;
@@ -63,14 +63,16 @@ main(int argc, char **argv)
   prm.point_shifting      = shift;
   prm.curvature_smoothing = passes;
   prm.height_function     = hf;
-  FlowScene<dim> scene(Point<dim>(L, L), h, rho,
-                       [&](const Point<dim> &x) {
-                         const double th =
-                           std::atan2(x[1] - centre[1], x[0] - centre[0]);
-                         return x.distance(centre) <
-                                R * (1 + eps * std::cos(2 * th));
-                       },
-                       prm, comm);
+  FlowScene<dim> scene(
+    Point<dim>(L, L),
+    h,
+    rho,
+    [&](const Point<dim> &x) {
+      const double th = std::atan2(x[1] - centre[1], x[0] - centre[0]);
+      return x.distance(centre) < R * (1 + eps * std::cos(2 * th));
+    },
+    prm,
+    comm);
   const int n = static_cast<int>(std::round(L / h));
 
   // K and A of the current points.
@@ -96,8 +98,10 @@ main(int argc, char **argv)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i)
         {
-          const double c[4] = {a(i, j) - 0.5, a(i + 1, j) - 0.5,
-                               a(i + 1, j + 1) - 0.5, a(i, j + 1) - 0.5};
+          const double                       c[4] = {a(i, j) - 0.5,
+                                                     a(i + 1, j) - 0.5,
+                                                     a(i + 1, j + 1) - 0.5,
+                                                     a(i, j + 1) - 0.5};
           std::vector<std::array<double, 2>> cut;
           for (int e = 0; e < 4; ++e)
             {
@@ -105,12 +109,14 @@ main(int argc, char **argv)
               if ((p < 0) != (q < 0))
                 {
                   const double t = p / (p - q);
-                  const auto & u = corner[e], &w = corner[(e + 1) % 4];
-                  cut.push_back({u[0] + t * (w[0] - u[0]), u[1] + t * (w[1] - u[1])});
+                  const auto  &u = corner[e], &w = corner[(e + 1) % 4];
+                  cut.push_back(
+                    {u[0] + t * (w[0] - u[0]), u[1] + t * (w[1] - u[1])});
                 }
             }
           for (std::size_t k = 0; k + 1 < cut.size(); k += 2)
-            A += h * std::hypot(cut[k][0] - cut[k + 1][0], cut[k][1] - cut[k + 1][1]);
+            A += h * std::hypot(cut[k][0] - cut[k + 1][0],
+                                cut[k][1] - cut[k + 1][1]);
         }
   };
 
@@ -132,9 +138,10 @@ main(int argc, char **argv)
               energies(K, A);
               const double dE = (K + sigma * A) - (K0 + sigma * A0);
               dE_max          = std::max(dE_max, dE);
-              std::cout << "t/t_sigma " << t / t_sigma << "  K " << K / (sigma * A0)
-                        << "  dA " << (A - A0) / A0 << "  dE " << dE / (sigma * A0)
-                        << "  S " << shape_measure(scene, comm) << '\n';
+              std::cout << "t/t_sigma " << t / t_sigma << "  K "
+                        << K / (sigma * A0) << "  dA " << (A - A0) / A0
+                        << "  dE " << dE / (sigma * A0) << "  S "
+                        << shape_measure(scene, comm) << '\n';
             }
         }
     }
@@ -142,6 +149,7 @@ main(int argc, char **argv)
     {
       std::cout << "stopped: " << e.what() << '\n';
     }
-  std::cout << "largest dE / (sigma A0) = " << dE_max / (sigma * A0) << std::endl;
+  std::cout << "largest dE / (sigma A0) = " << dE_max / (sigma * A0)
+            << std::endl;
   return 0;
 }

@@ -26,8 +26,8 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -40,13 +40,16 @@ namespace
   constexpr int dim = 3;
 
   double
-  run(const unsigned int n, const unsigned int steps, const bool fe,
-      const bool subcycled, double &n_objects,
+  run(const unsigned int                    n,
+      const unsigned int                    steps,
+      const bool                            fe,
+      const bool                            subcycled,
+      double                               &n_objects,
       const SolidMaterial::VelocityTransfer transfer =
         SolidMaterial::VelocityTransfer::flip,
       std::ostream *check = nullptr)
   {
-    const double                      h = 1e-5;
+    const double                             h = 1e-5;
     typename BackgroundGrid<dim>::Parameters gp;
     gp.lower_corner = Point<dim>();
     gp.upper_corner = Point<dim>(n * h, n * h, n * h / 2);
@@ -64,7 +67,7 @@ namespace
     points.create(300.);
 
     SolidMaterial sm(mat); // defaults: steel, E 193 GPa, sigma_y 250 MPa
-    sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
+    sm.yield_stress = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;
     sp.fixed_faces = {"z-"};
@@ -73,7 +76,7 @@ namespace
     fp.enabled      = fe;
     fp.lower_corner = gp.lower_corner;
     fp.upper_corner = gp.upper_corner;
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    SolidStress<dim>    solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     const auto sizes = solid.sizes();
@@ -111,7 +114,7 @@ namespace
       {
         // Final state (to compare code versions; not timed): energies and
         // sums of sigma_xx and the von Mises stress over the cells.
-        const auto          e = solid.energies();
+        const auto          e   = solid.energies();
         std::vector<double> sxx = grid.make_field(0.), vm = grid.make_field(0.);
         solid.cell_stress_fields(sxx, vm);
         double ssum = 0, vsum = 0;
@@ -130,8 +133,8 @@ namespace
   /// The constitutive update alone (eq. 5), as the FE calls it: ns per
   /// call over @p n states, with a velocity gradient of a heated element
   /// (thermal strain, spin) and a temperature rising by 1000 K.
-  std::vector<StressPoint> states;  // of constitutive_only()
-  std::vector<StressBlock> blocks;  // of constitutive_block()
+  std::vector<StressPoint> states; // of constitutive_only()
+  std::vector<StressBlock> blocks; // of constitutive_block()
 
   double
   constitutive_only(const unsigned int n, const unsigned int steps)
@@ -139,13 +142,14 @@ namespace
     Material thermal; // 316L-like defaults, no melting
     thermal.solidus = 1e6;
     SolidMaterial sm(thermal);
-    sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
+    sm.yield_stress = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     states.assign(n, StressPoint());
-    double                   sum   = 0;
-    const std::clock_t       start = std::clock();
+    double             sum   = 0;
+    const std::clock_t start = std::clock();
     for (unsigned int s = 0; s < steps; ++s)
       {
-        const double T0 = 300 + 1000. * s / steps, T1 = 300 + 1000. * (s + 1) / steps;
+        const double T0 = 300 + 1000. * s / steps,
+                     T1 = 300 + 1000. * (s + 1) / steps;
         for (unsigned int i = 0; i < n; ++i)
           {
             Tensor<2, 3> L;
@@ -155,7 +159,8 @@ namespace
             L[1][0]        = -0.1 * x;
             L[1][1]        = 0.5 * x;
             L[2][2]        = -0.2 * x;
-            update_stress(sm, L, T0 - 100. * (i % 5), T1 - 100. * (i % 5), states[i]);
+            update_stress(
+              sm, L, T0 - 100. * (i % 5), T1 - 100. * (i % 5), states[i]);
           }
         sum += states[n / 2].sigma[0][0];
       }
@@ -173,7 +178,7 @@ namespace
     Material thermal; // 316L-like defaults, no melting
     thermal.solidus = 1e6;
     SolidMaterial sm(thermal);
-    sm.yield_stress     = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
+    sm.yield_stress = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     constexpr unsigned int W = simd_lanes;
     blocks.resize(n / W);
     for (auto &b : blocks)
@@ -186,7 +191,8 @@ namespace
     const std::clock_t start = std::clock();
     for (unsigned int s = 0; s < steps; ++s)
       {
-        const double T0 = 300 + 1000. * s / steps, T1 = 300 + 1000. * (s + 1) / steps;
+        const double T0 = 300 + 1000. * s / steps,
+                     T1 = 300 + 1000. * (s + 1) / steps;
         for (std::size_t k = 0; k < blocks.size(); ++k)
           {
             StressBlock &b = blocks[k];
@@ -222,17 +228,18 @@ int
 main(int argc, char **argv)
 {
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
-  const unsigned int n     = argc > 1 ? std::atoi(argv[1]) : 32;
-  const unsigned int steps = argc > 2 ? std::atoi(argv[2]) : 50;
-  double             n_points = 0, n_elements = 0;
-  const std::string  only = argc > 3 ? argv[3] : "";
+  const unsigned int               n     = argc > 1 ? std::atoi(argv[1]) : 32;
+  const unsigned int               steps = argc > 2 ? std::atoi(argv[2]) : 50;
+  double                           n_points = 0, n_elements = 0;
+  const std::string                only = argc > 3 ? argv[3] : "";
   if (only == "constitutive")
     {
       std::cout << "update_stress alone: "
                 << constitutive_only(n * n * n / 2, steps) << " ns per call\n"
                 << "update_stress_block (SIMD, " << simd_lanes
                 << " states per call): "
-                << constitutive_block(n * n * n / 2, steps) << " ns per state\n";
+                << constitutive_block(n * n * n / 2, steps)
+                << " ns per state\n";
       // The two kernels on the same states: the same arithmetic per state,
       // so the stresses agree up to round-off (multiply-adds contracted
       // differently by the compiler).
@@ -241,12 +248,13 @@ main(int argc, char **argv)
         for (unsigned int l = 0; l < simd_lanes; ++l)
           {
             const StressPoint &st = states[simd_lanes * k + l];
-            eps_p = std::max(eps_p, st.eps_p);
+            eps_p                 = std::max(eps_p, st.eps_p);
             for (unsigned int c = 0; c < 6; ++c)
               {
                 smax = std::max(smax, std::abs(st.sigma.access_raw_entry(c)));
-                diff = std::max(diff, std::abs(st.sigma.access_raw_entry(c) -
-                                               blocks[k].s[c][l]));
+                diff = std::max(diff,
+                                std::abs(st.sigma.access_raw_entry(c) -
+                                         blocks[k].s[c][l]));
               }
           }
       std::cout << "max |sigma_block - sigma_scalar| / max |sigma| = "
@@ -257,7 +265,7 @@ main(int argc, char **argv)
     {
       // Final state of the MPM runs (FLIP and APIC sub-cycled; not timed),
       // to compare code versions.
-      using VT     = SolidMaterial::VelocityTransfer;
+      using VT                 = SolidMaterial::VelocityTransfer;
       double             n_obj = 0;
       std::ostringstream check;
       run(n, steps, false, true, n_obj, VT::flip, &check);
@@ -285,13 +293,23 @@ main(int argc, char **argv)
     }
   if (!only.empty())
     {
-      const bool   fe = only == "fe";
-      double       n_obj = 0;
+      const bool         fe    = only == "fe";
+      double             n_obj = 0;
       std::ostringstream check;
-      const double       a = run(n, steps, fe, false, n_obj,
-                           SolidMaterial::VelocityTransfer::flip, fe ? &check : nullptr);
-      const double       b = run(n, steps, fe, true, n_obj,
-                           SolidMaterial::VelocityTransfer::flip, fe ? &check : nullptr);
+      const double       a = run(n,
+                           steps,
+                           fe,
+                           false,
+                           n_obj,
+                           SolidMaterial::VelocityTransfer::flip,
+                           fe ? &check : nullptr);
+      const double       b = run(n,
+                           steps,
+                           fe,
+                           true,
+                           n_obj,
+                           SolidMaterial::VelocityTransfer::flip,
+                           fe ? &check : nullptr);
       std::cout << std::setprecision(4) << (fe ? "FE: " : "MPM: ") << n_obj
                 << (fe ? " elements, " : " points, ") << a
                 << " ns per step (one advance() per step), " << b
@@ -299,17 +317,18 @@ main(int argc, char **argv)
                 << check.str();
       return 0;
     }
-  const double       mpm  = run(n, steps, false, false, n_points);
-  const double       fe   = run(n, steps, true, false, n_elements);
-  const double       mpm1 = run(n, steps, false, true, n_points);
-  const double       fe1  = run(n, steps, true, true, n_elements);
-  const double       apic1 = run(n, steps, false, true, n_points,
-                           SolidMaterial::VelocityTransfer::apic);
+  const double mpm  = run(n, steps, false, false, n_points);
+  const double fe   = run(n, steps, true, false, n_elements);
+  const double mpm1 = run(n, steps, false, true, n_points);
+  const double fe1  = run(n, steps, true, true, n_elements);
+  const double apic1 =
+    run(n, steps, false, true, n_points, SolidMaterial::VelocityTransfer::apic);
   std::cout << std::setprecision(4) << "grid " << n << " x " << n << " x "
             << n / 2 << " cells, " << steps << " steps, "
             << Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) << " rank(s)\n"
             << "one advance() per solid step (points gathered every step):\n"
-            << "  MPM: " << n_points << " points, " << mpm << " ns per point-step\n"
+            << "  MPM: " << n_points << " points, " << mpm
+            << " ns per point-step\n"
             << "  FE:  " << n_elements << " elements, " << fe
             << " ns per element-step\n"
             << "all steps sub-cycled in one advance() (one gather):\n"

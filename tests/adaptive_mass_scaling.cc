@@ -20,10 +20,10 @@
 //       written; gate 0.15), and the solid step counts (cost) of both runs.
 // Same output on 1 and 2 ranks (the ratio is a global sum, the factor is
 // rounded to powers of 2^(1/4)).
+#include <map>
+
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <map>
 
 using namespace femp_test;
 
@@ -51,23 +51,23 @@ main(int argc, char **argv)
   try
     {
       const double r_max = 1e-3; // the default of the parameter
-      std::map<std::string, typename FempProblem<dim>::Summary>       sum;
+      std::map<std::string, typename FempProblem<dim>::Summary>         sum;
       std::map<std::string, std::map<std::string, std::vector<double>>> energy,
         probes;
       for (const std::string run : {"fixed", "adaptive"})
         {
-          sum[run] = run_scene<dim>(
-            argv[1], comm,
-            {{"Solid", "Mass scaling", run},
-             {"Output", "Directory", "out_" + run}});
+          sum[run] = run_scene<dim>(argv[1],
+                                    comm,
+                                    {{"Solid", "Mass scaling", run},
+                                     {"Output", "Directory", "out_" + run}});
           MPI_Barrier(comm); // rank 0 wrote the CSV files
           energy[run] = read_csv_columns("out_" + run + "/solid_energy.csv");
           probes[run] = read_csv_columns("out_" + run + "/solid_probes.csv");
         }
 
       // (a) The controller's decisions.
-      const auto &s = energy["adaptive"].at("mass_scaling");
-      const auto &r = energy["adaptive"].at("kinetic_to_elastic");
+      const auto &s     = energy["adaptive"].at("mass_scaling");
+      const auto &r     = energy["adaptive"].at("kinetic_to_elastic");
       double      s_max = 0, s_min = 1e300;
       int         rises = 0, falls = 0, wrong = 0;
       for (std::size_t i = 0; i < s.size(); ++i)
@@ -84,11 +84,15 @@ main(int argc, char **argv)
         }
       checks.print("adaptive: largest factor", s_max, 3);
       checks.in_range("adaptive: largest factor (raised while quasi-static)",
-                      s_max, 8, 1e4);
+                      s_max,
+                      8,
+                      1e4);
       checks.in_range("adaptive: smallest factor", s_min, 1, 1e4);
       checks.print("adaptive: rises of the factor", rises, 3);
       checks.in_range("adaptive: falls of the factor (ratio above r_max)",
-                      falls, 1, 1000);
+                      falls,
+                      1,
+                      1000);
       checks.at_most("adaptive: changes against the measured ratio", wrong, 0);
       checks.print("adaptive: factor at the end", s.back(), 3);
 
@@ -97,7 +101,8 @@ main(int argc, char **argv)
         {
           const auto &E = sum[run].solid_energy;
           checks.at_most(run + ": |solid energy balance| / |stress work|",
-                         std::abs(E.balance()) / std::abs(E.internal), 0.05);
+                         std::abs(E.balance()) / std::abs(E.internal),
+                         0.05);
         }
       {
         const auto &E = sum["adaptive"].solid_energy;
@@ -116,7 +121,8 @@ main(int argc, char **argv)
       for (std::size_t i = 0; i < ref.size(); ++i)
         num += (ada[i] - ref[i]) * (ada[i] - ref[i]), den += ref[i] * ref[i];
       checks.at_most("relative RMS sigma_xx difference, adaptive vs s = 1",
-                     std::round(std::sqrt(num / den) * 100) / 100, 0.15);
+                     std::round(std::sqrt(num / den) * 100) / 100,
+                     0.15);
       const double n_ref = energy["fixed"].at("step").back(),
                    n_ada = energy["adaptive"].at("step").back();
       checks.print("solid steps, s = 1", n_ref, 5);

@@ -16,9 +16,9 @@
 // same output.
 #include <femp/heat/attached_metal.h>
 
-#include "test_tools.h"
-
 #include <deque>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -84,8 +84,8 @@ namespace
   {
     std::vector<char> attached(s.alpha.size(), 0);
     std::deque<int>   queue;
-    const int         di[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
-                                  {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    const int         di[6][3] = {
+              {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
         if (s.alpha[Scene::at(i, j, 0)] > 0.5)
@@ -139,9 +139,8 @@ main(int argc, char **argv)
   Checks                           checks(comm);
 
   const double        h = 1e-5;
-  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0, 0),
-                                    Point<dim>(nx * h, ny * h, nz * h), h),
-                           comm);
+  BackgroundGrid<dim> grid(
+    box<dim>(Point<dim>(0, 0, 0), Point<dim>(nx * h, ny * h, nz * h), h), comm);
   grid.create();
   const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
 
@@ -164,23 +163,27 @@ main(int argc, char **argv)
       long         n       = 0;
       for (const auto idx : grid.owned_cells())
         n += counted[idx];
-      n = Utilities::MPI::sum(n, comm);
+      n                 = Utilities::MPI::sum(n, comm);
       const auto   ref  = reference(s);
       const double Tmax = attached_metal_max_temperature(grid, T, alpha);
       checks.print(std::string(name) + ": counted cells", n, 6);
       checks.at_most(std::string(name) + ": |counted - serial flood fill|",
-                     std::abs(n - ref.first), 0);
-      checks.print(std::string(name) + ": peak temperature of attached metal (K)",
-                   Tmax, 6);
+                     std::abs(n - ref.first),
+                     0);
+      checks.print(std::string(name) +
+                     ": peak temperature of attached metal (K)",
+                   Tmax,
+                   6);
       checks.at_most(std::string(name) + ": |peak - serial| (K)",
-                     std::abs(Tmax - ref.second), 0);
+                     std::abs(Tmax - ref.second),
+                     0);
       // One exchange round on one rank; on several, the tongue crosses
       // the partition and needs more (not printed: depends on the ranks).
       if (n_ranks == 1 && sweeps != 1)
         checks.at_most("exchange rounds on one rank", sweeps, 1);
       if (Utilities::MPI::this_mpi_process(comm) == 0)
-        std::cerr << name << ": " << sweeps << " exchange rounds on "
-                  << n_ranks << " ranks" << std::endl;
+        std::cerr << name << ": " << sweeps << " exchange rounds on " << n_ranks
+                  << " ranks" << std::endl;
     }
   return checks.exit_code();
 }

@@ -17,11 +17,11 @@
 
 #include <femp/grid/material_points.h>
 
-#include "scene_driver.h"
-#include "test_tools.h"
-
 #include <filesystem>
 #include <set>
+
+#include "scene_driver.h"
+#include "test_tools.h"
 
 using namespace femp_test;
 namespace fs = std::filesystem;
@@ -93,22 +93,21 @@ namespace
   }
 } // namespace
 
-
 int
 main(int argc, char **argv)
 {
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
-  const bool   root = Utilities::MPI::this_mpi_process(comm) == 0;
-  Checks       checks(comm);
+  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
+  Checks     checks(comm);
 
   // 1. Lattice alpha against point alpha.
   const std::vector<LatticeCase> cases = {
-    {0, 12, 1, 0.5, 6.6, 2},    // top in the upper sub-cell: alpha 1/2
-    {0, 12, 1, 0.375, 5.8, 2},  // spacing not a divisor of h/n
-    {-3, 9, 1, 0.3, 4.45, 3},   // n = 3, shifted origin
-    {0, 12, 1, 0.25, 7.55, 4},  // n = 4, 3D: 64 sub-cells
-    {0, 12, 1, 1, 5.6, 1},      // n = 1, one point per cell: none cut
+    {0, 12, 1, 0.5, 6.6, 2},   // top in the upper sub-cell: alpha 1/2
+    {0, 12, 1, 0.375, 5.8, 2}, // spacing not a divisor of h/n
+    {-3, 9, 1, 0.3, 4.45, 3},  // n = 3, shifted origin
+    {0, 12, 1, 0.25, 7.55, 4}, // n = 4, 3D: 64 sub-cells
+    {0, 12, 1, 1, 5.6, 1},     // n = 1, one point per cell: none cut
     {-96e-6, 200e-6, 8e-6, 3e-6, 52.5e-6, 2}, // the scene's h, spacing, top
   };
   for (std::size_t k = 0; k < cases.size(); ++k)
@@ -117,14 +116,13 @@ main(int argc, char **argv)
       const auto r3 = compare_alpha<3>(cases[k], comm);
       if (root)
         std::cout << "lattice case " << k << ": cut cells 2D "
-                  << long(r2.second) << ", 3D " << long(r3.second)
-                  << std::endl;
+                  << long(r2.second) << ", 3D " << long(r3.second) << std::endl;
       checks.at_most("  cells whose alpha differs, 2D", r2.first, 0);
       checks.at_most("  cells whose alpha differs, 3D", r3.first, 0);
     }
 
   // 2. The scene with and without points.
-  const std::string scene = argv[1];
+  const std::string       scene = argv[1];
   FempProblem<3>::Summary s[2];
   for (const bool always : {true, false})
     {
@@ -132,10 +130,11 @@ main(int argc, char **argv)
       if (root)
         fs::remove_all(dir);
       MPI_Barrier(comm);
-      s[always] = run_scene<3>(scene, comm,
-                               {{"Output", "Directory", dir},
-                                {"Material points", "Carry points",
-                                 always ? "always" : "auto"}});
+      s[always] = run_scene<3>(
+        scene,
+        comm,
+        {{"Output", "Directory", dir},
+         {"Material points", "Carry points", always ? "always" : "auto"}});
     }
   checks.print("material points with 'always'", s[1].n_points, 10);
   checks.print("material points with 'auto'", s[0].n_points, 10);
@@ -184,14 +183,16 @@ main(int argc, char **argv)
       for (const auto &f : b)
         point_files += f.rfind("points", 0) == 0 || !a.count(f);
     }
-  differ      = Utilities::MPI::broadcast(comm, differ, 0);
-  missing     = Utilities::MPI::broadcast(comm, missing, 0);
-  point_files = Utilities::MPI::broadcast(comm, point_files, 0);
-  compared    = Utilities::MPI::broadcast(comm, compared, 0);
+  differ        = Utilities::MPI::broadcast(comm, differ, 0);
+  missing       = Utilities::MPI::broadcast(comm, missing, 0);
+  point_files   = Utilities::MPI::broadcast(comm, point_files, 0);
+  compared      = Utilities::MPI::broadcast(comm, compared, 0);
   points_always = Utilities::MPI::broadcast(comm, points_always, 0);
   checks.in_range("point files written with 'always'", points_always > 0, 1, 1);
   checks.in_range("melt_pool.csv, grid and probe files compared",
-                  compared >= 3, 1, 1);
+                  compared >= 3,
+                  1,
+                  1);
   checks.at_most("files that differ", differ, 0);
   checks.at_most("files missing with 'auto'", missing, 0);
   checks.at_most("point (or extra) files written with 'auto'", point_files, 0);

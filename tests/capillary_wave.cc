@@ -28,10 +28,10 @@
 // With them only that one run is made (its checks are printed all the
 // same), and the time, a/a0 and the kinetic energy of the points over
 // the surface energy scale go to stderr every 200 steps.
-#include "flow_tools.h"
-
 #include <cstdlib>
 #include <iostream>
+
+#include "flow_tools.h"
 
 using namespace femp_test;
 
@@ -52,8 +52,12 @@ constexpr double k = numbers::PI;
 /// wave (free-slip walls there too), so the wave is the same.
 template <int dim>
 void
-run(const Case &c, const bool study, const double T_exact,
-    const double a_half, Checks &checks, MPI_Comm comm)
+run(const Case  &c,
+    const bool   study,
+    const double T_exact,
+    const double a_half,
+    Checks      &checks,
+    MPI_Comm     comm)
 {
   const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
   typename IncompressibleFlow<dim>::Parameters prm;
@@ -63,15 +67,19 @@ run(const Case &c, const bool study, const double T_exact,
   prm.curvature_smoothing = c.passes;
   prm.height_function     = c.height_function;
   prm.point_shifting      = c.shifting;
-  const double h = L / c.cells;
+  const double h          = L / c.cells;
   Point<dim>   size;
   for (int d = 0; d < dim; ++d)
     size[d] = (dim == 3 && d == 1) ? 4 * h : L;
-  FlowScene<dim> scene(size, h, rho,
-                       [&](const Point<dim> &x) {
-                         return x[dim - 1] < H + a0 * std::cos(k * x[0]);
-                       },
-                       prm, comm);
+  FlowScene<dim> scene(
+    size,
+    h,
+    rho,
+    [&](const Point<dim> &x) {
+      return x[dim - 1] < H + a0 * std::cos(k * x[0]);
+    },
+    prm,
+    comm);
   // {a, kinetic energy of the points} over all ranks.
   const double point_volume = std::pow(h / 2, dim);
   const auto   measure      = [&]() {
@@ -82,7 +90,8 @@ run(const Case &c, const bool study, const double T_exact,
         s[0] += std::cos(k * p.get_location()[0]), s[1] += 1;
         s[2] += 0.5 * rho * point_volume * v * v;
       }
-    Utilities::MPI::sum(ArrayView<const double>(s, 3), comm,
+    Utilities::MPI::sum(ArrayView<const double>(s, 3),
+                        comm,
                         ArrayView<double>(s, 3));
     return std::array<double, 2>{{2 * H * s[0] / s[1], s[2]}};
   };
@@ -117,7 +126,8 @@ run(const Case &c, const bool study, const double T_exact,
   checks.print("run: " + c.name + ", cells across", c.cells);
   checks.print("zero crossings", crossings.size());
   for (const double tc : crossings)
-    checks.print("  crossing t/T_exact", std::round(tc / T_exact * 100) / 100,
+    checks.print("  crossing t/T_exact",
+                 std::round(tc / T_exact * 100) / 100,
                  3);
   AssertThrow(crossings.size() >= 3,
               ExcMessage("fewer than three zero crossings"));
@@ -127,13 +137,14 @@ run(const Case &c, const bool study, const double T_exact,
     checks.at_most("|period error|", period_error, 0.05);
   else
     checks.print("|period error| (not gated: 16 % at 10 cells per 1/k)",
-                 std::round(period_error * 100) / 100, 3);
+                 std::round(period_error * 100) / 100,
+                 3);
   checks.print("first minimum a/a0", std::round(a_min / a0 * 100) / 100, 3);
-  checks.at_most("|first minimum - theory| / a0", std::abs(a_min / a0 - a_half),
+  checks.at_most("|first minimum - theory| / a0",
+                 std::abs(a_min / a0 - a_half),
                  0.15);
   checks.at_most("largest |a|/a0 after the first minimum", after_min / a0, 1);
 }
-
 
 int
 main(int argc, char **argv)
@@ -151,14 +162,20 @@ main(int argc, char **argv)
 
   std::vector<Case> cases = {
     {"defaults", 32, 0, false, 0., false},
-    {"height function, 2 smoothing passes, point shifting 2", 64, 2, true, 2.,
+    {"height function, 2 smoothing passes, point shifting 2",
+     64,
+     2,
+     true,
+     2.,
      true}};
   const bool three_d = argc > 5 && std::atoi(argv[5]) == 3;
   if (study)
-    cases = {{"study", std::atof(argv[1]),
+    cases = {{"study",
+              std::atof(argv[1]),
               static_cast<unsigned int>(argc > 2 ? std::atoi(argv[2]) : 0),
               argc > 3 && std::atoi(argv[3]) != 0,
-              argc > 4 ? std::atof(argv[4]) : 0., true}};
+              argc > 4 ? std::atof(argv[4]) : 0.,
+              true}};
   for (const Case &c : cases)
     try
       {

@@ -12,11 +12,11 @@
 // printed by femp for both scenes in the measured 2 us runs of doc/cases.md.
 #include <femp/base/parameter_file.h>
 
-#include "scene_driver.h"
-#include "test_tools.h"
-
 #include <regex>
 #include <sstream>
+
+#include "scene_driver.h"
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -50,8 +50,10 @@ main(int argc, char **argv)
           ParameterHandler prm;
           parse(prm, root, "prm/case_3_3_" + std::to_string(P) + "W.prm");
           prm.enter_subsection("Laser");
-          checks.print("case 3.3 file at " + std::to_string(P) + " W: Laser/Power",
-                       prm.get_double("Power"), 4);
+          checks.print("case 3.3 file at " + std::to_string(P) +
+                         " W: Laser/Power",
+                       prm.get_double("Power"),
+                       4);
           prm.set("Power", base.get({"Laser"}, "Power"));
           prm.leave_subsection();
           prm.enter_subsection("Output");
@@ -60,7 +62,8 @@ main(int argc, char **argv)
           std::ostringstream text;
           prm.print_parameters(text, ParameterHandler::ShortPRM);
           checks.print("  otherwise the FEMP scene (1 = yes)",
-                       text.str() == base_text.str(), 1);
+                       text.str() == base_text.str(),
+                       1);
         }
 
       for (const std::string name : {"femp", "mpm"})
@@ -84,9 +87,12 @@ main(int argc, char **argv)
           std::cout.rdbuf(old);
           const std::string t = log.str();
           std::smatch       m;
-          std::regex_search(t, m, std::regex("background grid: ([0-9]+) cells"));
+          std::regex_search(t,
+                            m,
+                            std::regex("background grid: ([0-9]+) cells"));
           checks.print(name + ": grid cells", std::stod(m[1]), 8);
-          std::regex_search(t, m,
+          std::regex_search(t,
+                            m,
                             std::regex("solid: ([0-9]+) material points"
                                        "(?: \\([^)]*\\))?, "
                                        "([0-9]+) finite elements"));
@@ -96,23 +102,26 @@ main(int argc, char **argv)
           std::ifstream line(name + "/probe_line_EF_00001.csv");
           std::string   row;
           std::getline(line, row), std::getline(line, row);
-          checks.print(name + ": EF carries sigma_xx ... plastic_strain (1 = yes)",
+          checks.print(name +
+                         ": EF carries sigma_xx ... plastic_strain (1 = yes)",
                        row.find(",sigma_xx,sigma_yy,sigma_zz,von_mises,"
                                 "plastic_strain") != std::string::npos,
                        1);
         }
       // The lines against the FE zone of the FEMP scene.
-      const auto zone = parse_point<dim>(base.get({"Solid FEM"}, "Zone upper corner"),
-                                         "Solid FEM/Zone upper corner");
+      const auto zone =
+        parse_point<dim>(base.get({"Solid FEM"}, "Zone upper corner"),
+                         "Solid FEM/Zone upper corner");
       const auto lines =
         Utilities::split_string_list(base.get({"Output"}, "Probe lines"), ';');
       for (const auto &l : lines)
         {
           const auto parts = Utilities::split_string_list(l, ':');
-          const auto a = parse_point<dim>(parts[1].substr(0, parts[1].find("->")),
-                                          "line");
+          const auto a =
+            parse_point<dim>(parts[1].substr(0, parts[1].find("->")), "line");
           checks.print("line " + parts[0] + " in the FE zone (1 = yes)",
-                       a[dim - 1] < zone[dim - 1], 1);
+                       a[dim - 1] < zone[dim - 1],
+                       1);
         }
     }
   catch (const std::exception &e)

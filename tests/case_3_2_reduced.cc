@@ -21,16 +21,16 @@
 //     control of femp's default (0.1): 0.024, all of it on EF, where the
 //     stress is still small after 10 us; on CD 0.009. Without hourglass
 //     control, as the shipped scenes and this test's scene now run
-//     (tests/fe_zone_hourglass.cc): 0.0016. Gate 0.05. Also printed: the peak |sigma_xx| of each run and of
-//     each line (the peaks of the two runs must lie within 25 % of each
-//     other), the pool length at the end and the solid energy balance of
-//     the FEMP run (gate 5 %, as in the coupling tests).
+//     (tests/fe_zone_hourglass.cc): 0.0016. Gate 0.05. Also printed: the peak
+//     |sigma_xx| of each run and of each line (the peaks of the two runs must
+//     lie within 25 % of each other), the pool length at the end and the solid
+//     energy balance of the FEMP run (gate 5 %, as in the coupling tests).
 // One optional argument after the scene: a directory for both runs' output
 // directories femp/ and mpm/ (default: the working directory).
+#include <map>
+
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <map>
 
 using namespace femp_test;
 
@@ -50,14 +50,16 @@ main(int argc, char **argv)
   try
     {
       std::map<std::string, std::map<std::string, std::vector<double>>> line;
-      std::map<std::string, typename FempProblem<dim>::Summary>          sum;
+      std::map<std::string, typename FempProblem<dim>::Summary>         sum;
       for (const std::string run : {"femp", "mpm"})
         {
-          const auto s = run_scene<dim>(
-            argv[1], comm,
-            {{"Solid FEM", "Use finite elements", run == "femp" ? "true" : "false"},
-             {"Output", "Directory", dir + run}});
-          sum[run] = s;
+          const auto s = run_scene<dim>(argv[1],
+                                        comm,
+                                        {{"Solid FEM",
+                                          "Use finite elements",
+                                          run == "femp" ? "true" : "false"},
+                                         {"Output", "Directory", dir + run}});
+          sum[run]     = s;
           MPI_Barrier(comm); // rank 0 wrote the probe files
           for (const std::string l : {"CD", "EF"})
             line[run + l] =
@@ -78,8 +80,8 @@ main(int argc, char **argv)
           double dT = 0, rise = 0;
           for (std::size_t i = 0; i < Ta.size(); ++i)
             {
-              dT   = std::max(dT, std::abs(Ta[i] - Tb[i]));
-              rise = std::max(rise, Tb[i] - T0);
+              dT        = std::max(dT, std::abs(Ta[i] - Tb[i]));
+              rise      = std::max(rise, Tb[i] - T0);
               s_diff    = std::max(s_diff, std::abs(sa[i] - sb[i]));
               s_peak[0] = std::max(s_peak[0], std::abs(sa[i]));
               s_peak[1] = std::max(s_peak[1], std::abs(sb[i]));
@@ -88,28 +90,38 @@ main(int argc, char **argv)
           for (const double x : sb)
             line_peak = std::max(line_peak, std::abs(x));
           checks.print("line " + l + ": largest temperature rise, all-MPM (K)",
-                       std::round(rise / 10) * 10, 3);
+                       std::round(rise / 10) * 10,
+                       3);
           checks.print("line " + l + ": peak |sigma_xx|, all-MPM (MPa)",
-                       std::round(line_peak / 1e7) * 10, 3);
+                       std::round(line_peak / 1e7) * 10,
+                       3);
           checks.at_most("line " + l + ": max |T_FEMP - T_MPM| / rise",
-                         dT / std::max(rise, 1.), 0.02);
+                         dT / std::max(rise, 1.),
+                         0.02);
           T_err = std::max(T_err, dT / std::max(rise, 1.));
         }
       checks.print("peak |sigma_xx| on CD and EF, FEMP (MPa)",
-                   std::round(s_peak[0] / 1e7) * 10, 2);
+                   std::round(s_peak[0] / 1e7) * 10,
+                   2);
       checks.print("peak |sigma_xx| on CD and EF, all-MPM (MPa)",
-                   std::round(s_peak[1] / 1e7) * 10, 2);
-      checks.in_range("peak |sigma_xx| FEMP / all-MPM", s_peak[0] / s_peak[1],
-                      0.75, 1.25);
+                   std::round(s_peak[1] / 1e7) * 10,
+                   2);
+      checks.in_range("peak |sigma_xx| FEMP / all-MPM",
+                      s_peak[0] / s_peak[1],
+                      0.75,
+                      1.25);
       checks.at_most("max |sigma_xx,FEMP - sigma_xx,MPM| / peak |sigma_xx,MPM|",
-                     s_diff / s_peak[1], 0.05);
+                     s_diff / s_peak[1],
+                     0.05);
       checks.print("melt pool length FEMP / all-MPM",
                    std::round(sum["femp"].pool.length /
-                              std::max(1e-30, sum["mpm"].pool.length) * 10) / 10,
+                              std::max(1e-30, sum["mpm"].pool.length) * 10) /
+                     10,
                    2);
       const auto &E = sum["femp"].solid_energy;
       checks.at_most("FEMP solid energy balance / stress work",
-                     std::abs(E.balance()) / std::abs(E.internal), 0.05);
+                     std::abs(E.balance()) / std::abs(E.internal),
+                     0.05);
     }
   catch (const std::exception &e)
     {

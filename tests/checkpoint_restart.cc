@@ -21,13 +21,13 @@
 
 #include <femp/base/input_checks.h>
 
-#include "scene_driver.h"
-#include "test_tools.h"
-
 #include <filesystem>
 #include <map>
 #include <set>
 #include <sstream>
+
+#include "scene_driver.h"
+#include "test_tools.h"
 
 using namespace femp_test;
 namespace fs = std::filesystem;
@@ -111,8 +111,8 @@ namespace
         for (const double v : p.get_properties())
           mine.push_back(v);
       }
-    const auto   all = Utilities::MPI::gather(comm, mine, 0);
-    const auto   n   = dim + points.n_properties() + 1;
+    const auto all = Utilities::MPI::gather(comm, mine, 0);
+    const auto n   = dim + points.n_properties() + 1;
     std::map<unsigned long, std::vector<double>> by_id;
     for (const auto &part : all)
       for (std::size_t i = 0; i + n <= part.size(); i += n)
@@ -124,7 +124,9 @@ namespace
   /// Run @p file with @p overrides on @p comm; the points at the end.
   template <int dim>
   std::map<unsigned long, std::vector<double>>
-  run(const std::string &file, MPI_Comm comm, const std::vector<Override> &overrides,
+  run(const std::string                        &file,
+      MPI_Comm                                  comm,
+      const std::vector<Override>              &overrides,
       typename femp::FempProblem<dim>::Summary *summary = nullptr)
   {
     dealii::ParameterHandler prm;
@@ -144,7 +146,9 @@ namespace
   /// "accepted".
   template <int dim>
   std::string
-  refusal(const std::string &file, MPI_Comm comm, const std::vector<Override> &overrides)
+  refusal(const std::string           &file,
+          MPI_Comm                     comm,
+          const std::vector<Override> &overrides)
   {
     dealii::ParameterHandler prm;
     parse_scene(prm, file, overrides);
@@ -161,8 +165,10 @@ namespace
 
   template <int dim>
   int
-  test(const std::string &scene, const double gate, const std::string &format,
-       MPI_Comm comm)
+  test(const std::string &scene,
+       const double       gate,
+       const std::string &format,
+       MPI_Comm           comm)
   {
     const bool root     = Utilities::MPI::this_mpi_process(comm) == 0;
     int        failures = 0;
@@ -175,7 +181,7 @@ namespace
       if (root)
         std::cout << what << " = " << std::setprecision(8) << v << std::endl;
     };
-    double     end_time;
+    double end_time;
     {
       dealii::ParameterHandler prm;
       femp::declare_all_parameters(prm);
@@ -201,7 +207,8 @@ namespace
 
     // Straight through, with the checkpoints.
     typename femp::FempProblem<dim>::Summary s0, s1;
-    const auto points0 = run<dim>(scene, comm, with({{"Output", "Directory", "out0"}}), &s0);
+    const auto                               points0 =
+      run<dim>(scene, comm, with({{"Output", "Directory", "out0"}}), &s0);
     const auto [last, half] = index_of("out0/checkpoint");
     if (root)
       std::cout << "checkpoints written (index): " << last << ", " << half
@@ -212,7 +219,8 @@ namespace
     if (root)
       fs::copy("out0", "out1", fs::copy_options::recursive);
     MPI_Barrier(comm);
-    run<dim>(scene, comm,
+    run<dim>(scene,
+             comm,
              with({{"Output", "Directory", "out1"},
                    {"Checkpoint", "Resume from", "out1/checkpoint/" + half}}),
              &s1);
@@ -228,7 +236,8 @@ namespace
       verdict(what + " bit-identical", same);
     };
     identical("final state (checkpoint files of the last step)", same_state);
-    for (const std::string f : {"melt_pool.csv", "probe_line_AB_00003.csv",
+    for (const std::string f : {"melt_pool.csv",
+                                "probe_line_AB_00003.csv",
                                 "thermal_history_full_0.csv"})
       identical(f, file_text("out0/" + f) == file_text("out1/" + f));
     for (const std::string f : {"grid.pvd", "points.pvd"})
@@ -255,8 +264,7 @@ namespace
               ++n_lines;
             }
         MPI_Bcast(&n_lines, 1, MPI_UNSIGNED, 0, comm);
-        identical("probe lines of all " + std::to_string(n_lines) +
-                    " outputs",
+        identical("probe lines of all " + std::to_string(n_lines) + " outputs",
                   Utilities::MPI::min(int(same), comm) == 1);
         const auto &e0 = s0.solid_energy, &e1 = s1.solid_energy;
         print("solid steps", s1.solid_steps);
@@ -292,7 +300,8 @@ namespace
       {
         fs::copy("out0", "out2", fs::copy_options::recursive);
         const auto points2 = run<dim>(
-          scene, MPI_COMM_SELF,
+          scene,
+          MPI_COMM_SELF,
           with({{"Output", "Directory", "out2"},
                 {"Checkpoint", "Resume from", "out2/checkpoint/" + half}}));
         if (fs::exists("out0/grid.xdmf"))
@@ -320,10 +329,9 @@ namespace
                          "against straight: "
                       << count(x2, "<Time ") << " / " << count(x0, "<Time ")
                       << "; the mesh files they name present: "
-                      << (all_there ? "yes" : "NO")
-                      << std::endl;
-            failures += !all_there ||
-                        count(x2, "<Time ") != count(x0, "<Time ");
+                      << (all_there ? "yes" : "NO") << std::endl;
+            failures +=
+              !all_there || count(x2, "<Time ") != count(x0, "<Time ");
           }
         double diff = points2.size() == points0.size() ? 0 : 1;
         for (const auto &[id, v] : points0)
@@ -335,8 +343,9 @@ namespace
                 continue;
               }
             for (std::size_t i = 0; i < v.size(); ++i)
-              diff = std::max(diff, std::abs(it->second[i] - v[i]) /
-                                      (std::abs(v[i]) + 1e-300 + 1e-12));
+              diff = std::max(diff,
+                              std::abs(it->second[i] - v[i]) /
+                                (std::abs(v[i]) + 1e-300 + 1e-12));
           }
         std::cout << "resumed on 1 rank: " << points2.size() << " points"
                   << std::endl;
@@ -359,19 +368,20 @@ namespace
               std::cout << "  " << f << " after the checkpoint: max relative "
                         << "difference " << std::setprecision(2)
                         << (d < 1e-15 ? 0. : d) << std::endl;
-              verdict("  " + f + " max relative difference <= " +
-                        femp::num(gate),
+              verdict("  " + f +
+                        " max relative difference <= " + femp::num(gate),
                       d <= gate);
             }
       }
 
     // Refusals: corrupt, truncated, another grid, other physics.
-    const std::string bad  = "bad/" + half;
-    const std::string file = bad + "/rank_00000.bin";
-    auto refused = [&](const std::string &what, const std::vector<Override> &o,
-                       const std::string &expect) {
+    const std::string bad     = "bad/" + half;
+    const std::string file    = bad + "/rank_00000.bin";
+    auto              refused = [&](const std::string           &what,
+                       const std::vector<Override> &o,
+                       const std::string           &expect) {
       const std::string msg = refusal<dim>(scene, comm, with(o));
-      const bool        ok  = msg.find(expect) != std::string::npos;
+      const bool        ok = msg.find(expect) != std::string::npos;
       verdict(what + ": refused naming '" + expect + "'", ok);
       if (!ok && root)
         std::cout << "  (" << msg << ")" << std::endl;
@@ -415,7 +425,8 @@ namespace
       refused("other FE zone",
               {{"Output", "Directory", "out1"},
                {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
-               {"Solid FEM", "Zone upper corner",
+               {"Solid FEM",
+                "Zone upper corner",
                 dim == 2 ? "160e-6, 36e-6" : "160e-6, 80e-6, 36e-6"}},
               "Solid FEM/Zone upper corner");
     else if (solid) // all material points (the 2D scene of the solid)
@@ -432,7 +443,6 @@ namespace
     return failures == 0 ? 0 : 1;
   }
 } // namespace
-
 
 int
 main(int argc, char **argv)

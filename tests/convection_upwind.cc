@@ -19,14 +19,14 @@ exact(const double x, const double t)
 double
 run(const double h, MPI_Comm comm)
 {
-  const int  dim = 2;
-  const auto gp  = box<dim>(Point<dim>(0, 0), Point<dim>(2, 2 * h), h);
+  const int           dim = 2;
+  const auto          gp  = box<dim>(Point<dim>(0, 0), Point<dim>(2, 2 * h), h);
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
   Material mat     = unit_material();
   mat.conductivity = PiecewiseLinear(kappa);
   Laser<dim> laser(laser_off<dim>());
-  auto       p           = heat_parameters<dim>(1., {});
+  auto       p          = heat_parameters<dim>(1., {});
   p.prescribed_velocity = "1; 0";
   HeatTransfer<dim> heat(p, mat, laser, grid);
   heat.initialize();
@@ -45,7 +45,8 @@ run(const double h, MPI_Comm comm)
 
   double err = 0;
   for (const auto idx : grid.owned_cells())
-    err = std::max(err, std::abs(T[idx] - exact(grid.cell_center(idx)[0], t_end)));
+    err =
+      std::max(err, std::abs(T[idx] - exact(grid.cell_center(idx)[0], t_end)));
   return Utilities::MPI::max(err, comm);
 }
 
@@ -55,13 +56,16 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const double e1 = run(1. / 100, comm);
-  const double e2 = run(1. / 200, comm);
-  const double e3 = run(1. / 400, comm);
+  const double                     e1 = run(1. / 100, comm);
+  const double                     e2 = run(1. / 200, comm);
+  const double                     e3 = run(1. / 400, comm);
   checks.print("max error h=1/100", e1, 2);
   checks.print("max error h=1/200", e2, 2);
   checks.print("max error h=1/400", e3, 2);
-  checks.in_range("observed order (1/200 -> 1/400)", std::log2(e2 / e3), 0.8, 1.3);
+  checks.in_range("observed order (1/200 -> 1/400)",
+                  std::log2(e2 / e3),
+                  0.8,
+                  1.3);
   checks.at_most("max error h=1/400", e3, 0.03);
   return checks.exit_code();
 }

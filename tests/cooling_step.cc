@@ -38,20 +38,22 @@ main(int argc, char **argv)
       const std::string scene = argv[1];
       const std::string C2    = "Safety factor after solidification";
       run_scene<3>(scene, comm, {{"Output", "Directory", "fixed"}});
-      run_scene<3>(scene, comm,
+      run_scene<3>(scene,
+                   comm,
                    {{"Output", "Directory", "cooling"},
                     {"Solid", C2, "0.8"},
                     {"Checkpoint", "Every simulated time", "1.15e-4"}});
-      run_scene<3>(scene, comm,
+      run_scene<3>(scene,
+                   comm,
                    {{"Output", "Directory", "naive"},
                     {"Solid", "Safety factor", "0.8"}});
 
       // 2. One switch, after the laser's path, to 2.56 s.
-      const auto e_fixed = read_csv_columns("fixed/solid_energy.csv");
-      const auto e_cool  = read_csv_columns("cooling/solid_energy.csv");
-      const auto &s      = e_cool.at("mass_scaling");
-      const auto &t      = e_cool.at("time");
-      unsigned int changes = 0;
+      const auto   e_fixed  = read_csv_columns("fixed/solid_energy.csv");
+      const auto   e_cool   = read_csv_columns("cooling/solid_energy.csv");
+      const auto  &s        = e_cool.at("mass_scaling");
+      const auto  &t        = e_cool.at("time");
+      unsigned int changes  = 0;
       double       t_switch = 0;
       for (std::size_t i = 1; i < s.size(); ++i)
         if (s[i] != s[i - 1])
@@ -59,11 +61,13 @@ main(int argc, char **argv)
       checks.in_range("changes of the mass-scaling factor", changes, 1, 1);
       checks.in_range("switch time (us)", std::round(t_switch * 1e6), 20, 130);
       checks.at_most("|s_end / s_start - 2.56|",
-                     std::abs(s.back() / s.front() - 2.56), 1e-12);
+                     std::abs(s.back() / s.front() - 2.56),
+                     1e-12);
       const double steps_fixed = e_fixed.at("step").back();
       const double steps_cool  = e_cool.at("step").back();
       checks.at_most("solid steps, with the switch / without",
-                     steps_cool / steps_fixed, 0.95);
+                     steps_cool / steps_fixed,
+                     0.95);
 
       // 2-3. The stresses at the end.
       const double d_cool =
@@ -80,36 +84,38 @@ main(int argc, char **argv)
         return (up ? std::ceil(x / e) : std::floor(x / e)) * e;
       };
       checks.at_most("sigma_xx with the switch against without, / peak",
-                     one_digit(d_cool, true), 0.01);
+                     one_digit(d_cool, true),
+                     0.01);
       checks.in_range("sigma_xx of C = 0.8 from the start against the "
                       "reference, / peak (control)",
-                      one_digit(d_naive, false), 5 * one_digit(d_cool, true),
+                      one_digit(d_naive, false),
+                      5 * one_digit(d_cool, true),
                       1);
 
       // 4. Resumed after the switch, in a copy of the output directory.
       const std::string resume_from =
         copy_for_resume("cooling", "resumed", comm);
-      run_scene<3>(scene, comm,
+      run_scene<3>(scene,
+                   comm,
                    {{"Output", "Directory", "resumed"},
                     {"Solid", C2, "0.8"},
                     {"Checkpoint", "Resume from", resume_from}});
       const auto e_res = read_csv_columns("resumed/solid_energy.csv");
-      checks.print("checkpoint resumed (us)",
-                   std::round(1e6 * 1.15e-4), 3);
-      double d_rows = e_res.at("step").size() == e_cool.at("step").size() ?
-                        0. :
-                        1.;
-      for (const std::string col : {"step", "mass_scaling", "internal_work",
-                                    "kinetic"})
+      checks.print("checkpoint resumed (us)", std::round(1e6 * 1.15e-4), 3);
+      double d_rows =
+        e_res.at("step").size() == e_cool.at("step").size() ? 0. : 1.;
+      for (const std::string col :
+           {"step", "mass_scaling", "internal_work", "kinetic"})
         for (std::size_t i = 0; d_rows == 0 && i < e_res.at(col).size(); ++i)
-          d_rows = std::max(d_rows, std::abs(e_res.at(col)[i] -
-                                             e_cool.at(col)[i]) /
-                                      std::max(1e-300,
-                                               std::abs(e_cool.at(col)[i])));
+          d_rows = std::max(d_rows,
+                            std::abs(e_res.at(col)[i] - e_cool.at(col)[i]) /
+                              std::max(1e-300, std::abs(e_cool.at(col)[i])));
       checks.at_most("resumed against straight: energy rows (relative)",
-                     d_rows, 1e-12);
+                     d_rows,
+                     1e-12);
       checks.at_most("resumed against straight: sigma_xx / peak",
-                     probe_line_relative_difference("cooling", "resumed",
+                     probe_line_relative_difference("cooling",
+                                                    "resumed",
                                                     "sigma_xx"),
                      1e-12);
     }

@@ -19,25 +19,32 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const auto stop = run_scene<3>(argv[1], comm, {{"Output", "Directory", "stop"}});
+      const auto stop =
+        run_scene<3>(argv[1], comm, {{"Output", "Directory", "stop"}});
       const double laser_end = 64e-6 / 2;
       checks.print("stopped at (us)", std::round(stop.time * 1e6), 3);
       checks.in_range("stop time (s)", stop.time, laser_end, 1e-3 * (1 - 1e-9));
-      checks.at_most("peak temperature at the stop (K) / 600", stop.T_max / 600, 1);
+      checks.at_most("peak temperature at the stop (K) / 600",
+                     stop.T_max / 600,
+                     1);
       // The same steps, one fewer.
       std::ostringstream end;
       end.precision(15);
       end << stop.time;
       const auto before = run_scene<3>(
-        argv[1], comm,
+        argv[1],
+        comm,
         {{"Output", "Directory", "before"},
          {"Time stepping", "Stop when peak temperature below", "0"},
          {"Time stepping", "End time", end.str()},
-         {"Time stepping", "Maximum number of steps",
+         {"Time stepping",
+          "Maximum number of steps",
           std::to_string(stop.steps - 1)}});
       checks.print("steps to the stop", stop.steps, 4);
       checks.in_range("peak temperature one step before the stop (K) / 600",
-                      before.T_max / 600, 1, 2);
+                      before.T_max / 600,
+                      1,
+                      2);
     }
   catch (const std::exception &e)
     {

@@ -16,11 +16,11 @@
 //      with the same probe lines and solid energy rows as run 2 (the step
 //      is decided from the state at every step, nothing to restore).
 // Runs on 1 and 2 ranks with the same output.
+#include <regex>
+
 #include "resume_tools.h"
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <regex>
 
 using namespace femp_test;
 
@@ -56,9 +56,11 @@ main(int argc, char **argv)
     {
       const std::string scene = argv[1];
       const std::string dt2   = "Time step after solidification";
-      const auto ref = run_scene<3>(scene, comm, {{"Output", "Directory", "fixed"}});
+      const auto        ref =
+        run_scene<3>(scene, comm, {{"Output", "Directory", "fixed"}});
       const auto cool =
-        run_scene<3>(scene, comm,
+        run_scene<3>(scene,
+                     comm,
                      {{"Output", "Directory", "cooling"},
                       {"Time stepping", dt2, "5e-7"},
                       {"Checkpoint", "Every simulated time", "1.15e-4"}});
@@ -67,7 +69,7 @@ main(int argc, char **argv)
       unsigned int changes  = 0;
       double       t_switch = 0;
       {
-        std::ifstream log("scene.log");
+        std::ifstream    log("scene.log");
         const std::regex on("^Time stepping: at t = ([0-9.eE+-]+) s (.*)$");
         std::smatch      m;
         for (std::string line; std::getline(log, line);)
@@ -80,49 +82,53 @@ main(int argc, char **argv)
       checks.in_range("changes of the temperature step", changes, 1, 1);
       checks.in_range("switch time (us)", std::round(t_switch * 1e6), 20, 130);
       checks.at_most("temperature steps, with the switch / without",
-                     std::round(100. * cool.steps / ref.steps) / 100, 0.9);
+                     std::round(100. * cool.steps / ref.steps) / 100,
+                     0.9);
 
       const auto [dT, T_rise] =
         probe_line_difference("fixed", "cooling", {"CD"}, "T", 300.);
       checks.at_most("T on CD with the switch against without, / peak rise",
-                     one_digit_up(dT / T_rise), 0.01);
+                     one_digit_up(dT / T_rise),
+                     0.01);
       const auto [ds, s_peak] =
         probe_line_difference("fixed", "cooling", {"CD", "EF"}, "sigma_xx");
       checks.at_most("sigma_xx with the switch against without, / peak",
-                     one_digit_up(ds / s_peak), 0.02);
+                     one_digit_up(ds / s_peak),
+                     0.02);
       checks.at_most("|heat balance with - without| / laser energy",
-                     one_digit_up(std::abs(heat_balance(cool) -
-                                           heat_balance(ref))),
+                     one_digit_up(
+                       std::abs(heat_balance(cool) - heat_balance(ref))),
                      1e-3);
 
       // 3. Resumed after the switch, in a copy of the output directory.
       const std::string resume_from =
         copy_for_resume("cooling", "resumed", comm);
-      run_scene<3>(scene, comm,
+      run_scene<3>(scene,
+                   comm,
                    {{"Output", "Directory", "resumed"},
                     {"Time stepping", dt2, "5e-7"},
                     {"Checkpoint", "Resume from", resume_from}});
       checks.print("checkpoint resumed (us)", std::round(1e6 * 1.15e-4), 3);
       const auto e_cool = read_csv_columns("cooling/solid_energy.csv");
       const auto e_res  = read_csv_columns("resumed/solid_energy.csv");
-      double     d_rows = e_res.at("step").size() == e_cool.at("step").size() ?
-                            0. :
-                            1.;
+      double     d_rows =
+        e_res.at("step").size() == e_cool.at("step").size() ? 0. : 1.;
       for (const std::string col : {"time", "step", "internal_work", "kinetic"})
         for (std::size_t i = 0; d_rows == 0 && i < e_res.at(col).size(); ++i)
-          d_rows = std::max(d_rows, std::abs(e_res.at(col)[i] -
-                                             e_cool.at(col)[i]) /
-                                      std::max(1e-300,
-                                               std::abs(e_cool.at(col)[i])));
+          d_rows = std::max(d_rows,
+                            std::abs(e_res.at(col)[i] - e_cool.at(col)[i]) /
+                              std::max(1e-300, std::abs(e_cool.at(col)[i])));
       checks.at_most("resumed against straight: solid energy rows (relative)",
-                     d_rows, 1e-12);
+                     d_rows,
+                     1e-12);
       double d_lines = 0;
       for (const std::string col : {"T", "sigma_xx"})
-        d_lines = std::max(d_lines,
-                           probe_line_difference("cooling", "resumed", {"CD", "EF"}, col)
-                             .first);
+        d_lines = std::max(
+          d_lines,
+          probe_line_difference("cooling", "resumed", {"CD", "EF"}, col).first);
       checks.at_most("resumed against straight: T and sigma_xx on the lines",
-                     d_lines, 1e-12);
+                     d_lines,
+                     1e-12);
     }
   catch (const std::exception &e)
     {

@@ -39,14 +39,19 @@ namespace
   };
 
   Errors
-  stress_errors(const FempProblem<dim> &problem, MPI_Comm comm,
-                const double y_top, const double H, const double h,
-                const double rho, const double g)
+  stress_errors(const FempProblem<dim> &problem,
+                MPI_Comm                comm,
+                const double            y_top,
+                const double            H,
+                const double            h,
+                const double            rho,
+                const double            g)
   {
     using P = typename MaterialPoints<dim>::PropertyIndex;
     // Per row of solid cells below the interface: sum of sigma_yy, of the
     // closed form, and the number of points.
-    const unsigned int  n_rows = static_cast<unsigned int>(std::round(y_top / h));
+    const unsigned int n_rows =
+      static_cast<unsigned int>(std::round(y_top / h));
     std::vector<double> sum(3 * n_rows, 0.);
     for (const auto &p : problem.material_points().particle_handler())
       {
@@ -65,8 +70,8 @@ namespace
     Errors e;
     for (unsigned int r = 0; r < n_rows; ++r)
       {
-        const double err = std::abs(sum[3 * r] - sum[3 * r + 1]) /
-                           std::abs(sum[3 * r + 1]);
+        const double err =
+          std::abs(sum[3 * r] - sum[3 * r + 1]) / std::abs(sum[3 * r + 1]);
         if (r == 0)
           e.top = err, e.sigma_top = sum[0] / sum[2];
         e.worst = std::max(e.worst, err);
@@ -104,37 +109,46 @@ main(int argc, char **argv)
           FempProblem<dim> problem(prm, comm);
           problem.run();
           std::cout.rdbuf(old);
-          const auto & s = problem.summary();
+          const auto  &s = problem.summary();
           const Errors e = stress_errors(problem, comm, y_top, H, h, rho, g);
           const std::string c = flow ? "with flow: " : "without flow: ";
           checks.print(c + "temperature steps", s.steps, 6);
           checks.print(c + "fluid steps", s.flow_steps, 6);
           checks.print(c + "solid steps", s.solid_steps, 6);
           checks.print(c + "reference sigma_yy below the interface (Pa)",
-                       -rho * g * (H + h / 2), 5);
+                       -rho * g * (H + h / 2),
+                       5);
           checks.print(c + "mean sigma_yy of the top solid row (Pa)",
-                       std::round(e.sigma_top * 100) / 100, 5);
+                       std::round(e.sigma_top * 100) / 100,
+                       5);
           if (flow)
             {
-              checks.at_most(c + "top row |sigma_yy - closed form| / |closed form|",
-                             e.top, 0.01);
+              checks.at_most(
+                c + "top row |sigma_yy - closed form| / |closed form|",
+                e.top,
+                0.01);
               checks.at_most(c + "worst row, same error", e.worst, 0.01);
               const auto &E = s.solid_energy;
               // The pool stays at rest: round-off, printed as the next
               // power of ten (as in tests/flow_scene_pool.cc).
               const double v = s.max_fluid_speed / (g * s.time);
-              checks.at_most(c + "max fluid point speed / (g t), next power of ten",
-                             v > 0 ? std::pow(10., std::ceil(std::log10(v))) : 0.,
-                             1e-9);
+              checks.at_most(
+                c + "max fluid point speed / (g t), next power of ten",
+                v > 0 ? std::pow(10., std::ceil(std::log10(v))) : 0.,
+                1e-9);
               checks.at_most(c + "solid energy balance / stress work",
-                             std::abs(E.balance()) / std::abs(E.internal), 0.05);
+                             std::abs(E.balance()) / std::abs(E.internal),
+                             0.05);
               checks.at_most(c + "solid kinetic / stress work",
-                             E.kinetic / std::abs(E.internal), 1e-3);
+                             E.kinetic / std::abs(E.internal),
+                             1e-3);
             }
           else
             checks.in_range(c + "top row error (must be about the fluid's "
                                 "share H/(H + h/2) = 0.94)",
-                            e.top, 0.5, 1.);
+                            e.top,
+                            0.5,
+                            1.);
         }
     }
   catch (const std::exception &e)

@@ -22,19 +22,21 @@ main(int argc, char **argv)
         {
           typename IncompressibleFlow<dim>::Parameters prm;
           prm.viscosity = 1e-3;
-          FlowScene<dim> scene(Point<dim>(4 * a, 2.5 * a), h, rho,
-                               [&](const Point<dim> &x) {
-                                 return x[0] < a && x[1] < 2 * a;
-                               },
-                               prm, comm);
+          FlowScene<dim> scene(
+            Point<dim>(4 * a, 2.5 * a),
+            h,
+            rho,
+            [&](const Point<dim> &x) { return x[0] < a && x[1] < 2 * a; },
+            prm,
+            comm);
           const std::vector<double> gamma = scene.grid.make_field(gamma_value);
-          CellFields<dim> fields;
+          CellFields<dim>           fields;
           fields.liquid_fraction = &gamma;
-          double time = 0;
+          double time            = 0;
           while (time < t_end)
             {
-              const double dt =
-                std::min(scene.flow->stable_time_step().min(), t_end - time + 1e-12);
+              const double dt = std::min(scene.flow->stable_time_step().min(),
+                                         t_end - time + 1e-12);
               scene.flow->step(dt, fields);
               time += dt;
             }
@@ -46,18 +48,25 @@ main(int argc, char **argv)
             [](const Point<dim> &x, auto) { return x[1]; });
           const double umax = scene.max_over_points(
             [](const Point<dim> &, auto v) { return point_speed<dim>(v); });
-          const std::string G = "gamma = " + std::to_string(int(gamma_value)) + ": ";
+          const std::string G =
+            "gamma = " + std::to_string(int(gamma_value)) + ": ";
           if (gamma_value == 0)
             {
               checks.at_most(G + "front displacement / a",
-                             std::abs(front - (a - h / 4)) / a, 1e-6);
+                             std::abs(front - (a - h / 4)) / a,
+                             1e-6);
               checks.at_most(G + "top displacement / a",
-                             std::abs(top - (2 * a - h / 4)) / a, 1e-6);
-              checks.at_most(G + "max speed / sqrt(g a)", umax / std::sqrt(g * a), 1e-6);
+                             std::abs(top - (2 * a - h / 4)) / a,
+                             1e-6);
+              checks.at_most(G + "max speed / sqrt(g a)",
+                             umax / std::sqrt(g * a),
+                             1e-6);
             }
           else
             checks.in_range(G + "front position / a (collapses)",
-                            std::round(front / a * 100) / 100, 1.3, 5);
+                            std::round(front / a * 100) / 100,
+                            1.3,
+                            5);
         }
     }
   catch (const std::exception &e)

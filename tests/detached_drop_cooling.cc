@@ -26,10 +26,10 @@
 // 0.043 W/(m K) (argon near 1000 K), the same without the model, and with
 // the default k_g = 0.018 (argon at 300 K) from 2500 K and from 4830 K (the
 // temperature of spatter held on the top face of the paper-scale track).
-#include "test_tools.h"
-
 #include <array>
 #include <tuple>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -53,8 +53,8 @@ namespace
     std::vector<double> alpha;
 
     Drop(const double h, const int n, MPI_Comm comm)
-      : grid(box<dim>(Point<dim>(), cube_corner<dim>(n * h), h), comm)
-      , laser(laser_off<dim>())
+        : grid(box<dim>(Point<dim>(), cube_corner<dim>(n * h), h), comm)
+        , laser(laser_off<dim>())
     {
       grid.create();
       alpha = grid.make_field(0.);
@@ -86,11 +86,13 @@ namespace
 
   template <int dim>
   void
-  closed_form_check(Checks &checks, MPI_Comm comm, const bool on_face,
-                    const Shape &shape = {{0, 0, 0}},
-                    const std::string &name = "")
+  closed_form_check(Checks            &checks,
+                    MPI_Comm           comm,
+                    const bool         on_face,
+                    const Shape       &shape = {{0, 0, 0}},
+                    const std::string &name  = "")
   {
-    const int cells = shape.size();
+    const int    cells = shape.size();
     const double h = 4e-6, T0 = 1500, Tref = 300;
     const int    n = 8;
     Material     mat;
@@ -112,39 +114,44 @@ namespace
           y[d] += o[d] * h;
         drop.put(y, a);
       }
-    auto p = heat_parameters<dim>(T0, {});
+    auto p                  = heat_parameters<dim>(T0, {});
     p.reference_temperature = Tref;
     p.detached_drops        = true;
     HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
     heat.initialize();
     heat.set_metal_fraction(drop.alpha);
-    const double V  = cells * a * std::pow(h, dim);
-    const double d  = dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
-    const double C  = a * mat.density * 500. +
+    const double V = cells * a * std::pow(h, dim);
+    const double d =
+      dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
+    const double C = a * mat.density * 500. +
                      (1 - a) * mat.gas_density * mat.gas_specific_heat;
-    const double lambda = (2 * dim * a / d) * (2 * mat.gas_conductivity / d) / C;
-    const double dt = 0.01 / lambda;
+    const double lambda =
+      (2 * dim * a / d) * (2 * mat.gas_conductivity / d) / C;
+    const double dt    = 0.01 / lambda;
     double       T_rec = T0;
     for (int k = 0; k < 100; ++k)
       {
         heat.advance(dt, k * dt);
         T_rec = Tref + (T_rec - Tref) / (1 + lambda * dt);
       }
-    const double T = drop.temperature_at(heat, x);
-    const double T_exp = Tref + (T0 - Tref) * std::exp(-lambda * 100 * dt);
-    const std::string at = std::to_string(dim) + "D drop of " +
+    const double      T     = drop.temperature_at(heat, x);
+    const double      T_exp = Tref + (T0 - Tref) * std::exp(-lambda * 100 * dt);
+    const std::string at    = std::to_string(dim) + "D drop of " +
                            std::to_string(cells) + " cell(s) " + name +
                            (on_face ? "on the top face" : "inside") + ": ";
     checks.print(at + "decay rate lambda, 1/s", lambda);
     checks.print(at + "(T - T_ref)/(T0 - T_ref) at t = 1/lambda",
                  std::round((T - Tref) / (T0 - Tref) * 1e4) / 1e4);
     checks.at_most(at + "|T - implicit recursion| / (T0 - T_ref)",
-                   std::abs(T - T_rec) / (T0 - Tref), 1e-10);
+                   std::abs(T - T_rec) / (T0 - Tref),
+                   1e-10);
     checks.at_most(at + "|T - exponential| / (T0 - T_ref)",
-                   std::abs(T - T_exp) / (T0 - Tref), 0.01);
+                   std::abs(T - T_exp) / (T0 - Tref),
+                   0.01);
     const double lost = cells * C * std::pow(h, dim) * (T0 - T);
     checks.at_most(at + "|booked convection / enthalpy lost - 1|",
-                   std::abs(heat.energy_budget().convection / lost - 1), 1e-9);
+                   std::abs(heat.energy_budget().convection / lost - 1),
+                   1e-9);
   }
 
   template <int dim>
@@ -159,60 +166,64 @@ namespace
     const std::vector<std::tuple<int, bool, unsigned int>> cases = {
       {1, false, 4}, {2, false, 4}, {5, true, 4}, {3, true, 2}};
     for (const auto &[cells, on, largest] : cases)
-        {
-          // A line along x from cell 2 (the first cell) in the box of 8.
-          Drop<dim>  drop(h, n, comm);
-          Point<dim> x;
-          for (int d = 0; d < dim; ++d)
-            x[d] = (n / 2 + 0.5) * h;
-          x[0] = 2.5 * h;
-          drop.put(x, 0.5);
-          for (int c = 1; c < cells; ++c)
-            {
-              Point<dim> y = x;
-              y[0] += c * h;
-              drop.put(y, 0.5);
-            }
-          auto p = heat_parameters<dim>(T0, {});
-          p.reference_temperature = 300;
-          p.detached_drops        = on;
-          p.detached_drop_cells   = largest;
-          HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
-          heat.initialize();
-          heat.set_metal_fraction(drop.alpha);
-          for (int k = 0; k < 10; ++k)
-            heat.advance(1e-7, k * 1e-7);
-          const std::string at = std::to_string(dim) + "D, " +
-                                 std::to_string(cells) + " cell(s), " +
-                                 (on ? "sphere, largest drop " +
-                                         std::to_string(largest) :
-                                       "off") + ": ";
-          checks.at_most(at + "|T - T0| of the first cell, K",
-                         std::abs(drop.temperature_at(heat, x) - T0), 1e-9);
-          checks.at_most(at + "convection loss, J",
-                         std::abs(heat.energy_budget().convection), 1e-30);
-        }
+      {
+        // A line along x from cell 2 (the first cell) in the box of 8.
+        Drop<dim>  drop(h, n, comm);
+        Point<dim> x;
+        for (int d = 0; d < dim; ++d)
+          x[d] = (n / 2 + 0.5) * h;
+        x[0] = 2.5 * h;
+        drop.put(x, 0.5);
+        for (int c = 1; c < cells; ++c)
+          {
+            Point<dim> y = x;
+            y[0] += c * h;
+            drop.put(y, 0.5);
+          }
+        auto p                  = heat_parameters<dim>(T0, {});
+        p.reference_temperature = 300;
+        p.detached_drops        = on;
+        p.detached_drop_cells   = largest;
+        HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
+        heat.initialize();
+        heat.set_metal_fraction(drop.alpha);
+        for (int k = 0; k < 10; ++k)
+          heat.advance(1e-7, k * 1e-7);
+        const std::string at =
+          std::to_string(dim) + "D, " + std::to_string(cells) + " cell(s), " +
+          (on ? "sphere, largest drop " + std::to_string(largest) : "off") +
+          ": ";
+        checks.at_most(at + "|T - T0| of the first cell, K",
+                       std::abs(drop.temperature_at(heat, x) - T0),
+                       1e-9);
+        checks.at_most(at + "convection loss, J",
+                       std::abs(heat.energy_budget().convection),
+                       1e-30);
+      }
   }
 
   /// Not gated: cooling of a one-point 316L drop at 4 um cells.
   void
-  steel_drop(Checks &checks, MPI_Comm comm, const bool on, const double T0,
+  steel_drop(Checks      &checks,
+             MPI_Comm     comm,
+             const bool   on,
+             const double T0,
              const double k_g)
   {
     const double h = 4e-6;
     const int    n = 8;
     Material     mat; // 316L-like defaults
     mat.gas_conductivity = k_g;
-    Drop<3>    drop(h, n, comm);
-    Point<3>   x((n / 2 + 0.5) * h, (n / 2 + 0.5) * h, (n / 2 + 0.5) * h);
+    Drop<3>  drop(h, n, comm);
+    Point<3> x((n / 2 + 0.5) * h, (n / 2 + 0.5) * h, (n / 2 + 0.5) * h);
     drop.put(x, 0.125);
-    auto p = HeatTransfer<3>::Parameters(); // default losses
+    auto p                = HeatTransfer<3>::Parameters(); // default losses
     p.initial_temperature = T0;
     p.detached_drops      = on;
     HeatTransfer<3> heat(p, mat, drop.laser, drop.grid);
     heat.initialize();
     heat.set_metal_fraction(drop.alpha);
-    const double dt = 1e-7;
+    const double dt      = 1e-7;
     double       t_solid = -1, t_500 = -1;
     for (int k = 0; k < 20000 && t_500 < 0; ++k)
       {
@@ -224,13 +235,15 @@ namespace
           t_500 = (k + 1) * dt;
       }
     const std::string at = "316L one-point drop from " +
-                           std::to_string(int(T0)) + " K, k_g = " +
-                           std::to_string(k_g).substr(0, 5) + ", " +
-                           (on ? "sphere" : "off") + ": ";
+                           std::to_string(int(T0)) +
+                           " K, k_g = " + std::to_string(k_g).substr(0, 5) +
+                           ", " + (on ? "sphere" : "off") + ": ";
     checks.print(at + "time to the solidus, us (-1: not within 2 ms)",
-                 t_solid > 0 ? std::round(t_solid * 1e7) / 10 : -1, 3);
+                 t_solid > 0 ? std::round(t_solid * 1e7) / 10 : -1,
+                 3);
     checks.print(at + "time to 500 K, us (-1: not within 2 ms)",
-                 t_500 > 0 ? std::round(t_500 * 1e7) / 10 : -1, 3);
+                 t_500 > 0 ? std::round(t_500 * 1e7) / 10 : -1,
+                 3);
   }
 } // namespace
 
@@ -254,10 +267,14 @@ main(int argc, char **argv)
       closed_form_check<2>(checks, comm, false, el, "(L) ");
       // Across the middle of the box in z (3D) or y (2D): split between
       // two ranks.
-      closed_form_check<3>(checks, comm, false,
+      closed_form_check<3>(checks,
+                           comm,
+                           false,
                            {{0, 0, -2}, {0, 0, -1}, {0, 0, 0}, {0, 0, 1}},
                            "(vertical line) ");
-      closed_form_check<2>(checks, comm, false,
+      closed_form_check<2>(checks,
+                           comm,
+                           false,
                            {{0, -2, 0}, {0, -1, 0}, {0, 0, 0}, {0, 1, 0}},
                            "(vertical line) ");
       const Shape square = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};

@@ -16,7 +16,7 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const auto s = run_scene<3>(argv[1], comm);
+  const auto                       s = run_scene<3>(argv[1], comm);
 
   checks.print("steps", s.steps);
   checks.print("laser energy (J)", s.laser, 4);
@@ -29,6 +29,7 @@ main(int argc, char **argv)
   // eta P t_on: 200 W * 0.35 * (laser on for 2e-4 s).
   const double expected = 200 * 0.35 * 2e-4;
   checks.at_most("|laser energy - eta P t| / (eta P t)",
-                 std::abs(s.laser - expected) / expected, 0.01);
+                 std::abs(s.laser - expected) / expected,
+                 0.01);
   return checks.exit_code();
 }

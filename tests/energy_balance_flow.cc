@@ -14,10 +14,10 @@
 // In both, with the two terms counted as sources the balance must close to
 // round-off (1e-3 of the laser energy). 1 and 2 ranks give the same output.
 
+#include <string>
+
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <string>
 
 using namespace femp_test;
 
@@ -30,27 +30,39 @@ main(int argc, char **argv)
   auto r = [](const double x) { return std::round(x * 1000) / 1000; };
   for (const std::string mode : {"points", "upwind"})
     {
-      const auto s = run_scene<2>(
-        argv[1], comm, {{"Heat transfer", "Advection by melt flow", mode}});
-      const double in = s.laser + std::abs(s.boundary);
-      const std::string m = "[" + mode + "] ";
-      checks.print(m + "laser energy (J/m)", std::round(s.laser * 100) / 100, 4);
+      const auto s =
+        run_scene<2>(argv[1],
+                     comm,
+                     {{"Heat transfer", "Advection by melt flow", mode}});
+      const double      in = s.laser + std::abs(s.boundary);
+      const std::string m  = "[" + mode + "] ";
+      checks.print(m + "laser energy (J/m)",
+                   std::round(s.laser * 100) / 100,
+                   4);
       const double plain = (s.laser + s.boundary - s.losses - s.stored) / in;
       if (mode == "points")
-        checks.at_most(m + "|balance error| (laser + faces - losses - stored) / laser",
-                       r(std::abs(plain)), 0.01);
+        checks.at_most(
+          m + "|balance error| (laser + faces - losses - stored) / laser",
+          r(std::abs(plain)),
+          0.01);
       else
-        checks.print(m + "balance error (laser + faces - losses - stored) / laser (not gated)",
-                     r(plain), 2);
+        checks.print(m + "balance error (laser + faces - losses - stored) / "
+                         "laser (not gated)",
+                     r(plain),
+                     2);
       checks.print(m + "energy created by the upwind convection / laser",
-                   r(s.advection / in), 2);
+                   r(s.advection / in),
+                   2);
       checks.print(m + "energy created by points moving between cells / laser",
-                   r(s.moved_points / in), 2);
+                   r(s.moved_points / in),
+                   2);
       const double closed = std::abs(s.laser + s.boundary + s.advection +
-                                     s.moved_points - s.losses - s.stored) / in;
-      checks.at_most(m + "balance error with both counted as sources, next power of ten",
-                     closed > 0 ? std::pow(10., std::ceil(std::log10(closed))) : 0.,
-                     1e-3);
+                                     s.moved_points - s.losses - s.stored) /
+                            in;
+      checks.at_most(
+        m + "balance error with both counted as sources, next power of ten",
+        closed > 0 ? std::pow(10., std::ceil(std::log10(closed))) : 0.,
+        1e-3);
     }
   return checks.exit_code();
 }

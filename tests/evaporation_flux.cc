@@ -24,14 +24,13 @@ namespace
 
   double
   q_closed(const HeatTransfer<dim>::Parameters &p,
-           const Material &                     m,
+           const Material                      &m,
            const double                         T)
   {
     const double M = m.molar_mass, Lv = m.latent_heat_evaporation;
     const double p_sat =
-      m.ambient_pressure *
-      std::exp(Lv * M * (T - m.evaporation_temperature) /
-               (R * T * m.evaporation_temperature));
+      m.ambient_pressure * std::exp(Lv * M * (T - m.evaporation_temperature) /
+                                    (R * T * m.evaporation_temperature));
     return p.evaporation_coefficient * Lv * p_sat *
            std::sqrt(M / (2 * M_PI * R * T));
   }
@@ -45,29 +44,30 @@ main(int argc, char **argv)
   Checks                           checks(comm);
 
   const double h = 8e-6, L = 80e-6, z_top = 32e-6;
-  const auto gp = box<dim>(Point<dim>(0, 0, 0), Point<dim>(L, L, 64e-6), h);
+  const auto   gp = box<dim>(Point<dim>(0, 0, 0), Point<dim>(L, L, 64e-6), h);
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
-  const Material   mat; // 316L-like defaults, molten above 1730 K
-  Laser<dim>       laser(laser_off<dim>());
+  const Material      mat; // 316L-like defaults, molten above 1730 K
+  Laser<dim>          laser(laser_off<dim>());
   std::vector<double> alpha = grid.make_field(0.);
   for (std::size_t i = 0; i < alpha.size(); ++i)
     alpha[i] = grid.cell_center(i)[dim - 1] < z_top ? 1. : 0.;
 
   for (const double T0 : {3090., 4000., 5000.})
     {
-      auto p = heat_parameters<dim>(T0, {});
+      auto p                    = heat_parameters<dim>(T0, {});
       p.evaporation_coefficient = 0.82;
       HeatTransfer<dim> heat(p, mat, laser, grid);
       heat.initialize();
       heat.set_metal_fraction(alpha);
       const double dt = 1e-12;
       heat.advance(dt, 0.);
-      const double q   = heat.energy_budget().evaporation / (L * L * dt);
-      const double ref = q_closed(p, mat, T0);
-      const std::string at = "T = " + std::to_string(int(T0)) + " K: ";
+      const double      q   = heat.energy_budget().evaporation / (L * L * dt);
+      const double      ref = q_closed(p, mat, T0);
+      const std::string at  = "T = " + std::to_string(int(T0)) + " K: ";
       checks.print(at + "q_evap closed form, W/m^2", ref);
-      checks.at_most(at + "|q_evap / closed form - 1|", std::abs(q / ref - 1),
+      checks.at_most(at + "|q_evap / closed form - 1|",
+                     std::abs(q / ref - 1),
                      1e-3);
     }
 
@@ -77,11 +77,12 @@ main(int argc, char **argv)
   double       lo = 3000, hi = 8000;
   for (int i = 0; i < 60; ++i)
     {
-      const double m = 0.5 * (lo + hi);
+      const double m                           = 0.5 * (lo + hi);
       (q_closed(p, mat, m) < q_peak ? lo : hi) = m;
     }
   checks.print("peak absorbed flux of prm/melt_track_3d.prm, W/m^2", q_peak);
   checks.print("T with q_evap(T) = that flux, K", 0.5 * (lo + hi));
-  checks.print("q_evap(T_v) / that flux", q_closed(p, mat, mat.evaporation_temperature) / q_peak);
+  checks.print("q_evap(T_v) / that flux",
+               q_closed(p, mat, mat.evaporation_temperature) / q_peak);
   return checks.exit_code();
 }

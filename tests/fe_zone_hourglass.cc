@@ -16,10 +16,10 @@
 // difference with 0.1 is printed only (rounded to one digit).
 // One optional argument after the scene: a directory for the runs' output
 // directories mpm/, fe0/ and fe01/ (default: the working directory).
+#include <map>
+
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <map>
 
 using namespace femp_test;
 
@@ -62,15 +62,19 @@ main(int argc, char **argv)
       std::map<std::string, std::map<std::string, std::vector<double>>> line;
       for (const std::string run : {"mpm", "fe0", "fe01"})
         {
-          run_scene<dim>(
-            argv[1], comm,
-            {{"Physics", "Melt flow", "false"},
-             {"Time stepping", "End time", "1e-4"},
-             {"Solid", "Safety factor after solidification", "0"},
-             {"Solid FEM", "Use finite elements", run == "mpm" ? "false" : "true"},
-             {"Solid FEM", "Hourglass coefficient", run == "fe01" ? "0.1" : "0"},
-             {"Output", "Write material points", "never"},
-             {"Output", "Directory", dir + run}});
+          run_scene<dim>(argv[1],
+                         comm,
+                         {{"Physics", "Melt flow", "false"},
+                          {"Time stepping", "End time", "1e-4"},
+                          {"Solid", "Safety factor after solidification", "0"},
+                          {"Solid FEM",
+                           "Use finite elements",
+                           run == "mpm" ? "false" : "true"},
+                          {"Solid FEM",
+                           "Hourglass coefficient",
+                           run == "fe01" ? "0.1" : "0"},
+                          {"Output", "Write material points", "never"},
+                          {"Output", "Directory", dir + run}});
           MPI_Barrier(comm); // rank 0 wrote the probe files
           for (const auto &l : lines)
             line[run + l] =
@@ -83,9 +87,11 @@ main(int argc, char **argv)
                            "no hourglass control",
                          line_difference(line["fe0" + l], line["mpm" + l]),
                          0.06);
-          checks.print("line " + l +
-                         ": the same with hourglass coefficient 0.1 (one digit)",
-                       line_difference(line["fe01" + l], line["mpm" + l]), 1);
+          checks.print(
+            "line " + l +
+              ": the same with hourglass coefficient 0.1 (one digit)",
+            line_difference(line["fe01" + l], line["mpm" + l]),
+            1);
         }
     }
   catch (const std::exception &e)

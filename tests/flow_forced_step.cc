@@ -54,19 +54,24 @@ namespace
   /// @p after(t)); returns how it ended.
   template <typename After, typename Done>
   Outcome
-  advance(FlowScene<dim> &scene, const std::string &which, const double C,
-          const double t_end, double &t, After after, Done done)
+  advance(FlowScene<dim>    &scene,
+          const std::string &which,
+          const double       C,
+          const double       t_end,
+          double            &t,
+          After              after,
+          Done               done)
   {
     Outcome o;
     try
       {
         while (t < t_end && !done())
           {
-            const auto   lim = scene.flow->stable_time_step();
+            const auto   lim  = scene.flow->stable_time_step();
             const double base = which == "capillary" ? lim.capillary :
                                 which == "viscous"   ? lim.viscous :
                                                        lim.convective;
-            const double dt = std::min(C * base, t_end - t + 1e-300);
+            const double dt   = std::min(C * base, t_end - t + 1e-300);
             scene.flow->forced_step(dt);
             t += dt;
             after(t);
@@ -98,10 +103,16 @@ namespace
   }
 
   void
-  droplet(const std::string &which, const double C, const double R_over_h,
-          const double flip, const double mu_given, const int smoothing,
-          const double eps_given, const bool gated, Checks &checks,
-          MPI_Comm comm)
+  droplet(const std::string &which,
+          const double       C,
+          const double       R_over_h,
+          const double       flip,
+          const double       mu_given,
+          const int          smoothing,
+          const double       eps_given,
+          const bool         gated,
+          Checks            &checks,
+          MPI_Comm           comm)
   {
     const bool   visc = which == "viscous";
     const double R = 0.25, h = R / R_over_h, L = 4 * R, rho = 1000, sigma = 1;
@@ -116,27 +127,38 @@ namespace
     if (flip >= 0)
       prm.flip_fraction = flip;
     const Point<dim> centre(0.5 * L, 0.5 * L);
-    FlowScene<dim>   scene(Point<dim>(L, L), h, rho,
-                         [&](const Point<dim> &x) {
-                           const Tensor<1, dim> d = x - centre;
-                           const double c2 = (d[0] * d[0] - d[1] * d[1]) /
-                                             std::max(1e-300, d.norm_square());
-                           return d.norm() < R * (1 + eps * c2);
-                         },
-                         prm, comm);
+    FlowScene<dim>   scene(
+      Point<dim>(L, L),
+      h,
+      rho,
+      [&](const Point<dim> &x) {
+        const Tensor<1, dim> d = x - centre;
+        const double         c2 =
+          (d[0] * d[0] - d[1] * d[1]) / std::max(1e-300, d.norm_square());
+        return d.norm() < R * (1 + eps * c2);
+      },
+      prm,
+      comm);
     const double omega = std::sqrt(6 * sigma / (rho * R * R * R));
     const double gamma = 4 * mu / rho / (R * R);
     const auto   lim0  = scene.flow->stable_time_step();
-    checks.print("viscous limit / capillary limit", lim0.viscous / lim0.capillary, 3);
-    double t = 0, S = shape_measure(scene, comm);
+    checks.print("viscous limit / capillary limit",
+                 lim0.viscous / lim0.capillary,
+                 3);
+    double       t = 0, S = shape_measure(scene, comm);
     const double S0 = S;
     if (!visc)
       {
-        const double T = 2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
+        const double T =
+          2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
         std::vector<double> crossings;
         double              S_late = 0, u_late = 0, t_prev = 0;
-        const Outcome o = advance(
-          scene, which, C, 2 * T, t,
+        const Outcome       o = advance(
+          scene,
+          which,
+          C,
+          2 * T,
+          t,
           [&](const double t_now) {
             const double S_new = shape_measure(scene, comm);
             if ((S > 0) != (S_new > 0)) // linear interpolation
@@ -156,12 +178,15 @@ namespace
           checks.print("zero crossings", crossings.size());
         const double err =
           crossings.size() >= 3 ?
-            std::round(std::abs((crossings[2] - crossings[0]) / T - 1) * 1000) / 1000 :
+            std::round(std::abs((crossings[2] - crossings[0]) / T - 1) * 1000) /
+              1000 :
             1.;
         if (gated) // the test: 2 x the limit still runs and is accurate
           {
             checks.in_range("not stopped, three zero crossings",
-                            !o.stopped && crossings.size() >= 3, 1, 1);
+                            !o.stopped && crossings.size() >= 3,
+                            1,
+                            1);
             checks.at_most("|period error|", err, 0.1);
           }
         else if (eps > 0 && crossings.size() >= 3)
@@ -175,28 +200,33 @@ namespace
           }
         else // a static drop: the point speeds are spurious currents
           checks.print("static drop: largest point speed after t = T, m/s",
-                       u_late, 3);
+                       u_late,
+                       3);
       }
     else
       {
-        const double t_end = 400 * lim0.viscous;
-        double       u_max = 0;
-        const Outcome o = advance(scene, which, C, t_end, t,
-                                  [&](const double) {
-                                    u_max = std::max(u_max, max_speed(scene));
-                                  },
-                                  []() { return false; });
+        const double  t_end = 400 * lim0.viscous;
+        double        u_max = 0;
+        const Outcome o     = advance(
+          scene,
+          which,
+          C,
+          t_end,
+          t,
+          [&](const double) { u_max = std::max(u_max, max_speed(scene)); },
+          []() { return false; });
         if (gated) // the detection test: the message is not printed whole
           {
             checks.print("steps", scene.flow->statistics().steps, 8);
-            const bool caught =
-              o.stopped &&
-              o.message.find("viscous update") != std::string::npos;
+            const bool caught = o.stopped && o.message.find("viscous update") !=
+                                               std::string::npos;
             if (C <= 1)
               checks.in_range("runs to the end", !o.stopped, 1, 1);
             else
-              checks.in_range("stopped by the viscous energy check", caught,
-                              1, 1);
+              checks.in_range("stopped by the viscous energy check",
+                              caught,
+                              1,
+                              1);
             return;
           }
         report(checks, o, scene);
@@ -206,30 +236,39 @@ namespace
   }
 
   void
-  column(const double C, const double cells_per_a, Checks &checks,
-         MPI_Comm comm)
+  column(const double C,
+         const double cells_per_a,
+         Checks      &checks,
+         MPI_Comm     comm)
   {
     const double a = 0.1, h = a / cells_per_a, rho = 1000, g = 9.81;
     typename IncompressibleFlow<dim>::Parameters prm;
     prm.viscosity      = 1e-3;
     prm.gravity        = Tensor<1, dim>({0., -g});
     prm.point_shifting = 2;
-    FlowScene<dim> scene(Point<dim>(5 * a, 2.25 * a), h, rho,
-                         [&](const Point<dim> &x) {
-                           return x[0] < a && x[1] < 2 * a;
-                         },
-                         prm, comm);
+    FlowScene<dim> scene(
+      Point<dim>(5 * a, 2.25 * a),
+      h,
+      rho,
+      [&](const Point<dim> &x) { return x[0] < a && x[1] < 2 * a; },
+      prm,
+      comm);
     double        t     = 0;
     const double  t_end = 2 / std::sqrt(2 * g / a);
-    const Outcome o =
-      advance(scene, "convective", C, t_end, t, [](const double) {},
-              []() { return false; });
+    const Outcome o     = advance(
+      scene,
+      "convective",
+      C,
+      t_end,
+      t,
+      [](const double) {},
+      []() { return false; });
     report(checks, o, scene);
-    const double front = scene.max_over_points(
-      [](const Point<dim> &x, auto) { return x[0]; });
+    const double front =
+      scene.max_over_points([](const Point<dim> &x, auto) { return x[0]; });
     checks.print("front Z = x / a at T = t sqrt(2 g / a) = 2",
                  std::round((front + 0.25 * h) / a * 100) / 100);
-    (void)comm;
+    (void) comm;
   }
 } // namespace
 
@@ -239,14 +278,15 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const std::string which = argc > 1 ? argv[1] : "capillary";
-  const double      C     = argc > 2 ? std::atof(argv[2]) : 2;
-  const double      n     = argc > 3 ? std::atof(argv[3]) :
-                                       which == "convective" ? 16 : 10;
-  const double      flip  = argc > 4 ? std::atof(argv[4]) : -1;
-  const double      mu    = argc > 5 ? std::atof(argv[5]) : -1;
-  const int         pass  = argc > 6 ? std::atoi(argv[6]) : -1;
-  const double      eps   = argc > 7 ? std::atof(argv[7]) : -1;
+  const std::string                which = argc > 1 ? argv[1] : "capillary";
+  const double                     C     = argc > 2 ? std::atof(argv[2]) : 2;
+  const double                     n     = argc > 3 ? std::atof(argv[3]) :
+                                           which == "convective" ? 16 :
+                                                                   10;
+  const double                     flip  = argc > 4 ? std::atof(argv[4]) : -1;
+  const double                     mu    = argc > 5 ? std::atof(argv[5]) : -1;
+  const int                        pass  = argc > 6 ? std::atoi(argv[6]) : -1;
+  const double                     eps   = argc > 7 ? std::atof(argv[7]) : -1;
   if (which == "viscous_detection")
     {
       // The detection test: at the limit the viscous droplet runs through,

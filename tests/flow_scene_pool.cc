@@ -16,10 +16,11 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
   const double                     end_time = 1e-3, g = 9.81;
-  const auto s = run_scene<2>(argv[1], comm,
+  const auto                       s = run_scene<2>(argv[1],
+                              comm,
                               {{"Time stepping", "End time", "1e-3"},
-                               {"Output", "Directory", "output"},
-                               {"Output", "Write material points", "never"}});
+                                                     {"Output", "Directory", "output"},
+                                                     {"Output", "Write material points", "never"}});
   checks.print("temperature steps", s.steps, 8);
   checks.print("material points", s.n_points, 10);
   checks.print("fluid steps", s.flow_steps, 8);
@@ -30,6 +31,7 @@ main(int argc, char **argv)
   // Round-off level, printed as the next power of ten (stable in numdiff).
   const double v = s.max_fluid_speed / (g * end_time);
   checks.at_most("max point speed / (g t), next power of ten",
-                 v > 0 ? std::pow(10., std::ceil(std::log10(v))) : 0., 1e-9);
+                 v > 0 ? std::pow(10., std::ceil(std::log10(v))) : 0.,
+                 1e-9);
   return checks.exit_code();
 }

@@ -6,9 +6,9 @@
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/material_points.h>
 
-#include "test_tools.h"
-
 #include <functional>
+
+#include "test_tools.h"
 
 namespace femp_test
 {
@@ -17,13 +17,13 @@ namespace femp_test
   {
     /// Box [0, size] with cells of size h, a fluid body where @p inside is
     /// true, points at spacing h/2, density rho.
-    FlowScene(const Point<dim> &                              size,
-              const double                                    h,
-              const double                                    rho,
-              const std::function<bool(const Point<dim> &)> &inside,
+    FlowScene(const Point<dim>                                   &size,
+              const double                                        h,
+              const double                                        rho,
+              const std::function<bool(const Point<dim> &)>      &inside,
               const typename IncompressibleFlow<dim>::Parameters &flow_prm,
-              MPI_Comm                                        comm)
-      : grid(box<dim>(Point<dim>(), size, h), comm)
+              MPI_Comm                                            comm)
+        : grid(box<dim>(Point<dim>(), size, h), comm)
     {
       material         = unit_material();
       material.density = rho;
@@ -31,17 +31,20 @@ namespace femp_test
       points_prm.point_spacing   = h / 2;
       points_prm.subcells        = 2;
       points_prm.layer_thickness = 0;
-      points = std::make_unique<MaterialPoints<dim>>(points_prm, material, grid);
+      points =
+        std::make_unique<MaterialPoints<dim>>(points_prm, material, grid);
       points->create_region(inside, 300., MaterialPoints<dim>::fluid);
-      flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material, grid,
+      flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm,
+                                                       material,
+                                                       grid,
                                                        *points);
     }
 
     /// Maximum over fluid points of f(point), over all ranks.
     double
     max_over_points(
-      const std::function<double(const Point<dim> &, ArrayView<const double>)> &f)
-      const
+      const std::function<double(const Point<dim> &, ArrayView<const double>)>
+        &f) const
     {
       double m = -1e300;
       for (const auto &p : points->particle_handler())
@@ -54,21 +57,22 @@ namespace femp_test
     double
     mean_pressure_within(const Point<dim> &centre, const double r) const
     {
-      const auto &p   = flow->pressure();
+      const auto &p    = flow->pressure();
       double      s[2] = {0, 0};
       for (const auto idx : grid.owned_cells())
         if (grid.cell_center(idx).distance(centre) < r)
           s[0] += p[idx], s[1] += 1;
-      Utilities::MPI::sum(ArrayView<const double>(s, 2), grid.communicator(),
+      Utilities::MPI::sum(ArrayView<const double>(s, 2),
+                          grid.communicator(),
                           ArrayView<double>(s, 2));
       return s[0] / s[1];
     }
 
-    Material                                  material;
-    BackgroundGrid<dim>                       grid;
-    typename MaterialPoints<dim>::Parameters  points_prm;
-    std::unique_ptr<MaterialPoints<dim>>      points;
-    std::unique_ptr<IncompressibleFlow<dim>>  flow;
+    Material                                 material;
+    BackgroundGrid<dim>                      grid;
+    typename MaterialPoints<dim>::Parameters points_prm;
+    std::unique_ptr<MaterialPoints<dim>>     points;
+    std::unique_ptr<IncompressibleFlow<dim>> flow;
   };
 
   /// Speed of a point from its properties.
@@ -99,7 +103,8 @@ namespace femp_test
         s[0] += 1, s[1] += x[0], s[2] += x[1], s[3] += x[0] * x[0],
           s[4] += x[1] * x[1];
       }
-    Utilities::MPI::sum(ArrayView<const double>(s, 5), comm,
+    Utilities::MPI::sum(ArrayView<const double>(s, 5),
+                        comm,
                         ArrayView<double>(s, 5));
     const double xx = s[3] / s[0] - std::pow(s[1] / s[0], 2);
     const double yy = s[4] / s[0] - std::pow(s[2] / s[0], 2);

@@ -19,8 +19,11 @@ namespace
   constexpr int dim = 2;
 
   void
-  run(const std::string &what, const double value, const std::string &expect,
-      Checks &checks, MPI_Comm comm)
+  run(const std::string &what,
+      const double       value,
+      const std::string &expect,
+      Checks            &checks,
+      MPI_Comm           comm)
   {
     typename IncompressibleFlow<dim>::Parameters prm;
     prm.viscosity       = 0.5;
@@ -28,11 +31,13 @@ namespace
     prm.surface_tension = 1;
     const double     R = 0.25, h = R / 8;
     const Point<dim> centre(0.5, 0.5);
-    FlowScene<dim>   scene(Point<dim>(1, 1), h, 1000,
-                         [&](const Point<dim> &x) {
-                           return x.distance(centre) < R;
-                         },
-                         prm, comm);
+    FlowScene<dim>   scene(
+      Point<dim>(1, 1),
+      h,
+      1000,
+      [&](const Point<dim> &x) { return x.distance(centre) < R; },
+      prm,
+      comm);
     const double dt = scene.flow->stable_time_step().min();
     for (int n = 0; n < 3; ++n)
       scene.flow->step(dt);
@@ -53,7 +58,7 @@ namespace
     catch (const CollectiveError &e)
       {
         stopped = collective = true;
-        message = e.what();
+        message              = e.what();
       }
     catch (const std::exception &e)
       {
@@ -63,7 +68,8 @@ namespace
     checks.print("case " + what + ", one point's velocity changed", 1);
     checks.in_range("stopped by an error every rank meets", collective, 1, 1);
     checks.in_range("message says '" + expect + "'",
-                    stopped && message.find(expect) != std::string::npos, 1,
+                    stopped && message.find(expect) != std::string::npos,
+                    1,
                     1);
   }
 } // namespace
@@ -74,8 +80,11 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  run("nan", std::numeric_limits<double>::quiet_NaN(), "non-finite velocity",
-      checks, comm);
+  run("nan",
+      std::numeric_limits<double>::quiet_NaN(),
+      "non-finite velocity",
+      checks,
+      comm);
   run("fast", 1e30, "after halving the step 20 times", checks, comm);
   return checks.exit_code();
 }

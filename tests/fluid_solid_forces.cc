@@ -15,7 +15,7 @@ template <int dim>
 void
 run(Checks &checks, MPI_Comm comm)
 {
-  const double h  = 1. / 8;
+  const double h = 1. / 8;
   Point<dim>   hi;
   for (int d = 0; d < dim; ++d)
     hi[d] = 1;
@@ -29,9 +29,10 @@ run(Checks &checks, MPI_Comm comm)
   MaterialPoints<dim> points(pp, mat, grid);
   // Solid below x_last = 0.5, fluid above.
   points.create_region([](const Point<dim> &x) { return x[dim - 1] < 0.5; },
-                       300., MaterialPoints<dim>::solid);
+                       300.,
+                       MaterialPoints<dim>::solid);
   typename SolidFEM<dim>::Parameters fe_zone; // no FE zone
-  FluidSolidForces<dim> forces(grid, points, mat.density, fe_zone);
+  FluidSolidForces<dim>              forces(grid, points, mat.density, fe_zone);
 
   // A face force on every face of every owned cell: component e of the
   // force through face (d, side) = (1 + d + 2 side) 10^e, in solid cells
@@ -60,9 +61,9 @@ run(Checks &checks, MPI_Comm comm)
       double sum = 0;
       for (const double f : forces.nodal_forces()[e])
         sum += f;
-      sum         = Utilities::MPI::sum(sum, comm);
+      sum             = Utilities::MPI::sum(sum, comm);
       const double ex = Utilities::MPI::sum(expected[e], comm);
-      worst = std::max(worst, std::abs(sum - ex) / ex);
+      worst           = std::max(worst, std::abs(sum - ex) / ex);
     }
   const std::string D = std::to_string(dim) + "D";
   checks.at_most(D + ": |sum of nodal forces - sum of face forces on solid "
@@ -94,16 +95,22 @@ run(Checks &checks, MPI_Comm comm)
   n_loaded = Utilities::MPI::sum(n_loaded, comm);
   f_min    = Utilities::MPI::min(f_min, comm);
   f_max    = Utilities::MPI::max(f_max, comm);
-  checks.in_range(D + ": nodes loaded by one face force", n_loaded,
-                  1u << (dim - 1), 1u << (dim - 1));
-  checks.in_range(D + ": their share (smallest)", f_min,
-                  1. / (1u << (dim - 1)) - 1e-12, 1. / (1u << (dim - 1)) + 1e-12);
-  checks.in_range(D + ": their share (largest)", f_max,
-                  1. / (1u << (dim - 1)) - 1e-12, 1. / (1u << (dim - 1)) + 1e-12);
+  checks.in_range(D + ": nodes loaded by one face force",
+                  n_loaded,
+                  1u << (dim - 1),
+                  1u << (dim - 1));
+  checks.in_range(D + ": their share (smallest)",
+                  f_min,
+                  1. / (1u << (dim - 1)) - 1e-12,
+                  1. / (1u << (dim - 1)) + 1e-12);
+  checks.in_range(D + ": their share (largest)",
+                  f_max,
+                  1. / (1u << (dim - 1)) - 1e-12,
+                  1. / (1u << (dim - 1)) + 1e-12);
 
   // Inside an FE zone covering the fluid half too, fluid cells take equal
   // shares: the whole sum arrives.
-  fe_zone.enabled = true;
+  fe_zone.enabled      = true;
   fe_zone.upper_corner = hi;
   FluidSolidForces<dim> fe_forces(grid, points, mat.density, fe_zone);
   for (auto &f : F)

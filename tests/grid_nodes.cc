@@ -17,10 +17,10 @@ check(Checks &checks, MPI_Comm comm)
     hi[d] = (d == 0 ? 13 : 7) * 0.5;
   BackgroundGrid<dim> grid(box<dim>(Point<dim>(), hi, 0.5), comm);
   grid.create();
-  const auto &n     = grid.n_cells();
-  auto        nodes = grid.make_node_field();
-  auto        cells = grid.make_field(-1.);
-  auto linear = [&](const std::array<int, dim> &ijk) {
+  const auto &n      = grid.n_cells();
+  auto        nodes  = grid.make_node_field();
+  auto        cells  = grid.make_field(-1.);
+  auto        linear = [&](const std::array<int, dim> &ijk) {
     double g = 0, m = 1;
     for (int d = 0; d < dim; ++d)
       g += m * ijk[d], m *= n[d];
@@ -59,9 +59,11 @@ check(Checks &checks, MPI_Comm comm)
     if (grid.cell_status()[idx] == BackgroundGrid<dim>::ghost)
       ghost_errors += cells[idx] != linear(grid.global_index(idx));
   checks.at_most(std::to_string(dim) + "D: wrong node sums",
-                 Utilities::MPI::sum(node_errors, comm), 0);
+                 Utilities::MPI::sum(node_errors, comm),
+                 0);
   checks.at_most(std::to_string(dim) + "D: wrong ghost values",
-                 Utilities::MPI::sum(ghost_errors, comm), 0);
+                 Utilities::MPI::sum(ghost_errors, comm),
+                 0);
 }
 
 int

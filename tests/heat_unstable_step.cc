@@ -9,11 +9,11 @@
 // check (without it the run ends normally with a bounded, wrong
 // checkerboard); C >= 3 are stopped by the maximum-principle check before
 // the temperature becomes non-finite.
-#include "test_tools.h"
-
 #include <femp/base/collective_error.h>
 
 #include <iostream>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -26,7 +26,7 @@ namespace
   {
     const int    dim = 2;
     const double h = 0.02, Tm = 10;
-    const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(3, 2 * h), h);
+    const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(3, 2 * h), h);
     BackgroundGrid<dim> grid(gp, comm);
     grid.create();
     Material mat           = unit_material();
@@ -52,7 +52,7 @@ namespace
       }
     catch (const femp::CollectiveError &e)
       {
-        t_stop = t;
+        t_stop              = t;
         const std::string m = e.what();
         if (m.find("maximum principle") != std::string::npos &&
             m.find("cell at (") != std::string::npos &&
@@ -75,14 +75,14 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   for (const double C : {1., 2., 2.5, 3., 4.})
     {
-      double            t_stop = 0;
-      const std::string how    = run_strip(C, comm, t_stop);
+      double            t_stop   = 0;
+      const std::string how      = run_strip(C, comm, t_stop);
       const std::string expected = C <= 2 ? "none" : "maximum principle";
       const bool        ok       = how == expected;
       if (Utilities::MPI::this_mpi_process(comm) == 0)
         std::cout << "step " << C << " x limit: stopped by " << how
-                  << " (expected " << expected << ") "
-                  << (ok ? "ok" : "FAILED") << std::endl;
+                  << " (expected " << expected << ") " << (ok ? "ok" : "FAILED")
+                  << std::endl;
       std::ostringstream label;
       label << "step " << C << " x limit:";
       checks.at_most(label.str() + " wrong detection", ok ? 0. : 1., 0.);

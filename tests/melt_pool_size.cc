@@ -28,14 +28,14 @@ main(int argc, char **argv)
 
   constexpr int dim = 3;
   const double  h   = 0.02;
-  const auto    gp  = box<dim>(Point<dim>(0, 0, -0.6), Point<dim>(1, 1, 0.1), h);
+  const auto    gp = box<dim>(Point<dim>(0, 0, -0.6), Point<dim>(1, 1, 0.1), h);
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
 
   // Pool centre on a cell centre in x and y.
-  const double xc = 0.51, yc = 0.51, a = 0.35, b = 0.3, c = 0.2;
-  const double T0 = 300, Tp = 3000, Ts = 1650, Tl = 2100;
-  const double bead_half_width = 0.35, bead_top = 2 * h;
+  const double        xc = 0.51, yc = 0.51, a = 0.35, b = 0.3, c = 0.2;
+  const double        T0 = 300, Tp = 3000, Ts = 1650, Tl = 2100;
+  const double        bead_half_width = 0.35, bead_top = 2 * h;
   std::vector<double> alpha = grid.make_field(0.);
   std::vector<double> T     = grid.make_field(T0);
   for (std::size_t i = 0; i < T.size(); ++i)
@@ -43,7 +43,7 @@ main(int argc, char **argv)
       const auto x = grid.cell_center(i);
       if (x[2] < 0)
         {
-          alpha[i] = 1;
+          alpha[i]        = 1;
           const double r2 = std::pow((x[0] - xc) / a, 2) +
                             std::pow((x[1] - yc) / b, 2) +
                             std::pow(x[2] / c, 2);
@@ -67,13 +67,17 @@ main(int argc, char **argv)
   checks.print("solidus width in the substrate (exact)", ws);
   checks.print("solidus depth in the substrate (exact)", ds);
   checks.at_most("liquidus width relative error",
-                 std::abs(pool.width - wl) / wl, 0.01);
+                 std::abs(pool.width - wl) / wl,
+                 0.01);
   checks.at_most("liquidus depth relative error",
-                 std::abs(pool.depth - dl) / dl, 0.01);
+                 std::abs(pool.depth - dl) / dl,
+                 0.01);
   checks.at_most("solidus width relative error",
-                 std::abs(pool.solidus_width - ws) / ws, 0.01);
+                 std::abs(pool.solidus_width - ws) / ws,
+                 0.01);
   checks.at_most("solidus depth relative error",
-                 std::abs(pool.solidus_depth - ds) / ds, 0.01);
+                 std::abs(pool.solidus_depth - ds) / ds,
+                 0.01);
   // With the bead counted, the solidus width would be the bead's.
   checks.print("bead width (excluded)", 2 * bead_half_width);
   return checks.exit_code();

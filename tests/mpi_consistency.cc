@@ -13,7 +13,7 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const auto s = run_scene<2>(argv[1], comm);
+  const auto                       s = run_scene<2>(argv[1], comm);
   checks.print("steps", s.steps, 8);
   checks.print("material points", s.n_points, 10);
   checks.print("peak temperature (K)", s.T_max, 8);

@@ -12,8 +12,8 @@
 // crossing) and 2 (t_2 - t_1). The test fails when the period error
 // exceeds 5 %. The automatic step uses the capillary step
 // fraction given per case; the flow runs with point shifting (A = 2) and
-// two passes of curvature smoothing (doc/studies/flow.md: without them the period
-// was not robust to the step). 1 and 2 ranks give the same output.
+// two passes of curvature smoothing (doc/studies/flow.md: without them the
+// period was not robust to the step). 1 and 2 ranks give the same output.
 //
 // Runs R = 20 h at step fractions 1/2 and 1/4 (gated) and R = 10 h at 1/2
 // (printed, not gated: +7 %, the smoothing bias at this resolution).
@@ -27,12 +27,12 @@
 // speeds are the spurious currents), the FLIP fraction (-1: the solver's),
 // the point shifting A (-1: 2), the curvature smoothing passes (-1: 2) and
 // the volume correction c (Melt flow/Volume correction; -1: the solver's
-// default 0 -- doc/studies/flow.md, "Volume correction": with c = 0.5 the period
-// error grows to 10-21 %, so the droplet runs without it), and 1 for the
+// default 0 -- doc/studies/flow.md, "Volume correction": with c = 0.5 the
+// period error grows to 10-21 %, so the droplet runs without it), and 1 for the
 // height-function curvature (Melt flow/Curvature; default: alpha gradient).
-#include "flow_tools.h"
-
 #include <fstream>
+
+#include "flow_tools.h"
 
 using namespace femp_test;
 
@@ -41,16 +41,22 @@ static bool height_function = false;
 
 /// One droplet run; returns false when it threw.
 bool
-run(const double fraction, const double R_over_h, const bool gated,
-    const double mu,
-    const double eps, const double flip, const double shifting,
-    const int smoothing, const double volume,
+run(const double       fraction,
+    const double       R_over_h,
+    const bool         gated,
+    const double       mu,
+    const double       eps,
+    const double       flip,
+    const double       shifting,
+    const int          smoothing,
+    const double       volume,
     const std::string &series_file,
-    Checks &checks, MPI_Comm comm)
+    Checks            &checks,
+    MPI_Comm           comm)
 {
-  constexpr int dim = 2;
+  constexpr int                                dim = 2;
   typename IncompressibleFlow<dim>::Parameters prm;
-  const double R = 0.25, h = R / R_over_h, L = 4 * R, rho = 1000, sigma = 1;
+  const double     R = 0.25, h = R / R_over_h, L = 4 * R, rho = 1000, sigma = 1;
   const Point<dim> centre(0.5 * L, 0.5 * L);
   try
     {
@@ -67,17 +73,22 @@ run(const double fraction, const double R_over_h, const bool gated,
       if (volume >= 0)
         prm.volume_correction = volume;
       prm.height_function = height_function;
-      FlowScene<dim> scene(Point<dim>(L, L), h, rho,
-                           [&](const Point<dim> &x) {
-                             const Tensor<1, dim> d = x - centre;
-                             const double c2 = (d[0] * d[0] - d[1] * d[1]) /
-                                               std::max(1e-300, d.norm_square());
-                             return d.norm() < R * (1 + eps * c2);
-                           },
-                           prm, comm);
-      const double omega   = std::sqrt(6 * sigma / (rho * R * R * R));
-      const double gamma   = 4 * mu / rho / (R * R);
-      const double T_exact = 2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
+      FlowScene<dim> scene(
+        Point<dim>(L, L),
+        h,
+        rho,
+        [&](const Point<dim> &x) {
+          const Tensor<1, dim> d = x - centre;
+          const double         c2 =
+            (d[0] * d[0] - d[1] * d[1]) / std::max(1e-300, d.norm_square());
+          return d.norm() < R * (1 + eps * c2);
+        },
+        prm,
+        comm);
+      const double omega = std::sqrt(6 * sigma / (rho * R * R * R));
+      const double gamma = 4 * mu / rho / (R * R);
+      const double T_exact =
+        2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
 
       const auto shape = [&]() { return shape_measure(scene, comm); };
 
@@ -87,20 +98,21 @@ run(const double fraction, const double R_over_h, const bool gated,
       // between a cell with points and an empty one. Returns {holes, free
       // faces, free faces of holes, interior cells with a single point, cells
       // with points, most points in a cell}.
-      const unsigned int N = static_cast<unsigned int>(std::lround(L / h));
-      const auto voids = [&]() {
+      const unsigned int N     = static_cast<unsigned int>(std::lround(L / h));
+      const auto         voids = [&]() {
         std::vector<double> count(N * N, 0.);
         for (const auto &p : scene.points->particle_handler())
           {
-            const auto   x = p.get_location();
-            const int    i = std::min<int>(N - 1, std::max(0, int(x[0] / h)));
-            const int    j = std::min<int>(N - 1, std::max(0, int(x[1] / h)));
+            const auto x = p.get_location();
+            const int  i = std::min<int>(N - 1, std::max(0, int(x[0] / h)));
+            const int  j = std::min<int>(N - 1, std::max(0, int(x[1] / h)));
             count[j * N + i] += 1;
           }
         Utilities::MPI::sum(count, comm, count);
         std::vector<int> outside(N * N, 0), stack;
         for (unsigned int i = 0; i < N; ++i)
-          for (const unsigned int c : {i, (N - 1) * N + i, i * N, i * N + N - 1})
+          for (const unsigned int c :
+               {i, (N - 1) * N + i, i * N, i * N + N - 1})
             if (count[c] == 0 && !outside[c])
               outside[c] = 1, stack.push_back(c);
         while (!stack.empty())
@@ -108,7 +120,10 @@ run(const double fraction, const double R_over_h, const bool gated,
             const int c = stack.back();
             stack.pop_back();
             const int i = c % N, j = c / N;
-            const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+            const int nb[4][2] = {{i - 1, j},
+                                  {i + 1, j},
+                                  {i, j - 1},
+                                  {i, j + 1}};
             for (const auto &q : nb)
               if (q[0] >= 0 && q[0] < int(N) && q[1] >= 0 && q[1] < int(N))
                 {
@@ -143,12 +158,12 @@ run(const double fraction, const double R_over_h, const bool gated,
         return r;
       };
 
-      std::vector<double> crossings;
+      std::vector<double>                crossings;
       std::vector<std::array<double, 8>> series;
-      double       t = 0, S = shape(), S0 = S, S_min = S;
-      unsigned int n_steps = 0;
-      const auto   first   = scene.flow->stable_time_step();
-      const auto v0 = voids();
+      double                             t = 0, S = shape(), S0 = S, S_min = S;
+      unsigned int                       n_steps = 0;
+      const auto                         first = scene.flow->stable_time_step();
+      const auto                         v0    = voids();
       series.push_back({{0., S, v0[0], v0[1], v0[2], v0[3], v0[4], v0[5]}});
       while ((eps == 0 || crossings.size() < 3) && t < 2 * T_exact)
         {
@@ -161,20 +176,21 @@ run(const double fraction, const double R_over_h, const bool gated,
             crossings.push_back(t - dt * S_new / (S_new - S));
           S     = S_new;
           S_min = std::min(S_min, S);
-          const auto v = series_file.empty() ? std::array<double, 6>() : voids();
+          const auto v =
+            series_file.empty() ? std::array<double, 6>() : voids();
           series.push_back({{t, S, v[0], v[1], v[2], v[3], v[4], v[5]}});
         }
       if (!series_file.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
         {
           std::ofstream f(series_file);
           f << "# oscillating droplet R/h = " << R_over_h
-            << ", capillary step fraction " << fraction
-            << ", point shifting " << prm.point_shifting
-            << ", curvature smoothing " << prm.curvature_smoothing
-            << ", volume correction " << prm.volume_correction
-            << ", analytic period " << T_exact << " s, gamma T = "
-            << gamma * T_exact << "\n"
-            << "t/T_exact,S/S0,holes,free faces,hole faces,single-point interior cells,cells with points,most points in a cell\n";
+            << ", capillary step fraction " << fraction << ", point shifting "
+            << prm.point_shifting << ", curvature smoothing "
+            << prm.curvature_smoothing << ", volume correction "
+            << prm.volume_correction << ", analytic period " << T_exact
+            << " s, gamma T = " << gamma * T_exact << "\n"
+            << "t/T_exact,S/S0,holes,free faces,hole faces,single-point "
+               "interior cells,cells with points,most points in a cell\n";
           for (const auto &r : series)
             f << r[0] / T_exact << "," << r[1] / S0 << "," << r[2] << ","
               << r[3] << "," << r[4] << "," << r[5] << "," << r[6] << ","
@@ -186,8 +202,10 @@ run(const double fraction, const double R_over_h, const bool gated,
       checks.print("capillary step fraction", fraction);
       checks.print("capillary limit / T_exact",
                    std::round(first.capillary / T_exact * 1e5) / 1e5);
-      checks.print("viscous decay rate / omega", std::round(gamma / omega * 1e4) / 1e4);
-      checks.print("initial shape measure S0 (2 eps = 0.2)", std::round(S0 * 1000) / 1000);
+      checks.print("viscous decay rate / omega",
+                   std::round(gamma / omega * 1e4) / 1e4);
+      checks.print("initial shape measure S0 (2 eps = 0.2)",
+                   std::round(S0 * 1000) / 1000);
       checks.print("steps", n_steps, 8);
       checks.print("zero crossings found", crossings.size());
       checks.print("first minimum S/S0", std::round(S_min / S0 * 100) / 100);
@@ -210,8 +228,9 @@ run(const double fraction, const double R_over_h, const bool gated,
         checks.print("|period error| (target 0.05; not met at R = 10 h: not "
                      "gated, see doc/flow.md)",
                      std::round(err * 1000) / 1000);
-      checks.print("max point speed / (omega eps R)",
-                   std::round(umax / (omega * std::max(eps, 1e-300) * R) * 100) / 100);
+      checks.print(
+        "max point speed / (omega eps R)",
+        std::round(umax / (omega * std::max(eps, 1e-300) * R) * 100) / 100);
       if (eps == 0)
         checks.print("static drop: spurious capillary number mu u_max / sigma",
                      mu * umax / sigma);
@@ -223,7 +242,6 @@ run(const double fraction, const double R_over_h, const bool gated,
     }
   return true;
 }
-
 
 int
 main(int argc, char **argv)
@@ -239,7 +257,9 @@ main(int argc, char **argv)
     double fraction, R_over_h;
     bool   gated;
   };
-  std::vector<Case> cases = {{0.5, 10, false}, {0.5, 20, true}, {0.25, 20, true}};
+  std::vector<Case> cases = {{0.5, 10, false},
+                             {0.5, 20, true},
+                             {0.25, 20, true}};
   if (argc > 1)
     {
       cases = {{std::atof(argv[1]), 20, true}};
@@ -253,12 +273,22 @@ main(int argc, char **argv)
   const double      shift  = argc > 7 ? std::atof(argv[7]) : -1;
   const int         smooth = argc > 8 ? std::atoi(argv[8]) : -1;
   const double      volume = argc > 9 ? std::atof(argv[9]) : -1;
-  height_function            = argc > 10 && std::atoi(argv[10]) == 1;
+  height_function          = argc > 10 && std::atoi(argv[10]) == 1;
   for (const auto &c : cases)
     {
       checks.print("R / h", c.R_over_h);
-      if (!run(c.fraction, c.R_over_h, c.gated, mu, eps, flip, shift, smooth, volume,
-               series, checks, comm))
+      if (!run(c.fraction,
+               c.R_over_h,
+               c.gated,
+               mu,
+               eps,
+               flip,
+               shift,
+               smooth,
+               volume,
+               series,
+               checks,
+               comm))
         return 1;
     }
   return checks.exit_code();

@@ -15,20 +15,19 @@
 // Every number printed is global, so 1 and 2 ranks print the same.
 #include <deal.II/base/utilities.h>
 
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <hdf5.h>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
 #include <zlib.h>
 
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <cstdint>
-#include <cstring>
-#include <fstream>
-#include <sstream>
-#include <filesystem>
-#include <map>
-#include <regex>
-#include <set>
 
 using namespace femp_test;
 
@@ -51,7 +50,8 @@ namespace
     std::vector<Element> elements;
     std::vector<int>     open;
     std::size_t          i = 0;
-    const std::regex     attribute("\\s*([A-Za-z_:][-A-Za-z0-9_:.]*)\\s*=\\s*\"([^\"]*)\"");
+    const std::regex     attribute(
+      "\\s*([A-Za-z_:][-A-Za-z0-9_:.]*)\\s*=\\s*\"([^\"]*)\"");
     while ((i = s.find('<', i)) != std::string::npos)
       {
         if (s.compare(i, 4, "<!--") == 0)
@@ -62,16 +62,17 @@ namespace
           }
         const std::size_t end = s.find('>', i);
         AssertThrow(end != std::string::npos, ExcMessage("open tag"));
-        std::string tag = s.substr(i + 1, end - i - 1);
+        std::string       tag        = s.substr(i + 1, end - i - 1);
         const std::size_t text_start = end + 1;
-        i = end + 1;
+        i                            = end + 1;
         if (tag[0] == '?' || tag[0] == '!')
           continue;
         if (tag[0] == '/')
           {
-            AssertThrow(!open.empty() &&
-                          elements[open.back()].name == Utilities::trim(tag.substr(1)),
-                        ExcMessage("mismatched closing tag </" + tag.substr(1) + ">"));
+            AssertThrow(!open.empty() && elements[open.back()].name ==
+                                           Utilities::trim(tag.substr(1)),
+                        ExcMessage("mismatched closing tag </" + tag.substr(1) +
+                                   ">"));
             open.pop_back();
             continue;
           }
@@ -79,8 +80,8 @@ namespace
         if (self_closing)
           tag.pop_back();
         Element     e;
-        std::size_t n = tag.find_first_of(" \t\n");
-        e.name        = tag.substr(0, n);
+        std::size_t n    = tag.find_first_of(" \t\n");
+        e.name           = tag.substr(0, n);
         std::string rest = n == std::string::npos ? "" : tag.substr(n);
         for (std::smatch m; std::regex_search(rest, m, attribute);
              rest = m.suffix())
@@ -126,22 +127,21 @@ namespace
       {"Time", {}},
       {"DataItem", {}}};
     const std::map<std::string, std::map<std::string, std::set<std::string>>>
-      required = {
-        {"Grid", {{"GridType", {"Uniform", "Collection"}}}},
-        {"Geometry", {{"GeometryType", {"XY", "XYZ"}}}},
-        {"Topology",
-         {{"TopologyType",
-           {"Polyvertex", "Polyline", "Quadrilateral", "Hexahedron"}},
-          {"NumberOfElements", {}}}},
-        {"Attribute",
-         {{"Name", {}},
-          {"AttributeType", {"Scalar", "Vector", "Tensor"}},
-          {"Center", {"Node", "Cell"}}}},
-        {"Time", {{"Value", {}}}},
-        {"DataItem",
-         {{"Dimensions", {}},
-          {"NumberType", {"Float", "Int", "UInt", "Char", "UChar"}},
-          {"Format", {"HDF"}}}}};
+      required = {{"Grid", {{"GridType", {"Uniform", "Collection"}}}},
+                  {"Geometry", {{"GeometryType", {"XY", "XYZ"}}}},
+                  {"Topology",
+                   {{"TopologyType",
+                     {"Polyvertex", "Polyline", "Quadrilateral", "Hexahedron"}},
+                    {"NumberOfElements", {}}}},
+                  {"Attribute",
+                   {{"Name", {}},
+                    {"AttributeType", {"Scalar", "Vector", "Tensor"}},
+                    {"Center", {"Node", "Cell"}}}},
+                  {"Time", {{"Value", {}}}},
+                  {"DataItem",
+                   {{"Dimensions", {}},
+                    {"NumberType", {"Float", "Int", "UInt", "Char", "UChar"}},
+                    {"Format", {"HDF"}}}}};
     AssertThrow(x[0].name == "Xdmf", ExcMessage("root is not <Xdmf>"));
     for (const auto &e : x)
       {
@@ -149,7 +149,8 @@ namespace
                     ExcMessage("unknown element <" + e.name + ">"));
         for (const int c : e.children)
           AssertThrow(children.at(e.name).count(x[c].name),
-                      ExcMessage("<" + x[c].name + "> inside <" + e.name + ">"));
+                      ExcMessage("<" + x[c].name + "> inside <" + e.name +
+                                 ">"));
         if (required.count(e.name))
           for (const auto &[attribute, values] : required.at(e.name))
             {
@@ -217,13 +218,17 @@ namespace
     Dataset     r;
     r.dims.resize(H5Sget_simple_extent_ndims(s));
     H5Sget_simple_extent_dims(s, r.dims.data(), nullptr);
-    r.type_class = H5Tget_class(t);
-    r.type_size  = H5Tget_size(t);
+    r.type_class  = H5Tget_class(t);
+    r.type_size   = H5Tget_size(t);
     std::size_t n = 1;
     for (const auto k : r.dims)
       n *= k;
     r.values.resize(n);
-    AssertThrow(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+    AssertThrow(H5Dread(d,
+                        H5T_NATIVE_DOUBLE,
+                        H5S_ALL,
+                        H5S_ALL,
+                        H5P_DEFAULT,
                         r.values.data()) >= 0,
                 ExcMessage("cannot read " + name + " in " + file));
     H5Tclose(t);
@@ -269,7 +274,7 @@ namespace
                 // Polyvertex: one cell per node, no connectivity needed.
                 AssertThrow(part.attributes.at("TopologyType") == "Polyvertex",
                             ExcMessage("a topology without connectivity"));
-                n_cells      = std::stoull(part.attributes.at("NumberOfElements"));
+                n_cells = std::stoull(part.attributes.at("NumberOfElements"));
                 n_node_index = n_cells;
                 continue;
               }
@@ -280,12 +285,14 @@ namespace
             AssertThrow(at != std::string::npos,
                         ExcMessage("DataItem text is not file:/dataset"));
             const std::string file = item.text.substr(0, at);
-            const auto data = read_dataset(directory + "/" + file,
-                                           item.text.substr(at + 1));
-            const auto dims = parse_dimensions(item.attributes.at("Dimensions"));
+            const auto        data =
+              read_dataset(directory + "/" + file, item.text.substr(at + 1));
+            const auto dims =
+              parse_dimensions(item.attributes.at("Dimensions"));
             AssertThrow(dims == data.dims,
-                        ExcMessage(item.text + ": dimensions differ from the "
-                                                "DataItem's " +
+                        ExcMessage(item.text +
+                                   ": dimensions differ from the "
+                                   "DataItem's " +
                                    item.attributes.at("Dimensions")));
             const std::string type = item.attributes.at("NumberType");
             AssertThrow((type == "Float") == (data.type_class == H5T_FLOAT),
@@ -299,15 +306,16 @@ namespace
               {
                 n_nodes = dims[0];
                 AssertThrow(dims.size() == 2 &&
-                              dims[1] == (part.attributes.at("GeometryType") ==
-                                              "XY" ?
-                                            2u :
-                                            3u),
+                              dims[1] ==
+                                (part.attributes.at("GeometryType") == "XY" ?
+                                   2u :
+                                   3u),
                             ExcMessage("geometry of the wrong shape"));
               }
             else if (part.name == "Topology")
               {
-                AssertThrow(n_nodes > 0, ExcMessage("topology before geometry"));
+                AssertThrow(n_nodes > 0,
+                            ExcMessage("topology before geometry"));
                 n_cells = dims[0];
                 AssertThrow(std::to_string(n_cells) ==
                               part.attributes.at("NumberOfElements"),
@@ -319,7 +327,7 @@ namespace
             else
               {
                 summary.attributes.push_back(part.attributes.at("Name"));
-                summary.last_file = file;
+                summary.last_file   = file;
                 const bool on_cells = part.attributes.at("Center") == "Cell";
                 AssertThrow(dims.size() == 2 && dims[1] == 1 &&
                               dims[0] == (on_cells ? n_cells : n_nodes),
@@ -339,22 +347,25 @@ namespace
   std::vector<T>
   vtu_array(const std::string &vtu, const std::string &name)
   {
-    const std::string key = name.empty() ? "NumberOfComponents=\"3\"" :
-                                           "Name=\"" + name + "\"";
+    const std::string key =
+      name.empty() ? "NumberOfComponents=\"3\"" : "Name=\"" + name + "\"";
     std::size_t k = vtu.find(key);
     AssertThrow(k != std::string::npos, ExcMessage("no " + name + " in VTU"));
-    k                       = vtu.find('>', k) + 1;
-    const std::string text  = Utilities::trim(vtu.substr(k, vtu.find('<', k) - k));
+    k = vtu.find('>', k) + 1;
+    const std::string text =
+      Utilities::trim(vtu.substr(k, vtu.find('<', k) - k));
     if (text.empty()) // a piece without points
       return {};
-    const auto        head  = Utilities::decode_base64(text.substr(0, 24));
-    const auto        data  = Utilities::decode_base64(text.substr(24));
-    std::uint32_t     h[4];
+    const auto    head = Utilities::decode_base64(text.substr(0, 24));
+    const auto    data = Utilities::decode_base64(text.substr(24));
+    std::uint32_t h[4];
     std::memcpy(h, head.data(), sizeof(h));
     std::vector<T> values(h[1] / sizeof(T));
     uLongf         size = h[1];
-    AssertThrow(uncompress(reinterpret_cast<Bytef *>(values.data()), &size,
-                           data.data(), data.size()) == Z_OK,
+    AssertThrow(uncompress(reinterpret_cast<Bytef *>(values.data()),
+                           &size,
+                           data.data(),
+                           data.size()) == Z_OK,
                 ExcMessage("cannot decompress " + name));
     return values;
   }
@@ -371,9 +382,12 @@ namespace
   /// Cell centres (rounded to 1e-9 of the largest coordinate) -> value of
   /// @p field, from the nodes, cells and field arrays of either format.
   std::map<std::vector<long>, double>
-  by_centre(const std::vector<double> &nodes, const unsigned int dim,
-            const std::vector<double> &cells, const unsigned int corners,
-            const std::vector<double> &field, const bool on_cells)
+  by_centre(const std::vector<double> &nodes,
+            const unsigned int         dim,
+            const std::vector<double> &cells,
+            const unsigned int         corners,
+            const std::vector<double> &field,
+            const bool                 on_cells)
   {
     std::map<std::vector<long>, double> m;
     for (std::size_t c = 0; c < cells.size() / corners; ++c)
@@ -381,7 +395,8 @@ namespace
         std::vector<double> x(dim, 0.);
         for (unsigned int v = 0; v < corners; ++v)
           for (unsigned int d = 0; d < dim; ++d)
-            x[d] += nodes[std::size_t(cells[c * corners + v]) * dim + d] / corners;
+            x[d] +=
+              nodes[std::size_t(cells[c * corners + v]) * dim + d] / corners;
         std::vector<long> key(dim);
         for (unsigned int d = 0; d < dim; ++d)
           key[d] = std::lround(x[d] * 1e9);
@@ -394,17 +409,22 @@ namespace
   /// (by centre) or the points (by id) of output @p n; -1 if the sets of
   /// cells or points differ.
   double
-  compare_with_vtu(const std::string &h5_dir, const std::string &vtu_dir,
-                   const std::string &kind, const std::string &field,
-                   const unsigned int dim, const unsigned int n,
-                   std::size_t &count, double &max_value,
-                   unsigned int &empty_pieces)
+  compare_with_vtu(const std::string &h5_dir,
+                   const std::string &vtu_dir,
+                   const std::string &kind,
+                   const std::string &field,
+                   const unsigned int dim,
+                   const unsigned int n,
+                   std::size_t       &count,
+                   double            &max_value,
+                   unsigned int      &empty_pieces)
   {
     const std::string number = Utilities::int_to_string(n, 5);
     const bool        points = kind == "points";
-    const std::string mesh   = h5_dir + "/" + (points ? kind + "_" + number : "grid_mesh") + ".h5";
-    const std::string file   = h5_dir + "/" + kind + "_" + number + ".h5";
-    const auto value = read_dataset(file, "/" + field).values;
+    const std::string mesh =
+      h5_dir + "/" + (points ? kind + "_" + number : "grid_mesh") + ".h5";
+    const std::string file  = h5_dir + "/" + kind + "_" + number + ".h5";
+    const auto        value = read_dataset(file, "/" + field).values;
     std::map<std::vector<long>, double> h5, vtu;
     if (points)
       {
@@ -413,8 +433,11 @@ namespace
           h5[{std::lround(id[i])}] = value[i];
       }
     else
-      h5 = by_centre(read_dataset(mesh, "/nodes").values, dim,
-                     read_dataset(mesh, "/cells").values, 1u << dim, value,
+      h5 = by_centre(read_dataset(mesh, "/nodes").values,
+                     dim,
+                     read_dataset(mesh, "/cells").values,
+                     1u << dim,
+                     value,
                      true);
     // VTU pieces: every grid_<n>.<piece>.vtu of the output.
     const std::regex piece(kind + "_" + number + "\\.[0-9]+\\.vtu");
@@ -422,8 +445,8 @@ namespace
       {
         if (!std::regex_match(entry.path().filename().string(), piece))
           continue;
-        const std::string s   = read_file(entry.path().string());
-        const auto        v   = vtu_array<float>(s, field);
+        const std::string s = read_file(entry.path().string());
+        const auto        v = vtu_array<float>(s, field);
         empty_pieces += v.empty();
         if (points)
           {
@@ -432,13 +455,14 @@ namespace
               vtu[{std::lround(id[i])}] = v[i];
             continue;
           }
-        const auto xyz  = vtu_array<float>(s, "");
-        const auto conn = vtu_array<std::int32_t>(s, "connectivity");
+        const auto          xyz  = vtu_array<float>(s, "");
+        const auto          conn = vtu_array<std::int32_t>(s, "connectivity");
         std::vector<double> x;
         for (std::size_t i = 0; i < xyz.size(); i += 3)
           for (unsigned int d = 0; d < dim; ++d)
             x.push_back(xyz[i + d]);
-        const auto m = by_centre(x, dim,
+        const auto m = by_centre(x,
+                                 dim,
                                  std::vector<double>(conn.begin(), conn.end()),
                                  1u << dim,
                                  std::vector<double>(v.begin(), v.end()),
@@ -464,14 +488,16 @@ namespace
 
   template <int dim>
   int
-  run(const std::string &prm_file, MPI_Comm comm,
+  run(const std::string           &prm_file,
+      MPI_Comm                     comm,
       const std::vector<Override> &scene)
   {
     Checks                checks(comm);
-    std::vector<Override> common = {
-      {"Output", "Output interval", "0"},
-      {"Output", "Write material points", "always"},
-      {"Output", "Probe lines", ""}};
+    std::vector<Override> common = {{"Output", "Output interval", "0"},
+                                    {"Output",
+                                     "Write material points",
+                                     "always"},
+                                    {"Output", "Probe lines", ""}};
     common.insert(common.end(), scene.begin(), scene.end());
     auto vtu = common, h5 = common;
     vtu.push_back({"Output", "Directory", "output_vtu"});
@@ -495,9 +521,16 @@ namespace
         std::size_t  count = 0;
         double       T_max = 0;
         unsigned int empty = 0;
-        const double diff  = compare_with_vtu(
-          "output_h5", "output_vtu", kind,
-          kind == "grid" ? "T" : "temperature", dim, 1, count, T_max, empty);
+        const double diff =
+          compare_with_vtu("output_h5",
+                           "output_vtu",
+                           kind,
+                           kind == "grid" ? "T" : "temperature",
+                           dim,
+                           1,
+                           count,
+                           T_max,
+                           empty);
         if (empty > 0) // ranks that had nothing to write
           std::cout << kind << ": " << empty << " VTU pieces are empty"
                     << std::endl;
@@ -515,7 +548,6 @@ namespace
     return checks.exit_code();
   }
 } // namespace
-
 
 int
 main(int argc, char **argv)
@@ -537,6 +569,5 @@ main(int argc, char **argv)
   femp::declare_all_parameters(prm);
   prm.parse_input(argv[1]);
   const int dim = prm.get_integer("Dimension");
-  return dim == 2 ? run<2>(argv[1], comm, scene) :
-                    run<3>(argv[1], comm, scene);
+  return dim == 2 ? run<2>(argv[1], comm, scene) : run<3>(argv[1], comm, scene);
 }

@@ -15,11 +15,11 @@
 //      goes on (it used to stop with "material point(s) lost in the gather
 //      of the solid points") and ends with the straight 'cost' run's lines
 //      within the same 1e-6.
+#include <regex>
+
 #include "resume_tools.h"
 #include "scene_driver.h"
 #include "test_tools.h"
-
-#include <regex>
 
 using namespace femp_test;
 
@@ -30,8 +30,8 @@ namespace
   double
   busiest_share(MPI_Comm comm)
   {
-    double        share = 0;
-    std::ifstream log("scene.log");
+    double           share = 0;
+    std::ifstream    log("scene.log");
     const std::regex at_most("solid: [0-9]+ material points \\(at most "
                              "([0-9.]+) % on one rank\\)");
     std::smatch      m;
@@ -50,7 +50,7 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string scene = argv[1];
+      const std::string           scene  = argv[1];
       const std::vector<Override> common = {
         {"Time stepping", "End time", "1.2e-5"},
         {"Checkpoint", "Every simulated time", "8e-6"}};
@@ -67,15 +67,19 @@ main(int argc, char **argv)
       run_scene<3>(scene, comm, with("cells", "cells"));
       const double share_cells = busiest_share(comm);
       checks.in_range("MPM points on the busiest rank, 'cost'",
-                      std::round(100 * share_cost) / 100, 0.5, 0.55);
+                      std::round(100 * share_cost) / 100,
+                      0.5,
+                      0.55);
       checks.at_most("busiest share, 'cost' / 'cells'",
-                     std::round(100 * share_cost / share_cells) / 100, 0.99);
+                     std::round(100 * share_cost / share_cells) / 100,
+                     0.99);
       for (const auto &[col, offset] :
            std::vector<std::pair<std::string, double>>{{"T", 300.},
-                                                        {"sigma_xx", 0.}})
-        checks.at_most(col + ": 'cost' against 'cells', / peak",
-                       probe_line_relative_difference("cost", "cells", col, offset),
-                       1e-6);
+                                                       {"sigma_xx", 0.}})
+        checks.at_most(
+          col + ": 'cost' against 'cells', / peak",
+          probe_line_relative_difference("cost", "cells", col, offset),
+          1e-6);
 
       // 3. The 'cells' checkpoint at 8 us, resumed with 'cost'.
       const std::string from = copy_for_resume("cells", "resumed", comm);
@@ -84,10 +88,11 @@ main(int argc, char **argv)
       run_scene<3>(scene, comm, o);
       for (const auto &[col, offset] :
            std::vector<std::pair<std::string, double>>{{"T", 300.},
-                                                        {"sigma_xx", 0.}})
-        checks.at_most(col + ": resumed with 'cost' against 'cost', / peak",
-                       probe_line_relative_difference("cost", "resumed", col, offset),
-                       1e-6);
+                                                       {"sigma_xx", 0.}})
+        checks.at_most(
+          col + ": resumed with 'cost' against 'cost', / peak",
+          probe_line_relative_difference("cost", "resumed", col, offset),
+          1e-6);
     }
   catch (const std::exception &e)
     {

@@ -32,7 +32,7 @@ struct Strip
   MaterialPoints<dim>::Parameters pp;
 
   explicit Strip(MPI_Comm comm)
-    : grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h), comm)
+      : grid(box<dim>(Point<dim>(0, 0), Point<dim>(1, 2 * h), h), comm)
   {
     grid.create();
     mat.solidus        = 1.4;
@@ -47,9 +47,9 @@ void
 run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
 {
   Strip        strip(comm);
-  const double h    = strip.h;
-  auto &       grid = strip.grid;
-  auto &       mat  = strip.mat;
+  const double h         = strip.h;
+  auto        &grid      = strip.grid;
+  auto        &mat       = strip.mat;
   mat.latent_heat_fusion = 0.5;
   Laser<dim>        laser(laser_off<dim>());
   auto              hp = heat_parameters<dim>(1., {});
@@ -57,8 +57,10 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
   heat.initialize();
 
   MaterialPoints<dim> points(strip.pp, mat, grid);
-  points.create_region([](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
-                       2., MaterialPoints<dim>::fluid);
+  points.create_region(
+    [](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
+    2.,
+    MaterialPoints<dim>::fluid);
   heat.set_metal_fraction(points.metal_fraction());
   // Temperatures from 1 to 2 along x: solid, mushy and liquid cells.
   for (const auto idx : grid.owned_cells())
@@ -78,13 +80,15 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
   exchange.points_changed_cells();
   const double dH = heat.stored_enthalpy() - H0;
   // Scale: the enthalpy of the metal, 0.6 x 2h x (c T + L) ~ 0.2.
-  const double scale = std::abs(H0);
-  const std::string mode = carried_by_points ? "points: " : "upwind: ";
-  const double account_error = std::abs(exchange.moved_points_energy() - dH) / scale;
+  const double      scale = std::abs(H0);
+  const std::string mode  = carried_by_points ? "points: " : "upwind: ";
+  const double      account_error =
+    std::abs(exchange.moved_points_energy() - dH) / scale;
   checks.at_most(mode + "|moved_points account - change of stored enthalpy| / "
                         "enthalpy, next power of ten",
                  account_error > 0 ?
-                   std::pow(10., std::ceil(std::log10(account_error))) : 0.,
+                   std::pow(10., std::ceil(std::log10(account_error))) :
+                   0.,
                  1e-14);
   if (carried_by_points)
     {
@@ -108,9 +112,12 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
         }
       T_new = Utilities::MPI::max(T_new, comm);
       checks.in_range("upwind: temperature of a cell that gained metal",
-                      std::round(T_new * 1e6) / 1e6, 1.775 - 1e-6, 1.775 + 1e-6);
+                      std::round(T_new * 1e6) / 1e6,
+                      1.775 - 1e-6,
+                      1.775 + 1e-6);
       checks.print("upwind: change of stored enthalpy / enthalpy",
-                   std::round(dH / scale * 1e4) / 1e4, 3);
+                   std::round(dH / scale * 1e4) / 1e4,
+                   3);
     }
 }
 
@@ -124,11 +131,11 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
 void
 stale_gas_cell(Checks &checks, MPI_Comm comm)
 {
-  Strip        strip(comm);
-  const double h    = strip.h;
-  const auto & grid = strip.grid;
-  const auto & mat  = strip.mat;
-  const auto & pp   = strip.pp;
+  Strip             strip(comm);
+  const double      h    = strip.h;
+  const auto       &grid = strip.grid;
+  const auto       &mat  = strip.mat;
+  const auto       &pp   = strip.pp;
   Laser<dim>        laser(laser_off<dim>());
   HeatTransfer<dim> heat(heat_parameters<dim>(1., {}), mat, laser, grid);
   heat.initialize();
@@ -136,7 +143,8 @@ stale_gas_cell(Checks &checks, MPI_Comm comm)
     {
       MaterialPoints<dim> points(pp, mat, grid);
       points.create_region(
-        [](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; }, 2.,
+        [](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
+        2.,
         MaterialPoints<dim>::solid);
       heat.set_metal_fraction(points.metal_fraction());
       for (const auto idx : grid.owned_cells())
@@ -164,12 +172,16 @@ stale_gas_cell(Checks &checks, MPI_Comm comm)
                              with_metal ? &heat.metal_fraction() : nullptr);
       double T_max = 0;
       for (const auto &particle : points.particle_handler())
-        T_max = std::max(T_max, particle.get_properties()[MaterialPoints<dim>::PropertyIndex::temperature]);
+        T_max = std::max(
+          T_max,
+          particle
+            .get_properties()[MaterialPoints<dim>::PropertyIndex::temperature]);
       T_max = Utilities::MPI::max(T_max, comm);
       if (with_metal)
         checks.in_range("stale gas cell: hottest point after cells_to_points "
                         "with the metal fraction",
-                        std::round(T_max * 1e6) / 1e6, 1.775 - 1e-6,
+                        std::round(T_max * 1e6) / 1e6,
+                        1.775 - 1e-6,
                         1.775 + 1e-6);
       else
         checks.print("stale gas cell: hottest point after cells_to_points "
@@ -194,18 +206,20 @@ fixed_cells(Checks &checks, MPI_Comm comm)
   const auto &grid = strip.grid;
   const auto &mat  = strip.mat;
   const auto &pp   = strip.pp;
-  auto make = [&]() {
+  auto        make = [&]() {
     auto p = std::make_unique<MaterialPoints<dim>>(pp, mat, grid);
-    p->create_region([](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
-                     1., MaterialPoints<dim>::solid);
+    p->create_region(
+      [](const Point<dim> &x) { return x[0] > 0.2 && x[0] < 0.8; },
+      1.,
+      MaterialPoints<dim>::solid);
     return p;
   };
-  auto eager = make(), lazy = make();
+  auto                      eager = make(), lazy = make();
   std::vector<std::uint8_t> fixed(grid.n_local(), 0);
   for (const auto idx : grid.owned_cells())
     fixed[idx] = grid.cell_center(idx)[0] < 0.5;
   lazy->set_fixed_cells(fixed);
-  (void)lazy->metal_fraction();
+  (void) lazy->metal_fraction();
   // Cell temperatures: a + b x; the cell at x = 0.475 (fixed) goes above
   // the solidus at the third push.
   auto field = [&](const double a, const double b, const bool hot_cell) {
@@ -220,13 +234,15 @@ fixed_cells(Checks &checks, MPI_Comm comm)
     grid.update_ghosts(T);
     return T;
   };
-  const std::vector<std::vector<double>> pushes = {
-    field(1.3, 0.1, false), field(1.1, 0.2, false), field(1.0, 0.1, true),
-    field(0.9, 0.1, false)};
-  using P = MaterialPoints<dim>::PropertyIndex;
+  const std::vector<std::vector<double>> pushes = {field(1.3, 0.1, false),
+                                                   field(1.1, 0.2, false),
+                                                   field(1.0, 0.1, true),
+                                                   field(0.9, 0.1, false)};
+  using P                 = MaterialPoints<dim>::PropertyIndex;
   auto largest_difference = [&](const unsigned int property) {
     double d = 0;
-    AssertDimension(eager->occupied_cells().size(), lazy->occupied_cells().size());
+    AssertDimension(eager->occupied_cells().size(),
+                    lazy->occupied_cells().size());
     for (std::size_t c = 0; c < eager->occupied_cells().size(); ++c)
       {
         const auto a = eager->cell_point_properties(c);
@@ -247,11 +263,14 @@ fixed_cells(Checks &checks, MPI_Comm comm)
                std::round(largest_difference(P::temperature) * 1e6) / 1e6);
   lazy->flush_point_temperatures();
   checks.at_most("fixed cells: largest temperature difference after the flush",
-                 largest_difference(P::temperature), 0.);
+                 largest_difference(P::temperature),
+                 0.);
   checks.at_most("fixed cells: largest peak temperature difference",
-                 largest_difference(P::peak_temperature), 0.);
+                 largest_difference(P::peak_temperature),
+                 0.);
   checks.at_most("fixed cells: largest state difference",
-                 largest_difference(P::state), 0.);
+                 largest_difference(P::state),
+                 0.);
   // Pushed again, then the cells' temperatures change without a push: the
   // volume means over the points (the cells with points at another
   // temperature) must be the same.
@@ -262,10 +281,12 @@ fixed_cells(Checks &checks, MPI_Comm comm)
   const auto ml = lazy->volume_mean_over_points(pushes[0], e);
   double     d  = me.size() == ml.size() ? 0. : 1.;
   for (std::size_t i = 0; i < std::min(me.size(), ml.size()); ++i)
-    d = std::max({d, std::abs(me[i].second - ml[i].second),
+    d = std::max({d,
+                  std::abs(me[i].second - ml[i].second),
                   me[i].first == ml[i].first ? 0. : 1.});
   checks.at_most("fixed cells: largest difference of the volume means",
-                 Utilities::MPI::max(d, comm), 0.);
+                 Utilities::MPI::max(d, comm),
+                 0.);
   checks.print("fixed cells: cells with a volume mean (all ranks)",
                Utilities::MPI::sum(me.size(), comm));
 }

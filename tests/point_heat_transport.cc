@@ -22,8 +22,8 @@
 // stored enthalpy is conserved to round-off; a mean of temperatures there
 // would create or destroy latent heat.
 
-#include <femp/heat/heat_transfer.h>
 #include <femp/grid/material_points.h>
+#include <femp/heat/heat_transfer.h>
 
 #include "test_tools.h"
 
@@ -35,7 +35,8 @@ double
 exact(const double x, const double t)
 {
   const double s = 2 * std::sqrt(kappa * t);
-  return 1 + 0.5 * (std::erf((x - a - u * t) / s) - std::erf((x - b - u * t) / s));
+  return 1 +
+         0.5 * (std::erf((x - a - u * t) / s) - std::erf((x - b - u * t) / s));
 }
 
 struct Result
@@ -55,10 +56,10 @@ run(const double h, const bool latent, MPI_Comm comm)
   mat.conductivity = PiecewiseLinear(kappa);
   // The moving metal is melt, as in a scene: its points are (or have been)
   // above the solidus, so alpha is the points' volume (doc/equations.md,
-  // "Background grid and material points"); sub-cell occupancy would read half a cell when
-  // round-off puts two points of a row into one sub-cell.
-  mat.solidus  = latent ? 1.4 : 0.5;
-  mat.liquidus = latent ? 1.6 : 0.6;
+  // "Background grid and material points"); sub-cell occupancy would read half
+  // a cell when round-off puts two points of a row into one sub-cell.
+  mat.solidus            = latent ? 1.4 : 0.5;
+  mat.liquidus           = latent ? 1.6 : 0.6;
   mat.latent_heat_fusion = latent ? 0.5 : 0.;
   Laser<dim>        laser(laser_off<dim>());
   auto              p = heat_parameters<dim>(1., {});
@@ -72,7 +73,8 @@ run(const double h, const bool latent, MPI_Comm comm)
   MaterialPoints<dim> points(pp, mat, grid);
   // Created at T = 2 (melted once: peak temperature above the solidus),
   // then given the cell temperatures below.
-  points.create_region([](const Point<dim> &x) { return x[0] < 2; }, 2.,
+  points.create_region([](const Point<dim> &x) { return x[0] < 2; },
+                       2.,
                        MaterialPoints<dim>::fluid);
   heat.set_metal_fraction(points.metal_fraction());
   const auto &T = heat.temperature();
@@ -81,15 +83,15 @@ run(const double h, const bool latent, MPI_Comm comm)
   heat.update_ghosts();
   const double H0 = heat.stored_enthalpy();
 
-  const double       t_end = 0.5;
-  const double       dt0   = 0.5 * heat.stable_time_step();
+  const double t_end = 0.5;
+  const double dt0   = 0.5 * heat.stable_time_step();
   // An odd number of steps: u dt is then never an odd multiple of a
   // quarter cell, so the point columns (a quarter cell off the faces at
   // the start) never sit exactly on a cell face, where round-off could put
   // a whole column into either cell.
-  const unsigned int n     = 2 * unsigned(std::ceil((t_end - t0) / dt0 / 2)) + 1;
-  const double       dt    = (t_end - t0) / n;
-  double             t     = t0;
+  const unsigned int n  = 2 * unsigned(std::ceil((t_end - t0) / dt0 / 2)) + 1;
+  const double       dt = (t_end - t0) / n;
+  double             t  = t0;
   for (unsigned int i = 0; i < n; ++i, t += dt)
     {
       heat.advance(dt, t);
@@ -101,8 +103,10 @@ run(const double h, const bool latent, MPI_Comm comm)
           particle.set_location(x);
         }
       points.points_moved();
-      const auto mean = points.volume_mean_over_points(
-        T, [&heat](const double Tc) { return heat.specific_enthalpy(Tc); });
+      const auto mean =
+        points.volume_mean_over_points(T, [&heat](const double Tc) {
+          return heat.specific_enthalpy(Tc);
+        });
       heat.set_metal_fraction(points.metal_fraction());
       heat.take_point_enthalpy(mean);
     }
@@ -110,7 +114,8 @@ run(const double h, const bool latent, MPI_Comm comm)
   double err = 0;
   for (const auto idx : grid.owned_cells())
     if (grid.cell_center(idx)[0] > 0.5 && grid.cell_center(idx)[0] < 2)
-      err = std::max(err, std::abs(T[idx] - exact(grid.cell_center(idx)[0], t_end)));
+      err = std::max(err,
+                     std::abs(T[idx] - exact(grid.cell_center(idx)[0], t_end)));
   // (Round-off over ~1500 steps: tolerance 1e-9 of the pulse enthalpy.)
   // Enthalpy of the pulse above T = 1: its width times the height 1
   // (sensible part, rho c = 1) plus the latent heat, per unit depth.
@@ -125,24 +130,31 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const auto r1 = run(1. / 50, false, comm);
-  const auto r2 = run(1. / 100, false, comm);
-  const auto r3 = run(1. / 200, false, comm);
+  const auto                       r1 = run(1. / 50, false, comm);
+  const auto                       r2 = run(1. / 100, false, comm);
+  const auto                       r3 = run(1. / 200, false, comm);
   auto round2 = [](const double x) { return std::round(x * 1000) / 1000; };
   checks.print("max error h=1/50", round2(r1.error), 3);
   checks.print("max error h=1/100", round2(r2.error), 3);
   checks.print("max error h=1/200", round2(r3.error), 3);
   checks.in_range("observed order (1/100 -> 1/200)",
-                  std::round(std::log2(r2.error / r3.error) * 10) / 10, 0.8, 1.3);
+                  std::round(std::log2(r2.error / r3.error) * 10) / 10,
+                  0.8,
+                  1.3);
   // (The grid upwind scheme gives 0.024 at h = 1/200: tests/convection_upwind.)
   checks.at_most("max error h=1/200", round2(r3.error), 0.02);
-  const double e_max = std::max({r1.enthalpy_error, r2.enthalpy_error, r3.enthalpy_error});
-  checks.at_most("enthalpy change / pulse enthalpy, no latent heat, next power of ten",
-                 e_max > 0 ? std::pow(10., std::ceil(std::log10(e_max))) : 0., 1e-9);
+  const double e_max =
+    std::max({r1.enthalpy_error, r2.enthalpy_error, r3.enthalpy_error});
+  checks.at_most(
+    "enthalpy change / pulse enthalpy, no latent heat, next power of ten",
+    e_max > 0 ? std::pow(10., std::ceil(std::log10(e_max))) : 0.,
+    1e-9);
   const auto rl = run(1. / 100, true, comm);
-  checks.at_most("enthalpy change / pulse enthalpy, melting range in the pulse, next power of ten",
+  checks.at_most("enthalpy change / pulse enthalpy, melting range in the "
+                 "pulse, next power of ten",
                  rl.enthalpy_error > 0 ?
-                   std::pow(10., std::ceil(std::log10(rl.enthalpy_error))) : 0.,
+                   std::pow(10., std::ceil(std::log10(rl.enthalpy_error))) :
+                   0.,
                  1e-9);
   return checks.exit_code();
 }

@@ -28,7 +28,7 @@ main(int argc, char **argv)
   spec.packing_fraction = 0.5;
   spec.seed             = 42;
   const PowderBed a = pack_powder_bed(spec), b = pack_powder_bed(spec);
-  bool same = a.grains.size() == b.grains.size();
+  bool            same = a.grains.size() == b.grains.size();
   for (std::size_t i = 0; same && i < a.grains.size(); ++i)
     same = a.grains[i].center == b.grains[i].center &&
            a.grains[i].radius == b.grains[i].radius;
@@ -43,11 +43,12 @@ main(int argc, char **argv)
       for (std::size_t j = 0; j < a.grains.size(); ++j)
         if (j != i)
           {
-            const auto & o = a.grains[j];
+            const auto  &o = a.grains[j];
             const double d = std::sqrt(std::pow(g.center[0] - o.center[0], 2) +
                                        std::pow(g.center[1] - o.center[1], 2) +
                                        std::pow(g.center[2] - o.center[2], 2));
-            max_overlap = std::max(max_overlap, (g.radius + o.radius - d) / g.radius);
+            max_overlap =
+              std::max(max_overlap, (g.radius + o.radius - d) / g.radius);
             if (o.center[2] < g.center[2])
               gap = std::min(gap, d - g.radius - o.radius);
           }
@@ -59,12 +60,15 @@ main(int argc, char **argv)
   checks.at_most("largest gap to a support / radius", max_gap, 1e-9);
   checks.at_most("grains sticking out of the layer", outside, 0);
   checks.print("grains", a.grains.size());
-  checks.in_range("packing fraction reached", a.achieved_packing_fraction, 0.3, 0.5);
+  checks.in_range("packing fraction reached",
+                  a.achieved_packing_fraction,
+                  0.3,
+                  0.5);
 
   // Points on a grid: substrate of 10 x 10 x 6 cells, h = 8 um, s = 4 um.
-  const int dim = 3;
-  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0, 0), Point<dim>(80e-6, 80e-6, 48e-6), 8e-6),
-                           comm);
+  const int           dim = 3;
+  BackgroundGrid<dim> grid(
+    box<dim>(Point<dim>(0, 0, 0), Point<dim>(80e-6, 80e-6, 48e-6), 8e-6), comm);
   grid.create();
   MaterialPoints<dim>::Parameters mp;
   mp.point_spacing   = 4e-6;
@@ -74,12 +78,15 @@ main(int argc, char **argv)
   MaterialPoints<dim> points(mp, mat, grid);
   points.create(300);
   checks.print("substrate points", points.n_global_points());
-  checks.at_most("|points - 20 x 20 x 6|", std::abs(double(points.n_global_points()) - 2400.), 0);
+  checks.at_most("|points - 20 x 20 x 6|",
+                 std::abs(double(points.n_global_points()) - 2400.),
+                 0);
   const auto alpha = points.metal_fraction();
   double     metal = 0;
   for (const auto idx : grid.owned_cells())
     metal += alpha[idx];
   checks.at_most("|sum alpha - 10 x 10 x 3 cells|",
-                 std::abs(Utilities::MPI::sum(metal, comm) - 300.), 1e-12);
+                 std::abs(Utilities::MPI::sum(metal, comm) - 300.),
+                 1e-12);
   return checks.exit_code();
 }

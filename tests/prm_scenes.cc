@@ -22,25 +22,26 @@ namespace
 {
   /// The values that a material file sets, as {subsection path, entry}.
   const std::vector<std::pair<std::vector<std::string>, std::string>>
-    material_entries = {
-      {{"Material"}, "Density"},
-      {{"Material"}, "Specific heat"},
-      {{"Material"}, "Thermal conductivity"},
-      {{"Material"}, "Solidus temperature"},
-      {{"Material"}, "Liquidus temperature"},
-      {{"Material"}, "Latent heat of fusion"},
-      {{"Material"}, "Latent heat of evaporation"},
-      {{"Material"}, "Evaporation temperature"},
-      {{"Material"}, "Molar mass"},
-      {{"Solid", "Material"}, "Young's modulus"},
-      {{"Solid", "Material"}, "Plastic modulus"},
-      {{"Solid", "Material"}, "Yield stress"},
-      {{"Solid", "Material"}, "Poisson's ratio"},
-      {{"Solid", "Material"}, "Thermal expansion coefficient"}};
+    material_entries = {{{"Material"}, "Density"},
+                        {{"Material"}, "Specific heat"},
+                        {{"Material"}, "Thermal conductivity"},
+                        {{"Material"}, "Solidus temperature"},
+                        {{"Material"}, "Liquidus temperature"},
+                        {{"Material"}, "Latent heat of fusion"},
+                        {{"Material"}, "Latent heat of evaporation"},
+                        {{"Material"}, "Evaporation temperature"},
+                        {{"Material"}, "Molar mass"},
+                        {{"Solid", "Material"}, "Young's modulus"},
+                        {{"Solid", "Material"}, "Plastic modulus"},
+                        {{"Solid", "Material"}, "Yield stress"},
+                        {{"Solid", "Material"}, "Poisson's ratio"},
+                        {{"Solid", "Material"},
+                         "Thermal expansion coefficient"}};
 
   std::string
-  get(ParameterHandler &prm, const std::vector<std::string> &path,
-      const std::string &entry)
+  get(ParameterHandler               &prm,
+      const std::vector<std::string> &path,
+      const std::string              &entry)
   {
     for (const auto &s : path)
       prm.enter_subsection(s);
@@ -52,7 +53,8 @@ namespace
 
   /// Parse @p text (named @p name in messages) and check the data.
   void
-  parse_and_check(ParameterHandler &prm, const std::string &text,
+  parse_and_check(ParameterHandler  &prm,
+                  const std::string &text,
                   const std::string &name)
   {
     declare_all_parameters(prm);
@@ -75,15 +77,15 @@ namespace
   }
 } // namespace
 
-
 int
 main(int argc, char **argv)
 {
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   Checks                           checks(MPI_COMM_WORLD);
-  const fs::path                   prm_dir = argv[1];
+  const fs::path                   prm_dir   = argv[1];
   const fs::path                   tests_dir = argv[2];
-  const std::string material_316L = (prm_dir / "materials" / "316L.prm").string();
+  const std::string                material_316L =
+    (prm_dir / "materials" / "316L.prm").string();
 
   std::vector<fs::path> files;
   for (const auto &dir : {prm_dir, prm_dir / "materials"})
@@ -118,16 +120,17 @@ main(int argc, char **argv)
               for (const auto &[path, entry] : material_entries)
                 if (solid || path[0] != "Solid")
                   {
-                    own = own || get(scene, path, entry) !=
-                                   get(defaults, path, entry);
+                    own = own ||
+                          get(scene, path, entry) != get(defaults, path, entry);
                     if (get(scene, path, entry) != get(with, path, entry))
                       changed.push_back(entry);
                   }
-              same_as_316L = own ? "its own material" :
-                                   "the default material (316L)";
-              same_as_316L += changed.empty() ?
-                                "; including materials/316L.prm changes nothing" :
-                                "; including materials/316L.prm changes ";
+              same_as_316L =
+                own ? "its own material" : "the default material (316L)";
+              same_as_316L +=
+                changed.empty() ?
+                  "; including materials/316L.prm changes nothing" :
+                  "; including materials/316L.prm changes ";
               for (std::size_t i = 0; i < changed.size(); ++i)
                 same_as_316L += (i > 0 ? ", " : "") + changed[i];
             }
@@ -151,7 +154,8 @@ main(int argc, char **argv)
   parse_parameter_file(prm, (tests_dir / "material_include.prm").string());
   prm.enter_subsection("Material");
   checks.at_most("IN625 included from tests/: |density - 8440| (kg/m^3)",
-                 std::abs(prm.get_double("Density") - 8440.), 0);
+                 std::abs(prm.get_double("Density") - 8440.),
+                 0);
   prm.leave_subsection();
   return checks.exit_code();
 }

@@ -72,8 +72,8 @@ check(Checks &checks, MPI_Comm comm)
       typename Output<dim>::Parameters prm;
       prm.probe_linear = linear;
       Output<dim> output(prm, grid);
-      const auto  v      = output.sample(inside, fields);
-      double      err    = 0;
+      const auto  v   = output.sample(inside, fields);
+      double      err = 0;
       for (std::size_t i = 0; i < inside.size(); ++i)
         err = std::max(err, std::abs(v[2 * i] - exact(inside[i])));
       const auto s       = output.sample(at_surface, fields);
@@ -84,15 +84,17 @@ check(Checks &checks, MPI_Comm comm)
         std::to_string(dim) + "D " + (linear ? "linear" : "cell");
       if (linear)
         {
-          checks.at_most(name + ": max error of a linear field, K", err,
-                         1e-9);
+          checks.at_most(name + ": max error of a linear field, K", err, 1e-9);
           checks.at_most(name + ": largest value next to the gas, K",
-                         max_gas, 1e3);
+                         max_gas,
+                         1e3);
         }
       else
         // Half a cell times the gradient in each direction bounds it; it
         // must be well above zero (the cell value is not interpolated).
-        checks.in_range(name + ": max error of a linear field, K", err, 1.,
+        checks.in_range(name + ": max error of a linear field, K",
+                        err,
+                        1.,
                         0.5 * h * 10 * dim * (dim + 1) / 2);
     }
 }

@@ -22,9 +22,9 @@
 //     its whole surface, so after 20 steps its points stay at rest (speed
 //     below 1e-9 of the Bernoulli speed sqrt(2 p_r/rho) of that pressure).
 // 2D, 1 and 2 ranks give the same output.
-#include "flow_tools.h"
-
 #include <cmath>
+
+#include "flow_tools.h"
 
 using namespace femp_test;
 
@@ -48,35 +48,39 @@ namespace
   parameters(const double g)
   {
     IncompressibleFlow<dim>::Parameters prm;
-    prm.viscosity          = 1e-3;
+    prm.viscosity                 = 1e-3;
     prm.pressure.solver_tolerance = 1e-12;
-    prm.gravity            = Tensor<1, dim>();
-    prm.gravity[dim - 1]   = -g;
-    prm.recoil_coefficient = 0.54;
+    prm.gravity                   = Tensor<1, dim>();
+    prm.gravity[dim - 1]          = -g;
+    prm.recoil_coefficient        = 0.54;
     return prm;
   }
 
   void
   pool_at_rest(Checks &checks, MPI_Comm comm)
   {
-    const double h = 0.025, rho = 1000, g = 9.81, H = 0.3, T = 3300;
-    const auto   prm = parameters(g);
-    FlowScene<dim> scene(Point<dim>(0.4, 0.4), h, rho,
-                         [&](const Point<dim> &x) { return x[dim - 1] < H; },
-                         prm, comm);
+    const double   h = 0.025, rho = 1000, g = 9.81, H = 0.3, T = 3300;
+    const auto     prm = parameters(g);
+    FlowScene<dim> scene(
+      Point<dim>(0.4, 0.4),
+      h,
+      rho,
+      [&](const Point<dim> &x) { return x[dim - 1] < H; },
+      prm,
+      comm);
     std::vector<double> temperature = scene.grid.make_field(T);
-    CellFields<dim> fields;
-    fields.temperature = &temperature;
-    const double dt = scene.flow->stable_time_step().min();
+    CellFields<dim>     fields;
+    fields.temperature         = &temperature;
+    const double       dt      = scene.flow->stable_time_step().min();
     const unsigned int n_steps = 200;
     for (unsigned int n = 0; n < n_steps; ++n)
       scene.flow->step(dt, fields);
 
-    const double pr = recoil(prm, T);
-    const double s  = h / 2; // material surface: top lattice point + s/2
-    const double Hm = std::ceil(H / s - 0.5) * s;
-    const auto & p    = scene.flow->pressure();
-    const auto & type = scene.flow->cell_type();
+    const double pr   = recoil(prm, T);
+    const double s    = h / 2; // material surface: top lattice point + s/2
+    const double Hm   = std::ceil(H / s - 0.5) * s;
+    const auto  &p    = scene.flow->pressure();
+    const auto  &type = scene.flow->cell_type();
     double       err  = 0;
     for (const auto idx : scene.grid.owned_cells())
       if (type[idx] == IncompressibleFlow<dim>::fluid)
@@ -85,30 +89,35 @@ namespace
           err = std::max(err, std::abs(p[idx] - pr - rho * g * (Hm - z)));
         }
     err = Utilities::MPI::max(err, comm) / (pr + rho * g * Hm);
-    const double umax = scene.max_over_points(
-      [](const Point<dim> &, ArrayView<const double> v) {
+    const double umax =
+      scene.max_over_points([](const Point<dim> &, ArrayView<const double> v) {
         return point_speed<dim>(v);
       });
     checks.print("pool: recoil pressure p_r at T = 3300 K, Pa", pr);
     checks.print("pool: rho g H_m, Pa", rho * g * Hm);
     checks.at_most("pool: max |p - p_r - rho g (H_m - z)| / (p_r + rho g H_m)",
-                   err, 0.01);
+                   err,
+                   0.01);
     checks.at_most("pool: max point speed / (g t)",
-                   umax / (g * n_steps * dt), 1e-9);
+                   umax / (g * n_steps * dt),
+                   1e-9);
   }
 
   void
   pushed_block(Checks &checks, MPI_Comm comm)
   {
-    const double h = 0.025, rho = 1000, L = 0.2, T_hot = 2500, T_cold = 300;
+    const double     h = 0.025, rho = 1000, L = 0.2, T_hot = 2500, T_cold = 300;
     const Point<dim> lo(0.2, 0.2), hi(0.4, 0.4), size(0.6, 0.6);
     const auto       prm = parameters(0.);
     FlowScene<dim>   scene(
-      size, h, rho,
+      size,
+      h,
+      rho,
       [&](const Point<dim> &x) {
         return x[0] > lo[0] && x[0] < hi[0] && x[1] > lo[1] && x[1] < hi[1];
       },
-      prm, comm);
+      prm,
+      comm);
     // Hot above the block's mid-height, cold below (per cell centre).
     std::vector<double> temperature = scene.grid.make_field(T_cold);
     for (std::size_t i = 0; i < temperature.size(); ++i)
@@ -117,7 +126,7 @@ namespace
     CellFields<dim> fields;
     fields.temperature = &temperature;
 
-    const double       dt = 1e-3;
+    const double       dt      = 1e-3;
     const unsigned int n_steps = 50;
     for (unsigned int n = 0; n < n_steps; ++n)
       scene.flow->step(dt, fields);
@@ -132,28 +141,34 @@ namespace
         for (int d = 0; d < dim; ++d)
           momentum[d] += v[P::mass] * v[P::velocity + d];
       }
-    mass     = Utilities::MPI::sum(mass, comm);
-    momentum = Utilities::MPI::sum(momentum, comm);
+    mass                  = Utilities::MPI::sum(mass, comm);
+    momentum              = Utilities::MPI::sum(momentum, comm);
     const double t        = n_steps * dt;
     const double expected = -recoil(prm, T_hot) * L * t; // per unit depth
     checks.print("block: mass per unit depth, kg/m", mass);
     checks.print("block: expected vertical momentum -p_r L t, kg/s", expected);
     checks.print("block: vertical momentum, kg/s", momentum[1]);
     checks.at_most("block: |momentum_z / (-p_r L t) - 1|",
-                   std::abs(momentum[1] / expected - 1), 0.05);
+                   std::abs(momentum[1] / expected - 1),
+                   0.05);
     checks.at_most("block: |momentum_x| / |p_r L t|",
-                   std::abs(momentum[0] / expected), 1e-6);
+                   std::abs(momentum[0] / expected),
+                   1e-6);
   }
 
   void
   linear_temperature_surface(Checks &checks, MPI_Comm comm)
   {
-    const double h = 0.025, rho = 1000, H = 0.3, W = 0.4;
-    const double T0 = 3000, G = 2500; // K, K/m: 3000 ... 4000 K along x
-    const auto   prm = parameters(9.81);
-    FlowScene<dim> scene(Point<dim>(W, 0.4), h, rho,
-                         [&](const Point<dim> &x) { return x[dim - 1] < H; },
-                         prm, comm);
+    const double   h = 0.025, rho = 1000, H = 0.3, W = 0.4;
+    const double   T0 = 3000, G = 2500; // K, K/m: 3000 ... 4000 K along x
+    const auto     prm = parameters(9.81);
+    FlowScene<dim> scene(
+      Point<dim>(W, 0.4),
+      h,
+      rho,
+      [&](const Point<dim> &x) { return x[dim - 1] < H; },
+      prm,
+      comm);
     std::vector<double> temperature = scene.grid.make_field(T0);
     for (std::size_t i = 0; i < temperature.size(); ++i)
       temperature[i] = T0 + G * scene.grid.cell_center(i)[0];
@@ -165,10 +180,10 @@ namespace
 
     // Surface cells: the top fluid row; away from the walls, i.e. the cells
     // whose 3 x 3 neighbourhood lies inside the box.
-    const auto & ps   = scene.flow->surface_pressure();
-    const auto & type = scene.flow->cell_type();
-    double       err = 0;
-    unsigned int n   = 0;
+    const auto  &ps   = scene.flow->surface_pressure();
+    const auto  &type = scene.flow->cell_type();
+    double       err  = 0;
+    unsigned int n    = 0;
     for (const auto idx : scene.grid.owned_cells())
       {
         const auto x = scene.grid.cell_center(idx);
@@ -178,41 +193,47 @@ namespace
             x[0] < 1.5 * h || x[0] > W - 1.5 * h)
           continue;
         const double pr = recoil(prm, temperature[idx]);
-        err = std::max(err, std::abs(ps[idx] - pr) / pr);
+        err             = std::max(err, std::abs(ps[idx] - pr) / pr);
         ++n;
       }
     err = Utilities::MPI::max(err, comm);
     n   = Utilities::MPI::sum(n, comm);
     checks.print("linear T: surface cells compared", n);
-    checks.at_most("linear T: max |p_s - p_r(T_cell)| / p_r(T_cell)", err, 1e-9);
+    checks.at_most("linear T: max |p_s - p_r(T_cell)| / p_r(T_cell)",
+                   err,
+                   1e-9);
   }
 
   void
   hot_fragment(Checks &checks, MPI_Comm comm)
   {
-    const double h = 0.025, rho = 1000;
+    const double     h = 0.025, rho = 1000;
     const Point<dim> lo(0.2, 0.2), hi(0.25, 0.25);
     const auto       prm = parameters(0.);
     FlowScene<dim>   scene(
-      Point<dim>(0.45, 0.45), h, rho,
+      Point<dim>(0.45, 0.45),
+      h,
+      rho,
       [&](const Point<dim> &x) {
         return x[0] > lo[0] && x[0] < hi[0] && x[1] > lo[1] && x[1] < hi[1];
       },
-      prm, comm);
+      prm,
+      comm);
     std::vector<double> temperature = scene.grid.make_field(4500.);
     for (std::size_t i = 0; i < temperature.size(); ++i)
       {
         const auto x = scene.grid.cell_center(i);
-        if (x[0] > lo[0] && x[0] < lo[0] + h && x[1] > lo[1] && x[1] < lo[1] + h)
+        if (x[0] > lo[0] && x[0] < lo[0] + h && x[1] > lo[1] &&
+            x[1] < lo[1] + h)
           temperature[i] = 8000;
       }
     CellFields<dim> fields;
     fields.temperature = &temperature;
-    const double dt = 1e-5;
+    const double dt    = 1e-5;
     for (unsigned int n = 0; n < 20; ++n)
       scene.flow->step(dt, fields);
-    const double umax = scene.max_over_points(
-      [](const Point<dim> &, ArrayView<const double> v) {
+    const double umax =
+      scene.max_over_points([](const Point<dim> &, ArrayView<const double> v) {
         return point_speed<dim>(v);
       });
     // Recoil of the median temperature of the four cells.
@@ -220,7 +241,8 @@ namespace
     checks.print("fragment: ratio of the cell-wise recoil at 8000 K and 4500 K",
                  recoil(prm, 8000) / recoil(prm, 4500));
     checks.at_most("fragment: max point speed / sqrt(2 p_r(median T)/rho)",
-                   umax / std::sqrt(2 * pr / rho), 1e-9);
+                   umax / std::sqrt(2 * pr / rho),
+                   1e-9);
   }
 } // namespace
 

@@ -6,8 +6,6 @@
 #include <deal.II/base/exceptions.h>
 #include <deal.II/base/mpi.h>
 
-#include "scene_driver.h"
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -16,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "scene_driver.h"
+
 namespace femp_test
 {
   /// Copy the output directory @p from, checkpoints included, to @p to
@@ -23,8 +23,7 @@ namespace femp_test
   /// but one of its index (the one before the end's, if the end wrote one),
   /// or the only one. Collective.
   inline std::string
-  copy_for_resume(const std::string &from, const std::string &to,
-                  MPI_Comm comm)
+  copy_for_resume(const std::string &from, const std::string &to, MPI_Comm comm)
   {
     std::ifstream            index(from + "/checkpoint/index");
     std::vector<std::string> steps; // newest first
@@ -33,8 +32,7 @@ namespace femp_test
     AssertThrow(!steps.empty(),
                 dealii::ExcMessage("no checkpoint written in " + from));
     if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
-      std::filesystem::copy(from, to,
-                            std::filesystem::copy_options::recursive);
+      std::filesystem::copy(from, to, std::filesystem::copy_options::recursive);
     MPI_Barrier(comm);
     return to + "/checkpoint/" + (steps.size() > 1 ? steps[1] : steps[0]);
   }
@@ -43,9 +41,11 @@ namespace femp_test
   /// directories @p a and @p b, and the largest |a - offset| there (the
   /// reference's peak; T: its rise above @p offset).
   inline std::pair<double, double>
-  probe_line_difference(const std::string &a, const std::string &b,
+  probe_line_difference(const std::string              &a,
+                        const std::string              &b,
                         const std::vector<std::string> &lines,
-                        const std::string &col, const double offset = 0)
+                        const std::string              &col,
+                        const double                    offset = 0)
   {
     double diff = 0, peak = 0;
     for (const auto &line : lines)
@@ -71,7 +71,8 @@ namespace femp_test
   /// probe_line_difference() over both probe lines (CD and EF), as a
   /// fraction of the reference's peak.
   inline double
-  probe_line_relative_difference(const std::string &a, const std::string &b,
+  probe_line_relative_difference(const std::string &a,
+                                 const std::string &b,
                                  const std::string &col,
                                  const double       offset = 0)
   {

@@ -15,12 +15,12 @@
 // and the unrounded errors go to stderr.
 #include <femp/heat/melt_pool.h>
 
-#include "test_tools.h"
-
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -39,12 +39,11 @@ eagar_tsai(const double xi, const double y, const double z, const double S = 12)
     {
       const double s  = i * ds;
       const double s2 = s * s;
-      const double f =
-        2 *
-        std::exp(-((xi + v * s2) * (xi + v * s2) + y * y) /
-                   (4 * kappa * s2 + 2 * sigma * sigma) -
-                 z * z / (4 * kappa * s2)) /
-        (2 * kappa * s2 + sigma * sigma);
+      const double f  = 2 *
+                       std::exp(-((xi + v * s2) * (xi + v * s2) + y * y) /
+                                  (4 * kappa * s2 + 2 * sigma * sigma) -
+                                z * z / (4 * kappa * s2)) /
+                       (2 * kappa * s2 + sigma * sigma);
       sum += f * (i == n ? 1 : (i % 2 ? 4 : 2));
     }
   return T0 + Q / (M_PI * std::sqrt(4 * M_PI * kappa)) * sum * ds / 3;
@@ -80,7 +79,8 @@ maximum(F f, const double a, const double b)
       if (f(x) > fbest)
         best = x, fbest = f(x);
     }
-  double lo = std::max(a, best - (b - a) / 40), hi = std::min(b, best + (b - a) / 40);
+  double lo      = std::max(a, best - (b - a) / 40),
+         hi      = std::min(b, best + (b - a) / 40);
   const double g = 0.5 * (std::sqrt(5.) - 1);
   for (int i = 0; i < 50; ++i)
     {
@@ -99,8 +99,8 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const double h      = argc > 1 ? std::atof(argv[1]) : 0.05;
-  const double safety = argc > 2 ? std::atof(argv[2]) : 0.5;
+  const double                     h = argc > 1 ? std::atof(argv[1]) : 0.05;
+  const double                     safety = argc > 2 ? std::atof(argv[2]) : 0.5;
   if (!(h > 0 && h <= 0.2) || std::abs(2 / h - std::round(2 / h)) > 1e-9 ||
       !(safety > 0 && safety <= 1))
     {
@@ -110,32 +110,40 @@ main(int argc, char **argv)
     }
 
   // Closed-form pool.
-  const auto   on_axis = [](double xi) { return eagar_tsai(xi, 0, 0) - Tm; };
-  const double front   = bisect(on_axis, 0, 3);
-  const double rear    = bisect(on_axis, -10, 0);
+  const auto   on_axis    = [](double xi) { return eagar_tsai(xi, 0, 0) - Tm; };
+  const double front      = bisect(on_axis, 0, 3);
+  const double rear       = bisect(on_axis, -10, 0);
   const double half_width = maximum(
     [&](double xi) {
-      return on_axis(xi) <= 0 ? 0. :
-                                bisect([&](double y) { return eagar_tsai(xi, y, 0) - Tm; }, 0, 5);
+      return on_axis(xi) <= 0 ?
+               0. :
+               bisect([&](double y) { return eagar_tsai(xi, y, 0) - Tm; },
+                      0,
+                      5);
     },
-    rear, front);
+    rear,
+    front);
   const double depth = maximum(
     [&](double xi) {
-      return on_axis(xi) <= 0 ? 0. :
-                                bisect([&](double z) { return eagar_tsai(xi, 0, z) - Tm; }, 0, 5);
+      return on_axis(xi) <= 0 ?
+               0. :
+               bisect([&](double z) { return eagar_tsai(xi, 0, z) - Tm; },
+                      0,
+                      5);
     },
-    rear, front);
+    rear,
+    front);
   checks.print("closed form: length", front - rear);
   checks.print("closed form: width", 2 * half_width);
   checks.print("closed form: depth", depth);
 
   // Simulation: x in [0, 6], y in [0, 2], z in [-2, 0]; beam from x = 1.
-  const int    dim = 3;
-  const auto gp = box<dim>(Point<dim>(0, 0, -2), Point<dim>(6, 2, 0), h);
+  const int  dim = 3;
+  const auto gp  = box<dim>(Point<dim>(0, 0, -2), Point<dim>(6, 2, 0), h);
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
-  const Material             mat = unit_material();
-  Laser<dim>::Parameters     lp;
+  const Material         mat = unit_material();
+  Laser<dim>::Parameters lp;
   lp.power        = Q;
   lp.absorptivity = 1;
   lp.beam_radius  = 2 * sigma;
@@ -144,7 +152,8 @@ main(int argc, char **argv)
   lp.end_point    = Point<dim>(5.8, 0, 0);
   lp.start_time   = 0;
   Laser<dim> laser(lp);
-  auto p = heat_parameters<dim>(T0, {{"x-", T0}, {"x+", T0}, {"y+", T0}, {"z-", T0}});
+  auto       p =
+    heat_parameters<dim>(T0, {{"x-", T0}, {"x+", T0}, {"y+", T0}, {"z-", T0}});
   HeatTransfer<dim> heat(p, mat, laser, grid);
   heat.initialize();
   heat.set_metal_fraction(grid.make_field(1.));
@@ -152,9 +161,9 @@ main(int argc, char **argv)
   // The laser sits on the symmetry plane: half of its Gaussian lies in the
   // domain (cell centres at y = h/2, 3h/2, ...), so half the power is
   // absorbed here, as in the full problem's half.
-  const double t_end = 1.0, dt0 = safety * heat.stable_time_step();
+  const double       t_end = 1.0, dt0 = safety * heat.stable_time_step();
   const unsigned int n = std::ceil(t_end / dt0);
-  double t = 0;
+  double             t = 0;
   for (unsigned int i = 0; i < n; ++i, t += t_end / n)
     heat.advance(t_end / n, t);
 
@@ -165,7 +174,7 @@ main(int argc, char **argv)
     Point<dim> beam;
     double     power;
     laser.position(t_end - 1e-12, beam, power);
-    const auto &n = grid.n_cells();
+    const auto         &n = grid.n_cells();
     std::vector<double> surf(n[0] * n[1], 0.), side(n[0] * n[2], 0.);
     for (const auto idx : grid.owned_cells())
       {
@@ -176,8 +185,12 @@ main(int argc, char **argv)
           side[ijk[0] + n[0] * ijk[2]] = heat.temperature()[idx];
       }
     std::vector<double> surf_sum(surf.size()), side_sum(side.size());
-    Utilities::MPI::sum(ArrayView<const double>(surf), comm, ArrayView<double>(surf_sum));
-    Utilities::MPI::sum(ArrayView<const double>(side), comm, ArrayView<double>(side_sum));
+    Utilities::MPI::sum(ArrayView<const double>(surf),
+                        comm,
+                        ArrayView<double>(surf_sum));
+    Utilities::MPI::sum(ArrayView<const double>(side),
+                        comm,
+                        ArrayView<double>(side_sum));
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
         std::ofstream out("rosenthal_slices.csv");
@@ -209,28 +222,39 @@ main(int argc, char **argv)
       }
   }
 
-  const auto pool = measure_melt_pool(grid, heat.temperature(),
-                                      heat.metal_fraction(), Tm, 0., Tm);
+  const auto pool = measure_melt_pool(
+    grid, heat.temperature(), heat.metal_fraction(), Tm, 0., Tm);
   checks.print("simulated: length", pool.length);
   checks.print("simulated: width", 2 * pool.width);
   checks.print("simulated: depth", pool.depth);
   // The pool length of the source switched on at t = 0 (the scene's start;
   // it differs from the quasi-steady length by 1.7 %, the rear still
   // lagging), to stderr for contrib/study.py rosenthal.
-  const auto   on_axis_t1 = [](double xi) { return eagar_tsai(xi, 0, 0, 1) - Tm; };
-  const double length_t1  = bisect(on_axis_t1, 0, 3) - bisect(on_axis_t1, -10, 0);
+  const auto on_axis_t1 = [](double xi) {
+    return eagar_tsai(xi, 0, 0, 1) - Tm;
+  };
+  const double length_t1 =
+    bisect(on_axis_t1, 0, 3) - bisect(on_axis_t1, -10, 0);
   if (Utilities::MPI::this_mpi_process(comm) == 0)
-    std::cerr << std::setprecision(8) << "length of the pool at t = 1 of the source "
+    std::cerr << std::setprecision(8)
+              << "length of the pool at t = 1 of the source "
               << "switched on at t = 0 " << length_t1 << ", relative error "
               << std::abs(pool.length - length_t1) / length_t1 << std::endl;
   if (Utilities::MPI::this_mpi_process(comm) == 0)
     std::cerr << std::setprecision(8) << "unrounded relative errors: length "
-              << std::abs(pool.length - (front - rear)) / (front - rear) << " width "
-              << std::abs(pool.width - half_width) / half_width << " depth "
-              << std::abs(pool.depth - depth) / depth << "\nsteps " << n << std::endl;
-  checks.at_most("length relative error", std::abs(pool.length - (front - rear)) / (front - rear), 0.05);
-  checks.at_most("width relative error", std::abs(2 * pool.width - 2 * half_width) / (2 * half_width), 0.05);
-  checks.at_most("depth relative error", std::abs(pool.depth - depth) / depth, 0.05);
+              << std::abs(pool.length - (front - rear)) / (front - rear)
+              << " width " << std::abs(pool.width - half_width) / half_width
+              << " depth " << std::abs(pool.depth - depth) / depth << "\nsteps "
+              << n << std::endl;
+  checks.at_most("length relative error",
+                 std::abs(pool.length - (front - rear)) / (front - rear),
+                 0.05);
+  checks.at_most("width relative error",
+                 std::abs(2 * pool.width - 2 * half_width) / (2 * half_width),
+                 0.05);
+  checks.at_most("depth relative error",
+                 std::abs(pool.depth - depth) / depth,
+                 0.05);
   checks.print("absorbed power / (eta P / 2)",
                heat.energy_budget().laser / t_end / (Q / 2));
   return checks.exit_code();

@@ -20,12 +20,14 @@ main(int argc, char **argv)
   Laser<2>::Parameters lp;
   lp.scan_path_file = std::string(argv[2]);
   lp.start_time     = 1e-5;
-  Laser<2>     laser(lp);
-  Point<2>     x;
-  double       power;
+  Laser<2> laser(lp);
+  Point<2> x;
+  double   power;
   // t = 1e-5 + 30 us: on, at x = 50 + 30 um.
   const bool on1 = laser.position(1e-5 + 30e-6, x, power);
-  checks.at_most("first segment: |x - 80 um| (m)", on1 ? std::abs(x[0] - 80e-6) : 1., 1e-12);
+  checks.at_most("first segment: |x - 80 um| (m)",
+                 on1 ? std::abs(x[0] - 80e-6) : 1.,
+                 1e-12);
   // t = 1e-5 + 60 us + 5 us: jump, off, at x = 110 + 60 um.
   const bool on2 = laser.position(1e-5 + 65e-6, x, power);
   checks.at_most("jump: laser on", on2, 0);
@@ -40,8 +42,10 @@ main(int argc, char **argv)
   const double expected = 0.35 * 1e5 * 120e-6;
   checks.print("laser energy (J/m)", s.laser, 4);
   checks.at_most("|laser energy - eta P t_on| / (eta P t_on)",
-                 std::abs(s.laser - expected) / expected, 0.01);
+                 std::abs(s.laser - expected) / expected,
+                 0.01);
   checks.at_most("energy imbalance / laser energy",
-                 std::abs(s.laser + s.boundary - s.losses - s.stored) / s.laser, 0.01);
+                 std::abs(s.laser + s.boundary - s.losses - s.stored) / s.laser,
+                 0.01);
   return checks.exit_code();
 }

@@ -54,12 +54,12 @@ namespace
         for (unsigned int k = 1; k < 3; ++k)
           {
             const bool on = lasers[k]->position(t, x, p);
-            difference    = std::max(difference, (on != on0) + std::abs(p - p0) +
-                                                x.distance(x0) / 1e-6);
+            difference =
+              std::max(difference,
+                       (on != on0) + std::abs(p - p0) + x.distance(x0) / 1e-6);
           }
       }
-    checks.at_most("largest difference between the formats", difference,
-                   1e-6);
+    checks.at_most("largest difference between the formats", difference, 1e-6);
     return checks.exit_code();
   }
 } // namespace
@@ -87,7 +87,7 @@ main(int argc, char **argv)
   for (const std::string format :
        {"adamantine_segment", "adamantine_event_series", "additivefoam"})
     {
-      const std::string file = dir + "/scan_path_" + format + ".txt";
+      const std::string    file = dir + "/scan_path_" + format + ".txt";
       Laser<2>::Parameters lp;
       lp.scan_path_file   = file;
       lp.scan_path_format = format;
@@ -99,30 +99,34 @@ main(int argc, char **argv)
                               emitted_by_hand),
                      1e-12);
       checks.at_most(format + ": |end time - 180 us| (s)",
-                     std::abs(laser.end_time() - (t0 + 170e-6)), 1e-15);
+                     std::abs(laser.end_time() - (t0 + 170e-6)),
+                     1e-15);
       double position_error = 0, power_error = 0;
       for (const auto &p : probes)
         {
           Point<2>   axis;
           double     power = 0;
           const bool on    = laser.position(p.t, axis, power);
-          position_error   = std::max(position_error,
-                                    std::abs(axis[0] - p.x) +
-                                      std::abs(axis[1] - p.z));
-          power_error = std::max(power_error,
-                                 on ? std::abs(power - p.power) : p.power);
+          position_error =
+            std::max(position_error,
+                     std::abs(axis[0] - p.x) + std::abs(axis[1] - p.z));
+          power_error =
+            std::max(power_error, on ? std::abs(power - p.power) : p.power);
         }
-      checks.at_most(format + ": beam position error (m)", position_error,
+      checks.at_most(format + ": beam position error (m)",
+                     position_error,
                      1e-12);
       checks.at_most(format + ": beam power error (W/m)", power_error, 1e-9);
 
-      const auto s = run_scene<2>(argv[1], comm,
+      const auto   s        = run_scene<2>(argv[1],
+                                  comm,
                                   {{"Laser", "Scan path file", file},
-                                   {"Laser", "Scan path format", format}});
+                                            {"Laser", "Scan path format", format}});
       const double expected = 0.35 * emitted_by_hand;
       checks.print(format + ": absorbed laser energy (J/m)", s.laser, 4);
       checks.at_most(format + ": |absorbed - eta E| / (eta E)",
-                     std::abs(s.laser - expected) / expected, 0.01);
+                     std::abs(s.laser - expected) / expected,
+                     0.01);
     }
 
   // A 3D hatch (two tracks 40 um apart in y) does not fit a 2D scene.
@@ -152,7 +156,8 @@ main(int argc, char **argv)
                    std::abs(emitted_energy<3>(laser.segments()) - 0.096),
                    1e-15);
     checks.at_most("3D hatch: |end time - 500 us| (s)",
-                   std::abs(laser.end_time() - 500e-6), 1e-15);
+                   std::abs(laser.end_time() - 500e-6),
+                   1e-15);
   }
   return checks.exit_code();
 }

@@ -5,12 +5,12 @@
 #include <femp/app/femp_problem.h>
 #include <femp/base/parameter_file.h>
 
+#include <fstream>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <string>
 #include <vector>
-#include <fstream>
-#include <iostream>
 
 namespace femp_test
 {
@@ -23,8 +23,8 @@ namespace femp_test
   /// Declare every parameter in @p prm, parse @p file and apply
   /// @p overrides ({subsection, entry, value}).
   inline void
-  parse_scene(dealii::ParameterHandler &   prm,
-              const std::string &          file,
+  parse_scene(dealii::ParameterHandler    &prm,
+              const std::string           &file,
               const std::vector<Override> &overrides)
   {
     femp::declare_all_parameters(prm);
@@ -42,8 +42,8 @@ namespace femp_test
   /// the scene with std::cout silenced; returns the summary.
   template <int dim>
   typename femp::FempProblem<dim>::Summary
-  run_scene(const std::string &file,
-            MPI_Comm           comm,
+  run_scene(const std::string           &file,
+            MPI_Comm                     comm,
             const std::vector<Override> &overrides = {})
   {
     dealii::ParameterHandler prm;
@@ -65,8 +65,8 @@ namespace femp_test
   {
     std::ifstream in(file);
     AssertThrow(in, dealii::ExcMessage("cannot read " + file));
-    std::string              row;
-    std::vector<std::string> names;
+    std::string                                row;
+    std::vector<std::string>                   names;
     std::map<std::string, std::vector<double>> columns;
     while (std::getline(in, row))
       {

@@ -1,5 +1,6 @@
 // Verification of the thermo-elasto-plastic model (eq. 5; doc/verification.md,
-// "Thermo-elasto-plastic point"), single material point driven by prescribed strain increments:
+// "Thermo-elasto-plastic point"), single material point driven by prescribed
+// strain increments:
 // 1. uniaxial stress (lateral stresses zero by a Newton iteration on the
 //    lateral strain), loading past yield with linear hardening and elastic
 //    unloading: compared with the exact curve sigma = sigma_y + E_t (eps -
@@ -40,8 +41,11 @@ namespace
   /// One step of uniaxial stress: strain increment dex in x, lateral strain
   /// increments (equal in y and z) found so that sigma_yy = sigma_zz = 0.
   void
-  uniaxial_step(const SolidMaterial &m, const double dex, const double T0,
-                const double T1, StressPoint &state)
+  uniaxial_step(const SolidMaterial &m,
+                const double         dex,
+                const double         T0,
+                const double         T1,
+                StressPoint         &state)
   {
     auto trial = [&](const double dl) {
       StressPoint  s = state;
@@ -53,7 +57,7 @@ namespace
     double dl = -m.poisson_ratio * dex;
     for (int it = 0; it < 50; ++it)
       {
-        const double r  = trial(dl).sigma[1][1];
+        const double r   = trial(dl).sigma[1][1];
         const double eps = 1e-9;
         const double dr  = (trial(dl + eps).sigma[1][1] - r) / eps;
         const double ddl = -r / dr;
@@ -76,22 +80,22 @@ main(int argc, char **argv)
     Material thermal; // the solidus the update reads
     thermal.solidus = 1e9;
     SolidMaterial m(thermal);
-    m.youngs_modulus   = PiecewiseLinear(200.);
-    m.plastic_modulus  = PiecewiseLinear(20.);
-    m.yield_stress     = PiecewiseLinear(1.);
-    m.poisson_ratio    = 0.3;
-    m.expansion        = 0;
+    m.youngs_modulus  = PiecewiseLinear(200.);
+    m.plastic_modulus = PiecewiseLinear(20.);
+    m.yield_stress    = PiecewiseLinear(1.);
+    m.poisson_ratio   = 0.3;
+    m.expansion       = 0;
     const double E = 200, H = 20, sy = 1, Et = E * H / (E + H);
     StressPoint  s;
     double       eps = 0, err_load = 0, err_unload = 0;
-    const int    n   = 400;
-    const double de  = 0.02 / n;
+    const int    n  = 400;
+    const double de = 0.02 / n;
     for (int i = 0; i < n; ++i)
       {
         uniaxial_step(m, de, 300, 300, s);
         eps += de;
         const double exact = E * eps <= sy ? E * eps : sy + Et * (eps - sy / E);
-        err_load = worst(err_load, std::abs(s.sigma[0][0] - exact));
+        err_load           = worst(err_load, std::abs(s.sigma[0][0] - exact));
       }
     const double smax = s.sigma[0][0], emax = eps, epmax = s.eps_p;
     // Elastic unloading to -0.5 sigma_max.
@@ -101,17 +105,21 @@ main(int argc, char **argv)
         uniaxial_step(m, d, 300, 300, s);
         eps += d;
         err_unload = worst(err_unload,
-                              std::abs(s.sigma[0][0] - (smax - E * (emax - eps))));
+                           std::abs(s.sigma[0][0] - (smax - E * (emax - eps))));
       }
     checks.print("uniaxial: sigma at eps = 0.02", smax, 6);
-    checks.at_most("uniaxial loading: max |sigma - exact| / sigma_y", err_load / sy,
+    checks.at_most("uniaxial loading: max |sigma - exact| / sigma_y",
+                   err_load / sy,
                    1e-10);
     checks.at_most("uniaxial unloading: max |sigma - exact| / sigma_y",
-                   err_unload / sy, 1e-10);
+                   err_unload / sy,
+                   1e-10);
     checks.at_most("uniaxial unloading: plastic strain change",
-                   std::abs(s.eps_p - epmax), 1e-14);
+                   std::abs(s.eps_p - epmax),
+                   1e-14);
     checks.at_most("uniaxial: |lateral stress| / sigma_y",
-                   std::abs(s.sigma[1][1]) + std::abs(s.sigma[2][2]), 1e-10);
+                   std::abs(s.sigma[1][1]) + std::abs(s.sigma[2][2]),
+                   1e-10);
   }
 
   // 2. Held in x, laterally free, heated; yield stress softens with T.
@@ -119,14 +127,14 @@ main(int argc, char **argv)
     Material thermal; // the solidus the update reads
     thermal.solidus = 1e9;
     SolidMaterial m(thermal);
-    m.youngs_modulus   = PiecewiseLinear(200.);
-    m.plastic_modulus  = PiecewiseLinear(0.);
-    m.yield_stress     = PiecewiseLinear::parse("0:1, 100:0.5", "yield");
-    m.poisson_ratio    = 0.3;
-    m.expansion        = 1e-4;
-    StressPoint  s;
-    double       err_el = 0, err_pl = 0, T = 0;
-    const int    n = 1000;
+    m.youngs_modulus  = PiecewiseLinear(200.);
+    m.plastic_modulus = PiecewiseLinear(0.);
+    m.yield_stress    = PiecewiseLinear::parse("0:1, 100:0.5", "yield");
+    m.poisson_ratio   = 0.3;
+    m.expansion       = 1e-4;
+    StressPoint s;
+    double      err_el = 0, err_pl = 0, T = 0;
+    const int   n = 1000;
     for (int i = 0; i < n; ++i)
       {
         const double T1 = T + 100. / n;
@@ -138,11 +146,15 @@ main(int argc, char **argv)
         else
           err_pl = worst(err_pl, std::abs(s.sigma[0][0] + (1 - 0.005 * T)));
       }
-    checks.at_most("constrained heating, elastic: max |sigma + E alpha dT|", err_el,
+    checks.at_most("constrained heating, elastic: max |sigma + E alpha dT|",
+                   err_el,
                    1e-10);
     checks.at_most("constrained heating, softening: max |sigma + sigma_y(T)|",
-                   err_pl, 1e-10);
-    checks.print("constrained heating: sigma_x at dT = 100 K", s.sigma[0][0], 6);
+                   err_pl,
+                   1e-10);
+    checks.print("constrained heating: sigma_x at dT = 100 K",
+                 s.sigma[0][0],
+                 6);
   }
 
   // 3. Fully constrained block heated: hydrostatic, never yields.
@@ -150,11 +162,11 @@ main(int argc, char **argv)
     Material thermal; // the solidus the update reads
     thermal.solidus = 1e9;
     SolidMaterial m(thermal);
-    m.youngs_modulus   = PiecewiseLinear(200.);
-    m.plastic_modulus  = PiecewiseLinear(0.);
-    m.yield_stress     = PiecewiseLinear(1.);
-    m.poisson_ratio    = 0.3;
-    m.expansion        = 1e-4;
+    m.youngs_modulus  = PiecewiseLinear(200.);
+    m.plastic_modulus = PiecewiseLinear(0.);
+    m.yield_stress    = PiecewiseLinear(1.);
+    m.poisson_ratio   = 0.3;
+    m.expansion       = 1e-4;
     StressPoint s;
     for (int i = 0; i < 100; ++i)
       update_stress(m, Tensor<2, 3>(), i, i + 1., s);
@@ -163,7 +175,8 @@ main(int argc, char **argv)
     for (unsigned int d = 0; d < 3; ++d)
       err = worst(err, std::abs(s.sigma[d][d] - exact));
     checks.at_most("fully constrained heating: |sigma + beta dT| / (beta dT)",
-                   err / std::abs(exact), 1e-12);
+                   err / std::abs(exact),
+                   1e-12);
     checks.at_most("fully constrained heating: plastic strain", s.eps_p, 0);
   }
 
@@ -172,8 +185,8 @@ main(int argc, char **argv)
     Material thermal; // the solidus the update reads
     thermal.solidus = 1e9;
     SolidMaterial m(thermal);
-    m.youngs_modulus   = PiecewiseLinear(200.);
-    m.yield_stress     = PiecewiseLinear(1e9);
+    m.youngs_modulus = PiecewiseLinear(200.);
+    m.yield_stress   = PiecewiseLinear(1e9);
     StressPoint s;
     s.sigma[0][0] = 3, s.sigma[1][1] = -1, s.sigma[2][2] = 0.5;
     s.sigma[0][1] = 0.7, s.sigma[0][2] = -0.2, s.sigma[1][2] = 1.1;
@@ -200,7 +213,8 @@ main(int argc, char **argv)
       }
     checks.at_most("rigid rotation: max invariant change", err_inv, 1e-10);
     checks.at_most("rigid rotation: |sigma(2 pi) - sigma(0)| / |sigma(0)|",
-                   (s.sigma - s0).norm() / s0.norm(), 1e-5);
+                   (s.sigma - s0).norm() / s0.norm(),
+                   1e-5);
   }
 
   // 5. Melting and re-solidification.
@@ -208,10 +222,10 @@ main(int argc, char **argv)
     Material thermal; // the solidus the update reads
     thermal.solidus = 1000;
     SolidMaterial m(thermal);
-    m.youngs_modulus   = PiecewiseLinear(200.);
-    m.yield_stress     = PiecewiseLinear(1.);
-    m.plastic_modulus  = PiecewiseLinear(0.);
-    m.expansion        = 1e-3;
+    m.youngs_modulus  = PiecewiseLinear(200.);
+    m.yield_stress    = PiecewiseLinear(1.);
+    m.plastic_modulus = PiecewiseLinear(0.);
+    m.expansion       = 1e-3;
     StressPoint s;
     uniaxial_step(m, 0.05, 300, 300, s);
     const double before = s.sigma.norm() + s.eps_p;
@@ -233,12 +247,12 @@ main(int argc, char **argv)
     Material thermal; // the solidus the update reads
     thermal.solidus = 1000;
     SolidMaterial m(thermal);
-    m.youngs_modulus   = PiecewiseLinear::parse("300:200, 900:100, 1000:1", "E");
-    m.yield_stress     = PiecewiseLinear(1e30);
-    m.plastic_modulus  = PiecewiseLinear(0.);
-    m.poisson_ratio    = 0.3;
-    m.expansion        = 1e-3;
-    const double f     = m.expansion / (1 - 2 * m.poisson_ratio);
+    m.youngs_modulus  = PiecewiseLinear::parse("300:200, 900:100, 1000:1", "E");
+    m.yield_stress    = PiecewiseLinear(1e30);
+    m.plastic_modulus = PiecewiseLinear(0.);
+    m.poisson_ratio   = 0.3;
+    m.expansion       = 1e-3;
+    const double f    = m.expansion / (1 - 2 * m.poisson_ratio);
     StressPoint  s;
     StressBlock  b{};
     for (unsigned int l = 0; l < simd_lanes; ++l)
@@ -260,7 +274,7 @@ main(int argc, char **argv)
         if (T1 < m.melt_temperature())
           {
             const double exact = -m.youngs_modulus.value(T1) * f * (T1 - 300);
-            err = worst(err, std::abs(sigma - exact) / std::abs(exact));
+            err        = worst(err, std::abs(sigma - exact) / std::abs(exact));
             at_solidus = sigma;
           }
         else
@@ -273,21 +287,26 @@ main(int argc, char **argv)
       }
     checks.at_most("softening to the solidus: max relative error of sigma = "
                    "-E(T) alpha dT/(1-2nu) (0 when melted)",
-                   err, 1e-12);
+                   err,
+                   1e-12);
     checks.at_most("softening to the solidus: SIMD kernel vs scalar, max "
                    "|difference| / peak",
-                   err_simd / peak, 1e-12);
+                   err_simd / peak,
+                   1e-12);
     checks.print("softening to the solidus: peak |sigma| / (E(300) alpha / "
                  "(1-2nu) 1 K)",
-                 peak / (200 * f), 4);
+                 peak / (200 * f),
+                 4);
     // The closed form at 999 K: E(999) = 1.99, 1.99 * 699 / 60000 = 0.0232
     // of the peak (at 900 K, E = 100: 100 * 600); that is also the largest
     // one-step change, the one at melting (the ramp itself: at most 0.0115).
     checks.at_most("softening to the solidus: |sigma| at 999 K / peak",
-                   std::abs(at_solidus) / peak, 0.025);
+                   std::abs(at_solidus) / peak,
+                   0.025);
     checks.at_most("softening to the solidus: largest change in a 1 K step "
                    "(melting included) / peak",
-                   jump / peak, 0.025);
+                   jump / peak,
+                   0.025);
   }
   return checks.exit_code();
 }

@@ -31,19 +31,20 @@ namespace
   {
     constexpr int dim = 2;
     const double  h   = 0.1;
-    Material mat = unit_material();
-    mat.density  = 1;
-    SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
-    auto &          grid   = block.grid;
-    auto &          points = *block.points;
-    const SolidMaterial sm = block_material("300:0.02, 400:0.005", block.material);
-    auto                sp = block_supports<dim>();
-    sp.gravity[1]          = -0.01;
+    Material      mat = unit_material();
+    mat.density       = 1;
+    SolidBlock<dim>     block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
+    auto               &grid   = block.grid;
+    auto               &points = *block.points;
+    const SolidMaterial sm =
+      block_material("300:0.02, 400:0.005", block.material);
+    auto sp       = block_supports<dim>();
+    sp.gravity[1] = -0.01;
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(0.2, 0);
     fp.upper_corner = Point<dim>(1.6, 0.3);
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    SolidStress<dim>    solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     for (int s = 1; s <= 10; ++s)
@@ -52,9 +53,10 @@ namespace
         for (const auto c : grid.owned_cells())
           {
             const Point<dim> x = grid.cell_center(c);
-            T[c] = 300 + 200 * t * std::exp(-((x[0] - 0.3) * (x[0] - 0.3) +
-                                              (x[1] - 0.3) * (x[1] - 0.3)) /
-                                            0.05);
+            T[c]               = 300 + 200 * t *
+                           std::exp(-((x[0] - 0.3) * (x[0] - 0.3) +
+                                      (x[1] - 0.3) * (x[1] - 0.3)) /
+                                    0.05);
           }
         solid.advance(t, T, s == 10);
       }
@@ -85,8 +87,8 @@ main(int argc, char **argv)
   Material mat = unit_material();
   mat.density  = 1;
   SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
-  auto &          grid   = block.grid;
-  auto &          points = *block.points;
+  auto           &grid   = block.grid;
+  auto           &points = *block.points;
 
   SolidMaterial sm = block_material("300:0.02, 400:0.005", block.material);
   sm.poisson_ratio = 0.3;
@@ -96,7 +98,7 @@ main(int argc, char **argv)
   fp.enabled      = true;
   fp.lower_corner = Point<dim>(0, 0);
   fp.upper_corner = Point<dim>(1.6, 0.4);
-  SolidStress<dim> solid(sp, fp, sm, grid, points);
+  SolidStress<dim>    solid(sp, fp, sm, grid, points);
   std::vector<double> T = grid.make_field(300.);
   solid.initialize(T, "");
 
@@ -109,9 +111,10 @@ main(int argc, char **argv)
       for (const auto c : grid.owned_cells())
         {
           const Point<dim> x = grid.cell_center(c);
-          T[c] = 300 + 100 * t * std::exp(-((x[0] - 0.8) * (x[0] - 0.8) +
-                                            (x[1] - 0.8) * (x[1] - 0.8)) /
-                                          0.05);
+          T[c]               = 300 + 100 * t *
+                         std::exp(-((x[0] - 0.8) * (x[0] - 0.8) +
+                                    (x[1] - 0.8) * (x[1] - 0.8)) /
+                                  0.05);
         }
       solid.advance(t, T, s == n);
     }
@@ -126,12 +129,13 @@ main(int argc, char **argv)
   for (const double x : {0.25, 0.85, 1.35})
     for (const double y : {0.35, 0.45, 0.75})
       probes.emplace_back(x, y);
-  const auto v = solid.probe(probes);
+  const auto v    = solid.probe(probes);
   double     jump = 0, scale = 0;
   for (std::size_t i = 0; i < probes.size(); ++i)
     {
       std::ostringstream s;
-      s << "sigma_xx at (" << probes[i][0] << ", " << probes[i][1] << ") / 1e-3";
+      s << "sigma_xx at (" << probes[i][0] << ", " << probes[i][1]
+        << ") / 1e-3";
       checks.print(s.str(), v[i][0] / 1e-3, 4);
       scale = std::max(scale, std::abs(v[i][0]));
     }
@@ -142,14 +146,18 @@ main(int argc, char **argv)
   checks.print("kinetic energy / 1e-9", e.kinetic / 1e-9, 3);
   checks.print("hourglass energy / 1e-9", e.hourglass / 1e-9, 3);
   checks.print("external work / 1e-6", e.external / 1e-6, 4);
-  checks.print("transfer dissipation / stress work", e.transfer / e.internal, 2);
+  checks.print("transfer dissipation / stress work",
+               e.transfer / e.internal,
+               2);
   checks.print("transfer dissipation / 1e-9", e.transfer / 1e-9, 3);
   // Continuity: the stress steps across the interface (one cell apart) by
   // much less than its size in the block.
   checks.at_most("max |sigma_xx(0.35) - sigma_xx(0.45)| / max |sigma_xx|",
-                 jump / scale, 0.3);
+                 jump / scale,
+                 0.3);
   checks.at_most("energy balance (transfer dissipation booked) / stress work",
-                 std::abs(e.balance() / e.internal), 0.05);
+                 std::abs(e.balance() / e.internal),
+                 0.05);
 
   // Melting and re-solidification of the points of one hot cell: lower the
   // solidus to 450 K, heat the cell at (0.85, 0.75) to 500 K (its points
@@ -178,19 +186,22 @@ main(int argc, char **argv)
         solid.advance(t, T, true);
       }
     const double after = solid.probe({hot})[0][0];
-    checks.print("re-solidified cell: sigma_xx before melting / 1e-3", before / 1e-3, 4);
+    checks.print("re-solidified cell: sigma_xx before melting / 1e-3",
+                 before / 1e-3,
+                 4);
     checks.at_most("re-solidified cell: |sigma_xx after| / |sigma_xx before|",
-                   std::abs(after / before), 0.05);
+                   std::abs(after / before),
+                   0.05);
   }
 
   // Independent partitions of the FE triangulation and the grid.
   {
-    double     off_rank = 0, off_self = 0;
-    const auto all      = partition_scene(comm, off_rank);
+    double              off_rank = 0, off_self = 0;
+    const auto          all = partition_scene(comm, off_rank);
     std::vector<double> self(all.size(), 0.);
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       self = partition_scene(MPI_COMM_SELF, off_self);
-    self = Utilities::MPI::broadcast(comm, self, 0);
+    self        = Utilities::MPI::broadcast(comm, self, 0);
     double diff = 0, scale = 0;
     for (std::size_t i = 0; i < all.size(); ++i)
       {
@@ -199,13 +210,19 @@ main(int argc, char **argv)
       }
     const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
     checks.print("partition scene: stress work / 1e-6", all[16] / 1e-6, 4);
-    checks.print("partition scene: sigma_xx at (0.25, 0.25) / 1e-3", all[5] / 1e-3, 4);
+    checks.print("partition scene: sigma_xx at (0.25, 0.25) / 1e-3",
+                 all[5] / 1e-3,
+                 4);
     checks.in_range("partition scene: FE elements on ranks that do not own "
                     "their grid cell (some with several ranks, none on one)",
-                    n_ranks == 1 ? off_rank == 0 : off_rank > 0, 1, 1);
+                    n_ranks == 1 ? off_rank == 0 : off_rank > 0,
+                    1,
+                    1);
     checks.in_range("partition scene: max difference to a one-rank run / "
                     "max value below 1e-9",
-                    diff <= 1e-9 * scale, 1, 1);
+                    diff <= 1e-9 * scale,
+                    1,
+                    1);
   }
   return checks.exit_code();
 }

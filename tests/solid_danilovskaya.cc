@@ -31,9 +31,9 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "test_tools.h"
-
 #include <fstream>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -64,7 +64,8 @@ namespace
   double
   S_exact(const double x, const double t)
   {
-    const double a = x / (2 * std::sqrt(t)), b = std::sqrt(t), G = std::exp(-a * a);
+    const double a = x / (2 * std::sqrt(t)), b = std::sqrt(t),
+                 G = std::exp(-a * a);
     if (t < x)
       return -0.5 * G * (erfcx(a - b) + erfcx(a + b));
     return 0.5 * G * (erfcx(b - a) - erfcx(a + b));
@@ -72,8 +73,8 @@ namespace
 
   struct History
   {
-    std::vector<double> t, S, theta;     // at the probe
-    std::vector<double> S_B;             // at x_B = 0.51 m (FE part of FEMP)
+    std::vector<double> t, S, theta; // at the probe
+    std::vector<double> S_B;         // at x_B = 0.51 m (FE part of FEMP)
     double              S_left = 0, S_right = 0; // at 0.59 and 0.61 m, t = 1
     double              balance = 0, K_max = 0;
     std::vector<double> profile_S, profile_theta; // at the cell centres, t = 1
@@ -82,15 +83,17 @@ namespace
 
   /// fe_end: the FE zone is [0, fe_end] (0: none).
   History
-  run(const double fe_end, MPI_Comm comm,
+  run(const double                          fe_end,
+      MPI_Comm                              comm,
       const SolidMaterial::VelocityTransfer transfer =
         SolidMaterial::VelocityTransfer::apic,
-      const unsigned int points_per_cell = 1, const double bulk_viscosity = 0.1)
+      const unsigned int points_per_cell = 1,
+      const double       bulk_viscosity  = 0.1)
   {
-    const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(5, h), h);
+    const auto          gp = box<dim>(Point<dim>(0, 0), Point<dim>(5, h), h);
     BackgroundGrid<dim> grid(gp, comm);
     grid.create();
-    Material mat = unit_material();
+    Material   mat = unit_material();
     Laser<dim> laser(laser_off<dim>());
 
     typename MaterialPoints<dim>::Parameters pp;
@@ -101,25 +104,27 @@ namespace
     MaterialPoints<dim> points(pp, mat, grid);
     points.create(1.);
 
-    HeatTransfer<dim> heat(heat_parameters<dim>(1., {{"x-", 1.001}}), mat, laser,
+    HeatTransfer<dim> heat(heat_parameters<dim>(1., {{"x-", 1.001}}),
+                           mat,
+                           laser,
                            grid);
     heat.initialize();
     heat.set_metal_fraction(points.metal_fraction());
 
     SolidMaterial sm(mat); // density 1, solidus 1e6
-    sm.youngs_modulus   = PiecewiseLinear(1.);
-    sm.plastic_modulus  = PiecewiseLinear(0.);
-    sm.yield_stress     = PiecewiseLinear(1e30);
-    sm.poisson_ratio    = 0;
-    sm.expansion        = 1;
-    sm.bulk_viscosity   = bulk_viscosity;
+    sm.youngs_modulus    = PiecewiseLinear(1.);
+    sm.plastic_modulus   = PiecewiseLinear(0.);
+    sm.yield_stress      = PiecewiseLinear(1e30);
+    sm.poisson_ratio     = 0;
+    sm.expansion         = 1;
+    sm.bulk_viscosity    = bulk_viscosity;
     sm.velocity_transfer = transfer;
     typename SolidStress<dim>::Parameters sp;
     sp.safety_factor = 0.9;
     sp.roller_faces  = {"y-", "y+"};
     sp.energy_file   = "";
     typename SolidFEM<dim>::Parameters fp;
-    fp.enabled = fe_end > 0;
+    fp.enabled      = fe_end > 0;
     fp.lower_corner = Point<dim>(0, 0);
     fp.upper_corner = Point<dim>(fe_end, h);
     SolidStress<dim> solid(sp, fp, sm, grid, points);
@@ -129,23 +134,23 @@ namespace
                                             Point<dim>(0.59, 0.5 * h),
                                             Point<dim>(0.61, 0.5 * h),
                                             Point<dim>(0.5 + 1e-9, 0.5 * h)};
-    History r;
-    r.sizes = solid.sizes();
-    const double       dt0 = 0.4 * heat.stable_time_step();
-    const unsigned int n1  = std::ceil(1. / dt0);
-    const double       dt  = 1. / n1;
-    double             t   = 0;
+    History                       r;
+    r.sizes                      = solid.sizes();
+    const double       dt0       = 0.4 * heat.stable_time_step();
+    const unsigned int n1        = std::ceil(1. / dt0);
+    const double       dt        = 1. / n1;
+    double             t         = 0;
     unsigned int       last_step = 0;
     for (unsigned int n = 0; n < 2 * n1; ++n)
       {
         heat.advance(dt, t);
         points.cells_to_points(heat.temperature());
-        t = (n + 1) * dt;
+        t                 = (n + 1) * dt;
         const bool at_one = (n + 1 == n1), at_end = (n + 1 == 2 * n1);
         solid.advance(t, heat.temperature(), at_one || at_end);
         if (solid.n_steps() != last_step)
           {
-            last_step  = solid.n_steps();
+            last_step    = solid.n_steps();
             const auto p = solid.probe(probes);
             r.t.push_back(solid.time());
             r.S.push_back(p[0][0] / 1e-3);
@@ -164,8 +169,8 @@ namespace
                   }
               }
             const auto e = solid.energies();
-            r.K_max = std::max(r.K_max, e.kinetic);
-            r.balance = std::max(r.balance, std::abs(e.balance()));
+            r.K_max      = std::max(r.K_max, e.kinetic);
+            r.balance    = std::max(r.balance, std::abs(e.balance()));
           }
       }
     return r;
@@ -183,23 +188,23 @@ namespace
   int
   study(char **argv, MPI_Comm comm)
   {
-    const std::string method = argv[2];
-    h                        = std::stod(argv[3]);
-    const unsigned int ppc   = std::stoi(argv[4]);
-    const auto transfer = std::string(argv[5]) == "flip" ?
-                            SolidMaterial::VelocityTransfer::flip :
-                            SolidMaterial::VelocityTransfer::apic;
-    const double bv = std::stod(argv[6]);
+    const std::string method    = argv[2];
+    h                           = std::stod(argv[3]);
+    const unsigned int ppc      = std::stoi(argv[4]);
+    const auto         transfer = std::string(argv[5]) == "flip" ?
+                                    SolidMaterial::VelocityTransfer::flip :
+                                    SolidMaterial::VelocityTransfer::apic;
+    const double       bv       = std::stod(argv[6]);
     AssertThrow(method == "mpm" || method == "femp" || method == "fe",
                 ExcMessage("METHOD must be mpm, femp or fe"));
-    const double fe_end = method == "mpm" ? 0 : method == "femp" ? 0.6 : 5;
-    const History r     = run(fe_end, comm, transfer, ppc, bv);
-    const double  xA    = (std::floor(1 / h + 1e-9) + 0.5) * h;
+    const double  fe_end = method == "mpm" ? 0 : method == "femp" ? 0.6 : 5;
+    const History r      = run(fe_end, comm, transfer, ppc, bv);
+    const double  xA     = (std::floor(1 / h + 1e-9) + 0.5) * h;
     double        err_S = 0, err_far = 0, sum1 = 0, sum2 = 0, t_front = -1;
     const double  mid = S_exact(xA, xA * (1 - 1e-12)) + 0.5;
     for (std::size_t i = 0; i < r.t.size(); ++i)
       {
-        const double e = std::abs(r.S[i] - S_exact(xA, r.t[i]));
+        const double e    = std::abs(r.S[i] - S_exact(xA, r.t[i]));
         const double dt_i = r.t[i] - (i > 0 ? r.t[i - 1] : 0.);
         sum1 += e * dt_i;
         sum2 += e * e * dt_i;
@@ -217,9 +222,9 @@ namespace
                 << " steps " << r.t.size() << " max_error_away " << err_S
                 << " max_error_far " << err_far << " mean_error "
                 << sum1 / r.t.back() << " rms_error "
-                << std::sqrt(sum2 / r.t.back())
-                << " front_error " << std::abs(t_front - xA) << " balance "
-                << r.balance / r.K_max << std::endl;
+                << std::sqrt(sum2 / r.t.back()) << " front_error "
+                << std::abs(t_front - xA) << " balance " << r.balance / r.K_max
+                << std::endl;
     return 0;
   }
 } // namespace
@@ -231,13 +236,12 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   if (argc == 7 && std::string(argv[1]) == "--study")
     return study(argv, comm);
-  Checks                           checks(comm);
-  const double                     xA = 1.01, c = 1;
+  Checks       checks(comm);
+  const double xA = 1.01, c = 1;
 
-  const History mpm  = run(0, comm);
+  const History mpm = run(0, comm);
 
-  const History flip =
-    run(0, comm, SolidMaterial::VelocityTransfer::flip);
+  const History flip = run(0, comm, SolidMaterial::VelocityTransfer::flip);
   const History femp = run(0.6, comm);
   const History fe   = run(5, comm);
   if (argc > 1 && Utilities::MPI::this_mpi_process(comm) == 0)
@@ -267,24 +271,27 @@ main(int argc, char **argv)
         }
     }
   for (const auto &[name, r] : {std::make_pair("all-MPM", &mpm),
-                                 std::make_pair("FEMP", &femp),
-                                 std::make_pair("all-FE", &fe)})
+                                std::make_pair("FEMP", &femp),
+                                std::make_pair("all-FE", &fe)})
     {
-      checks.print(std::string(name) + ": solid material points", r->sizes[0], 6);
+      checks.print(std::string(name) + ": solid material points",
+                   r->sizes[0],
+                   6);
       checks.print(std::string(name) + ": finite elements", r->sizes[1], 6);
       checks.print(std::string(name) + ": solid steps", r->t.size(), 6);
     }
 
-  const char *names[3] = {"all-MPM", "FEMP", "all-FE"};
-  const History *runs[3] = {&mpm, &femp, &fe};
-  double behind[3];
+  const char    *names[3] = {"all-MPM", "FEMP", "all-FE"};
+  const History *runs[3]  = {&mpm, &femp, &fe};
+  double         behind[3];
   for (int k = 0; k < 3; ++k)
     {
-      const History &r = *runs[k];
-      double err_T = 0, err_S = 0, t_front = -1, beh = 0;
+      const History &r     = *runs[k];
+      double         err_T = 0, err_S = 0, t_front = -1, beh = 0;
       for (std::size_t i = 0; i < r.t.size(); ++i)
         {
-          err_T = std::max(err_T, std::abs(r.theta[i] - theta_exact(xA, r.t[i])));
+          err_T =
+            std::max(err_T, std::abs(r.theta[i] - theta_exact(xA, r.t[i])));
           const double e = std::abs(r.S[i] - S_exact(xA, r.t[i]));
           if (std::abs(r.t[i] - xA / c) > 5 * h / c)
             err_S = std::max(err_S, e);
@@ -305,23 +312,32 @@ main(int argc, char **argv)
                                   (r.S[i] - r.S[i - 1]);
         return r.S.back();
       };
-      const double d     = 5 * h / c;
-      const double jump  = at(xA + d) - at(xA - d);
-      const double exact = S_exact(xA, xA + d) - S_exact(xA, xA - d);
-      const std::string n = names[k];
-      checks.at_most(n + ": max |theta - exact| at the probe (T / T0)", err_T, 0.01);
-      checks.at_most(n + ": max |S - exact| away from the front (sigma / beta T0)",
-                     err_S, 0.05);
-      checks.at_most(n + ": |front arrival - x/c| (s)", std::abs(t_front - xA / c),
+      const double      d     = 5 * h / c;
+      const double      jump  = at(xA + d) - at(xA - d);
+      const double      exact = S_exact(xA, xA + d) - S_exact(xA, xA - d);
+      const std::string n     = names[k];
+      checks.at_most(n + ": max |theta - exact| at the probe (T / T0)",
+                     err_T,
+                     0.01);
+      checks.at_most(
+        n + ": max |S - exact| away from the front (sigma / beta T0)",
+        err_S,
+        0.05);
+      checks.at_most(n + ": |front arrival - x/c| (s)",
+                     std::abs(t_front - xA / c),
                      2 * h / c);
       checks.at_most(n + ": |jump - exact jump| over +-5h/c (beta T0)",
-                     std::abs(jump - exact), 0.15);
-      checks.print(n + ": oscillation behind the front, max |S - exact|", beh, 2);
+                     std::abs(jump - exact),
+                     0.15);
+      checks.print(n + ": oscillation behind the front, max |S - exact|",
+                   beh,
+                   2);
       checks.at_most(n + ": energy balance / max kinetic energy",
-                     r.balance / r.K_max, 0.05);
+                     r.balance / r.K_max,
+                     0.05);
       behind[k] = beh;
     }
-  (void)behind;
+  (void) behind;
   {
     // All-MPM with the FLIP transfer, for comparison (printed only).
     double err_S = 0, beh = 0;
@@ -333,7 +349,9 @@ main(int argc, char **argv)
         if (flip.t[i] > xA / c + 5 * h / c)
           beh = std::max(beh, e);
       }
-    checks.print("all-MPM with FLIP: max |S - exact| away from the front", err_S, 2);
+    checks.print("all-MPM with FLIP: max |S - exact| away from the front",
+                 err_S,
+                 2);
     checks.print("all-MPM with FLIP: oscillation behind the front", beh, 2);
   }
 
@@ -346,11 +364,15 @@ main(int argc, char **argv)
         double beh = 0;
         for (std::size_t i = 0; i < runs[k]->t.size(); ++i)
           if (runs[k]->t[i] > xB / c + 5 * h / c)
-            beh = std::max(beh, std::abs(runs[k]->S_B[i] - S_exact(xB, runs[k]->t[i])));
-        checks.print(std::string(names[k]) + ": oscillation behind the front at "
-                                             "x = 0.51 m" +
+            beh =
+              std::max(beh,
+                       std::abs(runs[k]->S_B[i] - S_exact(xB, runs[k]->t[i])));
+        checks.print(std::string(names[k]) +
+                       ": oscillation behind the front at "
+                       "x = 0.51 m" +
                        (k == 1 ? " (FE part)" : ""),
-                     beh, 2);
+                     beh,
+                     2);
       }
   }
 
@@ -361,7 +383,8 @@ main(int argc, char **argv)
       if (std::abs(mpm.t[i] - xA / c) > 5 * h / c)
         diff = std::max(diff, std::abs(mpm.S[i] - femp.S[i]));
     checks.at_most("FEMP vs all-MPM: max |S difference| away from the front",
-                   diff, 0.05);
+                   diff,
+                   0.05);
   }
 
   // Interface continuity at t = 1: cells at 0.59 (FE in FEMP) and 0.61 m.
@@ -378,14 +401,18 @@ main(int argc, char **argv)
     checks.print("t = 1: all-MPM S at 0.59 m", mpm.S_left, 3);
     checks.print("t = 1: all-MPM S at 0.61 m", mpm.S_right, 3);
     checks.print("t = 1: all-MPM step across 0.6 m minus exact",
-                 mpm_step - exact_step, 2);
+                 mpm_step - exact_step,
+                 2);
     checks.print("t = 1: all-MPM max |S - exact| at 0.59, 0.61 m", mpm_err, 2);
     checks.at_most("t = 1: |FEMP - all-MPM| at 0.59 m (FE in FEMP)",
-                   std::abs(femp.S_left - mpm.S_left), 0.05);
+                   std::abs(femp.S_left - mpm.S_left),
+                   0.05);
     checks.at_most("t = 1: |FEMP - all-MPM| at 0.61 m (MPM in FEMP)",
-                   std::abs(femp.S_right - mpm.S_right), 0.05);
+                   std::abs(femp.S_right - mpm.S_right),
+                   0.05);
     checks.at_most("t = 1: |FEMP step across the interface - exact step|",
-                   std::abs(femp_step - exact_step), 0.05);
+                   std::abs(femp_step - exact_step),
+                   0.05);
   }
   return checks.exit_code();
 }

@@ -10,8 +10,8 @@
 // 0.2 m/s along x. Nine temperature steps of 0.02 s, in three phases:
 //   A. steps 1-3, no detached cell: the drop is part of the solid and,
 //      alone in its cell and unstressed, keeps its velocity (APIC moves a
-//      uniform velocity exactly): it moves by 0.2 m/s times the time the solid has
-//      stepped (it lags the temperature step by less than its step);
+//      uniform velocity exactly): it moves by 0.2 m/s times the time the solid
+//      has stepped (it lags the temperature step by less than its step);
 //   B. steps 4-6, the drop's cell detached: its points leave the solid
 //      (the solid counts the substrate's points only), at rest and
 //      stress-free; they do not move; their kinetic energy is booked with
@@ -53,9 +53,11 @@ namespace
         for (unsigned int k = P::stress; k < P::stress + 3; ++k)
           m[1] = std::max(m[1], std::abs(q[k]));
       }
-    Utilities::MPI::sum(ArrayView<const double>(s, 3), comm,
+    Utilities::MPI::sum(ArrayView<const double>(s, 3),
+                        comm,
                         ArrayView<double>(s, 3));
-    Utilities::MPI::max(ArrayView<const double>(m, 2), comm,
+    Utilities::MPI::max(ArrayView<const double>(m, 2),
+                        comm,
                         ArrayView<double>(m, 2));
     DropState d;
     d.n = s[0], d.x = s[0] > 0 ? s[1] / s[0] : 0,
@@ -74,7 +76,7 @@ main(int argc, char **argv)
   const double     h = 0.1;
   const Point<dim> size(1.6, 0.8);
   SolidBlock<dim>  block(size, h, 0.3, unit_material(), comm);
-  auto &           grid = block.grid;
+  auto            &grid = block.grid;
   // The substrate and the drop (an initial body of solid points).
   add_solid_box(block, h, 0.3, Point<dim>(0.8, 0.5), Point<dim>(0.9, 0.6));
   auto &points = *block.points;
@@ -84,7 +86,7 @@ main(int argc, char **argv)
 
   const SolidMaterial sm = elastic_block_material(block.material);
   auto                sp = block_supports<dim>();
-  SolidStress<dim>    solid(sp, fe_block<dim>(false, size, 0.), sm, grid, points);
+  SolidStress<dim> solid(sp, fe_block<dim>(false, size, 0.), sm, grid, points);
   const std::vector<double> T = grid.make_field(300.);
   solid.initialize(T, "");
   const double n_all = solid.sizes()[0];
@@ -103,10 +105,10 @@ main(int argc, char **argv)
 
   const DropState d0 = drop_state(points, comm);
   checks.in_range("points in the drop", d0.n, 4, 4);
-  DropState   after[3];
-  double      n_solid[3];
-  double      energy_melted[3], energy_solidified[3], t_solid[3];
-  int         s = 0;
+  DropState after[3];
+  double    n_solid[3];
+  double    energy_melted[3], energy_solidified[3], t_solid[3];
+  int       s = 0;
   for (int phase = 0; phase < 3; ++phase)
     {
       for (int k = 0; k < 3; ++k)
@@ -126,30 +128,48 @@ main(int argc, char **argv)
 
   const double K_drop = 4 * 0.5 * (h / 2) * (h / 2) * 0.2 * 0.2;
   // A: part of the solid, moving.
-  checks.in_range("A: points in the solid / all points", n_solid[0] / n_all, 1, 1);
+  checks.in_range("A: points in the solid / all points",
+                  n_solid[0] / n_all,
+                  1,
+                  1);
   checks.at_most("A: |drop displacement - 0.2 m/s x solid time| (m)",
-                 std::abs(after[0].x - d0.x - 0.2 * t_solid[0]), 1e-12);
+                 std::abs(after[0].x - d0.x - 0.2 * t_solid[0]),
+                 1e-12);
   checks.at_most("A: |drop velocity - 0.2 m/s| (m/s)",
-                 std::abs(after[0].vx - 0.2), 1e-12);
+                 std::abs(after[0].vx - 0.2),
+                 1e-12);
   // B: set aside.
   checks.in_range("B: points in the solid + 4 / all points",
-                  (n_solid[1] + 4) / n_all, 1, 1);
-  checks.in_range("B: times a point was set aside", solid.n_points_set_aside(), 4, 4);
+                  (n_solid[1] + 4) / n_all,
+                  1,
+                  1);
+  checks.in_range("B: times a point was set aside",
+                  solid.n_points_set_aside(),
+                  4,
+                  4);
   checks.at_most("B: drop displacement in the phase (m)",
-                 std::abs(after[1].x - after[0].x), 1e-15);
+                 std::abs(after[1].x - after[0].x),
+                 1e-15);
   checks.at_most("B: largest drop speed (m/s)", after[1].speed, 0);
   checks.at_most("B: largest drop |stress| (Pa)", after[1].stress, 0);
   checks.at_most("B: |booked kinetic energy - the drop's| / the drop's",
-                 std::abs(energy_melted[1] - K_drop) / K_drop, 1e-12);
+                 std::abs(energy_melted[1] - K_drop) / K_drop,
+                 1e-12);
   // C: back, at rest.
-  checks.in_range("C: points in the solid / all points", n_solid[2] / n_all, 1, 1);
+  checks.in_range("C: points in the solid / all points",
+                  n_solid[2] / n_all,
+                  1,
+                  1);
   checks.at_most("C: drop displacement in the phase (m)",
-                 std::abs(after[2].x - after[1].x), 1e-15);
+                 std::abs(after[2].x - after[1].x),
+                 1e-15);
   checks.at_most("C: largest drop speed (m/s)", after[2].speed, 1e-15);
   checks.at_most("C: kinetic energy it brought back (J/m)",
-                 energy_solidified[2], 0);
+                 energy_solidified[2],
+                 0);
   const auto e = solid.energies();
   checks.at_most("|energy balance of the solid| / the drop's kinetic energy",
-                 std::abs(e.balance()) / K_drop, 1e-10);
+                 std::abs(e.balance()) / K_drop,
+                 1e-10);
   return checks.exit_code();
 }

@@ -43,18 +43,22 @@ namespace
   };
 
   Outcome
-  run(const bool fe, const Load load, const double F, const double kappa,
-      MPI_Comm comm, const double distortion_limit = 1)
+  run(const bool   fe,
+      const Load   load,
+      const double F,
+      const double kappa,
+      MPI_Comm     comm,
+      const double distortion_limit = 1)
   {
-    const double      h = 0.1;
-    const Point<dim>  size(1.6, 0.8);
-    SolidBlock<dim>   block(size, h, 0.8, unit_material(), comm, 300., 1);
-    auto &            grid   = block.grid;
-    auto &            points = *block.points;
-    const SolidMaterial sm   = elastic_block_material(block.material);
+    const double        h = 0.1;
+    const Point<dim>    size(1.6, 0.8);
+    SolidBlock<dim>     block(size, h, 0.8, unit_material(), comm, 300., 1);
+    auto               &grid   = block.grid;
+    auto               &points = *block.points;
+    const SolidMaterial sm     = elastic_block_material(block.material);
     typename SolidStress<dim>::Parameters sp;
-    sp.energy_file = "";
-    const auto fp  = fe_block<dim>(fe, size, kappa, distortion_limit);
+    sp.energy_file      = "";
+    const auto       fp = fe_block<dim>(fe, size, kappa, distortion_limit);
     SolidStress<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
@@ -68,8 +72,9 @@ namespace
       for (int j = 0; j <= 8; ++j)
         {
           const std::array<int, dim> cell{{std::min(i, 15), std::min(j, 7)}};
-          if (!grid.in_box(cell) || grid.cell_status()[grid.local_index(
-                                      cell)] != BackgroundGrid<dim>::owned)
+          if (!grid.in_box(cell) ||
+              grid.cell_status()[grid.local_index(cell)] !=
+                BackgroundGrid<dim>::owned)
             continue;
           const unsigned int n = grid.local_node_index({{i, j}});
           if (load == Load::converging)
@@ -113,22 +118,28 @@ namespace
   }
 
   void
-  check_stop(Checks &checks, const std::string &name, const Outcome &o,
+  check_stop(Checks            &checks,
+             const std::string &name,
+             const Outcome     &o,
              const std::string &kind)
   {
     checks.in_range(name + ": stopped with an exception", o.thrown, 1, 1);
     checks.in_range(name + ": message says '" + kind + "'",
-                    has(o.message, kind), 1, 1);
+                    has(o.message, kind),
+                    1,
+                    1);
     checks.in_range(name + ": message names step, time, position and what "
                            "to change",
                     step_of(o.message) > 0 && has(o.message, " s, near x = ") &&
                       has(o.message, "'Solid/Safety factor'") &&
                       has(o.message, "'Solid FEM/Hourglass coefficient'"),
-                    1, 1);
+                    1,
+                    1);
     checks.in_range(name + ": before anything non-finite",
-                    !has(o.message, "non-finite") &&
-                      !has(o.message, "nan") && !has(o.message, "inf"),
-                    1, 1);
+                    !has(o.message, "non-finite") && !has(o.message, "nan") &&
+                      !has(o.message, "inf"),
+                    1,
+                    1);
     checks.print(name + ": stopped at solid step", step_of(o.message));
     if (std::getenv("FEMP_SHOW_MESSAGES"))
       checks.print("  message: " + o.message, 0);
@@ -142,32 +153,46 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
 
-  const double  F_c = argc > 1 ? std::atof(argv[1]) : 10;
-  const double  F_h = argc > 2 ? std::atof(argv[2]) : 3;
-  const double  F_w = argc > 3 ? std::atof(argv[3]) : 0.1;
+  const double  F_c    = argc > 1 ? std::atof(argv[1]) : 10;
+  const double  F_h    = argc > 2 ? std::atof(argv[2]) : 3;
+  const double  F_w    = argc > 3 ? std::atof(argv[3]) : 0.1;
   const Outcome points = run(false, Load::converging, F_c, 0.1, comm);
-  check_stop(checks, "points, converging force", points,
+  check_stop(checks,
+             "points, converging force",
+             points,
              "a material point collapsed");
   const Outcome squeezed = run(true, Load::converging, F_c, 0.1, comm);
-  check_stop(checks, "elements, converging force", squeezed,
+  check_stop(checks,
+             "elements, converging force",
+             squeezed,
              "a finite element inverted");
   const Outcome hourglass = run(true, Load::checkerboard, F_h, 0.1, comm);
-  check_stop(checks, "elements, checkerboard force, hourglass control on",
-             hourglass, "a finite element inverted");
+  check_stop(checks,
+             "elements, checkerboard force, hourglass control on",
+             hourglass,
+             "a finite element inverted");
   const Outcome off = run(true, Load::checkerboard, F_h, 0, comm);
-  check_stop(checks, "elements, checkerboard force, hourglass control off",
-             off, "a finite element inverted");
+  check_stop(checks,
+             "elements, checkerboard force, hourglass control off",
+             off,
+             "a finite element inverted");
   // A weaker checkerboard force without control: the mode grows for many
   // steps before it inverts a corner. With femp's distortion limit the run
   // stops on the distorted corners, earlier.
   const double  limit = SolidFEM<dim>::Parameters().hourglass_distortion_limit;
   const Outcome weak_inverted = run(true, Load::checkerboard, F_w, 0, comm);
-  check_stop(checks, "elements, weak checkerboard force, distortion limit 1",
-             weak_inverted, "a finite element inverted");
+  check_stop(checks,
+             "elements, weak checkerboard force, distortion limit 1",
+             weak_inverted,
+             "a finite element inverted");
   const Outcome weak = run(true, Load::checkerboard, F_w, 0, comm, limit);
-  check_stop(checks, "elements, weak checkerboard force, femp's distortion limit",
-             weak, "hourglass modes of a finite element distorted its corners");
+  check_stop(checks,
+             "elements, weak checkerboard force, femp's distortion limit",
+             weak,
+             "hourglass modes of a finite element distorted its corners");
   checks.in_range("weak checkerboard force: the distortion check stops first",
-                  step_of(weak.message) < step_of(weak_inverted.message), 1, 1);
+                  step_of(weak.message) < step_of(weak_inverted.message),
+                  1,
+                  1);
   return checks.exit_code();
 }

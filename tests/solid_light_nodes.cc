@@ -26,9 +26,9 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "solid_tools.h"
-
 #include <cmath>
+
+#include "solid_tools.h"
 
 using namespace femp_test;
 
@@ -41,15 +41,19 @@ namespace
   /// @p cutoff or (@p floor) the mass floor, the fragment's point at local
   /// coordinates (@p xi, @p xi) of its cell, safety factor @p C.
   SolidStress<dim>::Energies
-  run(const double cutoff, const bool floor, const double xi, const double C,
-      MPI_Comm comm, Checks &checks)
+  run(const double cutoff,
+      const bool   floor,
+      const double xi,
+      const double C,
+      MPI_Comm     comm,
+      Checks      &checks)
   {
     const double     h = 0.1;
     const Point<dim> size(1.6, 0.8);
     SolidBlock<dim>  block(size, h, 0.3, unit_material(), comm);
-    auto &           grid = block.grid;
+    auto            &grid = block.grid;
     add_solid_box(block, h, 0.3, Point<dim>(0.8, 0.3), Point<dim>(0.85, 0.35));
-    auto & points     = *block.points;
+    auto  &points     = *block.points;
     double n_fragment = 0;
     for (auto &p : points.particle_handler_for_update())
       if (p.get_location()[1] > 0.3)
@@ -60,13 +64,15 @@ namespace
           ++n_fragment;
         }
     checks.in_range("points of the fragment",
-                    Utilities::MPI::sum(n_fragment, comm), 1, 1);
+                    Utilities::MPI::sum(n_fragment, comm),
+                    1,
+                    1);
 
     const SolidMaterial sm = elastic_block_material(block.material);
-    auto sp          = block_supports<dim>();
-    sp.safety_factor = C;
-    SolidStress<dim>    solid(sp,
-                           fe_block<dim>(false, size, 0.), sm, grid, points);
+    auto                sp = block_supports<dim>();
+    sp.safety_factor       = C;
+    SolidStress<dim> solid(
+      sp, fe_block<dim>(false, size, 0.), sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     solid.set_small_mass_cutoff(cutoff);
@@ -88,22 +94,31 @@ main(int argc, char **argv)
   const auto   e  = run(0.5, false, 0.25, 0.5, comm, checks);
   const double K0 = 0.5 * 0.05 * 0.05 * 2 * 0.2 * 0.2;
   checks.in_range("initial kinetic energy / the fragment's",
-                  e.initial_kinetic / K0, 1 - 1e-12, 1 + 1e-12);
+                  e.initial_kinetic / K0,
+                  1 - 1e-12,
+                  1 + 1e-12);
   checks.at_most("no cutoff: |energy balance| / K0",
-                 std::abs(e0.balance()) / K0, 0.03);
+                 std::abs(e0.balance()) / K0,
+                 0.03);
   checks.in_range("no force, cutoff 0.5: |withheld work| / K0",
-                  std::abs(e.withheld) / K0, 10, 1e6);
+                  std::abs(e.withheld) / K0,
+                  10,
+                  1e6);
   checks.at_most("no force, cutoff 0.5: |energy balance| / |withheld work|",
-                 std::abs(e.balance()) / std::abs(e.withheld), 0.03);
+                 std::abs(e.balance()) / std::abs(e.withheld),
+                 0.03);
   checks.print("no force, cutoff 0.5: stress work / no cutoff (hundreds)",
-               std::round(e.internal / e0.internal / 100), 2);
+               std::round(e.internal / e0.internal / 100),
+               2);
 
   // The floor where no node needs it: the same run.
   const auto f0 = run(0, true, 0.25, 0.5, comm, checks);
   checks.at_most("mass floor, xi 1/4: |stress work / no cutoff - 1|",
-                 std::abs(f0.internal / e0.internal - 1), 1e-12);
+                 std::abs(f0.internal / e0.internal - 1),
+                 1e-12);
   checks.at_most("mass floor, xi 1/4: |withheld work| / K0",
-                 std::abs(f0.withheld) / K0, 1e-12);
+                 std::abs(f0.withheld) / K0,
+                 1e-12);
 
   // A point 0.02 h from the lower and left faces, C = 0.8.
   bool collapsed = false;
@@ -116,13 +131,20 @@ main(int argc, char **argv)
       collapsed = std::string(x.what()).find("collapsed") != std::string::npos;
     }
   checks.in_range("no protection, xi 0.02, C 0.8: collapse detected",
-                  collapsed ? 1 : 0, 1, 1);
+                  collapsed ? 1 : 0,
+                  1,
+                  1);
   const auto f = run(0, true, 0.02, 0.8, comm, checks);
   checks.in_range("mass floor, xi 0.02, C 0.8: |withheld work| / K0",
-                  std::abs(f.withheld) / K0, 0.01, 10);
+                  std::abs(f.withheld) / K0,
+                  0.01,
+                  10);
   checks.at_most("mass floor, xi 0.02, C 0.8: |energy balance| / K0",
-                 std::abs(f.balance()) / K0, 0.04);
+                 std::abs(f.balance()) / K0,
+                 0.04);
   checks.in_range("mass floor, xi 0.02, C 0.8: stress work / xi 1/4's",
-                  f.internal / e0.internal, 0.5, 3);
+                  f.internal / e0.internal,
+                  0.5,
+                  3);
   return checks.exit_code();
 }

@@ -1,13 +1,13 @@
-// Energy balance of the solid with melting and re-solidification (doc/verification.md,
-// "Energy balances of the solid"; doc/solid.md "Energies"). A 2D block, 1.6 m x 0.8 m, cells of
-// 0.1 m: finite elements below y = 0.3 m, material points above (2 x 2 per
-// cell); bottom fixed, sides on rollers. A hot spot on the top (prescribed
-// cell temperatures, no heat solver) heats the block fast enough (peak in
-// 0.3 s, about 4 wave transits of the block) that the block rings: the
-// points that melt (cells above the solidus, 450 K) leave the solid with
-// kinetic energy (booked, and dropped: without the melt flow a melted point
-// is at rest), and when the spot cools they come back (solidify) at rest
-// and stress-free. The balance
+// Energy balance of the solid with melting and re-solidification
+// (doc/verification.md, "Energy balances of the solid"; doc/solid.md
+// "Energies"). A 2D block, 1.6 m x 0.8 m, cells of 0.1 m: finite elements below
+// y = 0.3 m, material points above (2 x 2 per cell); bottom fixed, sides on
+// rollers. A hot spot on the top (prescribed cell temperatures, no heat solver)
+// heats the block fast enough (peak in 0.3 s, about 4 wave transits of the
+// block) that the block rings: the points that melt (cells above the solidus,
+// 450 K) leave the solid with kinetic energy (booked, and dropped: without the
+// melt flow a melted point is at rest), and when the spot cools they come back
+// (solidify) at rest and stress-free. The balance
 //   W_ext + W_remap - (K - K_0) - W_int - E_HG - D_transfer - K_melted
 //     + K_solidified
 // (W_remap: the MUSL re-map work, doc/solid.md "Energies") must vanish up
@@ -35,28 +35,31 @@ namespace
   constexpr int dim = 2;
 
   void
-  run(const SolidMaterial::VelocityTransfer transfer, const std::string &name,
-      Checks &checks, MPI_Comm comm, const std::string &directory)
+  run(const SolidMaterial::VelocityTransfer transfer,
+      const std::string                    &name,
+      Checks                               &checks,
+      MPI_Comm                              comm,
+      const std::string                    &directory)
   {
-    const double h  = 0.1;
-    Material mat = unit_material();
-    mat.solidus  = 450;
-    mat.liquidus = 460;
+    const double h   = 0.1;
+    Material     mat = unit_material();
+    mat.solidus      = 450;
+    mat.liquidus     = 460;
     SolidBlock<dim> block(Point<dim>(1.6, 0.8), h, 0.8, mat, comm);
-    auto &          grid   = block.grid;
-    auto &          points = *block.points;
+    auto           &grid   = block.grid;
+    auto           &points = *block.points;
 
     SolidMaterial sm     = block_material("300:0.05, 450:0.01", block.material);
     sm.poisson_ratio     = 0.3;
     sm.velocity_transfer = transfer;
-    auto sp              = block_supports<dim>();
+    auto                               sp = block_supports<dim>();
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(0, 0);
     fp.upper_corner = Point<dim>(1.6, 0.3);
     if (!directory.empty())
       sp.energy_file = "solid_melt_energy_" + name + ".csv";
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    SolidStress<dim>    solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, directory);
     const double n0 = solid.sizes()[0];
@@ -64,13 +67,13 @@ namespace
     // Temperature steps of 0.02 s; amplitude up to 300 K at t = 0.3 s
     // (peak 600 K: the top cells melt), down to 100 K at t = 0.6 s (all
     // solid again), then held to t = 0.8 s.
-    const int n = 40;
+    const int n            = 40;
     double    n_melted_max = 0;
     for (int s = 1; s <= n; ++s)
       {
         const double t = 0.02 * s;
-        const double A = t < 0.3 ? 1000 * t :
-                                   (t < 0.6 ? 300 - 200 * (t - 0.3) / 0.3 : 100);
+        const double A =
+          t < 0.3 ? 1000 * t : (t < 0.6 ? 300 - 200 * (t - 0.3) / 0.3 : 100);
         for (const auto c : grid.owned_cells())
           {
             const Point<dim> x = grid.cell_center(c);
@@ -83,32 +86,40 @@ namespace
         n_melted_max = std::max(n_melted_max, n0 - solid.sizes()[0]);
       }
 
-    const auto e = solid.energies();
+    const auto   e     = solid.energies();
     const double scale = std::abs(e.internal);
     checks.print(name + ": solid steps", solid.n_steps(), 6);
     checks.print(name + ": most points melted at once", n_melted_max, 6);
     checks.print(name + ": points in the solid at the end / at the start",
-                 solid.sizes()[0] / n0, 6);
+                 solid.sizes()[0] / n0,
+                 6);
     checks.print(name + ": stress work / 1e-6", e.internal / 1e-6, 3);
     checks.print(name + ": kinetic energy / stress work", e.kinetic / scale, 2);
     checks.print(name + ": melted / stress work", e.melted / scale, 2);
     checks.print(name + ": solidified / stress work", e.solidified / scale, 2);
     checks.print(name + ": transfer dissipation / stress work",
-                 e.transfer / scale, 2);
+                 e.transfer / scale,
+                 2);
     checks.print(name + ": re-map work / stress work", e.remap / scale, 2);
     const double without_melt = e.balance() + e.melted - e.solidified;
     checks.print(name + ": balance without the melt terms / stress work",
-                 std::abs(without_melt) / scale, 1);
+                 std::abs(without_melt) / scale,
+                 1);
     checks.print(name + ": balance without the transfer term / stress work",
-                 std::abs(e.balance() + e.transfer) / scale, 1);
+                 std::abs(e.balance() + e.transfer) / scale,
+                 1);
     checks.in_range(name + ": points melted and came back (1 = yes)",
-                    n_melted_max > 0 && solid.sizes()[0] == n0, 1, 1);
+                    n_melted_max > 0 && solid.sizes()[0] == n0,
+                    1,
+                    1);
     if (transfer == SolidMaterial::VelocityTransfer::apic)
       checks.at_most(name + ": |energy balance| / |stress work|",
-                     std::abs(e.balance()) / scale, 0.05);
+                     std::abs(e.balance()) / scale,
+                     0.05);
     else // see the header comment
       checks.print(name + ": |energy balance| / |stress work| (printed)",
-                   std::abs(e.balance()) / scale, 1);
+                   std::abs(e.balance()) / scale,
+                   1);
   }
 } // namespace
 

@@ -1,13 +1,13 @@
-// Solid MPM with points that cross cells and ranks (doc/solid.md, "Cell crossing"): a 2D
-// block of material points (2 x 2 per cell, no finite elements) given a
-// uniform velocity (1, 0.4) m/s, no forces, free faces, moves rigidly by
-// 2.5 cells in x and 1 cell in y (no point ends on a cell face) over 0.25 s, in 10 calls of advance()
-// (as after 10 temperature steps). Points that leave their cell are bound
-// to the new cell, moved in the ParticleHandler when the state is written
-// back, and re-sorted globally when they enter a cell of another rank
-// (SolidMPM::resort()). Checks, for FLIP and APIC: no point lost, every
-// point in the handler's cell that contains it, positions equal to the rigid
-// translation, zero stress (a uniform velocity has no gradient), velocity
+// Solid MPM with points that cross cells and ranks (doc/solid.md, "Cell
+// crossing"): a 2D block of material points (2 x 2 per cell, no finite
+// elements) given a uniform velocity (1, 0.4) m/s, no forces, free faces, moves
+// rigidly by 2.5 cells in x and 1 cell in y (no point ends on a cell face) over
+// 0.25 s, in 10 calls of advance() (as after 10 temperature steps). Points that
+// leave their cell are bound to the new cell, moved in the ParticleHandler when
+// the state is written back, and re-sorted globally when they enter a cell of
+// another rank (SolidMPM::resort()). Checks, for FLIP and APIC: no point lost,
+// every point in the handler's cell that contains it, positions equal to the
+// rigid translation, zero stress (a uniform velocity has no gradient), velocity
 // unchanged. A third scene throws a block of points into the finite-element
 // zone in one step, beyond what its rank sees on two ranks: the run must
 // stop with a diagnostic (SolidStress counts the solid points at every
@@ -15,9 +15,9 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "test_tools.h"
-
 #include <map>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -26,21 +26,24 @@ namespace
   constexpr int dim = 2;
 
   void
-  run(const SolidMaterial::VelocityTransfer transfer, const std::string &name,
-      Checks &checks, MPI_Comm comm)
+  run(const SolidMaterial::VelocityTransfer transfer,
+      const std::string                    &name,
+      Checks                               &checks,
+      MPI_Comm                              comm)
   {
     const double h  = 0.1;
     const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.0, 0.5), h);
     BackgroundGrid<dim> grid(gp, comm);
     grid.create();
-    Material mat = unit_material();
+    Material                                 mat = unit_material();
     typename MaterialPoints<dim>::Parameters pp;
     pp.point_spacing   = h / 2;
     pp.layer_thickness = 0;
     pp.subcells        = 2;
     MaterialPoints<dim> points(pp, mat, grid);
     points.create_region(
-      [](const Point<dim> &x) { return x[0] < 0.3 && x[1] < 0.2; }, 300.,
+      [](const Point<dim> &x) { return x[0] < 0.3 && x[1] < 0.2; },
+      300.,
       MaterialPoints<dim>::solid);
     using P = typename MaterialPoints<dim>::PropertyIndex;
     const Tensor<1, dim> u({1., 0.4});
@@ -59,7 +62,7 @@ namespace
     sp.energy_file = "";
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled = false;
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    SolidStress<dim>    solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     // Initial positions by particle id (to compare with the translation).
     std::map<types::particle_index, Point<dim>> x0;
@@ -87,15 +90,16 @@ namespace
     // initial position on the other rank, so gather all of them first.
     {
       std::vector<std::pair<types::particle_index, Point<dim>>> all(x0.begin(),
-                                                                     x0.end());
+                                                                    x0.end());
       const auto gathered = Utilities::MPI::all_gather(comm, all);
       std::map<types::particle_index, Point<dim>> global;
       for (const auto &g : gathered)
         for (const auto &e : g)
           global.insert(e);
       for (const auto &p : points.particle_handler())
-        err_x = std::max(err_x,
-                         (global.at(p.get_id()) + t_end * u).distance(p.get_location()));
+        err_x = std::max(
+          err_x,
+          (global.at(p.get_id()) + t_end * u).distance(p.get_location()));
     }
     // Points that changed rank (stderr only: zero on one rank).
     {
@@ -104,7 +108,8 @@ namespace
         changed += x0.count(p.get_id()) == 0;
       changed = Utilities::MPI::sum(changed, comm);
       if (Utilities::MPI::this_mpi_process(comm) == 0)
-        std::cerr << name << ": points that changed rank: " << changed << std::endl;
+        std::cerr << name << ": points that changed rank: " << changed
+                  << std::endl;
     }
     err_x      = Utilities::MPI::max(err_x, comm);
     err_v      = Utilities::MPI::max(err_v, comm);
@@ -117,7 +122,9 @@ namespace
     checks.at_most(name + ": points outside their handler cell", wrong_cell, 0);
     checks.at_most(name + ": max |x - (x0 + u t)| / h", err_x / h, 1e-9);
     checks.at_most(name + ": max |v - u| / |u|", err_v / u.norm(), 1e-9);
-    checks.at_most(name + ": max |sigma| / E", max_s / sm.youngs_modulus.value(300.), 1e-12);
+    checks.at_most(name + ": max |sigma| / E",
+                   max_s / sm.youngs_modulus.value(300.),
+                   1e-12);
   }
 
   /// A block of points thrown in one solid step across 8 cells into the
@@ -132,7 +139,7 @@ namespace
     const auto   gp = box<dim>(Point<dim>(0, 0), Point<dim>(1.6, 0.8), h);
     BackgroundGrid<dim> grid(gp, comm);
     grid.create();
-    Material mat = unit_material();
+    Material                                 mat = unit_material();
     typename MaterialPoints<dim>::Parameters pp;
     pp.point_spacing   = h / 2;
     pp.layer_thickness = 0;
@@ -142,8 +149,9 @@ namespace
       [](const Point<dim> &x) {
         return x[0] > 0.3 && x[0] < 0.5 && x[1] > 0.5 && x[1] < 0.7;
       },
-      300., MaterialPoints<dim>::solid);
-    using P = typename MaterialPoints<dim>::PropertyIndex;
+      300.,
+      MaterialPoints<dim>::solid);
+    using P         = typename MaterialPoints<dim>::PropertyIndex;
     const double dt = 0.01; // below the stable limit 0.03 s
     for (auto &p : points.particle_handler())
       {
@@ -151,7 +159,7 @@ namespace
         p.get_properties()[P::velocity + 1] = -0.35 / dt;
       }
     SolidMaterial sm(mat); // density 1, solidus 1e6
-    sm.youngs_modulus   = PiecewiseLinear(1.);
+    sm.youngs_modulus = PiecewiseLinear(1.);
     typename SolidStress<dim>::Parameters sp;
     sp.energy_file = "";
     sp.time_step   = dt;
@@ -177,7 +185,9 @@ namespace
       }
     checks.in_range("points thrown into the FE zone: run stopped with a "
                     "diagnostic at solid step 1 (1 = yes)",
-                    stopped, 1, 1);
+                    stopped,
+                    1,
+                    1);
   }
 } // namespace
 

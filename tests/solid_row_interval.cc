@@ -7,11 +7,11 @@
 // step either way), it is the first step at or past a multiple of the
 // interval, no multiple is skipped, and the summaries of both runs agree
 // exactly. Same output on 1 and 2 ranks.
-#include "scene_driver.h"
-#include "test_tools.h"
-
 #include <cmath>
 #include <map>
+
+#include "scene_driver.h"
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -48,13 +48,14 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const double interval = 1e-6;
+      const double                                              interval = 1e-6;
       std::map<std::string, typename FempProblem<dim>::Summary> sum;
-      std::map<std::string, std::vector<std::string>>            energy, probes;
+      std::map<std::string, std::vector<std::string>>           energy, probes;
       for (const std::string run : {"every", "interval"})
         {
           sum[run] = run_scene<dim>(
-            argv[1], comm,
+            argv[1],
+            comm,
             {{"Solid", "Row interval", run == "every" ? "0" : "1e-6"},
              {"Output", "Directory", "out_" + run}});
           MPI_Barrier(comm); // rank 0 wrote the CSV files
@@ -83,15 +84,18 @@ main(int argc, char **argv)
                               std::floor(t_end / interval * (1 + 1e-12))),
                      0);
       checks.at_most("rows written - rows expected",
-                     std::abs(double(few.size()) - double(expected.size())), 0);
+                     std::abs(double(few.size()) - double(expected.size())),
+                     0);
       int differ = 0;
       for (std::size_t k = 0; k < std::min(few.size(), expected.size()); ++k)
         differ += few[k] != all[expected[k]] ||
                   probes["interval"][k] != probes["every"][expected[k]];
       checks.at_most("rows that differ from the every-step files", differ, 0);
-      const auto &a = sum["every"].solid_energy, &b = sum["interval"].solid_energy;
+      const auto &a = sum["every"].solid_energy,
+                 &b = sum["interval"].solid_energy;
       checks.at_most("summaries differ (stress work, kinetic, balance)",
-                     double(a.internal != b.internal || a.kinetic != b.kinetic ||
+                     double(a.internal != b.internal ||
+                            a.kinetic != b.kinetic ||
                             a.balance() != b.balance()),
                      0);
     }

@@ -1,6 +1,6 @@
 // Energy balance of the 3D solid under a thermal shock (doc/verification.md,
-// "Energy balances of the solid"; doc/studies/solid.md): the reproduction of the
-// small single-track scene (prm/single_track_solid_small.prm) in seconds.
+// "Energy balances of the solid"; doc/studies/solid.md): the reproduction of
+// the small single-track scene (prm/single_track_solid_small.prm) in seconds.
 // A 3D block 0.8 x 0.4 x 0.8 m, cells of 0.1 m, finite elements below
 // z = 0.3 m, 2 x 2 x 2 material points per cell above; bottom fixed, sides
 // on rollers; E, yield stress and hardening in the ratios of the scene's
@@ -49,8 +49,8 @@ namespace
   void
   run(const Options &o, Checks &checks, MPI_Comm comm, const std::string &label)
   {
-    const double h  = 0.1;
-    const auto   gp = box<dim>(Point<dim>(0, 0, 0), Point<dim>(0.8, 0.4, 0.8), h);
+    const double h = 0.1;
+    const auto gp = box<dim>(Point<dim>(0, 0, 0), Point<dim>(0.8, 0.4, 0.8), h);
     BackgroundGrid<dim> grid(gp, comm);
     grid.create();
     Material mat = unit_material();
@@ -82,11 +82,11 @@ namespace
     sp.safety_factor = o.safety;
     sp.energy_file   = o.directory.empty() ? "" : "solid_shock_energy.csv";
     typename SolidFEM<dim>::Parameters fp;
-    fp.enabled      = o.fe;
-    fp.lower_corner = Point<dim>(0, 0, 0);
-    fp.upper_corner = Point<dim>(0.8, 0.4, o.ztop);
+    fp.enabled               = o.fe;
+    fp.lower_corner          = Point<dim>(0, 0, 0);
+    fp.upper_corner          = Point<dim>(0.8, 0.4, o.ztop);
     fp.hourglass_coefficient = o.hg;
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    SolidStress<dim>    solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, o.directory);
     const double n0 = solid.sizes()[0];
@@ -103,9 +103,9 @@ namespace
             const Point<dim> x = grid.cell_center(c);
             const double     r2 =
               (x[0] - 0.4) * (x[0] - 0.4) + (x[1] - 0.2) * (x[1] - 0.2);
-            T[c] = 300 + (x[2] > 0.4 ? dT * std::exp(-r2 / 0.09) *
-                                          (x[2] - 0.4) / 0.35 :
-                                        0.);
+            T[c] = 300 + (x[2] > 0.4 ?
+                            dT * std::exp(-r2 / 0.09) * (x[2] - 0.4) / 0.35 :
+                            0.);
           }
         points.cells_to_points(T);
         solid.advance(dt_T * s, T, s == 4);
@@ -118,18 +118,26 @@ namespace
     checks.print(label + "points melted", n_melted, 6);
     checks.print(label + "stress work / 1e-6", e.internal / 1e-6, 3);
     checks.print(label + "kinetic energy / stress work", e.kinetic / scale, 2);
-    checks.print(label + "hourglass energy / stress work", e.hourglass / scale, 2);
-    checks.print(label + "transfer dissipation / stress work", e.transfer / scale, 2);
+    checks.print(label + "hourglass energy / stress work",
+                 e.hourglass / scale,
+                 2);
+    checks.print(label + "transfer dissipation / stress work",
+                 e.transfer / scale,
+                 2);
     checks.print(label + "melted / stress work", e.melted / scale, 2);
     checks.print(label + "balance without the transfer term / stress work",
-                 std::abs(e.balance() + e.transfer) / scale, 1);
+                 std::abs(e.balance() + e.transfer) / scale,
+                 1);
     checks.print(label + "re-map work / stress work", e.remap / scale, 2);
     checks.print(label + "balance without the re-map term / stress work",
-                 std::abs(e.balance() - e.remap) / scale, 2);
+                 std::abs(e.balance() - e.remap) / scale,
+                 2);
     checks.print(label + "energy balance / |stress work| (signed)",
-                 e.balance() / scale, 2);
+                 e.balance() / scale,
+                 2);
     checks.at_most(label + "|energy balance| / |stress work|",
-                   std::abs(e.balance()) / scale, 0.05);
+                   std::abs(e.balance()) / scale,
+                   0.05);
   }
 } // namespace
 

@@ -49,21 +49,26 @@ namespace
   /// the subject here is the growth of the modes up to an inverted corner
   /// (the distortion check has its own test, solid_inversion).
   Result
-  run(const double kappa, const double dt, const double t_end, MPI_Comm comm,
-      const bool bending = false, const bool fe = true,
+  run(const double kappa,
+      const double dt,
+      const double t_end,
+      MPI_Comm     comm,
+      const bool   bending          = false,
+      const bool   fe               = true,
       const double distortion_limit = 1)
   {
-    const double      h = 0.1;
+    const double h = 0.1;
     // All-MPM runs (fe = false): 2 x 2 points per cell, and instead of the
     // cantilever a column suddenly loaded by its weight (g = 1 m/s^2, strain
     // about 1 %; bottom fixed, sides on rollers) with room above it.
-    const Point<dim>  size(1.6, fe ? 0.8 : 1.6);
-    SolidBlock<dim>   block(size, h, 0.8, unit_material(), comm, 300., fe ? 1 : 2);
-    auto &            grid   = block.grid;
-    auto &            points = *block.points;
-    const SolidMaterial sm   = elastic_block_material(block.material);
+    const Point<dim> size(1.6, fe ? 0.8 : 1.6);
+    SolidBlock<dim>  block(
+      size, h, 0.8, unit_material(), comm, 300., fe ? 1 : 2);
+    auto               &grid   = block.grid;
+    auto               &points = *block.points;
+    const SolidMaterial sm     = elastic_block_material(block.material);
     typename SolidStress<dim>::Parameters sp;
-    sp.time_step   = dt;
+    sp.time_step = dt;
     // Impact: free body (the checkerboard modes are zero-energy modes);
     // bending: a cantilever fixed at x = 0.
     if (bending && fe)
@@ -74,8 +79,8 @@ namespace
         sp.roller_faces = {"x-", "x+"};
         sp.gravity[1]   = -1.;
       }
-    sp.energy_file = "";
-    const auto fp = fe_block<dim>(fe, size, kappa, distortion_limit);
+    sp.energy_file      = "";
+    const auto       fp = fe_block<dim>(fe, size, kappa, distortion_limit);
     SolidStress<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
@@ -88,8 +93,8 @@ namespace
     auto add_force = [&](const std::array<int, dim> node,
                          const std::array<int, dim> cell,
                          const double               f) {
-      if (grid.in_box(cell) &&
-          grid.cell_status()[grid.local_index(cell)] == BackgroundGrid<dim>::owned)
+      if (grid.in_box(cell) && grid.cell_status()[grid.local_index(cell)] ==
+                                 BackgroundGrid<dim>::owned)
         force[1][grid.local_node_index(node)] += f;
     };
     if (bending) // tip shear load, spread over the nodes of the face x+
@@ -132,9 +137,9 @@ main(int argc, char **argv)
       const Material thermal = unit_material(); // density 1
       SolidMaterial  sm      = elastic_block_material(thermal);
       typename SolidStress<dim>::Parameters sp;
-      const double limit = sp.stable_limit(sm, 0.1);
-      const double kappa = kind == "fe0" ? 0. : 0.1;
-      const bool   fe    = kind != "mpm";
+      const double                          limit = sp.stable_limit(sm, 0.1);
+      const double                          kappa = kind == "fe0" ? 0. : 0.1;
+      const bool                            fe    = kind != "mpm";
       const auto attempt = [&](const double c, Result &r) -> std::string {
         try
           {
@@ -157,14 +162,15 @@ main(int argc, char **argv)
           std::cout << kind << ", dt = " << C << " x limit (" << limit
                     << " s), t_end = " << t_end << " s: " << outcome << "\n";
           if (outcome == "ran to the end")
-            std::cout << "  stress work " << r.internal << " J (0.5 x: "
-                      << ref.internal << "), relative difference "
+            std::cout << "  stress work " << r.internal
+                      << " J (0.5 x: " << ref.internal
+                      << "), relative difference "
                       << std::abs(r.internal - ref.internal) /
                            std::abs(ref.internal)
-                      << "\n  kinetic " << r.kinetic << " J (0.5 x: "
-                      << ref.kinetic << ")\n  balance / stress work "
-                      << r.balance / r.internal << " (0.5 x: "
-                      << ref.balance / ref.internal
+                      << "\n  kinetic " << r.kinetic
+                      << " J (0.5 x: " << ref.kinetic
+                      << ")\n  balance / stress work " << r.balance / r.internal
+                      << " (0.5 x: " << ref.balance / ref.internal
                       << ")\n  hourglass mode energy " << r.mode_end
                       << " (0.5 x: " << ref.mode_end << ")\n";
         }
@@ -182,10 +188,15 @@ main(int argc, char **argv)
   checks.print("hourglass on: mode energy at t = 0.2 s", on_early.mode_end, 3);
   checks.print("hourglass on: mode energy at t = 1 s", on.mode_half, 3);
   checks.print("hourglass on: mode energy at t = 2 s", on.mode_end, 3);
-  checks.in_range("hourglass off: growth of the mode energy from t = 0.1 to 0.2 s",
-                  off.mode_end / off.mode_half, 4, 1e30);
+  checks.in_range(
+    "hourglass off: growth of the mode energy from t = 0.1 to 0.2 s",
+    off.mode_end / off.mode_half,
+    4,
+    1e30);
   checks.in_range("hourglass on: growth of the mode energy from t = 1 to 2 s",
-                  on.mode_end / on.mode_half, 0, 2);
+                  on.mode_end / on.mode_half,
+                  0,
+                  2);
   // Without control the mode grows until it inverts an element's corner
   // (the corners are checked with control off as well): the run must stop.
   // With femp's hourglass distortion limit it stops earlier, on the
@@ -208,34 +219,48 @@ main(int argc, char **argv)
       return k == std::string::npos ? -1 : std::atoi(m.c_str() + k + 14);
     };
     const std::string inverted = stop(1);
-    checks.in_range("hourglass off, run on to t = 2 s: stopped with an exception",
-                    !inverted.empty(), 1, 1);
+    checks.in_range(
+      "hourglass off, run on to t = 2 s: stopped with an exception",
+      !inverted.empty(),
+      1,
+      1);
     checks.in_range("hourglass off: the message names an inverted element",
-                    inverted.find("a finite element inverted") != std::string::npos,
-                    1, 1);
+                    inverted.find("a finite element inverted") !=
+                      std::string::npos,
+                    1,
+                    1);
     const std::string distorted =
       stop(typename SolidFEM<dim>::Parameters().hourglass_distortion_limit);
     checks.in_range("hourglass off, femp's distortion limit: the message "
                     "names the distorted corners",
                     distorted.find("hourglass modes of a finite element "
-                                   "distorted its corners") != std::string::npos,
-                    1, 1);
+                                   "distorted its corners") !=
+                      std::string::npos,
+                    1,
+                    1);
     checks.print("hourglass off: solid step of the stop, inverted corner",
                  step_of(inverted));
     checks.print("hourglass off: solid step of the stop, distortion limit",
                  step_of(distorted));
     checks.in_range("hourglass off: the distortion check stops before the "
                     "corner inverts",
-                    step_of(distorted) > 0 && step_of(distorted) < step_of(inverted),
-                    1, 1);
+                    step_of(distorted) > 0 &&
+                      step_of(distorted) < step_of(inverted),
+                    1,
+                    1);
   }
-  checks.print("impact, hourglass on: hourglass energy / stress work at t = 2 s",
-               on.hourglass / on.internal, 2);
+  checks.print(
+    "impact, hourglass on: hourglass energy / stress work at t = 2 s",
+    on.hourglass / on.internal,
+    2);
   const Result bend = run(0.1, 0, 2, comm, true);
-  checks.at_most("bending, hourglass on: hourglass energy / stress work at t = 2 s",
-                 bend.hourglass / bend.internal, 0.1);
+  checks.at_most(
+    "bending, hourglass on: hourglass energy / stress work at t = 2 s",
+    bend.hourglass / bend.internal,
+    0.1);
   checks.at_most("hourglass on / off: mode energy at t = 0.2 s",
-                 on_early.mode_end / off.mode_end, 0.01);
+                 on_early.mode_end / off.mode_end,
+                 0.01);
 
   // Forced blow-up: three times the elastic limit.
   {
@@ -244,8 +269,8 @@ main(int argc, char **argv)
     sm.youngs_modulus = PiecewiseLinear(100.);
     sm.poisson_ratio  = 0.3;
     typename SolidStress<dim>::Parameters sp;
-    const double limit = sp.stable_limit(sm, 0.1);
-    bool         caught = false, named = false;
+    const double                          limit  = sp.stable_limit(sm, 0.1);
+    bool                                  caught = false, named = false;
     try
       {
         run(0.1, 3 * limit, 50, comm);
@@ -254,12 +279,17 @@ main(int argc, char **argv)
       {
         const std::string m = e.what();
         caught              = true;
-        named = m.find("at solid step") != std::string::npos &&
+        named               = m.find("at solid step") != std::string::npos &&
                 m.find("near x =") != std::string::npos;
       }
-    checks.in_range("dt = 3x limit: blow-up stopped with an exception", caught, 1, 1);
+    checks.in_range("dt = 3x limit: blow-up stopped with an exception",
+                    caught,
+                    1,
+                    1);
     checks.in_range("dt = 3x limit: message names the step and the location",
-                    named, 1, 1);
+                    named,
+                    1,
+                    1);
   }
 
   // Material points at 1.5 x the limit: the column grows a mode that stays
@@ -269,8 +299,8 @@ main(int argc, char **argv)
     const Material      thermal = unit_material(); // density 1
     const SolidMaterial sm      = elastic_block_material(thermal);
     typename SolidStress<dim>::Parameters sp;
-    const double limit   = sp.stable_limit(sm, 0.1);
-    bool         created = false;
+    const double                          limit   = sp.stable_limit(sm, 0.1);
+    bool                                  created = false;
     try
       {
         run(0.1, 1.5 * limit, 20, comm, true, false);
@@ -280,7 +310,9 @@ main(int argc, char **argv)
         created = std::string(e.what()).find("J created") != std::string::npos;
       }
     checks.in_range("MPM column, dt = 1.5x limit: stopped by the energy check",
-                    created, 1, 1);
+                    created,
+                    1,
+                    1);
     // The same column at 1 x runs to the end.
     bool stopped = false;
     try
@@ -307,8 +339,8 @@ main(int argc, char **argv)
       typename SolidStress<dim>::Parameters sp;
       sp.energy_file = "";
       sp.gravity[1]  = 5.;
-      SolidStress<dim> solid(sp, fe_block<dim>(false, size, 0.1), sm,
-                             block.grid, *block.points);
+      SolidStress<dim> solid(
+        sp, fe_block<dim>(false, size, 0.1), sm, block.grid, *block.points);
       solid.set_flow_owns_fluid_points(flow);
       const std::vector<double> T = block.grid.make_field(300.);
       solid.initialize(T, "");
@@ -319,18 +351,25 @@ main(int argc, char **argv)
         }
       catch (const std::runtime_error &e)
         {
-          left = std::string(e.what()).find("left the domain") != std::string::npos;
+          left =
+            std::string(e.what()).find("left the domain") != std::string::npos;
         }
       if (flow)
         {
           checks.in_range("points leaving the domain, melt flow: run stopped",
-                          left, 0, 0);
+                          left,
+                          0,
+                          0);
           checks.in_range("points leaving the domain, melt flow: points held",
-                          solid.n_points_held() > 0, 1, 1);
+                          solid.n_points_held() > 0,
+                          1,
+                          1);
         }
       else
         checks.in_range("points leaving the domain, no melt flow: stopped",
-                        left, 1, 1);
+                        left,
+                        1,
+                        1);
     }
   return checks.exit_code();
 }

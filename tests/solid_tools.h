@@ -8,10 +8,10 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_stress.h>
 
-#include "test_tools.h"
-
 #include <memory>
 #include <string>
+
+#include "test_tools.h"
 
 namespace femp_test
 {
@@ -25,12 +25,12 @@ namespace femp_test
     SolidBlock(const Point<dim> &size,
                const double      h,
                const double      top,
-               const Material &  material,
+               const Material   &material,
                MPI_Comm          comm,
                const double      T0      = 300.,
                const unsigned    n_per_h = 2)
-      : grid(box<dim>(Point<dim>(), size, h), comm)
-      , material(material)
+        : grid(box<dim>(Point<dim>(), size, h), comm)
+        , material(material)
     {
       grid.create();
       typename MaterialPoints<dim>::Parameters pp;
@@ -52,7 +52,7 @@ namespace femp_test
   /// filling the box [@p a, @p b] (a drop or a fragment).
   template <int dim>
   void
-  add_solid_box(SolidBlock<dim> & block,
+  add_solid_box(SolidBlock<dim>  &block,
                 const double      h,
                 const double      top,
                 const Point<dim> &a,
@@ -83,10 +83,10 @@ namespace femp_test
   block_material(const std::string &yield, const Material &thermal)
   {
     SolidMaterial sm(thermal);
-    sm.youngs_modulus   = PiecewiseLinear(100.);
-    sm.plastic_modulus  = PiecewiseLinear(5.);
-    sm.yield_stress     = PiecewiseLinear::parse(yield, "yield");
-    sm.expansion        = 1e-4;
+    sm.youngs_modulus  = PiecewiseLinear(100.);
+    sm.plastic_modulus = PiecewiseLinear(5.);
+    sm.yield_stress    = PiecewiseLinear::parse(yield, "yield");
+    sm.expansion       = 1e-4;
     return sm;
   }
 
@@ -110,8 +110,10 @@ namespace femp_test
   /// @p distortion_limit (femp's default unless given).
   template <int dim>
   typename SolidFEM<dim>::Parameters
-  fe_block(const bool enabled, const Point<dim> &size, const double kappa,
-           const double distortion_limit =
+  fe_block(const bool        enabled,
+           const Point<dim> &size,
+           const double      kappa,
+           const double      distortion_limit =
              typename SolidFEM<dim>::Parameters().hourglass_distortion_limit)
   {
     typename SolidFEM<dim>::Parameters fp;

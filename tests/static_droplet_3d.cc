@@ -22,10 +22,10 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  constexpr int                    dim = 3;
-  const double R_h   = argc > 1 ? std::atof(argv[1]) : 8;
-  const int    which = argc > 2 ? std::atoi(argv[2]) : -1;
-  const double times = argc > 3 ? std::atof(argv[3]) : 1.5;
+  constexpr int                    dim   = 3;
+  const double                     R_h   = argc > 1 ? std::atof(argv[1]) : 8;
+  const int                        which = argc > 2 ? std::atoi(argv[2]) : -1;
+  const double                     times = argc > 3 ? std::atof(argv[3]) : 1.5;
   const double L = 1, R = 0.25, h = R / R_h, rho = 1000, sigma = 1, mu = 0.5;
   const Point<dim> centre(0.5, 0.5, 0.5);
   for (const int hf : {0, 1})
@@ -40,14 +40,17 @@ main(int argc, char **argv)
       prm.gravity             = Tensor<1, dim>();
       prm.surface_tension     = sigma;
       checks.print(hf ? "curvature: height function" :
-                        "curvature: alpha gradient", R_h);
-      FlowScene<dim> scene(Point<dim>(L, L, L), h, rho,
-                           [&](const Point<dim> &x) {
-                             return x.distance(centre) < R;
-                           },
-                           prm, comm);
-      const double dt      = scene.flow->stable_time_step().min();
-      const double t_sigma = std::sqrt(rho * R * R * R / sigma);
+                        "curvature: alpha gradient",
+                   R_h);
+      FlowScene<dim> scene(
+        Point<dim>(L, L, L),
+        h,
+        rho,
+        [&](const Point<dim> &x) { return x.distance(centre) < R; },
+        prm,
+        comm);
+      const double       dt      = scene.flow->stable_time_step().min();
+      const double       t_sigma = std::sqrt(rho * R * R * R / sigma);
       const unsigned int n_steps =
         static_cast<unsigned int>(std::ceil(times * t_sigma / dt));
       for (unsigned int n = 0; n < n_steps; ++n)

@@ -1,6 +1,6 @@
 // Verification: two-phase Stefan problem (Neumann solution,
-// doc/verification.md, "Stefan problem"). All properties 1 (rho, c, lambda, L); solid
-// initially 1 K below the melting point T_m = 10 K; the face x = 0 held
+// doc/verification.md, "Stefan problem"). All properties 1 (rho, c, lambda, L);
+// solid initially 1 K below the melting point T_m = 10 K; the face x = 0 held
 // 1 K above it. Closed form: front s = 2 lambda sqrt(t) with
 // lambda = 0.377760. The simulation melts over the narrow range
 // T_m -/+ 0.005 K; its front is the liquid amount sum(gamma h). Checks the
@@ -10,11 +10,11 @@
 // cell size h (default 0.01) and the step as a fraction of the stable step
 // (default 0.4; up to 4, above the limit for stability experiments,
 // doc/stability.md); the front checks then print their errors as usual.
-#include "test_tools.h"
-
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -25,7 +25,7 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
 
-  const int    dim = 2;
+  const int    dim    = 2;
   const double h      = argc > 1 ? std::atof(argv[1]) : 0.01;
   const double safety = argc > 2 ? std::atof(argv[2]) : 0.4;
   const double Tm = 10, lambda = 0.377760;
@@ -35,7 +35,7 @@ main(int argc, char **argv)
                    "[step fraction of the stable step in (0, 4]]\n";
       return 1;
     }
-  const auto   gp  = box<dim>(Point<dim>(0, 0), Point<dim>(3, 2 * h), h);
+  const auto          gp = box<dim>(Point<dim>(0, 0), Point<dim>(3, 2 * h), h);
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
   Material mat           = unit_material();
@@ -43,7 +43,7 @@ main(int argc, char **argv)
   mat.liquidus           = Tm + 0.005;
   mat.latent_heat_fusion = 1;
   Laser<dim> laser(laser_off<dim>());
-  auto p = heat_parameters<dim>(Tm - 1, {{"x-", Tm + 1}, {"x+", Tm - 1}});
+  auto       p = heat_parameters<dim>(Tm - 1, {{"x-", Tm + 1}, {"x+", Tm - 1}});
   p.reference_temperature = Tm - 1;
   HeatTransfer<dim> heat(p, mat, laser, grid);
   heat.initialize();
@@ -78,25 +78,28 @@ main(int argc, char **argv)
             {
               const double s_sim = front();
               if (history.is_open())
-                history << t << ',' << s_sim << ',' << 2 * lambda * std::sqrt(t) << '\n';
+                history << t << ',' << s_sim << ',' << 2 * lambda * std::sqrt(t)
+                        << '\n';
             }
         }
       // Front: liquid length along the strip (per row).
-      const double s     = front();
-      const double exact = 2 * lambda * std::sqrt(t);
+      const double       s     = front();
+      const double       exact = 2 * lambda * std::sqrt(t);
       std::ostringstream what;
-      what << "front t=" << t_check << " (" << std::setprecision(3)
-           << exact / h << " cells): relative error";
+      what << "front t=" << t_check << " (" << std::setprecision(3) << exact / h
+           << " cells): relative error";
       checks.at_most(what.str(), std::abs(s - exact) / exact, 0.02);
     }
   // Final profile against the Neumann solution (liquid and solid parts).
   {
-    const double nu = 1; // sqrt(alpha_l / alpha_s), all properties 1
+    const double        nu = 1; // sqrt(alpha_l / alpha_s), all properties 1
     std::vector<double> T_row(grid.n_cells()[0], 0.), T_sum(T_row.size());
     for (const auto idx : grid.owned_cells())
       if (grid.global_index(idx)[1] == 0)
         T_row[grid.global_index(idx)[0]] = heat.temperature()[idx];
-    Utilities::MPI::sum(ArrayView<const double>(T_row), comm, ArrayView<double>(T_sum));
+    Utilities::MPI::sum(ArrayView<const double>(T_row),
+                        comm,
+                        ArrayView<double>(T_sum));
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
         std::ofstream out("stefan_profile.csv");
@@ -104,7 +107,7 @@ main(int argc, char **argv)
         const double s = 2 * lambda * std::sqrt(t);
         for (unsigned int i = 0; i < T_sum.size(); ++i)
           {
-            const double x = (i + 0.5) * h;
+            const double x   = (i + 0.5) * h;
             const double eta = x / (2 * std::sqrt(t));
             const double T_exact =
               x < s ? (Tm + 1) - std::erf(eta) / std::erf(lambda) :
@@ -117,6 +120,7 @@ main(int argc, char **argv)
   const double entered = heat.energy_budget().boundary;
   checks.print("stored enthalpy (J/m)", stored, 5);
   checks.at_most("energy balance |stored - entered| / entered",
-                 std::abs(stored - entered) / std::abs(entered), 1e-9);
+                 std::abs(stored - entered) / std::abs(entered),
+                 1e-9);
   return checks.exit_code();
 }

@@ -6,10 +6,10 @@
 
 #include <deal.II/base/mpi.h>
 
+#include <femp/base/material.h>
 #include <femp/grid/background_grid.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
-#include <femp/base/material.h>
 
 #include <cmath>
 #include <iomanip>
@@ -27,8 +27,9 @@ namespace femp_test
   {
   public:
     explicit Checks(MPI_Comm comm)
-      : root(Utilities::MPI::this_mpi_process(comm) == 0)
-    {}
+        : root(Utilities::MPI::this_mpi_process(comm) == 0)
+    {
+    }
     /// Print "what = value" rounded to @p digits significant digits.
     void
     print(const std::string &what, const double value, const int digits = 4)
@@ -50,8 +51,10 @@ namespace femp_test
     }
     /// Check lower <= value <= upper; print both.
     void
-    in_range(const std::string &what, const double value, const double lower,
-             const double upper)
+    in_range(const std::string &what,
+             const double       value,
+             const double       lower,
+             const double       upper)
     {
       const bool ok = value >= lower && value <= upper;
       failures += !ok;

@@ -60,20 +60,21 @@ main(int argc, char **argv)
         {
           std::replace(line.begin(), line.end(), ',', ' ');
           std::istringstream s(line);
-          double x, y, z, tm, tl, ts, cr, G, R;
+          double             x, y, z, tm, tl, ts, cr, G, R;
           s >> x >> y >> z >> tm >> tl >> ts >> cr >> G >> R;
           if (x < 0.2 || x > 0.6)
             continue;
           ++n;
           const double t_l = std::pow(x / (2 * eta_l), 2);
           const double t_s = std::pow(x / (2 * eta_s), 2);
-          const double f   = dT * 2 / std::sqrt(M_PI) * std::exp(-eta_l * eta_l);
-          e_tm             = std::max(e_tm, std::abs(tm));
-          e_tl             = std::max(e_tl, std::abs(tl - t_l) / t_l);
+          const double f = dT * 2 / std::sqrt(M_PI) * std::exp(-eta_l * eta_l);
+          e_tm           = std::max(e_tm, std::abs(tm));
+          e_tl           = std::max(e_tl, std::abs(tl - t_l) / t_l);
           const double cr_exact = f * eta_l / (2 * t_l);
           e_cr = std::max(e_cr, std::abs(cr - cr_exact) / cr_exact);
-          e_G  = std::max(e_G, std::abs(G - f / (2 * std::sqrt(t_l))) /
-                                (f / (2 * std::sqrt(t_l))));
+          e_G  = std::max(e_G,
+                         std::abs(G - f / (2 * std::sqrt(t_l))) /
+                           (f / (2 * std::sqrt(t_l))));
           e_R  = std::max(e_R, std::abs(R - x / (2 * t_l)) / (x / (2 * t_l)));
           if (t_s < 0.98 * t_end)
             {
@@ -82,7 +83,9 @@ main(int argc, char **argv)
             }
         }
     }
-  checks.at_most("ExaCA files without the header x,y,z,tm,tl,cr", bad_headers, 0);
+  checks.at_most("ExaCA files without the header x,y,z,tm,tl,cr",
+                 bad_headers,
+                 0);
   checks.print("events with x in [0.2, 0.6]", n);
   checks.print("of these, solidus reached before the end", n_ts);
   checks.print("rows of the ExaCA files", n_exaca);

@@ -29,9 +29,13 @@ main(int argc, char **argv)
       // the tilt that carries the return-flow pressure gradient far below a
       // cell (3 tau_s Lx/(2 D rho g) ~ 1e-6 m) and lets it settle quickly.
       prm.gravity[dim - 1] = -1000;
-      FlowScene<dim> scene(Point<dim>(Lx, D + 3 * h), h, rho,
-                           [&](const Point<dim> &x) { return x[1] < D + h; },
-                           prm, comm);
+      FlowScene<dim> scene(
+        Point<dim>(Lx, D + 3 * h),
+        h,
+        rho,
+        [&](const Point<dim> &x) { return x[1] < D + h; },
+        prm,
+        comm);
       // The bottom row of points is solid: a no-slip floor at y = h.
       for (auto &p : scene.points->particle_handler())
         if (p.get_location()[1] < h)
@@ -42,7 +46,7 @@ main(int argc, char **argv)
         if (scene.grid.cell_status()[i] != BackgroundGrid<dim>::outside)
           T[i] = 1000 + G * scene.grid.cell_center(i)[0];
       CellFields<dim> fields;
-      fields.temperature = &T;
+      fields.temperature   = &T;
       const double dt      = scene.flow->stable_time_step().min();
       const double t_end   = 4 * rho * D * D / mu; // 4 viscous times
       unsigned int n_steps = 0;
@@ -50,8 +54,8 @@ main(int argc, char **argv)
         scene.flow->step(dt, fields);
       // Profile in the cell column at mid-length (x = Lx/2 is a node line:
       // mean of the two columns beside it).
-      const auto &u   = scene.flow->cell_velocity()[0];
-      const int   nz  = 8;
+      const auto         &u  = scene.flow->cell_velocity()[0];
+      const int           nz = 8;
       std::vector<double> prof(nz, 0.);
       for (const auto idx : scene.grid.owned_cells())
         {
@@ -66,17 +70,21 @@ main(int argc, char **argv)
           prof[j]          = Utilities::MPI::sum(prof[j], comm);
           const double z   = (j + 0.5) / nz;
           const double ref = U * (3 * z * z - 2 * z);
-          err              = std::max(err, std::abs(prof[j] - ref) / std::abs(U));
+          err = std::max(err, std::abs(prof[j] - ref) / std::abs(U));
           checks.print("u/U_s at zeta = " + std::to_string(z).substr(0, 6) +
-                         " (analytic " + std::to_string(ref / U).substr(0, 6) + ")",
+                         " (analytic " + std::to_string(ref / U).substr(0, 6) +
+                         ")",
                        std::round(prof[j] / U * 1000) / 1000);
-          if (j > 0 && zero < 0 && prof[j - 1] * prof[j] <= 0 && prof[j] != prof[j - 1])
+          if (j > 0 && zero < 0 && prof[j - 1] * prof[j] <= 0 &&
+              prof[j] != prof[j - 1])
             zero = (j - 0.5 + prof[j - 1] / (prof[j - 1] - prof[j])) / nz;
         }
       checks.print("steps", n_steps);
       checks.print("Reynolds number rho U D/mu", std::abs(rho * U * D / mu));
       checks.at_most("max |u - u_exact| / U_s", err, 0.05);
-      checks.at_most("|zero crossing - 2/3| / (2/3)", std::abs(zero - 2. / 3) * 1.5, 0.05);
+      checks.at_most("|zero crossing - 2/3| / (2/3)",
+                     std::abs(zero - 2. / 3) * 1.5,
+                     0.05);
     }
   catch (const std::exception &e)
     {

@@ -12,13 +12,13 @@
 // crossing within 5 % of zeta = 2/3; it prints the largest pointwise error
 // (over the cell centres, relative to U_s). The reference is computed from
 // the scene's parameters (read from the file). 1 and 2 ranks identical.
-#include "scene_driver.h"
-#include "test_tools.h"
-
 #include <deal.II/base/utilities.h>
 
 #include <fstream>
 #include <sstream>
+
+#include "scene_driver.h"
+#include "test_tools.h"
 
 using namespace femp_test;
 
@@ -35,8 +35,9 @@ main(int argc, char **argv)
       femp::declare_all_parameters(prm);
       prm.parse_input(argv[1]);
       prm.enter_subsection("Melt flow");
-      const double mu   = prm.get_double("Viscosity");
-      const double dsdT = prm.get_double("Surface tension temperature derivative");
+      const double mu = prm.get_double("Viscosity");
+      const double dsdT =
+        prm.get_double("Surface tension temperature derivative");
       prm.leave_subsection();
       prm.enter_subsection("Material");
       const double rho = prm.get_double("Density");
@@ -59,10 +60,10 @@ main(int argc, char **argv)
       const int    ny = int(std::round(H / h));
       // Probe line through the cell centres of the column right of x = L/2.
       std::ostringstream line;
-      line << std::setprecision(10) << "mid: " << L / 2 + h / 2 << ", "
-           << h / 2 << " -> " << L / 2 + h / 2 << ", " << (ny - 0.5) * h
-           << " : " << ny;
-      const auto s = run_scene<2>(argv[1], comm,
+      line << std::setprecision(10) << "mid: " << L / 2 + h / 2 << ", " << h / 2
+           << " -> " << L / 2 + h / 2 << ", " << (ny - 0.5) * h << " : " << ny;
+      const auto s = run_scene<2>(argv[1],
+                                  comm,
                                   {{"Output", "Directory", "output"},
                                    {"Output", "Output interval", "1"},
                                    {"Output", "Write material points", "never"},
@@ -77,13 +78,16 @@ main(int argc, char **argv)
       if (Utilities::MPI::this_mpi_process(comm) == 0)
         {
           std::ifstream in("output/probe_line_mid_00001.csv");
-          AssertThrow(in, ExcMessage("no probe line output/probe_line_mid_00001.csv"));
+          AssertThrow(
+            in, ExcMessage("no probe line output/probe_line_mid_00001.csv"));
           std::string text;
           std::getline(in, text); // # time
           std::getline(in, text); // header
           const auto names = Utilities::split_string_list(text, ',');
-          const auto col_y = std::find(names.begin(), names.end(), "y") - names.begin();
-          const auto col_u = std::find(names.begin(), names.end(), "u_x") - names.begin();
+          const auto col_y =
+            std::find(names.begin(), names.end(), "y") - names.begin();
+          const auto col_u =
+            std::find(names.begin(), names.end(), "u_x") - names.begin();
           AssertThrow(col_u < long(names.size()), ExcMessage("no u_x column"));
           while (std::getline(in, text))
             {
@@ -131,11 +135,14 @@ main(int argc, char **argv)
           us += w * prof[a];
         }
       checks.print("U_s = tau_s D/(4 mu) (m/s)", U, 4);
-      checks.print("Reynolds number rho |U_s| D/mu", std::abs(rho * U * D / mu), 2);
+      checks.print("Reynolds number rho |U_s| D/mu",
+                   std::abs(rho * U * D / mu),
+                   2);
       checks.print("surface speed / U_s", std::round(us * 1000) / 1000);
       checks.at_most("|surface speed - U_s| / |U_s|", std::abs(us - 1), 0.05);
       checks.print("zero crossing zeta", std::round(zero * 1000) / 1000);
-      checks.at_most("|zero crossing - 2/3| / (2/3)", std::abs(zero - 2. / 3) * 1.5,
+      checks.at_most("|zero crossing - 2/3| / (2/3)",
+                     std::abs(zero - 2. / 3) * 1.5,
                      0.05);
       checks.at_most("max |u - u_exact| / U_s over the cells", err, 0.05);
     }

@@ -51,12 +51,15 @@ main(int argc, char **argv)
       const double width  = Utilities::string_to_double(last[3]);
       const double height = Utilities::string_to_double(last[4]);
       checks.at_most("bead width in the section at 10 us (while molten), m",
-                     Utilities::string_to_double(series[2][3]), 0.);
+                     Utilities::string_to_double(series[2][3]),
+                     0.);
       checks.print("bead width at 60 us (cells)", std::round(width / h), 2);
       checks.print("bead height at 60 us (um)", std::round(height * 1e6), 2);
       checks.in_range("bead width at 60 us / h", width / h, 1, 8);
       checks.in_range("bead height at 60 us / (layer + 2h)",
-                      height / (layer + 2 * h), 1e-3, 1);
+                      height / (layer + 2 * h),
+                      1e-3,
+                      1);
       // The section's columns in the last track_shape file.
       const auto shape = read_rows("out/track_shape_00006.csv");
       double     y_lo = 1, y_hi = -1, h_max = 0;
@@ -64,14 +67,16 @@ main(int argc, char **argv)
         if (shape[r][0] == "cross_1" && shape[r][5] == "1")
           {
             const double y = Utilities::string_to_double(shape[r][2]);
-            y_lo  = std::min(y_lo, y);
-            y_hi  = std::max(y_hi, y);
+            y_lo           = std::min(y_lo, y);
+            y_hi           = std::max(y_hi, y);
             h_max = std::max(h_max, Utilities::string_to_double(shape[r][4]));
           }
       checks.at_most("|width - extent of the bead columns| / h",
-                     std::abs(width - (y_hi - y_lo + h)) / h, 1e-6);
+                     std::abs(width - (y_hi - y_lo + h)) / h,
+                     1e-6);
       checks.at_most("|height - largest bead column height| / h",
-                     std::abs(height - h_max) / h, 1e-6);
+                     std::abs(height - h_max) / h,
+                     1e-6);
     }
   catch (const std::exception &e)
     {

@@ -32,11 +32,10 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
 
-  constexpr int dim = 3;
-  const double  h   = 0.02;
-  BackgroundGrid<dim> grid(box<dim>(Point<dim>(0, 0, 0),
-                                    Point<dim>(0.64, 0.64, 0.48), h),
-                           comm);
+  constexpr int       dim = 3;
+  const double        h   = 0.02;
+  BackgroundGrid<dim> grid(
+    box<dim>(Point<dim>(0, 0, 0), Point<dim>(0.64, 0.64, 0.48), h), comm);
   grid.create();
 
   const double z0 = 0.2, A = 0.1, w = 0.15, y0 = 0.31, xa = 0.2, xb = 0.44;
@@ -58,9 +57,9 @@ main(int argc, char **argv)
     {
       const auto   c  = grid.cell_center(i);
       const double Hc = H(c);
-      diffuse[i] = std::clamp(0.5 + (Hc - c[2]) / (3 * h), 0., 1.);
-      sharp[i]   = std::clamp((Hc - (c[2] - 0.5 * h)) / h, 0., 1.);
-      bead[i]    = c[2] > z0 && c[2] < Hc ? 1. : 0.;
+      diffuse[i]      = std::clamp(0.5 + (Hc - c[2]) / (3 * h), 0., 1.);
+      sharp[i]        = std::clamp((Hc - (c[2] - 0.5 * h)) / h, 0., 1.);
+      bead[i]         = c[2] > z0 && c[2] < Hc ? 1. : 0.;
     }
 
   const double w_e = w * std::sqrt(1 - h / (2 * A));
@@ -72,24 +71,33 @@ main(int argc, char **argv)
       double err = 0;
       for (const auto &s : sections)
         for (std::size_t c = 0; c < s.surface.size(); ++c)
-          err = std::max(err, std::abs(s.surface[c] -
-                                       H(Point<dim>(s.x[c], s.y[c], 0))));
+          err =
+            std::max(err,
+                     std::abs(s.surface[c] - H(Point<dim>(s.x[c], s.y[c], 0))));
       const double tol = kind == "diffuse" ? 1e-9 : 0.09 * h;
-      checks.at_most(kind + ": max |z_s - H| over all columns / h", err / h,
+      checks.at_most(kind + ": max |z_s - H| over all columns / h",
+                     err / h,
                      tol / h);
-      const auto &centre = sections[0], &cross = sections[1], &off = sections[2];
+      const auto &centre = sections[0], &cross = sections[1],
+                 &off = sections[2];
       checks.at_most(kind + ": centre line: |bead length - (xb - xa)| / h",
-                     std::abs(centre.width - (xb - xa)) / h, 1e-9);
+                     std::abs(centre.width - (xb - xa)) / h,
+                     1e-9);
       checks.at_most(kind + ": centre line: |bead height - A| / h",
-                     std::abs(centre.height - A) / h, tol / h);
+                     std::abs(centre.height - A) / h,
+                     tol / h);
       checks.at_most(kind + ": cross-section: |bead height - A| / h",
-                     std::abs(cross.height - A) / h, tol / h);
+                     std::abs(cross.height - A) / h,
+                     tol / h);
       checks.print(kind + ": cross-section: bead width / h",
-                   std::round(cross.width / h), 3);
+                   std::round(cross.width / h),
+                   3);
       checks.at_most(kind + ": cross-section: |bead width - 2 w_e| / h",
-                     std::abs(cross.width - 2 * w_e) / h, 1.);
+                     std::abs(cross.width - 2 * w_e) / h,
+                     1.);
       checks.at_most(kind + ": off the ridge: bead width + height",
-                     off.width + off.height, 0.);
+                     off.width + off.height,
+                     0.);
     }
   return checks.exit_code();
 }

@@ -18,10 +18,14 @@ namespace femp
   void
   declare_all_parameters(ParameterHandler &prm)
   {
-    prm.declare_entry("Dimension", "3", Patterns::Integer(2, 3),
+    prm.declare_entry("Dimension",
+                      "3",
+                      Patterns::Integer(2, 3),
                       "Space dimension of the scene: 2 or 3.");
     prm.enter_subsection("Physics");
-    prm.declare_entry("Heat transfer", "true", Patterns::Bool(),
+    prm.declare_entry("Heat transfer",
+                      "true",
+                      Patterns::Bool(),
                       "Solve the temperature equation (1). false: the "
                       "temperature stays frozen at 'Heat transfer/Initial "
                       "temperature' (a number or a function of x, y, z) and "
@@ -30,19 +34,25 @@ namespace femp
                       "damping from this field, and points still change "
                       "state with it. The step is then 'Time stepping/Time "
                       "step', or with melt flow and 0 the fluid step.");
-    prm.declare_entry("Melt flow", "false", Patterns::Bool(),
+    prm.declare_entry("Melt flow",
+                      "false",
+                      Patterns::Bool(),
                       "Solve the melt-pool flow (eqs. 3-4) of the fluid points "
                       "(subsection Melt flow): gravity, viscosity, Darcy "
                       "damping, surface tension, Marangoni stress and recoil "
                       "pressure.");
-    prm.declare_entry("Solid stress", "false", Patterns::Bool(),
+    prm.declare_entry("Solid stress",
+                      "false",
+                      Patterns::Bool(),
                       "Solve the thermal stress by MPM and FE (eqs. 5-17): "
                       "subsections 'Solid' and 'Solid FEM'. With 'Melt flow' "
                       "too, the flow moves the fluid points and the solid "
                       "the solid points, and the fluid pressure and viscous "
                       "forces on the faces to solid cells load the solid "
                       "(doc/solid.md, 'Flow and solid together').");
-    prm.declare_entry("Gravity", "9.81", Patterns::Double(),
+    prm.declare_entry("Gravity",
+                      "9.81",
+                      Patterns::Double(),
                       "Magnitude g of the gravitational acceleration, m/s^2, "
                       "acting along -y (2D) or -z (3D) on the melt flow and "
                       "on the solid (the one gravity of both); range [0, "
@@ -65,20 +75,21 @@ namespace femp
     Checkpoint<3>::Parameters::declare_parameters(prm);
   }
 
-
   template <int dim>
   FempProblem<dim>::FempProblem(ParameterHandler &prm, MPI_Comm comm)
-    : comm(comm)
-    , pcout(std::cout, Utilities::MPI::this_mpi_process(comm) == 0)
-    , timer(pcout, TimerOutput::never, TimerOutput::wall_times)
+      : comm(comm)
+      , pcout(std::cout, Utilities::MPI::this_mpi_process(comm) == 0)
+      , timer(pcout, TimerOutput::never, TimerOutput::wall_times)
   {
     prm.enter_subsection("Physics");
-    melt_flow     = prm.get_bool("Melt flow");
-    heat_enabled  = prm.get_bool("Heat transfer");
-    solid_enabled = prm.get_bool("Solid stress");
+    melt_flow      = prm.get_bool("Melt flow");
+    heat_enabled   = prm.get_bool("Heat transfer");
+    solid_enabled  = prm.get_bool("Solid stress");
     const double g = prm.get_double("Gravity");
     prm.leave_subsection();
-    require(g >= 0, "Physics/Gravity", g,
+    require(g >= 0,
+            "Physics/Gravity",
+            g,
             "it must be a magnitude >= 0 (m/s^2; it acts along -y in 2D, "
             "-z in 3D)");
     gravity[dim - 1] = -g;
@@ -88,7 +99,8 @@ namespace femp
     points_prm.parse_parameters(prm);
     points_prm.check(grid_prm);
     heat_prm.parse_parameters(prm);
-    heat_prm.check(grid_prm.lower_corner, grid_prm.upper_corner,
+    heat_prm.check(grid_prm.lower_corner,
+                   grid_prm.upper_corner,
                    grid_prm.cell_size);
     flow_prm.parse_parameters(prm);
     flow_prm.gravity = gravity;
@@ -101,7 +113,8 @@ namespace femp
     track_prm.parse_parameters(prm);
     // A bare plate without flow or solid carries no points (Material
     // points/Carry points = auto).
-    points_prm.resolve_carry(melt_flow, solid_enabled,
+    points_prm.resolve_carry(melt_flow,
+                             solid_enabled,
                              track_prm.enabled(melt_flow));
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     if (solid_enabled)
@@ -120,7 +133,8 @@ namespace femp
     checkpoint_prm.parse_parameters(prm);
     checkpoint = std::make_unique<Checkpoint<dim>>(checkpoint_prm,
                                                    output_prm.directory,
-                                                   checkpoint_scene(), comm);
+                                                   checkpoint_scene(),
+                                                   comm);
     if (checkpoint->resuming())
       checkpoint->read(); // refuses a corrupt or mismatched one here
     control = std::make_unique<SimulationControl>(
@@ -134,12 +148,9 @@ namespace femp
         return choose_time_step(step, time);
       });
     report = std::make_unique<RunReport<dim>>(comm, pcout);
-    laser = std::make_unique<Laser<dim>>(laser_prm);
+    laser  = std::make_unique<Laser<dim>>(laser_prm);
     laser->check_path_inside(grid_prm.lower_corner, grid_prm.upper_corner);
   }
-
-
-
 
   template <int dim>
   void
@@ -148,7 +159,9 @@ namespace femp
     // 'Zone upper corner = auto' (fe_zone_depth.h, doc/cases.md): the top
     // below the conservative melt depth of the laser's strongest moving
     // segment.
-    require(dim == 3, "Solid FEM/Zone upper corner", "auto",
+    require(dim == 3,
+            "Solid FEM/Zone upper corner",
+            "auto",
             "'auto' is for 3D scenes; give the corner's coordinates");
     double           d = 0;
     const Laser<dim> path(laser_prm);
@@ -159,16 +172,17 @@ namespace femp
                                              laser_prm.absorptivity * s.power,
                                              s.speed,
                                              heat_prm.initial_temperature));
-    fem_prm.upper_corner          = grid_prm.upper_corner;
-    fem_prm.upper_corner[dim - 1] = automatic_fe_zone_top(
-      d, points_prm.substrate_top, grid_prm.lower_corner[dim - 1],
-      grid_prm.cell_size);
+    fem_prm.upper_corner = grid_prm.upper_corner;
+    fem_prm.upper_corner[dim - 1] =
+      automatic_fe_zone_top(d,
+                            points_prm.substrate_top,
+                            grid_prm.lower_corner[dim - 1],
+                            grid_prm.cell_size);
     pcout << "Solid FEM: zone top 'auto' at z = "
           << fem_prm.upper_corner[dim - 1] << " m (conservative melt depth "
           << d << " m below the substrate top " << points_prm.substrate_top
           << " m, margin 1.1 d + 2 cells)" << std::endl;
   }
-
 
   template <int dim>
   void
@@ -183,7 +197,8 @@ namespace femp
             "initial temperature " +
               num(heat_prm.initial_temperature) + " K");
     require(heat_enabled || melt_flow || time_prm.time_step > 0,
-            "Time stepping/Time step", time_prm.time_step,
+            "Time stepping/Time step",
+            time_prm.time_step,
             "with 'Physics/Heat transfer = false' and no melt flow nothing "
             "sets the step: prescribe it (s, > 0)");
     require(time_prm.time_step_solidified == 0 || heat_enabled,
@@ -204,14 +219,16 @@ namespace femp
                    "step for every metal cell (at most "
                 << bound << " s for h = " << h
                 << " m and these material tables); use 0 (automatic)";
-        require(time_prm.time_step <= bound, "Time stepping/Time step",
-                time_prm.time_step, allowed.str());
+        require(time_prm.time_step <= bound,
+                "Time stepping/Time step",
+                time_prm.time_step,
+                allowed.str());
         require(time_prm.time_step_solidified <= bound,
                 "Time stepping/Time step after solidification",
-                time_prm.time_step_solidified, allowed.str());
+                time_prm.time_step_solidified,
+                allowed.str());
       }
   }
-
 
   namespace
   {
@@ -226,19 +243,18 @@ namespace femp
     template <int dim>
     std::function<unsigned int(const Point<dim> &)>
     partition_cost(const typename MaterialPoints<dim>::Parameters &points,
-                   const typename SolidFEM<dim>::Parameters &      fem,
+                   const typename SolidFEM<dim>::Parameters       &fem,
                    const double                                    h,
                    const bool                                      solid)
     {
       if (!points.carry_points)
         return {};
-      const double full = std::pow(h / points.point_spacing, dim);
-      const double top  = points.substrate_top;
-      const double powder_top =
-        top + std::max(0., points.layer_thickness);
-      const double packing = points.packing_fraction;
+      const double full       = std::pow(h / points.point_spacing, dim);
+      const double top        = points.substrate_top;
+      const double powder_top = top + std::max(0., points.layer_thickness);
+      const double packing    = points.packing_fraction;
       return [=](const Point<dim> &c) {
-        const double z = c[dim - 1];
+        const double z     = c[dim - 1];
         bool         in_fe = fem.enabled;
         for (int d = 0; d < dim && in_fe; ++d)
           in_fe = c[d] > fem.lower_corner[d] && c[d] < fem.upper_corner[d];
@@ -252,7 +268,6 @@ namespace femp
     }
   } // namespace
 
-
   template <int dim>
   void
   FempProblem<dim>::setup()
@@ -260,8 +275,8 @@ namespace femp
     {
       TimerOutput::Scope t(timer, "setup: grid");
       grid = std::make_unique<BackgroundGrid<dim>>(grid_prm, comm);
-      grid->create(partition_cost<dim>(points_prm, fem_prm,
-                                       grid_prm.cell_size, solid_enabled));
+      grid->create(partition_cost<dim>(
+        points_prm, fem_prm, grid_prm.cell_size, solid_enabled));
     }
     {
       TimerOutput::Scope t(timer, "setup: material points");
@@ -270,11 +285,14 @@ namespace femp
         solid_enabled && solid_material.velocity_transfer ==
                            SolidMaterial::VelocityTransfer::apic;
       points = std::make_unique<MaterialPoints<dim>>(
-        points_prm, material, *grid,
+        points_prm,
+        material,
+        *grid,
         MaterialPoints<dim>::PropertyIndex::n_used(solid_enabled, affine));
       points->create(heat_prm.initial_temperature);
     }
-    heat = std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
+    heat =
+      std::make_unique<HeatTransfer<dim>>(heat_prm, material, *laser, *grid);
     heat->initialize();
     heat->set_absorption_model(absorption_prm);
     if (!heat_enabled)
@@ -295,17 +313,25 @@ namespace femp
         // segment (the middle of the domain without a path).
         Point<dim> a = grid->origin(), b = grid->origin();
         for (int d = 0; d < dim; ++d)
-          a[d] = b[d] = 0.5 * (grid_prm.lower_corner[d] + grid_prm.upper_corner[d]);
+          a[d] = b[d] =
+            0.5 * (grid_prm.lower_corner[d] + grid_prm.upper_corner[d]);
         if (!laser->segments().empty())
-          a = laser->segments().front().start, b = laser->segments().front().end;
-        track_shape = std::make_unique<TrackShape<dim>>(
-          track_prm, *grid, dim == 3 ? a[1] : 0., points_prm.substrate_top,
-          0.5 * (a[0] + b[0]));
+          a = laser->segments().front().start,
+          b = laser->segments().front().end;
+        track_shape =
+          std::make_unique<TrackShape<dim>>(track_prm,
+                                            *grid,
+                                            dim == 3 ? a[1] : 0.,
+                                            points_prm.substrate_top,
+                                            0.5 * (a[0] + b[0]));
       }
     if (history_prm.enabled)
-      history = std::make_unique<ThermalHistory<dim>>(
-        *grid, material.solidus, material.liquidus, heat->temperature(),
-        heat->metal_fraction(), 0.);
+      history = std::make_unique<ThermalHistory<dim>>(*grid,
+                                                      material.solidus,
+                                                      material.liquidus,
+                                                      heat->temperature(),
+                                                      heat->metal_fraction(),
+                                                      0.);
     {
       std::vector<std::string> names;
       for (const auto &f : output_fields())
@@ -317,25 +343,23 @@ namespace femp
     print_scene();
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::setup_flow()
   {
-    flow = std::make_unique<IncompressibleFlow<dim>>(flow_prm, material,
-                                                     *grid, *points, &timer);
+    flow = std::make_unique<IncompressibleFlow<dim>>(
+      flow_prm, material, *grid, *points, &timer);
     // The flow reads T and gamma, the heat (with 'Advection by melt flow =
     // upwind') the flow's cell velocity, from cell_fields() at each call.
   }
-
 
   template <int dim>
   void
   FempProblem<dim>::setup_solid()
   {
     TimerOutput::Scope t(timer, "setup: solid");
-    solid = std::make_unique<SolidStress<dim>>(solid_prm, fem_prm,
-                                               solid_material, *grid, *points);
+    solid = std::make_unique<SolidStress<dim>>(
+      solid_prm, fem_prm, solid_material, *grid, *points);
     if (flow)
       {
         // Flow and solid together (doc/solid.md): the flow owns the
@@ -351,19 +375,20 @@ namespace femp
           solid->set_mass_floor(true);
         else
           solid->set_small_mass_cutoff(solid_prm.small_mass_cutoff);
-        fluid_solid = std::make_unique<FluidSolidForces<dim>>(
-          *grid, *points, material.density, fem_prm);
+        fluid_solid = std::make_unique<FluidSolidForces<dim>>(*grid,
+                                                              *points,
+                                                              material.density,
+                                                              fem_prm);
       }
     // On resume the solid's CSV files are cut back and reopened by its
     // load_state() instead.
-    solid->initialize(heat->temperature(), checkpoint->resuming() ?
-                                             std::string() :
-                                             output_prm.directory);
+    solid->initialize(heat->temperature(),
+                      checkpoint->resuming() ? std::string() :
+                                               output_prm.directory);
     // The FE zone's points never move nor melt (the solid stops the run
     // otherwise): the metal fraction bins them once.
     points->set_fixed_cells(solid->fe_zone_cells());
   }
-
 
   template <int dim>
   void
@@ -397,8 +422,8 @@ namespace femp
       {
         // With several ranks, the largest share of the MPM points on one
         // rank: what the partition leaves for the solid's point loops.
-        const auto   n     = solid->sizes();
-        const double n_max = solid->largest_rank_points();
+        const auto         n     = solid->sizes();
+        const double       n_max = solid->largest_rank_points();
         std::ostringstream s;
         s << "  solid: " << int(n[0]) << " material points";
         if (n_ranks > 1 && n[0] > 0)
@@ -409,8 +434,7 @@ namespace femp
         solid_line = s.str();
       }
     pcout << std::setprecision(3) << solid_line
-          << "  output: " << output_prm.directory << "/grid" << index
-          << ", "
+          << "  output: " << output_prm.directory << "/grid" << index << ", "
           << (points->carried() ?
                 output_prm.directory + "/points" + index + ", " :
                 std::string())
@@ -418,7 +442,6 @@ namespace femp
     if (dim == 3 && heat_enabled)
       print_melting_regime();
   }
-
 
   template <int dim>
   void
@@ -435,9 +458,10 @@ namespace femp
     double       ratio = 0;
     for (const auto &s : laser->segments())
       if (s.power > 0)
-        ratio = std::max(ratio,
-                         laser_prm.absorptivity * s.power /
-                           (M_PI * rc * Ts * std::sqrt(D * s.speed * rb * rb * rb)));
+        ratio =
+          std::max(ratio,
+                   laser_prm.absorptivity * s.power /
+                     (M_PI * rc * Ts * std::sqrt(D * s.speed * rb * rb * rb)));
     if (ratio > 0)
       pcout << "  regime: normalized enthalpy eta P/(pi h_s sqrt(D v r_b^3)) = "
             << std::setprecision(3) << ratio
@@ -452,7 +476,6 @@ namespace femp
                   "; use 'Laser/Absorption model = ray traced' "
                   "(doc/absorption.md)\n");
   }
-
 
   template <int dim>
   void
@@ -510,14 +533,18 @@ namespace femp
       }
 
     points->flush_point_temperatures();
-    report->finish(*control, *heat, *points, flow.get(), solid.get(),
-                   point_heat->moved_points_energy(), result);
+    report->finish(*control,
+                   *heat,
+                   *points,
+                   flow.get(),
+                   solid.get(),
+                   point_heat->moved_points_energy(),
+                   result);
     if (history)
       history->write(output_prm.directory);
     timer.print_summary();
     print_timer_statistics(timer, comm); // min/avg/max over the ranks
   }
-
 
   template <int dim>
   CellFields<dim>
@@ -531,7 +558,6 @@ namespace femp
       f.velocity = &flow->cell_velocity();
     return f;
   }
-
 
   template <int dim>
   void
@@ -549,10 +575,10 @@ namespace femp
       heat->advance(dt, control->time(), cell_fields());
     }
     if (history)
-      history->observe(heat->temperature(), heat->metal_fraction(),
+      history->observe(heat->temperature(),
+                       heat->metal_fraction(),
                        control->time() + dt);
   }
-
 
   template <int dim>
   void
@@ -576,7 +602,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::flow_substeps(const double dt)
@@ -586,7 +611,7 @@ namespace femp
     // temperature step. The limits and which one governed are recorded for
     // the report at the end of the run.
     const unsigned int resorts = flow->statistics().resorts;
-    auto &             r       = result.flow_limits;
+    auto              &r       = result.flow_limits;
     // Nothing to flow, and nothing can start to: the last flow step had no
     // fluid cell (its pressure, nodal velocities and forces on the solid
     // are zero) and no metal cell is above the solidus, so cells_to_points()
@@ -600,13 +625,14 @@ namespace femp
         ++r.idle_steps;
         return;
       }
-    double             t       = 0;
-    unsigned int       n_sub   = 0;
+    double       t     = 0;
+    unsigned int n_sub = 0;
     while (t < dt * (1 - 1e-12))
       {
         const auto l = flow->stable_time_step();
         r.record(l, flow_prm.time_step > 0);
-        const double wanted = flow_prm.time_step > 0 ? flow_prm.time_step : l.min();
+        const double wanted =
+          flow_prm.time_step > 0 ? flow_prm.time_step : l.min();
         // Equal sub-steps over the rest of the temperature step, none above
         // the wanted step: no tiny last sub-step (uneven sub-steps shortened
         // the droplet period in prm/oscillating_droplet.prm).
@@ -621,8 +647,9 @@ namespace femp
             InputError("Run limits/Maximum flow sub-steps",
                        std::to_string(run_limits().max_flow_substeps),
                        "the flow needed more sub-steps in the temperature "
-                       "step of " + num(dt) + " s (sub-step now " +
-                         num(dt_f) + " s: the flow may have blown up); raise "
+                       "step of " +
+                         num(dt) + " s (sub-step now " + num(dt_f) +
+                         " s: the flow may have blown up); raise "
                          "the bound if the flow is right")
               .what());
         // Feedback during a long sub-cycle (the progress line comes only
@@ -646,7 +673,6 @@ namespace femp
     point_heat->points_changed_cells();
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::fluid_forces_on_solid()
@@ -654,7 +680,6 @@ namespace femp
     TimerOutput::Scope t(timer, "flow: forces on the solid");
     fluid_solid->update(*flow);
   }
-
 
   template <int dim>
   void
@@ -678,10 +703,11 @@ namespace femp
                 << control->time() << " s): " << change << std::endl;
       }
     // Loaded by the fluid forces of step 3, with the flow.
-    solid->advance(control->time(), heat->temperature(), control->is_last(),
+    solid->advance(control->time(),
+                   heat->temperature(),
+                   control->is_last(),
                    fluid_solid ? &fluid_solid->nodal_forces() : nullptr);
   }
-
 
   template <int dim>
   void
@@ -700,21 +726,20 @@ namespace femp
     pcout << "Stopping at t = " << control->time() + dt
           << " s: the laser's path has ended and the peak "
              "temperature of the metal attached to the substrate "
-          << T_peak.str() << " K is below "
-          << time_prm.stop_temperature << " K" << std::endl;
+          << T_peak.str() << " K is below " << time_prm.stop_temperature << " K"
+          << std::endl;
   }
-
 
   template <int dim>
   double
   FempProblem<dim>::workpiece_peak_temperature()
   {
     if (!workpiece_peak)
-      workpiece_peak = attached_metal_max_temperature(
-        *grid, heat->temperature(), heat->metal_fraction());
+      workpiece_peak = attached_metal_max_temperature(*grid,
+                                                      heat->temperature(),
+                                                      heat->metal_fraction());
     return *workpiece_peak;
   }
-
 
   template <int dim>
   void
@@ -728,14 +753,15 @@ namespace femp
       report->progress(*control, heat->max_temperature(), result.pool);
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::write_series()
   {
     TimerOutput::Scope t(timer, "time series");
-    result.pool = measure_melt_pool(*grid, heat->temperature(),
-                                    heat->metal_fraction(), material.liquidus,
+    result.pool = measure_melt_pool(*grid,
+                                    heat->temperature(),
+                                    heat->metal_fraction(),
+                                    material.liquidus,
                                     points_prm.substrate_top,
                                     material.solidus);
     output->write_series(control->time(), output_fields(), result.pool);
@@ -743,7 +769,6 @@ namespace femp
       write_absorption_series();
     control->series_written();
   }
-
 
   template <int dim>
   void
@@ -763,13 +788,13 @@ namespace femp
     *absorption_csv << std::setprecision(8) << control->time() << ','
                     << r.incident << ',' << r.absorbed << ',' << r.escaped
                     << ',' << (r.incident > 0 ? r.absorbed / r.incident : 0.)
-                    << ',' << double(r.n_hits) / std::max(1u, r.n_rays)
-                    << '\n';
+                    << ',' << double(r.n_hits) / std::max(1u, r.n_rays) << '\n';
     absorption_csv->flush();
-    require(bool(*absorption_csv), "Output/Directory", output_prm.directory,
+    require(bool(*absorption_csv),
+            "Output/Directory",
+            output_prm.directory,
             "absorption.csv cannot be written there");
   }
-
 
   template <int dim>
   double
@@ -786,9 +811,8 @@ namespace femp
         check_projected_steps(step, dt);
         return dt;
       }
-    const double stable =
-      step == 0 ? heat->stable_time_step(cell_fields()) :
-                  heat->last_stable_time_step();
+    const double stable = step == 0 ? heat->stable_time_step(cell_fields()) :
+                                      heat->last_stable_time_step();
     if (time_prm.time_step_solidified > 0)
       {
         // The cooling step, while the laser's path has ended and the
@@ -814,25 +838,25 @@ namespace femp
           return dt_cooling;
       }
     const double dt = time_prm.time_step > 0 ? time_prm.time_step :
-                                         time_prm.safety_factor * stable;
+                                               time_prm.safety_factor * stable;
     if (time_prm.time_step > stable)
       {
         std::ostringstream s;
         s << "it exceeds the stable limit " << stable << " s of the explicit "
-          << "temperature step" << (step > 0 ? " reached at step " + std::to_string(step) +
-                                                 ", time " + num(time) + " s" :
-                                               std::string())
+          << "temperature step"
+          << (step > 0 ? " reached at step " + std::to_string(step) +
+                           ", time " + num(time) + " s" :
+                         std::string())
           << "; use 0 (automatic) or a step <= " << stable << " s";
         // Collective: the stable limit is a global minimum.
-        throw CollectiveError(
-          InputError("Time stepping/Time step", num(time_prm.time_step),
-                     s.str())
-            .what());
+        throw CollectiveError(InputError("Time stepping/Time step",
+                                         num(time_prm.time_step),
+                                         s.str())
+                                .what());
       }
     check_projected_steps(step, dt);
     return dt;
   }
-
 
   template <int dim>
   void
@@ -853,7 +877,6 @@ namespace femp
         .what());
   }
 
-
   template <int dim>
   std::vector<typename Output<dim>::Field>
   FempProblem<dim>::output_fields() const
@@ -873,7 +896,6 @@ namespace femp
     return fields;
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::write_output(const bool last)
@@ -883,8 +905,8 @@ namespace femp
     TimerOutput::Scope t(timer, "output");
     points->flush_point_temperatures();
     std::vector<double> phase(grid->n_local(), 0.);
-    const auto &        a = heat->metal_fraction();
-    const auto &        g = heat->liquid_fraction();
+    const auto         &a = heat->metal_fraction();
+    const auto         &g = heat->liquid_fraction();
     for (std::size_t i = 0; i < phase.size(); ++i)
       phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
     const std::vector<double> zone =
@@ -905,10 +927,12 @@ namespace femp
     fields.push_back({"laser_source", &heat->laser_source()});
     fields.push_back({"phase", &phase, false});
     fields.push_back({"zone", &zone, false});
-    const bool with_points = points->carried() &&
-                             (output_prm.write_points == "always" ||
-                              (output_prm.write_points == "last" && last));
-    output->write_fields(n, time, fields,
+    const bool with_points =
+      points->carried() && (output_prm.write_points == "always" ||
+                            (output_prm.write_points == "last" && last));
+    output->write_fields(n,
+                         time,
+                         fields,
                          with_points ? &points->particle_handler() : nullptr,
                          points->used_property_names());
     output->write_probe_lines(n, time, line_fields);
@@ -917,17 +941,16 @@ namespace femp
     control->output_written();
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::write_track_shape(const unsigned int n, const double time)
   {
-    const auto sections = track_shape->measure(
-      heat->metal_fraction(),
-      track_shape->resolidified_cells(*points, material.liquidus));
+    const auto sections =
+      track_shape->measure(heat->metal_fraction(),
+                           track_shape->resolidified_cells(*points,
+                                                           material.liquidus));
     track_shape->write(output_prm.directory, n, time, sections);
   }
-
 
   template <int dim>
   typename Checkpoint<dim>::Scene
@@ -952,8 +975,9 @@ namespace femp
           s.fe_lower[d] = fem_prm.lower_corner[d];
           s.fe_upper[d] = fem_prm.upper_corner[d];
         }
-    const bool affine = solid_enabled && solid_material.velocity_transfer ==
-                                           SolidMaterial::VelocityTransfer::apic;
+    const bool affine =
+      solid_enabled &&
+      solid_material.velocity_transfer == SolidMaterial::VelocityTransfer::apic;
     // 0 without carried points: a checkpoint resumes only the same choice.
     s.n_point_properties =
       points_prm.carry_points ?
@@ -961,7 +985,6 @@ namespace femp
         0;
     return s;
   }
-
 
   template <int dim>
   std::string
@@ -981,8 +1004,12 @@ namespace femp
     run.put(result.pool);
     run.put(result.flow_limits);
     std::vector<std::pair<std::string, const StateWriter *>> sections = {
-      {"control", &c}, {"heat", &h},       {"points", &p},
-      {"output", &o},  {"trigger", &trigger}, {"run", &run}};
+      {"control", &c},
+      {"heat", &h},
+      {"points", &p},
+      {"output", &o},
+      {"trigger", &trigger},
+      {"run", &run}};
     if (history)
       {
         history->save_state(th);
@@ -1008,7 +1035,6 @@ namespace femp
     return dir;
   }
 
-
   template <int dim>
   void
   FempProblem<dim>::restore_checkpoint()
@@ -1033,14 +1059,15 @@ namespace femp
     if (history)
       {
         require(checkpoint->has_section("thermal history"),
-                "Checkpoint/Resume from", checkpoint->path_read(),
+                "Checkpoint/Resume from",
+                checkpoint->path_read(),
                 "it was written without 'Thermal history/Enable' (the "
                 "history before it is lost)");
         load("thermal history", *history);
       }
     {
       std::vector<StateReader> parts = checkpoint->section("run");
-      StateReader &            in    = parts[0];
+      StateReader             &in    = parts[0];
       report->set_initial_enthalpy(in.get<double>());
       point_heat->set_moved_points_energy(in.get<double>());
       result.pool        = in.get<MeltPoolSize>();

@@ -15,9 +15,9 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/app/femp_problem.h>
+#include <femp/app/run_checks.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
-#include <femp/app/run_checks.h>
 #include <femp/base/parameter_file.h>
 
 #include <cctype>
@@ -32,33 +32,33 @@ namespace
   void
   print_help(std::ostream &out)
   {
-    out << "femp: laser powder bed fusion by the multi-physics finite "
-           "element-material point method.\n\n"
-           "Usage:\n"
-           "  femp [options] scene.prm    run the scene described in scene.prm\n"
-           "  mpirun -np N femp scene.prm run it on N MPI ranks\n"
-           "  femp --print-parameters     list every parameter with its "
-           "default, allowed values, unit and meaning (prm format)\n"
-           "  femp --print-parameters=json  the same as JSON\n"
-           "  femp --help                 this text\n\n"
-           "Options:\n"
-           "  --set 'Section/Name=value'  override one parameter of the scene "
-           "(repeatable;\n"
-           "                              nested subsections: "
-           "'A/B/Name=value')\n"
-           "  --resume DIR                continue from the checkpoint in "
-           "DIR (doc/checkpoint.md;\n"
-           "                              the same as --set "
-           "'Checkpoint/Resume from=DIR')\n\n"
-           "Output goes to the directory set in 'Output/Directory' "
-           "(default ./output): open grid.pvd and points.pvd (grid.xdmf and "
-           "points.xdmf with 'Output/Format = hdf5') in ParaView; "
-           "melt_pool.csv, probe_points.csv and probe_line_*.csv hold the "
-           "time series and line samples; parameters.prm the parameters "
-           "used. Errors in the input are reported before any work, with "
-           "exit status 1 (doc/input_errors.md).\n";
+    out
+      << "femp: laser powder bed fusion by the multi-physics finite "
+         "element-material point method.\n\n"
+         "Usage:\n"
+         "  femp [options] scene.prm    run the scene described in scene.prm\n"
+         "  mpirun -np N femp scene.prm run it on N MPI ranks\n"
+         "  femp --print-parameters     list every parameter with its "
+         "default, allowed values, unit and meaning (prm format)\n"
+         "  femp --print-parameters=json  the same as JSON\n"
+         "  femp --help                 this text\n\n"
+         "Options:\n"
+         "  --set 'Section/Name=value'  override one parameter of the scene "
+         "(repeatable;\n"
+         "                              nested subsections: "
+         "'A/B/Name=value')\n"
+         "  --resume DIR                continue from the checkpoint in "
+         "DIR (doc/checkpoint.md;\n"
+         "                              the same as --set "
+         "'Checkpoint/Resume from=DIR')\n\n"
+         "Output goes to the directory set in 'Output/Directory' "
+         "(default ./output): open grid.pvd and points.pvd (grid.xdmf and "
+         "points.xdmf with 'Output/Format = hdf5') in ParaView; "
+         "melt_pool.csv, probe_points.csv and probe_line_*.csv hold the "
+         "time series and line samples; parameters.prm the parameters "
+         "used. Errors in the input are reported before any work, with "
+         "exit status 1 (doc/input_errors.md).\n";
   }
-
 
   /// For an entry that an older femp declared elsewhere, where it is now
   /// (appended to deal.II's "No entry with name <...>" message).
@@ -76,8 +76,7 @@ namespace
       {"Evaporation temperature",
        "'Heat transfer/Evaporation temperature' is now 'Material/Evaporation "
        "temperature'"},
-      {"Molar mass",
-       "'Heat transfer/Molar mass' is now 'Material/Molar mass'"},
+      {"Molar mass", "'Heat transfer/Molar mass' is now 'Material/Molar mass'"},
       {"Ambient pressure",
        "'Heat transfer/Ambient pressure' is now 'Material/Ambient pressure'"}};
     for (const auto &m : moved)
@@ -86,7 +85,6 @@ namespace
         return std::string(" (") + m.second + ")";
     return "";
   }
-
 
   /// One line of an exception's message: deal.II's explanation without its
   /// boilerplate and stack trace.
@@ -114,7 +112,6 @@ namespace
     return flat;
   }
 
-
   /// A --set override: "A/B/Name=value" as prm text.
   std::string
   override_as_prm(const std::string &text)
@@ -136,11 +133,10 @@ namespace
     return prm_text;
   }
 
-
   /// Parse the scene file and the overrides; errors as one-line messages.
   void
-  read_input(dealii::ParameterHandler &       prm,
-             const std::string &              scene,
+  read_input(dealii::ParameterHandler       &prm,
+             const std::string              &scene,
              const std::vector<std::string> &overrides)
   {
     femp::check_scene_file(scene);
@@ -180,14 +176,12 @@ namespace
       }
   }
 
-
   /// The problem of either dimension.
   struct Problem
   {
     std::unique_ptr<femp::FempProblem<2>> p2;
     std::unique_ptr<femp::FempProblem<3>> p3;
   };
-
 
   /// What the command line asks for: the scene, its --set and --resume
   /// overrides, and whether it was a request that is answered on the spot
@@ -199,28 +193,26 @@ namespace
     bool                     answered = false;
   };
 
-
   /// --print-parameters[=prm|=json] (@p arg): every parameter of @p prm
   /// on std::cout, in declaration order.
   void
   print_parameters(dealii::ParameterHandler &prm, const std::string &arg)
   {
     using dealii::ParameterHandler;
-    prm.print_parameters(
-      std::cout,
-      ParameterHandler::OutputStyle(
-        (arg == "--print-parameters=json" ? ParameterHandler::JSON :
-                                            ParameterHandler::PRM) |
-        ParameterHandler::KeepDeclarationOrder));
+    prm.print_parameters(std::cout,
+                         ParameterHandler::OutputStyle(
+                           (arg == "--print-parameters=json" ?
+                              ParameterHandler::JSON :
+                              ParameterHandler::PRM) |
+                           ParameterHandler::KeepDeclarationOrder));
   }
-
 
   /// Reads the command line, in order: --help and --print-parameters are
   /// answered at once (on rank 0, @p root), the others collected; a bad
   /// argument throws an InputError naming it.
   CommandLine
   parse_command_line(const int                 argc,
-                     char *                    argv[],
+                     char                     *argv[],
                      dealii::ParameterHandler &prm,
                      const bool                root)
   {
@@ -246,7 +238,9 @@ namespace
           {
             if (arg == "--set")
               {
-                femp::require(i + 1 < argc, "--set (command line)", "",
+                femp::require(i + 1 < argc,
+                              "--set (command line)",
+                              "",
                               "it needs an argument 'Section/Name=value'");
                 cl.overrides.push_back(argv[++i]);
               }
@@ -259,7 +253,9 @@ namespace
             std::string dir;
             if (arg == "--resume")
               {
-                femp::require(i + 1 < argc, "--resume (command line)", "",
+                femp::require(i + 1 < argc,
+                              "--resume (command line)",
+                              "",
                               "it needs a checkpoint directory");
                 dir = argv[++i];
               }
@@ -268,13 +264,16 @@ namespace
             cl.overrides.push_back("Checkpoint/Resume from=" + dir);
           }
         else if (arg.size() > 1 && arg[0] == '-')
-          femp::require(false, "command line", femp::short_value(arg),
+          femp::require(false,
+                        "command line",
+                        femp::short_value(arg),
                         "it is not an option of femp; the options are "
                         "--set 'Section/Name=value', --resume DIR, "
                         "--print-parameters[=json] and --help");
         else
           {
-            femp::require(cl.scene.empty(), "command line",
+            femp::require(cl.scene.empty(),
+                          "command line",
                           femp::short_value(arg),
                           "only one scene file may be given (the first was '" +
                             femp::short_value(cl.scene) + "')");
@@ -284,17 +283,16 @@ namespace
     return cl;
   }
 
-
   /// Phase 1 on this rank: the command line, the input and every check,
   /// then the problem of the scene's dimension. Returns 0 (run), 1 (error,
   /// its one-line message in @p error) or 2 (done: help or listing).
   int
   set_up(const int                 argc,
-         char *                    argv[],
+         char                     *argv[],
          const MPI_Comm            comm,
          dealii::ParameterHandler &prm,
-         Problem &                 problem,
-         std::string &             error)
+         Problem                  &problem,
+         std::string              &error)
   {
     const bool root = dealii::Utilities::MPI::this_mpi_process(comm) == 0;
     try
@@ -313,8 +311,7 @@ namespace
         read_input(prm, cl.scene, cl.overrides);
         femp::check_output_file_names(prm);
         femp::check_values(prm);
-        femp::check_memory(prm,
-                           dealii::Utilities::MPI::n_mpi_processes(comm));
+        femp::check_memory(prm, dealii::Utilities::MPI::n_mpi_processes(comm));
         femp::check_disk(prm);
         if (prm.get_integer("Dimension") == 2)
           problem.p2 = std::make_unique<femp::FempProblem<2>>(prm, comm);
@@ -329,7 +326,6 @@ namespace
         return 1;
       }
   }
-
 
   /// The ranks agree on a failure of phase 1 (@p status 1 on some rank):
   /// the lowest failing rank prints its @p error. True if any rank failed.
@@ -347,7 +343,6 @@ namespace
     return first_failed < n_ranks;
   }
 
-
   /// An error of the run met by this rank alone (not a CollectiveError):
   /// printed by this rank, then (several ranks) every rank is ended with
   /// MPI_Abort so that none waits in a collective operation. Returns the
@@ -363,8 +358,8 @@ namespace
         // If rank 0 fails too (the same error everywhere), let it speak.
         std::this_thread::sleep_for(std::chrono::milliseconds(500));
       }
-    std::cerr << "femp: error" << (root ? std::string() :
-                                          " (rank " + std::to_string(rank) + ")")
+    std::cerr << "femp: error"
+              << (root ? std::string() : " (rank " + std::to_string(rank) + ")")
               << ": " << clean_message(e) << std::endl;
     std::cerr.flush();
     std::cout.flush();
@@ -372,7 +367,6 @@ namespace
       MPI_Abort(comm, 1);
     return 1;
   }
-
 
   /// Phase 2: the run. Returns the exit status; an error on one rank ends
   /// every rank.
@@ -402,7 +396,6 @@ namespace
     return 0;
   }
 } // namespace
-
 
 int
 main(int argc, char *argv[])

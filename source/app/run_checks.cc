@@ -8,10 +8,10 @@
 #include <femp/base/input_checks.h>
 
 #include <cmath>
-#include <functional>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -25,11 +25,12 @@ namespace femp
     /// Value of @p name in the subsection path @p path ("A/B").
     std::string
     get(const dealii::ParameterHandler &prm_in,
-        const std::string &             path,
-        const std::string &             name)
+        const std::string              &path,
+        const std::string              &name)
     {
-      auto &prm = const_cast<dealii::ParameterHandler &>(prm_in);
-      const auto sections = path.empty() ? std::vector<std::string>() :
+      auto      &prm      = const_cast<dealii::ParameterHandler &>(prm_in);
+      const auto sections = path.empty() ?
+                              std::vector<std::string>() :
                               dealii::Utilities::split_string_list(path, '/');
       for (const auto &s : sections)
         prm.enter_subsection(s);
@@ -41,8 +42,8 @@ namespace femp
 
     double
     get_double(const dealii::ParameterHandler &prm,
-               const std::string &             path,
-               const std::string &             name)
+               const std::string              &path,
+               const std::string              &name)
     {
       return dealii::Utilities::string_to_double(get(prm, path, name));
     }
@@ -61,7 +62,6 @@ namespace femp
     }
   } // namespace
 
-
   std::string
   short_value(const std::string &value)
   {
@@ -71,20 +71,24 @@ namespace femp
            " characters)";
   }
 
-
   void
   check_scene_file(const std::string &file_name)
   {
-    namespace fs = std::filesystem;
+    namespace fs            = std::filesystem;
     const std::string param = "scene file (command line)";
     std::error_code   error;
-    require(fs::exists(file_name, error), param, short_value(file_name),
+    require(fs::exists(file_name, error),
+            param,
+            short_value(file_name),
             "the file does not exist");
-    require(fs::is_regular_file(file_name, error), param,
+    require(fs::is_regular_file(file_name, error),
+            param,
             short_value(file_name),
             "it is not a regular file (a directory?); give a .prm file");
     std::ifstream in(file_name);
-    require(static_cast<bool>(in), param, short_value(file_name),
+    require(static_cast<bool>(in),
+            param,
+            short_value(file_name),
             "the file cannot be read");
 
     // JSON and XML scenes: deal.II checks them as a whole.
@@ -94,11 +98,11 @@ namespace femp
 
     // Statements of this file (not of the files it includes), with
     // deal.II's syntax: '#' comments, '\' continues a line.
-    std::vector<std::string>           sections;
-    std::map<std::string, unsigned>    set_at; // parameter -> line
-    unsigned int                       line_no = 0, statements = 0;
-    std::string                        line, pending;
-    unsigned int                       pending_line = 0;
+    std::vector<std::string>        sections;
+    std::map<std::string, unsigned> set_at; // parameter -> line
+    unsigned int                    line_no = 0, statements = 0;
+    std::string                     line, pending;
+    unsigned int                    pending_line = 0;
     while (std::getline(in, line))
       {
         ++line_no;
@@ -141,8 +145,9 @@ namespace femp
               key += sec + "/";
             key += dealii::Utilities::trim(line.substr(3, eq - 3));
             const auto previous = set_at.find(key);
-            require(previous == set_at.end(), key, file_name + ", line " +
-                      std::to_string(pending_line),
+            require(previous == set_at.end(),
+                    key,
+                    file_name + ", line " + std::to_string(pending_line),
                     "it is set twice in this file (first at line " +
                       (previous == set_at.end() ?
                          std::string() :
@@ -152,44 +157,49 @@ namespace femp
             set_at[key] = pending_line;
           }
       }
-    require(statements > 0, param, short_value(file_name),
+    require(statements > 0,
+            param,
+            short_value(file_name),
             "it holds no 'set' or 'include' statement: an empty scene "
             "would silently run the default scene");
   }
-
 
   void
   declare_run_limits(dealii::ParameterHandler &prm)
   {
     prm.enter_subsection("Run limits");
     prm.declare_entry(
-      "Memory limit", "0", dealii::Patterns::Double(0.),
+      "Memory limit",
+      "0",
+      dealii::Patterns::Double(0.),
       "Largest memory the scene may need, GiB, by a rough estimate from "
       "the number of cells, material points and probe samples made before "
       "any work; a larger scene is refused. 0: the physical memory of this "
       "machine (/proc/meminfo). Range [0, inf).");
     prm.declare_entry(
-      "Disk limit", "0", dealii::Patterns::Double(0.),
+      "Disk limit",
+      "0",
+      dealii::Patterns::Double(0.),
       "Largest output the scene may write, GiB, by a rough estimate from "
       "the cells, the material points written, the number of field outputs "
       "('Output interval', 'End time') and the format, made before any "
       "work; a larger scene is refused. 0: the free space of the file "
       "system that holds 'Output/Directory'. Range [0, inf).");
     prm.declare_entry(
-      "Maximum flow sub-steps", "100000", dealii::Patterns::Integer(1),
+      "Maximum flow sub-steps",
+      "100000",
+      dealii::Patterns::Integer(1),
       "Most melt-flow sub-steps within one temperature step; the run stops "
       "with an error when the flow needs more (a flow that blows up makes "
       "its stable step tiny). Range [1, inf).");
     prm.leave_subsection();
   }
 
-
   const RunLimits &
   run_limits()
   {
     return limits;
   }
-
 
   void
   check_output_file_names(const dealii::ParameterHandler &prm)
@@ -207,56 +217,63 @@ namespace femp
           ok = ok && part != "..";
         require(ok, "Solid/" + name, short_value(v), allowed);
       }
-    for (const auto &l : dealii::Utilities::split_string_list(
-           get(prm, "Output", "Probe lines"), ';'))
+    for (const auto &l :
+         dealii::Utilities::split_string_list(get(prm, "Output", "Probe lines"),
+                                              ';'))
       {
         const std::string line_name =
           dealii::Utilities::split_string_list(l, ':').front();
         require(std::regex_match(line_name, std::regex("[A-Za-z0-9_.+-]*")) &&
                   line_name.find("..") == std::string::npos,
-                "Output/Probe lines", short_value(l),
+                "Output/Probe lines",
+                short_value(l),
                 "a probe line's name becomes part of a file name: use "
                 "letters, digits, '_', '-', '+', '.' (no '..')");
       }
   }
 
-
   void
   check_values(const dealii::ParameterHandler &prm)
   {
-    const int dim = std::stoi(get(prm, "", "Dimension"));
+    const int         dim = std::stoi(get(prm, "", "Dimension"));
     const std::string text =
       dealii::Utilities::trim(get(prm, "Heat transfer", "Initial temperature"));
-    char *       end = nullptr;
+    char        *end = nullptr;
     const double T   = std::strtod(text.c_str(), &end);
     // (An expression is checked at every cell centre by HeatTransfer.)
     if (!text.empty() && end == text.c_str() + text.size())
       require(std::isfinite(T) && T > 0 && T <= 1e5,
-              "Heat transfer/Initial temperature", short_value(text),
+              "Heat transfer/Initial temperature",
+              short_value(text),
               "it must be a finite temperature in (0, 1e5] K");
 
     const double packing =
       get_double(prm, "Material points/Powder layer", "Packing fraction");
     require(packing > 0 && packing <= 0.64,
-            "Material points/Powder layer/Packing fraction", packing,
+            "Material points/Powder layer/Packing fraction",
+            packing,
             "it must lie in (0, 0.64] (no powder: 'Layer thickness = 0')");
 
     const std::string path_file = get(prm, "Laser", "Scan path file");
     if (path_file.empty())
       {
-        const auto a = dealii::Utilities::split_string_list(
-          get(prm, "Laser", "Start point"), ',');
-        const auto b = dealii::Utilities::split_string_list(
-          get(prm, "Laser", "End point"), ',');
+        const auto a =
+          dealii::Utilities::split_string_list(get(prm, "Laser", "Start point"),
+                                               ',');
+        const auto b =
+          dealii::Utilities::split_string_list(get(prm, "Laser", "End point"),
+                                               ',');
         double length2 = 0;
-        for (int d = 0; d < dim - 1 && d < int(a.size()) && d < int(b.size()); ++d)
+        for (int d = 0; d < dim - 1 && d < int(a.size()) && d < int(b.size());
+             ++d)
           {
             const double l = dealii::Utilities::string_to_double(b[d]) -
                              dealii::Utilities::string_to_double(a[d]);
             length2 += l * l;
           }
         require(length2 > 0 || get_double(prm, "Laser", "Power") == 0,
-                "Laser/End point", short_value(get(prm, "Laser", "End point")),
+                "Laser/End point",
+                short_value(get(prm, "Laser", "End point")),
                 "it must differ from 'Laser/Start point' in the horizontal "
                 "coordinates: a line scan of zero length takes no time, so "
                 "the laser would deposit nothing (power 0 turns it off)");
@@ -266,8 +283,10 @@ namespace femp
         // Every segment line must hold the numbers of this dimension's
         // format (the 3D format read in 2D would shift every column).
         std::ifstream in(path_file);
-        require(static_cast<bool>(in), "Laser/Scan path file",
-                short_value(path_file), "the file cannot be opened");
+        require(static_cast<bool>(in),
+                "Laser/Scan path file",
+                short_value(path_file),
+                "the file cannot be opened");
         const unsigned int wanted = 2 * (dim - 1) + 2;
         std::string        line;
         unsigned int       line_no = 0;
@@ -282,10 +301,12 @@ namespace femp
             unsigned int       n = 0;
             while (s >> word)
               ++n;
-            require(n == wanted, "Laser/Scan path file",
+            require(n == wanted,
+                    "Laser/Scan path file",
                     short_value(path_file) + ", line " +
                       std::to_string(line_no) + ": '" + short_value(line) + "'",
-                    "in " + std::to_string(dim) + "D each segment line must hold " +
+                    "in " + std::to_string(dim) +
+                      "D each segment line must hold " +
                       std::to_string(wanted) + " numbers, " +
                       (dim == 2 ? "'x0 x1 speed power'" :
                                   "'x0 y0 x1 y1 speed power'") +
@@ -293,7 +314,6 @@ namespace femp
           }
       }
   }
-
 
   namespace
   {
@@ -348,13 +368,12 @@ namespace femp
     }
   } // namespace
 
-
   void
   check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks)
   {
     prm.enter_subsection("Run limits");
-    const double limit_gib     = prm.get_double("Memory limit");
-    limits.max_flow_substeps   = prm.get_integer("Maximum flow sub-steps");
+    const double limit_gib   = prm.get_double("Memory limit");
+    limits.max_flow_substeps = prm.get_integer("Maximum flow sub-steps");
     prm.leave_subsection();
     // Cells of the background grid, metal points (substrate and powder).
     const SceneSize size = scene_size(prm);
@@ -363,8 +382,9 @@ namespace femp
     const double cells = size.cells, points = size.points;
     // Probe line samples.
     double samples = 0;
-    for (const auto &l : dealii::Utilities::split_string_list(
-           get(prm, "Output", "Probe lines"), ';'))
+    for (const auto &l :
+         dealii::Utilities::split_string_list(get(prm, "Output", "Probe lines"),
+                                              ';'))
       {
         const auto parts = dealii::Utilities::split_string_list(l, ':');
         if (parts.size() == 3)
@@ -373,13 +393,13 @@ namespace femp
     // Bytes per item, measured on the default 3D scene (156 250 cells,
     // 1.05 million points: 0.65 GB) and rounded up; flow and solid add
     // their matrices and point properties.
-    const bool flow  = get(prm, "Physics", "Melt flow") == "true";
-    const bool solid = get(prm, "Physics", "Solid stress") == "true";
-    const double bytes = cells * (1500. + (flow ? 1500. : 0.) + (solid ? 1000. : 0.)) +
-                         points * (400. + (solid ? 300. : 0.)) +
-                         samples * 200. + n_ranks * 100e6;
-    const double limit = limit_gib > 0 ? limit_gib * 1024. * 1024. * 1024. :
-                                         physical_memory();
+    const bool   flow  = get(prm, "Physics", "Melt flow") == "true";
+    const bool   solid = get(prm, "Physics", "Solid stress") == "true";
+    const double bytes =
+      cells * (1500. + (flow ? 1500. : 0.) + (solid ? 1000. : 0.)) +
+      points * (400. + (solid ? 300. : 0.)) + samples * 200. + n_ranks * 100e6;
+    const double limit =
+      limit_gib > 0 ? limit_gib * 1024. * 1024. * 1024. : physical_memory();
     limits.memory_limit = limit;
     if (limit <= 0 || bytes <= limit)
       return;
@@ -394,7 +414,6 @@ namespace femp
          "machines";
     throw InputError("Run limits/Memory limit", num(limit_gib), s.str());
   }
-
 
   void
   check_disk(dealii::ParameterHandler &prm)
@@ -413,13 +432,12 @@ namespace femp
     const double outputs =
       2 + (interval > 0 ? std::floor(end / interval * (1 + 1e-12)) : 0.);
     const std::string which = get(prm, "Output", "Write material points");
-    const double point_outputs =
+    const double      point_outputs =
       which == "always" ? outputs : (which == "last" ? 1. : 0.);
     // Bytes per cell and per point and output, measured on the VTU output
     // of the 3D scenes (about 45 B per cell with every field, 100 B per
     // point) and rounded up; HDF5 writes about a quarter of that.
-    const double format =
-      get(prm, "Output", "Format") == "hdf5" ? 0.25 : 1.;
+    const double format = get(prm, "Output", "Format") == "hdf5" ? 0.25 : 1.;
     const double bytes =
       format * (outputs * cells * 50. + point_outputs * points * 100.);
     double limit = limit_gib * 1024. * 1024. * 1024.;
@@ -442,11 +460,11 @@ namespace femp
       return;
     std::ostringstream s;
     s.precision(3);
-    s << "the scene would write about " << bytes / 1e9 << " GB ("
-      << outputs << " field outputs of " << cells << " cells, "
-      << point_outputs << " outputs of " << points
-      << " material points, format " << get(prm, "Output", "Format")
-      << "), more than the " << limit / 1e9 << " GB "
+    s << "the scene would write about " << bytes / 1e9 << " GB (" << outputs
+      << " field outputs of " << cells << " cells, " << point_outputs
+      << " outputs of " << points << " material points, format "
+      << get(prm, "Output", "Format") << "), more than the " << limit / 1e9
+      << " GB "
       << (limit_gib > 0 ? "allowed" : "free where 'Output/Directory' is")
       << ": raise 'Output/Output interval', set 'Output/Write material "
          "points = last' or 'never', use 'Output/Format = hdf5', or raise "
@@ -454,12 +472,11 @@ namespace femp
     throw InputError("Run limits/Disk limit", num(limit_gib), s.str());
   }
 
-
   void
   prepare_output_directory(const dealii::ParameterHandler &prm,
                            const MPI_Comm                  comm)
   {
-    namespace fs = std::filesystem;
+    namespace fs                = std::filesystem;
     const std::string directory = get(prm, "Output", "Directory");
     const std::string policy    = get(prm, "Output", "Existing directory");
     std::string       error;
@@ -474,9 +491,9 @@ namespace femp
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
           "track_shape_[0-9]+\\.csv|track_bead\\.csv|"
           "absorption\\.csv|parameters\\.prm|.*\\.(pvd|xdmf)\\.tmp");
-        const std::string energy = get(prm, "Solid", "Energy file");
-        const std::string probes = get(prm, "Solid", "Probe file");
-        std::error_code   ec;
+        const std::string     energy = get(prm, "Solid", "Energy file");
+        const std::string     probes = get(prm, "Solid", "Probe file");
+        std::error_code       ec;
         std::vector<fs::path> earlier;
         if (fs::is_directory(directory, ec))
           for (const auto &entry : fs::directory_iterator(directory, ec))
@@ -492,7 +509,8 @@ namespace femp
         if (!get(prm, "Checkpoint", "Resume from").empty())
           earlier.clear();
         if (!earlier.empty() && policy == "refuse")
-          error = InputError("Output/Directory", short_value(directory),
+          error = InputError("Output/Directory",
+                             short_value(directory),
                              "it holds the output of an earlier run (e.g. " +
                                earlier.front().filename().string() +
                                ") and 'Output/Existing directory = refuse'; "
@@ -505,19 +523,21 @@ namespace femp
               {
                 error = "cannot remove '" + f.string() +
                         "' of an earlier run (Output/Existing directory = "
-                        "clear): " + ec.message();
+                        "clear): " +
+                        ec.message();
                 break;
               }
         if (error.empty())
           {
             fs::create_directories(directory, ec);
             if (ec || !fs::is_directory(directory))
-              error = InputError("Output/Directory", short_value(directory),
-                                 "it cannot be created or is not a "
-                                 "directory" +
-                                   (ec ? " (" + ec.message() + ")" :
-                                         std::string()))
-                        .what();
+              error =
+                InputError("Output/Directory",
+                           short_value(directory),
+                           "it cannot be created or is not a "
+                           "directory" +
+                             (ec ? " (" + ec.message() + ")" : std::string()))
+                  .what();
           }
         if (error.empty())
           {
@@ -540,10 +560,8 @@ namespace femp
       throw std::runtime_error(error);
   }
 
-
   void
-  print_timer_statistics(const dealii::TimerOutput &timer,
-                         const MPI_Comm             comm)
+  print_timer_statistics(const dealii::TimerOutput &timer, const MPI_Comm comm)
   {
     if (dealii::Utilities::MPI::n_mpi_processes(comm) < 2)
       return;

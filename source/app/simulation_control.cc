@@ -12,17 +12,26 @@ namespace femp
   SimulationControl::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Time stepping");
-    prm.declare_entry("End time", "1e-3", Patterns::Double(0.),
-                      "Simulated time at which the run ends, s; range (0, inf).");
-    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+    prm.declare_entry(
+      "End time",
+      "1e-3",
+      Patterns::Double(0.),
+      "Simulated time at which the run ends, s; range (0, inf).");
+    prm.declare_entry("Time step",
+                      "0",
+                      Patterns::Double(0.),
                       "Temperature step, s; 0 chooses it automatically as the "
                       "safety factor times the stable limit. A prescribed step "
                       "above the stable limit is refused. Range [0, inf).");
-    prm.declare_entry("Safety factor", "0.5", Patterns::Double(0., 1.),
-                      "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
-                      "(diffusion) and h/|u| (convection) used as the "
-                      "automatic step; range (0, 1].");
-    prm.declare_entry("Time step after solidification", "0",
+    prm.declare_entry(
+      "Safety factor",
+      "0.5",
+      Patterns::Double(0., 1.),
+      "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
+      "(diffusion) and h/|u| (convection) used as the "
+      "automatic step; range (0, 1].");
+    prm.declare_entry("Time step after solidification",
+                      "0",
                       Patterns::Double(0.),
                       "Temperature step, s, while the laser's path has "
                       "ended and the workpiece (the metal attached to the "
@@ -36,9 +45,12 @@ namespace femp
                       "'Time step' to the end. Range 0 or [Time step, inf) "
                       "with a prescribed 'Time step' (doc/cases.md, "
                       "\"Longer temperature steps in the cooling\").");
-    prm.declare_entry("Maximum number of steps", "100000000", Patterns::Integer(1),
+    prm.declare_entry("Maximum number of steps",
+                      "100000000",
+                      Patterns::Integer(1),
                       "Stop after this many steps even before the end time.");
-    prm.declare_entry("Stop when peak temperature below", "0",
+    prm.declare_entry("Stop when peak temperature below",
+                      "0",
                       Patterns::Double(0.),
                       "K; 0: off. Once the laser has finished its path (the "
                       "end of its last segment; it is off after that), end "
@@ -55,44 +67,50 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   void
   SimulationControl::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Time stepping");
-    end_time      = prm.get_double("End time");
-    time_step     = prm.get_double("Time step");
-    safety_factor = prm.get_double("Safety factor");
+    end_time             = prm.get_double("End time");
+    time_step            = prm.get_double("Time step");
+    safety_factor        = prm.get_double("Safety factor");
     time_step_solidified = prm.get_double("Time step after solidification");
-    max_steps     = prm.get_integer("Maximum number of steps");
-    stop_temperature = prm.get_double("Stop when peak temperature below");
+    max_steps            = prm.get_integer("Maximum number of steps");
+    stop_temperature     = prm.get_double("Stop when peak temperature below");
     prm.leave_subsection();
-    require(end_time > 0, "Time stepping/End time", end_time,
+    require(end_time > 0,
+            "Time stepping/End time",
+            end_time,
             "it must be positive (s)");
-    require(safety_factor > 0, "Time stepping/Safety factor", safety_factor,
+    require(safety_factor > 0,
+            "Time stepping/Safety factor",
+            safety_factor,
             "it must lie in (0, 1]");
     if (time_step_solidified != 0)
       {
         const std::string name = "Time stepping/Time step after solidification";
-        require(time_step > 0, name, time_step_solidified,
+        require(time_step > 0,
+                name,
+                time_step_solidified,
                 "it replaces a prescribed step: it needs 'Time stepping/Time "
                 "step' > 0 (the automatic step 0 is already the largest "
                 "stable one)");
-        require(time_step_solidified >= time_step, name, time_step_solidified,
+        require(time_step_solidified >= time_step,
+                name,
+                time_step_solidified,
                 "it must be 0 (keep 'Time step') or at least 'Time step' = " +
                   num(time_step) + " s");
       }
   }
 
-
   SimulationControl::SimulationControl(const Parameters &prm,
-                                       const Cadence &   cadence)
-    : prm(prm)
-    , cadence(cadence)
-    , next_output(cadence.output_interval)
-    , wall_start(std::chrono::steady_clock::now())
-  {}
-
+                                       const Cadence    &cadence)
+      : prm(prm)
+      , cadence(cadence)
+      , next_output(cadence.output_interval)
+      , wall_start(std::chrono::steady_clock::now())
+  {
+  }
 
   void
   SimulationControl::start_clock()
@@ -100,20 +118,17 @@ namespace femp
     wall_start = std::chrono::steady_clock::now();
   }
 
-
   bool
   SimulationControl::running() const
   {
     return !last && t < prm.end_time * (1 - 1e-12) && n_step < prm.max_steps;
   }
 
-
   double
   SimulationControl::next_time_step() const
   {
     return std::min(choose(n_step, t), prm.end_time - t);
   }
-
 
   void
   SimulationControl::advance(const double dt)
@@ -126,21 +141,18 @@ namespace femp
     record_rate_sample();
   }
 
-
   void
   SimulationControl::record_rate_sample()
   {
     // A (wall, simulated time) sample at most every 1/64 of the elapsed
     // wall time; the window of wall_time_left() is the last quarter.
     const double wall = wall_time();
-    if (!rate_samples.empty() &&
-        wall - rate_samples.back().first < wall / 64)
+    if (!rate_samples.empty() && wall - rate_samples.back().first < wall / 64)
       return;
     rate_samples.emplace_back(wall, t);
     while (rate_samples.size() > 2 && rate_samples[1].first <= 0.75 * wall)
       rate_samples.pop_front();
   }
-
 
   bool
   SimulationControl::series_due() const
@@ -148,13 +160,11 @@ namespace femp
     return t >= next_series * (1 - 1e-12) || last;
   }
 
-
   void
   SimulationControl::series_written()
   {
     next_series = t + cadence.series_interval;
   }
-
 
   bool
   SimulationControl::output_due() const
@@ -164,7 +174,6 @@ namespace femp
            last;
   }
 
-
   void
   SimulationControl::output_written()
   {
@@ -173,13 +182,11 @@ namespace femp
       next_output += cadence.output_interval;
   }
 
-
   bool
   SimulationControl::progress_due() const
   {
     return n_step % cadence.progress_interval == 0 || last;
   }
-
 
   double
   SimulationControl::wall_time() const
@@ -188,7 +195,6 @@ namespace femp
                                          wall_start)
       .count();
   }
-
 
   double
   SimulationControl::wall_time_left() const
@@ -204,11 +210,11 @@ namespace femp
     double rate = wall / t;
     if (!rate_samples.empty() && t > rate_samples.front().second &&
         wall > rate_samples.front().first)
-      rate = std::max(rate, (wall - rate_samples.front().first) /
-                              (t - rate_samples.front().second));
+      rate = std::max(rate,
+                      (wall - rate_samples.front().first) /
+                        (t - rate_samples.front().second));
     return rate * left;
   }
-
 
   void
   SimulationControl::save_state(StateWriter &out) const
@@ -222,16 +228,15 @@ namespace femp
     out.put(next_series);
   }
 
-
   void
   SimulationControl::load_state(std::vector<StateReader> &parts)
   {
     // The same on every rank: the first part holds it.
-    auto &in    = parts[0];
-    t           = in.get<double>();
-    dt_last     = in.get<double>();
-    n_step      = in.get<unsigned int>();
-    n_output    = in.get<unsigned int>();
+    auto &in = parts[0];
+    t        = in.get<double>();
+    dt_last  = in.get<double>();
+    n_step   = in.get<unsigned int>();
+    n_output = in.get<unsigned int>();
     in.get<std::uint8_t>(); // 'last': from this run's end time instead
     next_output = in.get<double>();
     next_series = in.get<double>();

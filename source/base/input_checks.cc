@@ -1,7 +1,7 @@
 // femp: input validation helpers and piecewise-linear property tables.
-#include <femp/base/input_checks.h>
-
 #include <deal.II/base/utilities.h>
+
+#include <femp/base/input_checks.h>
 
 #include <cmath>
 #include <limits>
@@ -11,23 +11,23 @@ namespace femp
   InputError::InputError(const std::string &parameter,
                          const std::string &value,
                          const std::string &allowed)
-    : std::runtime_error(
-        "Invalid input: parameter '" + parameter + "' has the value '" +
-        // A long value (a table, a list of bodies) is quoted in part.
-        (value.size() <= 100 ? value :
-                               value.substr(0, 80) + " ... (" +
-                                 std::to_string(value.size()) + " characters)") +
-        "', but " + allowed + ".")
-  {}
-
+      : std::runtime_error(
+          "Invalid input: parameter '" + parameter + "' has the value '" +
+          // A long value (a table, a list of bodies) is quoted in part.
+          (value.size() <= 100 ?
+             value :
+             value.substr(0, 80) + " ... (" + std::to_string(value.size()) +
+               " characters)") +
+          "', but " + allowed + ".")
+  {
+  }
 
   PiecewiseLinear::PiecewiseLinear(const double constant)
-    : T_{0.}
-    , v_{constant}
+      : T_{0.}
+      , v_{constant}
   {
     seg.v0 = constant;
   }
-
 
   PiecewiseLinear
   PiecewiseLinear::parse(const std::string &text, const std::string &parameter)
@@ -50,12 +50,15 @@ namespace femp
             if (parts.size() == 1 && entries.size() == 1)
               {
                 table.T_.push_back(0.);
-                table.v_.push_back(dealii::Utilities::string_to_double(parts[0]));
+                table.v_.push_back(
+                  dealii::Utilities::string_to_double(parts[0]));
               }
             else if (parts.size() == 2)
               {
-                table.T_.push_back(dealii::Utilities::string_to_double(parts[0]));
-                table.v_.push_back(dealii::Utilities::string_to_double(parts[1]));
+                table.T_.push_back(
+                  dealii::Utilities::string_to_double(parts[0]));
+                table.v_.push_back(
+                  dealii::Utilities::string_to_double(parts[1]));
               }
             else
               throw InputError(parameter, text, allowed);
@@ -90,7 +93,6 @@ namespace femp
     return table;
   }
 
-
   double
   PiecewiseLinear::antiderivative(const double T) const
   {
@@ -112,13 +114,11 @@ namespace femp
     return sum + v_.back() * (T - T_.back());
   }
 
-
   double
   PiecewiseLinear::integral(const double T0, const double T1) const
   {
     return antiderivative(T1) - antiderivative(T0);
   }
-
 
   double
   PiecewiseLinear::min_value() const
@@ -126,13 +126,11 @@ namespace femp
     return *std::min_element(v_.begin(), v_.end());
   }
 
-
   double
   PiecewiseLinear::max_value() const
   {
     return *std::max_element(v_.begin(), v_.end());
   }
-
 
   template <int dim>
   dealii::Point<dim>
@@ -140,9 +138,7 @@ namespace femp
   {
     const auto parts = dealii::Utilities::split_string_list(text, ',');
     if (parts.size() < static_cast<std::size_t>(dim))
-      throw InputError(parameter,
-                       text,
-                       point_pattern_description(dim));
+      throw InputError(parameter, text, point_pattern_description(dim));
     dealii::Point<dim> p;
     try
       {
@@ -155,7 +151,6 @@ namespace femp
       }
     return p;
   }
-
 
   std::string
   point_pattern_description(const int dim)

@@ -8,10 +8,13 @@ namespace femp
   Material::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Material");
-    prm.declare_entry("Density", "7955", Patterns::Double(),
+    prm.declare_entry("Density",
+                      "7955",
+                      Patterns::Double(),
                       "Metal density rho_m, kg/m^3; range (0, inf). Default: "
                       "316L stainless steel (Kim 1975).");
-    prm.declare_entry("Specific heat", "300:499.2, 1670:681.2, 1730:770.4",
+    prm.declare_entry("Specific heat",
+                      "300:499.2, 1670:681.2, 1730:770.4",
                       Patterns::Anything(),
                       "Metal specific heat c_m(T), J/(kg K), > 0: a number, or "
                       "'T1:c1, T2:c2, ...' piecewise linear in T (K), held "
@@ -25,29 +28,52 @@ namespace femp
                       "Default: 316L (Kim 1975, type 316: 9.248 + 0.01571 T "
                       "solid, 300-1670 K; 12.41 + 0.003279 T liquid, "
                       "1730-3000 K).");
-    prm.declare_entry("Solidus temperature", "1670", Patterns::Double(),
+    prm.declare_entry("Solidus temperature",
+                      "1670",
+                      Patterns::Double(),
                       "Solidus T_s, K; range (0, liquidus).");
-    prm.declare_entry("Liquidus temperature", "1730", Patterns::Double(),
+    prm.declare_entry("Liquidus temperature",
+                      "1730",
+                      Patterns::Double(),
                       "Liquidus T_l, K; range (solidus, inf). The liquid "
                       "fraction rises linearly from T_s to T_l.");
-    prm.declare_entry("Latent heat of fusion", "2.68e5", Patterns::Double(),
+    prm.declare_entry("Latent heat of fusion",
+                      "2.68e5",
+                      Patterns::Double(),
                       "L_m, J/kg; range [0, inf).");
-    prm.declare_entry("Latent heat of evaporation", "7.41e6", Patterns::Double(0.),
+    prm.declare_entry("Latent heat of evaporation",
+                      "7.41e6",
+                      Patterns::Double(0.),
                       "L_v of the surface loss of eq. (1) and of the recoil "
                       "pressure, J/kg; range [0, inf).");
-    prm.declare_entry("Evaporation temperature", "3090", Patterns::Double(0.),
-                      "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
-    prm.declare_entry("Molar mass", "0.0558", Patterns::Double(0.),
-                      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
-    prm.declare_entry("Ambient pressure", "101325", Patterns::Double(0.),
+    prm.declare_entry(
+      "Evaporation temperature",
+      "3090",
+      Patterns::Double(0.),
+      "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
+    prm.declare_entry(
+      "Molar mass",
+      "0.0558",
+      Patterns::Double(0.),
+      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
+    prm.declare_entry("Ambient pressure",
+                      "101325",
+                      Patterns::Double(0.),
                       "Ambient pressure p_0, Pa; range [0, inf).");
-    prm.declare_entry("Gas density", "1.6", Patterns::Double(),
+    prm.declare_entry("Gas density",
+                      "1.6",
+                      Patterns::Double(),
                       "Ambient gas density rho_g, kg/m^3; range [0, inf). "
                       "Enters partially filled cells and the surface weighting "
                       "2 rho c/(rho_m c_m + rho_g c_g) of eq. (1).");
-    prm.declare_entry("Gas specific heat", "520", Patterns::Double(),
-                      "Ambient gas specific heat c_g, J/(kg K); range [0, inf).");
-    prm.declare_entry("Gas thermal conductivity", "0.018", Patterns::Double(),
+    prm.declare_entry(
+      "Gas specific heat",
+      "520",
+      Patterns::Double(),
+      "Ambient gas specific heat c_g, J/(kg K); range [0, inf).");
+    prm.declare_entry("Gas thermal conductivity",
+                      "0.018",
+                      Patterns::Double(),
                       "Ambient gas conductivity lambda_g, W/(m K): the gas "
                       "share of a partly filled cell's conductivity and the "
                       "conduction from detached drops (Heat transfer/"
@@ -56,15 +82,14 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   void
   Material::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Material");
-    density = prm.get_double("Density");
-    specific_heat =
-      PiecewiseLinear::parse(prm.get("Specific heat"), "Material/Specific heat");
-    conductivity = PiecewiseLinear::parse(prm.get("Thermal conductivity"),
+    density            = prm.get_double("Density");
+    specific_heat      = PiecewiseLinear::parse(prm.get("Specific heat"),
+                                           "Material/Specific heat");
+    conductivity       = PiecewiseLinear::parse(prm.get("Thermal conductivity"),
                                           "Material/Thermal conductivity");
     solidus            = prm.get_double("Solidus temperature");
     liquidus           = prm.get_double("Liquidus temperature");
@@ -77,26 +102,50 @@ namespace femp
     molar_mass              = prm.get_double("Molar mass");
     ambient_pressure        = prm.get_double("Ambient pressure");
     prm.leave_subsection();
-    require(evaporation_temperature > 0, "Material/Evaporation temperature",
-            evaporation_temperature, "it must be positive (K)");
-    require(molar_mass > 0, "Material/Molar mass", molar_mass,
+    require(evaporation_temperature > 0,
+            "Material/Evaporation temperature",
+            evaporation_temperature,
+            "it must be positive (K)");
+    require(molar_mass > 0,
+            "Material/Molar mass",
+            molar_mass,
             "it must be positive (kg/mol)");
 
-    require(density > 0, "Material/Density", density, "it must be positive (kg/m^3)");
-    require(specific_heat.min_value() > 0, "Material/Specific heat",
-            specific_heat.min_value(), "every specific heat must be positive (J/(kg K))");
-    require(conductivity.min_value() > 0, "Material/Thermal conductivity",
-            conductivity.min_value(), "every conductivity must be positive (W/(m K))");
-    require(solidus > 0, "Material/Solidus temperature", solidus,
+    require(density > 0,
+            "Material/Density",
+            density,
+            "it must be positive (kg/m^3)");
+    require(specific_heat.min_value() > 0,
+            "Material/Specific heat",
+            specific_heat.min_value(),
+            "every specific heat must be positive (J/(kg K))");
+    require(conductivity.min_value() > 0,
+            "Material/Thermal conductivity",
+            conductivity.min_value(),
+            "every conductivity must be positive (W/(m K))");
+    require(solidus > 0,
+            "Material/Solidus temperature",
+            solidus,
             "it must be positive (K)");
-    require(liquidus > solidus, "Material/Liquidus temperature", liquidus,
+    require(liquidus > solidus,
+            "Material/Liquidus temperature",
+            liquidus,
             "it must exceed the solidus temperature " + num(solidus) + " K");
-    require(latent_heat_fusion >= 0, "Material/Latent heat of fusion",
-            latent_heat_fusion, "it must be non-negative (J/kg)");
-    require(gas_density >= 0, "Material/Gas density", gas_density, "it must be non-negative");
-    require(gas_specific_heat >= 0, "Material/Gas specific heat", gas_specific_heat,
+    require(latent_heat_fusion >= 0,
+            "Material/Latent heat of fusion",
+            latent_heat_fusion,
+            "it must be non-negative (J/kg)");
+    require(gas_density >= 0,
+            "Material/Gas density",
+            gas_density,
             "it must be non-negative");
-    require(gas_conductivity >= 0, "Material/Gas thermal conductivity",
-            gas_conductivity, "it must be non-negative");
+    require(gas_specific_heat >= 0,
+            "Material/Gas specific heat",
+            gas_specific_heat,
+            "it must be non-negative");
+    require(gas_conductivity >= 0,
+            "Material/Gas thermal conductivity",
+            gas_conductivity,
+            "it must be non-negative");
   }
 } // namespace femp

@@ -6,11 +6,10 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_file.h>
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 #include <utility>
 #include <vector>
 
@@ -37,7 +36,6 @@ namespace femp
     };
     ResolvedCopies resolved_copies;
 
-
     /// The name an include line names, or "" if @p line is no include.
     std::string
     included_name(const std::string &line, std::size_t &first)
@@ -54,23 +52,26 @@ namespace femp
       return dealii::Utilities::trim(name);
     }
 
-
     std::string
     resolve(const std::string &file, const unsigned int depth)
     {
-      require(depth < 16, "include", file,
+      require(depth < 16,
+              "include",
+              file,
               "includes are nested more than 16 deep (does a file include "
               "itself?)");
       std::ifstream in(file);
-      require(static_cast<bool>(in), depth == 0 ? "scene file" : "include",
-              file, "the file does not exist or cannot be read");
+      require(static_cast<bool>(in),
+              depth == 0 ? "scene file" : "include",
+              file,
+              "the file does not exist or cannot be read");
       const fs::path     folder = fs::path(file).parent_path();
       std::ostringstream out;
       std::string        line;
       while (std::getline(in, line))
         {
-          std::size_t       first = 0;
-          const std::string name  = included_name(line, first);
+          std::size_t       first  = 0;
+          const std::string name   = included_name(line, first);
           const fs::path    beside = folder / name;
           if (!name.empty() && fs::path(name).is_relative() &&
               fs::exists(beside) && !fs::is_directory(beside))
@@ -81,20 +82,22 @@ namespace femp
               std::ifstream     original(beside);
               std::stringstream raw;
               raw << original.rdbuf();
-              const std::string text = resolve(beside.string(), depth + 1);
+              const std::string text   = resolve(beside.string(), depth + 1);
               std::string       target = beside.string();
               if (text != raw.str() && text + "\n" != raw.str() &&
                   text != raw.str() + "\n")
                 {
                   static unsigned int n = 0;
-                  target = (fs::temp_directory_path() /
-                            ("femp-" + std::to_string(::getpid()) + "-" +
-                             std::to_string(n++) + "-" +
-                             beside.filename().string()))
-                             .string();
+                  target =
+                    (fs::temp_directory_path() /
+                     ("femp-" + std::to_string(::getpid()) + "-" +
+                      std::to_string(n++) + "-" + beside.filename().string()))
+                      .string();
                   std::ofstream copy(target);
                   copy << text;
-                  require(static_cast<bool>(copy), "include", beside.string(),
+                  require(static_cast<bool>(copy),
+                          "include",
+                          beside.string(),
                           "a resolved copy could not be written to " + target);
                   resolved_copies.files.emplace_back(target, beside.string());
                 }
@@ -106,13 +109,11 @@ namespace femp
     }
   } // namespace
 
-
   std::string
   resolve_includes(const std::string &file)
   {
     return resolve(file, 0);
   }
-
 
   void
   parse_parameter_file(dealii::ParameterHandler &prm, const std::string &file)
@@ -126,7 +127,7 @@ namespace femp
       {
         // deal.II names the resolved copy of an included file: name the
         // file the user wrote instead.
-        std::string msg = e.what();
+        std::string msg  = e.what();
         const auto  info = msg.find("Additional information:");
         if (info != std::string::npos)
           msg = msg.substr(info + 23);
@@ -135,7 +136,7 @@ namespace femp
           msg = msg.substr(0, trace);
         for (const auto &f : resolved_copies.files)
           for (std::size_t pos = msg.find(f.first); pos != std::string::npos;
-               pos = msg.find(f.first, pos + f.second.size()))
+               pos             = msg.find(f.first, pos + f.second.size()))
             msg.replace(pos, f.first.size(), f.second);
         AssertThrow(false, dealii::ExcMessage(msg));
       }

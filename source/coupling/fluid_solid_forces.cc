@@ -8,19 +8,18 @@ namespace femp
 {
   template <int dim>
   FluidSolidForces<dim>::FluidSolidForces(
-    const BackgroundGrid<dim> &               grid,
-    const MaterialPoints<dim> &               points,
+    const BackgroundGrid<dim>                &grid,
+    const MaterialPoints<dim>                &points,
     const double                              density,
     const typename SolidFEM<dim>::Parameters &fe_zone)
-    : grid(grid)
-    , points(points)
-    , density(density)
-    , fe_zone(fe_zone)
+      : grid(grid)
+      , points(points)
+      , density(density)
+      , fe_zone(fe_zone)
   {
     for (int d = 0; d < dim; ++d)
       node_force[d] = grid.make_node_field();
   }
-
 
   template <int dim>
   void
@@ -30,16 +29,15 @@ namespace femp
     spread(face_force, &face_cells);
   }
 
-
   template <int dim>
   std::array<double, (1u << dim)>
   FluidSolidForces<dim>::corner_shares(const std::size_t c) const
   {
     constexpr unsigned int n_corners = 1u << dim;
-    using P                          = typename MaterialPoints<dim>::PropertyIndex;
+    using P        = typename MaterialPoints<dim>::PropertyIndex;
     const double h = grid.h(), ih = 1. / h;
     const double m_ref = density * std::pow(h, dim) / n_corners;
-    const auto & x0    = grid.origin();
+    const auto  &x0    = grid.origin();
     const auto   ijk   = grid.global_index(c);
     std::array<double, n_corners> share;
     // 1 in the FE zone, else min(1, 2 m_I / m_ref).
@@ -72,14 +70,13 @@ namespace femp
     return share;
   }
 
-
   template <int dim>
   void
-  FluidSolidForces<dim>::spread(const FaceForces &                F,
+  FluidSolidForces<dim>::spread(const FaceForces                 &F,
                                 const std::vector<std::uint32_t> *cells)
   {
-    constexpr unsigned int n_corners = 1u << dim;
-    const auto &ns = grid.node_strides();
+    constexpr unsigned int             n_corners = 1u << dim;
+    const auto                        &ns        = grid.node_strides();
     std::array<std::size_t, n_corners> offset;
     for (unsigned int k = 0; k < n_corners; ++k)
       {
@@ -116,7 +113,6 @@ namespace femp
             }
       }
   }
-
 
   template class FluidSolidForces<2>;
   template class FluidSolidForces<3>;

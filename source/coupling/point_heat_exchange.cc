@@ -7,19 +7,19 @@ namespace femp
 {
   template <int dim>
   PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim> &points,
-                                            HeatTransfer<dim> &  heat,
+                                            HeatTransfer<dim>   &heat,
                                             const bool carried_by_points)
-    : points(points)
-    , heat(heat)
-    , carried_by_points(carried_by_points)
-  {}
-
+      : points(points)
+      , heat(heat)
+      , carried_by_points(carried_by_points)
+  {
+  }
 
   template <int dim>
   void
   PointHeatExchange<dim>::initial_temperatures(
     const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
-    const typename HeatTransfer<dim>::Parameters &heat_prm)
+    const typename HeatTransfer<dim>::Parameters                      &heat_prm)
   {
     using P = typename MaterialPoints<dim>::PropertyIndex;
     if (!heat_prm.initial_temperature_expression.empty())
@@ -57,7 +57,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   PointHeatExchange<dim>::points_changed_cells()
@@ -66,16 +65,18 @@ namespace femp
     // Energy bookkeeping: the stored enthalpy before and after (collective).
     const double        H_before = heat_enabled ? heat.stored_enthalpy() : 0.;
     std::vector<double> alpha    = points.metal_fraction();
-    const auto &        old      = heat.metal_fraction();
+    const auto         &old      = heat.metal_fraction();
     using P                      = typename MaterialPoints<dim>::PropertyIndex;
     if (heat_enabled && carried_by_points)
       {
         // The points carry the heat: every cell whose points came from
         // cells at other temperatures takes their mean specific enthalpy
         // (cells that gained metal included).
-        const auto mean_e = points.volume_mean_over_points(
-          heat.temperature(),
-          [this](const double T) { return heat.specific_enthalpy(T); });
+        const auto mean_e =
+          points.volume_mean_over_points(heat.temperature(),
+                                         [this](const double T) {
+                                           return heat.specific_enthalpy(T);
+                                         });
         heat.set_metal_fraction(alpha);
         heat.take_point_enthalpy(mean_e);
         moved_points += heat.stored_enthalpy() - H_before;
@@ -101,7 +102,6 @@ namespace femp
     if (heat_enabled)
       moved_points += heat.stored_enthalpy() - H_before;
   }
-
 
   template class PointHeatExchange<2>;
   template class PointHeatExchange<3>;

@@ -18,12 +18,13 @@ namespace femp
     constexpr int fluid = flow_cells::fluid;
   } // namespace
 
-
   template <int dim>
   void
   FreeSurface<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.declare_entry("Curvature smoothing", "0", Patterns::Integer(0, 4),
+    prm.declare_entry("Curvature smoothing",
+                      "0",
+                      Patterns::Integer(0, 4),
                       "Passes of the curvature smoothing: each pass replaces "
                       "the capillary pressure of a free-surface cell by the "
                       "mean over the free-surface cells among its 3^dim "
@@ -31,7 +32,8 @@ namespace femp
                       "2 or 4 (an odd number of passes flips the sign of the "
                       "curvature's cell-to-cell noise, and the surface goes "
                       "unstable; doc/stability.md).");
-    prm.declare_entry("Curvature", "alpha gradient",
+    prm.declare_entry("Curvature",
+                      "alpha gradient",
                       Patterns::Selection("alpha gradient|height function"),
                       "How the curvature div(n) of a free-surface cell is "
                       "computed (doc/flow.md): 'alpha gradient' (default), "
@@ -43,22 +45,26 @@ namespace femp
                       "falling back to the alpha gradient where a column "
                       "does not cross the surface (melt thinner than about "
                       "3 cells, walls).");
-    prm.declare_entry("Surface tension", "0", Patterns::Double(0.),
+    prm.declare_entry("Surface tension",
+                      "0",
+                      Patterns::Double(0.),
                       "Surface tension coefficient sigma, N/m (0: no surface "
                       "tension); enters as the capillary pressure sigma div(n) "
                       "at the free surface. Range [0, inf).");
-    prm.declare_entry("Surface tension temperature derivative", "0",
+    prm.declare_entry("Surface tension temperature derivative",
+                      "0",
                       Patterns::Double(),
                       "dsigma/dT of the Marangoni stress, N/(m K) (negative "
                       "for most metals; 0: no Marangoni stress). Range any "
                       "real number.");
-    prm.declare_entry("Recoil coefficient", "0", Patterns::Double(0., 1.),
+    prm.declare_entry("Recoil coefficient",
+                      "0",
+                      Patterns::Double(0., 1.),
                       "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
                       "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
                       "L_v, M, T_v, p0 from the Heat transfer subsection. "
                       "Range [0, 1].");
   }
-
 
   template <int dim>
   void
@@ -70,33 +76,35 @@ namespace femp
     surface_tension_gradient =
       prm.get_double("Surface tension temperature derivative");
     recoil_coefficient = prm.get_double("Recoil coefficient");
-    require(surface_tension >= 0, "Melt flow/Surface tension", surface_tension,
+    require(surface_tension >= 0,
+            "Melt flow/Surface tension",
+            surface_tension,
             "it must be non-negative (N/m)");
     // One pass maps the curvature's cell-to-cell alternation on a chain of
     // surface cells to -1/3 of itself (the mean of a cell and its two
     // neighbours): an odd number of passes turns the restoring capillary
     // pressure of a one-cell wrinkle into one that pushes it further, and
     // the drops of doc/stability.md ("Curvature smoothing") go unstable.
-    require(curvature_smoothing % 2 == 0, "Melt flow/Curvature smoothing",
+    require(curvature_smoothing % 2 == 0,
+            "Melt flow/Curvature smoothing",
             curvature_smoothing,
             "it must be 0, 2 or 4: an odd number of passes reverses the sign "
             "of the curvature's cell-to-cell noise, which makes the free "
             "surface unstable (doc/stability.md, \"Curvature smoothing\")");
   }
 
-
   template <int dim>
-  FreeSurface<dim>::FreeSurface(const Parameters &         prm,
-                                const Material &           material,
+  FreeSurface<dim>::FreeSurface(const Parameters          &prm,
+                                const Material            &material,
                                 const BackgroundGrid<dim> &grid,
                                 const MaterialPoints<dim> &points)
-    : prm(prm)
-    , mat(material)
-    , grid(grid)
-    , points(points)
-    , corner_offset(flow_cells::corner_offsets(grid, true))
-    , around_offset(flow_cells::corner_offsets(grid, false))
-    , stencil(flow_cells::neighbourhood(grid))
+      : prm(prm)
+      , mat(material)
+      , grid(grid)
+      , points(points)
+      , corner_offset(flow_cells::corner_offsets(grid, true))
+      , around_offset(flow_cells::corner_offsets(grid, false))
+      , stencil(flow_cells::neighbourhood(grid))
   {
     p_surface    = grid.make_field(0.);
     p_capillary  = grid.make_field(0.);
@@ -111,12 +119,11 @@ namespace femp
     near2 = grid.make_field();
   }
 
-
   template <int dim>
   void
-  FreeSurface<dim>::update(const std::vector<double> &       type,
+  FreeSurface<dim>::update(const std::vector<double>        &type,
                            const std::vector<std::uint32_t> &fluid_cells,
-                           const std::vector<double> *       temperature)
+                           const std::vector<double>        *temperature)
   {
     const bool thermal =
       prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
@@ -138,7 +145,6 @@ namespace femp
     smooth_capillary_pressure(fluid_cells);
     grid.update_ghosts(p_surface);
   }
-
 
   template <int dim>
   void
@@ -170,7 +176,6 @@ namespace femp
           }
   }
 
-
   template <int dim>
   void
   FreeSurface<dim>::map_metal_fraction()
@@ -179,7 +184,7 @@ namespace femp
     const double h   = grid.h();
     const double ih  = 1. / h;
     const double ihd = std::pow(ih, dim);
-    const auto & x0  = grid.origin();
+    const auto  &x0  = grid.origin();
     // alpha at nodes: volume of the metal points near the fluid, tent
     // weights.
     std::fill(alpha_node.begin(), alpha_node.end(), 0.);
@@ -223,11 +228,10 @@ namespace femp
     grid.update_ghosts(alpha_cell);
   }
 
-
   template <int dim>
   void
   FreeSurface<dim>::locate_interface(
-    const std::vector<double> &       type,
+    const std::vector<double>        &type,
     const std::vector<std::uint32_t> &fluid_cells)
   {
     // Free-surface position on each fluid-gas face: where the smoothed
@@ -252,7 +256,6 @@ namespace femp
       grid.update_ghosts(theta[f]);
   }
 
-
   // Height-function curvature (Cummins, Francois and Kothe 2005; Popinet
   // 2009): across a surface that is a graph over the directions other than
   // d, the column sums H of alpha along d (in cells) are the surface's
@@ -268,9 +271,9 @@ namespace femp
   void
   FreeSurface<dim>::height_columns(const std::vector<double> &type)
   {
-    const auto &cs     = grid.strides();
-    const auto &status = grid.cell_status();
-    const double nan   = std::numeric_limits<double>::quiet_NaN();
+    const auto  &cs     = grid.strides();
+    const auto  &status = grid.cell_status();
+    const double nan    = std::numeric_limits<double>::quiet_NaN();
     // alpha where it is known: near1 cells (computed) and gas cells (no
     // metal); NaN elsewhere, so that a column through such a cell is NaN.
     const auto a = [&](const std::size_t c) {
@@ -296,14 +299,13 @@ namespace femp
       }
   }
 
-
   template <int dim>
   double
   FreeSurface<dim>::height_function_curvature(const std::size_t c,
-                                              const double *    n) const
+                                              const double     *n) const
   {
-    const auto &cs  = grid.strides();
-    int         d   = 0;
+    const auto &cs = grid.strides();
+    int         d  = 0;
     for (int e = 1; e < dim; ++e)
       if (std::abs(n[e]) > std::abs(n[d]))
         d = e;
@@ -349,17 +351,16 @@ namespace femp
            (h * std::pow(1 + Hx * Hx + Hy * Hy, 1.5));
   }
 
-
   template <int dim>
   void
   FreeSurface<dim>::capillary_and_marangoni(
-    const std::vector<double> &       type,
+    const std::vector<double>        &type,
     const std::vector<std::uint32_t> &fluid_cells,
-    const std::vector<double> *       temperature)
+    const std::vector<double>        *temperature)
   {
     const double h      = grid.h();
-    const auto & cs     = grid.strides();
-    const auto & status = grid.cell_status();
+    const auto  &cs     = grid.strides();
+    const auto  &status = grid.cell_status();
     // Surface cells (owned fluid cells with a gas face): p_s = sigma div(n)
     // + p_recoil(T), and the Marangoni traction on their gas faces.
     std::fill(p_surface.begin(), p_surface.end(), 0.);
@@ -375,7 +376,7 @@ namespace femp
           surface = surface || type[c + cs[d]] == gas || type[c - cs[d]] == gas;
         if (!surface)
           continue;
-        double div = 0;
+        double div     = 0;
         double nc[dim] = {};
         for (unsigned int k = 0; k < n_corners; ++k)
           {
@@ -429,11 +430,11 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           {
             nc[d] /= nn;
-            const bool   m = type[c - cs[d]] == fluid || type[c - cs[d]] == solid;
-            const bool   p = type[c + cs[d]] == fluid || type[c + cs[d]] == solid;
+            const bool m = type[c - cs[d]] == fluid || type[c - cs[d]] == solid;
+            const bool p = type[c + cs[d]] == fluid || type[c + cs[d]] == solid;
             const double Tm = m ? (*temperature)[c - cs[d]] : T;
             const double Tp = p ? (*temperature)[c + cs[d]] : T;
-            gT[d] = (m && p) ? (Tp - Tm) / (2 * h) : (Tp - Tm) / h;
+            gT[d]           = (m && p) ? (Tp - Tm) / (2 * h) : (Tp - Tm) / h;
             ndotg += nc[d] * gT[d];
           }
         const double face = std::pow(h, dim - 1) / (1u << (dim - 1));
@@ -443,7 +444,8 @@ namespace femp
               const std::ptrdiff_t o = side ? cs[d] : -cs[d];
               if (type[c + o] != gas)
                 continue;
-              const double w = prm.surface_tension_gradient * face * std::abs(nc[d]);
+              const double w =
+                prm.surface_tension_gradient * face * std::abs(nc[d]);
               const std::size_t n0 = grid.first_node_of_cell(c);
               for (unsigned int k = 0; k < n_corners; ++k)
                 if ((int((k >> d) & 1)) == side)
@@ -456,7 +458,6 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         grid.sum_shared_nodes(surface_force[d]);
   }
-
 
   // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
   // surface cell (doc/flow.md, "3D track with recoil"). T_s is the median
@@ -480,14 +481,14 @@ namespace femp
   void
   FreeSurface<dim>::add_recoil_pressure(
     const std::vector<std::uint32_t> &fluid_cells,
-    const std::vector<double> *       temperature)
+    const std::vector<double>        *temperature)
   {
     if (prm.recoil_coefficient == 0)
       return;
     const double R_gas = 8.314462618;
     const double Tv    = mat.evaporation_temperature;
-    const double a     = mat.latent_heat_evaporation * mat.molar_mass /
-                     (R_gas * Tv);
+    const double a =
+      mat.latent_heat_evaporation * mat.molar_mass / (R_gas * Tv);
     std::array<double, 27> Ts;
     for (const auto c : fluid_cells)
       {
@@ -498,13 +499,13 @@ namespace femp
           if (surface_mark[c + o] != 0)
             Ts[n++] = (*temperature)[c + o];
         std::sort(Ts.begin(), Ts.begin() + n);
-        const double T = (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
+        const double T =
+          (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
         if (T > 0)
           p_surface[c] += prm.recoil_coefficient * mat.ambient_pressure *
                           std::exp(a * (T - Tv) / T);
       }
   }
-
 
   // Curvature smoothing: the curvature div(n) of the smoothed alpha at a
   // staircase surface is noisy from cell to cell (at a round drop of
@@ -549,14 +550,11 @@ namespace femp
       }
   }
 
-
-
-
   template <int dim>
   std::array<double, (1u << dim)>
   FreeSurface<dim>::corner_alpha(const std::size_t c) const
   {
-    const auto &                    nc  = grid.n_cells();
+    const auto                     &nc  = grid.n_cells();
     const auto                      ijk = grid.global_index(c);
     const std::size_t               n0  = grid.first_node_of_cell(c);
     std::array<double, (1u << dim)> a;

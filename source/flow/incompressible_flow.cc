@@ -39,18 +39,18 @@
 // PressureSolver (pressure_solver.cc).
 #include <deal.II/base/mpi.h>
 
-#include <femp/flow/incompressible_flow.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/flow/incompressible_flow.h>
 #include <femp/io/checkpoint.h>
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <sstream>
 #include <type_traits>
 #include <utility>
-#include <sstream>
 
 namespace femp
 {
@@ -65,32 +65,48 @@ namespace femp
     gravity[dim - 1] = -9.81;
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Melt flow");
-    prm.declare_entry("Viscosity", "6e-3", Patterns::Double(0.),
-                      "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
-    prm.declare_entry("Darcy constant", "1e8", Patterns::Double(0.),
-                      "Mushy-zone constant K_c of the Darcy damping "
-                      "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
-    prm.declare_entry("Darcy epsilon", "1e-3", Patterns::Double(0.),
+    prm.declare_entry(
+      "Viscosity",
+      "6e-3",
+      Patterns::Double(0.),
+      "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
+    prm.declare_entry(
+      "Darcy constant",
+      "1e8",
+      Patterns::Double(0.),
+      "Mushy-zone constant K_c of the Darcy damping "
+      "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
+    prm.declare_entry("Darcy epsilon",
+                      "1e-3",
+                      Patterns::Double(0.),
                       "eps0 of the Darcy damping, avoids division by zero; "
                       "range (0, 1].");
-    prm.declare_entry("FLIP fraction", "0.95", Patterns::Double(0., 1.),
+    prm.declare_entry("FLIP fraction",
+                      "0.95",
+                      Patterns::Double(0., 1.),
                       "beta of the grid-to-point update: 1 pure FLIP, 0 pure "
                       "PIC; range [0, 1].");
-    prm.declare_entry("Courant number", "0.25", Patterns::Double(0.),
-                      "C of the convective limit dt <= C h / u_max; range (0, 1].");
-    prm.declare_entry("Capillary step fraction", "0.5", Patterns::Double(0.),
+    prm.declare_entry(
+      "Courant number",
+      "0.25",
+      Patterns::Double(0.),
+      "C of the convective limit dt <= C h / u_max; range (0, 1].");
+    prm.declare_entry("Capillary step fraction",
+                      "0.5",
+                      Patterns::Double(0.),
                       "Fraction of the capillary limit sqrt(rho h^3/(2 pi "
                       "sigma)) used by the automatic fluid step (surface "
                       "tension is explicit on the old geometry; the "
                       "oscillating-droplet study in doc/flow.md chose 0.5); "
                       "range (0, 1].");
-    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+    prm.declare_entry("Time step",
+                      "0",
+                      Patterns::Double(0.),
                       "Prescribed fluid step, s; 0 (default) chooses it "
                       "automatically at every sub-step as the smallest of the "
                       "convective, viscous and (fraction of the) capillary "
@@ -98,7 +114,9 @@ namespace femp
                       "h^2 rho/(2 dim mu) or the capillary limit is refused; "
                       "above the convective limit the step-halving safety "
                       "applies. Range [0, inf).");
-    prm.declare_entry("Point shifting", "0", Patterns::Double(0.),
+    prm.declare_entry("Point shifting",
+                      "0",
+                      Patterns::Double(0.),
                       "Coefficient A of the point shifting: each fluid point "
                       "is moved, besides its advection, by -A h |u| dt "
                       "grad(alpha) (alpha the metal fraction at the nodes, "
@@ -106,7 +124,9 @@ namespace femp
                       "most h/4 per step), which keeps the points evenly "
                       "spread (see doc/flow.md); dimensionless, 0 switches it "
                       "off. Range [0, 10].");
-    prm.declare_entry("Volume correction", "0", Patterns::Double(0.),
+    prm.declare_entry("Volume correction",
+                      "0",
+                      Patterns::Double(0.),
                       "Relaxation factor c of the volume correction: each "
                       "step the fluid points move, besides their advection, "
                       "by grad(psi), where lap(psi) = c (V_c/h^dim - 1) on the "
@@ -123,21 +143,20 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Melt flow");
-    viscosity = prm.get_double("Viscosity");
-    darcy_constant   = prm.get_double("Darcy constant");
-    darcy_epsilon    = prm.get_double("Darcy epsilon");
-    flip_fraction    = prm.get_double("FLIP fraction");
-    cfl              = prm.get_double("Courant number");
+    viscosity          = prm.get_double("Viscosity");
+    darcy_constant     = prm.get_double("Darcy constant");
+    darcy_epsilon      = prm.get_double("Darcy epsilon");
+    flip_fraction      = prm.get_double("FLIP fraction");
+    cfl                = prm.get_double("Courant number");
     capillary_fraction = prm.get_double("Capillary step fraction");
-    time_step        = prm.get_double("Time step");
-    point_shifting   = prm.get_double("Point shifting");
-    volume_correction = prm.get_double("Volume correction");
+    time_step          = prm.get_double("Time step");
+    point_shifting     = prm.get_double("Point shifting");
+    volume_correction  = prm.get_double("Volume correction");
     typename FreeSurface<dim>::Parameters surface;
     surface.parse_parameters(prm);
     surface_tension          = surface.surface_tension;
@@ -147,28 +166,43 @@ namespace femp
     height_function          = surface.height_function;
     pressure.parse_parameters(prm);
     prm.leave_subsection();
-    require(viscosity >= 0, "Melt flow/Viscosity", viscosity,
+    require(viscosity >= 0,
+            "Melt flow/Viscosity",
+            viscosity,
             "it must be non-negative (Pa s)");
-    require(darcy_constant >= 0, "Melt flow/Darcy constant", darcy_constant,
+    require(darcy_constant >= 0,
+            "Melt flow/Darcy constant",
+            darcy_constant,
             "it must be non-negative (kg/(m^3 s))");
-    require(darcy_epsilon > 0 && darcy_epsilon <= 1, "Melt flow/Darcy epsilon",
-            darcy_epsilon, "it must lie in (0, 1]");
-    require(flip_fraction >= 0 && flip_fraction <= 1, "Melt flow/FLIP fraction",
-            flip_fraction, "it must lie in [0, 1]");
-    require(cfl > 0 && cfl <= 1, "Melt flow/Courant number", cfl,
+    require(darcy_epsilon > 0 && darcy_epsilon <= 1,
+            "Melt flow/Darcy epsilon",
+            darcy_epsilon,
+            "it must lie in (0, 1]");
+    require(flip_fraction >= 0 && flip_fraction <= 1,
+            "Melt flow/FLIP fraction",
+            flip_fraction,
+            "it must lie in [0, 1]");
+    require(cfl > 0 && cfl <= 1,
+            "Melt flow/Courant number",
+            cfl,
             "it must lie in (0, 1]");
     require(point_shifting >= 0 && point_shifting <= 10,
-            "Melt flow/Point shifting", point_shifting, "it must lie in [0, 10]");
+            "Melt flow/Point shifting",
+            point_shifting,
+            "it must lie in [0, 10]");
     require(volume_correction >= 0 && volume_correction <= 1,
-            "Melt flow/Volume correction", volume_correction,
+            "Melt flow/Volume correction",
+            volume_correction,
             "it must lie in [0, 1]");
     require(capillary_fraction > 0 && capillary_fraction <= 1,
-            "Melt flow/Capillary step fraction", capillary_fraction,
+            "Melt flow/Capillary step fraction",
+            capillary_fraction,
             "it must lie in (0, 1]");
-    require(time_step >= 0, "Melt flow/Time step", time_step,
+    require(time_step >= 0,
+            "Melt flow/Time step",
+            time_step,
             "it must be non-negative (s; 0: automatic)");
   }
-
 
   template <int dim>
   typename FreeSurface<dim>::Parameters
@@ -182,8 +216,6 @@ namespace femp
     s.height_function          = height_function;
     return s;
   }
-
-
 
   template <int dim>
   typename IncompressibleFlow<dim>::StepLimits
@@ -204,7 +236,6 @@ namespace femp
     return limits;
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::Parameters::check_time_step(const double h,
@@ -215,38 +246,40 @@ namespace femp
     const StepLimits   l = material_limits(*this, h, rho);
     std::ostringstream allowed;
     allowed << "it exceeds the "
-            << (l.viscous <= l.capillary ? "viscous limit h^2 rho/(2 dim mu) = " :
-                                           "capillary limit sqrt(rho h^3/(2 pi "
-                                           "sigma)) = ")
+            << (l.viscous <= l.capillary ?
+                  "viscous limit h^2 rho/(2 dim mu) = " :
+                  "capillary limit sqrt(rho h^3/(2 pi "
+                  "sigma)) = ")
             << std::min(l.viscous, l.capillary) << " s (h = " << h
             << " m, rho = " << rho << " kg/m^3, mu = " << viscosity
             << " Pa s, sigma = " << surface_tension
             << " N/m); use 0 (automatic) or a step at most this limit";
     require(time_step <= std::min(l.viscous, l.capillary) * (1 + 1e-12),
-            "Melt flow/Time step", time_step, allowed.str());
+            "Melt flow/Time step",
+            time_step,
+            allowed.str());
   }
 
-
   template <int dim>
-  IncompressibleFlow<dim>::IncompressibleFlow(const Parameters &         prm,
-                                              const Material &           material,
+  IncompressibleFlow<dim>::IncompressibleFlow(const Parameters &prm,
+                                              const Material   &material,
                                               const BackgroundGrid<dim> &grid,
-                                              MaterialPoints<dim> &      points,
-                                              TimerOutput *              timer)
-    : prm(prm)
-    , rho(material.density)
-    , grid(grid)
-    , points(points)
-    , timer(timer)
-    , corner_offset(flow_cells::corner_offsets(grid, true))
-    , around_offset(flow_cells::corner_offsets(grid, false))
-    , stencil(flow_cells::neighbourhood(grid))
-    , surface(prm.surface_parameters(), material, grid, points)
-    , pressure_solver(prm.pressure, grid, prm.volume_correction > 0, timer)
+                                              MaterialPoints<dim>       &points,
+                                              TimerOutput               *timer)
+      : prm(prm)
+      , rho(material.density)
+      , grid(grid)
+      , points(points)
+      , timer(timer)
+      , corner_offset(flow_cells::corner_offsets(grid, true))
+      , around_offset(flow_cells::corner_offsets(grid, false))
+      , stencil(flow_cells::neighbourhood(grid))
+      , surface(prm.surface_parameters(), material, grid, points)
+      , pressure_solver(prm.pressure, grid, prm.volume_correction > 0, timer)
   {
     // Q1 stiffness int grad N_a . grad N_b over a cell of size h
     // (2-point Gauss rule per direction, exact for Q1).
-    const double h   = grid.h();
+    const double h     = grid.h();
     const double gp[2] = {0.5 - 0.5 / std::sqrt(3.), 0.5 + 0.5 / std::sqrt(3.)};
     for (auto &row : stiffness)
       row.fill(0.);
@@ -272,18 +305,18 @@ namespace femp
               stiffness[a][b] += w * grad[a][k] * grad[b][k];
       }
 
-    type       = grid.make_field(outside);
-    type_old   = grid.make_field(-1.);
-    p_cell     = grid.make_field(0.);
-    mass       = grid.make_node_field();
-    volume     = grid.make_node_field();
+    type     = grid.make_field(outside);
+    type_old = grid.make_field(-1.);
+    p_cell   = grid.make_field(0.);
+    mass     = grid.make_node_field();
+    volume   = grid.make_node_field();
     if (prm.volume_correction > 0)
       {
         occupancy = grid.make_field(0.);
         psi       = grid.make_field(0.);
       }
-    node_mark  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
-    node_fix   = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
+    node_mark = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
+    node_fix  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     for (int d = 0; d < dim; ++d)
       {
         mom[d]    = grid.make_node_field();
@@ -293,7 +326,6 @@ namespace femp
         u_cell[d] = grid.make_field();
       }
   }
-
 
   template <int dim>
   typename IncompressibleFlow<dim>::StepLimits
@@ -322,7 +354,6 @@ namespace femp
     return limits;
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::particles_to_grid()
@@ -332,7 +363,6 @@ namespace femp
     transfer_to_grid();
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::classify_cells()
@@ -340,10 +370,10 @@ namespace femp
     // One pass over the points of the occupied cells does both the cell
     // classification and the P2G scatter of mass and momentum (a deal.II
     // particles_in_cell() range per cell is the dominant cost of a pass).
-    using P            = typename MaterialPoints<dim>::PropertyIndex;
-    const auto &status = grid.cell_status();
-    const double ih    = 1. / grid.h();
-    const auto & x0    = grid.origin();
+    using P             = typename MaterialPoints<dim>::PropertyIndex;
+    const auto  &status = grid.cell_status();
+    const double ih     = 1. / grid.h();
+    const auto  &x0     = grid.origin();
     std::swap(type, type_old);
     for (std::size_t i = 0; i < type.size(); ++i)
       type[i] = status[i] == BackgroundGrid<dim>::outside ? outside : gas;
@@ -354,7 +384,7 @@ namespace femp
     std::fill(mass.begin(), mass.end(), 0.);
     for (int d = 0; d < dim; ++d)
       std::fill(mom[d].begin(), mom[d].end(), 0.);
-    const auto &handler = points.particle_handler();
+    const auto &handler      = points.particle_handler();
     const bool  count_volume = prm.volume_correction > 0;
     const auto &occupied     = points.occupied_cells();
     // Only cells that held a fluid point at the last classification, or
@@ -375,8 +405,8 @@ namespace femp
             type[idx] = solid; // (occupancy is read in fluid cells only)
             continue;
           }
-        bool        any_fluid   = false;
-        double      V_cell      = 0;
+        bool   any_fluid = false;
+        double V_cell    = 0;
         for (const double *v : points.cell_point_properties(c))
           {
             V_cell += v[P::volume];
@@ -388,10 +418,10 @@ namespace femp
         if (!any_fluid)
           continue;
         fluid_cells.push_back(idx);
-        const auto        ijk       = grid.global_index(idx);
-        const std::size_t n0        = grid.first_node_of_cell(idx);
-        double *          nm[n_corners];
-        double *          nu[dim][n_corners];
+        const auto        ijk = grid.global_index(idx);
+        const std::size_t n0  = grid.first_node_of_cell(idx);
+        double           *nm[n_corners];
+        double           *nu[dim][n_corners];
         for (unsigned int k = 0; k < n_corners; ++k)
           {
             nm[k] = &mass[n0 + corner_offset[k]];
@@ -427,8 +457,8 @@ namespace femp
       node_mark[n] = 0;
     active.clear();
     active_cell.clear();
-    const auto & nc        = grid.n_cells();
-    const double node_vol  = std::pow(0.5 * grid.h(), dim);
+    const auto  &nc       = grid.n_cells();
+    const double node_vol = std::pow(0.5 * grid.h(), dim);
     for (const auto c : fluid_cells)
       {
         const std::size_t n0  = grid.first_node_of_cell(c);
@@ -464,7 +494,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::transfer_to_grid()
@@ -479,7 +508,6 @@ namespace femp
         u_old[d][n] = mass[n] > 0 ? mom[d][n] / mass[n] : 0.;
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::apply_boundary_conditions(
@@ -492,13 +520,12 @@ namespace femp
             u[d][n] = 0;
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::predictor(const double               dt,
                                      const std::vector<double> *gamma)
   {
-    Section section(timer, "flow: predictor");
+    Section     section(timer, "flow: predictor");
     const auto &surface_force = surface.marangoni_force();
     // Viscous force -mu K u per fluid cell, summed over ranks; per cell
     // also its dissipation mu u^T K u, for check_viscous_energy().
@@ -510,7 +537,7 @@ namespace femp
         cell_dissipation.resize(fluid_cells.size());
         for (std::size_t i = 0; i < fluid_cells.size(); ++i)
           {
-            const std::size_t n0 = grid.first_node_of_cell(fluid_cells[i]);
+            const std::size_t n0  = grid.first_node_of_cell(fluid_cells[i]);
             double            uKu = 0;
             for (int d = 0; d < dim; ++d)
               {
@@ -535,18 +562,19 @@ namespace femp
     const double darcy = dt * prm.darcy_constant / rho;
     for (std::size_t a = 0; a < active.size(); ++a)
       {
-        const std::size_t n = active[a];
+        const std::size_t n       = active[a];
         double            damping = 1;
         if (gamma != nullptr && prm.darcy_constant > 0)
           {
             const std::size_t c0 = active_cell[a];
-            double            g = 0;
-            int               k = 0;
+            double            g  = 0;
+            int               k  = 0;
             for (unsigned int j = 0; j < n_corners; ++j)
               if (type[c0 - around_offset[j]] == fluid)
                 g += (*gamma)[c0 - around_offset[j]], ++k;
             g = k > 0 ? g / k : 1.;
-            damping += darcy * (1 - g) * (1 - g) / (g * g * g + prm.darcy_epsilon);
+            damping +=
+              darcy * (1 - g) * (1 - g) / (g * g * g + prm.darcy_epsilon);
           }
         for (int d = 0; d < dim; ++d)
           {
@@ -577,17 +605,17 @@ namespace femp
   void
   IncompressibleFlow<dim>::check_viscous_energy(const double dt) const
   {
-    const double node_vol = std::pow(0.5 * grid.h(), dim);
-    double       sums[3]  = {0, 0, 0}; // dissipation, f M^-1 f, 2 E
-    double       worst = -std::numeric_limits<double>::max();
+    const double node_vol   = std::pow(0.5 * grid.h(), dim);
+    double       sums[3]    = {0, 0, 0}; // dissipation, f M^-1 f, 2 E
+    double       worst      = -std::numeric_limits<double>::max();
     std::size_t  worst_cell = 0;
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
-        const std::size_t n0 = grid.first_node_of_cell(fluid_cells[i]);
+        const std::size_t n0  = grid.first_node_of_cell(fluid_cells[i]);
         double            fMf = 0, uMu = 0;
         for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t n = n0 + corner_offset[a];
+            const std::size_t n  = n0 + corner_offset[a];
             double            f2 = 0, u2 = 0;
             for (int d = 0; d < dim; ++d)
               {
@@ -604,32 +632,34 @@ namespace femp
         if (gain > worst)
           worst = gain, worst_cell = fluid_cells[i];
       }
-    Utilities::MPI::sum(ArrayView<const double>(sums, 3), grid.communicator(),
+    Utilities::MPI::sum(ArrayView<const double>(sums, 3),
+                        grid.communicator(),
                         ArrayView<double>(sums, 3));
     const double dE = dt * (0.5 * dt * sums[1] - sums[0]);
     const double E  = 0.5 * sums[2];
     if (!(dE > 1e-10 * E))
       return;
     // Where the gain is largest: the rank holding the global maximum says.
-    const double global_worst =
-      Utilities::MPI::max(worst, grid.communicator());
-    Point<dim> where;
-    const bool found = fluid_cells.size() > 0 && worst >= global_worst;
+    const double global_worst = Utilities::MPI::max(worst, grid.communicator());
+    Point<dim>   where;
+    const bool   found = fluid_cells.size() > 0 && worst >= global_worst;
     if (found)
       where = grid.cell_center(worst_cell);
     share_location(found, where, grid.communicator());
     const auto l = stable_time_step();
     throw CollectiveError(
       "Melt flow: the explicit viscous update of a step of " + num(dt) +
-      " s raised the melt's kinetic energy by " + num(dE / std::max(E, 1e-300)) +
+      " s raised the melt's kinetic energy by " +
+      num(dE / std::max(E, 1e-300)) +
       " of itself, which no stable step can do (viscosity only dissipates); "
       "the grid-scale velocity mode grows fastest in the cell at " +
-      location_text(where) + " m. The step exceeds the stable limit of the "
+      location_text(where) +
+      " m. The step exceeds the stable limit of the "
       "explicit viscous term (femp's viscous limit h^2 rho/(2 dim mu) is " +
-      num(l.viscous) + " s here): use 'Melt flow/Time step = 0' (steps "
+      num(l.viscous) +
+      " s here): use 'Melt flow/Time step = 0' (steps "
       "chosen within the limits) or a smaller prescribed step.");
   }
-
 
   template <int dim>
   void
@@ -639,15 +669,16 @@ namespace femp
     surface.update(type, fluid_cells, T);
   }
 
-
   template <int dim>
   typename PressureSolver<dim>::FluidCells
   IncompressibleFlow<dim>::fluid_cell_set() const
   {
-    return {type, type_old, fluid_cells, surface.near_fluid(),
+    return {type,
+            type_old,
+            fluid_cells,
+            surface.near_fluid(),
             surface.interface_position()};
   }
-
 
   template <int dim>
   void
@@ -662,31 +693,36 @@ namespace femp
         double            div = 0;
         for (unsigned int k = 0; k < n_corners; ++k)
           for (int d = 0; d < dim; ++d)
-            div += (((k >> d) & 1) ? 1. : -1.) * u_new[d][n0 + corner_offset[k]];
+            div +=
+              (((k >> d) & 1) ? 1. : -1.) * u_new[d][n0 + corner_offset[k]];
         divergence[i] = div * scale;
       }
   }
-
 
   template <int dim>
   void
   IncompressibleFlow<dim>::pressure_solve(const double dt)
   {
     velocity_divergence();
-    const auto cells     = fluid_cell_set();
-    const bool capillary = prm.surface_tension > 0 || prm.recoil_coefficient > 0;
+    const auto cells = fluid_cell_set();
+    const bool capillary =
+      prm.surface_tension > 0 || prm.recoil_coefficient > 0;
     pressure_solver.update_system(cells);
-    pressure_solver.solve_pressure(cells, divergence, surface.surface_pressure(),
-                            capillary, rho, dt, p_cell);
+    pressure_solver.solve_pressure(cells,
+                                   divergence,
+                                   surface.surface_pressure(),
+                                   capillary,
+                                   rho,
+                                   dt,
+                                   p_cell);
     copy_solver_statistics();
   }
-
 
   template <int dim>
   void
   IncompressibleFlow<dim>::copy_solver_statistics()
   {
-    const auto &s          = pressure_solver.statistics();
+    const auto &s           = pressure_solver.statistics();
     stats.matrix_rebuilds   = s.matrix_rebuilds;
     stats.amg_setups        = s.amg_setups;
     stats.cg_iterations     = s.cg_iterations;
@@ -697,18 +733,16 @@ namespace femp
     stats.volume_skipped    = s.volume_skipped;
   }
 
-
-
   template <int dim>
   void
   IncompressibleFlow<dim>::correction(const double dt)
   {
     Section      section(timer, "flow: correction");
-    const auto & theta     = surface.interface_position();
-    const auto & p_surface = surface.surface_pressure();
-    const double h  = grid.h();
-    const auto & cs = grid.strides();
-    const double f  = dt / (rho * h);
+    const auto  &theta     = surface.interface_position();
+    const auto  &p_surface = surface.surface_pressure();
+    const double h         = grid.h();
+    const auto  &cs        = grid.strides();
+    const double f         = dt / (rho * h);
     for (std::size_t a = 0; a < active.size(); ++a)
       {
         const std::size_t n  = active[a];
@@ -732,7 +766,8 @@ namespace femp
                 else if (tu == fluid && tl == gas)
                   sum += (p_cell[up] - p_surface[up]) / theta[2 * d][up], ++k;
                 else if (tu == gas && tl == fluid)
-                  sum -= (p_cell[lo] - p_surface[lo]) / theta[2 * d + 1][lo], ++k;
+                  sum -= (p_cell[lo] - p_surface[lo]) / theta[2 * d + 1][lo],
+                    ++k;
               }
             if (k > 0)
               u_new[d][n] -= f * sum / k;
@@ -740,7 +775,6 @@ namespace femp
       }
     apply_boundary_conditions(u_new);
   }
-
 
   template <int dim>
   void
@@ -760,7 +794,8 @@ namespace femp
         std::size_t rest = n;
         for (int e = dim - 1; e >= 0; --e)
           {
-            const int i = grid.box_lower()[e] + int(rest / grid.node_strides()[e]);
+            const int i =
+              grid.box_lower()[e] + int(rest / grid.node_strides()[e]);
             rest %= grid.node_strides()[e];
             where[e] = grid.origin()[e] + i * grid.h();
           }
@@ -769,11 +804,10 @@ namespace femp
       }
     share_location(found, where, grid.communicator());
     throw CollectiveError("Melt flow became unstable: non-finite velocity at "
-                          "the grid node at x = " + location_text(where) +
-                          " m (time step " + num(dt) +
+                          "the grid node at x = " +
+                          location_text(where) + " m (time step " + num(dt) +
                           " s). Reduce the time step.");
   }
-
 
   // Volume correction (doc/flow.md, "Volume correction"). The fluid points
   // carry a fixed volume, but the advection with an only approximately
@@ -828,19 +862,17 @@ namespace femp
     copy_solver_statistics();
   }
 
-
-
   template <int dim>
   void
   IncompressibleFlow<dim>::volume_faces(const std::size_t c, double *G) const
   {
-    const auto & theta = surface.interface_position();
-    const double h  = grid.h();
-    const auto & cs = grid.strides();
+    const auto  &theta = surface.interface_position();
+    const double h     = grid.h();
+    const auto  &cs    = grid.strides();
     for (int d = 0; d < dim; ++d)
       for (const int side : {0, 1})
         {
-          const std::size_t e = side ? c + cs[d] : c - cs[d];
+          const std::size_t e    = side ? c + cs[d] : c - cs[d];
           double            jump = 0; // psi(neighbour or ghost) - psi(c), /h^2
           if (type[e] == fluid)
             jump = psi[e] - psi[c];
@@ -851,19 +883,18 @@ namespace femp
         }
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::grid_to_points(const double dt)
   {
     Section section(timer, "flow: grid to points + advection");
-    using P           = typename MaterialPoints<dim>::PropertyIndex;
-    const double h    = grid.h();
-    const double ih   = 1. / h;
-    const auto & x0   = grid.origin();
-    const auto & nc   = grid.n_cells();
-    const double beta = prm.flip_fraction;
-    auto &       handler = points.particle_handler_for_update();
+    using P              = typename MaterialPoints<dim>::PropertyIndex;
+    const double h       = grid.h();
+    const double ih      = 1. / h;
+    const auto  &x0      = grid.origin();
+    const auto  &nc      = grid.n_cells();
+    const double beta    = prm.flip_fraction;
+    auto        &handler = points.particle_handler_for_update();
     // Cells where a point left (increasing): only their points are checked
     // by the re-sort, not every point of the powder and the substrate.
     std::vector<std::uint32_t> left_cells;
@@ -871,109 +902,113 @@ namespace femp
     // shifting and the volume correction), so that either costs nothing
     // when it is off.
     const auto loop = [&](auto mode_tag) {
-    constexpr int  mode     = decltype(mode_tag)::value;
-    constexpr bool shifting = mode & 1;
-    constexpr bool volume_c = mode & 2;
-    bool         moved   = false;
-    double       umax    = 0;
-    for (const auto &[idx, cell] : points.occupied_cells())
-      {
-        if (type[idx] != fluid)
-          continue;
-        const auto        ijk = grid.global_index(idx);
-        const std::size_t n0  = grid.first_node_of_cell(idx);
-        ShiftCell         sc;
-        if constexpr (shifting)
-          sc = shift_cell(idx);
-        double G[2 * dim] = {};
-        if constexpr (volume_c)
-          volume_faces(idx, G);
-        bool cell_left = false;
-        for (auto &particle : handler.particles_in_cell(cell))
-          {
-            const auto v = particle.get_properties();
-            if (v[P::state] != MaterialPoints<dim>::fluid)
-              continue;
-            Point<dim> x = particle.get_location();
-            double     xi[dim];
-            for (int d = 0; d < dim; ++d)
-              xi[d] = (x[d] - x0[d]) * ih - ijk[d];
-            double vg[dim] = {}, dv[dim] = {};
-            for (unsigned int k = 0; k < n_corners; ++k)
-              {
-                double w = 1;
-                for (int d = 0; d < dim; ++d)
-                  w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
-                const std::size_t n = n0 + corner_offset[k];
-                for (int d = 0; d < dim; ++d)
-                  {
-                    vg[d] += w * u_new[d][n];
-                    dv[d] += w * (u_new[d][n] - u_old[d][n]);
-                  }
-              }
-            double   speed2 = 0, step2 = 0;
-            bool     left   = false;
-            Point<dim> ref;
-            double   shift[dim] = {};
-            if constexpr (shifting)
-              {
-                double s2 = 0;
-                for (int d = 0; d < dim; ++d)
-                  s2 += vg[d] * vg[d];
-                shift_of_point(sc, xi, std::sqrt(s2), dt, shift);
-              }
-            if constexpr (volume_c)
-              {
-                // grad(psi) across the cell, at most h/4.
-                double vc[dim], n2 = 0;
-                for (int d = 0; d < dim; ++d)
-                  {
-                    vc[d] = (1 - xi[d]) * G[2 * d] + xi[d] * G[2 * d + 1];
-                    n2 += vc[d] * vc[d];
-                  }
-                const double f =
-                  n2 > 0.0625 * h * h ? 0.25 * h / std::sqrt(n2) : 1.;
-                for (int d = 0; d < dim; ++d)
-                  shift[d] += f * vc[d];
-              }
-            for (int d = 0; d < dim; ++d)
-              {
-                v[P::velocity + d] =
-                  beta * (v[P::velocity + d] + dv[d]) + (1 - beta) * vg[d];
-                speed2 += v[P::velocity + d] * v[P::velocity + d];
-                const double dx = dt * vg[d];
-                step2 += dx * dx;
-                // Stay inside the domain (walls are free slip).
-                const double lo = x0[d] + 1e-9 * h;
-                const double hi = x0[d] + nc[d] * h - 1e-9 * h;
-                x[d] = std::min(std::max(x[d] + ((shifting || volume_c) ? dx + shift[d] : dx), lo), hi);
-                ref[d]          = (x[d] - x0[d]) * ih - ijk[d];
-                left            = left || ref[d] < 0 || ref[d] >= 1;
-              }
-            if (!(step2 <= h * h))
-              {
-                std::ostringstream msg;
-                msg << "Melt flow became unstable: a point at x = " << x
-                    << " m would move " << std::sqrt(step2)
-                    << " m in one step, more than a cell (" << h
-                    << " m); time step " << dt << " s. Reduce the time step "
-                    << "or the Courant number.";
-                throw std::runtime_error(msg.str());
-              }
-            umax = std::max(umax, speed2);
-            particle.set_location(x);
-            if (!left)
-              particle.set_reference_location(ref);
-            cell_left = cell_left || left;
-          }
-        if (cell_left)
-          left_cells.push_back(idx);
-        moved = moved || cell_left;
-      }
-    return std::make_pair(moved, umax);
+      constexpr int  mode     = decltype(mode_tag)::value;
+      constexpr bool shifting = mode & 1;
+      constexpr bool volume_c = mode & 2;
+      bool           moved    = false;
+      double         umax     = 0;
+      for (const auto &[idx, cell] : points.occupied_cells())
+        {
+          if (type[idx] != fluid)
+            continue;
+          const auto        ijk = grid.global_index(idx);
+          const std::size_t n0  = grid.first_node_of_cell(idx);
+          ShiftCell         sc;
+          if constexpr (shifting)
+            sc = shift_cell(idx);
+          double G[2 * dim] = {};
+          if constexpr (volume_c)
+            volume_faces(idx, G);
+          bool cell_left = false;
+          for (auto &particle : handler.particles_in_cell(cell))
+            {
+              const auto v = particle.get_properties();
+              if (v[P::state] != MaterialPoints<dim>::fluid)
+                continue;
+              Point<dim> x = particle.get_location();
+              double     xi[dim];
+              for (int d = 0; d < dim; ++d)
+                xi[d] = (x[d] - x0[d]) * ih - ijk[d];
+              double vg[dim] = {}, dv[dim] = {};
+              for (unsigned int k = 0; k < n_corners; ++k)
+                {
+                  double w = 1;
+                  for (int d = 0; d < dim; ++d)
+                    w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
+                  const std::size_t n = n0 + corner_offset[k];
+                  for (int d = 0; d < dim; ++d)
+                    {
+                      vg[d] += w * u_new[d][n];
+                      dv[d] += w * (u_new[d][n] - u_old[d][n]);
+                    }
+                }
+              double     speed2 = 0, step2 = 0;
+              bool       left = false;
+              Point<dim> ref;
+              double     shift[dim] = {};
+              if constexpr (shifting)
+                {
+                  double s2 = 0;
+                  for (int d = 0; d < dim; ++d)
+                    s2 += vg[d] * vg[d];
+                  shift_of_point(sc, xi, std::sqrt(s2), dt, shift);
+                }
+              if constexpr (volume_c)
+                {
+                  // grad(psi) across the cell, at most h/4.
+                  double vc[dim], n2 = 0;
+                  for (int d = 0; d < dim; ++d)
+                    {
+                      vc[d] = (1 - xi[d]) * G[2 * d] + xi[d] * G[2 * d + 1];
+                      n2 += vc[d] * vc[d];
+                    }
+                  const double f =
+                    n2 > 0.0625 * h * h ? 0.25 * h / std::sqrt(n2) : 1.;
+                  for (int d = 0; d < dim; ++d)
+                    shift[d] += f * vc[d];
+                }
+              for (int d = 0; d < dim; ++d)
+                {
+                  v[P::velocity + d] =
+                    beta * (v[P::velocity + d] + dv[d]) + (1 - beta) * vg[d];
+                  speed2 += v[P::velocity + d] * v[P::velocity + d];
+                  const double dx = dt * vg[d];
+                  step2 += dx * dx;
+                  // Stay inside the domain (walls are free slip).
+                  const double lo = x0[d] + 1e-9 * h;
+                  const double hi = x0[d] + nc[d] * h - 1e-9 * h;
+                  x[d]   = std::min(std::max(x[d] + ((shifting || volume_c) ?
+                                                       dx + shift[d] :
+                                                       dx),
+                                           lo),
+                                  hi);
+                  ref[d] = (x[d] - x0[d]) * ih - ijk[d];
+                  left   = left || ref[d] < 0 || ref[d] >= 1;
+                }
+              if (!(step2 <= h * h))
+                {
+                  std::ostringstream msg;
+                  msg << "Melt flow became unstable: a point at x = " << x
+                      << " m would move " << std::sqrt(step2)
+                      << " m in one step, more than a cell (" << h
+                      << " m); time step " << dt << " s. Reduce the time step "
+                      << "or the Courant number.";
+                  throw std::runtime_error(msg.str());
+                }
+              umax = std::max(umax, speed2);
+              particle.set_location(x);
+              if (!left)
+                particle.set_reference_location(ref);
+              cell_left = cell_left || left;
+            }
+          if (cell_left)
+            left_cells.push_back(idx);
+          moved = moved || cell_left;
+        }
+      return std::make_pair(moved, umax);
     };
-    const int  mode = (prm.point_shifting > 0 ? 1 : 0) +
-                     (prm.volume_correction > 0 ? 2 : 0);
+    const int mode =
+      (prm.point_shifting > 0 ? 1 : 0) + (prm.volume_correction > 0 ? 2 : 0);
     const auto [moved, umax] =
       mode == 0 ? loop(std::integral_constant<int, 0>()) :
       mode == 1 ? loop(std::integral_constant<int, 1>()) :
@@ -997,10 +1032,9 @@ namespace femp
       }
   }
 
-
   // Point shifting: fluid points are displaced down the gradient of the
-  // metal fraction alpha (nodal values from FreeSurface::update()), so that they
-  // stay evenly spread (4 per cell in 2D) instead of bunching or leaving
+  // metal fraction alpha (nodal values from FreeSurface::update()), so that
+  // they stay evenly spread (4 per cell in 2D) instead of bunching or leaving
   // voids in the liquid. The displacement -A h |u| dt grad(alpha) is the
   // diffusion-type shifting of SPH (Lind et al. 2012 with the
   // velocity-scaled coefficient of Skillen et al. 2013), here with the
@@ -1012,7 +1046,7 @@ namespace femp
   typename IncompressibleFlow<dim>::ShiftCell
   IncompressibleFlow<dim>::shift_cell(const std::size_t c) const
   {
-    ShiftCell         sc;
+    ShiftCell   sc;
     const auto &cs = grid.strides();
     sc.alpha       = surface.corner_alpha(c);
     for (const auto o : stencil)
@@ -1029,7 +1063,7 @@ namespace femp
             const std::size_t lo = c - cs[d], up = c + cs[d];
             const bool        l = status[lo] != BackgroundGrid<dim>::outside;
             const bool        u = status[up] != BackgroundGrid<dim>::outside;
-            sc.normal[d] = -((u ? alpha_cell[up] : alpha_cell[c]) -
+            sc.normal[d]        = -((u ? alpha_cell[up] : alpha_cell[c]) -
                              (l ? alpha_cell[lo] : alpha_cell[c]));
             norm += sc.normal[d] * sc.normal[d];
           }
@@ -1040,14 +1074,13 @@ namespace femp
     return sc;
   }
 
-
   template <int dim>
   void
   IncompressibleFlow<dim>::shift_of_point(const ShiftCell &sc,
-                                          const double *   xi,
+                                          const double    *xi,
                                           const double     speed,
                                           const double     dt,
-                                          double *         dx) const
+                                          double          *dx) const
   {
     // grad(alpha) h: derivative of the bilinear (trilinear) interpolant in
     // reference coordinates.
@@ -1069,7 +1102,7 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           g[d] -= gn * sc.normal[d];
       }
-    const double a = -prm.point_shifting * speed * dt; // times grad(alpha) h
+    const double a  = -prm.point_shifting * speed * dt; // times grad(alpha) h
     double       n2 = 0;
     for (int d = 0; d < dim; ++d)
       {
@@ -1081,7 +1114,6 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         dx[d] *= cap / std::sqrt(n2);
   }
-
 
   template <int dim>
   void
@@ -1095,7 +1127,8 @@ namespace femp
         msg << "Melt flow: the time step " << dt
             << " s is not positive or exceeds the viscous limit "
             << limits.viscous << " s (h^2 rho/(2 dim mu)) or the capillary "
-            << "limit " << limits.capillary << " s (sqrt(rho h^3/(2 pi sigma))).";
+            << "limit " << limits.capillary
+            << " s (sqrt(rho h^3/(2 pi sigma))).";
         throw std::runtime_error(msg.str());
       }
     advance(dt, 0, fields);
@@ -1107,12 +1140,12 @@ namespace femp
                                    const unsigned int     depth,
                                    const CellFields<dim> &fields)
   {
-    particles_to_grid();   // P2G: cell classes, nodal mass and momentum
+    particles_to_grid(); // P2G: cell classes, nodal mass and momentum
     update_free_surface(fields.temperature); // alpha, theta, p_s, Marangoni
     predictor(dt, fields.liquid_fraction);   // u*: gravity, viscosity,
                                              // surface forces, Darcy
-    pressure_solve(dt);    // div(dt/rho grad p) = div u*
-    correction(dt);        // u = u* - dt/rho grad p
+    pressure_solve(dt);                      // div(dt/rho grad p) = div u*
+    correction(dt);                          // u = u* - dt/rho grad p
     // Step rejection: if the new nodal velocity would carry a point more
     // than a cell (e.g. a sudden recoil or capillary pressure that the
     // limits of the last step did not foresee), redo the step as two halves.
@@ -1135,11 +1168,10 @@ namespace femp
         return;
       }
     update_cell_velocity();
-    volume_solve();       // psi of the volume correction (when on)
-    grid_to_points(dt);   // G2P: FLIP/PIC update and advection
+    volume_solve();     // psi of the volume correction (when on)
+    grid_to_points(dt); // G2P: FLIP/PIC update and advection
     ++stats.steps;
   }
-
 
   template <int dim>
   double
@@ -1157,7 +1189,6 @@ namespace femp
       }
     return std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
   }
-
 
   template <int dim>
   void
@@ -1181,13 +1212,11 @@ namespace femp
       grid.update_ghosts(u_cell[d]);
   }
 
-
-
   template <int dim>
   void
   IncompressibleFlow<dim>::fluid_forces_on_solid(
     std::array<std::vector<double>, 2 * dim * dim> &F,
-    std::vector<std::uint32_t> &                    cells) const
+    std::vector<std::uint32_t>                     &cells) const
   {
     // (Flow and solid together, doc/solid.md; a separate entry point, not
     // part of the fluid step.) From the solid side, so that a fluid
@@ -1204,7 +1233,7 @@ namespace femp
     cells.clear();
     if (stats.n_fluid_cells == 0) // global
       return;
-    const auto & cs   = grid.strides();
+    const auto  &cs   = grid.strides();
     const double h    = grid.h();
     const double area = std::pow(h, dim - 1);
     for (const auto c : grid.owned_cells())
@@ -1220,11 +1249,11 @@ namespace femp
                 continue;
               if (!written)
                 cells.push_back(c);
-              written = true;
+              written        = true;
               const double s = side ? 1. : -1.;
               const double p = p_cell[n] - 0.5 * h * s * rho * prm.gravity[d];
               const unsigned int f = dim * (2 * d + side);
-              F[f + d][c] = -s * p * area;
+              F[f + d][c]          = -s * p * area;
               for (int e = 0; e < dim; ++e)
                 if (e != d)
                   F[f + e][c] = prm.viscosity * u_cell[e][n] / (0.5 * h) * area;
@@ -1236,7 +1265,8 @@ namespace femp
   void
   IncompressibleFlow<dim>::save_state(StateWriter &out)
   {
-    std::vector<const std::vector<double> *> fields = {&type, &type_old,
+    std::vector<const std::vector<double> *> fields = {&type,
+                                                       &type_old,
                                                        &p_cell};
     for (int d = 0; d < dim; ++d)
       fields.push_back(&u_cell[d]);
@@ -1244,9 +1274,14 @@ namespace femp
     // The statistics are global (the same on every rank); field by field
     // (no padding bytes in the file).
     const auto &s = stats;
-    for (const unsigned int v : {s.steps, s.matrix_rebuilds, s.amg_setups,
-                                 s.last_iterations, s.max_iterations,
-                                 s.resorts, s.global_sorts, s.halvings,
+    for (const unsigned int v : {s.steps,
+                                 s.matrix_rebuilds,
+                                 s.amg_setups,
+                                 s.last_iterations,
+                                 s.max_iterations,
+                                 s.resorts,
+                                 s.global_sorts,
+                                 s.halvings,
                                  s.volume_skipped})
       out.put(v);
     for (const unsigned long v :
@@ -1255,7 +1290,6 @@ namespace femp
     out.put(s.max_point_speed);
     pressure_solver.restart(pressure_solver.statistics());
   }
-
 
   template <int dim>
   void
@@ -1266,11 +1300,17 @@ namespace femp
       fields.push_back(&u_cell[d]);
     load_cell_fields(parts, grid, fields);
     classified = false; // the points were loaded anew
-    auto &in = parts[0];
-    auto &s  = stats;
-    for (unsigned int *v : {&s.steps, &s.matrix_rebuilds, &s.amg_setups,
-                            &s.last_iterations, &s.max_iterations, &s.resorts,
-                            &s.global_sorts, &s.halvings, &s.volume_skipped})
+    auto &in   = parts[0];
+    auto &s    = stats;
+    for (unsigned int *v : {&s.steps,
+                            &s.matrix_rebuilds,
+                            &s.amg_setups,
+                            &s.last_iterations,
+                            &s.max_iterations,
+                            &s.resorts,
+                            &s.global_sorts,
+                            &s.halvings,
+                            &s.volume_skipped})
       *v = in.get<unsigned int>();
     for (unsigned long *v :
          {&s.cg_iterations, &s.n_fluid_cells, &s.volume_iterations})

@@ -24,16 +24,21 @@ namespace femp
     using flow_cells::Section;
   } // namespace
 
-
   template <int dim>
   void
   PressureSolver<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.declare_entry("Solver tolerance", "1e-10", Patterns::Double(0.),
-                      "Relative residual of the pressure CG solve; range (0, 1e-2].");
-    prm.declare_entry("Maximum iterations", "1000", Patterns::Integer(1),
+    prm.declare_entry(
+      "Solver tolerance",
+      "1e-10",
+      Patterns::Double(0.),
+      "Relative residual of the pressure CG solve; range (0, 1e-2].");
+    prm.declare_entry("Maximum iterations",
+                      "1000",
+                      Patterns::Integer(1),
                       "Most CG iterations per pressure solve; range [1, inf).");
-    prm.declare_entry("Pressure preconditioner", "auto",
+    prm.declare_entry("Pressure preconditioner",
+                      "auto",
                       Patterns::Selection("auto|amg|jacobi"),
                       "Preconditioner of the pressure CG solve: 'amg' "
                       "(Trilinos ML, a hierarchy set up at each change of "
@@ -43,7 +48,9 @@ namespace femp
                       "ranks and its solves need at most 'Jacobi iteration "
                       "limit' iterations, AMG otherwise (doc/flow.md, \"One "
                       "fluid step\", step 4).");
-    prm.declare_entry("AMG minimum rows", "10000", Patterns::Integer(0),
+    prm.declare_entry("AMG minimum rows",
+                      "10000",
+                      Patterns::Integer(0),
                       "With 'Pressure preconditioner = auto': the smallest "
                       "band, in rows (cells) over all ranks, that the AMG "
                       "preconditions; range [0, inf), 0: always AMG. Below "
@@ -51,45 +58,46 @@ namespace femp
                       "more than Jacobi's extra iterations: measured faster "
                       "with Jacobi up to 7,300 rows (the paper-scale track "
                       "at 100 W), larger bands not measured.");
-    prm.declare_entry("Jacobi iteration limit", "60", Patterns::Integer(1),
-                      "With 'Pressure preconditioner = auto': a Jacobi solve "
-                      "that needs more CG iterations than this hands the "
-                      "pressure to the AMG for the rest of the run (or until "
-                      "a resume); range [1, inf). Tracks need 23-32 per solve (at most 55 "
-                      "measured), a resting drop or a closed cavity 60-230, "
-                      "where a hierarchy that is kept across steps is "
-                      "cheaper.");
+    prm.declare_entry(
+      "Jacobi iteration limit",
+      "60",
+      Patterns::Integer(1),
+      "With 'Pressure preconditioner = auto': a Jacobi solve "
+      "that needs more CG iterations than this hands the "
+      "pressure to the AMG for the rest of the run (or until "
+      "a resume); range [1, inf). Tracks need 23-32 per solve (at most 55 "
+      "measured), a resting drop or a closed cavity 60-230, "
+      "where a hierarchy that is kept across steps is "
+      "cheaper.");
   }
-
 
   template <int dim>
   void
   PressureSolver<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
-    solver_tolerance = prm.get_double("Solver tolerance");
-    max_iterations   = prm.get_integer("Maximum iterations");
-    preconditioner   = prm.get("Pressure preconditioner");
-    amg_minimum_rows = prm.get_integer("AMG minimum rows");
+    solver_tolerance       = prm.get_double("Solver tolerance");
+    max_iterations         = prm.get_integer("Maximum iterations");
+    preconditioner         = prm.get("Pressure preconditioner");
+    amg_minimum_rows       = prm.get_integer("AMG minimum rows");
     jacobi_iteration_limit = prm.get_integer("Jacobi iteration limit");
     require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
-            "Melt flow/Solver tolerance", solver_tolerance,
+            "Melt flow/Solver tolerance",
+            solver_tolerance,
             "it must lie in (0, 1e-2]");
   }
 
-
   template <int dim>
-  PressureSolver<dim>::PressureSolver(const Parameters &         prm,
+  PressureSolver<dim>::PressureSolver(const Parameters          &prm,
                                       const BackgroundGrid<dim> &grid,
-                                      const bool     volume_correction,
-                                      TimerOutput *  timer)
-    : prm(prm)
-    , grid(grid)
-    , volume_correction(volume_correction)
-    , timer(timer)
+                                      const bool   volume_correction,
+                                      TimerOutput *timer)
+      : prm(prm)
+      , grid(grid)
+      , volume_correction(volume_correction)
+      , timer(timer)
   {
     gid = grid.make_field(-1.);
   }
-
 
   // The matrix rows are the owned cells of a band: the cells within one
   // of a fluid cell (near1 of FreeSurface; a band of two cells cost more in
@@ -126,8 +134,8 @@ namespace femp
       set_band_values(cells);
     else
       set_diagonal(cells);
-    stats.n_fluid_cells = Utilities::MPI::sum(
-      static_cast<unsigned long>(cells.fluid.size()), comm);
+    stats.n_fluid_cells =
+      Utilities::MPI::sum(static_cast<unsigned long>(cells.fluid.size()), comm);
     // A new hierarchy whenever the set of fluid cells changed. Keeping one
     // across set changes inside the band (tried until 2026-11-24) cost more
     // than it saved: in the 0.2 ms 3D track the stale hierarchy needed 50
@@ -157,7 +165,6 @@ namespace femp
       setup_amg();
   }
 
-
   template <int dim>
   bool
   PressureSolver<dim>::fluid_set_changed(const FluidCells &cells)
@@ -186,15 +193,14 @@ namespace femp
     return Utilities::MPI::logical_or(set_changed, grid.communicator());
   }
 
-
   template <int dim>
   void
   PressureSolver<dim>::number_band(const FluidCells &cells)
   {
     Section        s(timer, "flow: pressure matrix setup");
     const MPI_Comm comm   = grid.communicator();
-    const auto &   cs     = grid.strides();
-    const auto &   status = grid.cell_status();
+    const auto    &cs     = grid.strides();
+    const auto    &status = grid.cell_status();
     band.clear();
     for (const auto c : grid.owned_cells())
       if (cells.band[c] != 0 && status[c] != BackgroundGrid<dim>::outside)
@@ -206,9 +212,8 @@ namespace femp
     MPI_Exscan(&n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM, comm);
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       offset64 = 0;
-    const types::global_dof_index offset = offset64;
-    const types::global_dof_index n_total =
-      Utilities::MPI::sum(n_local, comm);
+    const types::global_dof_index offset  = offset64;
+    const types::global_dof_index n_total = Utilities::MPI::sum(n_local, comm);
     std::fill(gid.begin(), gid.end(), -1.);
     for (std::size_t i = 0; i < band.size(); ++i)
       gid[band[i]] = offset + i;
@@ -219,7 +224,8 @@ namespace femp
 
     // (An empty row range must ask for 0 entries per row: Epetra's
     // size check uses the min/max row of the range.)
-    TrilinosWrappers::SparsityPattern sp(owned_rows, comm,
+    TrilinosWrappers::SparsityPattern sp(owned_rows,
+                                         comm,
                                          n_local > 0 ? 2 * dim + 1 : 0);
     for (std::size_t i = 0; i < band.size(); ++i)
       {
@@ -240,7 +246,6 @@ namespace femp
     ++stats.matrix_rebuilds;
   }
 
-
   template <int dim>
   void
   PressureSolver<dim>::set_band_values(const FluidCells &cells)
@@ -260,12 +265,12 @@ namespace femp
         const bool              f   = type[c] == fluid;
         types::global_dof_index cols[2 * dim + 1];
         double                  vals[2 * dim + 1];
-        unsigned int            n = 0;
+        unsigned int            n    = 0;
         double                  diag = f ? 0. : 1.;
         for (int d = 0; d < dim; ++d)
           for (const int side : {0, 1})
             {
-              const std::size_t e = side ? c + cs[d] : c - cs[d];
+              const std::size_t e  = side ? c + cs[d] : c - cs[d];
               const bool        ef = type[e] == fluid;
               if (f && ef)
                 diag += 1;
@@ -285,7 +290,6 @@ namespace femp
       }
     matrix.compress(VectorOperation::insert);
   }
-
 
   template <int dim>
   void
@@ -314,7 +318,6 @@ namespace femp
     matrix.compress(VectorOperation::insert);
   }
 
-
   // ML keeps a reference to the matrix it was set up with: it gets its
   // own copy, so that a kept hierarchy stays one fixed SPD operator while
   // the values of the system matrix change (with the system matrix
@@ -340,28 +343,27 @@ namespace femp
     ++stats.amg_setups;
   }
 
-
   template <int dim>
   void
-  PressureSolver<dim>::solve_pressure(const FluidCells &         cells,
+  PressureSolver<dim>::solve_pressure(const FluidCells          &cells,
                                       const std::vector<double> &divergence,
                                       const std::vector<double> &p_surface,
                                       const bool                 capillary,
                                       const double               rho,
                                       const double               dt,
-                                      std::vector<double> &      p_cell)
+                                      std::vector<double>       &p_cell)
   {
     if (stats.n_fluid_cells == 0)
       return;
     std::optional<Section> solve_section;
     solve_section.emplace(timer, "flow: pressure solve");
     const double h           = grid.h();
-    const auto & cs          = grid.strides();
-    const auto & type        = cells.type;
-    const auto & theta       = cells.theta;
-    const auto & fluid_cells = cells.fluid;
+    const auto  &cs          = grid.strides();
+    const auto  &type        = cells.type;
+    const auto  &theta       = cells.theta;
+    const auto  &fluid_cells = cells.fluid;
     const double f           = -rho * h * h / dt;
-    rhs = 0; // identity rows of the band: p = 0
+    rhs                      = 0; // identity rows of the band: p = 0
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
         double b = f * divergence[i];
@@ -386,7 +388,6 @@ namespace femp
         solution(types::global_dof_index(gid[fluid_cells[i]]));
     grid.update_ghosts(p_cell);
   }
-
 
   template <int dim>
   void
@@ -453,12 +454,11 @@ namespace femp
     stats.max_iterations = std::max(stats.max_iterations, total);
   }
 
-
   template <int dim>
   bool
-  PressureSolver<dim>::solve_volume(const FluidCells &         cells,
+  PressureSolver<dim>::solve_volume(const FluidCells          &cells,
                                     const std::vector<double> &source,
-                                    std::vector<double> &      psi)
+                                    std::vector<double>       &psi)
   {
     std::fill(psi.begin(), psi.end(), 0.);
     if (stats.n_fluid_cells == 0)

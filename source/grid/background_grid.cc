@@ -3,8 +3,8 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/grid/grid_generator.h>
 
-#include <femp/grid/background_grid.h>
 #include <femp/base/input_checks.h>
+#include <femp/grid/background_grid.h>
 
 #include <algorithm>
 #include <limits>
@@ -49,7 +49,6 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   void
   BackgroundGrid<dim>::Parameters::parse_parameters(ParameterHandler &prm)
@@ -59,7 +58,7 @@ namespace femp
       parse_point<dim>(prm.get("Lower corner"), "Background grid/Lower corner");
     upper_corner =
       parse_point<dim>(prm.get("Upper corner"), "Background grid/Upper corner");
-    cell_size = prm.get_double("Cell size");
+    cell_size         = prm.get_double("Cell size");
     partition_by_cost = prm.get("Partition") == "cost";
     prm.leave_subsection();
 
@@ -81,21 +80,20 @@ namespace femp
                 cell_size,
                 "it must divide the domain extent " + num(extent) +
                   " m in direction " + std::to_string(d) +
-                  " into a whole number of cells (extent / h = " +
-                  num(n) + ")");
+                  " into a whole number of cells (extent / h = " + num(n) +
+                  ")");
       }
   }
-
 
   template <int dim>
   BackgroundGrid<dim>::BackgroundGrid(const Parameters &parameters,
                                       MPI_Comm          comm)
-    : prm(parameters)
-    , comm(comm)
-    , tria(comm)
-    , inv_h(1. / parameters.cell_size)
-  {}
-
+      : prm(parameters)
+      , comm(comm)
+      , tria(comm)
+      , inv_h(1. / parameters.cell_size)
+  {
+  }
 
   template <int dim>
   std::uint64_t
@@ -106,7 +104,6 @@ namespace femp
       n *= n_global[d];
     return n;
   }
-
 
   template <int dim>
   void
@@ -119,7 +116,6 @@ namespace femp
     set_ghost_pattern(known);
     set_node_pattern(known);
   }
-
 
   template <int dim>
   void
@@ -136,12 +132,12 @@ namespace femp
     // triangulation (not the domain) is padded on the upper side; padding
     // cells lie outside the domain and are never used or written. Pick the
     // largest r <= 3 whose padding adds at most 10 % cells.
-    unsigned int r = 0;
+    unsigned int                  r      = 0;
     std::array<unsigned int, dim> n_tria = n_global;
     for (unsigned int level = 3; level > 0; --level)
       {
-        const unsigned int b = 1u << level;
-        double             padded = 1, exact = 1;
+        const unsigned int            b      = 1u << level;
+        double                        padded = 1, exact = 1;
         std::array<unsigned int, dim> n_try;
         for (int d = 0; d < dim; ++d)
           {
@@ -177,7 +173,7 @@ namespace femp
     if (cell_cost && prm.partition_by_cost &&
         Utilities::MPI::n_mpi_processes(comm) > 1)
       {
-        using Tria = parallel::distributed::Triangulation<dim>;
+        using Tria      = parallel::distributed::Triangulation<dim>;
         auto connection = tria.signals.weight.connect(
           [&](const typename Tria::cell_iterator &cell,
               const typename Tria::CellStatus) {
@@ -187,7 +183,6 @@ namespace femp
         connection.disconnect();
       }
   }
-
 
   template <int dim>
   void
@@ -223,21 +218,19 @@ namespace femp
 
     status.assign(n_box, outside);
     cells_of_flat.assign(n_box, {});
-    flat_of_active.assign(tria.n_active_cells(),
-                          numbers::invalid_unsigned_int);
+    flat_of_active.assign(tria.n_active_cells(), numbers::invalid_unsigned_int);
     owned_list.clear();
     for (const auto &[ijk, cell] : known)
       {
         const std::size_t idx = local_index(ijk);
-        status[idx]         = cell->is_locally_owned() ? owned : ghost;
-        cells_of_flat[idx]  = cell;
+        status[idx]           = cell->is_locally_owned() ? owned : ghost;
+        cells_of_flat[idx]    = cell;
         flat_of_active[cell->active_cell_index()] = idx;
         if (cell->is_locally_owned())
           owned_list.push_back(idx);
       }
     std::sort(owned_list.begin(), owned_list.end());
   }
-
 
   template <int dim>
   void
@@ -263,8 +256,7 @@ namespace femp
       std::sort(ghosts.begin(), ghosts.end());
       for (const auto &[g, idx] : ghosts)
         {
-          const unsigned int owner =
-            cell_iterator(idx)->subdomain_id();
+          const unsigned int owner = cell_iterator(idx)->subdomain_id();
           requests[owner].push_back(g);
           recv_map[owner].push_back(idx);
         }
@@ -303,7 +295,6 @@ namespace femp
     send_buffers.resize(neighbours.size());
     recv_buffers.resize(neighbours.size());
   }
-
 
   template <int dim>
   void
@@ -352,8 +343,8 @@ namespace femp
         std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
         for (const auto node : nodes)
           {
-            std::size_t   rest = node;
-            std::uint64_t g = 0, m = 1;
+            std::size_t          rest = node;
+            std::uint64_t        g = 0, m = 1;
             std::array<int, dim> ijk;
             for (int d = dim - 1; d >= 0; --d)
               {
@@ -376,7 +367,6 @@ namespace femp
     node_recv.resize(node_neighbours.size());
   }
 
-
   template <int dim>
   void
   BackgroundGrid<dim>::sum_shared_nodes(std::vector<double> &field) const
@@ -388,20 +378,29 @@ namespace femp
     for (std::size_t n = 0; n < node_neighbours.size(); ++n)
       {
         node_recv[n].resize(shared_nodes[n].size());
-        MPI_Irecv(node_recv[n].data(), node_recv[n].size(), MPI_DOUBLE,
-                  node_neighbours[n], tag, comm, &requests[2 * n]);
+        MPI_Irecv(node_recv[n].data(),
+                  node_recv[n].size(),
+                  MPI_DOUBLE,
+                  node_neighbours[n],
+                  tag,
+                  comm,
+                  &requests[2 * n]);
         node_send[n].resize(shared_nodes[n].size());
         for (std::size_t i = 0; i < shared_nodes[n].size(); ++i)
           node_send[n][i] = field[shared_nodes[n][i]];
-        MPI_Isend(node_send[n].data(), node_send[n].size(), MPI_DOUBLE,
-                  node_neighbours[n], tag, comm, &requests[2 * n + 1]);
+        MPI_Isend(node_send[n].data(),
+                  node_send[n].size(),
+                  MPI_DOUBLE,
+                  node_neighbours[n],
+                  tag,
+                  comm,
+                  &requests[2 * n + 1]);
       }
     MPI_Waitall(requests.size(), requests.data(), MPI_STATUSES_IGNORE);
     for (std::size_t n = 0; n < node_neighbours.size(); ++n)
       for (std::size_t i = 0; i < shared_nodes[n].size(); ++i)
         field[shared_nodes[n][i]] += node_recv[n][i];
   }
-
 
   template <int dim>
   void

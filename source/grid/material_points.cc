@@ -6,15 +6,15 @@
 
 #include <femp/base/input_checks.h>
 #include <femp/grid/material_points.h>
-#include <femp/io/checkpoint.h>
 #include <femp/grid/powder_bed.h>
+#include <femp/io/checkpoint.h>
 
-#include <bitset>
 #include <algorithm>
 #include <array>
+#include <bitset>
+#include <cmath>
 #include <limits>
 #include <map>
-#include <cmath>
 
 namespace femp
 {
@@ -23,20 +23,29 @@ namespace femp
   MaterialPoints<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Material points");
-    prm.declare_entry("Point spacing", "4e-6", Patterns::Double(0.),
+    prm.declare_entry("Point spacing",
+                      "4e-6",
+                      Patterns::Double(0.),
                       "Spacing of the lattice on which material points are "
                       "placed, m; range (0, cell size / sub-cell divisions].");
-    prm.declare_entry("Substrate top", "1.5e-4", Patterns::Double(),
-                      "Vertical coordinate (z in 3D, y in 2D) of the top of the "
-                      "substrate block, m; the block fills the domain below it. "
-                      "Range [lower corner, upper corner].");
-    prm.declare_entry("Sub-cell divisions", "2", Patterns::Integer(1, 4),
+    prm.declare_entry(
+      "Substrate top",
+      "1.5e-4",
+      Patterns::Double(),
+      "Vertical coordinate (z in 3D, y in 2D) of the top of the "
+      "substrate block, m; the block fills the domain below it. "
+      "Range [lower corner, upper corner].");
+    prm.declare_entry("Sub-cell divisions",
+                      "2",
+                      Patterns::Integer(1, 4),
                       "Sub-cells per direction n used to compute the metal "
                       "fraction alpha by occupation (cells holding melt, i.e. "
                       "a point that is or has been fluid, take the volume of "
                       "their points instead); range 1..4.");
     prm.declare_entry(
-      "Carry points", "auto", Patterns::Selection("auto|always"),
+      "Carry points",
+      "auto",
+      Patterns::Selection("auto|always"),
       "Whether the scene carries material points. 'auto': only where "
       "something needs them, i.e. a powder layer (Layer thickness > 0), "
       "initial bodies, Physics/Melt flow, Physics/Solid stress or the "
@@ -47,28 +56,47 @@ namespace femp
       "no point files are written. 'always': points in every scene (to "
       "write them).");
     prm.enter_subsection("Powder layer");
-    prm.declare_entry("Layer thickness", "5e-5", Patterns::Double(0.),
-                      "Thickness of the powder layer on the substrate, m; 0 for "
-                      "no powder. Range [0, upper corner - substrate top].");
-    prm.declare_entry("Mean grain diameter", "30e-6", Patterns::Double(0.),
-                      "Mean diameter of the normally distributed grain sizes, m.");
-    prm.declare_entry("Grain diameter deviation", "8e-6", Patterns::Double(0.),
-                      "Standard deviation of the grain diameters, m; range [0, inf).");
-    prm.declare_entry("Minimum grain diameter", "15e-6", Patterns::Double(0.),
+    prm.declare_entry(
+      "Layer thickness",
+      "5e-5",
+      Patterns::Double(0.),
+      "Thickness of the powder layer on the substrate, m; 0 for "
+      "no powder. Range [0, upper corner - substrate top].");
+    prm.declare_entry(
+      "Mean grain diameter",
+      "30e-6",
+      Patterns::Double(0.),
+      "Mean diameter of the normally distributed grain sizes, m.");
+    prm.declare_entry(
+      "Grain diameter deviation",
+      "8e-6",
+      Patterns::Double(0.),
+      "Standard deviation of the grain diameters, m; range [0, inf).");
+    prm.declare_entry("Minimum grain diameter",
+                      "15e-6",
+                      Patterns::Double(0.),
                       "Smallest grain diameter, m (the distribution is "
                       "truncated); range (0, maximum].");
-    prm.declare_entry("Maximum grain diameter", "45e-6", Patterns::Double(0.),
+    prm.declare_entry("Maximum grain diameter",
+                      "45e-6",
+                      Patterns::Double(0.),
                       "Largest grain diameter, m; also capped by the layer "
                       "thickness. Range [minimum, inf).");
-    prm.declare_entry("Packing fraction", "0.45", Patterns::Double(0., 0.64),
+    prm.declare_entry("Packing fraction",
+                      "0.45",
+                      Patterns::Double(0., 0.64),
                       "Target volume fraction of grains in the layer; random "
                       "sequential addition reaches about 0.3-0.45 (3D). Range "
                       "(0, 0.64].");
-    prm.declare_entry("Random seed", "1", Patterns::Integer(0),
+    prm.declare_entry("Random seed",
+                      "1",
+                      Patterns::Integer(0),
                       "Seed of the packing; the same seed gives the same bed.");
     prm.leave_subsection();
     prm.declare_entry(
-      "Initial bodies", "", Patterns::Anything(),
+      "Initial bodies",
+      "",
+      Patterns::Anything(),
       "Bodies of material points placed at the start besides the substrate "
       "and the powder (flow scenes: a liquid column, a drop, a pool), "
       "separated by ';'. Each is 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' "
@@ -81,7 +109,6 @@ namespace femp
       "top it re-states the substrate's points. Empty (default): none.");
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -108,8 +135,10 @@ namespace femp
     const std::string form =
       "each body must read 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' or "
       "'STATE ellipsoid: centre -> semi-axes : T' with STATE fluid, solid or "
-      "powder, " + std::to_string(dim) + " coordinates per point (m) and T > 0 (K)";
-    const auto to_point = [&](const std::string &text, const std::string &body) {
+      "powder, " +
+      std::to_string(dim) + " coordinates per point (m) and T > 0 (K)";
+    const auto to_point = [&](const std::string &text,
+                              const std::string &body) {
       const auto parts = Utilities::split_string_list(text, ',');
       require(parts.size() == dim, name, body, form);
       Point<dim> x;
@@ -142,9 +171,12 @@ namespace femp
         require(w.size() == 2 &&
                   (w[0] == "fluid" || w[0] == "solid" || w[0] == "powder") &&
                   (w[1] == "box" || w[1] == "ellipsoid"),
-                name, body_text, form);
-        body.state = w[0] == "fluid" ? fluid : (w[0] == "solid" ? solid : powder);
-        body.box   = w[1] == "box";
+                name,
+                body_text,
+                form);
+        body.state =
+          w[0] == "fluid" ? fluid : (w[0] == "solid" ? solid : powder);
+        body.box         = w[1] == "box";
         const auto arrow = parts[1].find("->");
         require(arrow != std::string::npos, name, body_text, form);
         body.a = to_point(parts[1].substr(0, arrow), body_text);
@@ -159,20 +191,23 @@ namespace femp
           }
         require(body.T > 0, name, body_text, form);
         for (int d = 0; d < dim; ++d)
-          require(body.box ? body.b[d] > body.a[d] : body.b[d] > 0, name,
+          require(body.box ? body.b[d] > body.a[d] : body.b[d] > 0,
+                  name,
                   body_text,
                   body.box ? "the upper corner must exceed the lower corner in "
                              "every direction" :
                              "the semi-axes must be positive (m)");
         bodies.push_back(body);
       }
-    require(point_spacing > 0, "Material points/Point spacing", point_spacing,
+    require(point_spacing > 0,
+            "Material points/Point spacing",
+            point_spacing,
             "it must be positive (m)");
     require(min_diameter > 0 && min_diameter <= max_diameter,
-            "Material points/Powder layer/Minimum grain diameter", min_diameter,
+            "Material points/Powder layer/Minimum grain diameter",
+            min_diameter,
             "it must be positive and not exceed the maximum grain diameter");
   }
-
 
   template <int dim>
   void
@@ -180,17 +215,20 @@ namespace femp
     const typename BackgroundGrid<dim>::Parameters &g) const
   {
     require(point_spacing <= g.cell_size / subcells * (1 + 1e-9),
-            "Material points/Point spacing", point_spacing,
+            "Material points/Point spacing",
+            point_spacing,
             "it must not exceed cell size / sub-cell divisions = " +
               num(g.cell_size / subcells) +
               " m, so that every sub-cell of a full cell holds a point");
     const double lo = g.lower_corner[dim - 1], hi = g.upper_corner[dim - 1];
     require(substrate_top >= lo && substrate_top <= hi,
-            "Material points/Substrate top", substrate_top,
-            "it must lie in the vertical extent of the domain [" +
-              num(lo) + ", " + num(hi) + "] m");
+            "Material points/Substrate top",
+            substrate_top,
+            "it must lie in the vertical extent of the domain [" + num(lo) +
+              ", " + num(hi) + "] m");
     require(substrate_top + layer_thickness <= hi * (1 + 1e-12),
-            "Material points/Powder layer/Layer thickness", layer_thickness,
+            "Material points/Powder layer/Layer thickness",
+            layer_thickness,
             "the powder layer must fit below the top of the domain (at most " +
               num(hi - substrate_top) + " m)");
     for (const auto &body : bodies)
@@ -203,18 +241,23 @@ namespace femp
           domain += num(g.lower_corner[d]) + ", " + num(g.upper_corner[d]) +
                     (d + 1 < dim ? "] x [" : "]");
         for (int d = 0; d < dim; ++d)
-          require(lower[d] >= g.lower_corner[d] - 1e-12 * std::abs(g.lower_corner[d]) &&
-                    upper[d] <= g.upper_corner[d] + 1e-12 * std::abs(g.upper_corner[d]),
-                  "Material points/Initial bodies", body.text,
+          require(lower[d] >=
+                      g.lower_corner[d] - 1e-12 * std::abs(g.lower_corner[d]) &&
+                    upper[d] <=
+                      g.upper_corner[d] + 1e-12 * std::abs(g.upper_corner[d]),
+                  "Material points/Initial bodies",
+                  body.text,
                   "each body must lie inside the domain " + domain + " m");
-        require(layer_thickness <= 0 || lower[dim - 1] >= substrate_top + layer_thickness ||
+        require(layer_thickness <= 0 ||
+                  lower[dim - 1] >= substrate_top + layer_thickness ||
                   upper[dim - 1] <= substrate_top,
-                "Material points/Initial bodies", body.text,
-                "a body must not overlap the powder layer [" + num(substrate_top) +
-                  ", " + num(substrate_top + layer_thickness) + "] m (vertical)");
+                "Material points/Initial bodies",
+                body.text,
+                "a body must not overlap the powder layer [" +
+                  num(substrate_top) + ", " +
+                  num(substrate_top + layer_thickness) + "] m (vertical)");
       }
   }
-
 
   template <int dim>
   void
@@ -225,7 +268,6 @@ namespace femp
     carry_points = carry == "always" || layer_thickness > 0 ||
                    !bodies.empty() || melt_flow || solid || track_shape;
   }
-
 
   template <int dim>
   bool
@@ -244,23 +286,22 @@ namespace femp
     return r < 1;
   }
 
-
   template <int dim>
-  MaterialPoints<dim>::MaterialPoints(const Parameters &         prm,
-                                      const Material &           material,
+  MaterialPoints<dim>::MaterialPoints(const Parameters          &prm,
+                                      const Material            &material,
                                       const BackgroundGrid<dim> &grid,
-                                      const unsigned int n_properties)
-    : prm(prm)
-    , n_props(n_properties)
-    , mat(material)
-    , grid(grid)
+                                      const unsigned int         n_properties)
+      : prm(prm)
+      , n_props(n_properties)
+      , mat(material)
+      , grid(grid)
   {
     Assert(n_props == PropertyIndex::n_used(false, false) ||
              n_props == PropertyIndex::n_used(true, false) ||
              n_props == PropertyIndex::n_used(true, true),
-           ExcMessage("MaterialPoints: the property count must end a layout block"));
+           ExcMessage(
+             "MaterialPoints: the property count must end a layout block"));
   }
-
 
   template <int dim>
   std::vector<std::string>
@@ -271,8 +312,12 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       names.push_back(std::string("velocity_") + char('x' + d));
     const char *s2[] = {"stress_xx", "stress_yy", "stress_xy"};
-    const char *s3[] = {"stress_xx", "stress_yy", "stress_zz",
-                        "stress_xy", "stress_xz", "stress_yz"};
+    const char *s3[] = {"stress_xx",
+                        "stress_yy",
+                        "stress_zz",
+                        "stress_xy",
+                        "stress_xz",
+                        "stress_yz"};
     for (int i = 0; i < dim * (dim + 1) / 2; ++i)
       names.push_back(dim == 2 ? s2[i] : s3[i]);
     names.push_back("plastic_strain");
@@ -286,7 +331,6 @@ namespace femp
     names.resize(std::min<std::size_t>(n, names.size()));
     return names;
   }
-
 
   template <int dim>
   void
@@ -303,7 +347,7 @@ namespace femp
 
     const double s  = prm.point_spacing;
     const double h  = grid.h();
-    const auto & x0 = grid.origin();
+    const auto  &x0 = grid.origin();
 
     // Points per owned cell, as (flat index, position), gathered first.
     std::vector<std::pair<std::uint32_t, Point<dim>>> points;
@@ -322,29 +366,31 @@ namespace femp
             spec.lower[d] = x0[d];
             spec.upper[d] = x0[d] + grid.n_cells()[d] * h;
           }
-        spec.lower[dim - 1]    = prm.substrate_top;
-        spec.upper[dim - 1]    = prm.substrate_top + prm.layer_thickness;
-        spec.mean_diameter     = prm.mean_diameter;
-        spec.std_diameter      = prm.std_diameter;
-        spec.min_diameter      = prm.min_diameter;
-        spec.max_diameter      = prm.max_diameter;
-        spec.packing_fraction  = prm.packing_fraction;
-        spec.seed              = prm.seed;
-        const PowderBed bed    = pack_powder_bed(spec);
-        n_grains               = bed.grains.size();
-        packing                = bed.achieved_packing_fraction;
+        spec.lower[dim - 1]   = prm.substrate_top;
+        spec.upper[dim - 1]   = prm.substrate_top + prm.layer_thickness;
+        spec.mean_diameter    = prm.mean_diameter;
+        spec.std_diameter     = prm.std_diameter;
+        spec.min_diameter     = prm.min_diameter;
+        spec.max_diameter     = prm.max_diameter;
+        spec.packing_fraction = prm.packing_fraction;
+        spec.seed             = prm.seed;
+        const PowderBed bed   = pack_powder_bed(spec);
+        n_grains              = bed.grains.size();
+        packing               = bed.achieved_packing_fraction;
         for (const auto &g : bed.grains)
           {
             std::array<long, dim> first, last;
             for (int d = 0; d < dim; ++d)
               {
-                const double lo = std::max(g.center[d] - g.radius, spec.lower[d]);
+                const double lo =
+                  std::max(g.center[d] - g.radius, spec.lower[d]);
                 const double hi = std::min(g.center[d] + g.radius,
                                            x0[d] + grid.n_cells()[d] * h);
                 first[d] = static_cast<long>(std::ceil((lo - x0[d]) / s - 0.5));
-                last[d]  = static_cast<long>(std::ceil((hi - x0[d]) / s - 0.5)) - 1;
+                last[d] =
+                  static_cast<long>(std::ceil((hi - x0[d]) / s - 0.5)) - 1;
               }
-            std::array<long, dim> i = first;
+            std::array<long, dim> i    = first;
             bool                  done = false;
             for (int d = 0; d < dim; ++d)
               done = done || last[d] < first[d];
@@ -357,13 +403,15 @@ namespace femp
                     p[d] = x0[d] + (i[d] + 0.5) * s;
                     r2 += (p[d] - g.center[d]) * (p[d] - g.center[d]);
                   }
-                if (r2 <= g.radius * g.radius && p[dim - 1] >= prm.substrate_top)
+                if (r2 <= g.radius * g.radius &&
+                    p[dim - 1] >= prm.substrate_top)
                   {
                     const auto ijk = grid.cell_of(p);
                     if (grid.in_box(ijk))
                       {
                         const auto idx = grid.local_index(ijk);
-                        if (grid.cell_status()[idx] == BackgroundGrid<dim>::owned)
+                        if (grid.cell_status()[idx] ==
+                            BackgroundGrid<dim>::owned)
                           points.emplace_back(idx, p);
                       }
                   }
@@ -382,16 +430,18 @@ namespace femp
     // Initial bodies: their lattice points above the substrate top.
     if (!prm.bodies.empty())
       for (const auto idx : grid.owned_cells())
-        add_lattice_points(idx, std::numeric_limits<double>::infinity(),
-                           [this](const Point<dim> &p) {
-                             if (p[dim - 1] < prm.substrate_top)
-                               return false;
-                             for (const auto &b : prm.bodies)
-                               if (b.inside(p))
-                                 return true;
-                             return false;
-                           },
-                           points);
+        add_lattice_points(
+          idx,
+          std::numeric_limits<double>::infinity(),
+          [this](const Point<dim> &p) {
+            if (p[dim - 1] < prm.substrate_top)
+              return false;
+            for (const auto &b : prm.bodies)
+              if (b.inside(p))
+                return true;
+            return false;
+          },
+          points);
 
     insert_points(points, T0, [this](const Point<dim> &p) {
       return p[dim - 1] < prm.substrate_top ? solid : powder;
@@ -406,30 +456,29 @@ namespace femp
         for (auto b = prm.bodies.rbegin(); b != prm.bodies.rend(); ++b)
           if (b->inside(p))
             {
-              auto v                  = particle.get_properties();
-              v[P::state]             = b->state;
-              v[P::temperature]       = b->T;
-              v[P::peak_temperature]  = b->T;
+              auto v                 = particle.get_properties();
+              v[P::state]            = b->state;
+              v[P::temperature]      = b->T;
+              v[P::peak_temperature] = b->T;
               break;
             }
       }
   }
-
 
   template <int dim>
   void
   MaterialPoints<dim>::add_lattice_points(
     const std::uint32_t                                idx,
     const double                                       vertical_limit,
-    const std::function<bool(const Point<dim> &)> &    keep,
+    const std::function<bool(const Point<dim> &)>     &keep,
     std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const
   {
     // Global lattice x = x0 + (i + 1/2) s; the points of cell idx below
     // vertical_limit (and accepted by keep, if given).
-    const double s   = prm.point_spacing;
-    const double h   = grid.h();
-    const auto & x0  = grid.origin();
-    const auto   ijk = grid.global_index(idx);
+    const double          s   = prm.point_spacing;
+    const double          h   = grid.h();
+    const auto           &x0  = grid.origin();
+    const auto            ijk = grid.global_index(idx);
     std::array<long, dim> first, last;
     for (int d = 0; d < dim; ++d)
       {
@@ -461,30 +510,32 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   MaterialPoints<dim>::insert_points(
     std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
     const double                                       T0,
-    const std::function<State(const Point<dim> &)> &   state_of)
+    const std::function<State(const Point<dim> &)>    &state_of)
   {
     // Insert cell by cell (stable sort keeps the lattice order in a cell),
     // with globally unique ids from an exclusive scan of the counts.
-    std::stable_sort(points.begin(), points.end(),
-                     [](const auto &a, const auto &b) { return a.first < b.first; });
+    std::stable_sort(points.begin(),
+                     points.end(),
+                     [](const auto &a, const auto &b) {
+                       return a.first < b.first;
+                     });
     // (types::particle_index is 32 bits in this deal.II build: the scan
     // goes through 64-bit integers, then the offset is narrowed.)
     std::uint64_t n_local64 = points.size(), offset64 = 0;
-    MPI_Exscan(&n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM,
-               grid.communicator());
+    MPI_Exscan(
+      &n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM, grid.communicator());
     if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
       offset64 = 0;
     const types::particle_index offset = offset64;
 
     const double        h = grid.h();
     std::vector<double> props(n_props, 0.);
-    const double        volume = std::pow(prm.point_spacing, dim);
+    const double        volume             = std::pow(prm.point_spacing, dim);
     props[PropertyIndex::mass]             = mat.density * volume;
     props[PropertyIndex::volume]           = volume;
     props[PropertyIndex::temperature]      = T0;
@@ -503,13 +554,12 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           ref[d] = (p[d] - v0[d]) / h;
         props[PropertyIndex::state] = state_of(p);
-        handler.insert_particle(p, ref, offset + n, cell,
-                                ArrayView<const double>(props));
+        handler.insert_particle(
+          p, ref, offset + n, cell, ArrayView<const double>(props));
       }
     handler.update_cached_numbers();
     cache_point_handles();
   }
-
 
   template <int dim>
   void
@@ -538,46 +588,47 @@ namespace femp
       }
   }
 
-
   template <int dim>
   std::vector<double>
   MaterialPoints<dim>::metal_fraction() const
   {
-    // Sub-cell occupancy (doc/method.md, "Heat transfer") everywhere, and, when some point
-    // is fluid, the volume of the points in the cells that hold a fluid
-    // point (see the header; doc/flow.md, "Volume-based alpha").
+    // Sub-cell occupancy (doc/method.md, "Heat transfer") everywhere, and, when
+    // some point is fluid, the volume of the points in the cells that hold a
+    // fluid point (see the header; doc/flow.md, "Volume-based alpha").
     if (!prm.carry_points)
       return lattice_fraction();
-    using P                = PropertyIndex;
-    const unsigned int n   = prm.subcells;
-    const double       ih  = n / grid.h();
-    const auto &       x0  = grid.origin();
-    const double       Ts  = mat.solidus;
+    using P                       = PropertyIndex;
+    const unsigned int         n  = prm.subcells;
+    const double               ih = n / grid.h();
+    const auto                &x0 = grid.origin();
+    const double               Ts = mat.solidus;
     std::vector<std::uint64_t> mask(grid.n_local(), 0);
     std::vector<double>        volume(grid.n_local(), 0.);
     std::vector<double>        fluid_cell(grid.n_local(), 0.);
     bool                       any_fluid = false;
     // Over the cached position and property pointers (the points of each
     // occupied cell, in the handler's order), not deal.II's iterator.
-    AssertDimension(point_locations.size(), handler.n_locally_owned_particles());
+    AssertDimension(point_locations.size(),
+                    handler.n_locally_owned_particles());
     // The cell and sub-cell bit point k falls in.
     auto bin = [&](const std::size_t k, std::size_t &idx, unsigned int &bit) {
-      const Point<dim> &   p = *point_locations[k];
+      const Point<dim>    &p = *point_locations[k];
       std::array<int, dim> ijk;
       unsigned int         m = 1;
       bit                    = 0;
       for (int d = 0; d < dim; ++d)
         {
           const int sub = static_cast<int>(std::floor((p[d] - x0[d]) * ih));
-          const int c   = std::min(std::max(sub / int(n), 0),
-                                 int(grid.n_cells()[d]) - 1);
+          const int c =
+            std::min(std::max(sub / int(n), 0), int(grid.n_cells()[d]) - 1);
           ijk[d] = c;
           bit += m * std::min(std::max(sub - c * int(n), 0), int(n) - 1);
           m *= n;
         }
       idx = grid.local_index(ijk);
     };
-    constexpr std::uint32_t not_binned = std::numeric_limits<std::uint32_t>::max();
+    constexpr std::uint32_t not_binned =
+      std::numeric_limits<std::uint32_t>::max();
     if (binned_count.size() != grid.n_local())
       {
         binned_bits.assign(grid.n_local(), 0);
@@ -641,7 +692,7 @@ namespace femp
             binned_volume[cell_idx] = vol;
           }
       }
-    binned_mark = layout_mark();
+    binned_mark                  = layout_mark();
     const double        inv_nsub = 1. / std::pow(n, dim);
     std::vector<double> alpha(grid.n_local(), 0.);
     for (std::size_t i = 0; i < alpha.size(); ++i)
@@ -651,7 +702,6 @@ namespace femp
     grid.update_ghosts(alpha);
     return alpha;
   }
-
 
   template <int dim>
   void
@@ -668,7 +718,6 @@ namespace femp
     binned_count.clear();
   }
 
-
   template <int dim>
   std::vector<double>
   MaterialPoints<dim>::lattice_fraction() const
@@ -681,11 +730,11 @@ namespace femp
     // add_lattice_points() places it (cell by cell, the same arithmetic)
     // and binned as metal_fraction() bins, so alpha is the same number,
     // bit for bit, as the points give on one rank.
-    const unsigned int n  = prm.subcells;
-    const double       s  = prm.point_spacing;
-    const double       h  = grid.h();
-    const double       ih = n / h;
-    const auto &       x0 = grid.origin();
+    const unsigned int                         n  = prm.subcells;
+    const double                               s  = prm.point_spacing;
+    const double                               h  = grid.h();
+    const double                               ih = n / h;
+    const auto                                &x0 = grid.origin();
     std::array<std::vector<unsigned int>, dim> hits;
     for (int d = 0; d < dim; ++d)
       {
@@ -701,11 +750,12 @@ namespace femp
             const long last  = static_cast<long>(std::ceil(hi / s - 0.5)) - 1;
             for (long i = first; i <= last; ++i)
               {
-                const double p   = x0[d] + (i + 0.5) * s;
-                const int    sub = static_cast<int>(std::floor((p - x0[d]) * ih));
-                const int    b   = std::min(std::max(sub / int(n), 0), N - 1);
-                mask[b] |= std::uint64_t(1)
-                           << std::min(std::max(sub - b * int(n), 0), int(n) - 1);
+                const double p = x0[d] + (i + 0.5) * s;
+                const int sub  = static_cast<int>(std::floor((p - x0[d]) * ih));
+                const int b    = std::min(std::max(sub / int(n), 0), N - 1);
+                mask[b] |=
+                  std::uint64_t(1)
+                  << std::min(std::max(sub - b * int(n), 0), int(n) - 1);
               }
           }
         hits[d].resize(N);
@@ -716,8 +766,8 @@ namespace femp
     std::vector<double> alpha(grid.n_local(), 0.);
     for (const auto idx : grid.owned_cells())
       {
-        const auto   ijk   = grid.global_index(idx);
-        std::size_t  count = 1;
+        const auto  ijk   = grid.global_index(idx);
+        std::size_t count = 1;
         for (int d = 0; d < dim; ++d)
           count *= hits[d][ijk[d]];
         alpha[idx] = count * inv_nsub;
@@ -726,13 +776,12 @@ namespace femp
     return alpha;
   }
 
-
   template <int dim>
   void
   MaterialPoints<dim>::volume_fraction_of_fluid_cells(
-    std::vector<double> &      v,
-    std::vector<double> &      is_fluid,
-    std::vector<double> &      alpha) const
+    std::vector<double> &v,
+    std::vector<double> &is_fluid,
+    std::vector<double> &alpha) const
   {
     // v: point volume per cell (owned cells), made a fraction of the cell
     // volume; is_fluid: 1 in cells holding a fluid point. Excess volume
@@ -742,10 +791,10 @@ namespace femp
     // or max_sweeps is reached; each sweep conserves sum v exactly. The
     // amounts depend only on the cell and its neighbours' values, so 1 and
     // n ranks give the same alpha.
-    constexpr unsigned int max_sweeps = 32;
-    const double           inv_V      = 1. / std::pow(grid.h(), dim);
-    const auto &           cells      = grid.owned_cells();
-    const auto &           st         = grid.strides();
+    constexpr unsigned int     max_sweeps = 32;
+    const double               inv_V      = 1. / std::pow(grid.h(), dim);
+    const auto                &cells      = grid.owned_cells();
+    const auto                &st         = grid.strides();
     std::vector<std::uint32_t> fluid;
     for (const auto idx : cells)
       {
@@ -768,15 +817,16 @@ namespace femp
     // in the same order as a sweep over all fluid cells, so the result is
     // the same to the bit at a fraction of the cost (a re-solidified track
     // counts as fluid and can keep the sweeps going to max_sweeps).
-    const auto &status = grid.cell_status();
+    const auto                &status = grid.cell_status();
     std::vector<std::uint32_t> at_rank_boundary;
     for (const auto idx : fluid)
       {
         bool near_ghost = false;
         for (int d = 0; d < dim; ++d)
           for (const std::ptrdiff_t s : {-st[d], st[d]})
-            near_ghost = near_ghost || (is_fluid[idx + s] > 0 &&
-                                        status[idx + s] != BackgroundGrid<dim>::owned);
+            near_ghost =
+              near_ghost || (is_fluid[idx + s] > 0 &&
+                             status[idx + s] != BackgroundGrid<dim>::owned);
         if (near_ghost)
           at_rank_boundary.push_back(idx);
       }
@@ -859,7 +909,6 @@ namespace femp
       alpha[idx] = std::min(1., v[idx]);
   }
 
-
   template <int dim>
   void
   MaterialPoints<dim>::cells_to_points(const std::vector<double> &T,
@@ -897,8 +946,8 @@ namespace femp
         const bool fixed = !fixed_cell.empty() && fixed_cell[idx] != 0;
         if (fixed && pending_temperature.size() != grid.n_local())
           {
-            pending_temperature.assign(grid.n_local(),
-                                       std::numeric_limits<double>::quiet_NaN());
+            pending_temperature.assign(
+              grid.n_local(), std::numeric_limits<double>::quiet_NaN());
             pending_peak.assign(grid.n_local(), 0.);
             melted_fixed_cell.assign(grid.n_local(), 0);
           }
@@ -906,9 +955,9 @@ namespace femp
           melted_fixed_cell[idx] = 1;
         if (fixed && !melted_fixed_cell[idx])
           {
-            pending_peak[idx] = std::isnan(pending_temperature[idx]) ?
-                                  Tc :
-                                  std::max(pending_peak[idx], Tc);
+            pending_peak[idx]        = std::isnan(pending_temperature[idx]) ?
+                                         Tc :
+                                         std::max(pending_peak[idx], Tc);
             pending_temperature[idx] = Tc;
             any_pending              = true;
             continue;
@@ -967,7 +1016,6 @@ namespace femp
     pending_temperature[idx] = std::numeric_limits<double>::quiet_NaN();
   }
 
-
   template <int dim>
   void
   MaterialPoints<dim>::flush_point_temperatures() const
@@ -979,11 +1027,10 @@ namespace femp
     any_pending = false;
   }
 
-
   template <int dim>
   std::vector<std::pair<std::uint32_t, double>>
   MaterialPoints<dim>::volume_mean_over_points(
-    const std::vector<double> &          T,
+    const std::vector<double>           &T,
     const std::function<double(double)> &e) const
   {
     // Only cells where some point brought another temperature need the
@@ -996,13 +1043,13 @@ namespace femp
     const bool pushed = pushed_temperature.size() == grid.n_local();
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-        const double Tc  = T[occupied[c].first];
+        const double Tc = T[occupied[c].first];
         // All points of a cell hold the temperature cells_to_points() gave
         // them until one enters or leaves it (which forgets the record).
         if (pushed && Tc == pushed_temperature[occupied[c].first])
           continue;
         flush_cell(c);
-        bool         any = false;
+        bool any = false;
         for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
           any = any || point_properties[k][P::temperature] != Tc;
         if (!any)
@@ -1063,10 +1110,12 @@ namespace femp
     handler.initialize(grid.triangulation(), mapping, n_props);
     std::vector<std::pair<std::uint32_t, Point<dim>>> points;
     for (const auto idx : grid.owned_cells())
-      add_lattice_points(idx, std::numeric_limits<double>::max(), inside, points);
+      add_lattice_points(idx,
+                         std::numeric_limits<double>::max(),
+                         inside,
+                         points);
     insert_points(points, T0, [state](const Point<dim> &) { return state; });
   }
-
 
   template <int dim>
   void
@@ -1084,7 +1133,6 @@ namespace femp
     cache_point_handles();
   }
 
-
   template <int dim>
   void
   MaterialPoints<dim>::points_moved()
@@ -1092,7 +1140,6 @@ namespace femp
     handler.sort_particles_into_subdomains_and_cells();
     index_occupied_cells();
   }
-
 
   template <int dim>
   bool
@@ -1106,17 +1153,18 @@ namespace femp
       std::vector<double>   properties;
     };
     std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
-                      to_remove;
-    std::vector<Move> moves;
-    bool              local = true;
-    const double      h     = grid.h();
+                               to_remove;
+    std::vector<Move>          moves;
+    bool                       local = true;
+    const double               h     = grid.h();
     std::vector<std::uint32_t> changed;
     // Points whose new cell is a ghost cell go to its owner: per rank,
     // (x, id, properties) of each point, n_send doubles each.
-    const unsigned int                     n_send = dim + 1 + n_props;
+    const unsigned int                          n_send = dim + 1 + n_props;
     std::map<unsigned int, std::vector<double>> outgoing;
-    auto scan_cell = [&](const std::uint32_t idx,
-                         const typename Triangulation<dim>::active_cell_iterator &cell) {
+    auto                                        scan_cell =
+      [&](const std::uint32_t                                      idx,
+          const typename Triangulation<dim>::active_cell_iterator &cell) {
         const auto own   = grid.global_index(idx);
         auto       range = handler.particles_in_cell(cell);
         for (auto it = range.begin(); it != range.end(); ++it)
@@ -1137,7 +1185,8 @@ namespace femp
               {
                 // To the owner of the ghost cell.
                 auto &buffer =
-                  outgoing[grid.cell_iterator(grid.local_index(ijk))->subdomain_id()];
+                  outgoing[grid.cell_iterator(grid.local_index(ijk))
+                             ->subdomain_id()];
                 for (int d = 0; d < dim; ++d)
                   buffer.push_back(x[d]);
                 buffer.push_back(static_cast<double>(it->get_id()));
@@ -1162,7 +1211,7 @@ namespace femp
             moves.push_back(std::move(m));
             to_remove.push_back(it);
           }
-    };
+      };
     if (from)
       {
         for (const auto idx : *from)
@@ -1175,9 +1224,9 @@ namespace femp
           scan_cell(idx, cell);
     // One reduction for both: did a point go beyond the ghost layer
     // anywhere, does any rank send points?
-    const std::array<unsigned int, 2> flags{{!local ? 1u : 0u,
-                                             outgoing.empty() ? 0u : 1u}};
-    std::array<unsigned int, 2>       any;
+    const std::array<unsigned int, 2> flags{
+      {!local ? 1u : 0u, outgoing.empty() ? 0u : 1u}};
+    std::array<unsigned int, 2> any;
     Utilities::MPI::max(ArrayView<const unsigned int>(flags.data(), 2),
                         grid.communicator(),
                         ArrayView<unsigned int>(any.data(), 2));
@@ -1190,7 +1239,9 @@ namespace femp
     for (auto it = to_remove.rbegin(); it != to_remove.rend(); ++it)
       handler.remove_particle(*it);
     for (const auto &m : moves)
-      handler.insert_particle(m.location, m.reference, m.id,
+      handler.insert_particle(m.location,
+                              m.reference,
+                              m.id,
                               grid.cell_iterator(m.cell),
                               ArrayView<const double>(m.properties));
     // Points from neighbour ranks (in the order of the sending ranks), into
@@ -1213,7 +1264,9 @@ namespace femp
           for (int d = 0; d < dim; ++d)
             ref[d] = (x[d] - grid.origin()[d]) / h - ijk[d];
           handler.insert_particle(
-            x, ref, static_cast<types::particle_index>(buffer[k + dim]),
+            x,
+            ref,
+            static_cast<types::particle_index>(buffer[k + dim]),
             grid.cell_iterator(idx),
             ArrayView<const double>(buffer.data() + k + dim + 1, n_props));
           changed.push_back(idx);
@@ -1244,7 +1297,6 @@ namespace femp
                            std::to_string(point_properties.size())));
     return true;
   }
-
 
   template <int dim>
   void
@@ -1282,11 +1334,11 @@ namespace femp
           }
       }
     // Merge the old occupied list with the changed cells (both increasing).
-    decltype(occupied)         new_occupied;
-    std::vector<double *>      new_pointers;
+    decltype(occupied)              new_occupied;
+    std::vector<double *>           new_pointers;
     std::vector<const Point<dim> *> new_locations;
-    std::vector<unsigned int>  new_handles;
-    std::vector<std::uint32_t> new_begin(1, 0);
+    std::vector<unsigned int>       new_handles;
+    std::vector<std::uint32_t>      new_begin(1, 0);
     new_occupied.reserve(occupied.size() + changed.size());
     new_pointers.reserve(point_properties.size());
     new_locations.reserve(point_locations.size());
@@ -1351,17 +1403,16 @@ namespace femp
         ++n;
       Assert(n == handler.n_locally_owned_particles(),
              ExcMessage("stale point count of the particle handler"));
-      const auto o = occupied;
-      const auto p = point_properties;
-      const auto l = point_locations;
+      const auto o  = occupied;
+      const auto p  = point_properties;
+      const auto l  = point_locations;
       const auto hd = point_handles;
-      const auto b = cell_begin;
-      const auto g = layout_generation;
+      const auto b  = cell_begin;
+      const auto g  = layout_generation;
       index_occupied_cells();
       layout_generation = g; // (a check, not a change of the handler)
       Assert(o.size() == occupied.size() && p == point_properties &&
-               l == point_locations && hd == point_handles &&
-               b == cell_begin,
+               l == point_locations && hd == point_handles && b == cell_begin,
              ExcMessage("refreshed point cache differs from a rebuild"));
       for (std::size_t i = 0; i < o.size(); ++i)
         Assert(o[i].first == occupied[i].first,
@@ -1369,7 +1420,6 @@ namespace femp
     }
 #endif
   }
-
 
   template <int dim>
   void
@@ -1385,20 +1435,19 @@ namespace femp
     out.put<std::uint64_t>(handler.n_locally_owned_particles());
     for (const auto &[idx, cell] : occupied)
       for (const auto &p : handler.particles_in_cell(cell))
-      {
-        out.put<std::uint64_t>(p.get_id());
-        out.put(global_cell_number(grid, grid.global_index(idx)));
-        const Point<dim> x = p.get_location(), r = p.get_reference_location();
-        for (int d = 0; d < dim; ++d)
-          out.put(x[d]);
-        for (int d = 0; d < dim; ++d)
-          out.put(r[d]);
-        const auto props = p.get_properties();
-        for (unsigned int i = 0; i < n_props; ++i)
-          out.put(props[i]);
-      }
+        {
+          out.put<std::uint64_t>(p.get_id());
+          out.put(global_cell_number(grid, grid.global_index(idx)));
+          const Point<dim> x = p.get_location(), r = p.get_reference_location();
+          for (int d = 0; d < dim; ++d)
+            out.put(x[d]);
+          for (int d = 0; d < dim; ++d)
+            out.put(r[d]);
+          const auto props = p.get_properties();
+          for (unsigned int i = 0; i < n_props; ++i)
+            out.put(props[i]);
+        }
   }
-
 
   template <int dim>
   void
@@ -1412,14 +1461,16 @@ namespace femp
     std::vector<double> props(n_props);
     for (auto &in : parts)
       {
-        require(in.get<std::uint32_t>() == n_props, "Checkpoint/Resume from",
-                "", "its points carry other properties than this scene's");
+        require(in.get<std::uint32_t>() == n_props,
+                "Checkpoint/Resume from",
+                "",
+                "its points carry other properties than this scene's");
         const auto n = in.get<std::uint64_t>();
         for (std::uint64_t k = 0; k < n; ++k)
           {
-            const auto       id   = in.get<std::uint64_t>();
-            const auto       cell = in.get<std::uint64_t>();
-            Point<dim>       x, r;
+            const auto id   = in.get<std::uint64_t>();
+            const auto cell = in.get<std::uint64_t>();
+            Point<dim> x, r;
             for (int d = 0; d < dim; ++d)
               x[d] = in.get<double>();
             for (int d = 0; d < dim; ++d)
@@ -1428,7 +1479,10 @@ namespace femp
               props[i] = in.get<double>();
             const auto idx = owned_local_index(grid, cell);
             if (idx >= 0)
-              handler.insert_particle(x, r, id, grid.cell_iterator(idx),
+              handler.insert_particle(x,
+                                      r,
+                                      id,
+                                      grid.cell_iterator(idx),
                                       ArrayView<const double>(props));
           }
       }

@@ -11,10 +11,10 @@ namespace femp
   PowderBed
   pack_powder_bed(const PowderBedSpec &spec)
   {
-    const int    dim = spec.dim;
-    const int    v   = dim - 1; // vertical direction
-    std::mt19937_64 rng(spec.seed);
-    std::normal_distribution<double> diameter(spec.mean_diameter,
+    const int                              dim = spec.dim;
+    const int                              v   = dim - 1; // vertical direction
+    std::mt19937_64                        rng(spec.seed);
+    std::normal_distribution<double>       diameter(spec.mean_diameter,
                                               spec.std_diameter);
     std::uniform_real_distribution<double> unit(0., 1.);
 
@@ -33,7 +33,8 @@ namespace femp
     while (sum < target)
       {
         double dia = diameter(rng);
-        dia = std::clamp(dia, spec.min_diameter,
+        dia        = std::clamp(dia,
+                         spec.min_diameter,
                          std::min(spec.max_diameter, thickness));
         radii.push_back(0.5 * dia);
         sum += grain_volume(0.5 * dia);
@@ -46,13 +47,14 @@ namespace femp
 
     // Grains by vertical column of width = largest diameter.
     const double bin = 2 * radii.front();
-    auto column_key = [&](const std::array<double, 3> &c, int i, int j) {
+    auto column_key  = [&](const std::array<double, 3> &c, int i, int j) {
       const std::int64_t a =
         static_cast<std::int64_t>(std::floor((c[0] - spec.lower[0]) / bin)) + i;
       const std::int64_t b =
-        dim == 3 ? static_cast<std::int64_t>(
-                     std::floor((c[1] - spec.lower[1]) / bin)) + j :
-                   0;
+        dim == 3 ?
+           static_cast<std::int64_t>(std::floor((c[1] - spec.lower[1]) / bin)) +
+            j :
+           0;
       return a * 1000003 + b;
     };
     std::unordered_multimap<std::int64_t, std::size_t> columns;
@@ -60,14 +62,16 @@ namespace femp
     double placed = 0;
     for (const double r : radii)
       {
-        for (unsigned int attempt = 0; attempt < spec.max_attempts / radii.size() + 50;
+        for (unsigned int attempt = 0;
+             attempt < spec.max_attempts / radii.size() + 50;
              ++attempt)
           {
             // Drop the grain at a random horizontal position: it comes to
             // rest on the substrate or on the first grain it touches.
             std::array<double, 3> c{{0, 0, 0}};
             for (int d = 0; d < dim - 1; ++d)
-              c[d] = spec.lower[d] + unit(rng) * (spec.upper[d] - spec.lower[d]);
+              c[d] =
+                spec.lower[d] + unit(rng) * (spec.upper[d] - spec.lower[d]);
             double z = spec.lower[v] + r;
             for (int i = -1; i <= 1; ++i)
               for (int j = (dim == 3 ? -1 : 0); j <= (dim == 3 ? 1 : 0); ++j)

@@ -14,7 +14,7 @@ namespace femp
   std::vector<std::uint8_t>
   attached_metal_cells(const BackgroundGrid<dim> &grid,
                        const std::vector<double> &alpha,
-                       unsigned int *             sweeps)
+                       unsigned int              *sweeps)
   {
     using Grid         = BackgroundGrid<dim>;
     const auto &st     = grid.strides();
@@ -25,7 +25,7 @@ namespace femp
     // ghost exchange.
     std::vector<double>        label = grid.make_field(0.);
     std::vector<std::uint32_t> stack;
-    const auto visit = [&](const std::size_t i) {
+    const auto                 visit = [&](const std::size_t i) {
       if (status[i] == Grid::owned && label[i] == 0 && metal(i))
         {
           label[i] = 1;
@@ -90,15 +90,14 @@ namespace femp
     return counted;
   }
 
-
   template <int dim>
   double
   attached_metal_max_temperature(const BackgroundGrid<dim> &grid,
                                  const std::vector<double> &T,
                                  const std::vector<double> &alpha)
   {
-    const auto   counted = attached_metal_cells(grid, alpha);
-    const double lowest  = std::numeric_limits<double>::lowest();
+    const auto   counted  = attached_metal_cells(grid, alpha);
+    const double lowest   = std::numeric_limits<double>::lowest();
     double       local[2] = {lowest, lowest}; // counted, all metal
     for (const auto idx : grid.owned_cells())
       if (alpha[idx] > 0)
@@ -109,16 +108,18 @@ namespace femp
         }
     double global[2];
     Utilities::MPI::max(ArrayView<const double>(local, 2),
-                        grid.communicator(), ArrayView<double>(global, 2));
+                        grid.communicator(),
+                        ArrayView<double>(global, 2));
     return global[0] > lowest ? global[0] : global[1];
   }
 
-
   template std::vector<std::uint8_t>
-  attached_metal_cells(const BackgroundGrid<2> &, const std::vector<double> &,
+  attached_metal_cells(const BackgroundGrid<2> &,
+                       const std::vector<double> &,
                        unsigned int *);
   template std::vector<std::uint8_t>
-  attached_metal_cells(const BackgroundGrid<3> &, const std::vector<double> &,
+  attached_metal_cells(const BackgroundGrid<3> &,
+                       const std::vector<double> &,
                        unsigned int *);
   template double
   attached_metal_max_temperature(const BackgroundGrid<2> &,

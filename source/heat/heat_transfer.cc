@@ -4,19 +4,19 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
-#include <femp/heat/heat_transfer.h>
-#include <femp/io/checkpoint.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/heat/heat_transfer.h>
+#include <femp/io/checkpoint.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <type_traits>
 #include <limits>
 #include <map>
 #include <sstream>
+#include <type_traits>
 
 namespace femp
 {
@@ -24,15 +24,16 @@ namespace femp
   {
     constexpr double stefan_boltzmann = 5.670374419e-8; // W/(m^2 K^4)
     constexpr double gas_constant     = 8.314462618;    // J/(mol K)
-  } // namespace
-
+  }                                                     // namespace
 
   template <int dim>
   void
   HeatTransfer<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Heat transfer");
-    prm.declare_entry("Initial temperature", "300", Patterns::Anything(),
+    prm.declare_entry("Initial temperature",
+                      "300",
+                      Patterns::Anything(),
                       "Initial temperature of the metal (and of the cells), K: "
                       "a number (uniform), or a function of the position x, y "
                       "(2D) or x, y, z (3D), in m, in the syntax of deal.II's "
@@ -42,12 +43,18 @@ namespace femp
                       "Points of 'Material points/Initial bodies' take the "
                       "temperature of their body instead. With 'Physics/Heat "
                       "transfer = false' this field stays frozen.");
-    prm.declare_entry("Reference temperature", "300", Patterns::Double(0.),
+    prm.declare_entry("Reference temperature",
+                      "300",
+                      Patterns::Double(0.),
                       "Ambient temperature T_ref for convection and radiation "
                       "losses, K; range (0, inf).");
-    prm.declare_entry("Convection coefficient", "10", Patterns::Double(0.),
-                      "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
-    prm.declare_entry("Detached drops", "off",
+    prm.declare_entry(
+      "Convection coefficient",
+      "10",
+      Patterns::Double(0.),
+      "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
+    prm.declare_entry("Detached drops",
+                      "off",
                       Patterns::Selection("off|sphere"),
                       "Heat loss of detached metal: a drop of a few "
                       "face-connected metal cells (at most 'Detached drop "
@@ -66,7 +73,9 @@ namespace femp
                       "1000 K, 0.065 at 2000 K). With the solid, the "
                       "solid points of such drops are left out of the solid, "
                       "at rest (doc/solid.md). doc/equations.md.");
-    prm.declare_entry("Detached drop cells", "4", Patterns::Integer(1, 4),
+    prm.declare_entry("Detached drop cells",
+                      "4",
+                      Patterns::Integer(1, 4),
                       "With 'Detached drops = sphere': the largest drop, "
                       "in cells, that counts as detached: a set of at most "
                       "this many face-connected metal cells with no other "
@@ -77,18 +86,26 @@ namespace femp
                       "of the sphere's surface. Range 1 to 4 (finding a drop "
                       "of N cells takes N exchanges of the ghost layer). "
                       "doc/equations.md.");
-    prm.declare_entry("Emissivity", "0.4", Patterns::Double(0., 1.),
-                      "Surface emissivity eps for radiation losses; range [0, 1].");
-    prm.declare_entry("Evaporation coefficient", "0.82", Patterns::Double(0., 1.),
-                      "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
-                      "evaporative cooling off; range [0, 1].");
-    prm.declare_entry("Fixed temperatures", "",
+    prm.declare_entry(
+      "Emissivity",
+      "0.4",
+      Patterns::Double(0., 1.),
+      "Surface emissivity eps for radiation losses; range [0, 1].");
+    prm.declare_entry(
+      "Evaporation coefficient",
+      "0.82",
+      Patterns::Double(0., 1.),
+      "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
+      "evaporative cooling off; range [0, 1].");
+    prm.declare_entry("Fixed temperatures",
+                      "",
                       Patterns::Map(Patterns::Selection("x-|x+|y-|y+|z-|z+"),
                                     Patterns::Double(0.)),
                       "Faces of the domain box held at a fixed temperature, as "
                       "'face: T' pairs, e.g. 'z-: 300' (faces x-, x+, y-, y+, "
                       "z-, z+; K). All other faces are insulated.");
-    prm.declare_entry("Laser deposition", "first surface",
+    prm.declare_entry("Laser deposition",
+                      "first surface",
                       Patterns::Selection("first surface|gradient"),
                       "How the laser's surface flux q enters the cells. 'first "
                       "surface': in each vertical column of cells, q goes into "
@@ -103,7 +120,8 @@ namespace femp
                       "surface cell, as written in eq. (1); in a powder bed "
                       "this heats every grain surface under the beam, also "
                       "shadowed ones, and absorbs more than eta P.");
-    prm.declare_entry("Advection by melt flow", "points",
+    prm.declare_entry("Advection by melt flow",
+                      "points",
                       Patterns::Selection("points|upwind"),
                       "How heat moves with the melt flow. 'points': the metal "
                       "carries its enthalpy on the material points; when "
@@ -120,7 +138,8 @@ namespace femp
                       "temperatures creates or destroys up to ~20 % of the "
                       "laser energy in the 3D track, doc/verification.md). "
                       "No effect without Physics/Melt flow.");
-    prm.declare_entry("Prescribed velocity", "",
+    prm.declare_entry("Prescribed velocity",
+                      "",
                       Patterns::Anything(),
                       "Optional steady velocity field for the convection term, "
                       "m/s, as dim expressions in x, y, z separated by ';' "
@@ -128,7 +147,6 @@ namespace femp
                       "solver provides a velocity.");
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -140,7 +158,7 @@ namespace femp
       const std::string text = Utilities::trim(prm.get("Initial temperature"));
       initial_temperature_expression.clear();
       initial_function.reset();
-      char *     end   = nullptr;
+      char      *end   = nullptr;
       const auto value = std::strtod(text.c_str(), &end);
       if (!text.empty() && end == text.c_str() + text.size())
         initial_temperature = value;
@@ -150,7 +168,9 @@ namespace femp
           const std::string allowed =
             "it must be a number (K) or a function of the position " + vars +
             " (m) in deal.II FunctionParser syntax, e.g. '1800 + 1000*x'";
-          require(!text.empty(), "Heat transfer/Initial temperature", "''",
+          require(!text.empty(),
+                  "Heat transfer/Initial temperature",
+                  "''",
                   allowed);
           auto f = std::make_shared<FunctionParser<dim>>(1);
           try
@@ -158,17 +178,18 @@ namespace femp
               f->initialize(vars, text, {});
               // muparser reports unknown variables at the first evaluation.
               const double v = f->value(Point<dim>());
-              (void)v;
+              (void) v;
             }
           catch (...)
             {
-              throw InputError("Heat transfer/Initial temperature", text,
+              throw InputError("Heat transfer/Initial temperature",
+                               text,
                                allowed + "; this one does not parse (unknown "
                                          "variable or syntax error)");
             }
           initial_temperature_expression = text;
-          initial_function                = f;
-          initial_temperature             = f->value(Point<dim>());
+          initial_function               = f;
+          initial_temperature            = f->value(Point<dim>());
         }
     }
     reference_temperature   = prm.get_double("Reference temperature");
@@ -184,27 +205,30 @@ namespace femp
     for (const auto &entry :
          Utilities::split_string_list(prm.get("Fixed temperatures"), ','))
       {
-        const auto kv = Utilities::split_string_list(entry, ':');
+        const auto        kv   = Utilities::split_string_list(entry, ':');
         const std::string face = kv[0];
-        require((face[0] - 'x') < dim, "Heat transfer/Fixed temperatures",
-                entry, "in " + std::to_string(dim) + "D only faces of the first " +
-                         std::to_string(dim) + " directions exist");
+        require((face[0] - 'x') < dim,
+                "Heat transfer/Fixed temperatures",
+                entry,
+                "in " + std::to_string(dim) + "D only faces of the first " +
+                  std::to_string(dim) + " directions exist");
         fixed_temperatures[face] = Utilities::string_to_double(kv[1]);
       }
     prm.leave_subsection();
     if (initial_temperature_expression.empty())
-      require(initial_temperature > 0, "Heat transfer/Initial temperature",
-              initial_temperature, "it must be positive (K)");
+      require(initial_temperature > 0,
+              "Heat transfer/Initial temperature",
+              initial_temperature,
+              "it must be positive (K)");
   }
-
 
   template <int dim>
   double
-  HeatTransfer<dim>::Parameters::initial_temperature_at(const Point<dim> &x) const
+  HeatTransfer<dim>::Parameters::initial_temperature_at(
+    const Point<dim> &x) const
   {
     return initial_function ? initial_function->value(x) : initial_temperature;
   }
-
 
   template <int dim>
   void
@@ -238,31 +262,31 @@ namespace femp
                  "it is "
               << T << " at x = (" << x << ") m";
             throw InputError("Heat transfer/Initial temperature",
-                             initial_temperature_expression, s.str());
+                             initial_temperature_expression,
+                             s.str());
           }
         if (c == 0)
           initial_temperature = T;
       }
   }
 
-
   template <int dim>
-  HeatTransfer<dim>::HeatTransfer(const Parameters &         prm,
-                                  const Material &           material,
-                                  const Laser<dim> &         laser,
+  HeatTransfer<dim>::HeatTransfer(const Parameters          &prm,
+                                  const Material            &material,
+                                  const Laser<dim>          &laser,
                                   const BackgroundGrid<dim> &grid)
-    : prm(prm)
-    , mat(material)
-    , laser(laser)
-    , grid(grid)
-    , evap_pref(prm.evaporation_coefficient *
-                material.latent_heat_evaporation * material.molar_mass /
-                std::sqrt(2 * M_PI * material.molar_mass * gas_constant) *
-                material.ambient_pressure)
-    , evap_exp(material.latent_heat_evaporation * material.molar_mass /
-               (gas_constant * material.evaporation_temperature))
-  {}
-
+      : prm(prm)
+      , mat(material)
+      , laser(laser)
+      , grid(grid)
+      , evap_pref(prm.evaporation_coefficient *
+                  material.latent_heat_evaporation * material.molar_mass /
+                  std::sqrt(2 * M_PI * material.molar_mass * gas_constant) *
+                  material.ambient_pressure)
+      , evap_exp(material.latent_heat_evaporation * material.molar_mass /
+                 (gas_constant * material.evaporation_temperature))
+  {
+  }
 
   template <int dim>
   void
@@ -277,10 +301,10 @@ namespace femp
             T[idx]     = prm.initial_temperature_at(grid.cell_center(idx));
             gamma[idx] = mat.liquid_fraction(T[idx]);
           }
-    T_new = T;
-    alpha = grid.make_field(0.);
-    conductance   = grid.make_field(0.);
-    capacity      = grid.make_field(1.);
+    T_new       = T;
+    alpha       = grid.make_field(0.);
+    conductance = grid.make_field(0.);
+    capacity    = grid.make_field(1.);
     is_source.assign(grid.n_local(), 0);
     source        = grid.make_field(0.);
     laser_density = grid.make_field(0.);
@@ -288,7 +312,7 @@ namespace femp
     if (prm.detached_drops)
       gas_coefficient = grid.make_field(0.);
     detached.clear();
-    budget        = EnergyBudget();
+    budget = EnergyBudget();
 
     // Fixed-temperature faces: owned cells touching them.
     fixed_faces.clear();
@@ -309,7 +333,8 @@ namespace femp
       {
         auto exprs = Utilities::split_string_list(prm.prescribed_velocity, ';');
         require(exprs.size() == static_cast<std::size_t>(dim),
-                "Heat transfer/Prescribed velocity", prm.prescribed_velocity,
+                "Heat transfer/Prescribed velocity",
+                prm.prescribed_velocity,
                 "it must hold " + std::to_string(dim) +
                   " expressions separated by ';'");
         FunctionParser<dim> f(dim);
@@ -319,9 +344,10 @@ namespace femp
           }
         catch (...)
           {
-            throw InputError("Heat transfer/Prescribed velocity",
-                             prm.prescribed_velocity,
-                             "the expressions must be valid functions of x, y (, z)");
+            throw InputError(
+              "Heat transfer/Prescribed velocity",
+              prm.prescribed_velocity,
+              "the expressions must be valid functions of x, y (, z)");
           }
         for (int d = 0; d < dim; ++d)
           prescribed[d] = grid.make_field(0.);
@@ -335,7 +361,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   const std::array<std::vector<double>, dim> *
   HeatTransfer<dim>::convection_velocity(const CellFields<dim> &fields) const
@@ -344,7 +369,6 @@ namespace femp
       return fields.velocity;
     return prescribed[0].empty() ? nullptr : &prescribed;
   }
-
 
   template <int dim>
   void
@@ -366,36 +390,36 @@ namespace femp
     // domain boundary alpha is extended with zero gradient, so the box faces
     // are not free surfaces.
     surface.clear();
-    const auto & st = grid.strides();
-    const auto & n  = grid.n_cells();
+    const auto  &st = grid.strides();
+    const auto  &n  = grid.n_cells();
     const double h  = grid.h();
     // Per vertical column (3D: i + n_x j), the topmost owned cell with
     // alpha >= 1/2 (below); found in the same pass.
     const unsigned int n_columns = dim == 3 ? n[0] * n[1] : n[0];
-    const auto column = [&](const auto &ijk) {
+    const auto         column    = [&](const auto &ijk) {
       return dim == 3 ? ijk[0] + n[0] * ijk[1] : ijk[0];
     };
     std::vector<int> top(n_columns, -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
-        if (alpha[idx] <= 0)
-          return;
-        if (alpha[idx] >= 0.5)
-          {
-            const auto col = column(ijk);
-            top[col]       = std::max(top[col], ijk[dim - 1]);
-          }
-        Tensor<1, dim> g;
-        for (int d = 0; d < dim; ++d)
-          {
-            const double am = ijk[d] > 0 ? alpha[idx - st[d]] : alpha[idx];
-            const double ap =
-              ijk[d] < int(n[d]) - 1 ? alpha[idx + st[d]] : alpha[idx];
-            g[d] = (ap - am) / (2 * h);
-          }
-        const double norm = g.norm();
-        if (norm > 1e-12 / h)
-          surface.push_back({std::uint32_t(idx), norm});
-      });
+      if (alpha[idx] <= 0)
+        return;
+      if (alpha[idx] >= 0.5)
+        {
+          const auto col = column(ijk);
+          top[col]       = std::max(top[col], ijk[dim - 1]);
+        }
+      Tensor<1, dim> g;
+      for (int d = 0; d < dim; ++d)
+        {
+          const double am = ijk[d] > 0 ? alpha[idx - st[d]] : alpha[idx];
+          const double ap =
+            ijk[d] < int(n[d]) - 1 ? alpha[idx + st[d]] : alpha[idx];
+          g[d] = (ap - am) / (2 * h);
+        }
+      const double norm = g.norm();
+      if (norm > 1e-12 / h)
+        surface.push_back({std::uint32_t(idx), norm});
+    });
     find_detached_cells();
 
     // First-surface cells: per vertical column, the topmost cell with
@@ -410,7 +434,11 @@ namespace femp
     // column sum to 1/h, the absorbed power stays eta P. A column without
     // surface cells there (a metal top at the box face) gives q/h to its
     // topmost cell with alpha >= 1/2, as before.
-    MPI_Allreduce(MPI_IN_PLACE, top.data(), n_columns, MPI_INT, MPI_MAX,
+    MPI_Allreduce(MPI_IN_PLACE,
+                  top.data(),
+                  n_columns,
+                  MPI_INT,
+                  MPI_MAX,
                   grid.communicator());
     const double rho_c_ref =
       mat.density * mat.specific_heat.value(prm.reference_temperature);
@@ -433,8 +461,12 @@ namespace femp
         if (k >= top[col] - 1)
           column_weight[col] += weight(sc);
       }
-    MPI_Allreduce(MPI_IN_PLACE, column_weight.data(), n_columns, MPI_DOUBLE,
-                  MPI_SUM, grid.communicator());
+    MPI_Allreduce(MPI_IN_PLACE,
+                  column_weight.data(),
+                  n_columns,
+                  MPI_DOUBLE,
+                  MPI_SUM,
+                  grid.communicator());
     first_surface.clear();
     for (const auto &sc : surface)
       {
@@ -482,7 +514,6 @@ namespace femp
                        source_cells.end());
   }
 
-
   // Detached metal (Heat transfer/Detached drops = sphere): a drop of at
   // most K = 'Detached drop cells' face-connected metal cells with no other
   // metal face neighbour inside the domain has no surface for the central
@@ -516,11 +547,11 @@ namespace femp
     detached.clear();
     if (!prm.detached_drops)
       return;
-    const unsigned int K  = prm.detached_drop_cells;
-    const auto &       st = grid.strides();
-    const auto &       n  = grid.n_cells();
-    const double       h  = grid.h();
-    const auto global_id = [&](const std::size_t idx) {
+    const unsigned int K         = prm.detached_drop_cells;
+    const auto        &st        = grid.strides();
+    const auto        &n         = grid.n_cells();
+    const double       h         = grid.h();
+    const auto         global_id = [&](const std::size_t idx) {
       const auto ijk = grid.global_index(idx);
       double     id  = 0;
       for (int d = dim - 1; d >= 0; --d)
@@ -529,22 +560,21 @@ namespace femp
     };
     // Visit the metal face neighbours inside the domain of local cell idx
     // (global index ijk).
-    const auto for_metal_neighbours_at = [&](const std::size_t idx,
-                                             const auto &       ijk,
-                                             auto &&            f) {
-      for (int d = 0; d < dim; ++d)
-        {
-          if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
-            f(idx - st[d]);
-          if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
-            f(idx + st[d]);
-        }
-    };
+    const auto for_metal_neighbours_at =
+      [&](const std::size_t idx, const auto &ijk, auto &&f) {
+        for (int d = 0; d < dim; ++d)
+          {
+            if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
+              f(idx - st[d]);
+            if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
+              f(idx + st[d]);
+          }
+      };
     const auto for_metal_neighbours = [&](const std::size_t idx, auto &&f) {
       for_metal_neighbours_at(idx, grid.global_index(idx), f);
     };
     // Metal face neighbours per owned metal cell, to the ghost layer.
-    std::vector<double> &count = gas_coefficient; // reused, zero here
+    std::vector<double>       &count = gas_coefficient; // reused, zero here
     std::vector<std::uint32_t> active;
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
       if (alpha[idx] <= 0)
@@ -602,7 +632,8 @@ namespace femp
           }
         // Cells of larger bodies keep their mark (K + 1) for the
         // neighbours; only the others go on.
-        active.erase(std::remove_if(active.begin(), active.end(),
+        active.erase(std::remove_if(active.begin(),
+                                    active.end(),
                                     [&](const std::uint32_t idx) {
                                       return size[idx] > K;
                                     }),
@@ -616,7 +647,8 @@ namespace femp
     for (const auto idx : active)
       mine.insert(mine.end(), {global_id(idx), alpha[idx]});
     std::map<double, double> alpha_of;
-    for (const auto &part : Utilities::MPI::all_gather(grid.communicator(), mine))
+    for (const auto &part :
+         Utilities::MPI::all_gather(grid.communicator(), mine))
       for (std::size_t i = 0; i + 1 < part.size(); i += 2)
         alpha_of[part[i]] = part[i + 1];
     for (const auto idx : active)
@@ -635,14 +667,13 @@ namespace femp
       gas_coefficient[dc.index] = dc.gas_h;
   }
 
-
   template <int dim>
   void
   HeatTransfer<dim>::surface_loss(const double T,
-                                  double &     q_evap,
-                                  double &     q_conv,
-                                  double &     q_rad,
-                                  double &     dq_dT,
+                                  double      &q_evap,
+                                  double      &q_conv,
+                                  double      &q_rad,
+                                  double      &dq_dT,
                                   const double gas_h) const
   {
     const double Tref  = prm.reference_temperature;
@@ -650,17 +681,16 @@ namespace femp
     // Evaporation; exp() of exponents below -40 (relative 4e-18 of the flux
     // at T_v) is skipped.
     const double exponent = evap_exp * (T - mat.evaporation_temperature) / T;
-    q_evap = (evap_pref > 0 && exponent > -40) ?
-               evap_pref / std::sqrt(T) * std::exp(exponent) :
-               0.;
-    q_conv = (prm.convection_coefficient + gas_h) * (T - Tref);
-    q_rad  = stefan_boltzmann * prm.emissivity * (T * T * T * T - Tref4);
-    dq_dT  = q_evap * (evap_exp * mat.evaporation_temperature / (T * T) -
-                      0.5 / T) +
-            prm.convection_coefficient + gas_h +
-            4 * stefan_boltzmann * prm.emissivity * T * T * T;
+    q_evap                = (evap_pref > 0 && exponent > -40) ?
+                              evap_pref / std::sqrt(T) * std::exp(exponent) :
+                              0.;
+    q_conv                = (prm.convection_coefficient + gas_h) * (T - Tref);
+    q_rad = stefan_boltzmann * prm.emissivity * (T * T * T * T - Tref4);
+    dq_dT =
+      q_evap * (evap_exp * mat.evaporation_temperature / (T * T) - 0.5 / T) +
+      prm.convection_coefficient + gas_h +
+      4 * stefan_boltzmann * prm.emissivity * T * T * T;
   }
-
 
   template <int dim>
   void
@@ -668,21 +698,21 @@ namespace femp
   {
     const double V = std::pow(grid.h(), dim);
     Point<dim>   axis;
-    double       power    = 0;
-    const bool   laser_on = laser.position(time, axis, power);
+    double       power         = 0;
+    const bool   laser_on      = laser.position(time, axis, power);
     const bool   gradient_mode = prm.laser_deposition == "gradient";
-    const double rho_g_c_g = mat.gas_density * mat.gas_specific_heat;
-    double       e_laser   = 0;
+    const double rho_g_c_g     = mat.gas_density * mat.gas_specific_heat;
+    double       e_laser       = 0;
     // Loss weights w |grad alpha| at T^n; the losses themselves are taken
     // at the new temperature in advance() (pass C).
     for (const auto &s : surface)
       {
-        const double Tc = T[s.index];
-        const double a  = alpha[s.index];
+        const double Tc      = T[s.index];
+        const double a       = alpha[s.index];
         const double rho_c_m = mat.density * mat.specific_heat.value(Tc);
-        const double w  = 2 * heat_capacity(Tc, a) / (rho_c_m + rho_g_c_g);
-        const double wg = w * s.grad_alpha;
-        double q_laser = 0;
+        const double w       = 2 * heat_capacity(Tc, a) / (rho_c_m + rho_g_c_g);
+        const double wg      = w * s.grad_alpha;
+        double       q_laser = 0;
         if (laser_on && gradient_mode)
           {
             const Point<dim> c  = grid.cell_center(s.index);
@@ -713,14 +743,13 @@ namespace femp
           double           r2 = 0;
           for (int d = 0; d < dim - 1; ++d)
             r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
-          const double q = laser.flux(r2, power) * lc.share;
+          const double q          = laser.flux(r2, power) * lc.share;
           laser_density[lc.index] = q;
           source[lc.index] += q;
           e_laser += q;
         }
     budget.laser += e_laser * V * dt;
   }
-
 
   template <int dim>
   void
@@ -732,7 +761,6 @@ namespace femp
       tracer = std::make_unique<RayTracedAbsorption<dim>>(absorption, grid);
   }
 
-
   template <int dim>
   void
   HeatTransfer<dim>::trace_laser(const double time)
@@ -743,12 +771,11 @@ namespace femp
     Point<dim> axis;
     double     power = 0;
     if (laser.position(time, axis, power) && power > 0)
-      trace_result = tracer->trace(alpha, axis, power, laser.beam_radius(),
-                                   ray_deposits);
+      trace_result =
+        tracer->trace(alpha, axis, power, laser.beam_radius(), ray_deposits);
     traced_time = time;
     traced      = true;
   }
-
 
   // Ray-traced laser: each hit's absorbed power W goes into its (owned)
   // surface cell as the volumetric source W/V for this step. A cell that is
@@ -789,15 +816,14 @@ namespace femp
     return sum;
   }
 
-
   template <int dim>
   double
   HeatTransfer<dim>::stable_time_step(const CellFields<dim> &fields)
   {
     const auto *velocity = convection_velocity(fields);
     compute_properties();
-    const auto & st  = grid.strides();
-    const double ih2 = 1. / (grid.h() * grid.h());
+    const auto  &st       = grid.strides();
+    const double ih2      = 1. / (grid.h() * grid.h());
     double       rate_max = 0;
     for (const auto idx : grid.owned_cells())
       {
@@ -819,12 +845,11 @@ namespace femp
         rate_max = std::max(rate_max, rate);
       }
     for (const auto &f : fixed_faces)
-      rate_max = std::max(rate_max,
-                          4 * conductance[f.index] * ih2 / capacity[f.index]);
+      rate_max =
+        std::max(rate_max, 4 * conductance[f.index] * ih2 / capacity[f.index]);
     rate_max = Utilities::MPI::max(rate_max, grid.communicator());
     return rate_max > 0 ? 1. / rate_max : std::numeric_limits<double>::max();
   }
-
 
   template <int dim>
   void
@@ -832,7 +857,6 @@ namespace femp
   {
     compute_properties(0, T.size());
   }
-
 
   template <int dim>
   void
@@ -845,8 +869,8 @@ namespace femp
     const double        rho_g_cg = mat.gas_density * mat.gas_specific_heat;
     const double        k_g      = mat.gas_conductivity;
     const double        rho_m    = mat.density;
-    const double *      Tp = T.data(), *ap = alpha.data();
-    double *            kp = conductance.data(), *cp = capacity.data();
+    const double       *Tp = T.data(), *ap = alpha.data();
+    double             *kp = conductance.data(), *cp = capacity.data();
     if (!mat.conductivity.has_padded_segments() ||
         !mat.specific_heat.has_padded_segments())
       {
@@ -855,7 +879,8 @@ namespace femp
           {
             const double a     = ap[idx];
             const double metal = (a > 0 && status[idx] != 0) ? 1. : 0.;
-            kp[idx] = metal * (a * mat.conductivity.value(Tp[idx]) + (1 - a) * k_g);
+            kp[idx] =
+              metal * (a * mat.conductivity.value(Tp[idx]) + (1 - a) * k_g);
             cp[idx] = metal * (a * rho_m * mat.specific_heat.value(Tp[idx]) +
                                (1 - a) * rho_g_cg) +
                       (1 - metal);
@@ -879,8 +904,9 @@ namespace femp
                     (1 - metal); // 1 in gas and padding: never used for heat
         }
     };
-    using four  = std::integral_constant<unsigned int, 4>;
-    using eight = std::integral_constant<unsigned int, PiecewiseLinear::max_segments>;
+    using four = std::integral_constant<unsigned int, 4>;
+    using eight =
+      std::integral_constant<unsigned int, PiecewiseLinear::max_segments>;
     if (k_m.n <= 4 && c_m.n <= 4)
       sweep(four(), four());
     else if (k_m.n <= 4)
@@ -890,7 +916,6 @@ namespace femp
     else
       sweep(eight(), eight());
   }
-
 
   template <int dim>
   void
@@ -912,14 +937,13 @@ namespace femp
     compute_surface_sources(dt, time);
 
     StepSums sums;
-    conduction_pass(dt, sums);       // pass B: T_new by conduction
-    fixed_face_pass(dt, sums);       // fixed-temperature faces
+    conduction_pass(dt, sums); // pass B: T_new by conduction
+    fixed_face_pass(dt, sums); // fixed-temperature faces
     convection_pass(dt, convection_velocity(fields), sums); // upwind
-    source_pass(dt, sums);           // pass C: sources, surface losses
-    phase_change_pass(sums);         // pass D: enthalpy iteration
-    finish_step(dt, time, sums);     // budget, T_max, ghosts, next limit
+    source_pass(dt, sums);       // pass C: sources, surface losses
+    phase_change_pass(sums);     // pass D: enthalpy iteration
+    finish_step(dt, time, sums); // budget, T_max, ghosts, next limit
   }
-
 
   template <int dim>
   void
@@ -932,7 +956,6 @@ namespace femp
         compute_properties(r * row_len, (r + 1) * row_len);
   }
 
-
   // Pass B: conduction on whole x-rows of the box interior, branch-free
   // so that it vectorizes; gas and padding cells have zero conductance and
   // keep their value. Rows where a cell may need the phase-change
@@ -942,30 +965,30 @@ namespace femp
   void
   HeatTransfer<dim>::conduction_pass(const double dt, StepSums &sums)
   {
-    const std::size_t plane = dim == 3 ? grid.strides()[dim - 1] : T.size();
+    const std::size_t plane   = dim == 3 ? grid.strides()[dim - 1] : T.size();
     const std::size_t row_len = grid.box_size()[0];
     const std::size_t rows_per_plane = dim == 3 ? plane / row_len : 0;
-    const auto & st   = grid.strides();
-    const auto & size = grid.box_size();
-    const double h    = grid.h();
-    const double ih   = 1. / h;
-    const double ih2  = ih * ih;
-    const double Ts   = mat.solidus;
-    const double Tl   = mat.liquidus;
-    const double rhoL = mat.density * mat.latent_heat_fusion;
-    const bool   variable_c = !mat.specific_heat.is_constant();
+    const auto       &st             = grid.strides();
+    const auto       &size           = grid.box_size();
+    const double      h              = grid.h();
+    const double      ih             = 1. / h;
+    const double      ih2            = ih * ih;
+    const double      Ts             = mat.solidus;
+    const double      Tl             = mat.liquidus;
+    const double      rhoL           = mat.density * mat.latent_heat_fusion;
+    const bool        variable_c     = !mat.specific_heat.is_constant();
 
     double rate_max = 0;
 
-    const double  *Tp = T.data(), *kp = conductance.data(), *cp = capacity.data(),
-                  *gp = gamma.data();
-    double        *Tn = T_new.data();
+    const double *Tp = T.data(), *kp = conductance.data(),
+                 *cp = capacity.data(), *gp = gamma.data();
+    double *Tn = T_new.data();
     // Peak, lowest temperature and fastest rate over owned cells only: on
     // several ranks the box interior also holds ghost cells and cells this
     // rank does not know, whose new values here use stale neighbours (their
     // owners compute them; the ghost exchange after the step overwrites
     // them). One rank owns every interior cell.
-    const std::uint8_t *own = grid.cell_status().data();
+    const std::uint8_t  *own = grid.cell_status().data();
     const std::ptrdiff_t sy = dim > 1 ? st[1] : 0, sz = dim > 2 ? st[2] : 0;
     const int            ny = dim > 1 ? size[1] : 1, nz = dim > 2 ? size[2] : 1;
     const int            j0 = dim > 1 ? 1 : 0, k0 = dim > 2 ? 1 : 0;
@@ -975,69 +998,69 @@ namespace femp
     double     box_min = std::numeric_limits<double>::max();
     for (int kk = k0; kk < (dim > 2 ? nz - 1 : 1); ++kk)
       {
-      if (dim == 3)
-        properties_of_rows((kk + 1) * rows_per_plane, rows_per_plane);
-      for (int jj = j0; jj < ny - 1; ++jj)
-        {
-          if (!row_has_metal[(jj * sy + kk * sz) / row_len])
-            continue; // gas only: nothing changes
-          const std::size_t row = jj * sy + kk * sz;
-          double row_rate = 0, row_max = 0, row_bad = 0, row_flags = 0;
-          double row_min = std::numeric_limits<double>::max();
+        if (dim == 3)
+          properties_of_rows((kk + 1) * rows_per_plane, rows_per_plane);
+        for (int jj = j0; jj < ny - 1; ++jj)
+          {
+            if (!row_has_metal[(jj * sy + kk * sz) / row_len])
+              continue; // gas only: nothing changes
+            const std::size_t row = jj * sy + kk * sz;
+            double row_rate = 0, row_max = 0, row_bad = 0, row_flags = 0;
+            double row_min = std::numeric_limits<double>::max();
 #pragma omp simd reduction(max : row_rate, row_max) reduction(min : row_min) reduction(+ : row_bad, row_flags)
-          for (int ii = 1; ii < size[0] - 1; ++ii)
-            {
-              const std::size_t i  = row + ii;
-              const double      Tc = Tp[i], kc = kp[i];
-              // harmonic mean 2 k_c k_n / (k_c + k_n), zero if either is zero
-              const double kxm = kp[i - 1], kxp = kp[i + 1];
-              const double fxm = 2 * kc * kxm / (kc + kxm + 1e-300);
-              const double fxp = 2 * kc * kxp / (kc + kxp + 1e-300);
-              double flux = fxm * (Tp[i - 1] - Tc) + fxp * (Tp[i + 1] - Tc);
-              double sumk = fxm + fxp;
-              if constexpr (dim > 1)
-                {
-                  const double kym = kp[i - sy], kyp = kp[i + sy];
-                  const double fym = 2 * kc * kym / (kc + kym + 1e-300);
-                  const double fyp = 2 * kc * kyp / (kc + kyp + 1e-300);
-                  flux += fym * (Tp[i - sy] - Tc) + fyp * (Tp[i + sy] - Tc);
-                  sumk += fym + fyp;
-                }
-              if constexpr (dim > 2)
-                {
-                  const double kzm = kp[i - sz], kzp = kp[i + sz];
-                  const double fzm = 2 * kc * kzm / (kc + kzm + 1e-300);
-                  const double fzp = 2 * kc * kzp / (kc + kzp + 1e-300);
-                  flux += fzm * (Tp[i - sz] - Tc) + fzp * (Tp[i + sz] - Tc);
-                  sumk += fzm + fzp;
-                }
-              const double inv_c = 1. / cp[i];
-              const double Tnew  = Tc + dt * ih2 * flux * inv_c;
-              Tn[i]              = Tnew;
-              const bool   owned = own[i] == BackgroundGrid<dim>::owned;
-              const double rate  = owned ? sumk * ih2 * inv_c : 0.;
-              row_rate           = rate > row_rate ? rate : row_rate;
-              // metal cells only: gas may keep a stale T after points moved
-              row_max = owned & (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
-              row_min = owned & (kc > 0) & (Tnew < row_min) ? Tnew : row_min;
-              row_bad += Tnew - Tnew; // NaN if Tnew is not finite
-              // Flag: a cell may change phase (unless clearly solid or
-              // clearly liquid) or, with c(T) tables, takes a large step.
-              const double g     = gp[i];
-              const bool   solid = (Tnew < Ts) & (g == 0.);
-              const bool   liquid = (Tnew > Tl) & (g == 1.);
-              const bool   phase = has_latent & !(solid | liquid);
-              const bool   large = variable_c & (std::abs(Tnew - Tc) > 1.);
-              row_flags += (phase | large) ? 1. : 0.;
-            }
-          const bool needs_phase = row_flags > 0;
-          box_max = std::max(box_max, row_max);
-          box_min = std::min(box_min, row_min);
-          box_bad += row_bad;
-          rate_max = std::max(rate_max, row_rate);
-          if (needs_phase)
-            flagged_rows.push_back(row);
-        }
+            for (int ii = 1; ii < size[0] - 1; ++ii)
+              {
+                const std::size_t i  = row + ii;
+                const double      Tc = Tp[i], kc = kp[i];
+                // harmonic mean 2 k_c k_n / (k_c + k_n), zero if either is zero
+                const double kxm = kp[i - 1], kxp = kp[i + 1];
+                const double fxm = 2 * kc * kxm / (kc + kxm + 1e-300);
+                const double fxp = 2 * kc * kxp / (kc + kxp + 1e-300);
+                double flux = fxm * (Tp[i - 1] - Tc) + fxp * (Tp[i + 1] - Tc);
+                double sumk = fxm + fxp;
+                if constexpr (dim > 1)
+                  {
+                    const double kym = kp[i - sy], kyp = kp[i + sy];
+                    const double fym = 2 * kc * kym / (kc + kym + 1e-300);
+                    const double fyp = 2 * kc * kyp / (kc + kyp + 1e-300);
+                    flux += fym * (Tp[i - sy] - Tc) + fyp * (Tp[i + sy] - Tc);
+                    sumk += fym + fyp;
+                  }
+                if constexpr (dim > 2)
+                  {
+                    const double kzm = kp[i - sz], kzp = kp[i + sz];
+                    const double fzm = 2 * kc * kzm / (kc + kzm + 1e-300);
+                    const double fzp = 2 * kc * kzp / (kc + kzp + 1e-300);
+                    flux += fzm * (Tp[i - sz] - Tc) + fzp * (Tp[i + sz] - Tc);
+                    sumk += fzm + fzp;
+                  }
+                const double inv_c = 1. / cp[i];
+                const double Tnew  = Tc + dt * ih2 * flux * inv_c;
+                Tn[i]              = Tnew;
+                const bool   owned = own[i] == BackgroundGrid<dim>::owned;
+                const double rate  = owned ? sumk * ih2 * inv_c : 0.;
+                row_rate           = rate > row_rate ? rate : row_rate;
+                // metal cells only: gas may keep a stale T after points moved
+                row_max = owned & (kc > 0) & (Tnew > row_max) ? Tnew : row_max;
+                row_min = owned & (kc > 0) & (Tnew < row_min) ? Tnew : row_min;
+                row_bad += Tnew - Tnew; // NaN if Tnew is not finite
+                // Flag: a cell may change phase (unless clearly solid or
+                // clearly liquid) or, with c(T) tables, takes a large step.
+                const double g      = gp[i];
+                const bool   solid  = (Tnew < Ts) & (g == 0.);
+                const bool   liquid = (Tnew > Tl) & (g == 1.);
+                const bool   phase  = has_latent & !(solid | liquid);
+                const bool   large  = variable_c & (std::abs(Tnew - Tc) > 1.);
+                row_flags += (phase | large) ? 1. : 0.;
+              }
+            const bool needs_phase = row_flags > 0;
+            box_max                = std::max(box_max, row_max);
+            box_min                = std::min(box_min, row_min);
+            box_bad += row_bad;
+            rate_max = std::max(rate_max, row_rate);
+            if (needs_phase)
+              flagged_rows.push_back(row);
+          }
       }
 
     sums.rate_max = rate_max;
@@ -1046,15 +1069,14 @@ namespace femp
     sums.box_bad  = box_bad;
   }
 
-
   template <int dim>
   void
   HeatTransfer<dim>::fixed_face_pass(const double dt, StepSums &sums)
   {
-    const double h   = grid.h();
-    const double ih  = 1. / h;
-    const double ih2 = ih * ih;
-    const double V   = std::pow(h, dim);
+    const double h        = grid.h();
+    const double ih       = 1. / h;
+    const double ih2      = ih * ih;
+    const double V        = std::pow(h, dim);
     double       rate_max = sums.rate_max;
     // Fixed-temperature faces: the face value sits h/2 from the cell centre.
     double e_boundary = 0;
@@ -1071,28 +1093,27 @@ namespace femp
     sums.rate_max   = rate_max;
   }
 
-
-    // Convection (only when a velocity field is present): first-order
-    // upwind, no advective flux from gas or from outside the domain. In a
-    // partly filled cell (alpha < 1) the metal flowing in mixes with alpha
-    // of metal, so its temperature moves at the rate 1/alpha: the part
-    // (1/alpha - 1) is taken implicitly in the cell's own temperature
-    // (a convex mix of T* and the upwind values: no step limit); full cells
-    // are unchanged. With it, the alpha update from the points (which
-    // books the arriving volume at the cell's T) and the convection give
-    // the arriving metal the upwind temperature (doc/equations.md).
+  // Convection (only when a velocity field is present): first-order
+  // upwind, no advective flux from gas or from outside the domain. In a
+  // partly filled cell (alpha < 1) the metal flowing in mixes with alpha
+  // of metal, so its temperature moves at the rate 1/alpha: the part
+  // (1/alpha - 1) is taken implicitly in the cell's own temperature
+  // (a convex mix of T* and the upwind values: no step limit); full cells
+  // are unchanged. With it, the alpha update from the points (which
+  // books the arriving volume at the cell's T) and the convection give
+  // the arriving metal the upwind temperature (doc/equations.md).
   template <int dim>
   void
   HeatTransfer<dim>::convection_pass(
     const double                                dt,
     const std::array<std::vector<double>, dim> *velocity,
-    StepSums &                                  sums)
+    StepSums                                   &sums)
   {
-    const auto & st       = grid.strides();
-    const double ih       = 1. / grid.h();
-    const double ih2      = ih * ih;
-    double       rate_max = sums.rate_max;
-    double e_advection = 0;
+    const auto  &st          = grid.strides();
+    const double ih          = 1. / grid.h();
+    const double ih2         = ih * ih;
+    double       rate_max    = sums.rate_max;
+    double       e_advection = 0;
     if (velocity)
       for (const auto idx : grid.owned_cells())
         {
@@ -1115,7 +1136,8 @@ namespace femp
             }
           if (alpha[idx] < 1 && r_up > 0)
             {
-              // T_new = (T* + w sum r T_up) / (1 + w sum r), w = dt (1/alpha - 1)
+              // T_new = (T* + w sum r T_up) / (1 + w sum r), w = dt (1/alpha -
+              // 1)
               const double w     = dt * (1. / alpha[idx] - 1);
               const double Tstar = T_new[idx] + dt * conv;
               const double Tmix  = (Tstar + w * rT_up) / (1 + w * r_up);
@@ -1137,39 +1159,38 @@ namespace femp
     sums.rate_max    = rate_max;
   }
 
-
-    // Pass C: cells with sparse sources (laser, surface losses, fixed
-    // faces). The surface loss q(T) w |grad alpha| is taken at the new
-    // temperature (fully implicit, a local Newton iteration): a cell heated
-    // from cold in one step meets the evaporation of the temperature it
-    // reaches, not the one it starts from (a linearization about T^n let
-    // the first steps of the 3D track heat powder tops to 8000 K and
-    // more). The loss is booked at the new temperature, so the energy
-    // stays balanced exactly.
+  // Pass C: cells with sparse sources (laser, surface losses, fixed
+  // faces). The surface loss q(T) w |grad alpha| is taken at the new
+  // temperature (fully implicit, a local Newton iteration): a cell heated
+  // from cold in one step meets the evaporation of the temperature it
+  // reaches, not the one it starts from (a linearization about T^n let
+  // the first steps of the 3D track heat powder tops to 8000 K and
+  // more). The loss is booked at the new temperature, so the energy
+  // stays balanced exactly.
   template <int dim>
   void
   HeatTransfer<dim>::source_pass(const double dt, StepSums &sums)
   {
     const double rhoL       = mat.density * mat.latent_heat_fusion;
     const bool   variable_c = !mat.specific_heat.is_constant();
-    std::size_t nphase = 0;
-    double      e_evap = 0, e_conv = 0, e_rad = 0;
+    std::size_t  nphase     = 0;
+    double       e_evap = 0, e_conv = 0, e_rad = 0;
     for (const auto idx : source_cells)
       {
-        const double Tc  = T[idx];
-        const double rc  = capacity[idx];
-        const double dH  = (T_new[idx] - Tc) * rc + dt * source[idx];
-        const double W   = loss_weight[idx];
-        const double hg  = gas_coefficient.empty() ? 0. : gas_coefficient[idx];
+        const double Tc   = T[idx];
+        const double rc   = capacity[idx];
+        const double dH   = (T_new[idx] - Tc) * rc + dt * source[idx];
+        const double W    = loss_weight[idx];
+        const double hg   = gas_coefficient.empty() ? 0. : gas_coefficient[idx];
         double       Tnew = Tc + dH / rc;
         if (W > 0)
-          Tnew = solve_cell(alpha[idx], Tc, gamma[idx], rc, dH, dt * W,
-                            false, Tnew, hg);
+          Tnew = solve_cell(
+            alpha[idx], Tc, gamma[idx], rc, dH, dt * W, false, Tnew, hg);
         if (needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
           {
             ++nphase;
-            Tnew = solve_cell(alpha[idx], Tc, gamma[idx], rc, dH, dt * W,
-                              true, Tnew, hg);
+            Tnew = solve_cell(
+              alpha[idx], Tc, gamma[idx], rc, dH, dt * W, true, Tnew, hg);
           }
         if (W > 0)
           {
@@ -1179,8 +1200,8 @@ namespace femp
             e_conv += qc * W;
             e_rad += qr * W;
           }
-        T_new[idx]   = Tnew;
-        gamma[idx]   = mat.liquid_fraction(Tnew);
+        T_new[idx]     = Tnew;
+        gamma[idx]     = mat.liquid_fraction(Tnew);
         is_source[idx] = 1;
       }
     sums.nphase = nphase;
@@ -1189,20 +1210,19 @@ namespace femp
     sums.e_rad  = e_rad;
   }
 
-
-    // Pass D: the local enthalpy iteration in flagged rows (not for source
-    // cells, done above): find T with
-    //   H(T) = H(T^n) + dH,  H = a rho_m (C(T) + L gamma(T)) + (1-a) rho_g c_g T,
-    // C the antiderivative of c_m; exact bookkeeping of c(T) and latent heat.
+  // Pass D: the local enthalpy iteration in flagged rows (not for source
+  // cells, done above): find T with
+  //   H(T) = H(T^n) + dH,  H = a rho_m (C(T) + L gamma(T)) + (1-a) rho_g c_g T,
+  // C the antiderivative of c_m; exact bookkeeping of c(T) and latent heat.
   template <int dim>
   void
   HeatTransfer<dim>::phase_change_pass(StepSums &sums)
   {
-    const auto & size       = grid.box_size();
+    const auto  &size       = grid.box_size();
     const double rhoL       = mat.density * mat.latent_heat_fusion;
     const bool   variable_c = !mat.specific_heat.is_constant();
     std::size_t  nphase     = sums.nphase;
-    const auto &status = grid.cell_status();
+    const auto  &status     = grid.cell_status();
     for (const std::size_t row : flagged_rows)
       for (int ii = 1; ii < size[0] - 1; ++ii)
         {
@@ -1210,34 +1230,32 @@ namespace femp
           if (is_source[idx] || alpha[idx] <= 0 ||
               status[idx] != BackgroundGrid<dim>::owned)
             continue;
-          const double Tc = T[idx];
+          const double Tc   = T[idx];
           double       Tnew = T_new[idx];
           if (!needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
             continue;
           ++nphase;
           const double dH = (Tnew - Tc) * capacity[idx];
-          Tnew = solve_cell(alpha[idx], Tc, gamma[idx], capacity[idx], dH, 0.,
-                            true, Tnew);
+          Tnew            = solve_cell(
+            alpha[idx], Tc, gamma[idx], capacity[idx], dH, 0., true, Tnew);
           T_new[idx] = Tnew;
           gamma[idx] = mat.liquid_fraction(Tnew);
         }
     sums.nphase = nphase;
   }
 
-
   template <int dim>
   void
-  HeatTransfer<dim>::finish_step(const double      dt,
-                                 const double      time,
-                                 const StepSums &  sums)
+  HeatTransfer<dim>::finish_step(const double    dt,
+                                 const double    time,
+                                 const StepSums &sums)
   {
-    const auto & size        = grid.box_size();
-    const double V           = std::pow(grid.h(), dim);
-    const double e_evap      = sums.e_evap, e_conv = sums.e_conv,
-                 e_rad       = sums.e_rad;
+    const auto  &size   = grid.box_size();
+    const double V      = std::pow(grid.h(), dim);
+    const double e_evap = sums.e_evap, e_conv = sums.e_conv, e_rad = sums.e_rad;
     const double e_boundary  = sums.e_boundary;
     const double e_advection = sums.e_advection;
-    const double box_max     = sums.box_max, box_bad = sums.box_bad;
+    const double box_max = sums.box_max, box_bad = sums.box_bad;
     const double rate_max    = sums.rate_max;
     const std::size_t nphase = sums.nphase;
     // Reset the sparse sources.
@@ -1257,7 +1275,7 @@ namespace femp
     // box. Cells changed after pass B (sources, phase change) are added
     // here.
     const auto &status = grid.cell_status();
-    double Tmax = box_max, Tmin = sums.box_min;
+    double      Tmax = box_max, Tmin = sums.box_min;
     for (const auto idx : source_cells)
       if (alpha[idx] > 0 && status[idx] == BackgroundGrid<dim>::owned)
         {
@@ -1289,9 +1307,9 @@ namespace femp
     Utilities::MPI::max(ArrayView<const double>(local, 3),
                         grid.communicator(),
                         ArrayView<double>(global, 3));
-    T_max          = global[0];
-    dt_stable_next = global[1] > 0 ? 1. / global[1] :
-                                     std::numeric_limits<double>::max();
+    T_max = global[0];
+    dt_stable_next =
+      global[1] > 0 ? 1. / global[1] : std::numeric_limits<double>::max();
 
     if (!std::isfinite(T_max))
       {
@@ -1309,13 +1327,15 @@ namespace femp
         share_location(found, where, grid.communicator());
         throw CollectiveError(
           "The temperature became non-finite at time " + num(time + dt) +
-          " s (step size " + num(dt) + " s). First non-finite temperature in "
-          "the cell at " + location_text(where) + " m. The step may exceed the "
+          " s (step size " + num(dt) +
+          " s). First non-finite temperature in "
+          "the cell at " +
+          location_text(where) +
+          " m. The step may exceed the "
           "stable limit, or a surface loss (evaporation) may be too stiff.");
       }
     check_temperature_floor(-global[2], dt, time);
   }
-
 
   template <int dim>
   double
@@ -1326,7 +1346,6 @@ namespace femp
               mat.latent_heat_fusion * mat.liquid_fraction(T)) +
            (1 - a) * mat.gas_density * mat.gas_specific_heat * T;
   }
-
 
   template <int dim>
   double
@@ -1343,12 +1362,12 @@ namespace femp
     // f(T) = H(T) - H(Tc) + dtW q(T) - dH, increasing in T (q grows with T
     // below ~2 L_v M/R, 1e5 K for steel). With the sensible part only,
     // H(T) - H(Tc) = rc (T - Tc).
-    const double H0 = enthalpy ? a * mat.density *
-                                     (mat.specific_heat.antiderivative(Tc) +
-                                      mat.latent_heat_fusion * gc) +
-                                   (1 - a) * mat.gas_density *
-                                     mat.gas_specific_heat * Tc :
-                                 0.;
+    const double H0 =
+      enthalpy ? a * mat.density *
+                     (mat.specific_heat.antiderivative(Tc) +
+                      mat.latent_heat_fusion * gc) +
+                   (1 - a) * mat.gas_density * mat.gas_specific_heat * Tc :
+                 0.;
     auto f = [&](const double T, double &slope) {
       double qe = 0, qc = 0, qr = 0, dq = 0;
       if (dtW > 0)
@@ -1369,10 +1388,10 @@ namespace femp
     };
     // Bracket: the slope is at least c_min, so the root lies between Tc and
     // Tc - f(Tc)/c_min; temperatures stay positive.
-    const double c_min =
-      enthalpy ? a * mat.density * mat.specific_heat.min_value() +
-                   (1 - a) * mat.gas_density * mat.gas_specific_heat :
-                 rc;
+    const double c_min = enthalpy ?
+                           a * mat.density * mat.specific_heat.min_value() +
+                             (1 - a) * mat.gas_density * mat.gas_specific_heat :
+                           rc;
     // Start from the guess, or without the enthalpy tables from the
     // linearization about Tc (one Newton step; exact for the convection
     // part, within round-off for cold cells, whose loss is nearly linear).
@@ -1380,20 +1399,20 @@ namespace femp
     const double f0    = f(Tc, slope);
     const double Tfar  = Tc - f0 / c_min;
     double       lo = std::min(Tc, Tfar) - 1e-9, hi = std::max(Tc, Tfar) + 1e-9;
-    lo              = std::max(lo, 1e-3 * Tc);
-    double       T  = std::clamp(enthalpy ? guess : Tc - f0 / slope, lo, hi);
+    lo       = std::max(lo, 1e-3 * Tc);
+    double T = std::clamp(enthalpy ? guess : Tc - f0 / slope, lo, hi);
     // Residual tolerance (J/m^3): the loss is booked at the T returned, so
     // the balance holds to this residual per cell.
-    const double tol = 1e-12 * (std::abs(H0) + c_min * Tc + std::abs(dH) +
-                                std::abs(f0)) +
-                       1e-300;
+    const double tol =
+      1e-12 * (std::abs(H0) + c_min * Tc + std::abs(dH) + std::abs(f0)) +
+      1e-300;
     for (unsigned int it = 0; it < 100; ++it)
       {
         const double r = f(T, slope);
         if (std::abs(r) <= tol)
           break;
         (r > 0 ? hi : lo) = T;
-        double next = T - r / slope;
+        double next       = T - r / slope;
         if (!(next > lo && next < hi))
           next = 0.5 * (lo + hi);
         if (hi - lo < 1e-12 * std::abs(T))
@@ -1402,7 +1421,6 @@ namespace femp
       }
     return T;
   }
-
 
   template <int dim>
   void
@@ -1420,8 +1438,9 @@ namespace femp
           continue;
         const double Tc = T[idx];
         const double dH = rho * (e - specific_enthalpy(Tc));
-        set_cell_temperature(idx, solve_cell(1., Tc, mat.liquid_fraction(Tc),
-                                             0., dH, 0., true, Tc));
+        set_cell_temperature(
+          idx,
+          solve_cell(1., Tc, mat.liquid_fraction(Tc), 0., dH, 0., true, Tc));
       }
     update_ghosts();
   }
@@ -1433,7 +1452,6 @@ namespace femp
     return mat.specific_heat.antiderivative(T_cell) +
            mat.latent_heat_fusion * mat.liquid_fraction(T_cell);
   }
-
 
   template <int dim>
   double
@@ -1458,18 +1476,27 @@ namespace femp
   typename HeatTransfer<dim>::EnergyBudget
   HeatTransfer<dim>::energy_budget() const
   {
-    const double local[8] = {budget.laser,          budget.evaporation,
-                             budget.convection,     budget.radiation,
-                             budget.boundary,       budget.advection,
-                             budget.laser_incident, budget.laser_escaped};
+    const double local[8] = {budget.laser,
+                             budget.evaporation,
+                             budget.convection,
+                             budget.radiation,
+                             budget.boundary,
+                             budget.advection,
+                             budget.laser_incident,
+                             budget.laser_escaped};
     double       global[8];
     Utilities::MPI::sum(ArrayView<const double>(local, 8),
                         grid.communicator(),
                         ArrayView<double>(global, 8));
-    return {global[0], global[1], global[2], global[3],
-            global[4], global[5], global[6], global[7]};
+    return {global[0],
+            global[1],
+            global[2],
+            global[3],
+            global[4],
+            global[5],
+            global[6],
+            global[7]};
   }
-
 
   template <int dim>
   double
@@ -1489,7 +1516,6 @@ namespace femp
     out.put(dt_stable_next);
   }
 
-
   template <int dim>
   void
   HeatTransfer<dim>::load_state(std::vector<StateReader> &parts)
@@ -1499,9 +1525,10 @@ namespace femp
     // The energy accounts are sums per rank: on as many ranks as wrote
     // them each takes its own (bit-identical totals), else rank 0 takes
     // the total.
-    const unsigned int rank  = Utilities::MPI::this_mpi_process(grid.communicator());
-    const bool         same  = parts.size() ==
-                        Utilities::MPI::n_mpi_processes(grid.communicator());
+    const unsigned int rank =
+      Utilities::MPI::this_mpi_process(grid.communicator());
+    const bool same =
+      parts.size() == Utilities::MPI::n_mpi_processes(grid.communicator());
     budget = EnergyBudget();
     for (std::size_t r = 0; r < parts.size(); ++r)
       {
@@ -1528,7 +1555,7 @@ namespace femp
     T_max = Tmax;
   }
 
-    template <int dim>
+  template <int dim>
   void
   HeatTransfer<dim>::set_temperature_floor()
   {
@@ -1543,7 +1570,6 @@ namespace femp
                        prm.reference_temperature);
   }
 
-
   template <int dim>
   void
   HeatTransfer<dim>::check_temperature_floor(const double T_min,
@@ -1557,7 +1583,7 @@ namespace femp
     if (!(T_min < T_floor - margin))
       return;
     Point<dim> where;
-    bool       found = false;
+    bool       found  = false;
     double     lowest = std::numeric_limits<double>::max();
     for (const auto idx : grid.owned_cells())
       if (alpha[idx] > 0 && T[idx] < lowest)
@@ -1569,14 +1595,14 @@ namespace femp
       "The temperature step broke the discrete maximum principle at time " +
       num(time + dt) + " s (step size " + num(dt) + " s): the cell at " +
       location_text(where) + " m fell to " + num(T_min) + " K, below " +
-      num(T_floor) + " K, the lowest initial, fixed-face or reference "
+      num(T_floor) +
+      " K, the lowest initial, fixed-face or reference "
       "temperature, which no stable step can undershoot. The step exceeds "
       "the stable limit of the explicit temperature step (an unstable step "
       "can stay finite: the latent heat clamps it into a wrong "
       "checkerboard). Use a smaller 'Time stepping/Safety factor' or "
       "'Time stepping/Time step'.");
   }
-
 
   template class HeatTransfer<2>;
   template class HeatTransfer<3>;

@@ -14,31 +14,53 @@ namespace femp
   Laser<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Laser");
-    prm.declare_entry("Power", "200", Patterns::Double(0.),
-                      "Laser power P, W (in 2D: W per m of depth); range [0, inf).");
-    prm.declare_entry("Absorptivity", "0.35", Patterns::Double(0., 1.),
-                      "Absorbed fraction eta of the laser power; range [0, 1].");
-    prm.declare_entry("Beam radius", "20e-6", Patterns::Double(0.),
-                      "1/e^2 radius r_b of the Gaussian beam, m; range (0, inf).");
-    prm.declare_entry("Scan speed", "2", Patterns::Double(0.),
+    prm.declare_entry(
+      "Power",
+      "200",
+      Patterns::Double(0.),
+      "Laser power P, W (in 2D: W per m of depth); range [0, inf).");
+    prm.declare_entry(
+      "Absorptivity",
+      "0.35",
+      Patterns::Double(0., 1.),
+      "Absorbed fraction eta of the laser power; range [0, 1].");
+    prm.declare_entry(
+      "Beam radius",
+      "20e-6",
+      Patterns::Double(0.),
+      "1/e^2 radius r_b of the Gaussian beam, m; range (0, inf).");
+    prm.declare_entry("Scan speed",
+                      "2",
+                      Patterns::Double(0.),
                       "Speed of the beam along the line from 'Start point' to "
                       "'End point', m/s; range (0, inf).");
-    prm.declare_entry("Start point", "1e-4, 2e-4, 0", Patterns::List(Patterns::Double(), 1, 3),
+    prm.declare_entry("Start point",
+                      "1e-4, 2e-4, 0",
+                      Patterns::List(Patterns::Double(), 1, 3),
                       "Horizontal position of the beam axis at the start time, "
                       "m (the vertical coordinate is ignored).");
-    prm.declare_entry("End point", "9e-4, 2e-4, 0", Patterns::List(Patterns::Double(), 1, 3),
+    prm.declare_entry("End point",
+                      "9e-4, 2e-4, 0",
+                      Patterns::List(Patterns::Double(), 1, 3),
                       "Horizontal position where the line scan ends and the "
                       "laser switches off, m.");
-    prm.declare_entry("Start time", "0", Patterns::Double(0.),
-                      "Time at which the laser switches on, s; range [0, inf).");
-    prm.declare_entry("Scan path file", "", Patterns::Anything(),
-                      "Optional file that replaces the single line: one segment "
-                      "per line, 'x0 y0 x1 y1 speed power' (3D) or 'x0 x1 speed "
-                      "power' (2D), m, m/s, W; power 0 moves the beam with the "
-                      "laser off. Segments follow each other in time from "
-                      "'Start time'. Lines starting with # are comments. A "
-                      "relative path is relative to the working directory.");
-    prm.declare_entry("Scan path format", "femp",
+    prm.declare_entry(
+      "Start time",
+      "0",
+      Patterns::Double(0.),
+      "Time at which the laser switches on, s; range [0, inf).");
+    prm.declare_entry(
+      "Scan path file",
+      "",
+      Patterns::Anything(),
+      "Optional file that replaces the single line: one segment "
+      "per line, 'x0 y0 x1 y1 speed power' (3D) or 'x0 x1 speed "
+      "power' (2D), m, m/s, W; power 0 moves the beam with the "
+      "laser off. Segments follow each other in time from "
+      "'Start time'. Lines starting with # are comments. A "
+      "relative path is relative to the working directory.");
+    prm.declare_entry("Scan path format",
+                      "femp",
                       Patterns::Selection(scan_path_formats()),
                       "Format of 'Scan path file': 'femp' (above), "
                       "'adamantine_segment', 'adamantine_event_series' "
@@ -50,50 +72,56 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   void
   Laser<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Laser");
-    power          = prm.get_double("Power");
-    absorptivity   = prm.get_double("Absorptivity");
-    beam_radius    = prm.get_double("Beam radius");
-    scan_speed     = prm.get_double("Scan speed");
-    start_point    = parse_point<dim>(prm.get("Start point"), "Laser/Start point");
-    end_point      = parse_point<dim>(prm.get("End point"), "Laser/End point");
-    start_time     = prm.get_double("Start time");
-    scan_path_file = prm.get("Scan path file");
+    power        = prm.get_double("Power");
+    absorptivity = prm.get_double("Absorptivity");
+    beam_radius  = prm.get_double("Beam radius");
+    scan_speed   = prm.get_double("Scan speed");
+    start_point = parse_point<dim>(prm.get("Start point"), "Laser/Start point");
+    end_point   = parse_point<dim>(prm.get("End point"), "Laser/End point");
+    start_time  = prm.get_double("Start time");
+    scan_path_file   = prm.get("Scan path file");
     scan_path_format = prm.get("Scan path format");
     prm.leave_subsection();
-    require(beam_radius > 0, "Laser/Beam radius", beam_radius,
+    require(beam_radius > 0,
+            "Laser/Beam radius",
+            beam_radius,
             "it must be positive (m)");
-    require(scan_speed > 0, "Laser/Scan speed", scan_speed,
+    require(scan_speed > 0,
+            "Laser/Scan speed",
+            scan_speed,
             "it must be positive (m/s)");
   }
 
-
   template <int dim>
   Laser<dim>::Laser(const Parameters &p)
-    : prm(p)
-    , inv_rb2(1. / (p.beam_radius * p.beam_radius))
+      : prm(p)
+      , inv_rb2(1. / (p.beam_radius * p.beam_radius))
   {
-    double t = prm.start_time;
+    double t   = prm.start_time;
     auto   add = [&](Point<dim> a, Point<dim> b, double speed, double power) {
       a[dim - 1] = b[dim - 1] = 0;
-      const double len = a.distance(b);
+      const double len        = a.distance(b);
       path.push_back({a, b, speed, power, t, t + len / speed});
       t += len / speed;
     };
     if (prm.scan_path_file.empty())
       add(prm.start_point, prm.end_point, prm.scan_speed, prm.power);
     else if (prm.scan_path_format != "femp")
-      path = read_scan_path<dim>(prm.scan_path_file, prm.scan_path_format,
-                                 prm.power, prm.start_time);
+      path = read_scan_path<dim>(prm.scan_path_file,
+                                 prm.scan_path_format,
+                                 prm.power,
+                                 prm.start_time);
     else
       {
         std::ifstream in(prm.scan_path_file);
-        require(static_cast<bool>(in), "Laser/Scan path file", prm.scan_path_file,
+        require(static_cast<bool>(in),
+                "Laser/Scan path file",
+                prm.scan_path_file,
                 "the file cannot be opened");
         std::string line;
         unsigned    line_no = 0;
@@ -120,11 +148,12 @@ namespace femp
                       "speed (m/s) and a non-negative power (W)");
             add(a, b, speed, power);
           }
-        require(!path.empty(), "Laser/Scan path file", prm.scan_path_file,
+        require(!path.empty(),
+                "Laser/Scan path file",
+                prm.scan_path_file,
                 "it must contain at least one segment");
       }
   }
-
 
   template <int dim>
   void
@@ -149,13 +178,10 @@ namespace femp
                     v.str(),
                     "the scan path must stay inside the " +
                       std::string(d < dim - 1 ? "horizontal" : "vertical") +
-                      " extent of the domain (coordinate " +
-                      std::to_string(d) + " in [" +
-                      num(lower[d]) + ", " +
-                      num(upper[d]) + "] m)");
+                      " extent of the domain (coordinate " + std::to_string(d) +
+                      " in [" + num(lower[d]) + ", " + num(upper[d]) + "] m)");
           }
   }
-
 
   template <int dim>
   bool

@@ -33,15 +33,15 @@ namespace femp
                  const double               T_iso,
                  const double               z_top)
     {
-      const auto &st  = grid.strides();
-      const auto &n   = grid.n_cells();
-      const double h  = grid.h();
-      const double big = std::numeric_limits<double>::max();
+      const auto      &st  = grid.strides();
+      const auto      &n   = grid.n_cells();
+      const double     h   = grid.h();
+      const double     big = std::numeric_limits<double>::max();
       IsothermBox<dim> box;
       box.lo.fill(big);
       box.hi.fill(-big);
-      const MPI_Comm comm = grid.communicator();
-      const auto below = [&](const std::size_t i) {
+      const MPI_Comm comm  = grid.communicator();
+      const auto     below = [&](const std::size_t i) {
         return grid.cell_center(i)[dim - 1] < z_top;
       };
       const auto melt = [&](const std::size_t i) {
@@ -146,7 +146,6 @@ namespace femp
     }
   } // namespace
 
-
   template <int dim>
   MeltPoolSize
   measure_melt_pool(const BackgroundGrid<dim> &grid,
@@ -181,17 +180,25 @@ namespace femp
     const auto fusion = isotherm_box(grid, T, alpha, T_solidus, surface_height);
     if (fusion.volume > 0)
       {
-        r.solidus_width = dim == 3 ? fusion.hi[1] - fusion.lo[1] :
-                                     fusion.hi[0] - fusion.lo[0];
+        r.solidus_width =
+          dim == 3 ? fusion.hi[1] - fusion.lo[1] : fusion.hi[0] - fusion.lo[0];
         r.solidus_depth = std::max(0., surface_height - fusion.lo[dim - 1]);
       }
     return r;
   }
 
   template MeltPoolSize
-  measure_melt_pool<2>(const BackgroundGrid<2> &, const std::vector<double> &,
-                       const std::vector<double> &, double, double, double);
+  measure_melt_pool<2>(const BackgroundGrid<2> &,
+                       const std::vector<double> &,
+                       const std::vector<double> &,
+                       double,
+                       double,
+                       double);
   template MeltPoolSize
-  measure_melt_pool<3>(const BackgroundGrid<3> &, const std::vector<double> &,
-                       const std::vector<double> &, double, double, double);
+  measure_melt_pool<3>(const BackgroundGrid<3> &,
+                       const std::vector<double> &,
+                       const std::vector<double> &,
+                       double,
+                       double,
+                       double);
 } // namespace femp

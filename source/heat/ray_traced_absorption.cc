@@ -17,11 +17,14 @@ namespace femp
 {
   template <int dim>
   void
-  RayTracedAbsorption<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  RayTracedAbsorption<dim>::Parameters::declare_parameters(
+    ParameterHandler &prm)
   {
     prm.enter_subsection("Laser");
     prm.declare_entry(
-      "Absorption model", "fixed", Patterns::Selection("fixed|ray traced"),
+      "Absorption model",
+      "fixed",
+      Patterns::Selection("fixed|ray traced"),
       "'fixed': the absorbed flux is 'Absorptivity' times the beam's flux, "
       "put into the cells where the vertical beam first meets metal "
       "('Heat transfer/Laser deposition'). 'ray traced': every temperature "
@@ -35,7 +38,9 @@ namespace femp
       "'Absorptivity' and 'Heat transfer/Laser deposition' are then not "
       "used. Recommended where the surface is deeply depressed (normalized "
       "enthalpy above ~20-30, see the scene log and doc/absorption.md).");
-    prm.declare_entry("Refractive index", "3.5", Patterns::Double(0.),
+    prm.declare_entry("Refractive index",
+                      "3.5",
+                      Patterns::Double(0.),
                       "Real part n of the metal's complex refractive index at "
                       "the laser wavelength (ray traced only), dimensionless; "
                       "range (0, inf). The default is a placeholder of the "
@@ -44,21 +49,27 @@ namespace femp
                       "extinction coefficient), not a measured value of an "
                       "alloy; set it from optical data of the alloy "
                       "(doc/absorption.md).");
-    prm.declare_entry("Extinction coefficient", "4.5", Patterns::Double(0.),
-                      "Imaginary part k of the complex refractive index at the "
-                      "laser wavelength (ray traced only), dimensionless; range "
-                      "[0, inf).");
-    prm.declare_entry("Rays per beam radius", "4", Patterns::Integer(1, 64),
+    prm.declare_entry(
+      "Extinction coefficient",
+      "4.5",
+      Patterns::Double(0.),
+      "Imaginary part k of the complex refractive index at the "
+      "laser wavelength (ray traced only), dimensionless; range "
+      "[0, inf).");
+    prm.declare_entry("Rays per beam radius",
+                      "4",
+                      Patterns::Integer(1, 64),
                       "Ray spacing r_b / this number on a square lattice (3D) "
                       "or a line (2D) out to 2 r_b (ray traced only): "
                       "4 gives 197 rays in 3D, 17 in 2D; range [1, 64].");
-    prm.declare_entry("Maximum reflections", "50", Patterns::Integer(0, 10000),
+    prm.declare_entry("Maximum reflections",
+                      "50",
+                      Patterns::Integer(0, 10000),
                       "After this many reflections a ray's remaining power is "
                       "absorbed where it is (ray traced only); range [0, "
                       "10000].");
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -71,32 +82,32 @@ namespace femp
     rays_per_beam_radius   = prm.get_integer("Rays per beam radius");
     max_reflections        = prm.get_integer("Maximum reflections");
     prm.leave_subsection();
-    require(refractive_index > 0, "Laser/Refractive index", refractive_index,
+    require(refractive_index > 0,
+            "Laser/Refractive index",
+            refractive_index,
             "it must be positive");
   }
 
-
   template <int dim>
-  RayTracedAbsorption<dim>::RayTracedAbsorption(const Parameters &         p,
+  RayTracedAbsorption<dim>::RayTracedAbsorption(const Parameters          &p,
                                                 const BackgroundGrid<dim> &g)
-    : prm(p)
-    , grid(g)
-  {}
-
+      : prm(p)
+      , grid(g)
+  {
+  }
 
   template <int dim>
   double
   RayTracedAbsorption<dim>::fresnel_absorptivity(const double cos_theta) const
   {
-    using C             = std::complex<double>;
-    const double c      = std::clamp(cos_theta, 0., 1.);
+    using C        = std::complex<double>;
+    const double c = std::clamp(cos_theta, 0., 1.);
     const C      N(prm.refractive_index, prm.extinction_coefficient);
     const C      ct  = std::sqrt(1. - (1. - c * c) / (N * N));
     const C      r_s = (c - N * ct) / (c + N * ct);
     const C      r_p = (N * c - ct) / (N * c + ct);
     return 1. - 0.5 * (std::norm(r_s) + std::norm(r_p));
   }
-
 
   namespace
   {
@@ -114,11 +125,11 @@ namespace femp
 
       Window(const BackgroundGrid<dim> &g,
              const std::vector<double> &alpha,
-             const Point<dim> &         axis,
+             const Point<dim>          &axis,
              const double               half_width)
-        : grid(g)
-        , h(g.h())
-        , origin(g.origin())
+          : grid(g)
+          , h(g.h())
+          , origin(g.origin())
       {
         for (int d = 0; d < dim; ++d)
           n[d] = g.n_cells()[d];
@@ -128,8 +139,12 @@ namespace femp
             int l = 0, u = n[d] - 1;
             if (d < dim - 1)
               {
-                l = std::max(0, int(std::floor((axis[d] - half_width - origin[d]) / h)) - 1);
-                u = std::min(n[d] - 1, int(std::floor((axis[d] + half_width - origin[d]) / h)) + 1);
+                l = std::max(
+                  0,
+                  int(std::floor((axis[d] - half_width - origin[d]) / h)) - 1);
+                u = std::min(
+                  n[d] - 1,
+                  int(std::floor((axis[d] + half_width - origin[d]) / h)) + 1);
               }
             lo[d]   = l;
             size[d] = u - l + 1;
@@ -153,8 +168,12 @@ namespace femp
             if (status[idx] == BackgroundGrid<dim>::owned)
               a[f] = alpha[idx];
           }
-        MPI_Allreduce(MPI_IN_PLACE, a.data(), int(a.size()), MPI_DOUBLE,
-                      MPI_SUM, g.communicator());
+        MPI_Allreduce(MPI_IN_PLACE,
+                      a.data(),
+                      int(a.size()),
+                      MPI_DOUBLE,
+                      MPI_SUM,
+                      g.communicator());
       }
 
       bool
@@ -259,8 +278,8 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           {
             auto m = ijk, p = ijk;
-            m[d] = std::max(0, ijk[d] - 1);
-            p[d] = std::min(n[d] - 1, ijk[d] + 1);
+            m[d]           = std::max(0, ijk[d] - 1);
+            p[d]           = std::min(n[d] - 1, ijk[d] + 1);
             const double g = (a[flat(p)] - a[flat(m)]) / (2 * h);
             g2 += g * g;
           }
@@ -269,20 +288,19 @@ namespace femp
     };
   } // namespace
 
-
   template <int dim>
   typename RayTracedAbsorption<dim>::Result
   RayTracedAbsorption<dim>::trace(
-    const std::vector<double> &                      alpha,
-    const Point<dim> &                               axis,
-    const double                                     power,
-    const double                                     rb,
+    const std::vector<double>                     &alpha,
+    const Point<dim>                              &axis,
+    const double                                   power,
+    const double                                   rb,
     std::vector<std::pair<std::uint32_t, double>> &deposits) const
   {
-    const Window<dim> w(grid, alpha, axis, 3 * rb);
-    const double      h     = grid.h();
-    const double      z_top = w.origin[dim - 1] + w.n[dim - 1] * h;
-    const double      step  = 0.25 * h;
+    const Window<dim>   w(grid, alpha, axis, 3 * rb);
+    const double        h     = grid.h();
+    const double        z_top = w.origin[dim - 1] + w.n[dim - 1] * h;
+    const double        step  = 0.25 * h;
     std::vector<double> absorbed_in(w.a.size(), 0.);
     Result              r;
     r.incident = power;
@@ -318,8 +336,9 @@ namespace femp
     auto target = [&](const Point<dim> &q) -> long {
       std::array<int, dim> c;
       for (int d = 0; d < dim; ++d)
-        c[d] = std::clamp(int(std::floor((q[d] - w.origin[d]) / h)), 0, w.n[d] - 1);
-      long   best = -1;
+        c[d] =
+          std::clamp(int(std::floor((q[d] - w.origin[d]) / h)), 0, w.n[d] - 1);
+      long   best    = -1;
       double best_d2 = std::numeric_limits<double>::max();
       for (unsigned int o = 0; o < std::pow(3u, dim); ++o)
         {
@@ -344,9 +363,9 @@ namespace femp
     const double max_path = 8. * (w.n[0] + w.n[dim - 1]) * h;
     for (unsigned int ray = 0; ray < start.size(); ++ray)
       {
-        double         P   = power * weight[ray] / sum_w;
-        const double   P0  = P;
-        Point<dim>     p   = start[ray];
+        double         P  = power * weight[ray] / sum_w;
+        const double   P0 = P;
+        Point<dim>     p  = start[ray];
         Tensor<1, dim> dir;
         dir[dim - 1] = -1;
         double path  = 0;
@@ -362,7 +381,8 @@ namespace femp
                 {
                   const Point<dim> q = p + step * dir;
                   path += step;
-                  if (!w.inside(q) || (q[dim - 1] > z_top && dir[dim - 1] >= 0) ||
+                  if (!w.inside(q) ||
+                      (q[dim - 1] > z_top && dir[dim - 1] >= 0) ||
                       path > max_path)
                     {
                       escaped = true;
@@ -373,7 +393,7 @@ namespace femp
                       Point<dim> a = p, b = q;
                       for (int k = 0; k < 20; ++k) // to 1e-6 of a step
                         {
-                          const Point<dim> c = 0.5 * (a + b);
+                          const Point<dim> c       = 0.5 * (a + b);
                           (w.at(c) >= 0.5 ? b : a) = c;
                         }
                       hit = b;
@@ -390,7 +410,7 @@ namespace femp
             // Surface normal (out of the metal) and incidence.
             Tensor<1, dim> nrm = -w.gradient(hit);
             const double   gn  = nrm.norm();
-            nrm = gn > 1e-12 / h ? nrm / gn : -dir;
+            nrm                = gn > 1e-12 / h ? nrm / gn : -dir;
             if (dir * nrm > 0)
               nrm = -nrm;
             const double cos_t = std::min(1., -(dir * nrm));

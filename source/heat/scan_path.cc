@@ -48,7 +48,9 @@ namespace femp
     read_lines(const std::string &file)
     {
       std::ifstream in(file);
-      require(static_cast<bool>(in), parameter, file,
+      require(static_cast<bool>(in),
+              parameter,
+              file,
               "the file cannot be opened");
       std::vector<Line> lines;
       std::string       text;
@@ -74,7 +76,7 @@ namespace femp
     /// The numbers of a data line; it must hold exactly @p n of them.
     std::vector<double>
     numbers(const std::string &file,
-            const Line &       line,
+            const Line        &line,
             const unsigned int n,
             const std::string &layout)
     {
@@ -93,9 +95,11 @@ namespace femp
             }
           ok = used == line.fields[i].size() && std::isfinite(v.back());
         }
-      require(ok, parameter, where(file, line),
-              "each line must hold the " + std::to_string(n) +
-                " numbers '" + layout + "'");
+      require(ok,
+              parameter,
+              where(file, line),
+              "each line must hold the " + std::to_string(n) + " numbers '" +
+                layout + "'");
       return v;
     }
 
@@ -110,11 +114,11 @@ namespace femp
     /// Append the piece from @p from to @p to lasting @p duration, dropping
     /// pieces of zero duration (they only place the beam).
     void
-    append(std::vector<ScanPathPiece> &path,
+    append(std::vector<ScanPathPiece>  &path,
            const std::array<double, 3> &from,
            const std::array<double, 3> &to,
            const double                 power,
-           double &                     t,
+           double                      &t,
            const double                 duration)
     {
       if (duration > 0)
@@ -133,16 +137,18 @@ namespace femp
                     const double       nominal_power,
                     const double       start_time)
     {
-      const std::vector<Line> lines = read_lines(file);
-      const std::string layout =
-        adamantine ? "mode x y z power_factor parameter" :
-                     "mode x y z power parameter";
-      std::size_t  first = 1; // AdditiveFOAM: one header line
-      unsigned int count = std::numeric_limits<unsigned int>::max();
+      const std::vector<Line> lines  = read_lines(file);
+      const std::string       layout = adamantine ?
+                                         "mode x y z power_factor parameter" :
+                                         "mode x y z power parameter";
+      std::size_t             first  = 1; // AdditiveFOAM: one header line
+      unsigned int            count  = std::numeric_limits<unsigned int>::max();
       if (adamantine)
         {
           // Line 1: title; line 2: number of segments; line 3: column names.
-          require(lines.size() >= 3, parameter, file,
+          require(lines.size() >= 3,
+                  parameter,
+                  file,
                   "an adamantine 'segment' file starts with 3 header lines, "
                   "the second holding the number of segments");
           std::size_t used = 0;
@@ -153,10 +159,12 @@ namespace femp
                             &used);
             }
           catch (const std::exception &)
-            {}
+            {
+            }
           require(n > 0 && lines[1].fields.size() == 1 &&
                     used == lines[1].fields[0].size(),
-                  parameter, where(file, lines[1]),
+                  parameter,
+                  where(file, lines[1]),
                   "the second line of an adamantine 'segment' file must hold "
                   "the number of segments (a positive integer)");
           count = n;
@@ -164,29 +172,37 @@ namespace femp
         }
       std::vector<ScanPathPiece> path;
       std::array<double, 3>      at{{0., 0., 0.}};
-      double                     t        = start_time;
-      unsigned int               n_read   = 0;
+      double                     t      = start_time;
+      unsigned int               n_read = 0;
       for (std::size_t i = first; i < lines.size() && n_read < count; ++i)
         {
           if (is_blank_or_comment(lines[i]))
             continue;
-          const auto v = numbers(file, lines[i], 6, layout);
+          const auto                  v = numbers(file, lines[i], 6, layout);
           const std::array<double, 3> p{{v[1], v[2], v[3]}};
           const double power = adamantine ? v[4] * nominal_power : v[4];
-          require(v[0] == 0 || v[0] == 1, parameter, where(file, lines[i]),
+          require(v[0] == 0 || v[0] == 1,
+                  parameter,
+                  where(file, lines[i]),
                   "the mode must be 0 (line) or 1 (spot)");
-          require(v[4] >= 0, parameter, where(file, lines[i]),
+          require(v[4] >= 0,
+                  parameter,
+                  where(file, lines[i]),
                   "the power must be non-negative");
           if (adamantine && n_read == 0)
             {
-              require(v[0] == 1, parameter, where(file, lines[i]),
+              require(v[0] == 1,
+                      parameter,
+                      where(file, lines[i]),
                       "an adamantine scan path must begin with a spot (mode "
                       "1), which places the beam");
               at = p;
             }
           if (v[0] == 1)
             {
-              require(v[5] >= 0, parameter, where(file, lines[i]),
+              require(v[5] >= 0,
+                      parameter,
+                      where(file, lines[i]),
                       "a spot's dwell time (last column, s) must be "
                       "non-negative");
               if (!adamantine)
@@ -195,14 +211,18 @@ namespace femp
             }
           else
             {
-              require(v[5] > 0, parameter, where(file, lines[i]),
+              require(v[5] > 0,
+                      parameter,
+                      where(file, lines[i]),
                       "a line's speed (last column, m/s) must be positive");
               append(path, at, p, power, t, distance(at, p) / v[5]);
             }
           at = p;
           ++n_read;
         }
-      require(!adamantine || n_read == count, parameter, file,
+      require(!adamantine || n_read == count,
+              parameter,
+              file,
               "the header announces " + std::to_string(count) +
                 " segments but the file holds " + std::to_string(n_read));
       return path;
@@ -219,16 +239,19 @@ namespace femp
       std::vector<ScanPathPiece> path;
       std::array<double, 3>      at{{0., 0., 0.}};
       double                     t_last = 0, power = 0;
-      bool                       first  = true;
+      bool                       first = true;
       for (const Line &line : read_lines(file))
         {
           if (is_blank_or_comment(line))
             continue;
           const auto v = numbers(file, line, 5, "time x y z power_factor");
           const std::array<double, 3> p{{v[1], v[2], v[3]}};
-          require(v[4] >= 0, parameter, where(file, line),
+          require(v[4] >= 0,
+                  parameter,
+                  where(file, line),
                   "the power factor must be non-negative");
-          require(first ? v[0] >= 0 : v[0] >= t_last, parameter,
+          require(first ? v[0] >= 0 : v[0] >= t_last,
+                  parameter,
                   where(file, line),
                   "the event times must be non-negative and non-decreasing");
           if (first)
@@ -244,7 +267,6 @@ namespace femp
     }
   } // namespace
 
-
   std::vector<ScanPathPiece>
   read_scan_path_pieces(const std::string &file,
                         const std::string &format,
@@ -259,18 +281,21 @@ namespace femp
     else if (format == "adamantine_event_series")
       path = read_event_series(file, nominal_power, start_time);
     else
-      require(false, "Laser/Scan path format", format,
+      require(false,
+              "Laser/Scan path format",
+              format,
               std::string("it must be one of ") + scan_path_formats());
-    require(!path.empty(), parameter, file,
+    require(!path.empty(),
+            parameter,
+            file,
             "it must contain at least one segment of positive duration");
     return path;
   }
 
-
   template <int dim>
   std::vector<typename Laser<dim>::Segment>
   to_laser_segments(const std::vector<ScanPathPiece> &pieces,
-                    const std::string &               file)
+                    const std::string                &file)
   {
     if (dim == 2)
       {
@@ -282,7 +307,8 @@ namespace femp
               y_min = std::min(y_min, p[1]);
               y_max = std::max(y_max, p[1]);
             }
-        require(y_max - y_min <= 1e-9, parameter,
+        require(y_max - y_min <= 1e-9,
+                parameter,
                 file + " (y from " + num(y_min) + " to " + num(y_max) + " m)",
                 "a 2D scene is one vertical plane (x, z) of a 3D path, so "
                 "every point of the path must have the same y (within 1 nm); "
@@ -302,8 +328,8 @@ namespace femp
         a[dim - 1]           = s.start[2];
         b[dim - 1]           = s.end[2];
         const double seconds = s.t_end - s.t_begin;
-        path.push_back({a, b, a.distance(b) / seconds, s.power, s.t_begin,
-                        s.t_end});
+        path.push_back(
+          {a, b, a.distance(b) / seconds, s.power, s.t_begin, s.t_end});
       }
     return path;
   }

@@ -18,7 +18,9 @@ namespace femp
   {
     prm.enter_subsection("Output");
     prm.declare_entry(
-      "Thermal history", "false", Patterns::Bool(),
+      "Thermal history",
+      "false",
+      Patterns::Bool(),
       "Record every melt event of every metal cell (times of the liquidus "
       "rise, liquidus and solidus fall, s; cooling rate K/s, gradient G K/m "
       "and isotherm speed R m/s at the liquidus fall) and write them per "
@@ -27,7 +29,6 @@ namespace femp
       "run. false costs nothing.");
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -38,7 +39,6 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   ThermalHistory<dim>::ThermalHistory(const BackgroundGrid<dim> &grid,
                                       const double               solidus,
@@ -46,11 +46,11 @@ namespace femp
                                       const std::vector<double> &T,
                                       const std::vector<double> &alpha,
                                       const double               time)
-    : grid(grid)
-    , T_s(solidus)
-    , T_l(liquidus)
-    , t_old(time)
-    , T_old(T)
+      : grid(grid)
+      , T_s(solidus)
+      , T_l(liquidus)
+      , t_old(time)
+      , T_old(T)
   {
     const auto &owned = grid.owned_cells();
     state.assign(owned.size(), 0);
@@ -60,7 +60,6 @@ namespace femp
       if (alpha[owned[k]] > 0 && T[owned[k]] > T_l)
         state[k] = 1;
   }
-
 
   template <int dim>
   double
@@ -74,10 +73,9 @@ namespace femp
     double      g2     = 0;
     for (int d = 0; d < dim; ++d)
       {
-        const std::size_t s     = grid.strides()[d];
-        const bool        minus = status[idx - s] !=
-                               BackgroundGrid<dim>::outside &&
-                             alpha[idx - s] > 0;
+        const std::size_t s = grid.strides()[d];
+        const bool        minus =
+          status[idx - s] != BackgroundGrid<dim>::outside && alpha[idx - s] > 0;
         const bool plus =
           status[idx + s] != BackgroundGrid<dim>::outside && alpha[idx + s] > 0;
         double dT = 0;
@@ -92,7 +90,6 @@ namespace femp
     return std::sqrt(g2) / grid.h();
   }
 
-
   template <int dim>
   void
   ThermalHistory<dim>::observe(const std::vector<double> &T,
@@ -100,7 +97,7 @@ namespace femp
                                const double               time)
   {
     const double dt    = time - t_old;
-    const auto & owned = grid.owned_cells();
+    const auto  &owned = grid.owned_cells();
     // Time at which T passes Tc between the old and the new value.
     auto crossing = [&](const double a, const double b, const double Tc) {
       return t_old + dt * (a - Tc) / (a - b);
@@ -109,7 +106,7 @@ namespace femp
       {
         const std::size_t idx = owned[k];
         const double      a = T_old[idx], b = T[idx];
-        T_old[idx]          = b;
+        T_old[idx] = b;
         if (!(alpha[idx] > 0) || dt <= 0)
           continue;
         if (state[k] != 1 && b > T_l)
@@ -123,8 +120,11 @@ namespace femp
           {
             // Solidification starts: liquidus on the way down.
             const double cr = (a - b) / dt;
-            finished.push_back({static_cast<std::uint32_t>(idx), melt_time[k],
-                                crossing(a, b, T_l), -1., cr,
+            finished.push_back({static_cast<std::uint32_t>(idx),
+                                melt_time[k],
+                                crossing(a, b, T_l),
+                                -1.,
+                                cr,
                                 gradient(T, alpha, idx)});
             open_event[k] = finished.size() - 1;
             state[k]      = 2;
@@ -139,7 +139,6 @@ namespace femp
     t_old = time;
   }
 
-
   template <int dim>
   void
   ThermalHistory<dim>::write(const std::string &directory) const
@@ -153,7 +152,7 @@ namespace femp
     full << "x,y,z,tm,tl,ts,cr,G,R\n" << std::setprecision(9);
     for (const auto &e : finished)
       {
-        const Point<dim> c = grid.cell_center(e.cell);
+        const Point<dim>   c = grid.cell_center(e.cell);
         std::ostringstream xyz;
         xyz << std::setprecision(9) << c[0] << ',' << (dim == 3 ? c[1] : 0.)
             << ',' << c[dim - 1];
@@ -180,7 +179,7 @@ namespace femp
         out.put(e.cooling_rate);
         out.put(e.gradient);
       }
-    const auto &               owned = grid.owned_cells();
+    const auto                &owned = grid.owned_cells();
     std::vector<std::uint64_t> keys(owned.size());
     std::vector<double>        T(owned.size());
     for (std::size_t k = 0; k < owned.size(); ++k)
@@ -195,12 +194,11 @@ namespace femp
     out.put_vector(open_event);
   }
 
-
   template <int dim>
   void
   ThermalHistory<dim>::load_state(std::vector<StateReader> &parts)
   {
-    const auto &              owned = grid.owned_cells();
+    const auto               &owned = grid.owned_cells();
     std::vector<std::int64_t> k_of(grid.n_local(), -1);
     for (std::size_t k = 0; k < owned.size(); ++k)
       k_of[owned[k]] = k;

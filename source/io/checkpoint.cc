@@ -15,7 +15,7 @@ namespace femp
 {
   namespace
   {
-    const char         magic[8]       = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
+    const char magic[8] = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
     // 2: the solid's sections (Physics/Solid stress) added; 4: the FE
     // elements' volume change.
     const std::uint32_t format_version = 4;
@@ -50,7 +50,6 @@ namespace femp
     }
   } // namespace
 
-
   void
   StateReader::check(const std::uint64_t n) const
   {
@@ -60,31 +59,40 @@ namespace femp
                            "checkpoint of another version of femp?)"));
   }
 
-
   template <int dim>
   void
   Checkpoint<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Checkpoint");
-    prm.declare_entry("Every steps", "0", Patterns::Integer(0),
+    prm.declare_entry("Every steps",
+                      "0",
+                      Patterns::Integer(0),
                       "Write a checkpoint after every this many temperature "
                       "steps; 0: off. Range [0, inf).");
-    prm.declare_entry("Every simulated time", "0", Patterns::Double(0.),
+    prm.declare_entry("Every simulated time",
+                      "0",
+                      Patterns::Double(0.),
                       "Write a checkpoint every this much simulated time, s; "
                       "0: off. Range [0, inf).");
-    prm.declare_entry("Every wall minutes", "0", Patterns::Double(0.),
+    prm.declare_entry("Every wall minutes",
+                      "0",
+                      Patterns::Double(0.),
                       "Write a checkpoint when this many minutes of wall "
                       "time have passed since the start or the last "
                       "checkpoint, min; 0: off. Range [0, inf). With all "
                       "three triggers off (the default) checkpoints cost "
                       "nothing.");
-    prm.declare_entry("Directory", "checkpoint", Patterns::Anything(),
+    prm.declare_entry("Directory",
+                      "checkpoint",
+                      Patterns::Anything(),
                       "Where checkpoints go: a relative path is relative to "
                       "'Output/Directory', an absolute path is allowed. Each "
                       "checkpoint is a subdirectory step_<step number>; the "
                       "file 'index' names the last two, older ones are "
                       "removed (doc/checkpoint.md).");
-    prm.declare_entry("Resume from", "", Patterns::Anything(),
+    prm.declare_entry("Resume from",
+                      "",
+                      Patterns::Anything(),
                       "Continue the run from this checkpoint: a checkpoint "
                       "directory (its index names the latest checkpoint) or "
                       "one checkpoint step_<n> in it; relative to the "
@@ -98,7 +106,6 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   void
   Checkpoint<dim>::Parameters::parse_parameters(ParameterHandler &prm)
@@ -110,27 +117,28 @@ namespace femp
     directory          = prm.get("Directory");
     resume_from        = prm.get("Resume from");
     prm.leave_subsection();
-    require(!directory.empty(), "Checkpoint/Directory", directory,
+    require(!directory.empty(),
+            "Checkpoint/Directory",
+            directory,
             "it must name a directory (relative to Output/Directory or "
             "absolute)");
   }
 
-
   template <int dim>
-  Checkpoint<dim>::Checkpoint(const Parameters & prm,
+  Checkpoint<dim>::Checkpoint(const Parameters  &prm,
                               const std::string &output_directory,
-                              const Scene &      scene,
+                              const Scene       &scene,
                               MPI_Comm           comm)
-    : prm(prm)
-    , base(std::filesystem::path(prm.directory).is_absolute() ?
-             prm.directory :
-             output_directory + "/" + prm.directory)
-    , scene(scene)
-    , comm(comm)
-    , next_time(prm.every_time)
-    , last_wall(std::chrono::steady_clock::now())
-  {}
-
+      : prm(prm)
+      , base(std::filesystem::path(prm.directory).is_absolute() ?
+               prm.directory :
+               output_directory + "/" + prm.directory)
+      , scene(scene)
+      , comm(comm)
+      , next_time(prm.every_time)
+      , last_wall(std::chrono::steady_clock::now())
+  {
+  }
 
   template <int dim>
   bool
@@ -148,13 +156,12 @@ namespace femp
         // The ranks' clocks differ: rank 0 decides for all.
         int wall = std::chrono::duration<double>(
                      std::chrono::steady_clock::now() - last_wall)
-                       .count() >= 60 * prm.every_wall_minutes;
+                     .count() >= 60 * prm.every_wall_minutes;
         MPI_Bcast(&wall, 1, MPI_INT, 0, comm);
         now = now || wall;
       }
     return now;
   }
-
 
   template <int dim>
   std::string
@@ -163,12 +170,12 @@ namespace femp
     const double                                                    time,
     const std::vector<std::pair<std::string, const StateWriter *>> &sections)
   {
-    namespace fs        = std::filesystem;
-    const auto   start  = std::chrono::steady_clock::now();
-    const auto   rank   = Utilities::MPI::this_mpi_process(comm);
-    const auto   n_rank = Utilities::MPI::n_mpi_processes(comm);
-    const std::string name = "step_" + Utilities::int_to_string(step, 8);
-    const std::string dir  = base + "/" + name;
+    namespace fs             = std::filesystem;
+    const auto        start  = std::chrono::steady_clock::now();
+    const auto        rank   = Utilities::MPI::this_mpi_process(comm);
+    const auto        n_rank = Utilities::MPI::n_mpi_processes(comm);
+    const std::string name   = "step_" + Utilities::int_to_string(step, 8);
+    const std::string dir    = base + "/" + name;
     std::string       error;
     if (rank == 0)
       {
@@ -181,8 +188,9 @@ namespace femp
       }
     int ok = error.empty();
     MPI_Bcast(&ok, 1, MPI_INT, 0, comm);
-    AssertThrow(ok, ExcMessage("cannot create the checkpoint directory '" +
-                               dir + "' (Checkpoint/Directory)"));
+    AssertThrow(ok,
+                ExcMessage("cannot create the checkpoint directory '" + dir +
+                           "' (Checkpoint/Directory)"));
 
     StateWriter payload;
     payload.put<std::uint32_t>(sections.size());
@@ -191,8 +199,8 @@ namespace femp
         payload.put_string(section);
         payload.put_vector(bytes->bytes());
       }
-    const auto &  p = payload.bytes();
-    StateWriter   head;
+    const auto &p = payload.bytes();
+    StateWriter head;
     head.put(magic);
     head.put(format_version);
     head.put<std::uint32_t>(dim);
@@ -221,9 +229,10 @@ namespace femp
       ok = static_cast<bool>(out);
     }
     ok = Utilities::MPI::min(ok, comm);
-    AssertThrow(ok, ExcMessage("cannot write the checkpoint into '" + dir +
-                               "' (disk full or no permission?); the "
-                               "previous checkpoint stays valid"));
+    AssertThrow(ok,
+                ExcMessage("cannot write the checkpoint into '" + dir +
+                           "' (disk full or no permission?); the "
+                           "previous checkpoint stays valid"));
     // Every rank has written: the index now names the new checkpoint.
     if (rank == 0)
       {
@@ -245,34 +254,33 @@ namespace femp
         }
         std::error_code ec;
         fs::rename(base + "/index.tmp", base + "/index", ec);
-        AssertThrow(!ec, ExcMessage("cannot replace '" + base +
-                                    "/index': " + ec.message()));
+        AssertThrow(!ec,
+                    ExcMessage("cannot replace '" + base +
+                               "/index': " + ec.message()));
         for (const auto &entry : fs::directory_iterator(base, ec))
           {
             const std::string n = entry.path().filename().string();
-            if (entry.is_directory() && n.rfind("step_", 0) == 0 &&
-                n != name && n != previous)
+            if (entry.is_directory() && n.rfind("step_", 0) == 0 && n != name &&
+                n != previous)
               fs::remove_all(entry.path(), ec);
           }
       }
-    last_bytes = Utilities::MPI::sum<std::uint64_t>(head.bytes().size() +
-                                                      p.size(),
-                                                    comm);
+    last_bytes =
+      Utilities::MPI::sum<std::uint64_t>(head.bytes().size() + p.size(), comm);
     last_wall = std::chrono::steady_clock::now();
     seconds += std::chrono::duration<double>(last_wall - start).count();
     return dir;
   }
 
-
   template <int dim>
   void
   Checkpoint<dim>::check_file(const std::vector<char> &image,
-                              const std::string &      file,
+                              const std::string       &file,
                               const unsigned int       rank,
                               const unsigned int       n_ranks)
   {
-    const std::string what = "Checkpoint/Resume from";
-    const std::string name = std::filesystem::path(file).filename().string();
+    const std::string what   = "Checkpoint/Resume from";
+    const std::string name   = std::filesystem::path(file).filename().string();
     auto              refuse = [&](const std::string &why) {
       throw InputError(what, prm.resume_from, why);
     };
@@ -282,10 +290,10 @@ namespace femp
       8 + 5 * 4 + 8 + 3 * 4 + 3 * 8 + 8 + 4 + 6 * 8 + 4 + 8 + 8;
     if (image.size() < header_size)
       refuse("its file " + name + " is truncated (" +
-             std::to_string(image.size()) +
-             " bytes, shorter than the header)");
+             std::to_string(image.size()) + " bytes, shorter than the header)");
     if (std::memcmp(image.data(), magic, 8) != 0)
-      refuse("its file " + name + " is not a femp checkpoint (no magic "
+      refuse("its file " + name +
+             " is not a femp checkpoint (no magic "
              "string FEMPCKPT at its start)");
     StateReader in(image.data() + 8, header_size - 8, name);
     const auto  version = in.get<std::uint32_t>();
@@ -314,7 +322,8 @@ namespace femp
     const auto size      = in.get<std::uint64_t>();
     const auto checksum  = in.get<std::uint64_t>();
 
-    auto differs = [&](const std::string &parameter, const std::string &saved,
+    auto differs = [&](const std::string &parameter,
+                       const std::string &saved,
                        const std::string &now) {
       refuse("it was written for " + parameter + " = " + saved +
              ", the scene has " + now +
@@ -346,7 +355,8 @@ namespace femp
     if (s.solid != scene.solid)
       differs("Physics/Solid stress", on_off(s.solid), on_off(scene.solid));
     if (s.fe_zone != scene.fe_zone)
-      differs("Solid FEM/Use finite elements", on_off(s.fe_zone),
+      differs("Solid FEM/Use finite elements",
+              on_off(s.fe_zone),
               on_off(scene.fe_zone));
     std::array<double, 3> n_saved{}, n_now{};
     for (int d = 0; d < 3; ++d)
@@ -355,19 +365,24 @@ namespace femp
         n_now[d]   = scene.n_cells[d];
       }
     if (s.cell_size != scene.cell_size)
-      differs("Background grid/Cell size", num(s.cell_size) + " m",
+      differs("Background grid/Cell size",
+              num(s.cell_size) + " m",
               num(scene.cell_size) + " m");
     if (s.lower_corner != scene.lower_corner)
-      differs("Background grid/Lower corner", triple(s.lower_corner, dim),
+      differs("Background grid/Lower corner",
+              triple(s.lower_corner, dim),
               triple(scene.lower_corner, dim));
     if (s.n_cells != scene.n_cells)
       differs("Background grid/Upper corner (cells per direction)",
-              triple(n_saved, dim), triple(n_now, dim));
+              triple(n_saved, dim),
+              triple(n_now, dim));
     if (s.fe_lower != scene.fe_lower)
-      differs("Solid FEM/Zone lower corner", triple(s.fe_lower, dim),
+      differs("Solid FEM/Zone lower corner",
+              triple(s.fe_lower, dim),
               triple(scene.fe_lower, dim));
     if (s.fe_upper != scene.fe_upper)
-      differs("Solid FEM/Zone upper corner", triple(s.fe_upper, dim),
+      differs("Solid FEM/Zone upper corner",
+              triple(s.fe_upper, dim),
               triple(scene.fe_upper, dim));
     if (s.n_point_properties != scene.n_point_properties)
       differs("the point properties (Material points/Carry points, "
@@ -380,14 +395,15 @@ namespace femp
              " bytes of data, the header announces " + std::to_string(size) +
              ")");
     if (fnv1a(image.data() + header_size, size) != checksum)
-      refuse("its file " + name + " is corrupt (the checksum of its data "
+      refuse("its file " + name +
+             " is corrupt (the checksum of its data "
              "does not match the one in its header)");
 
     // The sections of the payload.
-    auto &     map = sections_of_file.emplace_back();
+    auto       &map = sections_of_file.emplace_back();
     StateReader body(image.data() + header_size, size, name);
-    const auto n_sections = body.get<std::uint32_t>();
-    std::size_t offset    = header_size + 4;
+    const auto  n_sections = body.get<std::uint32_t>();
+    std::size_t offset     = header_size + 4;
     for (unsigned int i = 0; i < n_sections; ++i)
       {
         const auto section = body.get_string();
@@ -400,12 +416,11 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   Checkpoint<dim>::read()
   {
-    namespace fs = std::filesystem;
+    namespace fs           = std::filesystem;
     const std::string what = "Checkpoint/Resume from";
     path                   = prm.resume_from;
     if (fs::exists(path + "/index"))
@@ -413,11 +428,15 @@ namespace femp
         std::ifstream index(path + "/index");
         std::string   latest;
         std::getline(index, latest);
-        require(!latest.empty(), what, prm.resume_from,
+        require(!latest.empty(),
+                what,
+                prm.resume_from,
                 "its index file is empty (no checkpoint was completed)");
         path += "/" + latest;
       }
-    require(fs::exists(rank_file(path, 0)), what, prm.resume_from,
+    require(fs::exists(rank_file(path, 0)),
+            what,
+            prm.resume_from,
             "it is neither a checkpoint directory (with an index file) nor "
             "a checkpoint (a step_<n> directory with rank_00000.bin)");
     files.clear();
@@ -427,7 +446,9 @@ namespace femp
       {
         const std::string file = rank_file(path, r);
         std::ifstream     in(file, std::ios::binary);
-        require(static_cast<bool>(in), what, prm.resume_from,
+        require(static_cast<bool>(in),
+                what,
+                prm.resume_from,
                 "its file " + fs::path(file).filename().string() +
                   " is missing or cannot be read");
         files.emplace_back((std::istreambuf_iterator<char>(in)),
@@ -439,14 +460,12 @@ namespace femp
     n_files = n_ranks;
   }
 
-
   template <int dim>
   bool
   Checkpoint<dim>::has_section(const std::string &name) const
   {
     return !sections_of_file.empty() && sections_of_file[0].count(name) > 0;
   }
-
 
   template <int dim>
   std::vector<StateReader>
@@ -460,11 +479,11 @@ namespace femp
                     ExcMessage("the checkpoint '" + path +
                                "' has no state of '" + name + "'"));
         parts.emplace_back(files[f].data() + it->second.first,
-                           it->second.second, name);
+                           it->second.second,
+                           name);
       }
     return parts;
   }
-
 
   template <int dim>
   void
@@ -472,7 +491,6 @@ namespace femp
   {
     out.put(next_time);
   }
-
 
   template <int dim>
   void

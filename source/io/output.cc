@@ -19,12 +19,11 @@
 #include <femp/io/output.h>
 #include <femp/solid/solid_stress.h>
 
-#include <hdf5.h>
-
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <hdf5.h>
 #include <iomanip>
 
 namespace femp
@@ -39,10 +38,11 @@ namespace femp
     std::uint32_t
     partition_fingerprint(const BackgroundGrid<dim> &grid)
     {
-      const auto counts = Utilities::MPI::all_gather(
-        grid.communicator(), std::uint64_t(grid.owned_cells().size()));
-      std::uint64_t h = 1469598103934665603ull;
-      auto mix = [&](std::uint64_t x) {
+      const auto counts =
+        Utilities::MPI::all_gather(grid.communicator(),
+                                   std::uint64_t(grid.owned_cells().size()));
+      std::uint64_t h   = 1469598103934665603ull;
+      auto          mix = [&](std::uint64_t x) {
         for (int b = 0; b < 8; ++b, x >>= 8)
           h = (h ^ (x & 0xff)) * 1099511628211ull;
       };
@@ -71,9 +71,9 @@ namespace femp
     /// writes a temporary file and renames it over the old one, so that a
     /// reader, or a run killed meanwhile, never leaves a half-written index.
     void
-    replace_index(const std::string &                         file,
+    replace_index(const std::string                              &file,
                   const std::function<void(const std::string &)> &write,
-                  const MPI_Comm                               comm)
+                  const MPI_Comm                                  comm)
     {
       const int ierr = MPI_Barrier(comm);
       AssertThrowMPI(ierr);
@@ -83,13 +83,14 @@ namespace femp
       write(tmp);
       std::error_code error;
       std::filesystem::rename(tmp, file, error);
-      AssertThrow(!error, ExcMessage("cannot replace '" + file + "' by '" +
-                                     tmp + "': " + error.message()));
+      AssertThrow(!error,
+                  ExcMessage("cannot replace '" + file + "' by '" + tmp +
+                             "': " + error.message()));
     }
 
     /// The ParaView index of a series of PVTU records.
     void
-    write_pvd(const std::string &                                file,
+    write_pvd(const std::string                                 &file,
               const std::vector<std::pair<double, std::string>> &records,
               const MPI_Comm                                     comm)
     {
@@ -107,7 +108,7 @@ namespace femp
     /// The XDMF index of a series of HDF5 files: one temporal collection
     /// of the <Grid> elements @p entries (rank 0 writes it).
     void
-    write_xdmf(const std::string &             file,
+    write_xdmf(const std::string              &file,
                const std::vector<std::string> &entries,
                const MPI_Comm                  comm)
     {
@@ -161,16 +162,21 @@ namespace femp
     /// @p name (global size @p global_rows x @p columns) from @p values,
     /// collectively; a rank without rows takes part with an empty selection.
     void
-    write_h5_dataset(const hid_t file, const std::string &name,
-                     const hid_t file_type, const hid_t memory_type,
-                     const std::uint64_t global_rows, const std::uint64_t columns,
-                     const std::uint64_t offset, const std::uint64_t rows,
-                     const void *values, const std::string &file_name,
-                     const bool compress = false)
+    write_h5_dataset(const hid_t         file,
+                     const std::string  &name,
+                     const hid_t         file_type,
+                     const hid_t         memory_type,
+                     const std::uint64_t global_rows,
+                     const std::uint64_t columns,
+                     const std::uint64_t offset,
+                     const std::uint64_t rows,
+                     const void         *values,
+                     const std::string  &file_name,
+                     const bool          compress = false)
     {
-      const hsize_t dims[2]  = {global_rows, columns};
-      const hsize_t count[2] = {rows, columns};
-      const hsize_t start[2] = {offset, 0};
+      const hsize_t dims[2]    = {global_rows, columns};
+      const hsize_t count[2]   = {rows, columns};
+      const hsize_t start[2]   = {offset, 0};
       const hid_t   file_space = H5Screate_simple(2, dims, nullptr);
       // Compressed: zlib level 1 (as the VTU pieces) on chunks of 2^16 rows.
       const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
@@ -181,30 +187,40 @@ namespace femp
           H5Pset_chunk(create, 2, chunk);
           H5Pset_deflate(create, 1);
         }
-      const hid_t set = H5Dcreate2(file, name.c_str(), file_type, file_space,
-                                   H5P_DEFAULT, create, H5P_DEFAULT);
+      const hid_t set = H5Dcreate2(file,
+                                   name.c_str(),
+                                   file_type,
+                                   file_space,
+                                   H5P_DEFAULT,
+                                   create,
+                                   H5P_DEFAULT);
       H5Pclose(create);
-      const hid_t   memory_space = H5Screate_simple(2, count, nullptr);
-      herr_t        status = 0;
+      const hid_t memory_space = H5Screate_simple(2, count, nullptr);
+      herr_t      status       = 0;
       if (rows > 0)
-        status = H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start,
-                                     nullptr, count, nullptr);
+        status = H5Sselect_hyperslab(
+          file_space, H5S_SELECT_SET, start, nullptr, count, nullptr);
       else
-        status = std::min(H5Sselect_none(file_space),
-                          H5Sselect_none(memory_space));
+        status =
+          std::min(H5Sselect_none(file_space), H5Sselect_none(memory_space));
       const hid_t transfer = H5Pcreate(H5P_DATASET_XFER);
       H5Pset_dxpl_mpio(transfer, H5FD_MPIO_COLLECTIVE);
       static const double none = 0;
       const bool ok = file_space >= 0 && set >= 0 && memory_space >= 0 &&
                       status >= 0 &&
-                      H5Dwrite(set, memory_type, memory_space, file_space,
-                               transfer, rows > 0 ? values : &none) >= 0;
+                      H5Dwrite(set,
+                               memory_type,
+                               memory_space,
+                               file_space,
+                               transfer,
+                               rows > 0 ? values : &none) >= 0;
       H5Pclose(transfer);
       H5Sclose(memory_space);
       H5Dclose(set);
       H5Sclose(file_space);
-      AssertThrow(ok, ExcMessage("cannot write the data set '" + name +
-                                 "' of the output file '" + file_name + "'"));
+      AssertThrow(ok,
+                  ExcMessage("cannot write the data set '" + name +
+                             "' of the output file '" + file_name + "'"));
     }
 
     /// Create @p name for parallel writing by all ranks of @p comm.
@@ -228,8 +244,11 @@ namespace femp
     /// /cells into @p mesh_file, the data sets into @p data_file (the same
     /// name: one file). Returns the global sizes.
     H5Layout
-    write_h5(const std::string &mesh_file, const std::string &data_file,
-             const bool write_mesh, const H5Part &part, const MPI_Comm comm)
+    write_h5(const std::string &mesh_file,
+             const std::string &data_file,
+             const bool         write_mesh,
+             const H5Part      &part,
+             const MPI_Comm     comm)
     {
       H5Layout            l;
       const std::uint64_t local[2]  = {part.n_nodes, part.n_cells};
@@ -252,28 +271,38 @@ namespace femp
           file = create_h5_file(mesh_file, comm);
           // Single precision converted here: with compression, HDF5 writes
           // collectively only without type conversions.
-          std::vector<float> single(part.single_nodes ? part.nodes.size() :
-                                                        0);
-          std::copy(part.nodes.begin(), part.nodes.begin() + single.size(),
+          std::vector<float> single(part.single_nodes ? part.nodes.size() : 0);
+          std::copy(part.nodes.begin(),
+                    part.nodes.begin() + single.size(),
                     single.begin());
-          write_h5_dataset(file, "nodes",
-                           part.single_nodes ? H5T_NATIVE_FLOAT :
-                                               H5T_NATIVE_DOUBLE,
-                           part.single_nodes ? H5T_NATIVE_FLOAT :
-                                               H5T_NATIVE_DOUBLE,
-                           l.nodes, part.dim, l.node_offset, local[0],
-                           part.single_nodes ?
-                             static_cast<const void *>(single.data()) :
-                             static_cast<const void *>(part.nodes.data()),
-                           mesh_file, part.compress);
+          write_h5_dataset(
+            file,
+            "nodes",
+            part.single_nodes ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE,
+            part.single_nodes ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE,
+            l.nodes,
+            part.dim,
+            l.node_offset,
+            local[0],
+            part.single_nodes ? static_cast<const void *>(single.data()) :
+                                static_cast<const void *>(part.nodes.data()),
+            mesh_file,
+            part.compress);
           if (part.corners > 1)
             {
               std::vector<std::uint32_t> cells(part.cells.size());
               for (std::size_t i = 0; i < cells.size(); ++i)
                 cells[i] = part.cells[i] + l.node_offset;
-              write_h5_dataset(file, "cells", H5T_NATIVE_UINT32, H5T_NATIVE_UINT32,
-                               l.cells, part.corners, l.cell_offset, local[1],
-                               cells.data(), mesh_file);
+              write_h5_dataset(file,
+                               "cells",
+                               H5T_NATIVE_UINT32,
+                               H5T_NATIVE_UINT32,
+                               l.cells,
+                               part.corners,
+                               l.cell_offset,
+                               local[1],
+                               cells.data(),
+                               mesh_file);
             }
           if (mesh_file != data_file)
             {
@@ -293,15 +322,23 @@ namespace femp
                                  " values for " + std::to_string(local[k]) +
                                  (k ? " cells" : " nodes")));
           std::vector<float> single(set.single ? set.values.size() : 0);
-          std::copy(set.values.begin(), set.values.begin() + single.size(),
+          std::copy(set.values.begin(),
+                    set.values.begin() + single.size(),
                     single.begin());
           const hid_t type = set.single ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
-          write_h5_dataset(file, set.name, type, type, total[k], 1, offset[k],
+          write_h5_dataset(file,
+                           set.name,
+                           type,
+                           type,
+                           total[k],
+                           1,
+                           offset[k],
                            local[k],
                            set.single ?
                              static_cast<const void *>(single.data()) :
                              static_cast<const void *>(set.values.data()),
-                           data_file, part.compress);
+                           data_file,
+                           part.compress);
         }
       AssertThrow(H5Fclose(file) >= 0,
                   ExcMessage("cannot close '" + data_file + "'"));
@@ -312,14 +349,19 @@ namespace femp
     /// @p mesh_file, the data sets of @p part from @p data_file (names
     /// relative to the index's directory), sizes from @p l.
     std::string
-    xdmf_entry(const double time, const std::string &mesh_file,
-               const std::string &data_file, const H5Part &part,
-               const H5Layout &l)
+    xdmf_entry(const double       time,
+               const std::string &mesh_file,
+               const std::string &data_file,
+               const H5Part      &part,
+               const H5Layout    &l)
     {
       std::ostringstream x;
-      auto item = [&](const std::uint64_t rows, const unsigned int columns,
-                      const std::string &number, const unsigned int precision,
-                      const std::string &file, const std::string &set) {
+      auto               item = [&](const std::uint64_t rows,
+                      const unsigned int  columns,
+                      const std::string  &number,
+                      const unsigned int  precision,
+                      const std::string  &file,
+                      const std::string  &set) {
         x << "          <DataItem Dimensions=\"" << rows << ' ' << columns
           << "\" NumberType=\"" << number << "\" Precision=\"" << precision
           << "\" Format=\"HDF\">\n            " << file << ":/" << set
@@ -329,7 +371,11 @@ namespace femp
         << "        <Time Value=\"" << std::setprecision(10) << time << "\"/>\n"
         << "        <Geometry GeometryType=\"" << (part.dim == 2 ? "XY" : "XYZ")
         << "\">\n";
-      item(l.nodes, part.dim, "Float", part.single_nodes ? 4 : 8, mesh_file,
+      item(l.nodes,
+           part.dim,
+           "Float",
+           part.single_nodes ? 4 : 8,
+           mesh_file,
            "nodes");
       x << "        </Geometry>\n";
       if (part.corners == 1)
@@ -348,8 +394,12 @@ namespace femp
           x << "        <Attribute Name=\"" << set.name
             << "\" AttributeType=\"Scalar\" Center=\""
             << (set.on_cells ? "Cell" : "Node") << "\">\n";
-          item(set.on_cells ? l.cells : l.nodes, 1, "Float",
-               set.single ? 4 : 8, data_file, set.name);
+          item(set.on_cells ? l.cells : l.nodes,
+               1,
+               "Float",
+               set.single ? 4 : 8,
+               data_file,
+               set.name);
           x << "        </Attribute>\n";
         }
       x << "      </Grid>\n";
@@ -375,9 +425,9 @@ namespace femp
     /// Parse 'all' or a comma-separated list of names out of @p known
     /// (empty result: all).
     std::vector<std::string>
-    parse_selection(const std::string &             text,
+    parse_selection(const std::string              &text,
                     const std::vector<std::string> &known,
-                    const std::string &             parameter)
+                    const std::string              &parameter)
     {
       if (Utilities::trim(text) == "all")
         return {};
@@ -388,7 +438,9 @@ namespace femp
       require(!names.empty(), parameter, text, allowed);
       for (const auto &name : names)
         require(std::find(known.begin(), known.end(), name) != known.end(),
-                parameter, name, allowed);
+                parameter,
+                name,
+                allowed);
       return names;
     }
 
@@ -408,8 +460,8 @@ namespace femp
     {
     public:
       PointPatches(const Particles::ParticleHandler<dim> &points,
-                   const std::vector<std::string> &       property_names,
-                   const std::vector<std::string> &       selection)
+                   const std::vector<std::string>        &property_names,
+                   const std::vector<std::string>        &selection)
       {
         std::vector<unsigned int> columns;
         names = {"id"};
@@ -427,8 +479,8 @@ namespace femp
             patch.vertices[0] = point.get_location();
             patch.patch_index = i++;
             patch.data.reinit(names.size(), 1);
-            patch.data(0, 0)  = point.get_id();
-            const auto props  = point.get_properties();
+            patch.data(0, 0) = point.get_id();
+            const auto props = point.get_properties();
             for (unsigned int c = 0; c < columns.size(); ++c)
               patch.data(c + 1, 0) = props[columns[c]];
           }
@@ -451,18 +503,20 @@ namespace femp
     };
   } // namespace
 
-
   template <int dim>
   void
   Output<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Output");
-    prm.declare_entry("Directory", "output", Patterns::Anything(),
+    prm.declare_entry("Directory",
+                      "output",
+                      Patterns::Anything(),
                       "Directory for all output files; created if missing. "
                       "A relative path is relative to the working directory; "
                       "an absolute path is allowed. The parameters used are "
                       "written into it as parameters.prm.");
-    prm.declare_entry("Existing directory", "clear",
+    prm.declare_entry("Existing directory",
+                      "clear",
                       Patterns::Selection("clear|refuse"),
                       "What to do when 'Directory' holds the output of an "
                       "earlier run (numbered grid_/points_/probe_line_ "
@@ -470,19 +524,27 @@ namespace femp
                       "'clear' removes those files (and no others) before "
                       "the run, so that no stale time step is mixed into the "
                       "new series; 'refuse' stops before any work.");
-    prm.declare_entry("Output interval", "1e-4", Patterns::Double(0.),
-                      "Simulated time between VTU/PVTU outputs of the fields, "
-                      "s; 0 writes only the first and last state. Range [0, inf).");
-    prm.declare_entry("Steps between outputs", "0", Patterns::Integer(0),
+    prm.declare_entry(
+      "Output interval",
+      "1e-4",
+      Patterns::Double(0.),
+      "Simulated time between VTU/PVTU outputs of the fields, "
+      "s; 0 writes only the first and last state. Range [0, inf).");
+    prm.declare_entry("Steps between outputs",
+                      "0",
+                      Patterns::Integer(0),
                       "Also write the fields every this many steps; 0: only "
                       "by 'Output interval'. Range [0, inf).");
-    prm.declare_entry("Write material points", "last",
+    prm.declare_entry("Write material points",
+                      "last",
                       Patterns::Selection("always|last|never"),
                       "Write the material points and their properties at every "
                       "field output ('always'), only with the last one "
                       "('last'), or not at all. Point files are large: about "
                       "100 bytes per point.");
-    prm.declare_entry("Format", "vtu", Patterns::Selection("vtu|hdf5"),
+    prm.declare_entry("Format",
+                      "vtu",
+                      Patterns::Selection("vtu|hdf5"),
                       "File format of the grid fields and the material "
                       "points: 'vtu' writes compressed VTU pieces (one per "
                       "rank or group of ranks) with PVTU records and the "
@@ -493,7 +555,9 @@ namespace femp
                       "with the indices grid.xdmf, points.xdmf (ParaView: "
                       "open the .xdmf with the 'XDMF Reader'). Sizes and "
                       "write times of both: doc/output.md.");
-    prm.declare_entry("Point properties", "all", Patterns::Anything(),
+    prm.declare_entry("Point properties",
+                      "all",
+                      Patterns::Anything(),
                       "Material-point properties to write, 'all' or a "
                       "comma-separated list of: mass (kg), volume (m^3), "
                       "temperature (K), state (0 powder, 1 solid, 2 fluid), "
@@ -505,26 +569,38 @@ namespace femp
                       "Properties a scene does not carry (the stresses "
                       "without the solid) are skipped; the point id is "
                       "always written.");
-    prm.declare_entry("Grid fields", "all", Patterns::Anything(),
-                      "Grid cell fields to write, 'all' or a comma-separated "
-                      "list of: T (K), gamma (liquid fraction, -), alpha "
-                      "(metal fraction, -), p (Pa), u_x, u_y, u_z (m/s), "
-                      "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
-                      "plastic_strain (-), laser_source (W/m^3), phase (0 "
-                      "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
-                      "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
-                      "scene switches off are skipped. Probe lines sample "
-                      "their fields regardless.");
-    prm.declare_entry("Time series interval", "0", Patterns::Double(0.),
+    prm.declare_entry(
+      "Grid fields",
+      "all",
+      Patterns::Anything(),
+      "Grid cell fields to write, 'all' or a comma-separated "
+      "list of: T (K), gamma (liquid fraction, -), alpha "
+      "(metal fraction, -), p (Pa), u_x, u_y, u_z (m/s), "
+      "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
+      "plastic_strain (-), laser_source (W/m^3), phase (0 "
+      "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
+      "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
+      "scene switches off are skipped. Probe lines sample "
+      "their fields regardless.");
+    prm.declare_entry("Time series interval",
+                      "0",
+                      Patterns::Double(0.),
                       "Simulated time between rows of the probe-point and "
                       "melt-pool CSV files, s; 0 writes a row every step.");
-    prm.declare_entry("Progress interval", "100", Patterns::Integer(1),
-                      "Steps between progress lines on the screen; range [1, inf).");
-    prm.declare_entry("Probe points", "", Patterns::Anything(),
-                      "Points whose cell values are written to probe_points.csv, "
-                      "as coordinate lists (m) separated by ';', e.g. "
-                      "'1e-4,2e-4,1e-4; 2e-4,2e-4,1e-4'.");
-    prm.declare_entry("Probe interpolation", "cell",
+    prm.declare_entry(
+      "Progress interval",
+      "100",
+      Patterns::Integer(1),
+      "Steps between progress lines on the screen; range [1, inf).");
+    prm.declare_entry(
+      "Probe points",
+      "",
+      Patterns::Anything(),
+      "Points whose cell values are written to probe_points.csv, "
+      "as coordinate lists (m) separated by ';', e.g. "
+      "'1e-4,2e-4,1e-4; 2e-4,2e-4,1e-4'.");
+    prm.declare_entry("Probe interpolation",
+                      "cell",
                       Patterns::Selection("cell|linear"),
                       "How probe points and probe lines read the cell fields: "
                       "'cell' gives the value of the cell that contains the "
@@ -533,14 +609,15 @@ namespace femp
                       "(bilinear/trilinear), weighting each cell by its metal "
                       "fraction, so that an isotherm can be placed inside a "
                       "cell. Tags (phase, zone) are never interpolated.");
-    prm.declare_entry("Probe lines", "", Patterns::Anything(),
+    prm.declare_entry("Probe lines",
+                      "",
+                      Patterns::Anything(),
                       "Lines sampled at every field output into "
                       "probe_line_<name>_<n>.csv, separated by ';', each "
                       "'name: x0,y0,z0 -> x1,y1,z1 : samples' (m), e.g. "
                       "'CD: -4e-4,0,-2e-5 -> 4e-4,0,-2e-5 : 201'.");
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -555,11 +632,11 @@ namespace femp
     progress_interval = prm.get_integer("Progress interval");
     probe_linear      = prm.get("Probe interpolation") == "linear";
     format            = prm.get("Format");
-    point_properties  = parse_selection(
-      prm.get("Point properties"),
-      MaterialPoints<dim>::property_names(
-        MaterialPoints<dim>::PropertyIndex::n_properties),
-      "Output/Point properties");
+    point_properties =
+      parse_selection(prm.get("Point properties"),
+                      MaterialPoints<dim>::property_names(
+                        MaterialPoints<dim>::PropertyIndex::n_properties),
+                      "Output/Point properties");
     grid_fields = parse_selection(prm.get("Grid fields"),
                                   known_grid_fields<dim>(),
                                   "Output/Grid fields");
@@ -579,16 +656,19 @@ namespace femp
         const auto ends = parts[1].find("->");
         require(ends != std::string::npos, "Output/Probe lines", l, allowed);
         ProbeLine line;
-        line.name  = parts[0];
-        line.start = parse_point<dim>(parts[1].substr(0, ends), "Output/Probe lines");
-        line.end   = parse_point<dim>(parts[1].substr(ends + 2), "Output/Probe lines");
-        int n      = 0;
+        line.name = parts[0];
+        line.start =
+          parse_point<dim>(parts[1].substr(0, ends), "Output/Probe lines");
+        line.end =
+          parse_point<dim>(parts[1].substr(ends + 2), "Output/Probe lines");
+        int n = 0;
         try
           {
             n = Utilities::string_to_int(parts[2]);
           }
         catch (...)
-          {}
+          {
+          }
         require(n >= 2, "Output/Probe lines", l, allowed);
         line.n_samples = n;
         probe_lines.push_back(line);
@@ -596,10 +676,10 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   void
-  Output<dim>::Parameters::check(const Point<dim> &lo, const Point<dim> &hi) const
+  Output<dim>::Parameters::check(const Point<dim> &lo,
+                                 const Point<dim> &hi) const
   {
     auto inside = [&](const Point<dim> &p) {
       for (int d = 0; d < dim; ++d)
@@ -614,21 +694,24 @@ namespace femp
       {
         std::ostringstream s;
         s << p;
-        require(inside(p), "Output/Probe points", s.str(),
+        require(inside(p),
+                "Output/Probe points",
+                s.str(),
                 "every probe point must lie inside the domain");
       }
     for (const auto &l : probe_lines)
-      require(inside(l.start) && inside(l.end), "Output/Probe lines", l.name,
+      require(inside(l.start) && inside(l.end),
+              "Output/Probe lines",
+              l.name,
               "both ends of a probe line must lie inside the domain");
   }
 
-
   template <int dim>
   Output<dim>::Output(const Parameters &prm, const BackgroundGrid<dim> &grid)
-    : prm(prm)
-    , grid(grid)
-  {}
-
+      : prm(prm)
+      , grid(grid)
+  {
+  }
 
   template <int dim>
   void
@@ -636,7 +719,7 @@ namespace femp
                           const bool                      resume)
   {
     const MPI_Comm comm = grid.communicator();
-    int ok = 1;
+    int            ok   = 1;
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
         std::error_code error;
@@ -644,7 +727,9 @@ namespace femp
         ok = !error && std::filesystem::is_directory(prm.directory);
       }
     ok = Utilities::MPI::min(ok, comm);
-    require(ok == 1, "Output/Directory", prm.directory,
+    require(ok == 1,
+            "Output/Directory",
+            prm.directory,
             "it cannot be created or is not a directory");
     if (Utilities::MPI::this_mpi_process(comm) == 0 && !resume)
       {
@@ -666,21 +751,20 @@ namespace femp
     MPI_Barrier(comm);
   }
 
-
   template <int dim>
   std::vector<double>
   Output<dim>::sample(const std::vector<Point<dim>> &points,
-                      const std::vector<Field> &     fields) const
+                      const std::vector<Field>      &fields) const
   {
     // The owner of the cell that contains a point contributes its values;
     // everybody else adds zeros. With linear interpolation, the owner of
     // each of the 2^dim cells around the point adds its weighted values and
     // weight to a second block (owned cells only: no ghost values needed).
-    const std::size_t nf = fields.size();
-    const std::size_t np = points.size();
-    const std::size_t nw = nf + 1; // weighted sums of the fields and weight
+    const std::size_t   nf = fields.size();
+    const std::size_t   np = points.size();
+    const std::size_t   nw = nf + 1; // weighted sums of the fields and weight
     std::vector<double> v(np * nf + (prm.probe_linear ? np * nw : 0), 0.);
-    const auto &        status = grid.cell_status();
+    const auto         &status = grid.cell_status();
     auto                owned  = [&](const std::array<int, dim> &ijk) {
       return grid.in_box(ijk) &&
              status[grid.local_index(ijk)] == BackgroundGrid<dim>::owned;
@@ -703,11 +787,10 @@ namespace femp
         std::array<double, dim> t;
         for (int d = 0; d < dim; ++d)
           {
-            const double s =
-              (points[i][d] - grid.origin()[d]) / grid.h() - 0.5;
-            const int n = grid.n_cells()[d];
-            lo[d]       = static_cast<int>(std::floor(s));
-            t[d]        = s - lo[d];
+            const double s = (points[i][d] - grid.origin()[d]) / grid.h() - 0.5;
+            const int    n = grid.n_cells()[d];
+            lo[d]          = static_cast<int>(std::floor(s));
+            t[d]           = s - lo[d];
             if (lo[d] < 0)
               lo[d] = 0, t[d] = 0;
             if (lo[d] >= n - 1)
@@ -735,7 +818,8 @@ namespace femp
           }
       }
     std::vector<double> global(v.size());
-    Utilities::MPI::sum(ArrayView<const double>(v), grid.communicator(),
+    Utilities::MPI::sum(ArrayView<const double>(v),
+                        grid.communicator(),
                         ArrayView<double>(global));
     if (prm.probe_linear)
       for (std::size_t i = 0; i < np; ++i)
@@ -751,14 +835,13 @@ namespace femp
     return global;
   }
 
-
   template <int dim>
   void
-  Output<dim>::write_fields(const unsigned int                      n,
-                            const double                            time,
-                            const std::vector<Field> &              fields,
-                            const Particles::ParticleHandler<dim> * points,
-                            const std::vector<std::string> &        point_names)
+  Output<dim>::write_fields(const unsigned int                     n,
+                            const double                           time,
+                            const std::vector<Field>              &fields,
+                            const Particles::ParticleHandler<dim> *points,
+                            const std::vector<std::string>        &point_names)
   {
     std::vector<Field> chosen;
     for (const auto &f : fields)
@@ -769,7 +852,6 @@ namespace femp
       write_point_output(n, time, *points, point_names);
   }
 
-
   template <int dim>
   void
   Output<dim>::write_grid_output(const unsigned int        n,
@@ -777,12 +859,12 @@ namespace femp
                                  const std::vector<Field> &fields)
   {
     const MPI_Comm comm = grid.communicator();
-    const auto &   tria = grid.triangulation();
+    const auto    &tria = grid.triangulation();
     DataOut<dim>   data_out;
     data_out.attach_triangulation(tria);
     // Only owned cells of the domain (not the triangulation's padding).
     const auto &flat_of = grid.flat_index_of_active_cell();
-    auto        wanted  = [&](const typename Triangulation<dim>::cell_iterator &c) {
+    auto wanted = [&](const typename Triangulation<dim>::cell_iterator &c) {
       return c->is_active() && c->is_locally_owned() &&
              flat_of[c->active_cell_index()] != numbers::invalid_unsigned_int;
     };
@@ -793,7 +875,7 @@ namespace femp
             return typename Triangulation<dim>::cell_iterator(c);
         return t.end();
       },
-      [wanted](const Triangulation<dim> &t,
+      [wanted](const Triangulation<dim>                         &t,
                const typename Triangulation<dim>::cell_iterator &c) {
         typename Triangulation<dim>::active_cell_iterator next(c);
         for (++next; next != t.end(); ++next)
@@ -813,8 +895,8 @@ namespace femp
         // create_xdmf_entry fail when a rank has nothing to write and store
         // only node data, so write_h5() writes the arrays.
         H5Part part;
-        part.dim     = dim;
-        part.corners = GeometryInfo<dim>::vertices_per_cell;
+        part.dim      = dim;
+        part.corners  = GeometryInfo<dim>::vertices_per_cell;
         part.compress = true;
         std::vector<unsigned int> flat; // the fields' index of each cell
         for (const auto &cell : tria.active_cell_iterators())
@@ -824,7 +906,8 @@ namespace femp
         if (!grid_mesh_written)
           {
             Vector<float> owner(tria.n_active_cells());
-            data_out.add_data_vector(owner, "owner",
+            data_out.add_data_vector(owner,
+                                     "owner",
                                      DataOut<dim>::type_cell_data);
             data_out.build_patches();
             DataOutBase::DataOutFilter filter(
@@ -847,18 +930,22 @@ namespace femp
           }
         if (with_subdomain)
           part.data.push_back(
-            {"subdomain", true, true,
+            {"subdomain",
+             true,
+             true,
              std::vector<double>(flat.size(),
                                  Utilities::MPI::this_mpi_process(comm))});
         const std::string &mesh = grid_mesh_file;
-        const std::string file =
+        const std::string  file =
           "grid_" + Utilities::int_to_string(n, 5) + ".h5";
         auto layout = write_h5(prm.directory + "/" + mesh,
-                               prm.directory + "/" + file, !grid_mesh_written,
-                               part, comm);
+                               prm.directory + "/" + file,
+                               !grid_mesh_written,
+                               part,
+                               comm);
         if (!grid_mesh_written)
           {
-            grid_mesh_nodes = layout.nodes;
+            grid_mesh_nodes     = layout.nodes;
             grid_mesh_partition = partition_fingerprint(grid);
           }
         layout.nodes      = grid_mesh_nodes;
@@ -879,10 +966,12 @@ namespace femp
             data[fields.size()][i] = cell->subdomain_id();
         }
     for (std::size_t f = 0; f < fields.size(); ++f)
-      data_out.add_data_vector(data[f], fields[f].name,
+      data_out.add_data_vector(data[f],
+                               fields[f].name,
                                DataOut<dim>::type_cell_data);
     if (with_subdomain)
-      data_out.add_data_vector(data[fields.size()], "subdomain",
+      data_out.add_data_vector(data[fields.size()],
+                               "subdomain",
                                DataOut<dim>::type_cell_data);
     data_out.build_patches();
     DataOutBase::VtkFlags flags;
@@ -894,7 +983,6 @@ namespace femp
     grid_records.emplace_back(time, name);
     write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
   }
-
 
   template <int dim>
   void
@@ -947,19 +1035,17 @@ namespace femp
           part.data[c + 1].values.push_back(props[columns[c]]);
       }
     const std::string file = "points_" + Utilities::int_to_string(n, 5) + ".h5";
-    const auto        layout =
-      write_h5(prm.directory + "/" + file, prm.directory + "/" + file, true,
-               part, comm);
+    const auto        layout = write_h5(
+      prm.directory + "/" + file, prm.directory + "/" + file, true, part, comm);
     point_entries.push_back(xdmf_entry(time, file, file, part, layout));
     write_xdmf(prm.directory + "/points.xdmf", point_entries, comm);
   }
-
 
   template <int dim>
   void
   Output<dim>::write_series(const double              time,
                             const std::vector<Field> &probe_fields,
-                            const MeltPoolSize &      pool)
+                            const MeltPoolSize       &pool)
   {
     const auto v = sample(prm.probe_points, probe_fields);
     if (Utilities::MPI::this_mpi_process(grid.communicator()) != 0)
@@ -981,7 +1067,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   Output<dim>::write_probe_lines(const unsigned int        n,
@@ -992,14 +1077,14 @@ namespace femp
       {
         std::vector<Point<dim>> pts;
         for (unsigned int i = 0; i < line.n_samples; ++i)
-          pts.push_back(line.start +
-                        (double(i) / (line.n_samples - 1)) * (line.end - line.start));
+          pts.push_back(line.start + (double(i) / (line.n_samples - 1)) *
+                                       (line.end - line.start));
         const auto v = sample(pts, probe_fields);
         if (Utilities::MPI::this_mpi_process(grid.communicator()) != 0)
           continue;
         const std::string file = prm.directory + "/probe_line_" + line.name +
                                  "_" + Utilities::int_to_string(n, 5) + ".csv";
-        std::ofstream     out(file);
+        std::ofstream out(file);
         check_stream(out, file);
         out << "# time = " << std::setprecision(8) << time << " s\n";
         out << "s";
@@ -1041,10 +1126,9 @@ namespace femp
     // (The size on disk, not tellp(): a stream reopened for appending
     // reports 0 until it writes.)
     const auto size = [&](const std::ofstream &f,
-                          const std::string &  name) -> std::uint64_t {
+                          const std::string   &name) -> std::uint64_t {
       std::error_code ec;
-      const auto      n =
-        std::filesystem::file_size(prm.directory + "/" + name, ec);
+      const auto n = std::filesystem::file_size(prm.directory + "/" + name, ec);
       return f.is_open() && !ec ? std::uint64_t(n) : 0;
     };
     out.put(size(pool_csv, "melt_pool.csv"));
@@ -1062,7 +1146,6 @@ namespace femp
     out.put<std::uint64_t>(grid_mesh_nodes);
     out.put<std::uint32_t>(grid_mesh_partition);
   }
-
 
   template <int dim>
   void
@@ -1091,7 +1174,7 @@ namespace femp
     const std::string mesh_file = in.get_string();
     grid_mesh_nodes             = in.get<std::uint64_t>();
     grid_mesh_partition         = in.get<std::uint32_t>();
-    const MPI_Comm comm = grid.communicator();
+    const MPI_Comm comm         = grid.communicator();
     if (!mesh_file.empty() &&
         grid_mesh_partition == partition_fingerprint(grid))
       {
@@ -1106,23 +1189,27 @@ namespace femp
         // None yet, or the cells of this partition lie in another order:
         // the next grid output writes a mesh file of its own (the earlier
         // outputs keep theirs).
-        grid_mesh_file =
-          "grid_mesh_" + Utilities::int_to_string(grid_entries.size(), 5) + ".h5";
+        grid_mesh_file = "grid_mesh_" +
+                         Utilities::int_to_string(grid_entries.size(), 5) +
+                         ".h5";
         grid_mesh_written = false;
       }
-    std::string    error;
+    std::string error;
     if (Utilities::MPI::this_mpi_process(comm) == 0)
       {
         namespace fs = std::filesystem;
         // Drop the rows written after the checkpoint, then append.
-        auto reopen = [&](std::ofstream &f, const std::string &name,
+        auto reopen = [&](std::ofstream      &f,
+                          const std::string  &name,
                           const std::uint64_t size) {
           const std::string file = prm.directory + "/" + name;
           std::error_code   ec;
           if (!fs::exists(file) || fs::file_size(file, ec) < size)
             {
-              error = "the time series '" + file + "' is missing or shorter "
-                      "than at the checkpoint (" + std::to_string(size) +
+              error = "the time series '" + file +
+                      "' is missing or shorter "
+                      "than at the checkpoint (" +
+                      std::to_string(size) +
                       " bytes); resume into the output directory of the run "
                       "that wrote the checkpoint";
               return;
@@ -1166,8 +1253,9 @@ namespace femp
   }
 
   void
-  reopen_series_at(std::ofstream &stream, const std::string &file,
-                   const double time)
+  reopen_series_at(std::ofstream     &stream,
+                   const std::string &file,
+                   const double       time)
   {
     std::ifstream in(file);
     if (!in)
@@ -1175,7 +1263,7 @@ namespace femp
     std::string kept, line;
     while (std::getline(in, line))
       {
-        char *     end = nullptr;
+        char      *end = nullptr;
         const auto t   = std::strtod(line.c_str(), &end);
         // Rows are written with 8 significant digits.
         if (end == line.c_str() || t <= time * (1 + 1e-7))

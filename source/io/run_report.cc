@@ -13,10 +13,10 @@ namespace femp
 {
   template <int dim>
   RunReport<dim>::RunReport(MPI_Comm comm, ConditionalOStream &out)
-    : comm(comm)
-    , out(out)
-  {}
-
+      : comm(comm)
+      , out(out)
+  {
+  }
 
   template <int dim>
   void
@@ -25,41 +25,40 @@ namespace femp
     H0 = heat.stored_enthalpy();
   }
 
-
   template <int dim>
   void
   RunReport<dim>::progress(const SimulationControl &control,
                            const double             T_max,
-                           const MeltPoolSize &     pool) const
+                           const MeltPoolSize      &pool) const
   {
     const double time = control.time();
     const double wall = control.wall_time();
     const double left = control.wall_time_left();
     out << std::setprecision(4) << "t = " << std::setw(10) << time
-        << " s  step " << std::setw(7) << control.step() << "  dt = "
-        << std::setw(10) << control.time_step() << " s  T_max = "
-        << std::setw(8) << T_max << " K  pool L x W x D = "
-        << pool.length * 1e6 << " x " << pool.width * 1e6 << " x "
-        << pool.depth * 1e6 << " um  wall " << std::setprecision(3) << wall
-        << " s, left ~" << left << " s" << std::endl;
+        << " s  step " << std::setw(7) << control.step()
+        << "  dt = " << std::setw(10) << control.time_step()
+        << " s  T_max = " << std::setw(8) << T_max
+        << " K  pool L x W x D = " << pool.length * 1e6 << " x "
+        << pool.width * 1e6 << " x " << pool.depth * 1e6 << " um  wall "
+        << std::setprecision(3) << wall << " s, left ~" << left << " s"
+        << std::endl;
   }
-
 
   template <int dim>
   void
-  RunReport<dim>::finish(const SimulationControl &       control,
-                         const HeatTransfer<dim> &       heat,
-                         const MaterialPoints<dim> &     points,
-                         const IncompressibleFlow<dim> * flow,
-                         const SolidStress<dim> *        solid,
-                         const double                    moved_points,
-                         RunSummary<dim> &               s) const
+  RunReport<dim>::finish(const SimulationControl       &control,
+                         const HeatTransfer<dim>       &heat,
+                         const MaterialPoints<dim>     &points,
+                         const IncompressibleFlow<dim> *flow,
+                         const SolidStress<dim>        *solid,
+                         const double                   moved_points,
+                         RunSummary<dim>               &s) const
   {
     const bool heat_enabled = !heat.is_frozen();
-    s.steps        = control.step();
-    s.time         = control.time();
-    s.T_max        = heat.max_temperature();
-    s.moved_points = moved_points;
+    s.steps                 = control.step();
+    s.time                  = control.time();
+    s.T_max                 = heat.max_temperature();
+    s.moved_points          = moved_points;
 
     const auto e = heat.energy_budget();
     s.laser      = e.laser;
@@ -69,7 +68,7 @@ namespace femp
     s.stored     = heat.stored_enthalpy() - H0;
     s.n_points   = points.n_global_points();
     {
-      using P    = typename MaterialPoints<dim>::PropertyIndex;
+      using P = typename MaterialPoints<dim>::PropertyIndex;
       // Cell by cell in the order of the owned cells (not the handler's,
       // which depends on the history of insertions: a resumed run sums in
       // the same order).
@@ -107,8 +106,7 @@ namespace femp
               << " gathers of the MPM points (all ranks), " << gathers[0]
               << " kept the arrays (no point melted, solidified or moved into "
                  "or out of a member's cell since the last) and "
-              << gathers[1]
-              << " read again only the cells whose points changed"
+              << gathers[1] << " read again only the cells whose points changed"
               << std::endl;
         const unsigned long held = solid->n_points_held(); // collective
         if (held > 0)
@@ -134,14 +132,13 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   RunReport<dim>::print_energy(
-    const RunSummary<dim> &                          s,
+    const RunSummary<dim>                          &s,
     const typename HeatTransfer<dim>::EnergyBudget &e,
-    const bool                                       heat_enabled,
-    const bool                                       with_flow) const
+    const bool                                      heat_enabled,
+    const bool                                      with_flow) const
   {
     if (!heat_enabled)
       {
@@ -154,8 +151,8 @@ namespace femp
       std::max(1e-300, std::max(s.laser + std::abs(s.boundary), s.losses));
     out << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
         << "): laser " << s.laser << ", surface losses " << s.losses
-        << " (evaporation " << e.evaporation << ", convection "
-        << e.convection << ", radiation " << e.radiation
+        << " (evaporation " << e.evaporation << ", convection " << e.convection
+        << ", radiation " << e.radiation
         << " at the end of each step), fixed faces " << s.boundary
         << ", stored " << s.stored << "; balance error "
         << std::abs(s.laser + s.boundary - s.losses - s.stored) / scale
@@ -173,19 +170,17 @@ namespace femp
       out << std::setprecision(6) << "  with melt flow, energy created (J"
           << (dim == 2 ? "/m" : "") << ") by the upwind convection of T "
           << s.advection << " and by points moving between cells "
-          << s.moved_points
-          << "; balance error with these counted as sources "
+          << s.moved_points << "; balance error with these counted as sources "
           << std::abs(s.laser + s.boundary + s.advection + s.moved_points -
                       s.losses - s.stored) /
                scale
           << std::endl;
   }
 
-
   template <int dim>
   void
   RunReport<dim>::print_flow(const IncompressibleFlow<dim> &flow,
-                             const RunSummary<dim> &        s) const
+                             const RunSummary<dim>         &s) const
   {
     const auto &st = flow.statistics();
     out << "Melt flow: " << st.steps << " fluid steps, pressure matrix "
@@ -193,8 +188,8 @@ namespace femp
         << "hierarchy " << st.amg_setups << " times, CG iterations "
         << st.cg_iterations << " in total (" << std::setprecision(3)
         << double(st.cg_iterations) / std::max(1u, st.steps)
-        << " per solve, at most " << st.max_iterations << "), "
-        << st.halvings << " steps redone as halves, points "
+        << " per solve, at most " << st.max_iterations << "), " << st.halvings
+        << " steps redone as halves, points "
         << "re-sorted in " << st.resorts << " steps (" << st.global_sorts
         << " with deal.II's global sort), " << st.n_fluid_cells
         << " fluid cells and max speed " << st.max_point_speed
@@ -214,13 +209,12 @@ namespace femp
         << ", viscous " << r.governed[1] << ", capillary " << r.governed[2]
         << ", prescribed (Melt flow/Time step) " << r.governed[3]
         << "; sub-steps per temperature step "
-        << (r.max_substeps > 0 ? r.min_substeps : 0) << " to "
-        << r.max_substeps << std::endl;
+        << (r.max_substeps > 0 ? r.min_substeps : 0) << " to " << r.max_substeps
+        << std::endl;
     if (r.idle_steps > 0)
       out << "  melt flow idle (no fluid, no metal above the solidus) in "
           << r.idle_steps << " temperature steps" << std::endl;
   }
-
 
   template class RunReport<2>;
   template class RunReport<3>;

@@ -16,7 +16,9 @@ namespace femp
   {
     prm.enter_subsection("Output");
     prm.enter_subsection("Track shape");
-    prm.declare_entry("Write", "auto", Patterns::Selection("auto|true|false"),
+    prm.declare_entry("Write",
+                      "auto",
+                      Patterns::Selection("auto|true|false"),
                       "Write the track's shape at every field output: "
                       "track_shape_<n>.csv (the height z_s of the metal's top "
                       "surface, alpha = 1/2 interpolated along z, in every "
@@ -28,7 +30,9 @@ namespace femp
                       "auto: with Physics/Melt flow. The centre line is the "
                       "column of cells that contains the start point of the "
                       "laser's first segment.");
-    prm.declare_entry("Cross sections", "", Patterns::Anything(),
+    prm.declare_entry("Cross sections",
+                      "",
+                      Patterns::Anything(),
                       "Positions x (m) of the cross-sections across the "
                       "track (3D), separated by ','; each is the column of "
                       "cells that contains x, inside the domain. Empty: one "
@@ -36,7 +40,6 @@ namespace femp
     prm.leave_subsection();
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -54,12 +57,15 @@ namespace femp
           {
             std::size_t end = 0;
             x               = std::stod(s, &end);
-            require(end == s.size(), "Output/Track shape/Cross sections", s,
+            require(end == s.size(),
+                    "Output/Track shape/Cross sections",
+                    s,
                     "a list of positions x in m, separated by ','");
           }
         catch (const std::logic_error &)
           {
-            throw InputError("Output/Track shape/Cross sections", s,
+            throw InputError("Output/Track shape/Cross sections",
+                             s,
                              "a list of positions x in m, separated by ','");
           }
         cross_sections.push_back(x);
@@ -67,23 +73,23 @@ namespace femp
     prm.leave_subsection();
     prm.leave_subsection();
     require(dim == 3 || cross_sections.empty(),
-            "Output/Track shape/Cross sections", cross_sections.size(),
+            "Output/Track shape/Cross sections",
+            cross_sections.size(),
             "cross-sections need a 3D scene; leave the list empty in 2D");
   }
 
-
   template <int dim>
-  TrackShape<dim>::TrackShape(const Parameters &         prm,
+  TrackShape<dim>::TrackShape(const Parameters          &prm,
                               const BackgroundGrid<dim> &grid,
                               const double               centre_y,
                               const double               substrate_top,
                               const double               default_x)
-    : grid(grid)
-    , z_top(substrate_top)
+      : grid(grid)
+      , z_top(substrate_top)
   {
-    const auto &n  = grid.n_cells();
-    const auto &x0 = grid.origin();
-    const double h = grid.h();
+    const auto  &n  = grid.n_cells();
+    const auto  &x0 = grid.origin();
+    const double h  = grid.h();
     // Centre line: every i at the row j0 of the centre line (2D: j = 0).
     Point<dim> c = x0;
     if (dim == 3)
@@ -101,7 +107,8 @@ namespace femp
         for (const double x : xs)
           {
             require(x >= x0[0] && x < x0[0] + n[0] * h,
-                    "Output/Track shape/Cross sections", x,
+                    "Output/Track shape/Cross sections",
+                    x,
                     "each position must lie inside the domain along x, [" +
                       num(x0[0]) + ", " + num(x0[0] + n[0] * h) + ") m");
             Point<dim> p = x0;
@@ -114,7 +121,6 @@ namespace femp
           }
       }
   }
-
 
   template <int dim>
   std::vector<double>
@@ -141,7 +147,6 @@ namespace femp
     return mark;
   }
 
-
   template <int dim>
   double
   TrackShape<dim>::surface_height(const double *alpha) const
@@ -160,7 +165,6 @@ namespace femp
     return z0;
   }
 
-
   template <int dim>
   std::vector<typename TrackShape<dim>::Section>
   TrackShape<dim>::measure(const std::vector<double> &alpha,
@@ -168,14 +172,14 @@ namespace femp
   {
     // Gather the columns' alpha and bead marks: each owned cell adds its
     // value, the others 0, so the sum is exact on every rank.
-    const int    nz = grid.n_cells()[dim - 1];
-    const double h  = grid.h();
-    const auto & x0 = grid.origin();
+    const int    nz    = grid.n_cells()[dim - 1];
+    const double h     = grid.h();
+    const auto  &x0    = grid.origin();
     std::size_t  n_col = 0;
     for (const auto &s : columns)
       n_col += s.size();
     std::vector<double> a(n_col * nz, 0.), b(n_col * nz, 0.);
-    const auto &        status = grid.cell_status();
+    const auto         &status = grid.cell_status();
     std::size_t         offset = 0;
     for (const auto &s : columns)
       {
@@ -197,9 +201,17 @@ namespace femp
             }
         offset += s.size();
       }
-    MPI_Allreduce(MPI_IN_PLACE, a.data(), a.size(), MPI_DOUBLE, MPI_SUM,
+    MPI_Allreduce(MPI_IN_PLACE,
+                  a.data(),
+                  a.size(),
+                  MPI_DOUBLE,
+                  MPI_SUM,
                   grid.communicator());
-    MPI_Allreduce(MPI_IN_PLACE, b.data(), b.size(), MPI_DOUBLE, MPI_SUM,
+    MPI_Allreduce(MPI_IN_PLACE,
+                  b.data(),
+                  b.size(),
+                  MPI_DOUBLE,
+                  MPI_SUM,
                   grid.communicator());
 
     std::vector<Section> result;
@@ -207,14 +219,15 @@ namespace femp
     for (std::size_t s = 0; s < columns.size(); ++s)
       {
         Section sec;
-        sec.name       = names[s];
-        int        lo = -1, hi = -1;
+        sec.name = names[s];
+        int lo = -1, hi = -1;
         for (std::size_t c = 0; c < columns[s].size(); ++c)
           {
             const double *ac = &a[(offset + c) * nz];
             const double *bc = &b[(offset + c) * nz];
             sec.x.push_back(x0[0] + (columns[s][c][0] + 0.5) * h);
-            sec.y.push_back(dim == 3 ? x0[1] + (columns[s][c][1] + 0.5) * h : 0.);
+            sec.y.push_back(dim == 3 ? x0[1] + (columns[s][c][1] + 0.5) * h :
+                                       0.);
             sec.surface.push_back(surface_height(ac));
             int bead = 0;
             for (int k = 0; k < nz; ++k)
@@ -238,10 +251,9 @@ namespace femp
     return result;
   }
 
-
   template <int dim>
   void
-  TrackShape<dim>::write(const std::string &         directory,
+  TrackShape<dim>::write(const std::string          &directory,
                          const unsigned int          n,
                          const double                time,
                          const std::vector<Section> &sections)
@@ -285,7 +297,6 @@ namespace femp
     bead_csv.flush();
     check(bead_csv, series);
   }
-
 
   template class TrackShape<2>;
   template class TrackShape<3>;

@@ -11,13 +11,18 @@ namespace femp
   SolidMaterial::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
-    prm.declare_entry("Bulk viscosity", "0.1", Patterns::Double(),
-                      "Linear artificial bulk viscosity b1, -: the viscous "
-                      "pressure q = b1 rho c h tr(D) (c: P-wave speed, h: cell "
-                      "size) is added to the stress in the nodal forces and "
-                      "damps the ringing behind stress fronts; the stable step "
-                      "shrinks by sqrt(1 + b1^2) - b1. Range [0, 1]; 0 is off.");
-    prm.declare_entry("Velocity transfer", "APIC", Patterns::Selection("FLIP|APIC"),
+    prm.declare_entry(
+      "Bulk viscosity",
+      "0.1",
+      Patterns::Double(),
+      "Linear artificial bulk viscosity b1, -: the viscous "
+      "pressure q = b1 rho c h tr(D) (c: P-wave speed, h: cell "
+      "size) is added to the stress in the nodal forces and "
+      "damps the ringing behind stress fronts; the stable step "
+      "shrinks by sqrt(1 + b1^2) - b1. Range [0, 1]; 0 is off.");
+    prm.declare_entry("Velocity transfer",
+                      "APIC",
+                      Patterns::Selection("FLIP|APIC"),
                       "How material points of the solid MPM exchange "
                       "velocities with the grid nodes: APIC (affine "
                       "particle-in-cell: points take the nodal velocities and "
@@ -31,7 +36,9 @@ namespace femp
                       "point mass; see doc/solid.md). "
                       "One of FLIP, APIC.");
     prm.enter_subsection("Material");
-    prm.declare_entry("Young's modulus", "1.93e11", Patterns::Anything(),
+    prm.declare_entry("Young's modulus",
+                      "1.93e11",
+                      Patterns::Anything(),
                       "E(T), Pa: a constant or a table 'T1:E1, T2:E2, ...' "
                       "(K : Pa, T increasing, held constant outside). Every "
                       "value must be positive. The elasticity is of total "
@@ -39,17 +46,24 @@ namespace femp
                       "E: in scenes that melt the substrate give a table that "
                       "falls to a small value at the solidus (doc/solid.md "
                       "\"Material data of 316L\").");
-    prm.declare_entry("Plastic modulus", "1e9", Patterns::Anything(),
+    prm.declare_entry("Plastic modulus",
+                      "1e9",
+                      Patterns::Anything(),
                       "Linear isotropic hardening modulus H(T) = d sigma_y / "
                       "d eps_p, Pa: a constant or a table as for Young's "
                       "modulus. Range [0, inf).");
-    prm.declare_entry("Yield stress", "2.5e8", Patterns::Anything(),
+    prm.declare_entry("Yield stress",
+                      "2.5e8",
+                      Patterns::Anything(),
                       "Initial yield stress sigma_y(T), Pa: a constant or a "
                       "table as for Young's modulus. Range (0, inf); use a "
                       "huge value for a purely elastic solid.");
-    prm.declare_entry("Poisson's ratio", "0.3", Patterns::Double(),
+    prm.declare_entry("Poisson's ratio",
+                      "0.3",
+                      Patterns::Double(),
                       "nu, -; range [0, 0.5).");
-    prm.declare_entry("Thermal expansion coefficient", "1.7e-5",
+    prm.declare_entry("Thermal expansion coefficient",
+                      "1.7e-5",
                       Patterns::Double(),
                       "Linear thermal expansion alpha, 1/K; range [0, inf). "
                       "The thermal stress modulus is beta = E alpha / (1 - 2 "
@@ -59,12 +73,11 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   void
   SolidMaterial::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
-    bulk_viscosity = prm.get_double("Bulk viscosity");
+    bulk_viscosity    = prm.get_double("Bulk viscosity");
     velocity_transfer = prm.get("Velocity transfer") == "FLIP" ?
                           VelocityTransfer::flip :
                           VelocityTransfer::apic;
@@ -80,20 +93,31 @@ namespace femp
     expansion     = prm.get_double("Thermal expansion coefficient");
     prm.leave_subsection();
     prm.leave_subsection();
-    require(youngs_modulus.min_value() > 0, p + "Young's modulus",
-            youngs_modulus.min_value(), "every value must be positive (Pa)");
-    require(plastic_modulus.min_value() >= 0, p + "Plastic modulus",
-            plastic_modulus.min_value(), "every value must be >= 0 (Pa)");
-    require(yield_stress.min_value() > 0, p + "Yield stress",
-            yield_stress.min_value(), "every value must be positive (Pa)");
-    require(poisson_ratio >= 0 && poisson_ratio < 0.5, p + "Poisson's ratio",
-            poisson_ratio, "it must lie in [0, 0.5)");
-    require(bulk_viscosity >= 0 && bulk_viscosity <= 1, "Solid/Bulk viscosity",
-            bulk_viscosity, "it must lie in [0, 1]");
-    require(expansion >= 0, p + "Thermal expansion coefficient", expansion,
+    require(youngs_modulus.min_value() > 0,
+            p + "Young's modulus",
+            youngs_modulus.min_value(),
+            "every value must be positive (Pa)");
+    require(plastic_modulus.min_value() >= 0,
+            p + "Plastic modulus",
+            plastic_modulus.min_value(),
+            "every value must be >= 0 (Pa)");
+    require(yield_stress.min_value() > 0,
+            p + "Yield stress",
+            yield_stress.min_value(),
+            "every value must be positive (Pa)");
+    require(poisson_ratio >= 0 && poisson_ratio < 0.5,
+            p + "Poisson's ratio",
+            poisson_ratio,
+            "it must lie in [0, 0.5)");
+    require(bulk_viscosity >= 0 && bulk_viscosity <= 1,
+            "Solid/Bulk viscosity",
+            bulk_viscosity,
+            "it must lie in [0, 1]");
+    require(expansion >= 0,
+            p + "Thermal expansion coefficient",
+            expansion,
             "it must be >= 0 (1/K)");
   }
-
 
   double
   SolidMaterial::max_p_wave_modulus() const
@@ -102,13 +126,12 @@ namespace femp
     return youngs_modulus.max_value() * (1 - nu) / ((1 + nu) * (1 - 2 * nu));
   }
 
-
   StressIncrement
   update_stress(const SolidMaterial &m,
-                const Tensor<2, 3> & L_dt,
+                const Tensor<2, 3>  &L_dt,
                 const double         T_old,
                 const double         T_new,
-                StressPoint &        state)
+                StressPoint         &state)
   {
     // The array kernel of constitutive.h does the work (one code path for
     // material points and finite elements).
@@ -116,13 +139,18 @@ namespace femp
     for (unsigned int i = 0; i < 3; ++i)
       for (unsigned int j = 0; j < 3; ++j)
         L[i][j] = L_dt[i][j];
-    sv[0] = state.sigma[0][0], sv[1] = state.sigma[1][1], sv[2] = state.sigma[2][2];
-    sv[3] = state.sigma[0][1], sv[4] = state.sigma[0][2], sv[5] = state.sigma[1][2];
+    sv[0] = state.sigma[0][0], sv[1] = state.sigma[1][1],
+    sv[2] = state.sigma[2][2];
+    sv[3] = state.sigma[0][1], sv[4] = state.sigma[0][2],
+    sv[5] = state.sigma[1][2];
     StressIncrement result;
-    result.plastic_increment = update_stress_array(m, L, T_old, T_new, sv, state.eps_p);
-    result.yielded           = result.plastic_increment > 0;
-    state.sigma[0][0] = sv[0], state.sigma[1][1] = sv[1], state.sigma[2][2] = sv[2];
-    state.sigma[0][1] = sv[3], state.sigma[0][2] = sv[4], state.sigma[1][2] = sv[5];
+    result.plastic_increment =
+      update_stress_array(m, L, T_old, T_new, sv, state.eps_p);
+    result.yielded    = result.plastic_increment > 0;
+    state.sigma[0][0] = sv[0], state.sigma[1][1] = sv[1],
+    state.sigma[2][2] = sv[2];
+    state.sigma[0][1] = sv[3], state.sigma[0][2] = sv[4],
+    state.sigma[1][2] = sv[5];
     return result;
   }
 } // namespace femp

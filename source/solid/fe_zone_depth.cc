@@ -22,7 +22,8 @@ namespace femp
       auto rise = [&](const double s) {
         const double R = std::sqrt(s * s + z * z);
         // R - s = z^2 / (R + s): no cancellation far behind the source.
-        return Q / (2 * M_PI * k * R) * std::exp(-v * z * z / ((R + s) * 2 * a));
+        return Q / (2 * M_PI * k * R) *
+               std::exp(-v * z * z / ((R + s) * 2 * a));
       };
       // The far-field maximum lies at s = v z^2 / (4 a); scan s on a
       // logarithmic grid well past it and well below z, then refine.
@@ -38,9 +39,9 @@ namespace femp
             best = r, s_best = s;
         }
       // Golden-section refinement in [s_best / q, s_best * q].
-      const double q  = std::pow(s_hi / s_lo, 1. / n);
-      double       lo = s_best > 0 ? s_best / q : 0., hi = std::max(s_best * q, s_lo);
-      const double g  = 0.5 * (std::sqrt(5.) - 1);
+      const double q = std::pow(s_hi / s_lo, 1. / n);
+      double lo = s_best > 0 ? s_best / q : 0., hi = std::max(s_best * q, s_lo);
+      const double g = 0.5 * (std::sqrt(5.) - 1);
       for (int it = 0; it < 60; ++it)
         {
           const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
@@ -53,7 +54,6 @@ namespace femp
     }
   } // namespace
 
-
   double
   rosenthal_melt_depth(const double Q,
                        const double v,
@@ -65,17 +65,17 @@ namespace femp
       return 0.;
     const double a = k / rho_c;
     // Bracket: the rise falls with z; double until below dT.
-    double lo = 0., hi = std::max(1e-9, line_source_melt_depth(Q, v, rho_c, dT));
+    double lo = 0.,
+           hi = std::max(1e-9, line_source_melt_depth(Q, v, rho_c, dT));
     while (peak_rise_at_depth(hi, Q, v, k, a) >= dT)
       lo = hi, hi *= 2;
     for (int it = 0; it < 60; ++it)
       {
-        const double z = 0.5 * (lo + hi);
+        const double z                                      = 0.5 * (lo + hi);
         (peak_rise_at_depth(z, Q, v, k, a) >= dT ? lo : hi) = z;
       }
     return lo;
   }
-
 
   double
   line_source_melt_depth(const double Q,
@@ -88,7 +88,6 @@ namespace femp
     return std::sqrt(2 * Q / (M_PI * std::exp(1.) * rho_c * v * dT));
   }
 
-
   double
   conservative_melt_depth(const Material &m,
                           const double    Q,
@@ -98,11 +97,11 @@ namespace femp
     const double rho_c = m.density * m.specific_heat.min_value();
     const double dT    = m.solidus - T0;
     double       d     = line_source_melt_depth(Q, v, rho_c, dT);
-    for (const double k : {m.conductivity.min_value(), m.conductivity.max_value()})
+    for (const double k :
+         {m.conductivity.min_value(), m.conductivity.max_value()})
       d = std::max(d, rosenthal_melt_depth(Q, v, k, rho_c, dT));
     return d;
   }
-
 
   double
   automatic_fe_zone_top(const double d,
@@ -110,8 +109,8 @@ namespace femp
                         const double z0,
                         const double h)
   {
-    const double top = substrate_top - (FeZoneMargin::factor * d +
-                                        FeZoneMargin::cells * h);
+    const double top =
+      substrate_top - (FeZoneMargin::factor * d + FeZoneMargin::cells * h);
     return z0 + std::floor((top - z0) / h + 1e-9) * h;
   }
 } // namespace femp

@@ -12,10 +12,10 @@
 #include <femp/solid/solid_fem.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <type_traits>
-#include <cmath>
 
 namespace femp
 {
@@ -24,15 +24,21 @@ namespace femp
   SolidFEM<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid FEM");
-    prm.declare_entry("Use finite elements", "false", Patterns::Bool(),
+    prm.declare_entry("Use finite elements",
+                      "false",
+                      Patterns::Bool(),
                       "Discretize the constant-solid zone below by finite "
                       "elements (FEMP). If false, all solid is material "
                       "points (all-MPM).");
-    prm.declare_entry("Zone lower corner", "0, 0, 0", Patterns::Anything(),
+    prm.declare_entry("Zone lower corner",
+                      "0, 0, 0",
+                      Patterns::Anything(),
                       "Lower corner of the box of the finite-element zone, m "
                       "(dim coordinates). It must lie on grid lines inside the "
                       "domain. Points inside the zone carry temperature only.");
-    prm.declare_entry("Zone upper corner", "0, 0, 0", Patterns::Anything(),
+    prm.declare_entry("Zone upper corner",
+                      "0, 0, 0",
+                      Patterns::Anything(),
                       "Upper corner of the finite-element zone, m (dim "
                       "coordinates); on grid lines, inside the domain, above "
                       "the lower corner in every direction. Or 'auto' (3D): "
@@ -47,7 +53,9 @@ namespace femp
                       "T_s and 'Heat transfer/Initial temperature' T0 "
                       "(doc/cases.md). With either choice the run stops if a "
                       "finite element reaches the solidus.");
-    prm.declare_entry("Hourglass coefficient", "0", Patterns::Double(),
+    prm.declare_entry("Hourglass coefficient",
+                      "0",
+                      Patterns::Double(),
                       "kappa of the Flanagan-Belytschko hourglass stiffness "
                       "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
                       "(the default) switches hourglass control off. The "
@@ -61,7 +69,9 @@ namespace femp
                       "the run. Use 0.01-0.1 for elements under loads that "
                       "drive the zero-energy modes (point or alternating "
                       "nodal loads).");
-    prm.declare_entry("Hourglass distortion limit", "0.1", Patterns::Double(),
+    prm.declare_entry("Hourglass distortion limit",
+                      "0.1",
+                      Patterns::Double(),
                       "Largest change of an element corner's volume ratio "
                       "det(dx/dX) that the hourglass modes may make, -; "
                       "range (0, 1]. Measured per element at every solid "
@@ -79,18 +89,17 @@ namespace femp
     prm.leave_subsection();
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid FEM");
-    enabled      = prm.get_bool("Use finite elements");
-    hourglass_coefficient = prm.get_double("Hourglass coefficient");
+    enabled                    = prm.get_bool("Use finite elements");
+    hourglass_coefficient      = prm.get_double("Hourglass coefficient");
     hourglass_distortion_limit = prm.get_double("Hourglass distortion limit");
     if (enabled)
       {
-        lower_corner = parse_point<dim>(prm.get("Zone lower corner"),
+        lower_corner  = parse_point<dim>(prm.get("Zone lower corner"),
                                         "Solid FEM/Zone lower corner");
         automatic_top = Utilities::trim(prm.get("Zone upper corner")) == "auto";
         if (!automatic_top)
@@ -99,13 +108,14 @@ namespace femp
       }
     prm.leave_subsection();
     require(hourglass_coefficient >= 0 && hourglass_coefficient <= 1,
-            "Solid FEM/Hourglass coefficient", hourglass_coefficient,
+            "Solid FEM/Hourglass coefficient",
+            hourglass_coefficient,
             "it must lie in [0, 1]");
     require(hourglass_distortion_limit > 0 && hourglass_distortion_limit <= 1,
-            "Solid FEM/Hourglass distortion limit", hourglass_distortion_limit,
+            "Solid FEM/Hourglass distortion limit",
+            hourglass_distortion_limit,
             "it must lie in (0, 1]");
   }
-
 
   template <int dim>
   void
@@ -115,7 +125,8 @@ namespace femp
     if (!enabled)
       return;
     require(!automatic_top || upper_corner[dim - 1] > lower_corner[dim - 1],
-            "Solid FEM/Zone upper corner", "auto",
+            "Solid FEM/Zone upper corner",
+            "auto",
             "the estimated melt depth leaves no finite element above the "
             "zone's lower corner: use a deeper substrate, or all-MPM "
             "(Use finite elements = false)");
@@ -123,24 +134,27 @@ namespace femp
       {
         for (int c = 0; c < 2; ++c)
           {
-            const double x    = c == 0 ? lower_corner[d] : upper_corner[d];
-            const double r    = (x - g.lower_corner[d]) / g.cell_size;
-            const std::string name =
-              std::string("Solid FEM/Zone ") + (c == 0 ? "lower" : "upper") +
-              " corner";
-            require(std::abs(r - std::round(r)) < 1e-6, name, x,
+            const double      x    = c == 0 ? lower_corner[d] : upper_corner[d];
+            const double      r    = (x - g.lower_corner[d]) / g.cell_size;
+            const std::string name = std::string("Solid FEM/Zone ") +
+                                     (c == 0 ? "lower" : "upper") + " corner";
+            require(std::abs(r - std::round(r)) < 1e-6,
+                    name,
+                    x,
                     "every coordinate must lie on a grid line (lower corner "
                     "of the domain plus a whole number of cells)");
             require(x >= g.lower_corner[d] - 1e-12 * g.cell_size &&
                       x <= g.upper_corner[d] + 1e-12 * g.cell_size,
-                    name, x, "it must lie inside the domain");
+                    name,
+                    x,
+                    "it must lie inside the domain");
           }
-        require(upper_corner[d] > lower_corner[d], "Solid FEM/Zone upper corner",
+        require(upper_corner[d] > lower_corner[d],
+                "Solid FEM/Zone upper corner",
                 upper_corner[d],
                 "it must exceed the lower corner in every direction");
       }
   }
-
 
   namespace
   {
@@ -169,7 +183,6 @@ namespace femp
       return dim == 2 ? 3u : (al == 0 ? 3u : al == 1 ? 5u : al == 2 ? 6u : 7u);
     }
 
-
     /// In-place Walsh-Hadamard transform over the 2^dim corners (bit d of
     /// the corner index: upper side in direction d): x_m <- sum_a H_ma x_a
     /// with H_ma = prod_{d in m} s_a,d. Per stage (lo, hi) -> (lo + hi,
@@ -186,7 +199,7 @@ namespace femp
             for (int i = 0; i < dim; ++i)
               {
                 const Number lo = x[a][i], hi = x[a | (1u << d)][i];
-                x[a][i]              = lo + hi;
+                x[a][i]             = lo + hi;
                 x[a | (1u << d)][i] = hi - lo;
               }
     }
@@ -204,7 +217,7 @@ namespace femp
             for (int i = 0; i < dim; ++i)
               {
                 const Number lo = x[a][i], hi = x[a | (1u << d)][i];
-                x[a][i]              = lo - hi;
+                x[a][i]             = lo - hi;
                 x[a | (1u << d)][i] = lo + hi;
               }
     }
@@ -217,22 +230,21 @@ namespace femp
     }
   } // namespace
 
-
   template <int dim>
-  SolidFEM<dim>::SolidFEM(const Parameters &         prm,
+  SolidFEM<dim>::SolidFEM(const Parameters          &prm,
                           const BackgroundGrid<dim> &grid,
-                          const SolidMaterial &      material)
-    : prm(prm)
-    , grid(grid)
-    , mat(material)
-    , comm(grid.communicator())
-    , tria(grid.communicator())
-    , fe(1)
+                          const SolidMaterial       &material)
+      : prm(prm)
+      , grid(grid)
+      , mat(material)
+      , comm(grid.communicator())
+      , tria(grid.communicator())
+      , fe(1)
   {
-    Assert(prm.enabled, ExcMessage("SolidFEM is built only for an FE zone "
-                                   "that is switched on"));
+    Assert(prm.enabled,
+           ExcMessage("SolidFEM is built only for an FE zone "
+                      "that is switched on"));
   }
-
 
   template <int dim>
   double
@@ -241,13 +253,12 @@ namespace femp
     return kappa * mat.p_wave_modulus(T) * V * bb / n_corners;
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::setup(const double                             mass_scaling,
                        const std::array<std::uint8_t, 2 * dim> &face_bits,
-                       const Tensor<1, dim> &                   gravity,
-                       const std::vector<double> &              T)
+                       const Tensor<1, dim>                    &gravity,
+                       const std::vector<double>               &T)
   {
     mass_scale     = mass_scaling;
     g              = gravity;
@@ -260,7 +271,7 @@ namespace femp
     create_mesh();
     const double m_el = mat.density() * V * mass_scaling / n_corners;
     std::vector<std::array<int, dim>> node_ijk(n_local);
-    const auto cells = local_elements(node_ijk);
+    const auto                        cells = local_elements(node_ijk);
     set_node_box(node_ijk);
     set_elements(cells);
     allocate_node_arrays();
@@ -269,7 +280,6 @@ namespace femp
     set_temperature_exchange(T);
     element_loop<false>(0, 1);
   }
-
 
   template <int dim>
   bool
@@ -281,7 +291,6 @@ namespace femp
     return true;
   }
 
-
   template <int dim>
   std::uint64_t
   SolidFEM<dim>::zone_cell_id(const std::array<int, dim> &ijk) const
@@ -292,7 +301,6 @@ namespace femp
     return id;
   }
 
-
   template <int dim>
   std::uint64_t
   SolidFEM<dim>::zone_node_id(const std::array<int, dim> &ijk) const
@@ -302,7 +310,6 @@ namespace femp
       id = id * (zn[d] + 1) + (ijk[d] - zlo[d]);
     return id;
   }
-
 
   template <int dim>
   bool
@@ -317,13 +324,13 @@ namespace femp
     return false;
   }
 
-
   template <int dim>
   std::uint8_t
-  SolidFEM<dim>::fix_bits(const std::array<int, dim> &             ijk,
-                          const std::array<std::uint8_t, 2 * dim> &face_bits) const
+  SolidFEM<dim>::fix_bits(
+    const std::array<int, dim>              &ijk,
+    const std::array<std::uint8_t, 2 * dim> &face_bits) const
   {
-    const auto & N = grid.n_cells();
+    const auto  &N = grid.n_cells();
     std::uint8_t f = 0;
     for (int d = 0; d < dim; ++d)
       {
@@ -334,7 +341,6 @@ namespace femp
       }
     return f;
   }
-
 
   template <int dim>
   void
@@ -352,7 +358,6 @@ namespace femp
       if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
         in_zone_cell[idx] = in_zone(grid.global_index(idx));
   }
-
 
   template <int dim>
   void
@@ -373,12 +378,14 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       reps[d] = zn[d] >> r;
     tria.clear();
-    GridGenerator::subdivided_hyper_rectangle(tria, reps, prm.lower_corner,
+    GridGenerator::subdivided_hyper_rectangle(tria,
+                                              reps,
+                                              prm.lower_corner,
                                               prm.upper_corner);
     tria.refine_global(r);
     dof_handler.reinit(tria);
     dof_handler.distribute_dofs(fe);
-    const IndexSet &owned  = dof_handler.locally_owned_dofs();
+    const IndexSet &owned = dof_handler.locally_owned_dofs();
     IndexSet        ghosts;
     DoFTools::extract_locally_active_dofs(dof_handler, ghosts);
     ghosts.subtract_set(owned);
@@ -397,12 +404,10 @@ namespace femp
     }
   }
 
-
   // Elements in lexicographic order of their zone index (x fastest), and
   // the structured index of each local node.
   template <int dim>
-  std::vector<
-    std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
+  std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
   SolidFEM<dim>::local_elements(std::vector<std::array<int, dim>> &node_ijk)
   {
     std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, n_corners>>>
@@ -426,11 +431,11 @@ namespace femp
             }
           cells.emplace_back(zone_cell_id(ijk), c);
         }
-    std::sort(cells.begin(), cells.end(),
-              [](const auto &a, const auto &b) { return a.first < b.first; });
+    std::sort(cells.begin(), cells.end(), [](const auto &a, const auto &b) {
+      return a.first < b.first;
+    });
     return cells;
   }
-
 
   template <int dim>
   void
@@ -449,7 +454,7 @@ namespace femp
     std::size_t n_slots = 1;
     for (int d = 0; d < dim; ++d)
       box_stride[d] = n_slots, n_slots *= box_n[d];
-    n_box = (n_slots + simd_lanes - 1) / simd_lanes * simd_lanes;
+    n_box          = (n_slots + simd_lanes - 1) / simd_lanes * simd_lanes;
     auto box_index = [&](const std::array<int, dim> &ijk) {
       std::size_t n = 0;
       for (int d = 0; d < dim; ++d)
@@ -462,7 +467,6 @@ namespace femp
     AssertThrow(n_box < std::numeric_limits<std::uint32_t>::max(),
                 ExcMessage("FE node box too large for 32-bit node indices"));
   }
-
 
   template <int dim>
   void
@@ -498,7 +502,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::allocate_node_arrays()
@@ -532,7 +535,6 @@ namespace femp
       shared_nodes.clear();
   }
 
-
   template <int dim>
   std::vector<double>
   SolidFEM<dim>::lumped_masses(const double m_el)
@@ -550,13 +552,12 @@ namespace femp
     return mass;
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::set_transition_nodes(
     const std::array<std::uint8_t, 2 * dim> &face_bits,
     const double                             m_el,
-    const std::vector<double> &              mass,
+    const std::vector<double>               &mass,
     const std::vector<std::array<int, dim>> &node_ijk)
   {
     const std::size_t n_el = element_id.size();
@@ -615,10 +616,11 @@ namespace femp
     for (std::size_t e = 0; e < n_el; ++e)
       for (unsigned int a = 0; a < n_corners; ++a)
         if (box_tr[conn[n_corners * e + a]] >= 0)
-          tr_corners.push_back({{std::uint32_t(e), a,
-                                 std::uint32_t(box_tr[conn[n_corners * e + a]])}});
+          tr_corners.push_back(
+            {{std::uint32_t(e),
+              a,
+              std::uint32_t(box_tr[conn[n_corners * e + a]])}});
   }
-
 
   template <int dim>
   void
@@ -627,8 +629,8 @@ namespace femp
     const std::size_t n_el = element_id.size();
     // Temperatures: the grid rank owning a zone cell sends it (eq. 2).
     grid_zone_cells.clear();
-    std::vector<types::global_dof_index> send_ids, recv_ids(element_id.begin(),
-                                                            element_id.end());
+    std::vector<types::global_dof_index> send_ids,
+      recv_ids(element_id.begin(), element_id.end());
     for (const auto c : grid.owned_cells())
       if (in_zone_cell[c])
         {
@@ -645,7 +647,6 @@ namespace femp
         blocks[b].T[l] = T_end[std::min(simd_lanes * b + l, n_el - 1)];
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::new_temperatures(const std::vector<double> &T)
@@ -657,10 +658,10 @@ namespace femp
                                        ArrayView<double>(T_end));
   }
 
-
   template <int dim>
   void
-  SolidFEM<dim>::set_external_forces(const std::array<std::vector<double>, dim> *f)
+  SolidFEM<dim>::set_external_forces(
+    const std::array<std::vector<double>, dim> *f)
   {
     if (f == nullptr && ext_nodes.empty())
       return;
@@ -673,8 +674,8 @@ namespace femp
     // Grid nodes of owned cells inside the zone, not transition nodes (those
     // get the grid's forces through the grid): (zone node id, force).
     std::vector<double> mine;
-    const auto &        lo = grid.box_lower();
-    const auto &        ns = grid.node_strides();
+    const auto         &lo = grid.box_lower();
+    const auto         &ns = grid.node_strides();
     for (const auto n : grid.owned_cell_nodes())
       {
         std::array<int, dim> ijk;
@@ -717,8 +718,10 @@ namespace femp
       for (std::size_t i = 0; i < v.size(); i += dim + 1)
         {
           const auto id = std::uint64_t(v[i]);
-          const auto it = std::lower_bound(
-            ids.begin(), ids.end(), std::make_pair(id, std::uint32_t(0)));
+          const auto it =
+            std::lower_bound(ids.begin(),
+                             ids.end(),
+                             std::make_pair(id, std::uint32_t(0)));
           if (it == ids.end() || it->first != id)
             continue;
           ext_nodes.push_back(it->second);
@@ -729,7 +732,6 @@ namespace femp
     ext_nodes.erase(std::unique(ext_nodes.begin(), ext_nodes.end()),
                     ext_nodes.end());
   }
-
 
   template <int dim>
   void
@@ -748,7 +750,6 @@ namespace femp
         f[d][box_of[ln]] = F[dim * ln + d];
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::add_transition_partials(std::vector<double> &buf) const
@@ -761,13 +762,12 @@ namespace femp
         buf[tr_width * t + 1 + 2 * dim + d] += tr_hg[dim * t + d];
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::update_transition(const std::vector<double> &buf,
                                    const double               dt,
-                                   std::vector<double> &      v_grid,
-                                   std::vector<double> &      a_grid)
+                                   std::vector<double>       &v_grid,
+                                   std::vector<double>       &a_grid)
   {
     v_grid.resize(dim * tr_ijk.size());
     a_grid.resize(dim * tr_ijk.size());
@@ -783,15 +783,14 @@ namespace femp
                 v_grid[dim * t + d] = a_grid[dim * t + d] = v = 0;
                 continue;
               }
-            const double f = b[1 + dim + d];
-            const double p = b[1 + d] + tr_mass[t] * v + dt * f;
+            const double f      = b[1 + dim + d];
+            const double p      = b[1 + d] + tr_mass[t] * v + dt * f;
             a_grid[dim * t + d] = f / m;
             v_grid[dim * t + d] = p / m;
-            v = p / m + dt * b[1 + 2 * dim + d] / tr_mass[t];
+            v                   = p / m + dt * b[1 + 2 * dim + d] / tr_mass[t];
           }
       }
   }
-
 
   template <int dim>
   std::array<double, 2>
@@ -806,7 +805,6 @@ namespace femp
     return ext_nodes.empty() ? node_loop<false>(dt) : node_loop<true>(dt);
   }
 
-
   /// The node update over the box in SIMD: v <- v + dt (f + f_ext) / m
   /// masked to zero in fixed components (eq. 10), the force zeroed for the
   /// next element loop, kinetic energy and external power (gravity on the
@@ -817,15 +815,18 @@ namespace femp
   SolidFEM<dim>::node_loop(const double dt)
   {
     using VD = simd_double;
-    typedef std::int64_t VI __attribute__((vector_size(sizeof(VD))));
-    typedef std::uint8_t VB __attribute__((vector_size(simd_lanes)));
-    constexpr unsigned int W = simd_lanes;
-    auto load = [](const auto *p) {
-      std::conditional_t<std::is_same_v<std::decay_t<decltype(*p)>, double>, VD, VI> v;
+    typedef std::int64_t   VI __attribute__((vector_size(sizeof(VD))));
+    typedef std::uint8_t   VB __attribute__((vector_size(simd_lanes)));
+    constexpr unsigned int W    = simd_lanes;
+    auto                   load = [](const auto *p) {
+      std::conditional_t<std::is_same_v<std::decay_t<decltype(*p)>, double>,
+                         VD,
+                         VI>
+        v;
       std::memcpy(&v, p, sizeof v);
       return v;
     };
-    VD k = {}, p = {};
+    VD       k = {}, p = {};
     const VD zero = {};
     for (std::size_t n = 0; n < n_box; n += W)
       {
@@ -866,7 +867,6 @@ namespace femp
     return {{ks, ps}};
   }
 
-
   template <int dim>
   double
   SolidFEM<dim>::update_elements(const double dt, const double w)
@@ -874,14 +874,13 @@ namespace femp
     return element_loop<true>(dt, w);
   }
 
-
   template <int dim>
   typename SolidFEM<dim>::LoopConstants
   SolidFEM<dim>::loop_constants(const double dt) const
   {
-    const double  h  = grid.h();
-    const double  B  = 1. / (std::pow(2., dim - 1) * h);
-    const double  nu = mat.poisson_ratio;
+    const double  h    = grid.h();
+    const double  B    = 1. / (std::pow(2., dim - 1) * h);
+    const double  nu   = mat.poisson_ratio;
     const double  mfac = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
     LoopConstants c;
     c.Bdt  = B * dt;
@@ -895,7 +894,6 @@ namespace femp
     return c;
   }
 
-
   template <int dim>
   std::size_t
   SolidFEM<dim>::corner_row_offset(const unsigned int a) const
@@ -907,7 +905,6 @@ namespace femp
       o += ((a >> d) & 1u) * box_stride[d];
     return o;
   }
-
 
   // Gather pass: the velocities of the corners of block b (lanes el) as
   // coefficients of the Walsh-Hadamard transform over the corners:
@@ -926,8 +923,8 @@ namespace femp
     constexpr unsigned int nc = n_corners;
     static_assert(simd_lanes == 4, "the gathers below are written for 4 lanes");
     if (block_row[b] >= 0)
-      // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
-      // row(a) + l, corner a + 1 node row(a) + l + 1.
+    // One x-row: corner a (x-lower, bit 0 clear) of lane l is node
+    // row(a) + l, corner a + 1 node row(a) + l + 1.
 #pragma GCC unroll 4
       for (unsigned int a = 0; a < nc; a += 2)
         {
@@ -945,12 +942,11 @@ namespace femp
 #pragma GCC unroll 8
         for (unsigned int a = 0; a < nc; ++a)
           for (int i = 0; i < dim; ++i)
-            Vc[a][i] = VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]],
-                          vl[i][c3[a]]};
+            Vc[a][i] =
+              VD{vl[i][c0[a]], vl[i][c1[a]], vl[i][c2[a]], vl[i][c3[a]]};
       }
     fwht<dim>(Vc);
   }
-
 
   // Constitutive pass of block @p eb over the step dt: hourglass mode
   // amplitudes q_alpha += dt Gamma_alpha . v (kept per element), the
@@ -961,15 +957,15 @@ namespace femp
   // of each lane, (sigma_old + sigma_new)/2 : L V plus the viscous work.
   template <int dim>
   [[gnu::always_inline]] inline simd_double
-  SolidFEM<dim>::update_block(ElementBlock &                  eb,
+  SolidFEM<dim>::update_block(ElementBlock &eb,
                               const std::size_t (&el)[simd_lanes],
-                              const unsigned int              nl,
+                              const unsigned int nl,
                               const simd_double (&Vc)[n_corners][dim],
-                              const double                    dt,
-                              const double                    w,
-                              const LoopConstants &           c,
-                              StressBlock &                   sb,
-                              simd_double &                   E) const
+                              const double         dt,
+                              const double         w,
+                              const LoopConstants &c,
+                              StressBlock         &sb,
+                              simd_double         &E) const
   {
     using VD                 = simd_double;
     constexpr unsigned int W = simd_lanes;
@@ -1012,8 +1008,8 @@ namespace femp
       {
         sd += (eb.s[i] + sb.s[i]) * sb.L[i][i];
         for (int j = i + 1; j < dim; ++j)
-          so += (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) *
-                (sb.L[i][j] + sb.L[j][i]);
+          so +=
+            (eb.s[sidx(i, j)] + sb.s[sidx(i, j)]) * (sb.L[i][j] + sb.L[j][i]);
       }
     const VD sw = sd + so;
     const VD wk = 0.5 * V * sw + V * eb.visc * trL;
@@ -1027,7 +1023,6 @@ namespace femp
     return wk;
   }
 
-
   // Force and scatter pass: the corner forces of the next step of block b
   // (stress @p s, Young's modulus @p E, viscous pressure and hourglass
   // amplitudes of the block) as coefficients of the same transform:
@@ -1036,8 +1031,8 @@ namespace femp
   // transform gives the corner forces, added to the nodes.
   template <int dim>
   [[gnu::always_inline]] inline void
-  SolidFEM<dim>::scatter_forces(const std::size_t    b,
-                                const unsigned int   nl,
+  SolidFEM<dim>::scatter_forces(const std::size_t  b,
+                                const unsigned int nl,
                                 const simd_double (&s)[6],
                                 const simd_double    E,
                                 const LoopConstants &c,
@@ -1046,7 +1041,7 @@ namespace femp
     using VD                  = simd_double;
     constexpr unsigned int W  = simd_lanes;
     constexpr unsigned int nc = n_corners;
-    const ElementBlock &   eb = blocks[b];
+    const ElementBlock    &eb = blocks[b];
     const VD               k  = c.kfac * E;
     VD                     C[nc][dim];
     for (unsigned int al = 0; al < n_hg; ++al)
@@ -1060,9 +1055,9 @@ namespace femp
       }
     fwht_transpose<dim>(C);
     if (block_row[b] >= 0)
-      // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1) get
-      // C_a from lane l at node l and C_a+1 at node l + 1, added as one
-      // vector (no two lanes write the same node) and the last one.
+    // One x-row: the nodes row(a) + 0..W of a corner pair (a, a + 1) get
+    // C_a from lane l at node l and C_a+1 at node l + 1, added as one
+    // vector (no two lanes write the same node) and the last one.
 #pragma GCC unroll 4
       for (unsigned int a = 0; a < nc; a += 2)
         {
@@ -1089,7 +1084,6 @@ namespace femp
         }
   }
 
-
   // Hourglass pass at the transition nodes: the hourglass forces of this
   // rank's elements there, kept out of the grid's force and added back
   // locally (eq. 17).
@@ -1112,7 +1106,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   [[gnu::always_inline]] inline simd_double
   SolidFEM<dim>::hourglass_distortion(const ElementBlock &eb,
@@ -1126,15 +1119,13 @@ namespace femp
     return hgB * hq;
   }
 
-
   template <int dim>
   simd_double
   SolidFEM<dim>::jacobian_low(const ElementBlock &eb,
-                              const simd_double & distortion) const
+                              const simd_double  &distortion) const
   {
     return 1. + eb.dJ - distortion;
   }
-
 
   template <int dim>
   template <bool update>
@@ -1155,12 +1146,12 @@ namespace femp
     using VD                 = simd_double;
     constexpr unsigned int W = simd_lanes;
     const LoopConstants    c = loop_constants(dt);
-    double *               F[dim];
-    const double *         vl[dim];
+    double                *F[dim];
+    const double          *vl[dim];
     for (int d = 0; d < dim; ++d)
       F[d] = frc[d].data(), vl[d] = vel[d].data();
-    double                 work = 0;
-    const std::size_t      n_el = element_id.size();
+    double            work = 0;
+    const std::size_t n_el = element_id.size();
     // Smallest corner Jacobian ratio and largest hourglass distortion
     // (spare lanes repeat an element).
     VD jmin = VD{} + std::numeric_limits<double>::infinity();
@@ -1207,7 +1198,7 @@ namespace femp
           {
             min_jacobian = std::min(min_jacobian, jmin[l]);
             // Written so that a NaN is kept (and fails element_failed()).
-            max_distortion = dmax[l] > max_distortion ? dmax[l] :
+            max_distortion = dmax[l] > max_distortion  ? dmax[l] :
                              dmax[l] <= max_distortion ? max_distortion :
                                                          dmax[l];
           }
@@ -1216,14 +1207,13 @@ namespace femp
     return work;
   }
 
-
   template <int dim>
   std::array<double, 2>
   SolidFEM<dim>::hourglass_energy(const bool with_reference) const
   {
     // Each energy summed element by element in the same order as a pass of
     // its own would (k as hourglass_stiffness() computes it).
-    const double kappa = prm.hourglass_coefficient, kappa_ref = 0.05;
+    const double          kappa = prm.hourglass_coefficient, kappa_ref = 0.05;
     std::array<double, 2> energy{{0., 0.}};
     const bool            scene = kappa != 0;
     if (!scene && !with_reference)
@@ -1248,7 +1238,6 @@ namespace femp
     return energy;
   }
 
-
   template <int dim>
   bool
   SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
@@ -1270,7 +1259,6 @@ namespace femp
     T   = element_T(it->second);
     return true;
   }
-
 
   template <int dim>
   void
@@ -1295,9 +1283,9 @@ namespace femp
         for (std::size_t e = 0; e < element_id.size(); ++e)
           {
             const SymmetricTensor<2, 3> s = element_stress(e);
-            a[e] = k < 3  ? s[k][k] :
-                   k == 3 ? von_mises(s) :
-                            blocks[e / simd_lanes].eps_p[e % simd_lanes];
+            a[e]                          = k < 3  ? s[k][k] :
+                                            k == 3 ? von_mises(s) :
+                                                     blocks[e / simd_lanes].eps_p[e % simd_lanes];
           }
         back.export_to_ghosted_array(ArrayView<const double>(a),
                                      ArrayView<double>(r));
@@ -1306,13 +1294,12 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::set_mass_scaling(const double s)
   {
     const double old = mass_scale, r = s / old;
-    mass_scale       = s;
+    mass_scale = s;
     if (mass_scale_setup == 0)
       {
         mass_scale_setup = old;
@@ -1330,7 +1317,6 @@ namespace femp
     kinetic *= r;
   }
 
-
   template <int dim>
   double
   SolidFEM<dim>::elastic_energy() const
@@ -1345,7 +1331,6 @@ namespace femp
       }
     return u;
   }
-
 
   template <int dim>
   bool
@@ -1366,12 +1351,11 @@ namespace femp
     return false;
   }
 
-
   template <int dim>
   bool
   SolidFEM<dim>::find_failed(Point<dim> &where,
-                             double &    J,
-                             bool &      distorted) const
+                             double     &J,
+                             bool       &distorted) const
   {
     const double hgB = loop_constants(1.).hgB;
     for (std::size_t e = 0; e < element_id.size(); ++e)
@@ -1380,7 +1364,7 @@ namespace femp
         const simd_double   hdb = hourglass_distortion(eb, hgB);
         const double        j   = jacobian_low(eb, hdb)[e % simd_lanes];
         const double        hd  = hdb[e % simd_lanes];
-        distorted       = j > 0 && !(hd <= prm.hourglass_distortion_limit);
+        distorted = j > 0 && !(hd <= prm.hourglass_distortion_limit);
         if (!(j > 0) || distorted)
           {
             std::uint64_t r = element_id[e];
@@ -1397,14 +1381,12 @@ namespace femp
     return false;
   }
 
-
   template <int dim>
   double
   SolidFEM<dim>::largest_distortion() const
   {
     return Utilities::MPI::max(max_distortion_seen, comm);
   }
-
 
   template <int dim>
   void
@@ -1424,14 +1406,13 @@ namespace femp
           {
             const ElementBlock &eb = blocks[e / simd_lanes];
             const unsigned int  l  = e % simd_lanes;
-            v[e] = k < 6  ? eb.s[k][l] :
-                   k == 6 ? eb.eps_p[l] :
-                   k == 7 ? eb.visc[l] :
-                   k == 8 ? eb.T[l] :
-                   k < n_values - 2 ?
-                            eb.q[(k - 9) / dim][(k - 9) % dim][l] :
-                   k == n_values - 2 ? T_end[e] :
-                                       eb.dJ[l];
+            v[e]                   = k < 6  ? eb.s[k][l] :
+                                     k == 6 ? eb.eps_p[l] :
+                                     k == 7 ? eb.visc[l] :
+                                     k == 8 ? eb.T[l] :
+                                     k < n_values - 2 ? eb.q[(k - 9) / dim][(k - 9) % dim][l] :
+                                     k == n_values - 2 ? T_end[e] :
+                                                         eb.dJ[l];
           }
         out.put_vector(v);
       }
@@ -1451,7 +1432,6 @@ namespace femp
     out.put_vector(tr_vel);
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::load_state(std::vector<StateReader> &parts)
@@ -1466,14 +1446,15 @@ namespace femp
     std::size_t elements_set = 0, nodes_set = 0;
     for (std::size_t f = 0; f < parts.size(); ++f)
       {
-        StateReader &in  = parts[f];
-        const auto   ids = in.get_vector<std::uint64_t>();
+        StateReader              &in  = parts[f];
+        const auto                ids = in.get_vector<std::uint64_t>();
         std::vector<std::int64_t> local(ids.size(), -1);
         for (std::size_t i = 0; i < ids.size(); ++i)
           {
-            const auto it = std::lower_bound(
-              element_by_id.begin(), element_by_id.end(),
-              std::make_pair(ids[i], std::uint32_t(0)));
+            const auto it =
+              std::lower_bound(element_by_id.begin(),
+                               element_by_id.end(),
+                               std::make_pair(ids[i], std::uint32_t(0)));
             if (it != element_by_id.end() && it->first == ids[i])
               local[i] = it->second, ++elements_set;
           }
@@ -1486,7 +1467,7 @@ namespace femp
               if (local[i] >= 0)
                 {
                   const std::size_t  e  = local[i];
-                  ElementBlock &     eb = blocks[e / simd_lanes];
+                  ElementBlock      &eb = blocks[e / simd_lanes];
                   const unsigned int l  = e % simd_lanes;
                   if (k < 6)
                     eb.s[k][l] = v[i];
@@ -1504,13 +1485,14 @@ namespace femp
                     eb.dJ[l] = v[i];
                 }
           }
-        const auto node_ids = in.get_vector<std::uint64_t>();
+        const auto                node_ids = in.get_vector<std::uint64_t>();
         std::vector<std::int64_t> box(node_ids.size(), -1);
         for (std::size_t i = 0; i < node_ids.size(); ++i)
           {
-            const auto it = std::lower_bound(
-              node_by_id.begin(), node_by_id.end(),
-              std::make_pair(node_ids[i], std::uint32_t(0)));
+            const auto it =
+              std::lower_bound(node_by_id.begin(),
+                               node_by_id.end(),
+                               std::make_pair(node_ids[i], std::uint32_t(0)));
             if (it != node_by_id.end() && it->first == node_ids[i])
               box[i] = it->second, ++nodes_set;
           }
@@ -1537,7 +1519,7 @@ namespace femp
     // a run: same inputs, same arithmetic).
     if (n_el > 0)
       {
-        ElementBlock &     eb   = blocks.back();
+        ElementBlock      &eb   = blocks.back();
         const unsigned int last = (n_el - 1) % simd_lanes;
         for (unsigned int l = last + 1; l < simd_lanes; ++l)
           {
@@ -1562,7 +1544,6 @@ namespace femp
     element_loop<false>(0, 1);
   }
 
-
   template <int dim>
   void
   SolidFEM<dim>::save_no_zone(StateWriter &out)
@@ -1576,7 +1557,6 @@ namespace femp
       out.put_vector(std::vector<double>());
     out.put_vector(std::vector<double>()); // transition-node velocities
   }
-
 
   template <int dim>
   void
@@ -1599,7 +1579,6 @@ namespace femp
                                "transition nodes"));
       }
   }
-
 
   template class SolidFEM<2>;
   template class SolidFEM<3>;

@@ -27,7 +27,9 @@ namespace femp
     /// coordinates xi, for cell size 1/ih.
     template <int dim, typename Number>
     [[gnu::always_inline]] inline void
-    tents(const Number (&xi)[dim], const double ih, Number (&N)[1 << dim],
+    tents(const Number (&xi)[dim],
+          const double ih,
+          Number (&N)[1 << dim],
           Number (&dN)[1 << dim][dim])
     {
       Number w[dim][2];
@@ -45,12 +47,12 @@ namespace femp
             }
           else
             {
-              const unsigned int b2 = (a >> 2) & 1;
+              const unsigned int b2  = (a >> 2) & 1;
               const Number       w12 = w[1][b1] * w[2][b2];
-              N[a]     = w[0][b0] * w12;
-              dN[a][0] = g[b0] * w12;
-              dN[a][1] = w[0][b0] * g[b1] * w[2][b2];
-              dN[a][2] = w[0][b0] * w[1][b1] * g[b2];
+              N[a]                   = w[0][b0] * w12;
+              dN[a][0]               = g[b0] * w12;
+              dN[a][1]               = w[0][b0] * g[b1] * w[2][b2];
+              dN[a][2]               = w[0][b0] * w[1][b1] * g[b2];
             }
         }
     }
@@ -65,7 +67,8 @@ namespace femp
     /// points: one vector load).
     template <std::size_t W>
     inline typename SimdOf<W>::type
-    simd_load(const std::vector<double> &a, const std::size_t (&p)[W],
+    simd_load(const std::vector<double> &a,
+              const std::size_t (&p)[W],
               const bool full)
     {
       typename SimdOf<W>::type r;
@@ -83,8 +86,8 @@ namespace femp
     struct PointBlock
     {
       PointBlock(const std::size_t p0, const std::size_t n)
-        : nl(std::min<std::size_t>(W, n - p0))
-        , full(nl == W)
+          : nl(std::min<std::size_t>(W, n - p0))
+          , full(nl == W)
       {
         for (unsigned int l = 0; l < W; ++l)
           pl[l] = p0 + std::min(l, nl - 1);
@@ -115,7 +118,7 @@ namespace femp
     template <typename VD, std::size_t W, typename Coefficients>
     [[gnu::always_inline]] inline void
     corner_coefficients(const std::size_t (&n0)[W],
-                        std::size_t &coef_cell,
+                        std::size_t   &coef_cell,
                         Coefficients &&coefficients)
     {
       if (one_cell(n0))
@@ -156,32 +159,43 @@ namespace femp
 
     /// Local coordinates xi of the points of @p b in their cells (origin
     /// @p corner, size 1/ih) and their tent weights and gradients.
-    template <int dim, typename Arrays, unsigned int W,
+    template <int dim,
+              typename Arrays,
+              unsigned int W,
               typename VD = typename SimdOf<W>::type>
     [[gnu::always_inline]] inline void
-    block_tents(const Arrays &x, const Arrays &corner, const PointBlock<W> &b,
-                const double ih, VD (&xi)[dim], VD (&N)[1 << dim],
+    block_tents(const Arrays        &x,
+                const Arrays        &corner,
+                const PointBlock<W> &b,
+                const double         ih,
+                VD (&xi)[dim],
+                VD (&N)[1 << dim],
                 VD (&dN)[1 << dim][dim])
     {
       for (int d = 0; d < dim; ++d)
-        xi[d] = (simd_load(x[d], b.pl, b.full) -
-                 simd_load(corner[d], b.pl, b.full)) *
-                ih;
+        xi[d] =
+          (simd_load(x[d], b.pl, b.full) - simd_load(corner[d], b.pl, b.full)) *
+          ih;
       tents<dim>(xi, ih, N, dN);
     }
 
     /// Local coordinates xi of the points of @p b in their cells (origin
     /// @p corner, size 1/ih), without the tents.
-    template <int dim, typename Arrays, unsigned int W,
+    template <int dim,
+              typename Arrays,
+              unsigned int W,
               typename VD = typename SimdOf<W>::type>
     [[gnu::always_inline]] inline void
-    block_xi(const Arrays &x, const Arrays &corner, const PointBlock<W> &b,
-             const double ih, VD (&xi)[dim])
+    block_xi(const Arrays        &x,
+             const Arrays        &corner,
+             const PointBlock<W> &b,
+             const double         ih,
+             VD (&xi)[dim])
     {
       for (int d = 0; d < dim; ++d)
-        xi[d] = (simd_load(x[d], b.pl, b.full) -
-                 simd_load(corner[d], b.pl, b.full)) *
-                ih;
+        xi[d] =
+          (simd_load(x[d], b.pl, b.full) - simd_load(corner[d], b.pl, b.full)) *
+          ih;
     }
 
     /// Tent weights N of the 2^dim corners at xi (the products of tents(),
@@ -225,27 +239,29 @@ namespace femp
     /// polynomial with monomial coefficients @p c (Horner form).
     template <int dim, typename VD>
     [[gnu::always_inline]] inline void
-    multilinear(const VD (&c)[1 << dim], const VD (&xi)[dim], VD &val,
+    multilinear(const VD (&c)[1 << dim],
+                const VD (&xi)[dim],
+                VD &val,
                 VD (&grad)[dim])
     {
       const VD x = xi[0], y = xi[1];
       if constexpr (dim == 2)
         {
           const VD b = c[2] + c[3] * x;
-          val                 = (c[0] + c[1] * x) + y * b;
-          grad[0]             = c[1] + c[3] * y;
-          grad[1]             = b;
+          val        = (c[0] + c[1] * x) + y * b;
+          grad[0]    = c[1] + c[3] * y;
+          grad[1]    = b;
         }
       else
         {
           const VD z = xi[2];
           const VD b = c[2] + c[3] * x, e = c[4] + c[5] * x,
-                            f = c[6] + c[7] * x;
+                   f = c[6] + c[7] * x;
           const VD t = e + y * f;
-          val                 = ((c[0] + c[1] * x) + y * b) + z * t;
-          grad[0]             = (c[1] + c[3] * y) + z * (c[5] + c[7] * y);
-          grad[1]             = b + z * f;
-          grad[2]             = t;
+          val        = ((c[0] + c[1] * x) + y * b) + z * t;
+          grad[0]    = (c[1] + c[3] * y) + z * (c[5] + c[7] * y);
+          grad[1]    = b + z * f;
+          grad[2]    = t;
         }
     }
 
@@ -284,8 +300,10 @@ namespace femp
     /// Stores the first @p nl lanes of @p r at a[p0], a[p0 + 1], ...
     template <typename VD>
     inline void
-    simd_store(std::vector<double> &a, const std::size_t p0,
-               const unsigned int nl, const VD r)
+    simd_store(std::vector<double> &a,
+               const std::size_t    p0,
+               const unsigned int   nl,
+               const VD             r)
     {
       if (nl == simd_width<VD>)
         std::memcpy(&a[p0], &r, sizeof(r));
@@ -320,18 +338,18 @@ namespace femp
           // then the two halves.
           VD p[4];
           for (unsigned int k = 0; k < 4; ++k)
-            p[k] = __builtin_shuffle(c[2 * k], c[2 * k + 1],
+            p[k] = __builtin_shuffle(c[2 * k],
+                                     c[2 * k + 1],
                                      index{0, 8, 2, 10, 4, 12, 6, 14}) +
-                   __builtin_shuffle(c[2 * k], c[2 * k + 1],
+                   __builtin_shuffle(c[2 * k],
+                                     c[2 * k + 1],
                                      index{1, 9, 3, 11, 5, 13, 7, 15});
-          const VD q0 = __builtin_shuffle(p[0], p[1],
-                                          index{0, 1, 8, 9, 4, 5, 12, 13}) +
-                        __builtin_shuffle(p[0], p[1],
-                                          index{2, 3, 10, 11, 6, 7, 14, 15});
-          const VD q1 = __builtin_shuffle(p[2], p[3],
-                                          index{0, 1, 8, 9, 4, 5, 12, 13}) +
-                        __builtin_shuffle(p[2], p[3],
-                                          index{2, 3, 10, 11, 6, 7, 14, 15});
+          const VD q0 =
+            __builtin_shuffle(p[0], p[1], index{0, 1, 8, 9, 4, 5, 12, 13}) +
+            __builtin_shuffle(p[0], p[1], index{2, 3, 10, 11, 6, 7, 14, 15});
+          const VD q1 =
+            __builtin_shuffle(p[2], p[3], index{0, 1, 8, 9, 4, 5, 12, 13}) +
+            __builtin_shuffle(p[2], p[3], index{2, 3, 10, 11, 6, 7, 14, 15});
           return __builtin_shuffle(q0, q1, index{0, 1, 2, 3, 8, 9, 10, 11}) +
                  __builtin_shuffle(q0, q1, index{4, 5, 6, 7, 12, 13, 14, 15});
         }
@@ -358,17 +376,19 @@ namespace femp
       static constexpr std::size_t  none     = std::size_t(-1);
 
       CellScatter(const std::array<std::ptrdiff_t, n_corners> &offset,
-                  double *const *fields)
-        : offset(offset)
-        , fields(fields)
-      {}
+                  double *const                               *fields)
+          : offset(offset)
+          , fields(fields)
+      {
+      }
       ~CellScatter()
       {
         flush();
       }
 
       [[gnu::always_inline]] inline void
-      add(const VD (&c)[n_corners][n], const std::size_t (&node0)[W],
+      add(const VD (&c)[n_corners][n],
+          const std::size_t (&node0)[W],
           const unsigned int nl)
       {
         if (nl == W && one_cell(node0))
@@ -414,9 +434,9 @@ namespace femp
       }
 
       const std::array<std::ptrdiff_t, n_corners> &offset;
-      double *const *fields; ///< n node arrays
-      std::size_t cell0 = none;
-      VD          acc[n_groups];
+      double *const                               *fields; ///< n node arrays
+      std::size_t                                  cell0 = none;
+      VD                                           acc[n_groups];
     };
 
     /// P2G contributions of a block of points (one per lane) to its corner
@@ -428,11 +448,19 @@ namespace femp
     /// point's part of the row sum of the corner's stiffness over c^2.
     template <bool A, bool G, int dim, unsigned int n_corners, typename VD>
     [[gnu::always_inline]] inline void
-    p2g_block(const VD (&xi)[dim], const VD (&N)[n_corners],
-              const VD (&dN)[n_corners][dim], const VD m, const VD mg,
-              const VD V, const VD q, const VD (&s)[6], const VD (&v)[dim],
-              const VD (&C)[dim * dim], const double h,
-              const Tensor<1, dim> &gravity, VD (&c)[n_corners][1 + 2 * dim + G])
+    p2g_block(const VD (&xi)[dim],
+              const VD (&N)[n_corners],
+              const VD (&dN)[n_corners][dim],
+              const VD m,
+              const VD mg,
+              const VD V,
+              const VD q,
+              const VD (&s)[6],
+              const VD (&v)[dim],
+              const VD (&C)[dim * dim],
+              const double          h,
+              const Tensor<1, dim> &gravity,
+              VD (&c)[n_corners][1 + 2 * dim + G])
     {
       VD Vs[dim][dim], g[dim], v0[dim], Ch[dim][dim];
       for (int i = 0; i < dim; ++i)
@@ -490,13 +518,13 @@ namespace femp
     template <int dim>
     struct P2GInput
     {
-      const std::array<std::vector<double>, dim> &      x, &corner, &v;
+      const std::array<std::vector<double>, dim>       &x, &corner, &v;
       const std::array<std::vector<double>, dim * dim> &C;
-      const std::vector<double> &                      true_mass, &volume, &visc;
-      const std::array<std::vector<double>, 6> &       sigma;
-      const std::vector<std::uint32_t> &               node0;
-      const double                                     scaling, h;
-      const Tensor<1, dim> &                           gravity;
+      const std::vector<double>                &true_mass, &volume, &visc;
+      const std::array<std::vector<double>, 6> &sigma;
+      const std::vector<std::uint32_t>         &node0;
+      const double                              scaling, h;
+      const Tensor<1, dim>                     &gravity;
     };
 
     /// P2G (eqs. 11-13) of the blocks of points starting at p0 = b, b +
@@ -507,23 +535,24 @@ namespace femp
     /// compiled apart keep their values in registers.
     template <bool A, bool G, int dim, std::size_t n_corners>
     [[gnu::noinline]] void
-    p2g_blocks(const P2GInput<dim> &in, const std::size_t b,
-               const std::size_t e, const std::size_t n,
+    p2g_blocks(const P2GInput<dim>                                       &in,
+               const std::size_t                                          b,
+               const std::size_t                                          e,
+               const std::size_t                                          n,
                CellScatter<n_corners, 1 + 2 * dim + G, point_lanes<dim>> &out)
     {
-      constexpr unsigned int W  = point_lanes<dim>;
-      using VD                  = typename SimdOf<W>::type;
-      const double ih    = 1. / in.h;
+      constexpr unsigned int W = point_lanes<dim>;
+      using VD                 = typename SimdOf<W>::type;
+      const double ih          = 1. / in.h;
       for (std::size_t p0 = b; p0 < e; p0 += W)
         {
           const PointBlock<W> blk(p0, n);
-          const bool         full = blk.full;
-          const auto &       pl   = blk.pl;
-          VD                 xi[dim], N[n_corners], dN[n_corners][dim];
+          const bool          full = blk.full;
+          const auto         &pl   = blk.pl;
+          VD                  xi[dim], N[n_corners], dN[n_corners][dim];
           block_tents<dim>(in.x, in.corner, blk, ih, xi, N, dN);
-          const VD mg = simd_load(in.true_mass, pl, full),
-                   m  = mg * in.scaling;
-          VD sp[6], vp[dim], Cp[dim * dim];
+          const VD mg = simd_load(in.true_mass, pl, full), m = mg * in.scaling;
+          VD       sp[6], vp[dim], Cp[dim * dim];
           for (unsigned int c = 0; c < 6; ++c)
             sp[c] = simd_load(in.sigma[c], pl, full);
           for (int i = 0; i < dim; ++i)
@@ -533,9 +562,19 @@ namespace femp
               Cp[c] = simd_load(in.C[c], pl, full);
           // Per corner: mass, momentum (dim), force (dim) (, stiffness).
           VD c[n_corners][1 + 2 * dim + G];
-          p2g_block<A, G>(xi, N, dN, m, mg, simd_load(in.volume, pl, full),
-                       simd_load(in.visc, pl, full), sp, vp, Cp, in.h,
-                       in.gravity, c);
+          p2g_block<A, G>(xi,
+                          N,
+                          dN,
+                          m,
+                          mg,
+                          simd_load(in.volume, pl, full),
+                          simd_load(in.visc, pl, full),
+                          sp,
+                          vp,
+                          Cp,
+                          in.h,
+                          in.gravity,
+                          c);
           std::size_t n0[W];
           for (unsigned int l = 0; l < W; ++l)
             n0[l] = in.node0[pl[l]];
@@ -547,13 +586,12 @@ namespace femp
     /// position in the cell that the next P2G uses).
     template <int dim>
     inline void
-    add_affine_kinetic(
-      const std::array<std::vector<double>, dim> &      x,
-      const std::array<std::vector<double>, dim> &      corner,
-      const std::array<std::vector<double>, dim * dim> &C,
-      const std::size_t                                 p,
-      const double                                      h,
-      double &                                          v2)
+    add_affine_kinetic(const std::array<std::vector<double>, dim>       &x,
+                       const std::array<std::vector<double>, dim>       &corner,
+                       const std::array<std::vector<double>, dim * dim> &C,
+                       const std::size_t                                 p,
+                       const double                                      h,
+                       double                                           &v2)
     {
       const double ih = 1. / h;
       for (int j = 0; j < dim; ++j)
@@ -575,8 +613,8 @@ namespace femp
     template <int dim, std::size_t W, typename VD>
     [[gnu::always_inline]] inline void
     block_velocity_gradient(
-      const double *const *                            vel,
-      const std::array<std::ptrdiff_t, (1u << dim)> &   corner_offset,
+      const double *const                           *vel,
+      const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
       const std::size_t (&n0)[W],
       const VD (&xi)[dim],
       const double dt_ih,
@@ -616,15 +654,15 @@ namespace femp
     /// values.
     template <std::size_t W, typename VD>
     [[gnu::always_inline]] inline void
-    block_moduli(const SolidMaterial &             mat,
+    block_moduli(const SolidMaterial              &mat,
                  const std::vector<std::uint32_t> &cell,
                  const std::size_t (&pl)[W],
                  const std::size_t (&n0)[W],
-                 const std::vector<double> &       T_old,
-                 const std::vector<double> &       T_new,
-                 CellModuli &                      cache,
-                 StressBlockOf<VD> &               sb,
-                 VD &                              sy)
+                 const std::vector<double> &T_old,
+                 const std::vector<double> &T_new,
+                 CellModuli                &cache,
+                 StressBlockOf<VD>         &sb,
+                 VD                        &sy)
     {
       if (one_cell(n0))
         {
@@ -632,7 +670,7 @@ namespace femp
           if (cp != cache.cell)
             cache.cell = cp, cache.E = mat.youngs_modulus.value(T_new[cp]),
             cache.E_old = mat.youngs_modulus.value(T_old[cp]),
-            cache.sy = mat.yield_stress.value(T_new[cp]);
+            cache.sy    = mat.yield_stress.value(T_new[cp]);
           sb.E     = VD{} + cache.E;
           sb.E_old = VD{} + cache.E_old;
           sb.T_old = VD{} + T_old[cp];
@@ -646,7 +684,7 @@ namespace femp
             if (cp != cache.cell)
               cache.cell = cp, cache.E = mat.youngs_modulus.value(T_new[cp]),
               cache.E_old = mat.youngs_modulus.value(T_old[cp]),
-              cache.sy = mat.yield_stress.value(T_new[cp]);
+              cache.sy    = mat.yield_stress.value(T_new[cp]);
             sb.E[l]     = cache.E;
             sb.E_old[l] = cache.E_old;
             sb.T_old[l] = T_old[cp];
@@ -670,7 +708,7 @@ namespace femp
                           const VD     use,
                           const VD     m,
                           const VD     mg,
-                          VD &         kinetic_v,
+                          VD          &kinetic_v,
                           VD (&momentum_v)[dim])
     {
       auto in_cell = xn[0] >= cn[0] && xn[0] <= cn[0] + h;
@@ -703,12 +741,12 @@ namespace femp
     template <int dim>
     struct PointArrays
     {
-      std::array<std::vector<double>, dim> &      x, &corner, &v, &xdot;
+      std::array<std::vector<double>, dim>       &x, &corner, &v, &xdot;
       std::array<std::vector<double>, dim * dim> &C;
-      std::vector<double> &                       true_mass, &volume, &visc;
-      std::array<std::vector<double>, 6> &        sigma;
-      std::vector<double> &                       eps_p;
-      const std::vector<std::uint32_t> &          cell, &node0;
+      std::vector<double>                        &true_mass, &volume, &visc;
+      std::array<std::vector<double>, 6>         &sigma;
+      std::vector<double>                        &eps_p;
+      const std::vector<std::uint32_t>           &cell, &node0;
     };
 
     /// The constants of one update_stresses() step: nodal velocities
@@ -717,10 +755,10 @@ namespace femp
     template <int dim>
     struct StressStep
     {
-      const SolidMaterial &                          mat;
-      const double *const *                          vel;
+      const SolidMaterial                           &mat;
+      const double *const                           *vel;
       const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset;
-      const std::vector<double> &                    T_old, &T_new;
+      const std::vector<double>                     &T_old, &T_new;
       const double dt, h, ih, dt_ih, b1, b1h, M_per_E, idt, scaling;
     };
 
@@ -729,11 +767,11 @@ namespace femp
     /// P-wave modulus) and b1 the bulk viscosity of the viscous pressure.
     template <int dim>
     StressStep<dim>
-    stress_step(const SolidMaterial &                          mat,
-                const double *const *                          vel,
+    stress_step(const SolidMaterial                           &mat,
+                const double *const                           *vel,
                 const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
-                const std::vector<double> &                    T_old,
-                const std::vector<double> &                    T_new,
+                const std::vector<double>                     &T_old,
+                const std::vector<double>                     &T_new,
                 const double                                   dt,
                 const double                                   h,
                 const double                                   scaling)
@@ -742,19 +780,30 @@ namespace femp
       const double nu      = mat.poisson_ratio;
       const double M_per_E = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
       const double b1h = b1 * h, idt = 1. / dt;
-      return {mat, vel,     corner_offset, T_old, T_new,   dt,
-              h,   ih,      dt * ih,       b1,    b1h,     M_per_E,
-              idt, scaling};
+      return {mat,
+              vel,
+              corner_offset,
+              T_old,
+              T_new,
+              dt,
+              h,
+              ih,
+              dt * ih,
+              b1,
+              b1h,
+              M_per_E,
+              idt,
+              scaling};
     }
 
     /// The moduli of the cell of the first of @p n points (none: zero), to
     /// start the cache of block_moduli().
     inline CellModuli
-    first_cell_moduli(const SolidMaterial &             mat,
+    first_cell_moduli(const SolidMaterial              &mat,
                       const std::vector<std::uint32_t> &cell,
                       const std::size_t                 n,
-                      const std::vector<double> &       T_old,
-                      const std::vector<double> &       T_new)
+                      const std::vector<double>        &T_old,
+                      const std::vector<double>        &T_new)
     {
       const unsigned int E_cell = cell.empty() ? 0 : cell[0];
       return {E_cell,
@@ -767,8 +816,9 @@ namespace femp
     /// @p n points): the arrays of point p0 + prefetch_distance.
     template <int dim, bool A>
     [[gnu::always_inline]] inline void
-    prefetch_stress_block(const PointArrays<dim> &pa, const std::size_t p0,
-                          const std::size_t n)
+    prefetch_stress_block(const PointArrays<dim> &pa,
+                          const std::size_t       p0,
+                          const std::size_t       n)
     {
       if (p0 % 8 == 0 && p0 + prefetch_distance < n)
         {
@@ -797,22 +847,22 @@ namespace femp
     template <int dim, unsigned int W, typename VD>
     [[gnu::always_inline]] inline void
     stress_block(const StressStep<dim> &st,
-                 PointArrays<dim> &     pa,
-                 const PointBlock<W> &  blk,
+                 PointArrays<dim>      &pa,
+                 const PointBlock<W>   &blk,
                  const std::size_t      p0,
-                 std::size_t &          coef_cell,
+                 std::size_t           &coef_cell,
                  VD (&cv)[dim][1u << dim],
                  CellModuli &moduli,
-                 VD &        work_v,
-                 VD &        vmin,
-                 VD &        use,
-                 VD &        m,
-                 VD &        mg)
+                 VD         &work_v,
+                 VD         &vmin,
+                 VD         &use,
+                 VD         &m,
+                 VD         &mg)
     {
       constexpr unsigned int n_stress = 6;
       const unsigned int     nl       = blk.nl;
       const bool             full     = blk.full;
-      const auto &           pl       = blk.pl;
+      const auto            &pl       = blk.pl;
       VD                     xi[dim];
       block_xi<dim>(pa.x, pa.corner, blk, st.ih, xi);
       StressBlockOf<VD> sb;
@@ -823,15 +873,14 @@ namespace femp
       std::size_t n0[W];
       for (unsigned int l = 0; l < W; ++l)
         n0[l] = pa.node0[pl[l]];
-      block_velocity_gradient<dim>(st.vel, st.corner_offset, n0, xi,
-                                   st.dt_ih, cv, coef_cell, L);
+      block_velocity_gradient<dim>(
+        st.vel, st.corner_offset, n0, xi, st.dt_ih, cv, coef_cell, L);
       VD s_old[n_stress];
       for (unsigned int c = 0; c < n_stress; ++c)
         sb.s[c] = s_old[c] = simd_load(pa.sigma[c], pl, full);
       sb.eps_p = simd_load(pa.eps_p, pl, full);
       VD sy;
-      block_moduli(st.mat, pa.cell, pl, n0, st.T_old, st.T_new, moduli, sb,
-                   sy);
+      block_moduli(st.mat, pa.cell, pl, n0, st.T_old, st.T_new, moduli, sb, sy);
       update_stress_block(st.mat, sb, sy);
       for (unsigned int c = 0; c < n_stress; ++c)
         simd_store(pa.sigma[c], p0, nl, sb.s[c]);
@@ -871,18 +920,18 @@ namespace femp
     template <int dim, bool A, unsigned int W, typename VD>
     [[gnu::always_inline]] inline bool
     move_block(const StressStep<dim> &st,
-               PointArrays<dim> &     pa,
-               const PointBlock<W> &  blk,
+               PointArrays<dim>      &pa,
+               const PointBlock<W>   &blk,
                const std::size_t      p0,
                const VD               use,
                const VD               m,
                const VD               mg,
-               VD &                   kinetic_v,
+               VD                    &kinetic_v,
                VD (&momentum_v)[dim])
     {
       const unsigned int nl   = blk.nl;
       const bool         full = blk.full;
-      const auto &       pl   = blk.pl;
+      const auto        &pl   = blk.pl;
       VD                 vp[dim], xn[dim], cn[dim];
       for (int d = 0; d < dim; ++d)
         {
@@ -898,16 +947,17 @@ namespace femp
           Cp[c] = simd_load(pa.C[c], pl, full);
       // Kinetic energy and momentum, the cell check: in SIMD when every
       // point stays in its cell, else point by point.
-      return block_kinetic_in_cell<dim, A>(vp, xn, cn, Cp, st.h, st.ih, use,
-                                           m, mg, kinetic_v, momentum_v);
+      return block_kinetic_in_cell<dim, A>(
+        vp, xn, cn, Cp, st.h, st.ih, use, m, mg, kinetic_v, momentum_v);
     }
 
     /// Software prefetch for the block of g2p() at @p p0 (of @p n points):
     /// the arrays of point p0 + prefetch_distance.
     template <int dim, bool A>
     [[gnu::always_inline]] inline void
-    prefetch_g2p_block(const PointArrays<dim> &pa, const std::size_t p0,
-                       const std::size_t n)
+    prefetch_g2p_block(const PointArrays<dim> &pa,
+                       const std::size_t       p0,
+                       const std::size_t       n)
     {
       if (p0 % 8 == 0 && p0 + prefetch_distance < n)
         {
@@ -933,16 +983,17 @@ namespace femp
     /// lane by lane (the same coefficients per lane).
     template <int dim, bool A, std::size_t W, typename VD>
     [[gnu::always_inline]] inline void
-    g2p_coefficients(const double *const *                          vel,
-                     const double *const *                          acc,
-                     const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
-                     const std::size_t (&n0)[W],
-                     VD (&cv)[dim][1u << dim],
-                     VD (&ca)[dim][1u << dim],
-                     std::size_t &coef_cell)
+    g2p_coefficients(
+      const double *const                           *vel,
+      const double *const                           *acc,
+      const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset,
+      const std::size_t (&n0)[W],
+      VD (&cv)[dim][1u << dim],
+      VD (&ca)[dim][1u << dim],
+      std::size_t &coef_cell)
     {
-      constexpr unsigned int n_corners = 1u << dim;
-      auto coefficients = [&](auto &&nodal) {
+      constexpr unsigned int n_corners    = 1u << dim;
+      auto                   coefficients = [&](auto &&nodal) {
         for (int i = 0; i < dim; ++i)
           {
             for (unsigned int a = 0; a < n_corners; ++a)
@@ -969,7 +1020,7 @@ namespace femp
     /// returned in @p vp.
     template <int dim, bool A, unsigned int W, typename VD>
     [[gnu::always_inline]] inline void
-    g2p_velocity(PointArrays<dim> &   pa,
+    g2p_velocity(PointArrays<dim>    &pa,
                  const PointBlock<W> &blk,
                  const std::size_t    p0,
                  const VD (&xi)[dim],
@@ -993,8 +1044,7 @@ namespace femp
         }
       for (int i = 0; i < dim; ++i)
         {
-          vp[i] =
-            A ? vg[i] : simd_load(pa.v[i], blk.pl, blk.full) + dt * ag[i];
+          vp[i] = A ? vg[i] : simd_load(pa.v[i], blk.pl, blk.full) + dt * ag[i];
           simd_store(pa.v[i], p0, blk.nl, vp[i]);
           if constexpr (!A)
             simd_store(pa.xdot[i], p0, blk.nl, vg[i]);
@@ -1009,7 +1059,7 @@ namespace femp
     /// C_p (x_a - x_p), C_p = @p Cn stored; FLIP: v_p.
     template <int dim, bool A, unsigned int W, typename VD>
     [[gnu::always_inline]] inline void
-    remap_momentum(PointArrays<dim> &   pa,
+    remap_momentum(PointArrays<dim>    &pa,
                    const PointBlock<W> &blk,
                    const std::size_t    p0,
                    const VD (&xi)[dim],
@@ -1048,15 +1098,15 @@ namespace femp
     }
   } // namespace
 
-
   template <int dim>
   SolidMPM<dim>::SolidMPM(const BackgroundGrid<dim> &grid,
-                          const SolidMaterial &      material,
-                          MaterialPoints<dim> &      points)
-    : grid(grid)
-    , mat(material)
-    , points(points)
-    , apic(material.velocity_transfer == SolidMaterial::VelocityTransfer::apic)
+                          const SolidMaterial       &material,
+                          MaterialPoints<dim>       &points)
+      : grid(grid)
+      , mat(material)
+      , points(points)
+      , apic(material.velocity_transfer ==
+             SolidMaterial::VelocityTransfer::apic)
   {
     const auto &s = grid.node_strides();
     for (unsigned int a = 0; a < n_corners; ++a)
@@ -1068,7 +1118,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::gather(const std::vector<std::uint8_t> &excluded_cell,
@@ -1078,8 +1127,7 @@ namespace femp
     using P = typename MaterialPoints<dim>::PropertyIndex;
     const bool apic_now =
       mat.velocity_transfer == SolidMaterial::VelocityTransfer::apic;
-    AssertThrow(points.n_properties() >=
-                  P::n_used(true, apic_now),
+    AssertThrow(points.n_properties() >= P::n_used(true, apic_now),
                 ExcMessage("SolidMPM: the material points do not carry the "
                            "solid (or APIC) properties"));
     // The same members in the same pool slots and order as at the last
@@ -1091,10 +1139,9 @@ namespace femp
                       points.layout_unchanged(gathered_layout, cell);
     // Otherwise, the same handler layout (no re-sort or re-index): only the
     // cells whose points changed are read again.
-    const bool merge = !keep && gathered && apic_now == apic &&
-                       excluded_cell == excluded &&
-                       points.layout_mark().generation ==
-                         gathered_layout.generation;
+    const bool merge =
+      !keep && gathered && apic_now == apic && excluded_cell == excluded &&
+      points.layout_mark().generation == gathered_layout.generation;
     apic = apic_now;
     if (!gathered || excluded_cell != excluded)
       {
@@ -1132,10 +1179,9 @@ namespace femp
           const auto ce = cell, no = node0;
           const auto ha = handle, mi = member_id;
           copy_members();
-          Assert(xs == x && vs == v && cs == corner && Cs == C &&
-                   ss == sigma && m == true_mass && vo == volume &&
-                   vi == visc && e == eps_p && ce == cell && no == node0 &&
-                   ha == handle && mi == member_id,
+          Assert(xs == x && vs == v && cs == corner && Cs == C && ss == sigma &&
+                   m == true_mass && vo == volume && vi == visc && e == eps_p &&
+                   ce == cell && no == node0 && ha == handle && mi == member_id,
                  ExcMessage("the merged gather differs from a full copy"));
         }
 #endif
@@ -1156,22 +1202,21 @@ namespace femp
     sum_energies();
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::find_members(
     const std::size_t                                    c,
     std::vector<std::pair<unsigned int, std::uint32_t>> &out)
   {
-    using P     = typename MaterialPoints<dim>::PropertyIndex;
-    auto &pool  = points.particle_handler_for_update().get_property_pool();
-    const auto  handles = points.cell_point_handles(c);
+    using P         = typename MaterialPoints<dim>::PropertyIndex;
+    auto      &pool = points.particle_handler_for_update().get_property_pool();
+    const auto handles           = points.cell_point_handles(c);
     const std::size_t     n_cell = handles.size();
     constexpr std::size_t ahead  = 16;
     // No stress, hardening memory, viscous pressure or affine velocity
     // (and, with @p velocity, no velocity): a point that left the solid.
     const auto clear_solid_state = [this](const ArrayView<double> &q,
-                                          const bool velocity) {
+                                          const bool               velocity) {
       for (unsigned int k = P::stress; k < P::stress + dim * (dim + 1) / 2; ++k)
         q[k] = 0;
       if (velocity)
@@ -1222,13 +1267,12 @@ namespace femp
               v2 += q[P::velocity + d] * q[P::velocity + d];
             if (apic)
               {
-                const auto &xp  = pool.get_location(hp);
-                const auto  ijk = grid.global_index(idx);
-                const double h  = grid.h();
+                const auto  &xp  = pool.get_location(hp);
+                const auto   ijk = grid.global_index(idx);
+                const double h   = grid.h();
                 for (int j = 0; j < dim; ++j)
                   {
-                    const double xi =
-                      (xp[j] - grid.origin()[j]) / h - ijk[j];
+                    const double xi = (xp[j] - grid.origin()[j]) / h - ijk[j];
                     for (int i = 0; i < dim; ++i)
                       v2 += q[P::affine_velocity + i * dim + j] *
                             q[P::affine_velocity + i * dim + j] * h * h * xi *
@@ -1244,7 +1288,6 @@ namespace femp
         out.emplace_back(hp, idx);
       }
   }
-
 
   template <int dim>
   void
@@ -1268,20 +1311,19 @@ namespace femp
     aside_cells = cells;
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::read_member(const std::size_t   p,
                              const unsigned int  hp,
                              const std::uint32_t idx)
   {
-    using P = typename MaterialPoints<dim>::PropertyIndex;
+    using P    = typename MaterialPoints<dim>::PropertyIndex;
     auto &pool = points.particle_handler_for_update().get_property_pool();
-    const ArrayView<const double> q  = pool.get_properties(hp);
-    const Point<dim> &            xp = pool.get_location(hp);
+    const ArrayView<const double> q   = pool.get_properties(hp);
+    const Point<dim>             &xp  = pool.get_location(hp);
     const auto                    ijk = grid.global_index(idx);
-    handle[p] = hp;
-    cell[p]   = idx;
+    handle[p]                         = hp;
+    cell[p]                           = idx;
     for (int d = 0; d < dim; ++d)
       {
         corner[d][p] = grid.origin()[d] + ijk[d] * grid.h();
@@ -1315,7 +1357,6 @@ namespace femp
     member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
   }
 
-
   namespace
   {
     /// Resizes every per-point array of @p arrays to @p n (the arrays
@@ -1327,7 +1368,6 @@ namespace femp
       (arrays.resize(n), ...);
     }
   } // namespace
-
 
   template <int dim>
   void
@@ -1351,10 +1391,12 @@ namespace femp
       c.resize(apic ? n : 0);
     for (auto &s : sigma)
       s.resize(n);
-    resize_all(n, true_mass, volume, visc, eps_p, cell, node0, handle, member_id);
+    resize_all(
+      n, true_mass, volume, visc, eps_p, cell, node0, handle, member_id);
     // Membership by particle id, for exchange_since_gather().
-    member_bits.assign(points.particle_handler().get_next_free_particle_index() / 64 + 1, 0);
-    auto &                pool  = points.particle_handler_for_update().get_property_pool();
+    member_bits.assign(
+      points.particle_handler().get_next_free_particle_index() / 64 + 1, 0);
+    auto &pool = points.particle_handler_for_update().get_property_pool();
     constexpr std::size_t ahead = 16;
     for (std::size_t p = 0; p < n; ++p)
       {
@@ -1369,7 +1411,6 @@ namespace femp
         read_member(p, found[p].first, found[p].second);
       }
   }
-
 
   template <int dim>
   void
@@ -1388,7 +1429,8 @@ namespace femp
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
         const auto idx = occupied[c].first;
-        if ((exchange_cell.empty() || exchange_cell[idx]) && changed_since_gather(idx))
+        if ((exchange_cell.empty() || exchange_cell[idx]) &&
+            changed_since_gather(idx))
           find_members(c, found);
       }
     const std::size_t n_old = handle.size();
@@ -1475,7 +1517,6 @@ namespace femp
         }
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::set_exchange_cells()
@@ -1503,7 +1544,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::mark_cell_nodes(const std::size_t idx, const std::size_t n0)
@@ -1518,7 +1558,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::clear_next()
@@ -1530,7 +1569,6 @@ namespace femp
             f[n] = 0;
     next_dirty = false;
   }
-
 
   template <int dim>
   typename SolidMPM<dim>::Exchange
@@ -1550,72 +1588,74 @@ namespace femp
     // keeps that, so only the others are looked at: in the cooling a few
     // cells where points solidify or members crossed a face, not every
     // point of the powder and the MPM zone.
-    auto &pool = points.particle_handler().get_property_pool();
-    const auto &          occupied = points.occupied_cells();
+    auto                 &pool = points.particle_handler().get_property_pool();
+    const auto           &occupied = points.occupied_cells();
     constexpr std::size_t ahead    = 16;
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-      const auto idx = occupied[c].first;
-      if (!exchange_cell.empty() && !exchange_cell[idx])
-        continue;
-      if (gathered && !changed_since_gather(idx))
-        continue;
-      const auto handles = points.cell_point_handles(c);
-      const std::size_t n_cell = handles.size();
-      for (std::size_t i = 0; i < n_cell; ++i)
-      {
-        if (i + ahead < n_cell)
-          {
-            const auto hn = handles[i + ahead];
-            __builtin_prefetch(pool.get_properties(hn).data() + P::state, 0);
-            __builtin_prefetch(&pool.get_location(hn), 0);
-          }
-        const auto                    hp     = handles[i];
-        const ArrayView<const double> q      = pool.get_properties(hp);
-        const bool                    member = is_member(pool.get_id(hp));
-        const bool       solid = q[P::state] == MaterialPoints<dim>::solid;
-        if (!member && !solid) // (neither before nor now: the cell does not matter)
+        const auto idx = occupied[c].first;
+        if (!exchange_cell.empty() && !exchange_cell[idx])
           continue;
-        const Point<dim> xp    = pool.get_location(hp);
-        const auto       ijk   = grid.cell_of(xp);
-        const auto       cidx  = grid.local_index(ijk);
-        const bool       out   = excluded[cidx];
-        const bool       away  = set_aside(cidx);
-        if (member == (solid && !out && !away))
+        if (gathered && !changed_since_gather(idx))
           continue;
-        if (member && solid && out) // now in a cell of the FE zone
+        const auto        handles = points.cell_point_handles(c);
+        const std::size_t n_cell  = handles.size();
+        for (std::size_t i = 0; i < n_cell; ++i)
           {
-            if (e.n_lost == 0)
-              e.lost_at = xp;
-            e.n_lost += 1;
-            continue;
+            if (i + ahead < n_cell)
+              {
+                const auto hn = handles[i + ahead];
+                __builtin_prefetch(pool.get_properties(hn).data() + P::state,
+                                   0);
+                __builtin_prefetch(&pool.get_location(hn), 0);
+              }
+            const auto                    hp     = handles[i];
+            const ArrayView<const double> q      = pool.get_properties(hp);
+            const bool                    member = is_member(pool.get_id(hp));
+            const bool solid = q[P::state] == MaterialPoints<dim>::solid;
+            if (!member &&
+                !solid) // (neither before nor now: the cell does not matter)
+              continue;
+            const Point<dim> xp   = pool.get_location(hp);
+            const auto       ijk  = grid.cell_of(xp);
+            const auto       cidx = grid.local_index(ijk);
+            const bool       out  = excluded[cidx];
+            const bool       away = set_aside(cidx);
+            if (member == (solid && !out && !away))
+              continue;
+            if (member && solid && out) // now in a cell of the FE zone
+              {
+                if (e.n_lost == 0)
+                  e.lost_at = xp;
+                e.n_lost += 1;
+                continue;
+              }
+            // Kinetic energy as the points had it in (or bring it to) the
+            // solid: inertial mass, APIC affine part with the tents of the
+            // cell.
+            double v2 = 0;
+            for (int d = 0; d < dim; ++d)
+              v2 += q[P::velocity + d] * q[P::velocity + d];
+            if (apic)
+              for (int j = 0; j < dim; ++j)
+                {
+                  const double xi = (xp[j] - grid.origin()[j]) * ih - ijk[j];
+                  const double D  = h * h * xi * (1 - xi);
+                  for (int i = 0; i < dim; ++i)
+                    v2 += q[P::affine_velocity + i * dim + j] *
+                          q[P::affine_velocity + i * dim + j] * D;
+                }
+            const double k = 0.5 * q[P::mass] * scaling * v2;
+            if (member && solid) // now in a detached drop
+              e.n_set_aside += 1, e.k_set_aside += k;
+            else if (member)
+              e.n_melted += 1, e.k_melted += k;
+            else
+              e.n_solidified += 1, e.k_solidified += k;
           }
-        // Kinetic energy as the points had it in (or bring it to) the
-        // solid: inertial mass, APIC affine part with the tents of the cell.
-        double v2 = 0;
-        for (int d = 0; d < dim; ++d)
-          v2 += q[P::velocity + d] * q[P::velocity + d];
-        if (apic)
-          for (int j = 0; j < dim; ++j)
-            {
-              const double xi = (xp[j] - grid.origin()[j]) * ih - ijk[j];
-              const double D  = h * h * xi * (1 - xi);
-              for (int i = 0; i < dim; ++i)
-                v2 += q[P::affine_velocity + i * dim + j] *
-                      q[P::affine_velocity + i * dim + j] * D;
-            }
-        const double k = 0.5 * q[P::mass] * scaling * v2;
-        if (member && solid) // now in a detached drop
-          e.n_set_aside += 1, e.k_set_aside += k;
-        else if (member)
-          e.n_melted += 1, e.k_melted += k;
-        else
-          e.n_solidified += 1, e.k_solidified += k;
-      }
       }
     return e;
   }
-
 
   template <int dim>
   void
@@ -1630,7 +1670,7 @@ namespace femp
         if (p + ahead < n) // the pool slots written a few points ahead
           {
             const auto hn = handle[p + ahead];
-            double *   r  = pool.get_properties(hn).data();
+            double    *r  = pool.get_properties(hn).data();
             for (unsigned int c = 0; c < pool.n_properties_per_slot(); c += 8)
               __builtin_prefetch(r + c, 1);
             __builtin_prefetch(&pool.get_location(hn), 1);
@@ -1663,7 +1703,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::scatter()
@@ -1684,7 +1723,6 @@ namespace femp
     moved_cell = false;
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::resort()
@@ -1698,7 +1736,6 @@ namespace femp
     const std::vector<std::uint8_t> mask = excluded;
     gather(mask, scaling);
   }
-
 
   template <int dim>
   void
@@ -1721,19 +1758,17 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
-  SolidMPM<dim>::p2g(SolidNodeFields<dim> &nodes,
-                     const Tensor<1, dim> &gravity)
+  SolidMPM<dim>::p2g(SolidNodeFields<dim> &nodes, const Tensor<1, dim> &gravity)
   {
     // Mass, momentum (dim), force (dim) and, with the light-node mass
     // floor, the stiffness row sums.
     const unsigned int nf = 1 + 2 * dim + (stiffness_rows ? 1 : 0);
-    double *nodes_out[2 + 2 * dim] = {nodes.mass.data()};
+    double            *nodes_out[2 + 2 * dim] = {nodes.mass.data()};
     for (int d = 0; d < dim; ++d)
-      nodes_out[1 + d]       = nodes.momentum[d].data(),
-      nodes_out[1 + dim + d] = nodes.force[d].data();
+      nodes_out[1 + d]                     = nodes.momentum[d].data(),
+                    nodes_out[1 + dim + d] = nodes.force[d].data();
     if (stiffness_rows)
       {
         AssertDimension(nodes.stiffness.size(), nodes.mass.size());
@@ -1760,9 +1795,18 @@ namespace femp
     p2g_gravity  = gravity;
 
     const std::size_t   n = true_mass.size();
-    const P2GInput<dim> in{x,      corner, v,     C,           true_mass,
-                           volume, visc,   sigma, node0,       scaling,
-                           grid.h(), gravity};
+    const P2GInput<dim> in{x,
+                           corner,
+                           v,
+                           C,
+                           true_mass,
+                           volume,
+                           visc,
+                           sigma,
+                           node0,
+                           scaling,
+                           grid.h(),
+                           gravity};
     // The transfer and the floor are compile-time constants inside the
     // loop (measured: 7-20 % faster than a run-time branch per point).
     auto run = [&](auto transfer, auto floor) {
@@ -1782,7 +1826,6 @@ namespace femp
       run(std::false_type(), std::false_type());
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::set_stiffness_rows(const bool on)
@@ -1793,14 +1836,13 @@ namespace femp
     stiffness_rows = on;
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::g2p(SolidNodeFields<dim> &nodes, const double dt)
   {
     const double  h = grid.h(), ih = 1. / h;
     const double *vel[dim], *acc[dim];
-    double *      mom[dim];
+    double       *mom[dim];
     for (int d = 0; d < dim; ++d)
       {
         vel[d] = nodes.velocity[d].data();
@@ -1815,12 +1857,22 @@ namespace femp
     // re-map added to the nodes in point order.
     constexpr unsigned int W = point_lanes<dim>;
     using VD                 = typename SimdOf<W>::type;
-    PointArrays<dim> pa{x,      corner, v,     xdot,  C,    true_mass,
-                        volume, visc,   sigma, eps_p, cell, node0};
+    PointArrays<dim> pa{x,
+                        corner,
+                        v,
+                        xdot,
+                        C,
+                        true_mass,
+                        volume,
+                        visc,
+                        sigma,
+                        eps_p,
+                        cell,
+                        node0};
     // The transfer is a compile-time constant inside the loop (measured:
     // 7-20 % faster than a run-time branch per point).
     auto loop = [&](auto transfer) {
-      constexpr bool A = decltype(transfer)::value;
+      constexpr bool                 A = decltype(transfer)::value;
       CellScatter<n_corners, dim, W> remap(corner_offset, mom);
       // Monomial coefficients of the nodal velocity (and FLIP: the nodal
       // acceleration) of the cell of the last one-cell block; the blocks
@@ -1838,13 +1890,12 @@ namespace femp
           std::size_t n0[W];
           for (unsigned int l = 0; l < W; ++l)
             n0[l] = pa.node0[blk.pl[l]];
-          g2p_coefficients<dim, A>(vel, acc, corner_offset, n0, cv, ca,
-                                   coef_cell);
+          g2p_coefficients<dim, A>(
+            vel, acc, corner_offset, n0, cv, ca, coef_cell);
           VD vp[dim], Cn[dim][dim];
           g2p_velocity<dim, A>(pa, blk, p0, xi, cv, ca, ih, dt, vp, Cn);
           VD nmom[n_corners][dim];
-          remap_momentum<dim, A>(pa, blk, p0, xi, N, vp, Cn, h, scaling,
-                                 nmom);
+          remap_momentum<dim, A>(pa, blk, p0, xi, N, vp, Cn, h, scaling, nmom);
           remap.add(nmom, n0, blk.nl);
         }
     };
@@ -1854,13 +1905,12 @@ namespace femp
       loop(std::false_type());
   }
 
-
   template <int dim>
   double
   SolidMPM<dim>::update_stresses(const SolidNodeFields<dim> &nodes,
                                  const double                dt,
-                                 const std::vector<double> & T_old,
-                                 const std::vector<double> & T_new)
+                                 const std::vector<double>  &T_old,
+                                 const std::vector<double>  &T_new)
   {
     const double  h = grid.h();
     const double *vel[dim];
@@ -1873,8 +1923,8 @@ namespace femp
     kinetic                = 0;
     min_volume             = std::numeric_limits<double>::infinity();
     weight_momentum.fill(0.);
-    const StressStep<dim> st = stress_step<dim>(mat, vel, corner_offset, T_old,
-                                                T_new, dt, h, scaling);
+    const StressStep<dim> st =
+      stress_step<dim>(mat, vel, corner_offset, T_old, T_new, dt, h, scaling);
     CellModuli moduli = first_cell_moduli(mat, cell, n, T_old, T_new);
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
@@ -1884,7 +1934,7 @@ namespace femp
     const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity;
     ++steps_since_gather;
     const unsigned int nf = 1 + 2 * dim + (stiffness_rows ? 1 : 0);
-    double *           next_out[2 + 2 * dim] = {};
+    double            *next_out[2 + 2 * dim] = {};
     if (fuse)
       {
         for (unsigned int k = 0; k < nf; ++k)
@@ -1903,17 +1953,35 @@ namespace femp
     // arithmetic per point is that of the scalar formulation.
     constexpr unsigned int W = point_lanes<dim>;
     using VD                 = typename SimdOf<W>::type;
-    PointArrays<dim> pa{x,      corner, v,     xdot,  C,    true_mass,
-                        volume, visc,   sigma, eps_p, cell, node0};
-    auto loop = [&](auto transfer, auto fused, auto floor) {
-      constexpr bool A = decltype(transfer)::value;
-      constexpr bool F = decltype(fused)::value;
-      constexpr bool G = decltype(floor)::value;
-      CellScatter<n_corners, 1 + 2 * dim + G, W> out(
-        corner_offset, next_out);
-      const P2GInput<dim> in{x,      corner, v,     C,     true_mass,
-                             volume, visc,   sigma, node0, scaling,
-                             h,      p2g_gravity};
+    PointArrays<dim> pa{x,
+                        corner,
+                        v,
+                        xdot,
+                        C,
+                        true_mass,
+                        volume,
+                        visc,
+                        sigma,
+                        eps_p,
+                        cell,
+                        node0};
+    auto             loop = [&](auto transfer, auto fused, auto floor) {
+      constexpr bool                             A = decltype(transfer)::value;
+      constexpr bool                             F = decltype(fused)::value;
+      constexpr bool                             G = decltype(floor)::value;
+      CellScatter<n_corners, 1 + 2 * dim + G, W> out(corner_offset, next_out);
+      const P2GInput<dim>                        in{x,
+                             corner,
+                             v,
+                             C,
+                             true_mass,
+                             volume,
+                             visc,
+                             sigma,
+                             node0,
+                             scaling,
+                             h,
+                             p2g_gravity};
       // Chunks of points: stress update and move, then (fused) the P2G of
       // the chunk's points, whose data are still in the L1 cache.
       constexpr std::size_t chunk = 16 * W;
@@ -1934,10 +2002,20 @@ namespace femp
               const PointBlock<W> blk(p0, n);
               prefetch_stress_block<dim, A>(pa, p0, n);
               VD use, m, mg;
-              stress_block(st, pa, blk, p0, coef_cell, cv, moduli, work_v,
-                           vmin, use, m, mg);
-              if (!move_block<dim, A>(st, pa, blk, p0, use, m, mg, kinetic_v,
-                                      momentum_v))
+              stress_block(st,
+                           pa,
+                           blk,
+                           p0,
+                           coef_cell,
+                           cv,
+                           moduli,
+                           work_v,
+                           vmin,
+                           use,
+                           m,
+                           mg);
+              if (!move_block<dim, A>(
+                    st, pa, blk, p0, use, m, mg, kinetic_v, momentum_v))
                 finish_points<A>(p0, blk.nl);
             }
           if constexpr (F)
@@ -1968,7 +2046,6 @@ namespace femp
     return work;
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::hold_in_domain(const std::size_t p, Point<dim> &xp)
@@ -1995,7 +2072,6 @@ namespace femp
     ++held;
   }
 
-
   // The points of a block of update_stresses() of which one left its cell
   // or the rank, point by point: kinetic energy and momentum, the cell
   // crossing (see solid_mpm.h) and the APIC affine part of the kinetic
@@ -2021,7 +2097,8 @@ namespace femp
         // Cell crossing (see solid_mpm.h).
         bool inside = true;
         for (int d = 0; d < dim; ++d)
-          inside = inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
+          inside =
+            inside && x[d][p] >= corner[d][p] && x[d][p] <= corner[d][p] + h;
         if (!inside)
           {
             Point<dim> xp;
@@ -2073,7 +2150,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   double
   SolidMPM<dim>::elastic_energy(const std::vector<double> &T) const
@@ -2089,7 +2165,6 @@ namespace femp
     return u;
   }
 
-
   template <int dim>
   std::pair<double, unsigned int>
   SolidMPM<dim>::cell_stress_xx(const std::size_t idx) const
@@ -2102,11 +2177,10 @@ namespace femp
     return {n > 0 ? s / n : 0., n};
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::add_cell_fields(std::vector<std::vector<double>> &f,
-                                 std::vector<double> &             count) const
+                                 std::vector<double>              &count) const
   {
     for (std::size_t p = 0; p < true_mass.size(); ++p)
       {
@@ -2121,7 +2195,6 @@ namespace femp
         count[cell[p]] += 1;
       }
   }
-
 
   template <int dim>
   bool
@@ -2144,7 +2217,6 @@ namespace femp
     return false;
   }
 
-
   template <int dim>
   bool
   SolidMPM<dim>::find_collapsed(Point<dim> &where, double &V) const
@@ -2159,7 +2231,6 @@ namespace femp
         }
     return false;
   }
-
 
   template <int dim>
   void
@@ -2182,7 +2253,6 @@ namespace femp
     out.put_vector(eps_p);
   }
 
-
   template <int dim>
   void
   SolidMPM<dim>::load_state(std::vector<StateReader> &parts)
@@ -2197,7 +2267,7 @@ namespace femp
     eps_p.clear(), cell.clear(), node0.clear(), handle.clear();
     member_bits.clear();
     left_cells.clear();
-    gathered = false; // the next gather() copies
+    gathered       = false; // the next gather() copies
     const double h = grid.h();
     for (std::size_t f = 0; f < parts.size(); ++f)
       {
@@ -2211,12 +2281,12 @@ namespace femp
         // points are ever looked up.
         const auto ids = in.get_vector<std::uint64_t>();
         for (const auto id : ids)
-            {
-              if (id / 64 >= member_bits.size())
-                member_bits.resize(id / 64 + 1, 0);
-              member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
-            }
-        const auto                             keys = in.get_vector<std::uint64_t>();
+          {
+            if (id / 64 >= member_bits.size())
+              member_bits.resize(id / 64 + 1, 0);
+            member_bits[id / 64] |= std::uint64_t(1) << (id % 64);
+          }
+        const auto keys = in.get_vector<std::uint64_t>();
         std::array<std::vector<double>, n_stress> sg;
         for (auto &c : sg)
           c = in.get_vector<double>();
@@ -2251,7 +2321,6 @@ namespace femp
     left_rank         = 0;
     left_rank_points.clear();
   }
-
 
   template class SolidMPM<2>;
   template class SolidMPM<3>;

@@ -1,15 +1,16 @@
-// femp: the solid step (paper eqs. 5-17, doc/method.md, "Solid" and "Macro time step"): MPM and FE
-// coupled at the transition nodes through the background-grid nodes, with
-// sub-cycling against the temperature step; see solid_stress.h.
+// femp: the solid step (paper eqs. 5-17, doc/method.md, "Solid" and "Macro time
+// step"): MPM and FE coupled at the transition nodes through the
+// background-grid nodes, with sub-cycling against the temperature step; see
+// solid_stress.h.
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
+#include <femp/base/collective_error.h>
+#include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
 #include <femp/io/checkpoint.h>
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
-#include <femp/base/collective_error.h>
-#include <femp/base/error_location.h>
 
 #include <cmath>
 #include <filesystem>
@@ -24,8 +25,9 @@ namespace femp
     const char *face_names[6] = {"x-", "x+", "y-", "y+", "z-", "z+"};
 
     std::vector<std::string>
-    parse_faces(const std::string &text, const std::string &parameter,
-                const int dim)
+    parse_faces(const std::string &text,
+                const std::string &parameter,
+                const int          dim)
     {
       std::vector<std::string> faces;
       for (auto f : Utilities::split_string_list(text, ','))
@@ -36,30 +38,37 @@ namespace femp
           bool ok = false;
           for (int i = 0; i < 2 * dim; ++i)
             ok = ok || f == face_names[i];
-          require(ok, parameter, f,
-                  dim == 2 ? "it must be a comma-separated list of faces x-, x+, y-, y+" :
-                             "it must be a comma-separated list of faces x-, x+, "
-                             "y-, y+, "
-                             "z-, z+");
+          require(
+            ok,
+            parameter,
+            f,
+            dim == 2 ?
+              "it must be a comma-separated list of faces x-, x+, y-, y+" :
+              "it must be a comma-separated list of faces x-, x+, "
+              "y-, y+, "
+              "z-, z+");
           faces.push_back(f);
         }
       return faces;
     }
   } // namespace
 
-
   template <int dim>
   void
   SolidStress<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
-    prm.declare_entry("Time step", "0", Patterns::Double(0.),
+    prm.declare_entry("Time step",
+                      "0",
+                      Patterns::Double(0.),
                       "Solid step, s; 0 chooses the safety factor times the "
                       "elastic limit h / (sqrt(dim) c), c = sqrt(M / (s rho)) "
                       "with the largest P-wave modulus M of the E(T) table and "
                       "the mass-scaling factor s. A step above the limit is "
                       "refused. Range [0, inf).");
-    prm.declare_entry("Safety factor", "0.5", Patterns::Double(0., 1.),
+    prm.declare_entry("Safety factor",
+                      "0.5",
+                      Patterns::Double(0., 1.),
                       "Courant number C of the automatic solid step. With "
                       "material points the stresses depend on C and the "
                       "mass-scaling factor s through sqrt(s) / C (the "
@@ -67,7 +76,8 @@ namespace femp
                       "2.56 gives the answer of C = 0.5 for 2.56x fewer "
                       "steps without the melt flow (doc/speed_accuracy.md); "
                       "with it 0.8 and 1 went unstable. Range (0, 1].");
-    prm.declare_entry("Safety factor after solidification", "0",
+    prm.declare_entry("Safety factor after solidification",
+                      "0",
                       Patterns::Double(0., 1.),
                       "With the melt flow only: the Courant number of the "
                       "automatic solid step once the laser's path has ended "
@@ -87,7 +97,9 @@ namespace femp
                       "or [Safety factor, 1]; needs 'Time step = 0' and "
                       "'Mass scaling = fixed' (doc/solid.md \"Cooling after "
                       "the workpiece has solidified\").");
-    prm.declare_entry("Mass scaling factor", "1", Patterns::Double(1.),
+    prm.declare_entry("Mass scaling factor",
+                      "1",
+                      Patterns::Double(1.),
                       "Factor s >= 1 on the inertial mass of points and FE "
                       "nodes (gravity keeps the true mass): the stable step "
                       "grows by sqrt(s). Only for quasi-static scenes: watch "
@@ -96,34 +108,44 @@ namespace femp
                       "scaling = adaptive' the starting factor, which must "
                       "lie in [Minimum factor, Maximum factor]. Range [1, "
                       "inf).");
-    prm.declare_entry("Mass scaling", "fixed", Patterns::Selection("fixed|adaptive"),
-                      "fixed: the inertial mass is scaled by 'Mass scaling "
-                      "factor' throughout. adaptive: after every temperature "
-                      "step in which the solid stepped, the factor s is set "
-                      "from the ratio r = K / U_el of the mean kinetic energy "
-                      "of those solid steps to the stored elastic energy "
-                      "U_el = sum V sigma : C(T)^-1 : sigma / 2 (points and "
-                      "elements): s_new = s r_max / r, at most 2 s, rounded "
-                      "down to a power of 2^(1/4) and limited to [Minimum "
-                      "factor, Maximum factor]; velocities are kept, the "
-                      "solid step follows sqrt(s) and the kinetic energy "
-                      "jump is booked in the energy file (doc/speed_accuracy.md, "
-                      "section 3). Needs 'Time step = 0'.");
+    prm.declare_entry(
+      "Mass scaling",
+      "fixed",
+      Patterns::Selection("fixed|adaptive"),
+      "fixed: the inertial mass is scaled by 'Mass scaling "
+      "factor' throughout. adaptive: after every temperature "
+      "step in which the solid stepped, the factor s is set "
+      "from the ratio r = K / U_el of the mean kinetic energy "
+      "of those solid steps to the stored elastic energy "
+      "U_el = sum V sigma : C(T)^-1 : sigma / 2 (points and "
+      "elements): s_new = s r_max / r, at most 2 s, rounded "
+      "down to a power of 2^(1/4) and limited to [Minimum "
+      "factor, Maximum factor]; velocities are kept, the "
+      "solid step follows sqrt(s) and the kinetic energy "
+      "jump is booked in the energy file (doc/speed_accuracy.md, "
+      "section 3). Needs 'Time step = 0'.");
     prm.enter_subsection("Adaptive mass scaling");
-    prm.declare_entry("Maximum kinetic energy ratio", "0.001", Patterns::Double(),
+    prm.declare_entry("Maximum kinetic energy ratio",
+                      "0.001",
+                      Patterns::Double(),
                       "Target r_max of the ratio of kinetic to stored elastic "
                       "energy K / U_el of the solid (dimensionless); used "
                       "with 'Mass scaling = adaptive'. Range (0, 1].");
-    prm.declare_entry("Minimum factor", "1", Patterns::Double(),
+    prm.declare_entry("Minimum factor",
+                      "1",
+                      Patterns::Double(),
                       "Smallest mass-scaling factor of the adaptive "
                       "controller (dimensionless); range [1, Maximum "
                       "factor].");
-    prm.declare_entry("Maximum factor", "10000", Patterns::Double(),
+    prm.declare_entry("Maximum factor",
+                      "10000",
+                      Patterns::Double(),
                       "Largest mass-scaling factor of the adaptive "
                       "controller (dimensionless); range [Minimum factor, "
                       "1e12].");
     prm.leave_subsection();
-    prm.declare_entry("Light nodes", "mass floor",
+    prm.declare_entry("Light nodes",
+                      "mass floor",
                       Patterns::Selection("mass floor|no force"),
                       "Used only with the melt flow (Physics/Melt flow and "
                       "Solid stress both true): how the solid's grid update "
@@ -142,9 +164,12 @@ namespace femp
                       "velocity (fragments held by heavier nodes are then "
                       "strained without bound). doc/solid.md \"Small node "
                       "masses\".");
-    prm.declare_entry("Small mass cutoff", "0.05", Patterns::Double(),
+    prm.declare_entry("Small mass cutoff",
+                      "0.05",
+                      Patterns::Double(),
                       "Used only with the melt flow and 'Light nodes = no "
-                      "force': grid nodes whose inertial mass is below this fraction of a full cell's node "
+                      "force': grid nodes whose inertial mass is below this "
+                      "fraction of a full cell's node "
                       "(rho h^dim / 2^dim times the mass scaling) take no "
                       "force in the solid's grid update (the work the force "
                       "would have done is booked in the energy file as "
@@ -153,15 +178,21 @@ namespace femp
                       "explicit update unstable; 0 is off. "
                       "Dimensionless, range [0, 1) (doc/solid.md \"Small "
                       "node masses\").");
-    prm.declare_entry("Fixed faces", "", Patterns::Anything(),
+    prm.declare_entry("Fixed faces",
+                      "",
+                      Patterns::Anything(),
                       "Domain faces whose grid nodes are fixed (zero "
                       "velocity): a comma-separated list of x-, x+, y-, y+, "
                       "z-, z+; empty for none. Faces not listed here or under "
                       "'Roller faces' are traction-free.");
-    prm.declare_entry("Roller faces", "", Patterns::Anything(),
+    prm.declare_entry("Roller faces",
+                      "",
+                      Patterns::Anything(),
                       "Domain faces whose grid nodes cannot move normal to "
                       "the face (rollers); same format as 'Fixed faces'.");
-    prm.declare_entry("Energy file", "solid_energy.csv", Patterns::Anything(),
+    prm.declare_entry("Energy file",
+                      "solid_energy.csv",
+                      Patterns::Anything(),
                       "CSV file (in the output directory) with the solid "
                       "energies after every solid step: external work, stress "
                       "work, kinetic, hourglass, balance, kinetic/internal "
@@ -174,7 +205,9 @@ namespace femp
                       "(at the end of the last temperature step) and the "
                       "kinetic energy booked for changes of the factor "
                       "(adaptive mass scaling); empty for none.");
-    prm.declare_entry("Row interval", "0", Patterns::Double(0),
+    prm.declare_entry("Row interval",
+                      "0",
+                      Patterns::Double(0),
                       "Simulated time between two rows of the 'Energy file' "
                       "and the 'Probe file', s; range [0, inf): a row is "
                       "written after the solid step that reaches or passes "
@@ -184,16 +217,19 @@ namespace femp
                       "(the hourglass energy) and global sums, which long "
                       "runs with millions of solid steps need not pay each "
                       "step.");
-    prm.declare_entry("Probe file", "solid_probes.csv", Patterns::Anything(),
+    prm.declare_entry("Probe file",
+                      "solid_probes.csv",
+                      Patterns::Anything(),
                       "CSV file (in the output directory) with sigma_xx (Pa) "
                       "and T (K) at the probe points after every solid step.");
-    prm.declare_entry("Probe points", "", Patterns::Anything(),
+    prm.declare_entry("Probe points",
+                      "",
+                      Patterns::Anything(),
                       "Points 'x,y[,z]; x,y[,z]; ...' (m) whose cell stress "
                       "and temperature are written to the probe file; empty "
                       "for none.");
     prm.leave_subsection();
   }
-
 
   template <int dim>
   void
@@ -204,7 +240,7 @@ namespace femp
     safety_factor = prm.get_double("Safety factor");
     safety_factor_solidified =
       prm.get_double("Safety factor after solidification");
-    mass_scaling  = prm.get_double("Mass scaling factor");
+    mass_scaling     = prm.get_double("Mass scaling factor");
     adaptive_scaling = prm.get("Mass scaling") == "adaptive";
     prm.enter_subsection("Adaptive mass scaling");
     max_kinetic_ratio = prm.get_double("Maximum kinetic energy ratio");
@@ -213,60 +249,77 @@ namespace femp
     prm.leave_subsection();
     light_nodes       = prm.get("Light nodes");
     small_mass_cutoff = prm.get_double("Small mass cutoff");
-    fixed_faces  = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
-    roller_faces = parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
+    fixed_faces = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
+    roller_faces =
+      parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
     energy_file  = prm.get("Energy file");
     probe_file   = prm.get("Probe file");
     row_interval = prm.get_double("Row interval");
     probes.clear();
-    for (const auto &s : Utilities::split_string_list(prm.get("Probe points"), ';'))
+    for (const auto &s :
+         Utilities::split_string_list(prm.get("Probe points"), ';'))
       if (!Utilities::trim(s).empty())
         probes.push_back(parse_point<dim>(s, "Solid/Probe points"));
     prm.leave_subsection();
-    require(safety_factor > 0, "Solid/Safety factor", safety_factor,
+    require(safety_factor > 0,
+            "Solid/Safety factor",
+            safety_factor,
             "it must lie in (0, 1]");
     if (safety_factor_solidified != 0)
       {
         const std::string name = "Solid/Safety factor after solidification";
         require(safety_factor_solidified >= safety_factor &&
                   safety_factor_solidified <= 1,
-                name, safety_factor_solidified,
+                name,
+                safety_factor_solidified,
                 "it must be 0 (keep 'Safety factor') or lie in [Safety "
-                "factor, 1] = [" + num(safety_factor) + ", 1]");
-        require(time_step == 0, name, safety_factor_solidified,
+                "factor, 1] = [" +
+                  num(safety_factor) + ", 1]");
+        require(time_step == 0,
+                name,
+                safety_factor_solidified,
                 "it sets the automatic step: it needs 'Solid/Time step = 0' "
-                "(now " + num(time_step) + " s)");
-        require(!adaptive_scaling, name, safety_factor_solidified,
+                "(now " +
+                  num(time_step) + " s)");
+        require(!adaptive_scaling,
+                name,
+                safety_factor_solidified,
                 "it changes the mass-scaling factor itself: it needs "
                 "'Solid/Mass scaling = fixed', not adaptive");
       }
     require(small_mass_cutoff >= 0 && small_mass_cutoff < 1,
-            "Solid/Small mass cutoff", small_mass_cutoff,
+            "Solid/Small mass cutoff",
+            small_mass_cutoff,
             "it must lie in [0, 1) (a fraction of a full node's mass)");
     const std::string ams = "Solid/Adaptive mass scaling/";
     require(max_kinetic_ratio > 0 && max_kinetic_ratio <= 1,
-            ams + "Maximum kinetic energy ratio", max_kinetic_ratio,
+            ams + "Maximum kinetic energy ratio",
+            max_kinetic_ratio,
             "it must lie in (0, 1]");
-    require(min_factor >= 1, ams + "Minimum factor", min_factor,
+    require(min_factor >= 1,
+            ams + "Minimum factor",
+            min_factor,
             "it must lie in [1, Maximum factor]");
     require(max_factor >= min_factor && max_factor <= 1e12,
-            ams + "Maximum factor", max_factor,
+            ams + "Maximum factor",
+            max_factor,
             "it must lie in [Minimum factor, 1e12] (Minimum factor = " +
               num(min_factor) + ")");
     if (adaptive_scaling)
       {
         require(mass_scaling >= min_factor && mass_scaling <= max_factor,
-                "Solid/Mass scaling factor", mass_scaling,
+                "Solid/Mass scaling factor",
+                mass_scaling,
                 "with 'Solid/Mass scaling = adaptive' the starting factor "
                 "must lie in [Minimum factor, Maximum factor] = [" +
-                  num(min_factor) + ", " +
-                  num(max_factor) + "]");
-        require(time_step == 0, "Solid/Time step", time_step,
+                  num(min_factor) + ", " + num(max_factor) + "]");
+        require(time_step == 0,
+                "Solid/Time step",
+                time_step,
                 "with 'Solid/Mass scaling = adaptive' the step follows the "
                 "factor: it must be 0 (automatic)");
       }
   }
-
 
   template <int dim>
   double
@@ -280,19 +333,18 @@ namespace femp
     return h / (std::sqrt(double(dim)) * c) * (std::sqrt(1 + b1 * b1) - b1);
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::Parameters::check(
-    const SolidMaterial &                           m,
+    const SolidMaterial                            &m,
     const typename BackgroundGrid<dim>::Parameters &g) const
   {
-    const double limit = stable_limit(m, g.cell_size);
+    const double       limit = stable_limit(m, g.cell_size);
     std::ostringstream s;
-    s << "it exceeds the elastic stable limit h / (sqrt(dim) c) (sqrt(1 + b1^2) "
+    s << "it exceeds the elastic stable limit h / (sqrt(dim) c) (sqrt(1 + "
+         "b1^2) "
          "- b1) = "
-      << limit
-      << " s (h = " << g.cell_size << " m, largest P-wave modulus "
+      << limit << " s (h = " << g.cell_size << " m, largest P-wave modulus "
       << m.max_p_wave_modulus() << " Pa, density " << m.density()
       << " kg/m^3, mass scaling " << mass_scaling
       << "); use 0 (automatic) or a smaller step";
@@ -300,42 +352,43 @@ namespace femp
     for (const auto &x : probes)
       for (int d = 0; d < dim; ++d)
         require(x[d] >= g.lower_corner[d] && x[d] <= g.upper_corner[d],
-                "Solid/Probe points", x, "every point must lie in the domain");
+                "Solid/Probe points",
+                x,
+                "every point must lie in the domain");
   }
 
-
   template <int dim>
-  SolidStress<dim>::SolidStress(const Parameters &                        prm,
-                                const typename SolidFEM<dim>::Parameters &fem_prm,
-                                const SolidMaterial &                     material,
-                                const BackgroundGrid<dim> &               grid,
-                                MaterialPoints<dim> &                     points)
-    : prm(prm)
-    , mat(material)
-    , grid(grid)
-    , comm(grid.communicator())
-    , mpm(grid, material, points)
-    , fem(fem_prm.enabled ?
-            std::make_unique<SolidFEM<dim>>(fem_prm, grid, material) :
-            nullptr)
+  SolidStress<dim>::SolidStress(
+    const Parameters                         &prm,
+    const typename SolidFEM<dim>::Parameters &fem_prm,
+    const SolidMaterial                      &material,
+    const BackgroundGrid<dim>                &grid,
+    MaterialPoints<dim>                      &points)
+      : prm(prm)
+      , mat(material)
+      , grid(grid)
+      , comm(grid.communicator())
+      , mpm(grid, material, points)
+      , fem(fem_prm.enabled ?
+              std::make_unique<SolidFEM<dim>>(fem_prm, grid, material) :
+              nullptr)
   {
     scaling.factor = prm.mass_scaling;
     safety         = prm.safety_factor;
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::initialize(const std::vector<double> &T,
-                               const std::string &        directory)
+                               const std::string         &directory)
   {
     nodes.resize(grid.n_local_nodes());
     if (mass_floor)
       nodes.stiffness.assign(grid.n_local_nodes(), 0.);
-    safety       = prm.safety_factor;
-    cooling_step = false;
-    dt_solid = prm.time_step > 0 ? prm.time_step :
-                                   safety * prm.stable_limit(mat, grid.h());
+    safety               = prm.safety_factor;
+    cooling_step         = false;
+    dt_solid             = prm.time_step > 0 ? prm.time_step :
+                                               safety * prm.stable_limit(mat, grid.h());
     const auto face_bits = set_boundary_flags();
     scaling              = MassScalingState();
     scaling.factor       = prm.mass_scaling;
@@ -364,7 +417,6 @@ namespace femp
     open_output_files(directory);
   }
 
-
   template <int dim>
   std::array<std::uint8_t, 2 * dim>
   SolidStress<dim>::set_boundary_flags()
@@ -384,8 +436,9 @@ namespace femp
           }
         for (int f = 0; f < 2 * dim; ++f)
           {
-            const int  d  = f / 2;
-            const bool on = (f % 2 == 0) ? ijk[d] == 0 : ijk[d] == int(grid.n_cells()[d]);
+            const int  d = f / 2;
+            const bool on =
+              (f % 2 == 0) ? ijk[d] == 0 : ijk[d] == int(grid.n_cells()[d]);
             if (!on)
               continue;
             for (const auto &name : prm.fixed_faces)
@@ -409,7 +462,6 @@ namespace femp
       }
     return face_bits;
   }
-
 
   template <int dim>
   void
@@ -482,7 +534,8 @@ namespace femp
       counted_nodes.clear();
       for (const auto n : active_nodes)
         {
-          // The cell named for the node (the last cell for nodes on a top face).
+          // The cell named for the node (the last cell for nodes on a top
+          // face).
           std::array<int, dim> ijk = node_ijk(n);
           for (int d = 0; d < dim; ++d)
             ijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
@@ -505,7 +558,7 @@ namespace femp
           bool                       shared = false;
           for (unsigned int a = 0; a < (1u << dim) && !shared; ++a)
             {
-              std::array<int, dim> c = ijk;
+              std::array<int, dim> c  = ijk;
               bool                 in = true;
               for (int d = 0; d < dim; ++d)
                 {
@@ -538,7 +591,6 @@ namespace femp
     }
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::rebuild_live(const std::vector<double> *T, const double w)
@@ -564,8 +616,7 @@ namespace femp
         {
           nodes.mass[n] = 0;
           for (int d = 0; d < dim; ++d)
-            nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] =
-              0;
+            nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] = 0;
         }
     live_counted.clear();
     for (const auto n : live_nodes)
@@ -583,7 +634,6 @@ namespace femp
     cells_seen = cells.size();
     regathered = false;
   }
-
 
   template <int dim>
   void
@@ -605,10 +655,12 @@ namespace femp
           }
         nodes_seen = reached.size();
         std::sort(live_nodes.begin() + n0, live_nodes.end());
-        std::inplace_merge(live_nodes.begin(), live_nodes.begin() + n0,
+        std::inplace_merge(live_nodes.begin(),
+                           live_nodes.begin() + n0,
                            live_nodes.end());
         std::sort(live_counted.begin() + c0, live_counted.end());
-        std::inplace_merge(live_counted.begin(), live_counted.begin() + c0,
+        std::inplace_merge(live_counted.begin(),
+                           live_counted.begin() + c0,
                            live_counted.end());
       }
     const auto &cells = mpm.cells_reached();
@@ -617,7 +669,6 @@ namespace femp
         add_live_cell(cells[i], &T, w);
     cells_seen = cells.size();
   }
-
 
   template <int dim>
   void
@@ -631,7 +682,6 @@ namespace femp
       T_next[c] = T_prev[c] + w * ((*T)[c] - T_prev[c]);
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::open_output_files(const std::string &directory)
@@ -643,21 +693,24 @@ namespace femp
           {
             energy_out = std::make_unique<std::ofstream>(directory + "/" +
                                                          prm.energy_file);
-            AssertThrow(*energy_out, ExcMessage("cannot write " + directory +
-                                                "/" + prm.energy_file));
-            *energy_out << "time,step,external_work,internal_work,kinetic,"
-                           "hourglass,balance,kinetic_to_internal,hourglass_mode,"
-                           "transfer_dissipation,removed_by_melting,"
-                           "added_by_solidification,remap_work,mass_scaling,"
-                           "kinetic_to_elastic,mass_scaling_kinetic_jump,"
-                           "withheld_work\n";
+            AssertThrow(*energy_out,
+                        ExcMessage("cannot write " + directory + "/" +
+                                   prm.energy_file));
+            *energy_out
+              << "time,step,external_work,internal_work,kinetic,"
+                 "hourglass,balance,kinetic_to_internal,hourglass_mode,"
+                 "transfer_dissipation,removed_by_melting,"
+                 "added_by_solidification,remap_work,mass_scaling,"
+                 "kinetic_to_elastic,mass_scaling_kinetic_jump,"
+                 "withheld_work\n";
           }
         if (!prm.probe_file.empty() && !prm.probes.empty())
           {
-            probe_out = std::make_unique<std::ofstream>(directory + "/" +
-                                                        prm.probe_file);
-            AssertThrow(*probe_out, ExcMessage("cannot write " + directory +
-                                               "/" + prm.probe_file));
+            probe_out =
+              std::make_unique<std::ofstream>(directory + "/" + prm.probe_file);
+            AssertThrow(*probe_out,
+                        ExcMessage("cannot write " + directory + "/" +
+                                   prm.probe_file));
             *probe_out << "time";
             for (std::size_t i = 0; i < prm.probes.size(); ++i)
               *probe_out << ",sigma_xx_" << i << ",T_" << i;
@@ -666,13 +719,12 @@ namespace femp
       }
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::advance(const double               t,
                             const std::vector<double> &T,
                             const bool                 final,
-                            const NodalForces *        external_forces)
+                            const NodalForces         *external_forces)
   {
     check_fe_zone_solid(T, t);
     if (fem)
@@ -736,14 +788,13 @@ namespace femp
     t_prev = t;
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::step(const double       dt,
                          const double       w,
                          const NodalForces *external_forces)
   {
-    particles_to_grid(external_forces);               // 1. P2G
+    particles_to_grid(external_forces);                   // 1. P2G
     const double merge_loss = merge_transition_nodes(dt); // 2. transition
     sum_grid_partials();
     // Transfer dissipation, P2G part: point kinetic energy at the start of
@@ -755,8 +806,8 @@ namespace femp
     // after the update (nodes.mass is still the point mass here).
     transfer += grid_point_kinetic(true);
     set_transition_velocities();
-    const double ext_power = external_power(external_forces);
-    const auto   fe_energy = grid_to_points(dt);      // 3., 4. G2P, FE nodes
+    const double ext_power  = external_power(external_forces);
+    const auto   fe_energy  = grid_to_points(dt); // 3., 4. G2P, FE nodes
     const double remap_work = remap_work_of_step(dt);
     set_grid_velocities();
 
@@ -765,10 +816,9 @@ namespace femp
     if (fem)
       work += fem->update_elements(dt, w);
     ++steps;
-    book_energies(dt, ext_power, fe_energy, transfer, work, remap_work,
-                  withheld);
+    book_energies(
+      dt, ext_power, fe_energy, transfer, work, remap_work, withheld);
   }
-
 
   template <int dim>
   void
@@ -790,7 +840,6 @@ namespace femp
         for (const auto n : live_nodes)
           nodes.force[d][n] += (*external_forces)[d][n];
   }
-
 
   template <int dim>
   double
@@ -815,8 +864,12 @@ namespace femp
           }
         fem->add_transition_partials(tr_buffer);
         if (Utilities::MPI::n_mpi_processes(comm) > 1)
-          MPI_Allreduce(MPI_IN_PLACE, tr_buffer.data(), tr_buffer.size(),
-                        MPI_DOUBLE, MPI_SUM, comm);
+          MPI_Allreduce(MPI_IN_PLACE,
+                        tr_buffer.data(),
+                        tr_buffer.size(),
+                        MPI_DOUBLE,
+                        MPI_SUM,
+                        comm);
         // Merging at the transition nodes (booked with the transfer): the
         // points' grid momentum and the FE node momentum become one
         // velocity, an inelastic exchange that loses 1/2 mu |v_g - v_i|^2,
@@ -843,7 +896,6 @@ namespace femp
     return merge_loss;
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::sum_grid_partials()
@@ -862,7 +914,6 @@ namespace femp
         tr_fgrid[dim * t + d] = nodes.force[d][n];
   }
 
-
   template <int dim>
   double
   SolidStress<dim>::update_grid_momentum(const double dt)
@@ -875,7 +926,7 @@ namespace femp
     const double kappa = mass_floor ? safety * safety / (4. * dim) : 0.;
     for (const auto n : live_nodes)
       {
-        const double m = nodes.mass[n];
+        const double m       = nodes.mass[n];
         const double m_floor = mass_floor ? kappa * nodes.stiffness[n] : 0.;
         for (int d = 0; d < dim; ++d)
           {
@@ -917,8 +968,7 @@ namespace femp
                 // it (a transition node, counted_as >= 0, takes the merged
                 // update of step 2).
                 if (counted_as[n] == -1)
-                  withheld +=
-                    dt * nodes.force[d][n] * nodes.momentum[d][n] / m;
+                  withheld += dt * nodes.force[d][n] * nodes.momentum[d][n] / m;
                 nodes.force[d][n]    = 0;
                 nodes.velocity[d][n] = nodes.momentum[d][n] / m;
                 continue;
@@ -930,7 +980,6 @@ namespace femp
       }
     return withheld;
   }
-
 
   template <int dim>
   void
@@ -949,7 +998,6 @@ namespace femp
       }
   }
 
-
   template <int dim>
   double
   SolidStress<dim>::external_power(const NodalForces *external_forces) const
@@ -961,7 +1009,6 @@ namespace femp
           ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
     return ext_power;
   }
-
 
   template <int dim>
   std::array<double, 2>
@@ -983,7 +1030,6 @@ namespace femp
           fem->transition_mass(t) * fem->transition_velocity(t)[d];
     return fe_energy;
   }
-
 
   template <int dim>
   double
@@ -1026,15 +1072,13 @@ namespace femp
               const double  mf = fem->transition_mass(t);
               const double  u  = tr_u[dim * t + d];
               const double  vm = (b[1 + d] + mf * u) / (b[0] + mf);
-              remap_work +=
-                0.5 * dt *
-                (fg * (vI - vr) +
-                 (f - fg + b[1 + 2 * dim + d]) *
-                   (vI - fem->transition_velocity(t)[d] + vm - u));
+              remap_work += 0.5 * dt *
+                            (fg * (vI - vr) +
+                             (f - fg + b[1 + 2 * dim + d]) *
+                               (vI - fem->transition_velocity(t)[d] + vm - u));
             }
     return remap_work;
   }
-
 
   template <int dim>
   void
@@ -1047,7 +1091,6 @@ namespace femp
             nodes.momentum[d][n] / nodes.mass[n] :
             0.;
   }
-
 
   template <int dim>
   void
@@ -1063,13 +1106,19 @@ namespace femp
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
     // sums[8]: a point volume or element Jacobian <= 0 on this rank.
-    double sums[10] = {mpm.kinetic_energy(), work, dt * local_ext,
-                       mpm.point_lost() ? 1. : 0., double(mpm.n_left_rank()),
-                       transfer, fe_energy[0], remap_work,
-                       mpm.volume_collapsed() || (fem && fem->element_failed()) ?
-                         1. : 0.,
-                       withheld};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 10), comm,
+    double sums[10] = {
+      mpm.kinetic_energy(),
+      work,
+      dt * local_ext,
+      mpm.point_lost() ? 1. : 0.,
+      double(mpm.n_left_rank()),
+      transfer,
+      fe_energy[0],
+      remap_work,
+      mpm.volume_collapsed() || (fem && fem->element_failed()) ? 1. : 0.,
+      withheld};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 10),
+                        comm,
                         ArrayView<double>(sums, 10));
     K = sums[0] + sums[6];
     W_int += sums[1];
@@ -1077,7 +1126,7 @@ namespace femp
     D_transfer += sums[5] - sums[0]; // sums[0]: point kinetic energy now
     W_remap += sums[7];
     W_withheld += sums[9];
-    K_points = sums[0];
+    K_points         = sums[0];
     const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
     if (!blown && sums[8] > 0)
       stop_inverted(dt);
@@ -1086,8 +1135,8 @@ namespace femp
         Point<dim> where;
         bool       found = false;
         if (blown)
-          found = mpm.find_non_finite(where) ||
-                  (fem && fem->find_non_finite(where));
+          found =
+            mpm.find_non_finite(where) || (fem && fem->find_non_finite(where));
         else if (mpm.point_lost())
           where = mpm.escaped_point(), found = true;
         share_location(found, where, comm);
@@ -1110,22 +1159,26 @@ namespace femp
         // Members carried into a detached drop's cell leave the solid
         // there (SolidMPM::set_aside_cells()): counted and booked as at
         // an exchange.
-        const auto aside = mpm.set_aside_by_last_gather();
-        double     after[4] = {mpm.kinetic_energy(), double(mpm.n_points()),
-                               aside[0], aside[1]};
-        Utilities::MPI::sum(ArrayView<const double>(after, 4), comm,
+        const auto aside    = mpm.set_aside_by_last_gather();
+        double     after[4] = {mpm.kinetic_energy(),
+                               double(mpm.n_points()),
+                               aside[0],
+                               aside[1]};
+        Utilities::MPI::sum(ArrayView<const double>(after, 4),
+                            comm,
                             ArrayView<double>(after, 4));
         D_transfer -= after[0] + after[3] - sums[0];
         K_melted += after[3];
         n_set_aside += after[2];
-        K = after[0] + sums[6];
+        K        = after[0] + sums[6];
         K_points = after[0];
-        check_point_count(after[1], n_points_global - after[2], "re-sorting",
+        check_point_count(after[1],
+                          n_points_global - after[2],
+                          "re-sorting",
                           t_solid + dt);
         n_points_global = after[1];
       }
   }
-
 
   template <int dim>
   void
@@ -1175,7 +1228,6 @@ namespace femp
     throw CollectiveError(s.str()); // the flag was reduced over all ranks
   }
 
-
   template <int dim>
   double
   SolidStress<dim>::grid_point_kinetic(const bool updated) const
@@ -1202,7 +1254,6 @@ namespace femp
     return k;
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::check_point_count(const double       n_now,
@@ -1213,15 +1264,13 @@ namespace femp
     if (n_now == n_expected)
       return;
     std::ostringstream s;
-    s << "solid: " << n_expected - n_now
-      << " material point(s) lost in " << where << " at solid step " << steps
-      << ", time " << time << " s (" << n_expected << " expected, "
-      << n_now
+    s << "solid: " << n_expected - n_now << " material point(s) lost in "
+      << where << " at solid step " << steps << ", time " << time << " s ("
+      << n_expected << " expected, " << n_now
       << " found): a point left the solid without melting, e.g. into a cell "
          "of the finite-element zone that its rank does not see";
     throw std::runtime_error(s.str());
   }
-
 
   template <int dim>
   void
@@ -1235,10 +1284,9 @@ namespace femp
     // step, doc/solid.md "Cooling after the workpiece has solidified").
     small_mass_fraction = fraction;
     const double c      = safety / prm.safety_factor;
-    small_mass = fraction * c * c * scaling.factor * mat.density() *
+    small_mass          = fraction * c * c * scaling.factor * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
-
 
   template <int dim>
   void
@@ -1251,7 +1299,6 @@ namespace femp
     else
       nodes.stiffness.clear();
   }
-
 
   template <int dim>
   void
@@ -1270,7 +1317,6 @@ namespace femp
     have_pending_exchange = true;
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::gather_points()
@@ -1282,17 +1328,23 @@ namespace femp
                                     mpm.exchange_since_gather();
         // Nothing melted, solidified or lost here: the gather may keep
         // the arrays of the last one (SolidMPM::gather()).
-        mpm.gather(zone_mask(), scaling.factor,
+        mpm.gather(zone_mask(),
+                   scaling.factor,
                    e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
     have_pending_exchange = false;
     // Points set aside in detached drops leave the solid as melted ones
     // do: counted with them, their kinetic energy booked with theirs.
-    double sums[8] = {e.n_melted + e.n_set_aside, e.n_solidified, e.n_lost,
-                      e.k_melted + e.k_set_aside, e.k_solidified,
-                      double(mpm.n_points()),   mpm.kinetic_energy(),
+    double sums[8] = {e.n_melted + e.n_set_aside,
+                      e.n_solidified,
+                      e.n_lost,
+                      e.k_melted + e.k_set_aside,
+                      e.k_solidified,
+                      double(mpm.n_points()),
+                      mpm.kinetic_energy(),
                       e.n_set_aside};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 8), comm,
+    Utilities::MPI::sum(ArrayView<const double>(sums, 8),
+                        comm,
                         ArrayView<double>(sums, 8));
     n_set_aside += sums[7];
     if (sums[2] > 0)
@@ -1306,7 +1358,8 @@ namespace femp
           << steps + 1 << ", time " << t_solid << " s, e.g. at x = " << where;
         throw std::runtime_error(s.str());
       }
-    check_point_count(sums[5], n_points_global - sums[0] + sums[1],
+    check_point_count(sums[5],
+                      n_points_global - sums[0] + sums[1],
                       "the gather of the solid points (after " +
                         std::to_string(int(sums[0])) + " melted, " +
                         std::to_string(int(sums[1])) + " solidified)",
@@ -1321,7 +1374,6 @@ namespace femp
     K_points = sums[6];
   }
 
-
   template <int dim>
   typename SolidStress<dim>::Energies
   SolidStress<dim>::energies(const bool with_hourglass_mode) const
@@ -1334,19 +1386,19 @@ namespace femp
     std::array<double, 2> hg{{0., 0.}};
     if (fem)
       hg = fem->hourglass_energy(with_hourglass_mode);
-    Utilities::MPI::sum(ArrayView<const double>(hg.data(), 2), comm,
+    Utilities::MPI::sum(ArrayView<const double>(hg.data(), 2),
+                        comm,
                         ArrayView<double>(hg.data(), 2));
     e.hourglass      = hg[0];
     e.hourglass_mode = hg[1];
-    e.transfer        = D_transfer;
-    e.remap           = W_remap;
-    e.withheld        = W_withheld;
-    e.melted          = K_melted;
-    e.solidified      = K_solidified;
-    e.scaling_jump    = scaling.kinetic_jump;
+    e.transfer       = D_transfer;
+    e.remap          = W_remap;
+    e.withheld       = W_withheld;
+    e.melted         = K_melted;
+    e.solidified     = K_solidified;
+    e.scaling_jump   = scaling.kinetic_jump;
     return e;
   }
-
 
   template <int dim>
   std::vector<std::array<double, 2>>
@@ -1380,7 +1432,6 @@ namespace femp
     return r;
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::cell_stress_fields(std::vector<double> &sxx,
@@ -1392,14 +1443,12 @@ namespace femp
     vm.swap(f[3]);
   }
 
-
   template <int dim>
   std::vector<std::string>
   SolidStress<dim>::cell_field_names()
   {
     return {"sigma_xx", "sigma_yy", "sigma_zz", "von_mises", "plastic_strain"};
   }
-
 
   template <int dim>
   void
@@ -1416,7 +1465,6 @@ namespace femp
       fem->cell_fields(f);
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::check_fe_zone_solid(const std::vector<double> &T,
@@ -1424,8 +1472,8 @@ namespace femp
   {
     if (!guard_fe_zone)
       return;
-    const double T_s    = mat.melt_temperature();
-    double       T_max  = -std::numeric_limits<double>::infinity();
+    const double T_s   = mat.melt_temperature();
+    double       T_max = -std::numeric_limits<double>::infinity();
     for (const auto c : fe_cells)
       T_max = std::max(T_max, T[c]);
     T_max = Utilities::MPI::max(T_max, comm);
@@ -1433,7 +1481,7 @@ namespace femp
       return;
     // The deepest element at or above the solidus: its position (cell
     // centre; ties: largest x, then y) and the hottest zone temperature.
-    const double h = grid.h();
+    const double            h = grid.h();
     std::array<double, dim> where;
     where.fill(-std::numeric_limits<double>::infinity());
     double z_low = std::numeric_limits<double>::infinity();
@@ -1446,7 +1494,8 @@ namespace femp
           std::abs(grid.cell_center(c)[dim - 1] - z_low) < 1e-3 * h)
         {
           const Point<dim> x = grid.cell_center(c);
-          if (x[0] > where[0] || (dim == 3 && x[0] == where[0] && x[1] > where[1]))
+          if (x[0] > where[0] ||
+              (dim == 3 && x[0] == where[0] && x[1] > where[1]))
             for (int d = 0; d < dim; ++d)
               where[d] = x[d];
         }
@@ -1457,9 +1506,10 @@ namespace femp
     for (int d = 1; d < dim; ++d)
       where[d] = Utilities::MPI::max(where[d], comm);
     where[0] = x_max;
-    const double top = grid.origin()[dim - 1] +
-                       std::floor((z_low - 0.5 * h - grid.origin()[dim - 1]) / h +
-                                  1e-9) * h - 2 * h;
+    const double top =
+      grid.origin()[dim - 1] +
+      std::floor((z_low - 0.5 * h - grid.origin()[dim - 1]) / h + 1e-9) * h -
+      2 * h;
     std::ostringstream s;
     s << "the finite element at (";
     for (int d = 0; d < dim; ++d)
@@ -1472,7 +1522,6 @@ namespace femp
     throw FeZoneMelted(s.str());
   }
 
-
   template <int dim>
   double
   SolidStress<dim>::fe_elements_off_rank() const
@@ -1480,7 +1529,6 @@ namespace femp
     return Utilities::MPI::sum(fem ? double(fem->n_elements_off_rank()) : 0.,
                                comm);
   }
-
 
   template <int dim>
   std::array<double, 2>
@@ -1490,14 +1538,12 @@ namespace femp
              Utilities::MPI::sum(fem ? double(fem->n_elements()) : 0., comm)}};
   }
 
-
   template <int dim>
   double
   SolidStress<dim>::largest_rank_points() const
   {
     return Utilities::MPI::max(double(mpm.n_points()), comm);
   }
-
 
   template <int dim>
   bool
@@ -1512,7 +1558,6 @@ namespace femp
     };
     return k(t_new) > k(t_old);
   }
-
 
   template <int dim>
   void
@@ -1548,15 +1593,16 @@ namespace femp
         // the run naming the file, instead of losing the series quietly.
         AssertThrow(!energy_out || *energy_out,
                     ExcMessage("cannot write the solid energy file '" +
-                               prm.energy_file + "' (Solid/Energy file): "
+                               prm.energy_file +
+                               "' (Solid/Energy file): "
                                "disk full or file system gone?"));
         AssertThrow(!probe_out || *probe_out,
                     ExcMessage("cannot write the solid probe file '" +
-                               prm.probe_file + "' (Solid/Probe file): "
+                               prm.probe_file +
+                               "' (Solid/Probe file): "
                                "disk full or file system gone?"));
       }
   }
-
 
   template <int dim>
   void
@@ -1568,8 +1614,16 @@ namespace femp
     out.put(t_prev);
     out.put(dt_solid);
     out.put(steps);
-    for (const double a : {W_ext, W_int, K0, K, D_transfer, K_melted,
-                           K_solidified, W_remap, K_points, n_points_global})
+    for (const double a : {W_ext,
+                           W_int,
+                           K0,
+                           K,
+                           D_transfer,
+                           K_melted,
+                           K_solidified,
+                           W_remap,
+                           K_points,
+                           n_points_global})
       out.put(a);
     // Temperatures of the last sub-step, of the last advance() (the start
     // of the next interpolation) and the spare buffer of the sub-steps.
@@ -1577,16 +1631,19 @@ namespace femp
     // Lengths of the CSV files (rank 0 writes them; flushed so that the
     // size on disk is what they hold).
     auto size = [&](const std::unique_ptr<std::ofstream> &f,
-                    const std::string &                   name) {
+                    const std::string                    &name) {
       std::uint64_t n = 0;
       if (f)
         {
           f->flush();
           std::error_code ec;
           n = std::filesystem::file_size(csv_directory + "/" + name, ec);
-          AssertThrow(!ec && *f, ExcMessage("cannot measure the solid CSV "
-                                            "file '" + name + "' for the "
-                                            "checkpoint"));
+          AssertThrow(!ec && *f,
+                      ExcMessage("cannot measure the solid CSV "
+                                 "file '" +
+                                 name +
+                                 "' for the "
+                                 "checkpoint"));
         }
       return n;
     };
@@ -1599,13 +1656,15 @@ namespace femp
       SolidFEM<dim>::save_no_zone(out);
     // The mass-scaling factor (adaptive mass scaling changes it) and its
     // measurement over the current solid phase.
-    for (const double a : {scaling.factor, scaling.last_ratio,
-                           scaling.kinetic_jump, phase_K_dt, phase_time})
+    for (const double a : {scaling.factor,
+                           scaling.last_ratio,
+                           scaling.kinetic_jump,
+                           phase_K_dt,
+                           phase_time})
       out.put(a);
     // Added last, so that checkpoints written without it still load (as 0).
     out.put(W_withheld);
   }
-
 
   template <int dim>
   void
@@ -1614,7 +1673,7 @@ namespace femp
     // The quasi-static gauge (doc/speed_accuracy.md, sections 1 and 3):
     // the mean kinetic energy of the advance's steps over the elastic
     // energy stored at its end (cell temperatures of the last step).
-    const double u = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
+    const double u      = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
                                            (fem ? fem->elastic_energy() : 0.),
                                          comm);
     const double k_mean = phase_time > 0 ? phase_K_dt / phase_time : K;
@@ -1640,7 +1699,6 @@ namespace femp
     if (target != s)
       set_mass_scaling(target);
   }
-
 
   template <int dim>
   void
@@ -1680,11 +1738,10 @@ namespace femp
     throw CollectiveError(s.str()); // the sums are global
   }
 
-
   template <int dim>
   void
   SolidStress<dim>::load_state(std::vector<StateReader> &parts,
-                               const std::string &       directory)
+                               const std::string        &directory)
   {
     double        a[10];
     std::uint64_t energy_size = 0, probe_size = 0;
@@ -1693,7 +1750,7 @@ namespace femp
         StateReader &in = parts[f];
         const auto   ts = in.get<double>(), tp = in.get<double>(),
                    dts = in.get<double>();
-        const auto n  = in.get<unsigned int>();
+        const auto n   = in.get<unsigned int>();
         for (double &x : a)
           x = in.get<double>();
         if (f > 0)
@@ -1759,8 +1816,8 @@ namespace femp
       {
         namespace fs = std::filesystem;
         auto reopen  = [&](std::unique_ptr<std::ofstream> &f,
-                          const std::string &              name,
-                          const std::uint64_t              size) {
+                          const std::string              &name,
+                          const std::uint64_t             size) {
           const std::string file = directory + "/" + name;
           std::error_code   ec;
           if (!fs::exists(file) || fs::file_size(file, ec) < size)
@@ -1769,7 +1826,7 @@ namespace femp
                       "' is missing or shorter than at the checkpoint (" +
                       std::to_string(size) +
                       " bytes); resume into the output directory of the run "
-                      "that wrote the checkpoint";
+                       "that wrote the checkpoint";
               return;
             }
           fs::resize_file(file, size, ec);
@@ -1783,10 +1840,10 @@ namespace femp
           reopen(probe_out, prm.probe_file, probe_size);
       }
     if (Utilities::MPI::min(int(error.empty()), comm) == 0)
-      throw InputError("Checkpoint/Resume from", directory,
+      throw InputError("Checkpoint/Resume from",
+                       directory,
                        Utilities::MPI::broadcast(comm, error, 0));
   }
-
 
   template <int dim>
   std::string
@@ -1799,13 +1856,13 @@ namespace femp
     // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
     // (C2 / C)^2, and the step, C sqrt(s), by (C2 / C)^2 as well.
     const double s_old = scaling.factor, c_old = safety, dt_old = dt_solid;
-    const double r     = c2 / c_old;
-    safety             = c2;
+    const double r = c2 / c_old;
+    safety         = c2;
     set_mass_scaling(s_old * r * r);
     cooling_step = true;
     std::ostringstream m;
-    m << "safety factor " << c_old << " -> " << c2 << ", mass scaling "
-      << s_old << " -> " << scaling.factor << " (sqrt(s)/C kept at "
+    m << "safety factor " << c_old << " -> " << c2 << ", mass scaling " << s_old
+      << " -> " << scaling.factor << " (sqrt(s)/C kept at "
       << std::sqrt(scaling.factor) / safety << "), solid step " << dt_old
       << " -> " << dt_solid << " s";
     if (mass_floor)
@@ -1815,7 +1872,6 @@ namespace femp
         << small_mass_fraction * r * r;
     return m.str();
   }
-
 
   template <int dim>
   void
@@ -1833,9 +1889,8 @@ namespace femp
       fem->set_mass_scaling(s);
     scaling.factor = s;
     set_small_mass_cutoff(small_mass_fraction); // from the factor, not by r
-    dt_solid       = safety * prm.stable_limit(mat, grid.h(), s);
+    dt_solid = safety * prm.stable_limit(mat, grid.h(), s);
   }
-
 
   template class SolidStress<2>;
   template class SolidStress<3>;

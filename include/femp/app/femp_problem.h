@@ -19,16 +19,16 @@
 #include <deal.II/base/timer.h>
 
 #include <femp/app/simulation_control.h>
+#include <femp/base/material.h>
 #include <femp/coupling/fluid_solid_forces.h>
 #include <femp/coupling/point_heat_exchange.h>
+#include <femp/flow/incompressible_flow.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
+#include <femp/grid/material_points.h>
 #include <femp/heat/heat_transfer.h>
-#include <femp/flow/incompressible_flow.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/thermal_history.h>
-#include <femp/base/material.h>
-#include <femp/grid/material_points.h>
 #include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/io/run_report.h>
@@ -83,38 +83,38 @@ namespace femp
     MPI_Comm           comm;
     ConditionalOStream pcout;
     /// Wall time (s) after which a long melt-flow sub-cycle reports.
-    double             next_substep_report = 30;
+    double next_substep_report = 30;
     /// workpiece_peak_temperature() of the current step (reset at its start).
     std::optional<double> workpiece_peak;
     /// 'Time stepping/Time step after solidification' in use at this step.
-    bool               cooling_step = false;
-    TimeParameters     time_prm;
+    bool           cooling_step = false;
+    TimeParameters time_prm;
     /// The material, owner of the data that several modules read (density,
     /// solidus, liquidus, evaporation data), passed by const reference.
-    Material           material;
+    Material material;
     /// Physics/Gravity, m/s^2: the one gravity of the flow and the solid.
-    Tensor<1, dim>     gravity;
-    typename BackgroundGrid<dim>::Parameters  grid_prm;
-    typename MaterialPoints<dim>::Parameters  points_prm;
-    typename HeatTransfer<dim>::Parameters    heat_prm;
-    typename Laser<dim>::Parameters           laser_prm;
+    Tensor<1, dim>                           gravity;
+    typename BackgroundGrid<dim>::Parameters grid_prm;
+    typename MaterialPoints<dim>::Parameters points_prm;
+    typename HeatTransfer<dim>::Parameters   heat_prm;
+    typename Laser<dim>::Parameters          laser_prm;
     /// Laser/Absorption model and the ray tracer's parameters.
     typename RayTracedAbsorption<dim>::Parameters absorption_prm;
     /// Ray traced: absorption.csv of the output directory (rank 0).
-    std::unique_ptr<std::ofstream>            absorption_csv;
-    typename Output<dim>::Parameters          output_prm;
-    typename ThermalHistory<dim>::Parameters  history_prm;
-    bool                                      melt_flow = false;
+    std::unique_ptr<std::ofstream>           absorption_csv;
+    typename Output<dim>::Parameters         output_prm;
+    typename ThermalHistory<dim>::Parameters history_prm;
+    bool                                     melt_flow = false;
     /// Physics/Heat transfer: false freezes the temperature field.
-    bool                                      heat_enabled = true;
+    bool                                         heat_enabled = true;
     typename IncompressibleFlow<dim>::Parameters flow_prm;
-    bool                                      solid_enabled = false;
+    bool                                         solid_enabled = false;
     /// Reads the density and solidus of @ref material.
-    SolidMaterial                             solid_material{material};
-    typename SolidStress<dim>::Parameters     solid_prm;
-    typename SolidFEM<dim>::Parameters        fem_prm;
-    typename TrackShape<dim>::Parameters      track_prm;
-    typename Checkpoint<dim>::Parameters      checkpoint_prm;
+    SolidMaterial                         solid_material{material};
+    typename SolidStress<dim>::Parameters solid_prm;
+    typename SolidFEM<dim>::Parameters    fem_prm;
+    typename TrackShape<dim>::Parameters  track_prm;
+    typename Checkpoint<dim>::Parameters  checkpoint_prm;
 
     // The modules; flow and solid exist only when switched on.
     std::unique_ptr<BackgroundGrid<dim>>     grid;
@@ -125,16 +125,16 @@ namespace femp
     std::unique_ptr<SolidStress<dim>>        solid;
     std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
     // What joins them.
-    std::unique_ptr<PointHeatExchange<dim>>  point_heat;
-    std::unique_ptr<FluidSolidForces<dim>>   fluid_solid;
+    std::unique_ptr<PointHeatExchange<dim>> point_heat;
+    std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
     // Clock, output and report.
-    std::unique_ptr<SimulationControl>       control;
-    std::unique_ptr<Output<dim>>             output;
-    std::unique_ptr<RunReport<dim>>          report;
-    std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
-    std::unique_ptr<Checkpoint<dim>>         checkpoint;
-    TimerOutput                              timer;
-    Summary                                  result;
+    std::unique_ptr<SimulationControl> control;
+    std::unique_ptr<Output<dim>>       output;
+    std::unique_ptr<RunReport<dim>>    report;
+    std::unique_ptr<TrackShape<dim>>   track_shape; ///< null unless on
+    std::unique_ptr<Checkpoint<dim>>   checkpoint;
+    TimerOutput                        timer;
+    Summary                            result;
 
     /// 'Solid FEM/Zone upper corner = auto': the FE zone's top below a
     /// conservative melt depth of the scene's laser (fe_zone_depth.h).

@@ -73,8 +73,7 @@ namespace femp
   /// each section of @p timer over the ranks (TimerOutput's statistics),
   /// if every rank has the same sections (else nothing: no rank waits).
   void
-  print_timer_statistics(const dealii::TimerOutput &timer,
-                         const MPI_Comm             comm);
+  print_timer_statistics(const dealii::TimerOutput &timer, const MPI_Comm comm);
 } // namespace femp
 
 #endif

@@ -12,8 +12,8 @@
 
 #include <chrono>
 #include <deque>
-#include <utility>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace femp
@@ -28,18 +28,18 @@ namespace femp
     /// Subsection 'Time stepping'.
     struct Parameters
     {
-      double       end_time      = 1e-3; ///< s
-      double       time_step     = 0;    ///< s, 0: automatic
-      double       safety_factor = 0.5;  ///< of the stable limit, (0, 1]
+      double end_time      = 1e-3; ///< s
+      double time_step     = 0;    ///< s, 0: automatic
+      double safety_factor = 0.5;  ///< of the stable limit, (0, 1]
       /// s, 0: off. With a prescribed time_step: the temperature step
       /// while the laser's path has ended and the workpiece is below the
       /// solidus (the driver decides; at most safety_factor times the
       /// stable limit).
       double       time_step_solidified = 0;
-      unsigned int max_steps     = 100000000;
+      unsigned int max_steps            = 100000000;
       /// K; 0: off. After the laser's path, end the run once the hottest
       /// metal cell is below this temperature (the driver asks for it).
-      double       stop_temperature = 0;
+      double stop_temperature = 0;
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -158,13 +158,13 @@ namespace femp
     load_state(std::vector<StateReader> &parts);
 
   private:
-    Parameters   prm;
-    Cadence      cadence;
-    StepChooser  choose;
-    double       t = 0, dt_last = 0;
-    unsigned int n_step = 0, n_output = 0;
-    bool         last = false, stop_requested = false;
-    double       next_output, next_series = 0;
+    Parameters                            prm;
+    Cadence                               cadence;
+    StepChooser                           choose;
+    double                                t = 0, dt_last = 0;
+    unsigned int                          n_step = 0, n_output = 0;
+    bool                                  last = false, stop_requested = false;
+    double                                next_output, next_series     = 0;
     std::chrono::steady_clock::time_point wall_start;
     /// (wall time, simulated time) samples of the recent past.
     std::deque<std::pair<double, double>> rate_samples;

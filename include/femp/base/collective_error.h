@@ -18,8 +18,9 @@ namespace femp
   {
   public:
     explicit CollectiveError(const std::string &message)
-      : std::runtime_error(message)
-    {}
+        : std::runtime_error(message)
+    {
+    }
   };
 } // namespace femp
 

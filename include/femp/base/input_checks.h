@@ -41,7 +41,7 @@ namespace femp
   void
   require(const bool         condition,
           const std::string &parameter,
-          const T &          value,
+          const T           &value,
           const std::string &allowed)
   {
     if (!condition)
@@ -98,7 +98,7 @@ namespace femp
     {
       double                           v0 = 0;
       std::array<double, max_segments> T{}, w{}, slope{}; // padded: slope 0
-      unsigned int                     n = 0; ///< segments in use
+      unsigned int                     n = 0;             ///< segments in use
       /// Evaluate with the first N segments (N >= n).
       template <unsigned int N = max_segments>
       double
@@ -150,7 +150,7 @@ namespace femp
 
   private:
     std::vector<double> T_, v_, inv_dT_;
-    Segments seg;
+    Segments            seg;
   };
 
   /// Parse a comma-separated list of dim numbers into a point.

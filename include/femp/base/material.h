@@ -2,7 +2,8 @@
 // used by eq. (1): density, temperature tables of specific heat and
 // conductivity, solidus/liquidus, latent heats, the evaporation data
 // (also read by the recoil pressure of the flow) and the liquid fraction
-// gamma = clamp((T - T_s)/(T_l - T_s), 0, 1) of doc/method.md, "Zones and discretizations".
+// gamma = clamp((T - T_s)/(T_l - T_s), 0, 1) of doc/method.md, "Zones and
+// discretizations".
 #ifndef femp_material_h
 #define femp_material_h
 
@@ -18,11 +19,11 @@ namespace femp
 
   struct Material
   {
-    double          density = 7955.;         ///< rho_m, kg/m^3
-    PiecewiseLinear specific_heat{500.};     ///< c_m(T), J/(kg K)
-    PiecewiseLinear conductivity{20.};       ///< lambda_m(T), W/(m K)
-    double          solidus     = 1670.;     ///< T_s, K
-    double          liquidus    = 1730.;     ///< T_l, K
+    double          density = 7955.;             ///< rho_m, kg/m^3
+    PiecewiseLinear specific_heat{500.};         ///< c_m(T), J/(kg K)
+    PiecewiseLinear conductivity{20.};           ///< lambda_m(T), W/(m K)
+    double          solidus            = 1670.;  ///< T_s, K
+    double          liquidus           = 1730.;  ///< T_l, K
     double          latent_heat_fusion = 2.68e5; ///< L_m, J/kg
     double          gas_density        = 1.6;    ///< rho_g, kg/m^3
     double          gas_specific_heat  = 520.;   ///< c_g, J/(kg K)

@@ -44,9 +44,9 @@ namespace femp
 
     /// @p density: of the solid metal, kg/m^3; @p fe_zone: the FE zone of
     /// the solid (equal shares inside it).
-    FluidSolidForces(const BackgroundGrid<dim> &                grid,
-                     const MaterialPoints<dim> &                points,
-                     const double                               density,
+    FluidSolidForces(const BackgroundGrid<dim>                &grid,
+                     const MaterialPoints<dim>                &points,
+                     const double                              density,
                      const typename SolidFEM<dim>::Parameters &fe_zone);
 
     /// The forces of the last fluid step of @p flow to the nodes.
@@ -58,7 +58,7 @@ namespace femp
     /// @p cells: the owned cells (increasing) outside which @p face_force
     /// is zero; nullptr: look at every owned cell.
     void
-    spread(const FaceForces &                face_force,
+    spread(const FaceForces                 &face_force,
            const std::vector<std::uint32_t> *cells = nullptr);
 
     /// The nodal forces, one array per direction over the local node box.
@@ -69,12 +69,12 @@ namespace femp
     }
 
   private:
-    const BackgroundGrid<dim> &                grid;
-    const MaterialPoints<dim> &                points;
-    const double                               density;
+    const BackgroundGrid<dim>                &grid;
+    const MaterialPoints<dim>                &points;
+    const double                              density;
     const typename SolidFEM<dim>::Parameters &fe_zone;
-    FaceForces                                 face_force;
-    NodeForces                                 node_force;
+    FaceForces                                face_force;
+    NodeForces                                node_force;
     // The cells where face_force may be non-zero (the flow's last call),
     // and those whose corners the last spread wrote: only they are reset,
     // so a few liquid drops cost a few cells, not passes over the grid.

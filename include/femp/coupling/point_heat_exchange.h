@@ -27,7 +27,7 @@ namespace femp
   public:
     /// @p carried_by_points: Heat transfer/Advection by melt flow = points.
     PointHeatExchange(MaterialPoints<dim> &points,
-                      HeatTransfer<dim> &  heat,
+                      HeatTransfer<dim>   &heat,
                       const bool           carried_by_points);
 
     /// Initial temperatures: points outside the initial @p bodies take
@@ -63,7 +63,7 @@ namespace femp
 
   private:
     MaterialPoints<dim> &points;
-    HeatTransfer<dim> &  heat;
+    HeatTransfer<dim>   &heat;
     const bool           carried_by_points;
     double               moved_points = 0;
   };

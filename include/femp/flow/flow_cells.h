@@ -53,7 +53,7 @@ namespace femp
     inline std::vector<std::ptrdiff_t>
     neighbourhood(const BackgroundGrid<dim> &grid)
     {
-      const auto &                cs = grid.strides();
+      const auto                 &cs = grid.strides();
       std::vector<std::ptrdiff_t> stencil;
       for (unsigned int k = 0; k < std::pow(3, dim); ++k)
         {

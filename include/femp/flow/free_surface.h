@@ -42,9 +42,9 @@ namespace femp
   public:
     struct Parameters
     {
-      double       surface_tension          = 0; ///< sigma, N/m (0: off)
-      double       surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
-      double       recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
+      double surface_tension          = 0; ///< sigma, N/m (0: off)
+      double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      double recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
       /// Curvature from heights of alpha in columns of 7 cells (true) or
@@ -70,8 +70,8 @@ namespace femp
     };
 
     /// The recoil pressure takes the evaporation data of @p material.
-    FreeSurface(const Parameters &         prm,
-                const Material &           material,
+    FreeSurface(const Parameters          &prm,
+                const Material            &material,
                 const BackgroundGrid<dim> &grid,
                 const MaterialPoints<dim> &points);
 
@@ -82,9 +82,9 @@ namespace femp
     /// temperature (ghost values needed), K, for the Marangoni stress and
     /// the recoil pressure; required when either is switched on.
     void
-    update(const std::vector<double> &       type,
+    update(const std::vector<double>        &type,
            const std::vector<std::uint32_t> &fluid_cells,
-           const std::vector<double> *       T);
+           const std::vector<double>        *T);
 
     /// 1 on the cells within one cell of a fluid cell (ghosts exchanged),
     /// 0 elsewhere: where alpha_cell() is computed, and the band of the
@@ -147,7 +147,7 @@ namespace femp
     map_metal_fraction();
     /// theta on the fluid-gas faces.
     void
-    locate_interface(const std::vector<double> &       type,
+    locate_interface(const std::vector<double>        &type,
                      const std::vector<std::uint32_t> &fluid_cells);
     /// Column sums of alpha along each direction for the height-function
     /// curvature: col3[d] (3 cells) on the owned near2 cells and col5[d]
@@ -167,36 +167,36 @@ namespace femp
     /// Capillary pressure of the surface cells, and their Marangoni
     /// traction.
     void
-    capillary_and_marangoni(const std::vector<double> &       type,
+    capillary_and_marangoni(const std::vector<double>        &type,
                             const std::vector<std::uint32_t> &fluid_cells,
-                            const std::vector<double> *       temperature);
+                            const std::vector<double>        *temperature);
     /// Add the recoil pressure of the surface cells to p_s, from the
     /// surface temperature of their neighbourhood (median over the surface
     /// cells among the 3^dim neighbours).
     void
     add_recoil_pressure(const std::vector<std::uint32_t> &fluid_cells,
-                        const std::vector<double> *       temperature);
+                        const std::vector<double>        *temperature);
     /// Average the capillary part of p_s over neighbouring surface cells
     /// (Melt flow/Curvature smoothing passes).
     void
     smooth_capillary_pressure(const std::vector<std::uint32_t> &fluid_cells);
 
     const Parameters           prm;
-    const Material &           mat;
+    const Material            &mat;
     const BackgroundGrid<dim> &grid;
     const MaterialPoints<dim> &points;
 
     static constexpr unsigned int         n_corners = 1u << dim;
     std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
     std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
-    std::vector<std::ptrdiff_t>           stencil; // 3^dim neighbourhood
+    std::vector<std::ptrdiff_t>           stencil;       // 3^dim neighbourhood
 
     std::vector<double>                      near1, near2; // 0/1
     std::vector<double>                      alpha_node, alpha_cell;
     std::array<std::vector<double>, dim>     col3, col5; // height function
     std::array<std::vector<double>, 2 * dim> theta;
     std::vector<double>                      p_surface;
-    std::vector<double> p_capillary, surface_mark; // sigma div(n), 0/1
+    std::vector<double> p_capillary, surface_mark;      // sigma div(n), 0/1
     std::array<std::vector<double>, dim> surface_force; // Marangoni, N
   };
 } // namespace femp

@@ -9,23 +9,23 @@
 // solves the pressure Poisson equation div(dt/rho grad p) = div u* on the
 // centres of the fluid cells (5-point/7-point stencil, CG + Trilinos ML
 // AMG; rows over a band of cells round the fluid, so that the graph and the
-// hierarchy are reused while the fluid stays inside the band), corrects the nodal velocity u = u* - dt/rho grad p, and updates
-// the points with a FLIP/PIC blend before moving them with the nodal
-// velocity (explicit advection). Optionally (Melt flow/Volume correction)
-// the points are also moved by grad(psi), lap(psi) = c (V_c/h^dim - 1) with
-// psi = 0 at the free surface, so that bunched points spread again and the
-// fluid volume of the cells is kept (doc/flow.md, "Volume correction").
+// hierarchy are reused while the fluid stays inside the band), corrects the
+// nodal velocity u = u* - dt/rho grad p, and updates the points with a FLIP/PIC
+// blend before moving them with the nodal velocity (explicit advection).
+// Optionally (Melt flow/Volume correction) the points are also moved by
+// grad(psi), lap(psi) = c (V_c/h^dim - 1) with psi = 0 at the free surface, so
+// that bunched points spread again and the fluid volume of the cells is kept
+// (doc/flow.md, "Volume correction").
 //
 // Surface tension enters through the free-surface condition: the Dirichlet
 // pressure on the faces between fluid and gas cells is the capillary
 // pressure p_s = sigma div(n) (n the outward normal of the smoothed metal
-// fraction alpha, doc/method.md, "Melt flow"), the sharp-interface form of the CSF term
-// sigma kappa n |grad alpha| of eq. (3); the recoil pressure
-// p_r = zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] adds to it. The Marangoni
-// stress dsigma/dT (grad T - (n.grad T) n) is a traction on the faces
-// between fluid and gas cells, each face weighted by |n_d| so that the
-// staircase of faces carries the area of the smoothed interface; it is
-// spread to the face's nodes.
+// fraction alpha, doc/method.md, "Melt flow"), the sharp-interface form of the
+// CSF term sigma kappa n |grad alpha| of eq. (3); the recoil pressure p_r =
+// zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] adds to it. The Marangoni stress
+// dsigma/dT (grad T - (n.grad T) n) is a traction on the faces between fluid
+// and gas cells, each face weighted by |n_d| so that the staircase of faces
+// carries the area of the smoothed interface; it is spread to the face's nodes.
 //
 // The step reads P2G -> free surface -> predictor -> pressure -> correction
 // -> G2P; the free-surface terms are computed by FreeSurface
@@ -61,7 +61,7 @@ namespace femp
   public:
     struct Parameters
     {
-      double         viscosity = 6e-3; ///< mu, Pa s
+      double viscosity = 6e-3; ///< mu, Pa s
       /// g, m/s^2 (default: -9.81 vertical); not an input of Melt flow:
       /// FempProblem sets it from Physics/Gravity.
       Tensor<1, dim> gravity;
@@ -71,25 +71,25 @@ namespace femp
       double         cfl            = 0.25; ///< convective Courant number
       /// Fraction of the capillary limit used by the automatic step (the
       /// surface tension is explicit; see doc/flow.md, oscillating droplet).
-      double         capillary_fraction = 0.5;
+      double capillary_fraction = 0.5;
       /// Prescribed fluid step, s (0: automatic, the smallest limit).
-      double         time_step = 0;
+      double time_step = 0;
       /// A of the point shifting delta x = -A h |u| dt grad(alpha) (Skillen
       /// et al. form; 0: off; tangential only near the free surface).
-      double         point_shifting = 0;
+      double point_shifting = 0;
       /// Passes of the curvature smoothing along the surface (0: none).
-      unsigned int   curvature_smoothing = 0;
+      unsigned int curvature_smoothing = 0;
       /// Curvature by the height function (Melt flow/Curvature); false:
       /// from the gradient of alpha.
-      bool           height_function = false;
+      bool height_function = false;
       /// Relaxation c of the volume correction (0: off): the points move,
       /// besides their advection, by grad(psi) with lap(psi) = c (V_c/h^dim
       /// - 1), V_c the point volume in the cell (doc/flow.md).
-      double         volume_correction = 0;
-      double         surface_tension = 0;   ///< sigma, N/m (0: off)
-      double         surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      double volume_correction        = 0;
+      double surface_tension          = 0; ///< sigma, N/m (0: off)
+      double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
-      double         recoil_coefficient = 0;
+      double recoil_coefficient = 0;
       /// Tolerance, iteration limit and preconditioner of the pressure
       /// solve.
       typename PressureSolver<dim>::Parameters pressure;
@@ -113,18 +113,19 @@ namespace femp
     /// Cell classes used by the flow (cell_type()).
     enum CellType : int
     {
-      gas     = flow_cells::gas,   ///< no metal point: free surface beyond, p = 0
-      solid   = flow_cells::solid, ///< metal points but none fluid: rigid, no-slip
-      fluid   = flow_cells::fluid, ///< at least one fluid point: pressure unknown
+      gas = flow_cells::gas, ///< no metal point: free surface beyond, p = 0
+      solid =
+        flow_cells::solid, ///< metal points but none fluid: rigid, no-slip
+      fluid = flow_cells::fluid, ///< at least one fluid point: pressure unknown
       outside = flow_cells::outside ///< beyond the domain: free-slip wall
     };
 
     /// Stable step limits, s (each is reported by the caller).
     struct StepLimits
     {
-      double convective; ///< cfl h / max(u_max, sqrt(|g| h))
-      double viscous;    ///< h^2 rho / (2 dim mu)
-      double capillary;  ///< sqrt(rho h^3 / (2 pi sigma))
+      double convective;             ///< cfl h / max(u_max, sqrt(|g| h))
+      double viscous;                ///< h^2 rho / (2 dim mu)
+      double capillary;              ///< sqrt(rho h^3 / (2 pi sigma))
       double capillary_fraction = 1; ///< of the capillary limit, automatic step
       /// The automatic step: min(convective, viscous, fraction x capillary).
       double
@@ -149,28 +150,29 @@ namespace femp
 
     struct Statistics
     {
-      unsigned int  steps            = 0;
-      unsigned int  matrix_rebuilds  = 0; ///< band numbering + matrix graph builds
-      unsigned int  amg_setups       = 0; ///< AMG hierarchy builds
-      unsigned long cg_iterations    = 0; ///< total over all steps
-      unsigned int  last_iterations  = 0;
-      unsigned int  max_iterations   = 0;
-      unsigned int  resorts          = 0; ///< steps in which points changed cell
+      unsigned int steps = 0;
+      unsigned int matrix_rebuilds =
+        0; ///< band numbering + matrix graph builds
+      unsigned int  amg_setups      = 0; ///< AMG hierarchy builds
+      unsigned long cg_iterations   = 0; ///< total over all steps
+      unsigned int  last_iterations = 0;
+      unsigned int  max_iterations  = 0;
+      unsigned int  resorts         = 0; ///< steps in which points changed cell
       /// of these, steps that needed deal.II's sort of all points (~0.5 us
       /// per point): a point beyond the ghost layer
-      unsigned int  global_sorts     = 0;
-      unsigned int  halvings         = 0; ///< steps redone as two halves
-      double        max_point_speed  = 0; ///< m/s, after the last step
-      unsigned long n_fluid_cells    = 0; ///< global, last step
+      unsigned int  global_sorts      = 0;
+      unsigned int  halvings          = 0; ///< steps redone as two halves
+      double        max_point_speed   = 0; ///< m/s, after the last step
+      unsigned long n_fluid_cells     = 0; ///< global, last step
       unsigned long volume_iterations = 0; ///< CG, volume correction, total
-      unsigned int  volume_skipped   = 0; ///< volume solves not converged
+      unsigned int  volume_skipped    = 0; ///< volume solves not converged
     };
 
-    IncompressibleFlow(const Parameters &         prm,
-                       const Material &           material,
+    IncompressibleFlow(const Parameters          &prm,
+                       const Material            &material,
                        const BackgroundGrid<dim> &grid,
-                       MaterialPoints<dim> &      points,
-                       TimerOutput *              timer = nullptr);
+                       MaterialPoints<dim>       &points,
+                       TimerOutput               *timer = nullptr);
 
     /// Limits from the current point velocities (collective).
     StepLimits
@@ -191,7 +193,7 @@ namespace femp
     /// limit (the step rejection and the non-finite check remain): for the
     /// forced-step experiments of doc/stability.md only.
     void
-    forced_step(const double                 dt,
+    forced_step(const double           dt,
                 const CellFields<dim> &fields = CellFields<dim>())
     {
       advance(dt, 0, fields);
@@ -335,8 +337,8 @@ namespace femp
     struct ShiftCell
     {
       std::array<double, (1u << dim)> alpha; ///< nodal alpha, mirrored at walls
-      bool                          near_surface = false;
-      std::array<double, dim>       normal{};     ///< unit, when near_surface
+      bool                            near_surface = false;
+      std::array<double, dim>         normal{}; ///< unit, when near_surface
     };
     ShiftCell
     shift_cell(const std::size_t cell) const;
@@ -344,8 +346,11 @@ namespace femp
     /// moving at @p speed during @p dt: -A h speed dt grad(alpha), its
     /// normal component removed near the free surface, at most h/4.
     void
-    shift_of_point(const ShiftCell &sc, const double *xi, const double speed,
-                   const double dt, double *dx) const;
+    shift_of_point(const ShiftCell &sc,
+                   const double    *xi,
+                   const double     speed,
+                   const double     dt,
+                   double          *dx) const;
 
     /// Wall conditions on the active nodes: no-slip next to solid cells,
     /// free slip (zero normal component) on the domain boundary.
@@ -355,34 +360,36 @@ namespace femp
     Parameters                 prm;
     const double               rho;
     const BackgroundGrid<dim> &grid;
-    MaterialPoints<dim> &      points;
-    TimerOutput *              timer;
+    MaterialPoints<dim>       &points;
+    TimerOutput               *timer;
 
-    static constexpr unsigned int n_corners = 1u << dim;
+    static constexpr unsigned int         n_corners = 1u << dim;
     std::array<std::ptrdiff_t, n_corners> corner_offset; // node offsets
     std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
-    std::vector<std::ptrdiff_t>           stencil; // 3^dim neighbourhood offsets
-    std::array<std::array<double, n_corners>, n_corners> stiffness; // Q1 Laplace
+    std::vector<std::ptrdiff_t> stencil; // 3^dim neighbourhood offsets
+    std::array<std::array<double, n_corners>, n_corners>
+      stiffness; // Q1 Laplace
 
     FreeSurface<dim>    surface;
     PressureSolver<dim> pressure_solver;
 
-    std::vector<double>                  type, type_old, p_cell;
-    std::vector<double>                  mass, volume;
-    std::vector<double>                  occupancy, psi; // point volume per cell, m^dim; psi/h^2
+    std::vector<double> type, type_old, p_cell;
+    std::vector<double> mass, volume;
+    std::vector<double> occupancy, psi; // point volume per cell, m^dim; psi/h^2
     std::array<std::vector<double>, dim> mom, u_old, u_new, force, u_cell;
-    std::vector<std::uint32_t>           active;      // nodes of fluid cells
-    std::vector<std::uint32_t>           active_cell; // cell whose corner 0 it is
-    std::vector<std::uint8_t>            node_mark;   // in active
-    std::vector<std::uint8_t>            node_fix;    // bit d: u_d = 0
-    std::vector<std::uint32_t>           fluid_cells; // owned fluid cells
+    std::vector<std::uint32_t>           active; // nodes of fluid cells
+    std::vector<std::uint32_t> active_cell;      // cell whose corner 0 it is
+    std::vector<std::uint8_t>  node_mark;        // in active
+    std::vector<std::uint8_t>  node_fix;         // bit d: u_d = 0
+    std::vector<std::uint32_t> fluid_cells;      // owned fluid cells
     // Where the points stood at the last classify_cells() (false: none
     // yet, or the points were loaded since): cells with no fluid point
     // then and no change of their points since are skipped.
     typename MaterialPoints<dim>::LayoutMark classified_at;
     bool                                     classified = false;
-    std::vector<double>                  divergence;  // per owned fluid cell
-    std::vector<double>                  cell_dissipation; // mu u^T K u per owned fluid cell, W (W/m in 2D)
+    std::vector<double>                      divergence; // per owned fluid cell
+    std::vector<double>
+      cell_dissipation; // mu u^T K u per owned fluid cell, W (W/m in 2D)
     std::vector<double> volume_source; // -c e per owned fluid cell
 
     Statistics stats;

@@ -81,20 +81,20 @@ namespace femp
     /// ghosts current).
     struct FluidCells
     {
-      const std::vector<double> &type;     ///< flow_cells::Type per cell
-      const std::vector<double> &type_old; ///< the same, previous step
-      const std::vector<std::uint32_t> &fluid; ///< owned fluid cells
-      const std::vector<double> &       band;  ///< 1 within a cell of fluid
+      const std::vector<double>        &type;     ///< flow_cells::Type per cell
+      const std::vector<double>        &type_old; ///< the same, previous step
+      const std::vector<std::uint32_t> &fluid;    ///< owned fluid cells
+      const std::vector<double>        &band;     ///< 1 within a cell of fluid
       /// Interface distance/h per face 2d+side (FreeSurface).
       const std::array<std::vector<double>, 2 * dim> &theta;
     };
 
     /// @p volume_correction: whether solve_volume() will be called (it
     /// needs a vector of its own).
-    PressureSolver(const Parameters &         prm,
+    PressureSolver(const Parameters          &prm,
                    const BackgroundGrid<dim> &grid,
                    const bool                 volume_correction,
-                   TimerOutput *              timer = nullptr);
+                   TimerOutput               *timer = nullptr);
 
     /// Bring the system up to date with the fluid cells @p cells: a new
     /// band numbering and graph when a fluid cell left the band, all band
@@ -111,22 +111,22 @@ namespace femp
     /// left as it is when there is no fluid cell at all). Throws when CG
     /// does not converge with a fresh hierarchy.
     void
-    solve_pressure(const FluidCells &         cells,
+    solve_pressure(const FluidCells          &cells,
                    const std::vector<double> &divergence,
                    const std::vector<double> &p_surface,
                    const bool                 capillary,
                    const double               rho,
                    const double               dt,
-                   std::vector<double> &      p_cell);
+                   std::vector<double>       &p_cell);
 
     /// Solve A x = -c e with the pressure matrix and hierarchy (@p
     /// source: -c e per owned fluid cell, in the order of cells.fluid);
     /// @p psi gets x at the fluid cells (ghosts exchanged). False (and @p
     /// psi zero) when CG does not converge.
     bool
-    solve_volume(const FluidCells &         cells,
+    solve_volume(const FluidCells          &cells,
                  const std::vector<double> &source,
-                 std::vector<double> &      psi);
+                 std::vector<double>       &psi);
 
     const Statistics &
     statistics() const
@@ -141,7 +141,7 @@ namespace femp
     {
       have_matrix     = false;
       jacobi_too_slow = false;
-      stats       = s;
+      stats           = s;
     }
 
   private:
@@ -169,14 +169,14 @@ namespace femp
     const Parameters           prm;
     const BackgroundGrid<dim> &grid;
     const bool                 volume_correction;
-    TimerOutput *              timer;
+    TimerOutput               *timer;
 
-    std::vector<double>               gid; // global row per cell, -1: none
+    std::vector<double>               gid;  // global row per cell, -1: none
     std::vector<std::uint32_t>        band; // owned band cells in row order
-    std::size_t                       n_fluid_rows = 0;
+    std::size_t                       n_fluid_rows           = 0;
     unsigned int                      iterations_after_setup = 1;
-    bool                              renumbered    = false;
-    bool                              new_hierarchy = false;
+    bool                              renumbered             = false;
+    bool                              new_hierarchy          = false;
     IndexSet                          owned_rows;
     TrilinosWrappers::SparseMatrix    matrix;
     TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
@@ -188,9 +188,9 @@ namespace femp
     /// A Jacobi solve needed more than the limit (auto: AMG from then on).
     bool jacobi_too_slow = false;
     /// The AMG hierarchy was set up on the current band and fluid set.
-    bool amg_current = false;
-    TrilinosWrappers::MPI::Vector     solution, rhs, psi_solution;
-    bool                              have_matrix = false;
+    bool                          amg_current = false;
+    TrilinosWrappers::MPI::Vector solution, rhs, psi_solution;
+    bool                          have_matrix = false;
 
     Statistics stats;
   };

@@ -38,7 +38,7 @@ namespace femp
       double     cell_size = 8e-6; ///< as declared ("Cell size")
       /// "Partition": balance the cells' costs (true, 'cost') or their
       /// number (false, 'cells') over the ranks.
-      bool       partition_by_cost = true;
+      bool partition_by_cost = true;
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -62,8 +62,8 @@ namespace femp
     /// the costs instead of the number of cells (doc/performance.md,
     /// "Balancing the ranks").
     void
-    create(const std::function<unsigned int(const Point<dim> &)> &cell_cost =
-             {});
+    create(
+      const std::function<unsigned int(const Point<dim> &)> &cell_cost = {});
 
     const parallel::distributed::Triangulation<dim> &
     triangulation() const
@@ -316,17 +316,17 @@ namespace femp
     // Ghost exchange pattern: per neighbour rank, the local flat indices we
     // send (owned cells that are ghosts there) and receive (our ghosts that
     // it owns), both in increasing global lexicographic order.
-    std::vector<int>                        neighbours;
-    std::vector<std::vector<std::uint32_t>> send_indices, recv_indices;
+    std::vector<int>                         neighbours;
+    std::vector<std::vector<std::uint32_t>>  send_indices, recv_indices;
     mutable std::vector<std::vector<double>> send_buffers, recv_buffers;
 
     // Nodes: layout and the shared-node pattern (same node list on both
     // sides, in increasing global node order).
-    std::size_t                             n_nodes_box = 0;
-    std::array<std::ptrdiff_t, dim>         node_stride;
-    std::vector<std::uint32_t>              active_nodes;
-    std::vector<int>                        node_neighbours;
-    std::vector<std::vector<std::uint32_t>> shared_nodes;
+    std::size_t                              n_nodes_box = 0;
+    std::array<std::ptrdiff_t, dim>          node_stride;
+    std::vector<std::uint32_t>               active_nodes;
+    std::vector<int>                         node_neighbours;
+    std::vector<std::vector<std::uint32_t>>  shared_nodes;
     mutable std::vector<std::vector<double>> node_send, node_recv;
 
     /// The owned and ghost cells of the triangulation in the domain, with
@@ -335,9 +335,9 @@ namespace femp
       std::vector<std::pair<std::array<int, dim>,
                             typename Triangulation<dim>::active_cell_iterator>>;
     /// The parts of create(): the p4est triangulation (coarse blocks
-    /// refined globally), partitioned by @p cell_cost if given; the local box, the cell status and the owned
-    /// cells (fills @p known); the ghost exchange pattern; the node layout
-    /// and the shared-node pattern.
+    /// refined globally), partitioned by @p cell_cost if given; the local box,
+    /// the cell status and the owned cells (fills @p known); the ghost exchange
+    /// pattern; the node layout and the shared-node pattern.
     void
     create_triangulation(
       const std::function<unsigned int(const Point<dim> &)> &cell_cost);
@@ -355,8 +355,11 @@ namespace femp
   /// corner offsets). @p x0 is the grid origin and @p ih = 1/h.
   template <int dim, typename PointType>
   inline void
-  tent_weights(const PointType &x, const PointType &x0, const double ih,
-               const std::array<int, dim> &ijk, const double scale,
+  tent_weights(const PointType            &x,
+               const PointType            &x0,
+               const double                ih,
+               const std::array<int, dim> &ijk,
+               const double                scale,
                double (&w)[1u << dim])
   {
     w[0] = scale;

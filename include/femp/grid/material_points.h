@@ -1,13 +1,14 @@
-// femp: the material points (doc/method.md, "Zones and discretizations") on the background grid,
-// carried by deal.II's Particles::ParticleHandler.
+// femp: the material points (doc/method.md, "Zones and discretizations") on the
+// background grid, carried by deal.II's Particles::ParticleHandler.
 //
 // A scene builds a substrate block and a powder layer of randomly packed
 // spherical grains; each region is filled with points on a global lattice of
 // the given spacing, inserted cell by cell. The metal fraction alpha of a
 // cell is the fraction of its n^dim sub-cells that hold at least one point
 // (ref. [11]), and in cells holding melt (fluid points) the volume of its
-// points, kept where fluid points bunch (see metal_fraction()); temperatures pass from cells to points after each thermal
-// step, and from points to cells that just gained points.
+// points, kept where fluid points bunch (see metal_fraction()); temperatures
+// pass from cells to points after each thermal step, and from points to cells
+// that just gained points.
 //
 // Property layout of each point (index: quantity, unit):
 //   0 mass (kg; 2D: kg/m)        1 volume (m^3; 2D: m^2)
@@ -27,8 +28,8 @@
 #include <deal.II/fe/mapping_q1.h>
 #include <deal.II/particles/particle_handler.h>
 
-#include <femp/grid/background_grid.h>
 #include <femp/base/material.h>
+#include <femp/grid/background_grid.h>
 
 #include <functional>
 #include <vector>
@@ -59,9 +60,10 @@ namespace femp
       static constexpr unsigned int peak_temperature = 4;
       static constexpr unsigned int velocity         = 5;
       static constexpr unsigned int stress           = 5 + dim;
-      static constexpr unsigned int plastic_strain   = 5 + dim + dim * (dim + 1) / 2;
+      static constexpr unsigned int plastic_strain =
+        5 + dim + dim * (dim + 1) / 2;
       /// 2D only (plane strain): out-of-plane stress sigma_zz.
-      static constexpr unsigned int stress_zz        = plastic_strain + 1;
+      static constexpr unsigned int stress_zz = plastic_strain + 1;
       /// Artificial bulk-viscosity pressure of the solid (SolidMPM).
       static constexpr unsigned int viscous_pressure =
         plastic_strain + 1 + (dim == 2 ? 1 : 0);
@@ -95,11 +97,11 @@ namespace femp
       double       packing_fraction = 0.45;
       unsigned int seed             = 1;
       /// Material points/Carry points: "auto" or "always".
-      std::string  carry            = "auto";
+      std::string carry = "auto";
       /// Whether the scene carries points at all (resolve_carry()); false:
       /// create() makes none, alpha comes from the substrate's lattice
       /// geometry and the per-step transfer to points does nothing.
-      bool         carry_points     = true;
+      bool carry_points = true;
 
       /// An initial body (Material points/Initial bodies): a box from
       /// @p a (lower corner) to @p b (upper corner), or an ellipsoid
@@ -131,16 +133,18 @@ namespace femp
       /// needs none: its points would never move nor hold anything the
       /// cells do not.
       void
-      resolve_carry(const bool melt_flow, const bool solid,
+      resolve_carry(const bool melt_flow,
+                    const bool solid,
                     const bool track_shape);
     };
 
     /// @p n_properties: how many properties each point carries
     /// (PropertyIndex::n_used(); by default the whole layout).
-    MaterialPoints(const Parameters &         prm,
-                   const Material &           material,
-                   const BackgroundGrid<dim> &grid,
-                   const unsigned int n_properties = PropertyIndex::n_properties);
+    MaterialPoints(
+      const Parameters          &prm,
+      const Material            &material,
+      const BackgroundGrid<dim> &grid,
+      const unsigned int         n_properties = PropertyIndex::n_properties);
 
     /// Number of properties each point carries.
     unsigned int
@@ -163,7 +167,8 @@ namespace femp
     /// points created before.
     void
     create_region(const std::function<bool(const Point<dim> &)> &inside,
-                  const double T0, const State state);
+                  const double                                   T0,
+                  const State                                    state);
 
     /// After point positions changed so that some point left its cell:
     /// move points to their new cells and ranks and refresh the list of
@@ -215,8 +220,8 @@ namespace femp
     struct LayoutMark
     {
       std::uint64_t generation = 0; ///< re-indexings (sorts, loads, inserts)
-      std::uint64_t moves      = 0; ///< relocate_points() calls that moved points
-      std::uint64_t states     = 0; ///< cells_to_points() calls that changed states
+      std::uint64_t moves  = 0; ///< relocate_points() calls that moved points
+      std::uint64_t states = 0; ///< cells_to_points() calls that changed states
     };
     LayoutMark
     layout_mark() const
@@ -228,7 +233,7 @@ namespace femp
     /// any of the local cells @p cells (increasing or not): the points of
     /// these cells keep their pool handles and their order in the handler.
     bool
-    layout_unchanged(const LayoutMark &               mark,
+    layout_unchanged(const LayoutMark                 &mark,
                      const std::vector<std::uint32_t> &cells) const
     {
       if (mark.generation != layout_generation)
@@ -257,7 +262,8 @@ namespace femp
 
     /// Owned cells that hold points: (flat index, cell iterator).
     const std::vector<
-      std::pair<std::uint32_t, typename Triangulation<dim>::active_cell_iterator>> &
+      std::pair<std::uint32_t,
+                typename Triangulation<dim>::active_cell_iterator>> &
     occupied_cells() const
     {
       return occupied;
@@ -265,10 +271,10 @@ namespace femp
 
     /// Metal fraction alpha per cell of the local box (ghosts exchanged).
     /// Cells without a fluid point: sub-cell occupancy (the fraction of the
-    /// n^dim sub-cells holding a point, doc/method.md, "Heat transfer"). Cells holding a
-    /// fluid point: the volume of their points over the cell volume, with
-    /// the excess of over-full cells (points bunched by the flow) passed on
-    /// to fluid face neighbours that are not full, then min(1, .): the metal
+    /// n^dim sub-cells holding a point, doc/method.md, "Heat transfer"). Cells
+    /// holding a fluid point: the volume of their points over the cell volume,
+    /// with the excess of over-full cells (points bunched by the flow) passed
+    /// on to fluid face neighbours that are not full, then min(1, .): the metal
     /// volume of the melt is kept as the points keep it, where occupancy
     /// lost it when points bunched (doc/flow.md, "Volume-based alpha").
     /// On the point lattice with spacing h/n both rules give the same alpha.
@@ -323,7 +329,7 @@ namespace femp
     /// points all have the cell's temperature are left out: their mean is
     /// e(T) of the cell.
     std::vector<std::pair<std::uint32_t, double>>
-    volume_mean_over_points(const std::vector<double> &         T,
+    volume_mean_over_points(const std::vector<double>           &T,
                             const std::function<double(double)> &e) const;
 
     /// Zone tag per cell of the local box, from the states of its points:
@@ -395,14 +401,14 @@ namespace femp
   private:
     Parameters                      prm;
     unsigned int                    n_props;
-    const Material &                mat;
-    const BackgroundGrid<dim> &     grid;
+    const Material                 &mat;
+    const BackgroundGrid<dim>      &grid;
     MappingQ1<dim>                  mapping;
     Particles::ParticleHandler<dim> handler;
     // Owned cells that hold points: flat index and iterator.
     std::vector<std::pair<std::uint32_t,
                           typename Triangulation<dim>::active_cell_iterator>>
-                 occupied;
+      occupied;
     // Property arrays of the points in the pool, grouped by occupied cell:
     // points of occupied[c] are point_properties[cell_begin[c] ..
     // cell_begin[c+1]).
@@ -452,7 +458,7 @@ namespace femp
     mutable std::vector<double> pending_peak;
     // Fixed cells that went above the solidus (written at once since).
     std::vector<std::uint8_t> melted_fixed_cell;
-    mutable bool                any_pending = false;
+    mutable bool              any_pending = false;
     // Flush the record of occupied_cells()[c] (if any) into its points.
     void
     flush_cell(const std::size_t c) const;
@@ -482,7 +488,7 @@ namespace femp
     add_lattice_points(
       const std::uint32_t                                idx,
       const double                                       vertical_limit,
-      const std::function<bool(const Point<dim> &)> &    keep,
+      const std::function<bool(const Point<dim> &)>     &keep,
       std::vector<std::pair<std::uint32_t, Point<dim>>> &points) const;
     /// metal_fraction() in cells with a fluid point: @p v the point volume
     /// per owned cell (turned into a fraction, excess spread), @p is_fluid
@@ -495,7 +501,7 @@ namespace femp
     void
     insert_points(std::vector<std::pair<std::uint32_t, Point<dim>>> &points,
                   const double                                       T0,
-                  const std::function<State(const Point<dim> &)> &   state_of);
+                  const std::function<State(const Point<dim> &)>    &state_of);
     unsigned int n_grains = 0;
     double       packing  = 0;
   };

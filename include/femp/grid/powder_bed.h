@@ -1,12 +1,11 @@
-// femp: random packing of spherical powder grains (doc/method.md, "Zones and discretizations"): grain
-// diameters drawn from a normal distribution truncated to [d_min, d_max],
-// largest first, each dropped vertically at a random horizontal position
-// until it rests on the substrate or touches a grain below it (ballistic
-// deposition without rolling); a grain that would stick out of the layer is
-// dropped again elsewhere. Stops at the target packing fraction or when the
-// attempts run out. The
-// generator is seeded, so every rank builds the same bed and a run is
-// reproducible. Pure geometry: no deal.II dependency.
+// femp: random packing of spherical powder grains (doc/method.md, "Zones and
+// discretizations"): grain diameters drawn from a normal distribution truncated
+// to [d_min, d_max], largest first, each dropped vertically at a random
+// horizontal position until it rests on the substrate or touches a grain below
+// it (ballistic deposition without rolling); a grain that would stick out of
+// the layer is dropped again elsewhere. Stops at the target packing fraction or
+// when the attempts run out. The generator is seeded, so every rank builds the
+// same bed and a run is reproducible. Pure geometry: no deal.II dependency.
 #ifndef femp_powder_bed_h
 #define femp_powder_bed_h
 
@@ -26,10 +25,10 @@ namespace femp
   {
     int                   dim = 3;
     std::array<double, 3> lower{}, upper{}; ///< layer box, m (vertical = dim-1)
-    double                mean_diameter   = 30e-6;
-    double                std_diameter    = 5e-6;
-    double                min_diameter    = 15e-6;
-    double                max_diameter    = 45e-6;
+    double                mean_diameter    = 30e-6;
+    double                std_diameter     = 5e-6;
+    double                min_diameter     = 15e-6;
+    double                max_diameter     = 45e-6;
     double                packing_fraction = 0.5;
     std::uint64_t         seed             = 1;
     unsigned int          max_attempts     = 200000;

@@ -36,7 +36,7 @@ namespace femp
   std::vector<std::uint8_t>
   attached_metal_cells(const BackgroundGrid<dim> &grid,
                        const std::vector<double> &alpha,
-                       unsigned int *             sweeps = nullptr);
+                       unsigned int              *sweeps = nullptr);
 
   /// Global maximum of @p T over the counted cells; the maximum over all
   /// metal cells (alpha > 0) when there is none. Collective.

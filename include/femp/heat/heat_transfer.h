@@ -12,10 +12,10 @@
 // velocity (none unless a flow solver or a prescribed field provides one;
 // in partly filled cells at the rate 1/alpha, the part above 1 implicit);
 // latent heat by a local iteration per cell over the solid, mushy and liquid
-// branches of the enthalpy relation (doc/method.md, "Heat transfer"); surface losses and the
-// laser deposited through |grad alpha| with the density weighting above (the
-// default 'first surface' laser only into the cells where the vertical beam
-// first meets metal, shared in proportion to that weight).
+// branches of the enthalpy relation (doc/method.md, "Heat transfer"); surface
+// losses and the laser deposited through |grad alpha| with the density
+// weighting above (the default 'first surface' laser only into the cells where
+// the vertical beam first meets metal, shared in proportion to that weight).
 // Cells without metal (alpha = 0) are not solved and carry no flux.
 #ifndef femp_heat_transfer_h
 #define femp_heat_transfer_h
@@ -23,11 +23,11 @@
 #include <deal.II/base/function_parser.h>
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/material.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/ray_traced_absorption.h>
-#include <femp/base/material.h>
 
 #include <cstdint>
 #include <limits>
@@ -50,12 +50,12 @@ namespace femp
     {
       /// Uniform initial temperature, K; with a function expression its
       /// value at the lower corner of the domain (see check()).
-      double initial_temperature   = 300.;
+      double initial_temperature = 300.;
       /// 'Initial temperature' given as a function of x, y (, z) (m);
       /// empty when it is a plain number.
       std::string initial_temperature_expression;
-      double reference_temperature = 300.;
-      double convection_coefficient = 10.;
+      double      reference_temperature  = 300.;
+      double      convection_coefficient = 10.;
       /// 'Detached drops = sphere': a drop of at most detached_drop_cells
       /// metal cells (face-connected, no other metal face neighbour inside
       /// the domain) loses heat as a sphere of its metal volume (diameter
@@ -66,9 +66,9 @@ namespace femp
       /// 'Detached drop cells': the largest drop (in cells) that counts as
       /// detached; 1 to 4.
       unsigned int detached_drop_cells = 4;
-      double emissivity             = 0.4;
+      double       emissivity          = 0.4;
       /// zeta_q of eq. (1); the evaporation data are the Material's.
-      double evaporation_coefficient = 0.82;
+      double                        evaporation_coefficient = 0.82;
       std::map<std::string, double> fixed_temperatures;
       std::string                   laser_deposition = "first surface";
       std::string                   prescribed_velocity;
@@ -117,9 +117,9 @@ namespace femp
     double
     total_losses() const;
 
-    HeatTransfer(const Parameters &         prm,
-                 const Material &           material,
-                 const Laser<dim> &         laser,
+    HeatTransfer(const Parameters          &prm,
+                 const Material            &material,
+                 const Laser<dim>          &laser,
                  const BackgroundGrid<dim> &grid);
 
     /// Allocate the fields, set T to the initial temperature (a constant
@@ -299,8 +299,8 @@ namespace femp
 
   private:
     Parameters                 prm;
-    const Material &           mat;
-    const Laser<dim> &         laser;
+    const Material            &mat;
+    const Laser<dim>          &laser;
     const BackgroundGrid<dim> &grid;
     /// Evaporation flux constants: q_evap = evap_pref / sqrt(T)
     /// exp(evap_exp (T - T_v) / T).
@@ -311,7 +311,7 @@ namespace femp
     std::vector<std::uint32_t> source_cells;
     std::vector<std::size_t>   flagged_rows;
     /// Per x-row of the local box: 1 if any cell of the row holds metal.
-    std::vector<std::uint8_t>  row_has_metal;
+    std::vector<std::uint8_t> row_has_metal;
     /// Laser density of the last step, W/m^3; surface-loss weight
     /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
     std::vector<double> laser_density, loss_weight;
@@ -324,8 +324,8 @@ namespace femp
     struct DetachedCell
     {
       std::uint32_t index;
-      double        area;   ///< sphere surface / cell volume, 1/m
-      double        gas_h;  ///< Nu k_g / d, W/(m^2 K)
+      double        area;  ///< sphere surface / cell volume, 1/m
+      double        gas_h; ///< Nu k_g / d, W/(m^2 K)
     };
     std::vector<DetachedCell> detached;
     /// find_detached_cells(): per cell of the local box, the global indices
@@ -346,7 +346,7 @@ namespace femp
     struct SurfaceCell
     {
       std::uint32_t index;
-      double        grad_alpha;  ///< |grad alpha|, 1/m
+      double        grad_alpha; ///< |grad alpha|, 1/m
     };
     std::vector<SurfaceCell> surface;
     /// Owned cells where the vertical beam first meets metal, with their
@@ -369,12 +369,12 @@ namespace femp
     /// Ray-traced absorption (nullptr: the fixed model), its deposits
     /// (owned cell, W) for the time traced_time, the cells that took the
     /// last step's deposits, the outcome of the last trace.
-    std::unique_ptr<RayTracedAbsorption<dim>>       tracer;
-    std::vector<std::pair<std::uint32_t, double>>   ray_deposits;
-    std::vector<std::uint32_t>                      ray_cells;
-    double                                          traced_time = -1;
-    bool                                            traced      = false;
-    typename RayTracedAbsorption<dim>::Result       trace_result;
+    std::unique_ptr<RayTracedAbsorption<dim>>     tracer;
+    std::vector<std::pair<std::uint32_t, double>> ray_deposits;
+    std::vector<std::uint32_t>                    ray_cells;
+    double                                        traced_time = -1;
+    bool                                          traced      = false;
+    typename RayTracedAbsorption<dim>::Result     trace_result;
     /// Ray traced: the deposits of the trace at @p time into the sources
     /// of this step; returns their sum over the owned cells, W/m^3 summed.
     double
@@ -399,15 +399,16 @@ namespace femp
     /// discrete maximum principle, which the latent heat can otherwise
     /// hide as a bounded, wrong checkerboard. Collective.
     void
-    check_temperature_floor(const double T_min, const double dt,
+    check_temperature_floor(const double T_min,
+                            const double dt,
                             const double time) const;
     /// What the passes of advance() hand on to each other.
     struct StepSums
     {
-      double      rate_max = 0; ///< largest rate (1/stable step), 1/s
-      double      box_max  = 0; ///< pass B: peak new T over metal cells, K
-      double      box_min  = 0; ///< pass B: lowest new T over metal cells, K
-      double      box_bad  = 0; ///< pass B: NaN when a new T is not finite
+      double      rate_max    = 0; ///< largest rate (1/stable step), 1/s
+      double      box_max     = 0; ///< pass B: peak new T over metal cells, K
+      double      box_min     = 0; ///< pass B: lowest new T over metal cells, K
+      double      box_bad     = 0; ///< pass B: NaN when a new T is not finite
       double      e_boundary  = 0; ///< through fixed faces in the step, J
       double      e_advection = 0; ///< convection, W/m^3 summed over cells
       double      e_evap = 0, e_conv = 0, e_rad = 0; ///< losses, W/m^3 sums
@@ -428,7 +429,7 @@ namespace femp
     void
     convection_pass(const double                                dt,
                     const std::array<std::vector<double>, dim> *u,
-                    StepSums &                                  sums);
+                    StepSums                                   &sums);
     /// Pass C: the cells with sparse sources (laser, surface losses, fixed
     /// faces), surface losses implicit.
     void
@@ -473,10 +474,10 @@ namespace femp
     /// convection coefficient (the gas conduction of a detached cell).
     void
     surface_loss(const double T,
-                 double &     q_evap,
-                 double &     q_conv,
-                 double &     q_rad,
-                 double &     dq_dT,
+                 double      &q_evap,
+                 double      &q_conv,
+                 double      &q_rad,
+                 double      &dq_dT,
                  const double gas_h = 0) const;
     /// New temperature of a cell with metal fraction @p a that starts from
     /// @p Tc, gamma @p gc and receives the explicit enthalpy change @p dH

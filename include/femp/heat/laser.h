@@ -29,17 +29,17 @@ namespace femp
       /// formats (heat/scan_path.h), else 0; the beam deposits its energy
       /// where it meets the metal, whatever this height.
       Point<dim> start, end;
-      double     speed;      ///< m/s
-      double     power;      ///< W (3D) or W/m (2D); 0 = laser off
+      double     speed; ///< m/s
+      double     power; ///< W (3D) or W/m (2D); 0 = laser off
       double     t_begin, t_end;
     };
 
     struct Parameters
     {
-      double      power       = 200.;
+      double      power        = 200.;
       double      absorptivity = 0.35;
-      double      beam_radius = 20e-6;
-      double      scan_speed  = 2.;
+      double      beam_radius  = 20e-6;
+      double      scan_speed   = 2.;
       Point<dim>  start_point, end_point;
       double      start_time = 0.;
       std::string scan_path_file;

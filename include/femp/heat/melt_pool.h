@@ -26,8 +26,8 @@ namespace femp
     double volume = 0;                       ///< m^3 (2D: m^2), cells above T_m
     double T_max  = 0;                       ///< K, over metal cells
     /// Fusion zone inside the original substrate at the solidus, m.
-    double solidus_width = 0, solidus_depth = 0;
-    std::array<double, 3> lower{}, upper{};  ///< bounding box of the pool, m
+    double                solidus_width = 0, solidus_depth = 0;
+    std::array<double, 3> lower{}, upper{}; ///< bounding box of the pool, m
   };
 
   /// Global melt-pool size; @p T needs valid ghosts; @p alpha marks metal.

@@ -68,10 +68,10 @@ namespace femp
     /// into the metal fraction @p alpha (owned values and ghosts). Appends
     /// (owned local cell index, absorbed power W) to @p deposits. Collective.
     Result
-    trace(const std::vector<double> &                      alpha,
-          const Point<dim> &                               axis,
-          const double                                     power,
-          const double                                     beam_radius,
+    trace(const std::vector<double>                     &alpha,
+          const Point<dim>                              &axis,
+          const double                                   power,
+          const double                                   beam_radius,
           std::vector<std::pair<std::uint32_t, double>> &deposits) const;
 
     const Parameters &

@@ -59,7 +59,7 @@ namespace femp
   template <int dim>
   std::vector<typename Laser<dim>::Segment>
   to_laser_segments(const std::vector<ScanPathPiece> &pieces,
-                    const std::string &               file);
+                    const std::string                &file);
 
   /// Both steps: read @p file and map it to @p dim.
   template <int dim>

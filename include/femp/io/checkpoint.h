@@ -74,18 +74,20 @@ namespace femp
     std::vector<char> data;
   };
 
-
   /// Reads what a StateWriter wrote; throws (naming @p what) on reading past
   /// the end, which a checksum-verified file only does when the format of
   /// the writer and the reader differ.
   class StateReader
   {
   public:
-    StateReader(const char *begin, const std::size_t size, const std::string &what)
-      : p(begin)
-      , end(begin + size)
-      , what(what)
-    {}
+    StateReader(const char        *begin,
+                const std::size_t  size,
+                const std::string &what)
+        : p(begin)
+        , end(begin + size)
+        , what(what)
+    {
+    }
     template <typename T>
     T
     get()
@@ -102,7 +104,7 @@ namespace femp
     std::vector<T>
     get_vector()
     {
-      const auto     n = get<std::uint64_t>();
+      const auto n = get<std::uint64_t>();
       check(n * sizeof(T));
       std::vector<T> values(n);
       std::memcpy(values.data(), p, n * sizeof(T));
@@ -137,7 +139,6 @@ namespace femp
     void
     check(const std::uint64_t n) const;
   };
-
 
   /// Global linear index i + n_0 (j + n_1 k) of the structured cell @p ijk.
   template <int dim, typename Index>
@@ -174,11 +175,11 @@ namespace femp
   /// keyed by the global cell number.
   template <int dim>
   void
-  save_cell_fields(StateWriter &                             out,
-                   const BackgroundGrid<dim> &               grid,
+  save_cell_fields(StateWriter                                    &out,
+                   const BackgroundGrid<dim>                      &grid,
                    const std::vector<const std::vector<double> *> &fields)
   {
-    const auto &               owned = grid.owned_cells();
+    const auto                &owned = grid.owned_cells();
     std::vector<std::uint64_t> keys(owned.size());
     for (std::size_t k = 0; k < owned.size(); ++k)
       keys[k] = global_cell_number(grid, grid.global_index(owned[k]));
@@ -197,8 +198,8 @@ namespace femp
   /// ranks: each rank keeps its owned cells; ghosts are exchanged.
   template <int dim>
   void
-  load_cell_fields(std::vector<StateReader> &           parts,
-                   const BackgroundGrid<dim> &          grid,
+  load_cell_fields(std::vector<StateReader>                 &parts,
+                   const BackgroundGrid<dim>                &grid,
                    const std::vector<std::vector<double> *> &fields)
   {
     for (auto &in : parts)
@@ -222,7 +223,6 @@ namespace femp
       grid.update_ghosts(*f);
   }
 
-
   template <int dim>
   class Checkpoint
   {
@@ -234,7 +234,7 @@ namespace femp
       double       every_time         = 0; ///< s, 0: off
       double       every_wall_minutes = 0; ///< min, 0: off
       std::string  directory          = "checkpoint";
-      std::string  resume_from;            ///< empty: a new run
+      std::string  resume_from; ///< empty: a new run
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -255,9 +255,9 @@ namespace femp
     };
 
     /// @p output_directory: where a relative 'Directory' lies.
-    Checkpoint(const Parameters & prm,
+    Checkpoint(const Parameters  &prm,
                const std::string &output_directory,
-               const Scene &      scene,
+               const Scene       &scene,
                MPI_Comm           comm);
 
     /// True if any trigger is on.
@@ -275,9 +275,10 @@ namespace femp
     /// Write a checkpoint of this rank's @p sections (name, bytes) at
     /// @p step, @p time (collective); returns its directory.
     std::string
-    write(const unsigned int                                       step,
-          const double                                             time,
-          const std::vector<std::pair<std::string, const StateWriter *>> &sections);
+    write(
+      const unsigned int                                              step,
+      const double                                                    time,
+      const std::vector<std::pair<std::string, const StateWriter *>> &sections);
 
     /// Read and verify the checkpoint 'Resume from' (collective): a
     /// checkpoint that is corrupt, truncated or written for another scene
@@ -299,7 +300,7 @@ namespace femp
     void
     release()
     {
-      files          = {};
+      files            = {};
       sections_of_file = {};
     }
     unsigned int
@@ -344,28 +345,28 @@ namespace femp
     load_state(std::vector<StateReader> &parts);
 
   private:
-    Parameters  prm;
-    std::string base;
-    Scene       scene;
-    MPI_Comm    comm;
-    double      next_time = 0;
+    Parameters                            prm;
+    std::string                           base;
+    Scene                                 scene;
+    MPI_Comm                              comm;
+    double                                next_time = 0;
     std::chrono::steady_clock::time_point last_wall;
-    double        seconds    = 0;
-    std::uint64_t last_bytes = 0;
+    double                                seconds    = 0;
+    std::uint64_t                         last_bytes = 0;
 
     // The checkpoint read: one file image per saved rank, its sections.
-    std::string                                        path;
-    unsigned int                                       step_read = 0;
-    unsigned int                                       n_files   = 0;
-    double                                             time_read = 0;
-    std::vector<std::vector<char>>                     files;
+    std::string                    path;
+    unsigned int                   step_read = 0;
+    unsigned int                   n_files   = 0;
+    double                         time_read = 0;
+    std::vector<std::vector<char>> files;
     std::vector<std::map<std::string, std::pair<std::size_t, std::size_t>>>
       sections_of_file;
 
     /// Check one file image against the scene (InputError).
     void
     check_file(const std::vector<char> &image,
-               const std::string &      file,
+               const std::string       &file,
                const unsigned int       rank,
                const unsigned int       n_ranks);
   };

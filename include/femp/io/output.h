@@ -36,18 +36,18 @@ namespace femp
 
     struct Parameters
     {
-      std::string            directory       = "output";
-      double                 output_interval = 1e-4;
-      std::string            write_points    = "last"; ///< always|last|never
-      std::string            format          = "vtu";  ///< vtu|hdf5
+      std::string directory       = "output";
+      double      output_interval = 1e-4;
+      std::string write_points    = "last"; ///< always|last|never
+      std::string format          = "vtu";  ///< vtu|hdf5
       /// Point properties and grid fields to write; empty: all.
       std::vector<std::string> point_properties, grid_fields;
-      double                 series_interval = 0;
-      unsigned int           output_steps    = 0;
-      unsigned int           progress_interval = 100;
+      double                   series_interval   = 0;
+      unsigned int             output_steps      = 0;
+      unsigned int             progress_interval = 100;
       /// Probe values: the containing cell's ("cell") or interpolated
       /// between cell centres, weighted by the metal fraction ("linear").
-      bool                   probe_linear = false;
+      bool                    probe_linear = false;
       std::vector<Point<dim>> probe_points;
       std::vector<ProbeLine>  probe_lines;
 
@@ -89,22 +89,22 @@ namespace femp
 
     /// Write grid fields (and points) for output number @p n at @p time.
     void
-    write_fields(const unsigned int                       n,
-                 const double                             time,
-                 const std::vector<Field> &               fields,
-                 const Particles::ParticleHandler<dim> *  points,
-                 const std::vector<std::string> &         point_names);
+    write_fields(const unsigned int                     n,
+                 const double                           time,
+                 const std::vector<Field>              &fields,
+                 const Particles::ParticleHandler<dim> *points,
+                 const std::vector<std::string>        &point_names);
 
     /// Append one row to the probe-point and melt-pool CSV files.
     void
-    write_series(const double                 time,
-                 const std::vector<Field> &   probe_fields,
-                 const MeltPoolSize &         pool);
+    write_series(const double              time,
+                 const std::vector<Field> &probe_fields,
+                 const MeltPoolSize       &pool);
 
     /// Write every probe line's samples for output number @p n.
     void
-    write_probe_lines(const unsigned int n,
-                      const double       time,
+    write_probe_lines(const unsigned int        n,
+                      const double              time,
                       const std::vector<Field> &probe_fields);
 
     const Parameters &
@@ -122,35 +122,36 @@ namespace femp
     /// points with no metal around take the containing cell's value.
     std::vector<double>
     sample(const std::vector<Point<dim>> &points,
-           const std::vector<Field> &     fields) const;
+           const std::vector<Field>      &fields) const;
 
   private:
-    Parameters                 prm;
-    const BackgroundGrid<dim> &grid;
-    std::ofstream              probe_csv, pool_csv;
+    Parameters                                  prm;
+    const BackgroundGrid<dim>                  &grid;
+    std::ofstream                               probe_csv, pool_csv;
     std::vector<std::pair<double, std::string>> grid_records, point_records;
     /// XDMF <Grid> elements of the outputs written so far.
-    std::vector<std::string>   grid_entries, point_entries;
-    bool                       grid_mesh_written = false;
-    std::uint64_t              grid_mesh_nodes   = 0; ///< all ranks'
+    std::vector<std::string> grid_entries, point_entries;
+    bool                     grid_mesh_written = false;
+    std::uint64_t            grid_mesh_nodes   = 0; ///< all ranks'
     /// HDF5 mesh file of the grid outputs (a run resumed on another
     /// partition, whose cells lie in another order, writes a new one).
-    std::string                grid_mesh_file    = "grid_mesh.h5";
+    std::string grid_mesh_file = "grid_mesh.h5";
     /// Fingerprint of the partition that wrote grid_mesh_file (the number
     /// of ranks and their cell counts; 0: none yet).
-    unsigned int               grid_mesh_partition = 0;
-
+    unsigned int grid_mesh_partition = 0;
 
     /// Write the selected grid fields in the chosen format, and the index.
     void
-    write_grid_output(const unsigned int n, const double time,
-               const std::vector<Field> &fields);
+    write_grid_output(const unsigned int        n,
+                      const double              time,
+                      const std::vector<Field> &fields);
     /// Write the selected point properties in the chosen format, and the
     /// index.
     void
-    write_point_output(const unsigned int n, const double time,
-                 const Particles::ParticleHandler<dim> &points,
-                 const std::vector<std::string> &       point_names);
+    write_point_output(const unsigned int                     n,
+                       const double                           time,
+                       const Particles::ParticleHandler<dim> &points,
+                       const std::vector<std::string>        &point_names);
   };
   /// On resume from a checkpoint at @p time: keep the lines of the CSV
   /// time series @p file that do not start with a number (the header) and
@@ -159,8 +160,9 @@ namespace femp
   /// Called by the rank that writes the file; throws if it cannot be
   /// rewritten.
   void
-  reopen_series_at(std::ofstream &stream, const std::string &file,
-                   const double time);
+  reopen_series_at(std::ofstream     &stream,
+                   const std::string &file,
+                   const double       time);
 } // namespace femp
 
 #endif

@@ -38,8 +38,8 @@ namespace femp
     /// conservative) and by points moving between cells (change of the
     /// stored enthalpy when alpha and the new metal cells are updated),
     /// J (2D: J/m); both are zero for a conservative scheme.
-    double advection = 0, moved_points = 0;
-    types::particle_index n_points = 0;
+    double                advection = 0, moved_points = 0;
+    types::particle_index n_points     = 0;
     double                point_T_mean = 0; ///< mean point temperature, K
     // Melt flow (zero when Physics/Melt flow is false).
     unsigned int  flow_steps             = 0;
@@ -51,9 +51,9 @@ namespace femp
     /// prescribed), and the sub-steps per temperature step.
     struct FlowLimits
     {
-      double convective = std::numeric_limits<double>::infinity();
-      double viscous    = std::numeric_limits<double>::infinity();
-      double capillary  = std::numeric_limits<double>::infinity();
+      double convective         = std::numeric_limits<double>::infinity();
+      double viscous            = std::numeric_limits<double>::infinity();
+      double capillary          = std::numeric_limits<double>::infinity();
       double capillary_fraction = 1;
       std::array<unsigned long, 4> governed{};
       unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
@@ -87,7 +87,6 @@ namespace femp
     typename SolidStress<dim>::Energies solid_energy;
   };
 
-
   template <int dim>
   class RunReport
   {
@@ -114,19 +113,19 @@ namespace femp
     void
     progress(const SimulationControl &control,
              const double             T_max,
-             const MeltPoolSize &     pool) const;
+             const MeltPoolSize      &pool) const;
 
     /// Fill the end-of-run numbers of @p s from the modules (@p flow and
     /// @p solid may be null) and print the report; @p moved_points is the
     /// energy account of the point heat exchange. Collective.
     void
-    finish(const SimulationControl &        control,
-           const HeatTransfer<dim> &        heat,
-           const MaterialPoints<dim> &      points,
-           const IncompressibleFlow<dim> *  flow,
-           const SolidStress<dim> *         solid,
-           const double                     moved_points,
-           RunSummary<dim> &                s) const;
+    finish(const SimulationControl       &control,
+           const HeatTransfer<dim>       &heat,
+           const MaterialPoints<dim>     &points,
+           const IncompressibleFlow<dim> *flow,
+           const SolidStress<dim>        *solid,
+           const double                   moved_points,
+           RunSummary<dim>               &s) const;
 
   private:
     MPI_Comm            comm;
@@ -134,13 +133,13 @@ namespace femp
     double              H0 = 0;
 
     void
-    print_energy(const RunSummary<dim> &                          s,
+    print_energy(const RunSummary<dim>                          &s,
                  const typename HeatTransfer<dim>::EnergyBudget &e,
-                 const bool heat_enabled,
+                 const bool                                      heat_enabled,
                  const bool with_flow) const;
     void
     print_flow(const IncompressibleFlow<dim> &flow,
-               const RunSummary<dim> &        s) const;
+               const RunSummary<dim>         &s) const;
   };
 } // namespace femp
 

@@ -28,7 +28,6 @@
 
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
-
 #include <femp/io/output.h>
 
 #include <fstream>
@@ -74,7 +73,7 @@ namespace femp
     /// @p centre_y: the track's centre line (3D; the column of cells that
     /// contains it); @p substrate_top: the original substrate top, m;
     /// @p default_x: the cross-section when the parameter lists none.
-    TrackShape(const Parameters &         prm,
+    TrackShape(const Parameters          &prm,
                const BackgroundGrid<dim> &grid,
                const double               centre_y,
                const double               substrate_top,
@@ -107,7 +106,7 @@ namespace femp
     /// and append a row to track_bead.csv (width and height per section)
     /// in @p directory.
     void
-    write(const std::string &         directory,
+    write(const std::string          &directory,
           const unsigned int          n,
           const double                time,
           const std::vector<Section> &sections);

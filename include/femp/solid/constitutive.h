@@ -1,6 +1,6 @@
 // femp: the thermo-elasto-plastic constitutive model of the solid (paper
-// eq. 5, doc/method.md, "Solid"), shared by the material points (SolidMPM) and the
-// finite elements (SolidFEM).
+// eq. 5, doc/method.md, "Solid"), shared by the material points (SolidMPM) and
+// the finite elements (SolidFEM).
 //
 // Hypoelastic-plastic, rate form, one explicit increment per solid step:
 //   D = sym(L), W = skew(L)             (L: velocity gradient)
@@ -59,8 +59,9 @@ namespace femp
     /// The solid data of the metal of @p thermal, whose density and solidus
     /// it reads (declared once, in Material); @p thermal must outlive it.
     explicit SolidMaterial(const Material &thermal)
-      : thermal(&thermal)
-    {}
+        : thermal(&thermal)
+    {
+    }
 
     PiecewiseLinear youngs_modulus{1.93e11}; ///< E(T), Pa
     PiecewiseLinear plastic_modulus{1e9};    ///< H(T), Pa
@@ -71,7 +72,7 @@ namespace femp
     /// pressure q = b1 rho c h tr(D) added to the stress in the force
     /// computation (not stored), which damps the ringing behind stress
     /// fronts of the explicit scheme (von Neumann-Richtmyer, linear term).
-    double          bulk_viscosity = 0.1;
+    double bulk_viscosity = 0.1;
     /// Velocity transfer of the material points (SolidMPM, numerical):
     /// FLIP (v_p += dt sum N a_I) or APIC (affine particle-in-cell, Jiang et
     /// al. 2015: each point carries C_p = sum v_I (x) grad N; parameter
@@ -125,7 +126,9 @@ namespace femp
   /// (isotropic: ((1 + nu) sigma:sigma - nu tr(sigma)^2) / (2 E(T))); used
   /// by the adaptive mass scaling (doc/speed_accuracy.md, section 3).
   inline double
-  elastic_energy_density(const SolidMaterial &m, const double *s, const double T)
+  elastic_energy_density(const SolidMaterial &m,
+                         const double        *s,
+                         const double         T)
   {
     const double nu = m.poisson_ratio;
     const double tr = s[0] + s[1] + s[2];
@@ -144,7 +147,7 @@ namespace femp
   /// Result of one increment, for the energy bookkeeping.
   struct StressIncrement
   {
-    bool   yielded = false;
+    bool   yielded           = false;
     double plastic_increment = 0.; ///< d_gamma
   };
 
@@ -153,10 +156,10 @@ namespace femp
   /// @p T_old and @p T_new the temperatures at the start and end of the step.
   StressIncrement
   update_stress(const SolidMaterial &m,
-                const Tensor<2, 3> & L_dt,
+                const Tensor<2, 3>  &L_dt,
                 const double         T_old,
                 const double         T_new,
-                StressPoint &        state);
+                StressPoint         &state);
 
   /// The same update on plain arrays, for point loops (SolidMPM): @p L_dt
   /// row-major 3x3, @p s the stress {xx, yy, zz, xy, xz, yz}, @p eps_p the
@@ -190,8 +193,14 @@ namespace femp
         eps_p = 0;
         return 0;
       }
-    return update_stress_array(m, L_dt, T_old, T_new, m.youngs_modulus.value(T_old),
-                               m.youngs_modulus.value(T_new), s, eps_p);
+    return update_stress_array(m,
+                               L_dt,
+                               T_old,
+                               T_new,
+                               m.youngs_modulus.value(T_old),
+                               m.youngs_modulus.value(T_new),
+                               s,
+                               eps_p);
   }
 
   /// The same with Young's moduli @p E_old = E(T_old) and @p E = E(T_new)
@@ -220,7 +229,7 @@ namespace femp
     // E (exactly 1 for a constant E).
     const double r  = E / E_old;
     double       xx = r * s[0], yy = r * s[1], zz = r * s[2], xy = r * s[3],
-                 xz = r * s[4], yz = r * s[5];
+           xz = r * s[4], yz = r * s[5];
     const double w01 = 0.5 * (L_dt[0][1] - L_dt[1][0]);
     const double w02 = 0.5 * (L_dt[0][2] - L_dt[2][0]);
     const double w12 = 0.5 * (L_dt[1][2] - L_dt[2][1]);
@@ -234,14 +243,16 @@ namespace femp
         double       R[3][3];
         for (unsigned int i = 0; i < 3; ++i)
           for (unsigned int j = 0; j < 3; ++j)
-            R[i][j] = (i == j ? 1. : 0.) +
-                      f * (W[i][j] + 0.5 * (W[i][0] * W[0][j] + W[i][1] * W[1][j] +
-                                            W[i][2] * W[2][j]));
+            R[i][j] =
+              (i == j ? 1. : 0.) +
+              f * (W[i][j] + 0.5 * (W[i][0] * W[0][j] + W[i][1] * W[1][j] +
+                                    W[i][2] * W[2][j]));
         const double S[3][3] = {{xx, xy, xz}, {xy, yy, yz}, {xz, yz, zz}};
         double       RS[3][3];
         for (unsigned int i = 0; i < 3; ++i)
           for (unsigned int j = 0; j < 3; ++j)
-            RS[i][j] = R[i][0] * S[0][j] + R[i][1] * S[1][j] + R[i][2] * S[2][j];
+            RS[i][j] =
+              R[i][0] * S[0][j] + R[i][1] * S[1][j] + R[i][2] * S[2][j];
         auto rsr = [&](const unsigned int i, const unsigned int j) {
           return RS[i][0] * R[j][0] + RS[i][1] * R[j][1] + RS[i][2] * R[j][2];
         };
@@ -266,10 +277,11 @@ namespace femp
     xz += 0.5 * mu2 * (L_dt[0][2] + L_dt[2][0]);
     yz += 0.5 * mu2 * (L_dt[1][2] + L_dt[2][1]);
     // J2 radial return, linear isotropic hardening.
-    const double p  = (xx + yy + zz) * (1. / 3);
+    const double p = (xx + yy + zz) * (1. / 3);
     xx -= p, yy -= p, zz -= p;
-    const double ss = xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
-    const double sy = m.yield_stress.value(T_new);
+    const double ss =
+      xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
+    const double sy    = m.yield_stress.value(T_new);
     double       scale = 1, dg = 0;
     if (1.5 * ss > sy * sy) // the hardening term only raises the yield stress
       {
@@ -364,8 +376,7 @@ namespace femp
   /// finite data (pad a partial block with copies).
   template <typename V>
   [[gnu::always_inline]] inline void
-  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b,
-                      const V sy);
+  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b, const V sy);
 
   template <typename V>
   [[gnu::always_inline]] inline void
@@ -382,16 +393,15 @@ namespace femp
   /// of a cell share its temperature).
   template <typename V>
   [[gnu::always_inline]] inline void
-  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b,
-                      const V sy)
+  update_stress_block(const SolidMaterial &m, StressBlockOf<V> &b, const V sy)
   {
     constexpr unsigned int W  = simd_width<V>;
     const double           nu = m.poisson_ratio;
-    const V      Tm     = V{} + m.melt_temperature();
+    const V                Tm = V{} + m.melt_temperature();
     // Total-form elasticity (see the top of this file): r = 1 exactly for a
     // constant E.
-    const V r = b.E / b.E_old;
-    V xx = r * b.s[0], yy = r * b.s[1], zz = r * b.s[2], xy = r * b.s[3],
+    const V r  = b.E / b.E_old;
+    V       xx = r * b.s[0], yy = r * b.s[1], zz = r * b.s[2], xy = r * b.s[3],
       xz = r * b.s[4], yz = r * b.s[5];
     const V(&L)[3][3] = b.L;
     const V w01       = 0.5 * (L[0][1] - L[1][0]);
@@ -405,11 +415,14 @@ namespace femp
       const V R00 = 1. + f * (0. + 0.5 * (0. * 0. + w01 * -w01 + w02 * -w02));
       const V R01 = 0. + f * (w01 + 0.5 * (0. * w01 + w01 * 0. + w02 * -w12));
       const V R02 = 0. + f * (w02 + 0.5 * (0. * w02 + w01 * w12 + w02 * 0.));
-      const V R10 = 0. + f * (-w01 + 0.5 * (-w01 * 0. + 0. * -w01 + w12 * -w02));
+      const V R10 =
+        0. + f * (-w01 + 0.5 * (-w01 * 0. + 0. * -w01 + w12 * -w02));
       const V R11 = 1. + f * (0. + 0.5 * (-w01 * w01 + 0. * 0. + w12 * -w12));
       const V R12 = 0. + f * (w12 + 0.5 * (-w01 * w02 + 0. * w12 + w12 * 0.));
-      const V R20 = 0. + f * (-w02 + 0.5 * (-w02 * 0. + -w12 * -w01 + 0. * -w02));
-      const V R21 = 0. + f * (-w12 + 0.5 * (-w02 * w01 + -w12 * 0. + 0. * -w12));
+      const V R20 =
+        0. + f * (-w02 + 0.5 * (-w02 * 0. + -w12 * -w01 + 0. * -w02));
+      const V R21 =
+        0. + f * (-w12 + 0.5 * (-w02 * w01 + -w12 * 0. + 0. * -w12));
       const V R22 = 1. + f * (0. + 0.5 * (-w02 * w02 + -w12 * w12 + 0. * 0.));
       const V R[3][3] = {{R00, R01, R02}, {R10, R11, R12}, {R20, R21, R22}};
       const V S[3][3] = {{xx, xy, xz}, {xy, yy, yz}, {xz, yz, zz}};
@@ -429,7 +442,7 @@ namespace femp
     const V lambda = b.E * nu / ((1 + nu) * (1 - 2 * nu));
     const V dth    = m.expansion * (b.T_new - (b.T_old < Tm ? b.T_old : Tm));
     const V dxx = L[0][0] - dth, dyy = L[1][1] - dth, dzz = L[2][2] - dth;
-    const V lt  = lambda * (dxx + dyy + dzz);
+    const V lt = lambda * (dxx + dyy + dzz);
     xx += mu2 * dxx + lt;
     yy += mu2 * dyy + lt;
     zz += mu2 * dzz + lt;
@@ -438,7 +451,8 @@ namespace femp
     yz += 0.5 * mu2 * (L[1][2] + L[2][1]);
     const V p = (xx + yy + zz) * (1. / 3);
     xx -= p, yy -= p, zz -= p;
-    const V    ss = xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
+    const V ss =
+      xx * xx + yy * yy + zz * zz + 2 * (xy * xy + xz * xz + yz * yz);
     const auto melted = b.T_new >= Tm;
     const auto flag   = melted | (1.5 * ss > sy * sy);
     V          scale  = V{} + 1.;
@@ -463,12 +477,12 @@ namespace femp
             }
         }
     const V zero = {};
-    b.s[0] = melted ? zero : scale * xx + p;
-    b.s[1] = melted ? zero : scale * yy + p;
-    b.s[2] = melted ? zero : scale * zz + p;
-    b.s[3] = melted ? zero : scale * xy;
-    b.s[4] = melted ? zero : scale * xz;
-    b.s[5] = melted ? zero : scale * yz;
+    b.s[0]       = melted ? zero : scale * xx + p;
+    b.s[1]       = melted ? zero : scale * yy + p;
+    b.s[2]       = melted ? zero : scale * zz + p;
+    b.s[3]       = melted ? zero : scale * xy;
+    b.s[4]       = melted ? zero : scale * xz;
+    b.s[5]       = melted ? zero : scale * yz;
   }
 
   /// von Mises equivalent stress q = sqrt(3/2 s:s), Pa.

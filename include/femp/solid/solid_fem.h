@@ -1,7 +1,8 @@
 // femp: SolidFEM<dim>, explicit finite elements for the constant-solid zone
-// (paper eqs. 6-10, doc/method.md, "Solid"): 8-node hexahedra (4-node quadrilaterals
-// in 2D, plane strain), one-point quadrature, Flanagan-Belytschko hourglass
-// control, lumped mass, central difference; transition nodes (eqs. 14-17).
+// (paper eqs. 6-10, doc/method.md, "Solid"): 8-node hexahedra (4-node
+// quadrilaterals in 2D, plane strain), one-point quadrature,
+// Flanagan-Belytschko hourglass control, lumped mass, central difference;
+// transition nodes (eqs. 14-17).
 //
 // Mesh: its own parallel::distributed::Triangulation of the FE zone (a box
 // on grid lines), cells of the grid's size h, so that every element covers
@@ -45,8 +46,8 @@
 // SIMD blocks of simd_lanes elements (one per lane of simd_double, element
 // state stored per block, update_stress_block of constitutive.h).
 //
-// Transition nodes (doc/method.md, "Solid"): FE nodes on a face of the zone that is
-// not a domain face (they touch grid cells outside the zone). They are
+// Transition nodes (doc/method.md, "Solid"): FE nodes on a face of the zone
+// that is not a domain face (they touch grid cells outside the zone). They are
 // numbered globally from geometry (every rank knows all of them); see
 // solid_stress.h for the exchange of their sums.
 #ifndef femp_solid_fem_h
@@ -108,9 +109,9 @@ namespace femp
     /// momentum (dim), force without hourglass (dim), hourglass force (dim).
     static constexpr unsigned int tr_width = 1 + 3 * dim;
 
-    SolidFEM(const Parameters &         prm,
+    SolidFEM(const Parameters          &prm,
              const BackgroundGrid<dim> &grid,
-             const SolidMaterial &      material);
+             const SolidMaterial       &material);
 
     const Parameters &
     parameters() const
@@ -123,10 +124,10 @@ namespace femp
     /// forces. @p face_bits[f]: velocity components fixed on domain face f
     /// (x-, x+, y-, ...). @p T: grid cell temperatures at time 0.
     void
-    setup(const double                          mass_scaling,
+    setup(const double                             mass_scaling,
           const std::array<std::uint8_t, 2 * dim> &face_bits,
-          const Tensor<1, dim> &                gravity,
-          const std::vector<double> &           T);
+          const Tensor<1, dim>                    &gravity,
+          const std::vector<double>               &T);
 
     /// 1 for cells of the grid's local box inside the FE zone.
     const std::vector<std::uint8_t> &
@@ -196,8 +197,8 @@ namespace femp
     void
     update_transition(const std::vector<double> &buffer,
                       const double               dt,
-                      std::vector<double> &      v_grid,
-                      std::vector<double> &      a_grid);
+                      std::vector<double>       &v_grid,
+                      std::vector<double>       &a_grid);
 
     /// Central-difference node update (eq. 10): sums of the element forces
     /// over ranks, new velocities of all local FE nodes
@@ -292,12 +293,12 @@ namespace femp
   private:
     Parameters                 prm;
     const BackgroundGrid<dim> &grid;
-    const SolidMaterial &      mat;
+    const SolidMaterial       &mat;
     MPI_Comm                   comm;
 
-    parallel::distributed::Triangulation<dim> tria;
-    FE_Q<dim>                                 fe;
-    DoFHandler<dim>                           dof_handler;
+    parallel::distributed::Triangulation<dim>          tria;
+    FE_Q<dim>                                          fe;
+    DoFHandler<dim>                                    dof_handler;
     std::shared_ptr<const Utilities::MPI::Partitioner> node_partitioner;
     LinearAlgebra::distributed::Vector<double>         force; ///< dim per node
 
@@ -313,7 +314,7 @@ namespace femp
     // x-row of elements then has its corner nodes at consecutive indices.
     std::array<int, dim>         box_lo, box_n;
     std::array<std::size_t, dim> box_stride;
-    std::size_t                  n_box = 0; ///< padded box size
+    std::size_t                  n_box      = 0; ///< padded box size
     bool                         multi_rank = false;
 
     // Elements, in lexicographic order of their zone index (x fastest).
@@ -341,8 +342,8 @@ namespace femp
       /// ratio; small-displacement forces keep the reference volume).
       simd_double dJ;
     };
-    std::vector<ElementBlock>  blocks;
-    std::vector<double>        T_start, T_end;
+    std::vector<ElementBlock> blocks;
+    std::vector<double>       T_start, T_end;
     /// Stress tensor of element @p e.
     SymmetricTensor<2, 3>
     element_stress(const std::size_t e) const
@@ -359,31 +360,31 @@ namespace femp
     }
     std::vector<std::uint64_t> element_id; ///< lexicographic in the zone
     std::vector<std::pair<std::uint64_t, std::uint32_t>> element_by_id;
-    std::size_t                off_rank = 0;
+    std::size_t                                          off_rank = 0;
     Utilities::MPI::NoncontiguousPartitioner T_exchange; ///< grid -> FE
     std::vector<std::uint32_t> grid_zone_cells;          ///< owned zone cells
     std::vector<double>        T_send;
 
     // Nodes (box numbering, see above).
     std::size_t                n_owned = 0, n_local = 0; ///< DoFHandler's
-    std::vector<std::uint32_t> box_of;  ///< box index of local node ln
+    std::vector<std::uint32_t> box_of; ///< box index of local node ln
     /// Local nodes whose force sums go over ranks: ghosts and owned nodes
     /// that are ghosts elsewhere (empty on one rank).
-    std::vector<std::uint32_t> shared_nodes;
-    std::array<std::vector<double>, dim> vel;   ///< velocity, m/s
-    std::array<std::vector<double>, dim> frc;   ///< nodal force, N
-    std::array<std::vector<double>, dim> ext;   ///< external force, N
+    std::vector<std::uint32_t>           shared_nodes;
+    std::array<std::vector<double>, dim> vel; ///< velocity, m/s
+    std::array<std::vector<double>, dim> frc; ///< nodal force, N
+    std::array<std::vector<double>, dim> ext; ///< external force, N
     /// Bit d set: velocity component d fixed (zero); all bits at slots
     /// without a local node. Clear at transition nodes (their velocity
     /// comes from update_transition(), fixed components zero there).
-    std::vector<std::uint8_t>  fix;
-    std::vector<double>        inv_mass;   ///< 0 at transition nodes
-    std::vector<double>        owned_mass; ///< lumped mass at owned nodes
+    std::vector<std::uint8_t> fix;
+    std::vector<double>       inv_mass;   ///< 0 at transition nodes
+    std::vector<double>       owned_mass; ///< lumped mass at owned nodes
     /// The masses of the setup's factor, kept from the first change of the
     /// factor on, so that every later factor scales them once (a resumed
     /// run then has the same masses bit for bit as the run that went on).
-    std::vector<double> inv_mass_setup, owned_mass_setup, tr_mass_setup;
-    double              mass_scale_setup = 0;
+    std::vector<double>        inv_mass_setup, owned_mass_setup, tr_mass_setup;
+    double                     mass_scale_setup = 0;
     std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
     std::vector<std::uint32_t> ext_nodes;    ///< box indices
     double                     kinetic = 0;
@@ -406,7 +407,7 @@ namespace femp
     std::vector<std::array<std::uint32_t, 3>> tr_corners;
     /// (box index, transition index) of the local transition nodes.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> tr_local;
-    std::vector<double>                       tr_hg; ///< partial f^HG
+    std::vector<double> tr_hg; ///< partial f^HG
 
     std::vector<std::uint8_t> in_zone_cell;
 
@@ -420,7 +421,8 @@ namespace femp
     set_zone();
     void
     create_mesh();
-    std::vector<std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
+    std::vector<
+      std::pair<std::uint64_t, std::array<std::uint32_t, (1u << dim)>>>
     local_elements(std::vector<std::array<int, dim>> &node_ijk);
     void
     set_node_box(const std::vector<std::array<int, dim>> &node_ijk);
@@ -436,7 +438,7 @@ namespace femp
     void
     set_transition_nodes(const std::array<std::uint8_t, 2 * dim> &face_bits,
                          const double                             m_el,
-                         const std::vector<double> &              mass,
+                         const std::vector<double>               &mass,
                          const std::vector<std::array<int, dim>> &node_ijk);
     void
     set_temperature_exchange(const std::vector<double> &T);
@@ -452,7 +454,7 @@ namespace femp
     bool
     is_transition(const std::array<int, dim> &ijk) const;
     std::uint8_t
-    fix_bits(const std::array<int, dim> &             ijk,
+    fix_bits(const std::array<int, dim>              &ijk,
              const std::array<std::uint8_t, 2 * dim> &face_bits) const;
 
     /// Constants of one element loop over the step dt: B dt, V B, the
@@ -498,18 +500,18 @@ namespace femp
                       const double *const (&vl)[dim],
                       simd_double (&Vc)[n_corners][dim]) const;
     simd_double
-    update_block(ElementBlock &                  eb,
+    update_block(ElementBlock &eb,
                  const std::size_t (&el)[simd_lanes],
-                 const unsigned int              nl,
+                 const unsigned int nl,
                  const simd_double (&Vc)[n_corners][dim],
-                 const double                    dt,
-                 const double                    w,
-                 const LoopConstants &           c,
-                 StressBlock &                   sb,
-                 simd_double &                   E) const;
+                 const double         dt,
+                 const double         w,
+                 const LoopConstants &c,
+                 StressBlock         &sb,
+                 simd_double         &E) const;
     void
-    scatter_forces(const std::size_t    b,
-                   const unsigned int   nl,
+    scatter_forces(const std::size_t  b,
+                   const unsigned int nl,
                    const simd_double (&s)[6],
                    const simd_double    E,
                    const LoopConstants &c,

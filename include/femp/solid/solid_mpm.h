@@ -80,8 +80,8 @@
 #include <deal.II/base/tensor.h>
 
 #include <femp/grid/background_grid.h>
-#include <femp/solid/constitutive.h>
 #include <femp/grid/material_points.h>
+#include <femp/solid/constitutive.h>
 
 #include <array>
 #include <limits>
@@ -98,7 +98,7 @@ namespace femp
   template <int dim>
   struct SolidNodeFields
   {
-    std::vector<double>                 mass;
+    std::vector<double>                  mass;
     std::array<std::vector<double>, dim> momentum, force, velocity;
     /// With SolidMPM::set_stiffness_rows(true) only: per node I, the sum
     /// over the points of m_p h |grad N_Ip| h sum_J |grad N_Jp| (kg), the
@@ -124,8 +124,8 @@ namespace femp
   {
   public:
     SolidMPM(const BackgroundGrid<dim> &grid,
-             const SolidMaterial &      material,
-             MaterialPoints<dim> &      points);
+             const SolidMaterial       &material,
+             MaterialPoints<dim>       &points);
 
     /// Copy the state of the solid points that lie in cells with
     /// @p excluded_cell[idx] == 0 into the flat arrays. Inertial masses are
@@ -141,8 +141,8 @@ namespace femp
     /// handler's order: they are kept, not copied again (the same result).
     void
     gather(const std::vector<std::uint8_t> &excluded_cell,
-           const double                      mass_scaling,
-           const bool                        same_members = false);
+           const double                     mass_scaling,
+           const bool                       same_members = false);
     /// Cells (local indices, owned) whose solid points stay out of the
     /// solid: the detached drops of the heat transfer ('Heat
     /// transfer/Detached drops = sphere'), spatter of one or two cells
@@ -223,8 +223,8 @@ namespace femp
     double
     update_stresses(const SolidNodeFields<dim> &nodes,
                     const double                dt,
-                    const std::vector<double> & T_old,
-                    const std::vector<double> & T_new);
+                    const std::vector<double>  &T_old,
+                    const std::vector<double>  &T_new);
     /// Points of this rank that entered a cell of another rank in the last
     /// update_stresses() (resort() needed).
     unsigned int
@@ -256,8 +256,8 @@ namespace femp
     /// with the affine part), and the position of one lost point.
     struct Exchange
     {
-      double     n_melted = 0, n_solidified = 0, n_lost = 0;
-      double     k_melted = 0, k_solidified = 0;
+      double n_melted = 0, n_solidified = 0, n_lost = 0;
+      double k_melted = 0, k_solidified = 0;
       /// Members now in a cell of set_aside_cells().
       double     n_set_aside = 0, k_set_aside = 0;
       Point<dim> lost_at;
@@ -308,7 +308,7 @@ namespace femp
     /// @p f[0..4]) and count the points per cell.
     void
     add_cell_fields(std::vector<std::vector<double>> &f,
-                    std::vector<double> &             count) const;
+                    std::vector<double>              &count) const;
     /// Position of the first point with a non-finite state, if any.
     bool
     find_non_finite(Point<dim> &where) const;
@@ -365,11 +365,11 @@ namespace femp
     load_state(std::vector<StateReader> &parts);
 
   private:
-    const BackgroundGrid<dim> &grid;
-    const SolidMaterial &      mat;
-    MaterialPoints<dim> &      points;
-    static constexpr unsigned int n_corners = 1u << dim;
-    static constexpr unsigned int n_stress  = 6; // xx yy zz xy xz yz
+    const BackgroundGrid<dim>            &grid;
+    const SolidMaterial                  &mat;
+    MaterialPoints<dim>                  &points;
+    static constexpr unsigned int         n_corners = 1u << dim;
+    static constexpr unsigned int         n_stress  = 6; // xx yy zz xy xz yz
     std::array<std::ptrdiff_t, n_corners> corner_offset;
     bool                                  apic;
     /// p2g() and the fused pass also sum nodes.stiffness
@@ -377,15 +377,15 @@ namespace femp
     bool stiffness_rows = false;
 
     // Structure of arrays, one vector per component.
-    std::array<std::vector<double>, dim>       x, v, corner;
+    std::array<std::vector<double>, dim> x, v, corner;
     /// Grid velocity at x_p (FLIP; with APIC it is v).
     std::array<std::vector<double>, dim>       xdot;
     std::array<std::vector<double>, dim * dim> C; ///< APIC, row-major, 1/s
     std::vector<double>                        true_mass, volume;
-    std::vector<double>                   visc; ///< viscous pressure q, Pa
-    std::array<std::vector<double>, n_stress> sigma;
-    std::vector<double>                       eps_p;
-    std::vector<std::uint32_t>                cell, node0;
+    std::vector<double>                        visc; ///< viscous pressure q, Pa
+    std::array<std::vector<double>, n_stress>  sigma;
+    std::vector<double>                        eps_p;
+    std::vector<std::uint32_t>                 cell, node0;
     /// Where each point lives in the handler's property pool (its local
     /// index), for write_back(), and its particle id.
     std::vector<types::particle_index> handle, member_id;
@@ -417,12 +417,14 @@ namespace femp
     /// part: melted points cleared of their solid state on the way, the
     /// members' (pool handle, cell) appended to @p out.
     void
-    find_members(const std::size_t                                   c,
+    find_members(const std::size_t                                    c,
                  std::vector<std::pair<unsigned int, std::uint32_t>> &out);
     /// Reads the state of member @p p (pool handle @p hp in local cell
     /// @p idx) from the pool into the arrays at index @p p.
     void
-    read_member(const std::size_t p, const unsigned int hp, const std::uint32_t idx);
+    read_member(const std::size_t   p,
+                const unsigned int  hp,
+                const std::uint32_t idx);
     /// (hp, cell) of the members found by find_members(), and the merge's
     /// source of each new entry (an old index, or ~j for found entry j).
     std::vector<std::pair<unsigned int, std::uint32_t>> found;
@@ -438,7 +440,7 @@ namespace femp
     /// yet), and the cells whose flag changed since the last gather()
     /// (marked; the exchange looks at them, the gather copies anew).
     std::vector<std::uint32_t> aside_cells;
-    double gather_aside_n = 0, gather_aside_k = 0;
+    double                     gather_aside_n = 0, gather_aside_k = 0;
     std::vector<std::uint8_t>  aside, aside_changed_mark;
     std::vector<std::uint32_t> aside_changed;
     bool
@@ -455,18 +457,18 @@ namespace femp
              (!aside_changed.empty() && aside_changed_mark[idx]);
     }
 
-    std::vector<std::uint8_t> excluded; ///< copy of the FE-zone cell mask
+    std::vector<std::uint8_t> excluded;    ///< copy of the FE-zone cell mask
     double                    scaling = 1; ///< inertial mass / true_mass
     double                    kinetic = 0;
     /// Smallest point volume after the last update_stresses(), m^dim
     /// (infinite without points).
-    double                    min_volume = std::numeric_limits<double>::infinity();
-    std::array<double, dim>   weight_momentum{}; ///< sum m_true v
-    bool                      moved_cell = false, lost = false;
-    bool                      flow_owns_fluid = false;
-    unsigned int              left_rank  = 0;
-    unsigned long             held       = 0; ///< see n_held()
-    Point<dim>                escaped;
+    double min_volume = std::numeric_limits<double>::infinity();
+    std::array<double, dim> weight_momentum{}; ///< sum m_true v
+    bool                    moved_cell = false, lost = false;
+    bool                    flow_owns_fluid = false;
+    unsigned int            left_rank       = 0;
+    unsigned long           held            = 0; ///< see n_held()
+    Point<dim>              escaped;
     /// Puts point @p p (at @p xp, outside the domain) back on the domain's
     /// faces and removes its outward velocity (melt-flow scenes).
     void
@@ -491,11 +493,11 @@ namespace femp
     std::vector<std::uint8_t>                    node_mark;
     std::vector<std::uint32_t>                   reached_cells;
     std::vector<std::uint8_t>                    cell_mark;
-    bool                 next_ready = false; ///< next holds the next P2G
-    bool                 next_dirty = false; ///< next is not all zero
-    unsigned int         steps_since_gather = 0;
-    bool                 have_gravity       = false;
-    Tensor<1, dim>       p2g_gravity; ///< of the last p2g()
+    bool           next_ready         = false; ///< next holds the next P2G
+    bool           next_dirty         = false; ///< next is not all zero
+    unsigned int   steps_since_gather = 0;
+    bool           have_gravity       = false;
+    Tensor<1, dim> p2g_gravity; ///< of the last p2g()
 
     /// The points p0 .. p0 + nl - 1 of a block of update_stresses() of
     /// which one left its cell, point by point: kinetic energy, momentum

@@ -1,7 +1,7 @@
-// femp: SolidStress<dim>, the solid step of the macro step (doc/method.md, "Solid" and "Macro time step",
-// paper eqs. 5-17): material points (SolidMPM) and finite elements
-// (SolidFEM) coupled through the background-grid nodes, sub-cycled against
-// the temperature step.
+// femp: SolidStress<dim>, the solid step of the macro step (doc/method.md,
+// "Solid" and "Macro time step", paper eqs. 5-17): material points (SolidMPM)
+// and finite elements (SolidFEM) coupled through the background-grid nodes,
+// sub-cycled against the temperature step.
 //
 // Coupling (eqs. 14-17). The FE mesh is its own triangulation, aligned
 // with the grid (solid_fem.h), so a transition node i coincides with a grid
@@ -35,12 +35,13 @@
 // s: mass-scaling factor; fixed, or with Solid/Mass scaling = adaptive
 // set after each advance from the ratio of the mean kinetic energy of its
 // steps to the stored elastic energy, velocities kept and the kinetic
-// energy jump booked: doc/speed_accuracy.md, section 3). advance(t) is called after every temperature
-// step and takes whole solid steps up to t; the cell temperatures of each
-// sub-step are interpolated linearly between the temperature fields of the
-// last two calls, so both orders work: several solid steps inside one
-// temperature step, or (case 3.1) one solid step spanning many temperature
-// steps. The last call of a run ends the solid exactly at the end time.
+// energy jump booked: doc/speed_accuracy.md, section 3). advance(t) is called
+// after every temperature step and takes whole solid steps up to t; the cell
+// temperatures of each sub-step are interpolated linearly between the
+// temperature fields of the last two calls, so both orders work: several solid
+// steps inside one temperature step, or (case 3.1) one solid step spanning many
+// temperature steps. The last call of a run ends the solid exactly at the end
+// time.
 //
 // Energies (global, J or J/m in 2D): external work (gravity, fluid forces),
 // stress work int sigma : D (internal), kinetic, hourglass, the kinetic
@@ -57,8 +58,8 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/grid/background_grid.h>
-#include <femp/solid/constitutive.h>
 #include <femp/grid/material_points.h>
+#include <femp/solid/constitutive.h>
 #include <femp/solid/solid_fem.h>
 #include <femp/solid/solid_mpm.h>
 
@@ -80,28 +81,28 @@ namespace femp
   public:
     struct Parameters
     {
-      double                   time_step     = 0;
-      double                   safety_factor = 0.5;
+      double time_step     = 0;
+      double safety_factor = 0.5;
       /// With the melt flow: the Courant number once the melt has
       /// solidified after the laser's path (0: keep safety_factor).
-      double                   safety_factor_solidified = 0;
+      double safety_factor_solidified = 0;
       /// Mass-scaling factor s: the fixed value, or the starting value of
       /// the adaptive controller.
-      double                   mass_scaling  = 1;
+      double mass_scaling = 1;
       /// Adaptive mass scaling (doc/speed_accuracy.md, section 3): between
       /// two temperature steps the factor follows the ratio of the kinetic
       /// to the stored elastic energy.
-      bool                     adaptive_scaling = false;
+      bool adaptive_scaling = false;
       /// Target ratio K / U_el, and the factor's range.
-      double                   max_kinetic_ratio = 1e-3;
-      double                   min_factor = 1, max_factor = 1e4;
+      double max_kinetic_ratio = 1e-3;
+      double min_factor = 1, max_factor = 1e4;
       /// With the melt flow only: nodes whose inertial mass is below this
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
       /// With the melt flow only: how nodes of small mass are updated,
       /// "mass floor" (set_mass_floor()) or "no force" (the cutoff below).
-      std::string              light_nodes = "mass floor";
-      double                   small_mass_cutoff = 0.05;
+      std::string light_nodes       = "mass floor";
+      double      small_mass_cutoff = 0.05;
       /// m/s^2 (default: none); not an input of Solid: FempProblem sets
       /// it from Physics/Gravity.
       Tensor<1, dim>           gravity;
@@ -110,8 +111,8 @@ namespace femp
       std::string              probe_file  = "solid_probes.csv";
       /// Simulated time between two rows of the energy and probe files, s
       /// (0: every solid step).
-      double                   row_interval = 0;
-      std::vector<Point<dim>>  probes;
+      double                  row_interval = 0;
+      std::vector<Point<dim>> probes;
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -120,13 +121,14 @@ namespace femp
       /// Checks that need the material and the grid: the prescribed step
       /// against the elastic limit.
       void
-      check(const SolidMaterial &                           m,
+      check(const SolidMaterial                            &m,
             const typename BackgroundGrid<dim>::Parameters &g) const;
       /// Largest stable step h / (sqrt(dim) c), s, with the mass-scaling
       /// factor @p s (0: mass_scaling).
       double
-      stable_limit(const SolidMaterial &m, const double h,
-                   const double s = 0) const;
+      stable_limit(const SolidMaterial &m,
+                   const double         h,
+                   const double         s = 0) const;
     };
 
     struct Energies
@@ -170,11 +172,11 @@ namespace femp
       }
     };
 
-    SolidStress(const Parameters &                     prm,
+    SolidStress(const Parameters                         &prm,
                 const typename SolidFEM<dim>::Parameters &fem_prm,
-                const SolidMaterial &                  material,
-                const BackgroundGrid<dim> &            grid,
-                MaterialPoints<dim> &                  points);
+                const SolidMaterial                      &material,
+                const BackgroundGrid<dim>                &grid,
+                MaterialPoints<dim>                      &points);
 
     /// Set up the FE zone, boundary flags and the temperature history from
     /// the cell temperatures @p T at time 0. @p directory receives the CSV
@@ -196,7 +198,7 @@ namespace femp
     advance(const double               t,
             const std::vector<double> &T,
             const bool                 final,
-            const NodalForces *        external_forces = nullptr);
+            const NodalForces         *external_forces = nullptr);
 
     /// The melt flow runs beside the solid: fluid points keep their
     /// velocity at the gather (SolidMPM::set_flow_owns_fluid_points()).
@@ -258,10 +260,11 @@ namespace femp
     /// switch the automatic step to 'Safety factor after solidification'
     /// with the mass-scaling factor times (C_after / C)^2, so that
     /// sqrt(s) / C, and with it the stresses, stay as they were, and the
-    /// step (C sqrt(s)) grows by (C_after / C)^2 (velocities kept, the kinetic energy jump
-    /// booked). Once per run (a resumed run knows it from its step). Returns
-    /// what changed, for the log, or "" if nothing did (no such factor set,
-    /// or switched before). Local: every rank takes the same decision.
+    /// step (C sqrt(s)) grows by (C_after / C)^2 (velocities kept, the kinetic
+    /// energy jump booked). Once per run (a resumed run knows it from its
+    /// step). Returns what changed, for the log, or "" if nothing did (no such
+    /// factor set, or switched before). Local: every rank takes the same
+    /// decision.
     std::string
     use_cooling_step();
     bool
@@ -393,7 +396,7 @@ namespace femp
 
   private:
     Parameters                 prm;
-    const SolidMaterial &      mat;
+    const SolidMaterial       &mat;
     const BackgroundGrid<dim> &grid;
     MPI_Comm                   comm;
     SolidMPM<dim>              mpm;
@@ -414,7 +417,7 @@ namespace femp
       return fem ? fem->n_transition() : 0;
     }
 
-    SolidNodeFields<dim>                  nodes;
+    SolidNodeFields<dim> nodes;
     /// Grid nodes of this rank's owned cells outside the FE zone plus the
     /// transition nodes among its owned-cell nodes: the only grid nodes a
     /// solid step touches.
@@ -428,16 +431,16 @@ namespace femp
     /// (transition index, local grid node) for transition nodes among the
     /// nodes of this rank's owned cells.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
-    std::vector<double> tr_buffer, tr_v, tr_a;
+    std::vector<double>                                  tr_buffer, tr_v, tr_a;
     /// Per transition node: FE velocity before the merge and the grid
     /// (point) force, for the re-map work there.
-    std::vector<double> tr_u, tr_fgrid;
+    std::vector<double>       tr_u, tr_fgrid;
     std::vector<std::uint8_t> constrained; ///< bit d: velocity d fixed
     std::vector<double>       T_solid, T_prev, T_next;
     double                    t_solid = 0, t_prev = 0, dt_solid = 0;
-    unsigned int              steps   = 0;
-    double W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
-    double D_transfer = 0, K_melted = 0, K_solidified = 0; // global
+    unsigned int              steps = 0;
+    double                    W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
+    double D_transfer = 0, K_melted = 0, K_solidified = 0;         // global
     /// Points set aside in detached drops (n_points_set_aside()); not
     /// saved in checkpoints (a resumed run counts from there).
     double n_set_aside = 0;
@@ -445,7 +448,7 @@ namespace femp
     /// node forces at the transition nodes (global)
     double W_remap = 0;
     /// Energies::withheld, summed over the steps, J.
-    double W_withheld = 0;
+    double W_withheld      = 0;
     double K_points        = 0; ///< kinetic energy of the points (global)
     double n_points_global = 0; ///< solid points after the last step
     /// Grid nodes whose point kinetic energy this rank counts (each node
@@ -464,7 +467,7 @@ namespace femp
     /// node fields are zero at other nodes of active_nodes.
     std::vector<std::uint32_t>                          live_nodes, live_cells;
     std::vector<std::pair<std::uint32_t, std::int32_t>> live_counted;
-    std::vector<std::uint8_t>  node_live, cell_live;
+    std::vector<std::uint8_t>                           node_live, cell_live;
     std::vector<std::uint32_t> fixed_live_nodes, fixed_live_cells;
     /// Per local node: its transition index in counted_nodes, -1 for a
     /// counted node that is not one, -2 if not counted.
@@ -482,8 +485,8 @@ namespace femp
     /// kg/m; 0: off).
     double small_mass = 0;
     /// set_mass_floor(): the light-node mass floor is on.
-    bool mass_floor = false;
-    double small_mass_fraction = 0; ///< the cutoff it was set from
+    bool             mass_floor          = false;
+    double           small_mass_fraction = 0; ///< the cutoff it was set from
     MassScalingState scaling;
     /// Courant number of the automatic step in use: safety_factor, or
     /// safety_factor_solidified after use_cooling_step().
@@ -521,8 +524,9 @@ namespace femp
     extend_live(const std::vector<double> &T, const double w);
     /// Marks @p c live; with @p T, T_next[c] of the step of weight @p w.
     void
-    add_live_cell(const std::uint32_t c, const std::vector<double> *T,
-                  const double w);
+    add_live_cell(const std::uint32_t        c,
+                  const std::vector<double> *T,
+                  const double               w);
     void
     open_output_files(const std::string &directory);
     /// The parts of step(), in this order: 1. P2G (partial sums of this
