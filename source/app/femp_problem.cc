@@ -4,6 +4,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/app/femp_problem.h>
+#include <femp/app/physical_bounds.h>
 #include <femp/app/run_checks.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
@@ -639,19 +640,24 @@ namespace femp
         const double rest = dt - t;
         const double dt_f =
           rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
-        flow->step(dt_f, cell_fields());
-        t += dt_f;
-        // Collective: the limits are global, so is the count.
-        if (++n_sub > run_limits().max_flow_substeps)
+        // Collective: the limits are global, so is the count. A sub-step
+        // that cannot move the time on ends the run at once.
+        if (++n_sub > run_limits().max_flow_substeps || !(t + dt_f > t))
           throw CollectiveError(
             InputError("Run limits/Maximum flow sub-steps",
                        std::to_string(run_limits().max_flow_substeps),
                        "the flow needed more sub-steps in the temperature "
                        "step of " +
-                         num(dt) + " s (sub-step now " + num(dt_f) +
-                         " s: the flow may have blown up); raise "
+                         num(dt) + " s (sub-step now " + num(dt_f) + " s, " +
+                         flow_limit_name(l.governing()) +
+                         (flow_prm.time_step > 0 ? " ('Melt flow/Time step' "
+                                                   "prescribed)" :
+                                                   "") +
+                         ": the flow may have blown up); raise "
                          "the bound if the flow is right")
               .what());
+        flow->step(dt_f, cell_fields());
+        t += dt_f;
         // Feedback during a long sub-cycle (the progress line comes only
         // between temperature steps).
         const double wall = control->wall_time();

@@ -15,10 +15,12 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/app/femp_problem.h>
+#include <femp/app/physical_bounds.h>
 #include <femp/app/run_checks.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_file.h>
+#include <femp/base/progress_watchdog.h>
 
 #include <cctype>
 #include <chrono>
@@ -311,6 +313,9 @@ namespace
         read_input(prm, cl.scene, cl.overrides);
         femp::check_output_file_names(prm);
         femp::check_values(prm);
+        femp::check_physical_relations(prm);
+        femp::check_step_floors(prm);
+        femp::check_number_magnitudes(prm);
         femp::check_memory(prm, dealii::Utilities::MPI::n_mpi_processes(comm));
         femp::check_disk(prm);
         if (prm.get_integer("Dimension") == 2)
@@ -414,6 +419,12 @@ main(int argc, char *argv[])
   if (status == 2)
     return 0;
 
-  // Phase 2: the run. An error on one rank ends every rank.
-  return run(problem, comm);
+  // Phase 2: the run. An error on one rank ends every rank. A line at
+  // least every 30 s of wall time, whatever the run is doing.
+  prm.enter_subsection("Run limits");
+  femp::progress::start(comm, prm.get_double("Progress wall interval"));
+  prm.leave_subsection();
+  const int result = run(problem, comm);
+  femp::progress::stop();
+  return result;
 }

@@ -6,12 +6,14 @@
 
 #include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
+#include <femp/io/output_lock.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -192,6 +194,22 @@ namespace femp
       "Most melt-flow sub-steps within one temperature step; the run stops "
       "with an error when the flow needs more (a flow that blows up makes "
       "its stable step tiny). Range [1, inf).");
+    prm.declare_entry(
+      "Maximum solid sub-steps",
+      "100000",
+      dealii::Patterns::Integer(1),
+      "Most solid sub-steps within one temperature step; a scene whose "
+      "elastic step limit would need more is refused before any work. "
+      "Range [1, inf).");
+    prm.declare_entry(
+      "Progress wall interval",
+      "30",
+      dealii::Patterns::Double(0.01),
+      "Longest wall time without a line of output, s: when the run has "
+      "printed nothing for this long (a slow step, a long sub-cycle, "
+      "output or a checkpoint being written), rank 0 prints 'femp: still "
+      "working: <phase>' with the simulated time, the step and the "
+      "sub-step. Range [0.01, inf).");
     prm.leave_subsection();
   }
 
@@ -300,7 +318,21 @@ namespace femp
             std::string        word;
             unsigned int       n = 0;
             while (s >> word)
-              ++n;
+              {
+                ++n;
+                char        *end = nullptr;
+                const double x   = std::strtod(word.c_str(), &end);
+                require(end != word.c_str() + word.size() ||
+                          (std::isfinite(x) && std::abs(x) <= 1e30),
+                        "Laser/Scan path file",
+                        short_value(path_file) + ", line " +
+                          std::to_string(line_no) + ": '" + short_value(line) +
+                          "'",
+                        "the number '" + word +
+                          "' is not finite or beyond 1e30 in magnitude: "
+                          "every number of a scan path must be finite, in "
+                          "SI units (m, m/s, W)");
+              }
             require(n == wanted,
                     "Laser/Scan path file",
                     short_value(path_file) + ", line " +
@@ -372,8 +404,9 @@ namespace femp
   check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks)
   {
     prm.enter_subsection("Run limits");
-    const double limit_gib   = prm.get_double("Memory limit");
-    limits.max_flow_substeps = prm.get_integer("Maximum flow sub-steps");
+    const double limit_gib    = prm.get_double("Memory limit");
+    limits.max_flow_substeps  = prm.get_integer("Maximum flow sub-steps");
+    limits.max_solid_substeps = prm.get_integer("Maximum solid sub-steps");
     prm.leave_subsection();
     // Cells of the background grid, metal points (substrate and powder).
     const SceneSize size = scene_size(prm);
@@ -480,6 +513,29 @@ namespace femp
     const std::string directory = get(prm, "Output", "Directory");
     const std::string policy    = get(prm, "Output", "Existing directory");
     std::string       error;
+    // One run per folder: the lock before anything there is cleared or
+    // written (rank 0 takes it; every rank gets the outcome).
+    {
+      std::error_code ec;
+      if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
+        fs::create_directories(directory, ec);
+      if (dealii::Utilities::MPI::this_mpi_process(comm) == 0 &&
+          !fs::is_directory(directory, ec))
+        error = InputError("Output/Directory",
+                           short_value(directory),
+                           "it cannot be created or is not a directory" +
+                             (ec ? " (" + ec.message() + ")" : std::string()))
+                  .what();
+      error = dealii::Utilities::MPI::broadcast(comm, error, 0);
+      if (!error.empty())
+        throw std::runtime_error(error);
+      std::string       note;
+      const std::string refused = OutputLock::acquire(directory, comm, note);
+      if (!refused.empty())
+        throw InputError("Output/Directory", short_value(directory), refused);
+      if (!note.empty())
+        std::cerr << note << std::endl;
+    }
     if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
       {
         // Files a run of femp writes: numbered VTU/PVTU pieces or HDF5

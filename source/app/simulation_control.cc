@@ -2,6 +2,7 @@
 // header).
 #include <femp/app/simulation_control.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
 
 #include <algorithm>
@@ -135,6 +136,7 @@ namespace femp
   {
     t += dt;
     ++n_step;
+    progress::time(t, n_step);
     dt_last = dt;
     last    = t >= prm.end_time * (1 - 1e-12) || n_step >= prm.max_steps ||
            stop_requested;

@@ -42,6 +42,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/progress_watchdog.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/io/checkpoint.h>
 
@@ -1119,6 +1120,8 @@ namespace femp
   void
   IncompressibleFlow<dim>::step(const double dt, const CellFields<dim> &fields)
   {
+    progress::phase("melt-flow sub-steps");
+    progress::substep(stats.steps + 1, dt);
     const StepLimits limits = stable_time_step();
     if (!(dt > 0) || dt > limits.viscous * (1 + 1e-12) ||
         dt > limits.capillary * (1 + 1e-12))

@@ -7,6 +7,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/progress_watchdog.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/io/checkpoint.h>
 
@@ -236,7 +237,34 @@ namespace femp
                                        const Point<dim> &upper,
                                        const double      h)
   {
-    if (!initial_function)
+    // The prescribed velocity: dim expressions that parse, finite at
+    // every cell centre (a NaN would only show as a non-finite
+    // temperature later).
+    std::unique_ptr<FunctionParser<dim>> velocity;
+    if (!prescribed_velocity.empty())
+      {
+        const auto exprs =
+          Utilities::split_string_list(prescribed_velocity, ';');
+        require(exprs.size() == static_cast<std::size_t>(dim),
+                "Heat transfer/Prescribed velocity",
+                prescribed_velocity,
+                "it must hold " + std::to_string(dim) +
+                  " expressions separated by ';'");
+        velocity = std::make_unique<FunctionParser<dim>>(dim);
+        try
+          {
+            velocity->initialize(dim == 2 ? "x,y" : "x,y,z", exprs, {});
+            velocity->value(Point<dim>(), 0); // unknown names show here
+          }
+        catch (...)
+          {
+            throw InputError(
+              "Heat transfer/Prescribed velocity",
+              prescribed_velocity,
+              "the expressions must be valid functions of x, y (, z)");
+          }
+      }
+    if (!initial_function && !velocity)
       return;
     std::array<unsigned int, dim> n;
     std::size_t                   total = 1;
@@ -254,6 +282,23 @@ namespace femp
             x[d] = lower[d] + (rest % n[d] + 0.5) * h;
             rest /= n[d];
           }
+        if (velocity)
+          for (int d = 0; d < dim; ++d)
+            {
+              const double u = velocity->value(x, d);
+              if (!std::isfinite(u))
+                {
+                  std::ostringstream s;
+                  s << "every component must be finite (m/s) at every cell "
+                       "centre; component "
+                    << d << " is " << u << " at x = (" << x << ") m";
+                  throw InputError("Heat transfer/Prescribed velocity",
+                                   prescribed_velocity,
+                                   s.str());
+                }
+            }
+        if (!initial_function)
+          continue;
         const double T = initial_function->value(x);
         if (!(std::isfinite(T) && T > 0))
           {
@@ -715,11 +760,11 @@ namespace femp
         double       q_laser = 0;
         if (laser_on && gradient_mode)
           {
-            const Point<dim> c  = grid.cell_center(s.index);
-            double           r2 = 0;
-            for (int d = 0; d < dim - 1; ++d)
-              r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
-            q_laser = laser.flux(r2, power) * wg;
+            q_laser = laser.cell_flux(grid.cell_center(s.index),
+                                      axis,
+                                      power,
+                                      grid.h()) *
+                      wg;
           }
         laser_density[s.index] = q_laser;
         source[s.index]        = q_laser;
@@ -739,11 +784,9 @@ namespace femp
               laser_density[lc.index] = 0;
               continue;
             }
-          const Point<dim> c  = grid.cell_center(lc.index);
-          double           r2 = 0;
-          for (int d = 0; d < dim - 1; ++d)
-            r2 += (c[d] - axis[d]) * (c[d] - axis[d]);
-          const double q          = laser.flux(r2, power) * lc.share;
+          const double q =
+            laser.cell_flux(grid.cell_center(lc.index), axis, power, grid.h()) *
+            lc.share;
           laser_density[lc.index] = q;
           source[lc.index] += q;
           e_laser += q;
@@ -924,6 +967,7 @@ namespace femp
                              const CellFields<dim> &fields)
   {
     Assert(!frozen, ExcMessage("advance() on a frozen temperature field"));
+    progress::phase("the temperature step");
     if (std::isnan(T_floor))
       set_temperature_floor();
     // Properties: in 3D plane by plane just ahead of the sweep (pass B), so

@@ -93,13 +93,14 @@ namespace femp
             {
               used = 0;
             }
-          ok = used == line.fields[i].size() && std::isfinite(v.back());
+          ok = used == line.fields[i].size() && std::isfinite(v.back()) &&
+               std::abs(v.back()) <= 1e30;
         }
       require(ok,
               parameter,
               where(file, line),
               "each line must hold the " + std::to_string(n) + " numbers '" +
-                layout + "'");
+                layout + "', finite and at most 1e30 in magnitude (SI)");
       return v;
     }
 

@@ -4,6 +4,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
 
 #include <filesystem>
@@ -170,6 +171,7 @@ namespace femp
     const double                                                    time,
     const std::vector<std::pair<std::string, const StateWriter *>> &sections)
   {
+    progress::phase("writing a checkpoint");
     namespace fs             = std::filesystem;
     const auto        start  = std::chrono::steady_clock::now();
     const auto        rank   = Utilities::MPI::this_mpi_process(comm);

@@ -14,6 +14,7 @@
 #include <deal.II/numerics/data_out.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/progress_watchdog.h>
 #include <femp/grid/material_points.h>
 #include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
@@ -843,6 +844,7 @@ namespace femp
                             const Particles::ParticleHandler<dim> *points,
                             const std::vector<std::string>        &point_names)
   {
+    progress::phase("writing the field output");
     std::vector<Field> chosen;
     for (const auto &f : fields)
       if (selected(prm.grid_fields, f.name))

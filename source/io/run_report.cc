@@ -3,6 +3,7 @@
 // the solid energies of eqs. 5-17 and the melt-flow statistics.
 #include <deal.II/base/mpi.h>
 
+#include <femp/base/progress_watchdog.h>
 #include <femp/io/run_report.h>
 
 #include <algorithm>
@@ -34,6 +35,7 @@ namespace femp
     const double time = control.time();
     const double wall = control.wall_time();
     const double left = control.wall_time_left();
+    progress::reported();
     out << std::setprecision(4) << "t = " << std::setw(10) << time
         << " s  step " << std::setw(7) << control.step()
         << "  dt = " << std::setw(10) << control.time_step()

@@ -8,6 +8,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
@@ -740,9 +741,26 @@ namespace femp
         gather_points();
         rebuild_live(nullptr, 0.);
       }
+    progress::phase("solid sub-steps");
     while (t_solid < t * (1 - 1e-12))
       {
         double t_next = t_solid + dt_solid;
+        // A sub-step too small to move the time on would loop forever
+        // (collective: dt_solid and the times are the same on every rank).
+        if (!(t_next > t_solid))
+          throw CollectiveError(
+            InputError(prm.time_step > 0 ? "Solid/Time step" :
+                                           "Solid/Material/Young's modulus",
+                       num(prm.time_step > 0 ? prm.time_step :
+                                               mat.max_p_wave_modulus()),
+                       "the solid sub-step " + num(dt_solid) +
+                         " s makes no progress at t = " + num(t_solid) +
+                         " s (it is below the round-off of the time): the "
+                         "elastic limit h/(sqrt(dim) c) is far too small "
+                         "for this run; check the stiffness, the density "
+                         "and their units")
+              .what());
+        progress::substep(steps + 1, dt_solid);
         if (t_next > t * (1 + 1e-12))
           {
             if (!final)

@@ -32,8 +32,9 @@ namespace femp
   /// Limits read by check_memory(); defaults if it was not called.
   struct RunLimits
   {
-    double       memory_limit      = 0;      ///< bytes, 0: no check
-    unsigned int max_flow_substeps = 100000; ///< per temperature step
+    double       memory_limit       = 0;      ///< bytes, 0: no check
+    unsigned int max_flow_substeps  = 100000; ///< per temperature step
+    unsigned int max_solid_substeps = 100000; ///< per temperature step
   };
   const RunLimits &
   run_limits();
