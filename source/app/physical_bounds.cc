@@ -9,6 +9,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/material.h>
 #include <femp/flow/incompressible_flow.h>
+#include <femp/heat/laser.h>
 #include <femp/solid/constitutive.h>
 #include <femp/solid/solid_stress.h>
 
@@ -231,6 +232,31 @@ namespace femp
         dt_T = time.safety_factor * h * h * mat.density *
                mat.specific_heat.min_value() /
                (2 * dim * mat.conductivity.max_value());
+
+      // The laser is seen at the start of each temperature step: a path
+      // whose beam is on for less than one step in all would deposit its
+      // energy in one step or in none (a laser line of 0 in the report).
+      if (heat && dt_T > 0)
+        {
+          typename Laser<dim>::Parameters lp;
+          lp.parse_parameters(prm);
+          const Laser<dim> laser(lp);
+          double           on = 0;
+          for (const auto &seg : laser.segments())
+            if (seg.power > 0)
+              on += seg.t_end - seg.t_begin;
+          const bool         line = lp.scan_path_file.empty();
+          std::ostringstream why;
+          why << "the laser is on for " << on << " s in all, less than one "
+              << "temperature step (about " << dt_T
+              << " s): it would deposit its energy in one step or in none; "
+              << (line ? "lower the speed or check its unit (m/s)" :
+                         "check the speeds of its lines (m/s)");
+          require(!(on > 0) || on >= dt_T,
+                  line ? "Laser/Scan speed" : "Laser/Scan path file",
+                  line ? num(lp.scan_speed) : lp.scan_path_file,
+                  why.str());
+        }
 
       if (flow)
         {

@@ -1,6 +1,7 @@
 // femp: SimulationControl, the clock and output cadence of a run (see the
 // header).
 #include <femp/app/simulation_control.h>
+#include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
@@ -134,6 +135,18 @@ namespace femp
   void
   SimulationControl::advance(const double dt)
   {
+    // A step that cannot move the time on would repeat until the step
+    // bound (collective: dt is the same on every rank).
+    if (!(t + dt > t))
+      throw CollectiveError(
+        "the temperature step " + num(dt) + " s makes no progress at t = " +
+        num(t) + " s (step " + std::to_string(n_step) +
+        "; it is below the round-off of the time): the stable limit of the "
+        "explicit temperature step has collapsed (" +
+        (prm.time_step > 0 ?
+           "'Time stepping/Time step' = " + num(prm.time_step) + " s" :
+           std::string("a temperature running away?")) +
+        ")");
     t += dt;
     ++n_step;
     progress::time(t, n_step);
