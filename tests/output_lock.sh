@@ -64,7 +64,7 @@ wait $first
 first=
 grep -q "pid" both/femp.lock || fail "no lock left by the killed run"
 out=$("$femp" --resume both/checkpoint --set Output/Directory=both \
-  --set "Time stepping/End time=$(grep -o 'time [0-9.e+-]*' both/checkpoint/*/*.txt 2>/dev/null | head -1 | cut -d' ' -f2)" \
+  --set "Time stepping/End time=$(awk '/^Checkpoint: step/ {t = $5} END {print t + 2e-4}' first.log)" \
   --set "Output/Write material points=never" --set "Output/Output interval=1" \
   --set "Checkpoint/Every steps=50" "$scene" 2>&1)
 rc=$?
