@@ -6,8 +6,8 @@
 // cell); a beam of one cell or more is sampled at the cell centres, whose
 // sum then differs from eta P by the sampling error of a Gaussian, a few
 // per cent at one cell. (b) A whole 2D scene whose beam is a quarter of a
-// cell books eta P t as the laser energy of its energy report (before
-// this deposit, point sampling booked about 40 % of it, and nothing for a
+// cell books eta P t as the laser energy of its energy report (point
+// sampling booked 89 % of it in this scene, and nothing for a
 // beam of 1e-30 m).
 #include <deal.II/base/mpi.h>
 
@@ -63,9 +63,11 @@ check_deposits(Checks &checks)
         narrow = std::max(narrow, deposit_error<dim>(rb, o, h));
       one_cell = std::max(one_cell, deposit_error<dim>(1., o, h));
     }
-  const std::string d = std::to_string(dim) + "D";
+  // Round-off (1e-16 to 1e-15, different on each machine) printed as 0.
+  const auto        rounded = [](const double e) { return e < 1e-13 ? 0. : e; };
+  const std::string d       = std::to_string(dim) + "D";
   checks.at_most(d + ": beams of 1e-24 to 0.9 cells, deposited / eta P - 1",
-                 narrow,
+                 rounded(narrow),
                  1e-12);
   checks.at_most(d + ": beam of one cell (sampled), deposited / eta P - 1",
                  std::round(one_cell * 100) / 100,
@@ -94,7 +96,9 @@ main(int argc, char *argv[])
                                {"Output", "Directory", "narrow_beam"},
                                {"Output", "Write material points", "never"}});
   checks.at_most("2D scene, beam of h/4: laser energy / (eta P t) - 1",
-                 std::abs(s.laser / (eta_P * t_end) - 1),
+                 std::abs(s.laser / (eta_P * t_end) - 1) < 1e-13 ?
+                   0. :
+                   std::abs(s.laser / (eta_P * t_end) - 1),
                  1e-9);
   return checks.exit_code();
 }

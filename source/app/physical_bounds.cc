@@ -232,6 +232,12 @@ namespace femp
         dt_T = time.safety_factor * h * h * mat.density *
                mat.specific_heat.min_value() /
                (2 * dim * mat.conductivity.max_value());
+      // A prescribed step above the stable limit of every metal cell is
+      // refused by its own check, with its own message.
+      if (heat && time.time_step > 0 &&
+          time.time_step > h * h * mat.density * mat.specific_heat.max_value() /
+                             (2 * dim * mat.conductivity.min_value()))
+        return;
 
       // The laser is seen at the start of each temperature step: a path
       // whose beam is on for less than one step in all would deposit its
