@@ -480,6 +480,9 @@ def evaluate(out_dir, t_end, log_text=""):
     pool = read_csv(os.path.join(out_dir, "melt_pool.csv"))
     t_last = max(float(p["time"]) for p in pool)
     r["t_reached"] = t_last
+    # a run stopped early (wall-time cap): the same window of the path it
+    # reached, marked incomplete by the caller
+    t_end = min(t_end, t_last)
     t0, t1 = 0.6 * t_end, t_end * (1 + 1e-9)
     for key, name in (("width_solidus_substrate", "width"),
                       ("depth_solidus_substrate", "depth"),
@@ -592,11 +595,12 @@ def run_case(args, exe, c, setting):
                           open(os.path.join(d, "log.txt")).read()))
     except (OSError, ValueError, KeyError) as ex:
         r["read_error"] = str(ex)
-    try:
-        r.update(end_state(d, c["alloy"]))
-    except (OSError, ValueError, KeyError, TypeError) as ex:
-        r["end_state_error"] = str(ex)
-    if rc != 0 and not (r.get("t_reached", 0) >= t_end * (1 - 1e-6)):
+    if r.get("t_reached", 0) >= t_end * (1 - 1e-6):
+        try:
+            r.update(end_state(d, c["alloy"]))
+        except (OSError, ValueError, KeyError, TypeError) as ex:
+            r["end_state_error"] = str(ex)
+    else:
         r["incomplete"] = True
     json.dump(r, open(f, "w"), indent=1)
     print("  rc %s, %.0f s wall, width %s um, depth %s um, absorbed %s" % (
@@ -619,7 +623,11 @@ def cmd_reevaluate(args):
         t_end = track_geometry(allc[name])["Ltr"] / allc[name]["v"]
         r.update(evaluate(os.path.join(d, "output"), t_end,
                           open(os.path.join(d, "log.txt")).read()))
-        r.update(end_state(d, allc[name]["alloy"]))
+        if r["t_reached"] >= t_end * (1 - 1e-6):
+            r.pop("incomplete", None)
+            r.update(end_state(d, allc[name]["alloy"]))
+        else:
+            r["incomplete"] = True
         json.dump(r, open(os.path.join(d, "result.json"), "w"), indent=1)
         print("re-evaluated", setting, name)
 
@@ -798,7 +806,10 @@ def cmd_report(args):
                              ("%.2f" % r["hits_per_ray"]) if r.get("hits_per_ray") else "-",
                              ("%.3g" % r["normalized_enthalpy"]) if r.get("normalized_enthalpy") else "-",
                              pct(r.get("depth_growth")), r["wall_s"], r["np"],
-                             " (incomplete)" if r.get("incomplete") else ""))
+                             (" (stopped at %.0f of %.0f µs)" % (
+                                 r["t_reached"] * 1e6,
+                                 track_geometry(c)["Ltr"] / c["v"] * 1e6))
+                             if r.get("incomplete") else ""))
     table = "\n".join(lines) + "\n"
     f = os.path.join(args.out, "tables.md")
     open(f, "w").write(table)
