@@ -1,12 +1,12 @@
-// Every shipped scene (prm/*.prm) and material file (prm/materials/*.prm)
-// parses with femp's full parameter set, and its material, laser and solid
-// data pass femp's checks; nothing is run. For each scene, also whether
-// putting 'include materials/316L.prm' in front of it would change any
-// material value the scene uses (Material, with the evaporation data, and
-// Solid/Material when the solid is solved): a scene for
-// which nothing changes could include the file instead of relying on the
-// built-in defaults. Last, a scene in tests/ that includes a material file
-// by a path relative to itself is read from another working directory.
+// Every shipped scene (prm/*.prm, prm/validation/*.prm) and material file
+// (prm/materials/*.prm) parses with femp's full parameter set, and its
+// material, laser and solid data pass femp's checks; nothing is run. For each
+// scene, also whether putting 'include materials/316L.prm' in front of it would
+// change any material value the scene uses (Material, with the evaporation
+// data, and Solid/Material when the solid is solved): a scene for which nothing
+// changes could include the file instead of relying on the built-in defaults.
+// Last, a scene in tests/ that includes a material file by a path relative to
+// itself is read from another working directory.
 #include <femp/base/parameter_file.h>
 
 #include <algorithm>
@@ -88,7 +88,8 @@ main(int argc, char **argv)
     (prm_dir / "materials" / "316L.prm").string();
 
   std::vector<fs::path> files;
-  for (const auto &dir : {prm_dir, prm_dir / "materials"})
+  for (const auto &dir :
+       {prm_dir, prm_dir / "materials", prm_dir / "validation"})
     for (const auto &f : fs::directory_iterator(dir))
       if (f.path().extension() == ".prm")
         files.push_back(f.path());

@@ -39,23 +39,26 @@ namespace femp
       "used. Recommended where the surface is deeply depressed (normalized "
       "enthalpy above ~20-30, see the scene log and doc/absorption.md).");
     prm.declare_entry("Refractive index",
-                      "3.5",
+                      "3.83",
                       Patterns::Double(0.),
                       "Real part n of the metal's complex refractive index at "
                       "the laser wavelength (ray traced only), dimensionless; "
-                      "range (0, inf). The default is a placeholder of the "
-                      "order of iron and steels near 1.06 um (normal-"
-                      "incidence absorptivity 0.346 with the default "
-                      "extinction coefficient), not a measured value of an "
-                      "alloy; set it from optical data of the alloy "
+                      "range (0, inf). The default is that of polished "
+                      "austenitic stainless steel (similar to 316) at "
+                      "1.064 um, room temperature (Karlsson and Ribbing, "
+                      "J. Appl. Phys. 53 (1982) 6340): n = 3.83, k = 5.34, "
+                      "normal-incidence absorptivity 0.296, matching femp's "
+                      "default material 316L. The material files of "
+                      "prm/materials set the value of their alloy "
                       "(doc/absorption.md).");
     prm.declare_entry(
       "Extinction coefficient",
-      "4.5",
+      "5.34",
       Patterns::Double(0.),
       "Imaginary part k of the complex refractive index at the "
       "laser wavelength (ray traced only), dimensionless; range "
-      "[0, inf).");
+      "[0, inf). Default: stainless steel at 1.064 um (see "
+      "'Refractive index').");
     prm.declare_entry("Rays per beam radius",
                       "4",
                       Patterns::Integer(1, 64),

@@ -38,8 +38,8 @@ namespace femp
     {
       /// 'fixed' (eq. 1, 'Laser/Absorptivity') or 'ray traced'.
       std::string  model                  = "fixed";
-      double       refractive_index       = 3.5;
-      double       extinction_coefficient = 4.5;
+      double       refractive_index       = 3.83;
+      double       extinction_coefficient = 5.34;
       unsigned int rays_per_beam_radius   = 4;
       unsigned int max_reflections        = 50;
 

@@ -1,0 +1,909 @@
+#!/usr/bin/env python3
+"""Melt pools of femp against published single-track experiments
+(doc/validation.md).
+
+  contrib/validate.py scenes   [--check]
+  contrib/validate.py run      [--cases REGEX] [--setting S] [--np N]
+                               [--build build] [--out build/validation]
+                               [--max-wall SECONDS]
+  contrib/validate.py reevaluate [--out build/validation]
+  contrib/validate.py report   [--out build/validation] [--doc doc/validation.md]
+                               [--img doc/img]
+  contrib/validate.py all      (run, then report; the ctest 'validation')
+  contrib/validate.py pipeline --expected FILE [--build build]
+  contrib/validate.py regime
+
+scenes: writes prm/validation/<case>.prm, one scene per measured case of
+  the data sets in prm/validation/data/ (each file names its publication):
+  bare plate at the stated temperature, beam radius r_b = D4sigma / 2 (the
+  1/e^2 radius of a Gaussian), ray-traced absorption with the alloy's
+  optical constants from its material file, melt flow with recoil, 8 um
+  cells. --check: fail if a written scene differs from the committed one.
+run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
+  Trapp subset, see DEFAULT_CASES) with femp's default free surface
+  ('default') or the fine-surface setting ('fine': height-function
+  curvature, 2 smoothing passes, point shifting 2), one run directory per
+  case and setting under --out; a run whose result.json exists is skipped
+  (resumable). Variants for the domain-size check: setting 'large' (the
+  domain 1.5 x wider and deeper).
+report: reads every finished run, writes doc/validation.md's tables and
+  figures (SVG, standard library only).
+regime: the normalized enthalpy of every measured track (as femp's scene
+  log computes it) with the flat-surface Fresnel absorptivity, the measured
+  one and 0.35, beside the measured depth/width.
+pipeline: a small, fast case (the Trapp 48 W track, thermal only, 16 um
+  cells, 0.2 ms) through the whole chain: scene, femp, melt_pool.csv and
+  absorption.csv, errors against the measurement; prints rounded numbers
+  and compares them with FILE (exit 1 on a difference).
+
+Fusion zone: the width and depth of the metal above the solidus inside the
+plate ('width_solidus_substrate', 'depth_solidus_substrate' of
+melt_pool.csv), the median over the last 40 % of the laser's path (the
+quasi-steady pool; its maximum there is written too). Absorbed fraction:
+the time mean of absorption.csv's 'absorbed_fraction' over the same window.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DATA = os.path.join(ROOT, "prm", "validation", "data")
+SCENES = os.path.join(ROOT, "prm", "validation")
+
+# Cases run by 'run' without --cases (the cost budget of the validation):
+# all seven AM-Bench tracks and five of the Trapp series.
+DEFAULT_CASES = r"^(amb_.*|trapp_(048|065|099|134|178)W)$"
+
+FINE = {"Melt flow/Curvature": "height function",
+        "Melt flow/Curvature smoothing": "2",
+        "Melt flow/Point shifting": "2"}
+
+H = 8e-6          # cell size, m
+GAS = 48e-6       # gas above the plate, m
+MARGIN_START = 80e-6   # plate before the track's start, m
+MARGIN_END = 160e-6    # plate after the track's end, m
+
+
+# ---------------------------------------------------------------- data
+def read_table(name):
+    """Rows of a data file (comment lines '#' skipped; the first
+    non-comment line is the header; a second section after a comment line
+    that follows data is ignored)."""
+    rows, header = [], None
+    with open(os.path.join(DATA, name)) as fh:
+        for line in fh:
+            line = line.strip()
+            if not line:
+                continue
+            if line.startswith("#"):
+                if rows:
+                    break
+                continue
+            cells = next(csv.reader([line]))
+            if header is None:
+                header = cells
+            else:
+                rows.append(dict(zip(header, cells)))
+    return rows
+
+
+def num(s):
+    try:
+        return float(s)
+    except (TypeError, ValueError):
+        return None
+
+
+def ceil_cells(x, h=H):
+    return h * math.ceil(x / h - 1e-9)
+
+
+def cases():
+    """Every measured case as a dict: name, data set, alloy, P (W), v
+    (m/s), r_b (m), T0 (K), measured width/depth (m) with their spread
+    (m; SD, or the expanded uncertainty where given), absorptivity."""
+    out = []
+    for r in read_table("amb2022_03_in718_tracks.csv"):
+        out.append(dict(
+            name="amb_%s" % r["case"].replace(".", "_"), dataset="AM-Bench 2022",
+            alloy="IN718", P=num(r["power_W"]), v=num(r["speed_mm_s"]) * 1e-3,
+            rb=num(r["d4sigma_um"]) * 0.5e-6, T0=296.65,
+            width=num(r["width_um"]) * 1e-6, width_sd=num(r["width_sd_um"]) * 1e-6,
+            depth=num(r["depth_um"]) * 1e-6, depth_sd=num(r["depth_sd_um"]) * 1e-6,
+            label="case %s" % r["case"],
+            note="AMB2022-03 case %s: %s W, %s mm/s, D4sigma %s um" % (
+                r["case"], r["power_W"], r["speed_mm_s"], r["d4sigma_um"])))
+    for r in read_table("nist_in718_spot_sweep.csv"):
+        tag = ("eos" if r["machine"].startswith("EOS") else "ammt")
+        out.append(dict(
+            name="nist_spot_%s_%03d" % (tag, round(num(r["spot_um"]))),
+            dataset="NIST spot sweep", alloy="IN718", P=285.0, v=0.96,
+            rb=num(r["spot_um"]) * 0.5e-6, T0=296.65,
+            width=num(r["width_um"]) * 1e-6, width_sd=num(r["width_u_k2_um"]) * 1e-6,
+            depth=num(r["depth_um"]) * 1e-6, depth_sd=num(r["depth_u_k2_um"]) * 1e-6,
+            label="%s %s um" % (r["machine"], r["spot_um"]),
+            note="NIST spot sweep, %s, spot %s um (D4sigma taken), 285 W, "
+                 "960 mm/s" % (r["machine"], r["spot_um"])))
+    for r in read_table("trapp2017_316l.csv"):
+        P = num(r["power_W"])
+        out.append(dict(
+            name="trapp_%03dW" % round(P), dataset="Trapp 2017", alloy="316L",
+            P=P, v=num(r["speed_mm_s"]) * 1e-3, rb=30e-6, T0=293.15,
+            width=num(r["width_um"]) * 1e-6, width_sd=3e-6,
+            depth=num(r["depth_um"]) * 1e-6, depth_sd=3e-6,
+            absorptivity=num(r["absorptivity"]), disc=500e-6,
+            label="%g W" % P,
+            note="Trapp et al. 2017, %g W, 500 mm/s, 60 um 1/e^2 diameter, "
+                 "0.5 mm disc" % P))
+    for r in read_table("simonds2018_316l_spot.csv"):
+        P = num(r["power_W"])
+        out.append(dict(
+            name="simonds_%03dW" % round(P), dataset="Simonds 2018",
+            alloy="316L", P=P, v=0.0, rb=151.5e-6, T0=293.15,
+            coupling=num(r["coupling"]), t_keyhole=num(r["t_keyhole_ms"]),
+            weld_w=num(r["weld_W_um"]), label="%g W" % P,
+            note="Simonds et al. 2018, stationary 10 ms, %g W, top-hat 303 um "
+                 "(Gaussian of the same D4sigma)" % P))
+    return out
+
+
+# ---------------------------------------------------------------- scenes
+def track_geometry(c):
+    """Domain and track of a track case. The rule (the same for every
+    case): the track is 3 measured widths long (at least 320 um); the plate extends 80 um
+    before and 160 um after it, 2 widths + 80 um across and 1.6 depths +
+    80 um below the surface (at least 160 um; at most the disc of Trapp's
+    experiment, 0.5 mm, whose bottom is then insulated as in the
+    calorimetry); 48 um of gas above. The domain-size check (setting
+    'large') shows what this rule costs in accuracy."""
+    Ltr = ceil_cells(max(320e-6, 3 * c["width"]))
+    Lx = ceil_cells(MARGIN_START + Ltr + MARGIN_END)
+    Ly = 2 * ceil_cells(max(120e-6, c["width"] + 40e-6))
+    Hp = ceil_cells(max(160e-6, 1.6 * c["depth"] + 80e-6))
+    disc = c.get("disc")
+    if disc is not None and Hp >= disc:
+        Hp, bottom = disc, False
+    else:
+        bottom = True
+    return dict(Ltr=Ltr, Lx=Lx, Ly=Ly, Hp=Hp, fixed_bottom=bottom)
+
+
+def fmt(x):
+    return "%.6g" % x
+
+
+def material_comment(alloy):
+    return {"IN718": "IN718 (thermal, melt-flow, evaporation and optical data, "
+                     "each with its source)",
+            "316L": "316L (thermal, melt-flow, evaporation and optical data, "
+                    "each with its source)"}[alloy]
+
+
+def scene_text(c, scale=1.0):
+    """The scene of case @p c; @p scale > 1 enlarges the domain across and
+    below (the domain-size check)."""
+    if c["v"] == 0:
+        return spot_scene_text(c)
+    g = track_geometry(c)
+    Ly = 2 * ceil_cells(0.5 * g["Ly"] * scale)
+    Hp = g["Hp"] if not g["fixed_bottom"] else ceil_cells(g["Hp"] * scale)
+    Lx = g["Lx"]
+    ztop = Hp
+    t_end = g["Ltr"] / c["v"]
+    fixed = ("z-: %s" % fmt(c["T0"])) if g["fixed_bottom"] else ""
+    lines = [
+        "# femp validation scene (doc/validation.md), written by",
+        "# contrib/validate.py scenes: %s." % c["note"],
+        "# Bare plate at %s K, no powder; beam radius r_b = D4sigma/2 = %s um "
+        "(1/e^2)." % (fmt(c["T0"]), fmt(c["rb"] * 1e6)),
+        "# Track %s um long (%s ms), plate %s x %s um, %s um thick%s; %s um "
+        "cells." % (fmt(g["Ltr"] * 1e6), fmt(t_end * 1e3), fmt(Lx * 1e6),
+                    fmt(Ly * 1e6), fmt(Hp * 1e6),
+                    (", bottom held at %s K" % fmt(c["T0"])) if fixed else
+                    " (the disc; all faces insulated)", fmt(H * 1e6)),
+        "#   mpirun -np 2 femp prm/validation/%s.prm" % c["name"],
+        "set Dimension = 3",
+        "",
+        "# Material data of %s." % material_comment(c["alloy"]),
+        "include ../materials/%s.prm" % c["alloy"],
+        "",
+        "subsection Physics",
+        "  set Heat transfer = true",
+        "  set Melt flow     = true",
+        "  set Gravity       = 9.81",
+        "end",
+        "",
+        "subsection Time stepping",
+        "  set End time      = %s   # s: the laser's path" % fmt(t_end),
+        "  set Time step     = 0",
+        "  set Safety factor = 0.5",
+        "end",
+        "",
+        "subsection Background grid",
+        "  set Lower corner = 0, 0, 0",
+        "  set Upper corner = %s, %s, %s" % (fmt(Lx), fmt(Ly), fmt(ztop + GAS)),
+        "  set Cell size    = %s" % fmt(H),
+        "end",
+        "",
+        "subsection Material points",
+        "  set Point spacing      = %s" % fmt(H / 2),
+        "  set Substrate top      = %s" % fmt(ztop),
+        "  set Sub-cell divisions = 2",
+        "  subsection Powder layer",
+        "    set Layer thickness = 0",
+        "  end",
+        "end",
+        "",
+        "subsection Heat transfer",
+        "  set Initial temperature = %s" % fmt(c["T0"]),
+        "  set Reference temperature = %s" % fmt(c["T0"]),
+        "  set Fixed temperatures  = %s" % fixed,
+        "end",
+        "",
+        "subsection Melt flow",
+        "  # Recoil: zeta_p = 0.54 (Anisimov's back-flow fraction); the alloy's",
+        "  # viscosity and surface tension come from its material file.",
+        "  set Recoil coefficient = 0.54",
+        "  set Darcy constant     = 1e8",
+        "  set Darcy epsilon      = 1e-3",
+        "end",
+        "",
+        "subsection Laser",
+        "  set Power            = %s" % fmt(c["P"]),
+        "  set Beam radius      = %s" % fmt(c["rb"]),
+        "  set Scan speed       = %s" % fmt(c["v"]),
+        "  set Start point      = %s, %s, 0" % (fmt(MARGIN_START), fmt(Ly / 2)),
+        "  set End point        = %s, %s, 0" % (fmt(MARGIN_START + g["Ltr"]),
+                                                 fmt(Ly / 2)),
+        "  set Start time       = 0",
+        "  # Rays traced into the surface, Fresnel absorption with the",
+        "  # material file's optical constants (no fitted absorptivity).",
+        "  set Absorption model = ray traced",
+        "end",
+        "",
+        "subsection Output",
+        "  set Directory             = output",
+        "  set Output interval       = 0",
+        "  set Write material points = never",
+        "  set Time series interval  = %s" % fmt(min(5e-6, t_end / 100)),
+        "  set Progress interval     = 1000",
+        "end",
+        ""]
+    return "\n".join(lines)
+
+
+def spot_scene_text(c):
+    """Stationary spot (Simonds 2018): 10 ms on a plate; the top-hat beam
+    of 303 um is taken as the Gaussian of the same second-moment diameter
+    (D4sigma = 303 um, r_b = 151.5 um): femp's beam is Gaussian, whose
+    peak irradiance is then twice the top-hat's. The spot moves 10 um in
+    the 10 ms (femp's line scan needs a speed)."""
+    L, Hp = 1200e-6, 1120e-6
+    lines = [
+        "# femp validation scene (doc/validation.md), written by",
+        "# contrib/validate.py scenes: %s." % c["note"],
+        "# The top-hat beam is approximated by the Gaussian of the same",
+        "# D4sigma (303 um, r_b = 151.5 um): its peak irradiance is twice the",
+        "# top-hat's, so the keyhole may start earlier than measured. The beam",
+        "# creeps 10 um in the 10 ms (a line scan needs a speed). About 3",
+        "# million 8 um cells: not in the default validation run.",
+        "#   mpirun -np 2 femp prm/validation/%s.prm" % c["name"],
+        "set Dimension = 3",
+        "",
+        "# Material data of %s." % material_comment(c["alloy"]),
+        "include ../materials/%s.prm" % c["alloy"],
+        "",
+        "subsection Physics",
+        "  set Heat transfer = true",
+        "  set Melt flow     = true",
+        "end",
+        "subsection Time stepping",
+        "  set End time = 1e-2",
+        "end",
+        "subsection Background grid",
+        "  set Lower corner = 0, 0, 0",
+        "  set Upper corner = %s, %s, %s" % (fmt(L), fmt(L), fmt(Hp + 80e-6)),
+        "  set Cell size    = %s" % fmt(H),
+        "end",
+        "subsection Material points",
+        "  set Point spacing      = %s" % fmt(H / 2),
+        "  set Substrate top      = %s" % fmt(Hp),
+        "  set Sub-cell divisions = 2",
+        "  subsection Powder layer",
+        "    set Layer thickness = 0",
+        "  end",
+        "end",
+        "subsection Heat transfer",
+        "  set Initial temperature   = %s" % fmt(c["T0"]),
+        "  set Reference temperature = %s" % fmt(c["T0"]),
+        "  set Fixed temperatures    = z-: %s" % fmt(c["T0"]),
+        "end",
+        "subsection Melt flow",
+        "  set Recoil coefficient = 0.54",
+        "end",
+        "subsection Laser",
+        "  set Power            = %s" % fmt(c["P"]),
+        "  set Beam radius      = %s" % fmt(c["rb"]),
+        "  set Scan speed       = 1e-3",
+        "  set Start point      = %s, %s, 0" % (fmt(L / 2 - 5e-6), fmt(L / 2)),
+        "  set End point        = %s, %s, 0" % (fmt(L / 2 + 5e-6), fmt(L / 2)),
+        "  set Absorption model = ray traced",
+        "end",
+        "subsection Output",
+        "  set Directory             = output",
+        "  set Output interval       = 0",
+        "  set Write material points = never",
+        "  set Time series interval  = 1e-5",
+        "  set Progress interval     = 1000",
+        "end",
+        ""]
+    return "\n".join(lines)
+
+
+def material(alloy):
+    """Density, c_p(T), lambda(T), solidus and n, k of a material file."""
+    text = open(os.path.join(ROOT, "prm", "materials", alloy + ".prm")).read()
+    get = lambda key: re.search(r"set %s\s*=\s*([^#\n]*)" % re.escape(key),
+                                text).group(1).strip()
+
+    def table(v):
+        pts = [tuple(float(a) for a in p.split(":")) for p in v.split(",")]
+
+        def f(T):
+            if T <= pts[0][0]:
+                return pts[0][1]
+            for (a, b), (c, d) in zip(pts, pts[1:]):
+                if T <= c:
+                    return b + (d - b) * (T - a) / (c - a)
+            return pts[-1][1]
+        return f
+    return dict(rho=float(get("Density")), cp=table(get("Specific heat")),
+                k=table(get("Thermal conductivity")),
+                Ts=float(get("Solidus temperature")),
+                n=float(get("Refractive index")),
+                kappa=float(get("Extinction coefficient")))
+
+
+def cmd_regime(args):
+    """The normalized enthalpy of every measured track as femp's log
+    computes it, beside the measured depth/width."""
+    print("case                  P(W)  v(m/s) r_b(um) depth/width  "
+          "dH/h_s(A0)  dH/h_s(eta meas.)  dH/h_s(0.35)")
+    for c in cases():
+        if c["v"] == 0:
+            continue
+        m = material(c["alloy"])
+        rc = m["rho"] * m["cp"](m["Ts"])
+        D = m["k"](m["Ts"]) / rc
+        base = c["P"] / (math.pi * rc * m["Ts"] * math.sqrt(D * c["v"] * c["rb"] ** 3))
+        eta = c.get("absorptivity")
+        print("%-20s %5.0f  %5.2f  %6.1f  %10.2f  %10.1f  %17s  %12.1f" % (
+            c["name"], c["P"], c["v"], c["rb"] * 1e6, c["depth"] / c["width"],
+            fresnel(m["n"], m["kappa"]) * base,
+            ("%.1f" % (eta * base)) if eta else "-", 0.35 * base))
+
+
+def cmd_scenes(args):
+    os.makedirs(SCENES, exist_ok=True)
+    bad = []
+    for c in cases():
+        f = os.path.join(SCENES, c["name"] + ".prm")
+        text = scene_text(c)
+        if args.check:
+            if not os.path.exists(f) or open(f).read() != text:
+                bad.append(f)
+            continue
+        with open(f, "w") as fh:
+            fh.write(text)
+    if bad:
+        raise SystemExit("validate.py: scenes out of date (run contrib/validate.py "
+                         "scenes): " + ", ".join(bad))
+    print("%d scenes %s" % (len(cases()), "up to date" if args.check else
+                            "written to " + SCENES))
+
+
+# ---------------------------------------------------------------- runs
+def run_timed(cmd, cwd, log, max_wall=None):
+    """Run cmd in cwd, stdout+stderr to log; (exit code, wall s, CPU s of
+    the run and its children). After max_wall seconds the run is stopped
+    (exit code -15) and what it wrote is kept."""
+    t0 = time.time()
+    with open(log, "w") as out:
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=subprocess.STDOUT)
+        while True:
+            pid, status, ru = os.wait4(p.pid, os.WNOHANG)
+            if pid:
+                break
+            if max_wall and time.time() - t0 > max_wall:
+                p.terminate()
+                pid, status, ru = os.wait4(p.pid, 0)
+                break
+            time.sleep(0.2)
+    return (os.waitstatus_to_exitcode(status), time.time() - t0,
+            ru.ru_utime + ru.ru_stime)
+
+
+def read_csv(path):
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
+def window_stats(rows, key, t0, t1):
+    v = sorted(float(r[key]) for r in rows if t0 <= float(r["time"]) <= t1)
+    if not v:
+        return None, None
+    n = len(v)
+    med = v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+    return med, v[-1]
+
+
+def time_mean(rows, key, t0, t1):
+    pts = [(float(r["time"]), float(r[key])) for r in rows
+           if t0 <= float(r["time"]) <= t1]
+    if len(pts) < 2:
+        return pts[0][1] if pts else None
+    s = sum(0.5 * (a[1] + b[1]) * (b[0] - a[0]) for a, b in zip(pts, pts[1:]))
+    return s / (pts[-1][0] - pts[0][0])
+
+
+def log_figures(text):
+    r = {}
+    m = re.search(r"Melt flow: ([0-9]+) fluid steps", text)
+    r["fluid_steps"] = int(m.group(1)) if m else None
+    m = re.findall(r"step +([0-9]+) +dt =", text)
+    r["steps"] = int(m[-1]) if m else None
+    m = re.search(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
+                  r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)", text)
+    if m:
+        r.update(laser_J=float(m.group(1)), losses_J=float(m.group(2)),
+                 evaporation_J=float(m.group(3)))
+    m = re.search(r"incident ([-0-9.e+]+), absorbed ([-0-9.e+]+) \(fraction "
+                  r"([-0-9.e+]+)\)", text)
+    if m:
+        r["absorbed_fraction_run"] = float(m.group(3))
+    m = re.search(r"normalized enthalpy [^=]*= ([0-9.e+]+)", text)
+    r["normalized_enthalpy"] = float(m.group(1)) if m else None
+    m = re.search(r"[Ww]all (?:time|clock)[^0-9]*([0-9.]+) *s", text)
+    r["femp_wall_s"] = float(m.group(1)) if m else None
+    return r
+
+
+def evaluate(out_dir, t_end, log_text=""):
+    """The fusion zone and absorbed fraction of a finished run."""
+    r = log_figures(log_text)
+    pool = read_csv(os.path.join(out_dir, "melt_pool.csv"))
+    t_last = max(float(p["time"]) for p in pool)
+    r["t_reached"] = t_last
+    # a run stopped early (wall-time cap): the same window of the path it
+    # reached, marked incomplete by the caller
+    t_end = min(t_end, t_last)
+    t0, t1 = 0.6 * t_end, t_end * (1 + 1e-9)
+    for key, name in (("width_solidus_substrate", "width"),
+                      ("depth_solidus_substrate", "depth"),
+                      ("T_max", "T_max"), ("length", "length")):
+        med, mx = window_stats(pool, key, t0, t1)
+        r[name], r[name + "_max"] = med, mx
+    # steadiness: median of the last 20 % against the 20 % before
+    a, _ = window_stats(pool, "depth_solidus_substrate", 0.6 * t_end, 0.8 * t_end)
+    b, _ = window_stats(pool, "depth_solidus_substrate", 0.8 * t_end, t1)
+    r["depth_growth"] = (b / a - 1) if a and b else None
+    f = os.path.join(out_dir, "absorption.csv")
+    if os.path.exists(f):
+        ab = read_csv(f)
+        r["absorbed"] = time_mean(ab, "absorbed_fraction", t0, t1)
+        r["hits_per_ray"] = time_mean(ab, "hits_per_ray", t0, t1)
+    return r
+
+
+EVAPORATION = {"IN718": (6.43e6, 0.0580, 3186.0), "316L": (7.41e6, 0.0558, 3090.0)}
+
+
+def scene_value(scene, key):
+    m = re.search(r"set %s\s*=\s*([^#\n]*)" % re.escape(key), scene)
+    return [float(v) for v in m.group(1).split(",")] if m else None
+
+
+def end_state(run_dir, alloy):
+    """What digs the pool, from the last field output of a run: the
+    depression depth under and behind the beam (the lowest metal surface
+    within 4 r_b behind to 1 r_b ahead of the beam axis, the centre column
+    and its two neighbours across), the surface temperature there and the
+    recoil pressure zeta_p p_sat(T) it gives (Clausius-Clapeyron with the
+    alloy's evaporation data, as femp computes it), the fastest melt."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import plot_track_svg as P
+    out = os.path.join(run_dir, "output")
+    ns = [int(m.group(1)) for f in os.listdir(out)
+          for m in [re.match(r"grid_([0-9]+)\.pvtu$", f)] if m]
+    if not ns:
+        return {}
+    cells = P.read_cells(out, max(ns))
+    scene = open(os.path.join(run_dir, "scene.prm")).read()
+    h = scene_value(scene, "Cell size")[0]
+    ztop = scene_value(scene, "Substrate top")[0]
+    rb = scene_value(scene, "Beam radius")[0]
+    xb, yc, _ = scene_value(scene, "End point")
+    cols = {}
+    for (x, y, z), f in cells.items():
+        if abs(y - yc) <= 1.01 * h and xb - 4 * rb <= x <= xb + rb:
+            cols.setdefault((x, y), []).append((z, f))
+    surf = {}
+    for key, col in cols.items():
+        col.sort(key=lambda t: -t[0])
+        for z, f in col:
+            if f["alpha"] >= 0.5:
+                surf[key] = (z + h * (f["alpha"] - 0.5), f["T"])
+                break
+    r = {}
+    if surf:
+        Lv, M, Tv = EVAPORATION[alloy]
+        recoil = lambda T: 0.54 * 101325 * math.exp(
+            Lv * M * (T - Tv) / (8.314462618 * T * Tv))
+        deepest = min(surf.values())
+        r["depression"] = max(0.0, ztop - deepest[0])
+        # the column on the beam axis (nearest cell centre)
+        axis = min(surf, key=lambda k: (abs(k[0] - xb), abs(k[1] - yc)))
+        r["depression_axis"] = max(0.0, ztop - surf[axis][0])
+        r["T_axis"] = surf[axis][1]
+        r["recoil_axis"] = recoil(surf[axis][1])
+        hottest = max(surf.values(), key=lambda t: t[1])
+        r["T_surface_max"] = hottest[1]
+        r["recoil_max"] = recoil(hottest[1])
+    speeds = [math.sqrt(f["u_x"] ** 2 + f["u_y"] ** 2 + f["u_z"] ** 2)
+              for f in cells.values() if f.get("alpha", 0) >= 0.5 and "u_x" in f]
+    r["u_max"] = max(speeds) if speeds else None
+    return r
+
+
+def femp_cmd(args, exe, sets, scene):
+    cmd = (["mpirun", "--allow-run-as-root", "--oversubscribe", "-np",
+            str(args.np), exe] if args.np > 1 else [exe])
+    for k, v in sets.items():
+        cmd += ["--set", "%s=%s" % (k, v)]
+    return cmd + [scene]
+
+
+def run_case(args, exe, c, setting):
+    d = os.path.join(args.out, setting, c["name"])
+    f = os.path.join(d, "result.json")
+    if os.path.exists(f):
+        return json.load(open(f))
+    os.makedirs(d, exist_ok=True)
+    scene = os.path.join(d, "scene.prm")
+    scale = 1.5 if setting == "large" else 1.0
+    text = scene_text(c, scale).replace("include ../materials/",
+                                        "include %s/prm/materials/" % ROOT)
+    open(scene, "w").write(text)
+    sets = {"Output/Directory": os.path.join(d, "output")}
+    if setting == "fine":
+        sets.update(FINE)
+    cmd = femp_cmd(args, exe, sets, scene)
+    print("run %s [%s] ..." % (c["name"], setting), flush=True)
+    t0 = time.time()
+    rc, wall, cpu = run_timed(cmd, d, os.path.join(d, "log.txt"), args.max_wall)
+    t_end = track_geometry(c)["Ltr"] / c["v"]
+    r = dict(name=c["name"], setting=setting, rc=rc, wall_s=wall,
+             np=args.np, cpu_s=cpu)
+    try:
+        r.update(evaluate(os.path.join(d, "output"), t_end,
+                          open(os.path.join(d, "log.txt")).read()))
+    except (OSError, ValueError, KeyError) as ex:
+        r["read_error"] = str(ex)
+    if r.get("t_reached", 0) >= t_end * (1 - 1e-6):
+        try:
+            r.update(end_state(d, c["alloy"]))
+        except (OSError, ValueError, KeyError, TypeError) as ex:
+            r["end_state_error"] = str(ex)
+    else:
+        r["incomplete"] = True
+    json.dump(r, open(f, "w"), indent=1)
+    print("  rc %s, %.0f s wall, width %s um, depth %s um, absorbed %s" % (
+        rc, wall, um(r.get("width")), um(r.get("depth")),
+        ("%.3f" % r["absorbed"]) if r.get("absorbed") is not None else "-"),
+        flush=True)
+    return r
+
+
+def um(x):
+    return "%.1f" % (x * 1e6) if x is not None else "-"
+
+
+def cmd_reevaluate(args):
+    """Evaluate every finished run again (after a change of the evaluation;
+    nothing is rerun)."""
+    allc = {c["name"]: c for c in cases()}
+    for (setting, name), r in load_results(args.out).items():
+        d = os.path.join(args.out, setting, name)
+        t_end = track_geometry(allc[name])["Ltr"] / allc[name]["v"]
+        r.update(evaluate(os.path.join(d, "output"), t_end,
+                          open(os.path.join(d, "log.txt")).read()))
+        if r["t_reached"] >= t_end * (1 - 1e-6):
+            r.pop("incomplete", None)
+            r.update(end_state(d, allc[name]["alloy"]))
+        else:
+            r["incomplete"] = True
+        json.dump(r, open(os.path.join(d, "result.json"), "w"), indent=1)
+        print("re-evaluated", setting, name)
+
+
+def cmd_run(args):
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    if not os.path.exists(exe):
+        raise SystemExit("validate.py: build femp first (%s)" % exe)
+    rx = re.compile(args.cases or DEFAULT_CASES)
+    todo = [c for c in cases() if rx.search(c["name"]) and c["v"] > 0]
+    for c in todo:
+        run_case(args, exe, c, args.setting)
+
+
+# ---------------------------------------------------------------- report
+def load_results(out):
+    res = {}
+    if not os.path.isdir(out):
+        return res
+    for setting in sorted(os.listdir(out)):
+        sd = os.path.join(out, setting)
+        if not os.path.isdir(sd):
+            continue
+        for name in sorted(os.listdir(sd)):
+            f = os.path.join(sd, name, "result.json")
+            if os.path.exists(f):
+                res[(setting, name)] = json.load(open(f))
+    return res
+
+
+def rel(p, m):
+    return (p / m - 1) if (p is not None and m) else None
+
+
+def pct(x):
+    return ("%+.0f %%" % (100 * x)) if x is not None else "-"
+
+
+def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
+                xlim=None, ylim=None):
+    """Predicted against measured (or any x-y) with horizontal error bars
+    (the measurement's spread) and the line y = x (diag). series: list of
+    (label, colour, [(x, y, xerr, yerr, text)])."""
+    W, Hh, L, R, T, B = 560, 460, 70, 150, 40, 55
+    xs = [p[0] for s in series for p in s[2]] or [0, 1]
+    ys = [p[1] for s in series for p in s[2]] or [0, 1]
+    lo = min(xs + ys) if diag else None
+    hi = max(xs + ys) if diag else None
+    x0, x1 = xlim or ((lo, hi) if diag else (min(xs), max(xs)))
+    y0, y1 = ylim or ((lo, hi) if diag else (min(ys), max(ys)))
+    padx, pady = 0.08 * (x1 - x0 or 1), 0.08 * (y1 - y0 or 1)
+    x0, x1, y0, y1 = x0 - padx, x1 + padx, y0 - pady, y1 + pady
+    X = lambda v: L + (v - x0) / (x1 - x0) * (W - L - R)
+    Y = lambda v: Hh - B - (v - y0) / (y1 - y0) * (Hh - T - B)
+    o = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
+         'font-family="sans-serif" font-size="11">' % (W, Hh),
+         '<rect width="100%" height="100%" fill="white"/>',
+         '<text x="%d" y="20" font-size="13">%s</text>' % (L, title)]
+    for i in range(6):
+        xv = x0 + (x1 - x0) * i / 5
+        yv = y0 + (y1 - y0) * i / 5
+        o.append('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#eee"/>'
+                 % (X(xv), T, X(xv), Hh - B))
+        o.append('<text x="%.1f" y="%d" text-anchor="middle">%.3g</text>'
+                 % (X(xv), Hh - B + 15, xv))
+        o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#eee"/>'
+                 % (L, Y(yv), W - R, Y(yv)))
+        o.append('<text x="%d" y="%.1f" text-anchor="end">%.3g</text>'
+                 % (L - 5, Y(yv) + 4, yv))
+    o.append('<rect x="%d" y="%d" width="%d" height="%d" fill="none" '
+             'stroke="black"/>' % (L, T, W - L - R, Hh - T - B))
+    if diag:
+        a, b = max(x0, y0), min(x1, y1)
+        o.append('<line x1="%.1f" y1="%.1f" x2="%.1f" y2="%.1f" stroke="#888" '
+                 'stroke-dasharray="4 3"/>' % (X(a), Y(a), X(b), Y(b)))
+    o.append('<text x="%d" y="%d" text-anchor="middle">%s</text>'
+             % ((L + W - R) // 2, Hh - 15, xlabel))
+    o.append('<text x="16" y="%d" text-anchor="middle" transform="rotate(-90 '
+             '16 %d)">%s</text>' % ((T + Hh - B) // 2, (T + Hh - B) // 2, ylabel))
+    for k, (label, colour, pts) in enumerate(series):
+        for (x, y, xe, ye, text) in pts:
+            if xe:
+                o.append('<line x1="%.1f" y1="%.1f" x2="%.1f" y2="%.1f" '
+                         'stroke="%s"/>' % (X(x - xe), Y(y), X(x + xe), Y(y), colour))
+            if ye:
+                o.append('<line x1="%.1f" y1="%.1f" x2="%.1f" y2="%.1f" '
+                         'stroke="%s"/>' % (X(x), Y(y - ye), X(x), Y(y + ye), colour))
+            o.append('<circle cx="%.1f" cy="%.1f" r="3.5" fill="%s"/>'
+                     % (X(x), Y(y), colour))
+            if text:
+                o.append('<text x="%.1f" y="%.1f" font-size="9">%s</text>'
+                         % (X(x) + 5, Y(y) - 4, text))
+        o.append('<circle cx="%d" cy="%d" r="4" fill="%s"/>'
+                 % (W - R + 12, T + 12 + 16 * k, colour))
+        o.append('<text x="%d" y="%d">%s</text>' % (W - R + 20, T + 16 + 16 * k, label))
+    o.append("</svg>")
+    with open(path, "w") as fh:
+        fh.write("\n".join(o) + "\n")
+
+
+SETTING_NAMES = {"default": "default free surface",
+                 "fine": "fine surface (height function, 2 smoothing passes, "
+                         "point shifting 2)",
+                 "large": "default free surface, domain 1.5 x wider and deeper"}
+COLOURS = {"default": "#1f5fbf", "fine": "#d9480f", "large": "#2b8a3e"}
+
+
+def cmd_report(args):
+    res = load_results(args.out)
+    allc = {c["name"]: c for c in cases()}
+    os.makedirs(args.img, exist_ok=True)
+    settings = [s for s in ("default", "fine", "large")
+                if any(k[0] == s for k in res)]
+    # figures
+    for what in ("width", "depth"):
+        series = []
+        for s in settings:
+            if s == "large":
+                continue
+            pts = []
+            for (st, name), r in sorted(res.items()):
+                c = allc.get(name)
+                if st != s or not c or r.get(what) is None:
+                    continue
+                pts.append((c[what] * 1e6, r[what] * 1e6, c[what + "_sd"] * 1e6,
+                            0, c["label"] if s == "default" else ""))
+            if pts:
+                series.append((SETTING_NAMES[s].split(" (")[0], COLOURS[s], pts))
+        if series:
+            svg_scatter(os.path.join(args.img, "validation_%s.svg" % what), series,
+                        "Fusion-zone %s: femp against measured (8 um cells)" % what,
+                        "measured %s (um), bar: spread" % what,
+                        "femp %s (um)" % what)
+    series = []
+    meas = [(c["P"], c["absorptivity"], 0, 0.005, "") for c in cases()
+            if c["dataset"] == "Trapp 2017" and c.get("absorptivity")]
+    series.append(("Trapp 2017 calorimetry", "#000000", meas))
+    for s in settings:
+        if s == "large":
+            continue
+        pts = [(allc[n]["P"], r["absorbed"], 0, 0, "")
+               for (st, n), r in sorted(res.items())
+               if st == s and n.startswith("trapp") and r.get("absorbed") is not None]
+        if pts:
+            series.append(("femp, " + SETTING_NAMES[s].split(" (")[0], COLOURS[s], pts))
+    svg_scatter(os.path.join(args.img, "validation_absorption.svg"), series,
+                "Absorbed fraction at 500 mm/s, 316L, against power",
+                "laser power (W)", "absorbed fraction", diag=False,
+                ylim=(0, 1))
+    # tables
+    lines = []
+    for ds in ("AM-Bench 2022", "NIST spot sweep", "Trapp 2017"):
+        rows = [(st, n, r) for (st, n), r in sorted(res.items())
+                if n in allc and allc[n]["dataset"] == ds]
+        if not rows:
+            continue
+        lines.append("\n### %s\n" % ds)
+        lines.append("| case | setting | measured width (µm) | femp | error | "
+                     "measured depth (µm) | femp | error | depth/width | "
+                     "absorbed (femp%s) | hits/ray | ΔH/h_s | steady (depth growth) | "
+                     "wall (s) × ranks |" % (" / Trapp" if ds == "Trapp 2017" else ""))
+        lines.append("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        for st, n, r in sorted(rows, key=lambda x: (x[1], x[0])):
+            c = allc[n]
+            ab = ("%.3f" % r["absorbed"]) if r.get("absorbed") is not None else "-"
+            if ds == "Trapp 2017":
+                ab += " / %s" % (("%.3f" % c["absorptivity"]) if c.get("absorptivity")
+                                 else "-")
+            lines.append("| %s | %s | %.1f ± %.1f | %s | %s | %.1f ± %.1f | %s | %s | "
+                         "%.2f | %s | %s | %s | %s | %.0f × %d%s |" % (
+                             c["label"], st, c["width"] * 1e6, c["width_sd"] * 1e6,
+                             um(r.get("width")), pct(rel(r.get("width"), c["width"])),
+                             c["depth"] * 1e6, c["depth_sd"] * 1e6, um(r.get("depth")),
+                             pct(rel(r.get("depth"), c["depth"])),
+                             c["depth"] / c["width"], ab,
+                             ("%.2f" % r["hits_per_ray"]) if r.get("hits_per_ray") else "-",
+                             ("%.3g" % r["normalized_enthalpy"]) if r.get("normalized_enthalpy") else "-",
+                             pct(r.get("depth_growth")), r["wall_s"], r["np"],
+                             (" (stopped at %.0f of %.0f µs)" % (
+                                 r["t_reached"] * 1e6,
+                                 track_geometry(c)["Ltr"] / c["v"] * 1e6))
+                             if r.get("incomplete") else ""))
+    table = "\n".join(lines) + "\n"
+    f = os.path.join(args.out, "tables.md")
+    open(f, "w").write(table)
+    print(table)
+    print("wrote", f, "and the figures in", args.img)
+
+
+# ---------------------------------------------------------------- pipeline
+def cmd_pipeline(args):
+    """Trapp 48 W, thermal only, 16 um cells, 0.2 ms: the whole chain."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    c = [c for c in cases() if c["name"] == "trapp_048W"][0]
+    d = os.path.abspath(args.out)
+    os.makedirs(d, exist_ok=True)
+    scene = os.path.join(d, "scene.prm")
+    text = scene_text(c).replace("include ../materials/",
+                                 "include %s/prm/materials/" % ROOT)
+    open(scene, "w").write(text)
+    t_end = 2e-4
+    sets = {"Physics/Melt flow": "false", "Background grid/Cell size": "16e-6",
+            "Material points/Point spacing": "8e-6",
+            "Time stepping/End time": str(t_end),
+            "Output/Directory": os.path.join(d, "output"),
+            "Output/Time series interval": "5e-6"}
+    args.np = 1
+    rc, wall, cpu = run_timed(femp_cmd(args, exe, sets, scene), d,
+                         os.path.join(d, "log.txt"))
+    if rc != 0:
+        raise SystemExit("validate.py pipeline: femp failed (exit %d), see %s"
+                         % (rc, os.path.join(d, "log.txt")))
+    r = evaluate(os.path.join(d, "output"), t_end, open(os.path.join(d, "log.txt")).read())
+    out = ["case trapp_048W (thermal only, 16 um, 0.2 ms)",
+           "fusion-zone width (um) = %.0f" % (r["width"] * 1e6),
+           "fusion-zone depth (um) = %.0f" % (r["depth"] * 1e6),
+           "width error against Trapp 2017 = %.2f" % rel(r["width"], c["width"]),
+           "depth error against Trapp 2017 = %.2f" % rel(r["depth"], c["depth"]),
+           "absorbed fraction = %.3f (Trapp 2017: %.3f)" % (r["absorbed"], c["absorptivity"]),
+           "flat-surface Fresnel value of the 316L constants = %.3f" % fresnel(3.83, 5.34)]
+    text = "\n".join(out) + "\n"
+    print(text, end="")
+    if args.expected:
+        exp = open(args.expected).read()
+        if not same_numbers(exp, text):
+            raise SystemExit("validate.py pipeline: output differs from %s" % args.expected)
+        print("pipeline output agrees with", args.expected)
+
+
+def fresnel(n, k):
+    return 4 * n / ((n + 1) ** 2 + k ** 2)
+
+
+def same_numbers(a, b, rtol=1e-6):
+    na = re.findall(r"-?[0-9]+\.?[0-9]*(?:e[-+]?[0-9]+)?", a)
+    nb = re.findall(r"-?[0-9]+\.?[0-9]*(?:e[-+]?[0-9]+)?", b)
+    words = lambda s: re.sub(r"-?[0-9]+\.?[0-9]*(?:e[-+]?[0-9]+)?", "#", s)
+    if words(a) != words(b) or len(na) != len(nb):
+        return False
+    return all(abs(float(x) - float(y)) <= rtol * max(1, abs(float(x)))
+               for x, y in zip(na, nb))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
+                                       "pipeline", "regime"])
+    ap.add_argument("--check", action="store_true")
+    ap.add_argument("--cases", default=None)
+    ap.add_argument("--setting", default="default", choices=["default", "fine", "large"])
+    ap.add_argument("--np", type=int, default=2)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--out", default=None)
+    ap.add_argument("--img", default=os.path.join(ROOT, "doc", "img"))
+    ap.add_argument("--max-wall", type=float, default=None)
+    ap.add_argument("--expected", default=None)
+    args = ap.parse_args()
+    if args.out is None:
+        args.out = os.path.join(args.build, "validation" if args.command != "pipeline"
+                                else "validation_pipeline")
+    if args.command == "scenes":
+        cmd_scenes(args)
+    elif args.command == "run":
+        cmd_run(args)
+    elif args.command == "regime":
+        cmd_regime(args)
+    elif args.command == "reevaluate":
+        cmd_reevaluate(args)
+    elif args.command == "report":
+        cmd_report(args)
+    elif args.command == "all":
+        cmd_run(args)
+        cmd_report(args)
+    else:
+        cmd_pipeline(args)
+
+
+if __name__ == "__main__":
+    main()
