@@ -749,8 +749,9 @@ namespace femp
       write_series();
     if (control->output_due())
       write_output(control->is_last());
+    // The hottest metal of the workpiece, not of a drop in the gas.
     if (control->progress_due())
-      report->progress(*control, heat->max_temperature(), result.pool);
+      report->progress(*control, workpiece_peak_temperature(), result.pool);
   }
 
   template <int dim>
