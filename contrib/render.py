@@ -15,9 +15,10 @@
 #   T          the metal (grid cells with alpha >= 1/2, the metal fraction)
 #              as a solid, its surface coloured by the temperature T (K);
 #              with --surface points the metal material points instead;
-#   von_mises  the FE zone (the grid cells below the lowest material point,
-#              von_mises of the finite elements) and the metal points
-#              (von Mises stress from their stress tensor) together, in MPa;
+#   von_mises  the FE zone (the grid cells below the lowest material point
+#              with a stress: the points inside the FE zone carry none) by
+#              the elements' von_mises, and the metal points above it (von
+#              Mises stress from their stress tensor) together, in MPa;
 #              without points at that time: the metal cells' von_mises;
 #   cut_T      the metal cut along the track (the plane y = --cut-y, the
 #              half y < cut removed) coloured by T, with the melt pool's
@@ -192,12 +193,12 @@ def colour(display, view, association, array, lut_name, title, rng):
     bar.Title = title
     bar.ComponentTitle = ""
     bar.TitleColor = bar.LabelColor = [0, 0, 0]
-    bar.TitleFontSize = 18
-    bar.LabelFontSize = 16
+    bar.TitleFontSize = 16
+    bar.LabelFontSize = 14
     bar.ScalarBarLength = 0.5
     bar.HorizontalTitle = 1
     bar.WindowLocation = "Any Location"
-    bar.Position = [0.84, 0.15]
+    bar.Position = [0.87, 0.15]
     bar.AutomaticLabelFormat = 0
     bar.LabelFormat = "%.0f"
     bar.RangeLabelFormat = "%.0f"
@@ -215,7 +216,7 @@ if d.IsA("vtkMultiBlockDataSet"):
     it = d.NewIterator(); it.InitTraversal(); d = it.GetCurrentDataObject()
 w = dsa.WrapDataObject(d)
 pd = w.PointData
-keep = np.asarray(pd["state"]) > 0.5
+keep = (np.asarray(pd["state"]) > 0.5) & (np.asarray(w.Points)[:, 2] >= Z_FE)
 s = {k: np.asarray(pd["stress_" + k])[keep]
      for k in ("xx", "yy", "zz", "xy", "xz", "yz")}
 vm = 1e-6 * np.sqrt(0.5 * ((s["xx"] - s["yy"]) ** 2 + (s["yy"] - s["zz"]) ** 2
@@ -239,14 +240,37 @@ out.GetPointData().AddArray(a)
 """
 
 
-def von_mises_points(points):
-    """Metal points (state 1 solid, 2 fluid) with their von Mises stress in
-    MPa from the stress tensor (a programmable filter: ParaView 5.11's
-    Threshold crashed on the points)."""
+def von_mises_points(points, z_fe=-1e300):
+    """Metal points (state 1 solid, 2 fluid) above z_fe (the FE zone's top)
+    with their von Mises stress in MPa from the stress tensor (a
+    programmable filter: ParaView 5.11's Threshold crashed on the
+    points)."""
     f = ProgrammableFilter(Input=points)
     f.OutputDataSetType = "vtkPolyData"
-    f.Script = VM_SCRIPT
+    f.Script = "Z_FE = %r\n" % z_fe + VM_SCRIPT
     return f
+
+
+def fe_zone_top(run, t):
+    """Top of the FE zone, m: the points inside the FE zone carry no
+    stress (the elements do), so the lowest point with a stress, down to
+    the cell face below it."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    d = as_dataset(run.points_reader, t)
+    pd = d.GetPointData()
+    z = vtk_to_numpy(d.GetPoints().GetData())[:, 2]
+    stressed = None
+    for k in ("xx", "yy", "zz", "xy", "xz", "yz"):
+        a = pd.GetArray("stress_" + k)
+        if a is None:
+            return run.bounds[4]
+        nz = vtk_to_numpy(a) != 0
+        stressed = nz if stressed is None else stressed | nz
+    if stressed is None or not stressed.any():
+        return run.bounds[4]
+    h = run.cell_size
+    z0 = run.bounds[4]
+    return z0 + math.floor((z[stressed].min() - z0) / h + 1e-6) * h
 
 
 def mpa(src, association):
@@ -281,7 +305,12 @@ def set_camera(view, b, cut):
     view.CameraViewAngle = 30
     view.ResetCamera()
     view.CameraParallelProjection = 0
-    GetActiveCamera().Dolly(1.25)
+    cam = view.GetActiveCamera()
+    cam.Dolly(1.3)
+    # Room for the colour bar on the right: the model a little to the left.
+    shift = [0.09 * L * x for x in (1.0, -0.55, 0)]
+    view.CameraFocalPoint = [a + b for a, b in zip(view.CameraFocalPoint, shift)]
+    view.CameraPosition = [a + b for a, b in zip(view.CameraPosition, shift)]
 
 
 def new_view(size):
@@ -297,8 +326,13 @@ def new_view(size):
     return v
 
 
-def label(view, text, where="Upper Left Corner"):
-    t = Text(Text=text)
+def label(view, run, where="Upper Left Corner"):
+    """The run's label and the time shown (it follows the time when the
+    view is turned in ParaView from a saved state)."""
+    t = AnnotateTimeFilter(Input=run.grid_reader)
+    t.Format = run.label.replace("{", "{{").replace("}", "}}") + \
+        "   t = {time:.4g} us"
+    t.Scale = 1e6
     d = Show(t, view)
     d.Color = [0, 0, 0]
     d.FontSize = 18
@@ -316,6 +350,9 @@ def spheres(display, run, args):
 
 def draw(run, kind, t, view, args, rng):
     """Put the pipeline of one view kind of one run at time t into view."""
+    scene = GetAnimationScene()  # the time a saved state opens at
+    scene.UpdateAnimationUsingDataTimeSteps()
+    scene.AnimationTime = t
     view.ViewTime = t
     cut = kind.startswith("cut_")
     field = "T" if kind.endswith("T") else "vm"
@@ -339,27 +376,27 @@ def draw(run, kind, t, view, args, rng):
         d = Show(s, view)
         colour(d, view, "POINTS", "T", "T", "T (K)", rng["T"])
     elif kind == "von_mises" and run.has_points_at(t):
-        lowest = as_dataset(run.points_reader, t).GetBounds()[4]
+        z_fe = fe_zone_top(run, t)
         fe = Clip(Input=run.cells)
         fe.ClipType = "Plane"
-        fe.ClipType.Origin = [0, 0, lowest]
+        fe.ClipType.Origin = [0, 0, z_fe - 1e-3 * run.cell_size]
         fe.ClipType.Normal = [0, 0, 1]
         fe.Invert = 1  # below the lowest point
         fe.Crinkleclip = 1
         fe_vm = mpa(fe, "CELLS")
         d = Show(fe_vm, view)
         colour(d, view, "CELLS", "von_mises_MPa", "von_mises_MPa",
-               "von Mises (MPa)", rng["vm"])
-        pts = von_mises_points(run.points_reader)
+               "von Mises\n(MPa)", rng["vm"])
+        pts = von_mises_points(run.points_reader, z_fe)
         dp = Show(pts, view)
         spheres(dp, run, args)
         colour(dp, view, "POINTS", "von_mises_MPa", "von_mises_MPa",
-               "von Mises (MPa)", rng["vm"])
+               "von Mises\n(MPa)", rng["vm"])
     else:
         s = mpa(ExtractSurface(Input=metal), "CELLS")
         d = Show(s, view)
         colour(d, view, "CELLS", "von_mises_MPa", "von_mises_MPa",
-               "von Mises (MPa)", rng["vm"])
+               "von Mises\n(MPa)", rng["vm"])
     if cut:
         # The melt pool's outline on the cut face.
         y0 = args.cut_y if args.cut_y is not None else (b[2] + b[3]) / 2
@@ -373,7 +410,7 @@ def draw(run, kind, t, view, args, rng):
         dl.ColorArrayName = ["POINTS", ""]
         dl.AmbientColor = dl.DiffuseColor = [1, 1, 1]
         dl.LineWidth = 3
-    label(view, "%s   t = %.4g us" % (run.label, t * 1e6))
+    label(view, run)
     set_camera(view, b, cut)
 
 
@@ -396,8 +433,9 @@ def ranges(runs, kinds, t_of, args):
             if a:
                 lo_vm.append(a[0] * 1e-6); hi_vm.append(a[1] * 1e-6)
             if r.has_points_at(t):
-                a = array_range(von_mises_points(r.points_reader), "POINTS",
-                                "von_mises_MPa", t)
+                a = array_range(von_mises_points(r.points_reader,
+                                                 fe_zone_top(r, t)),
+                                "POINTS", "von_mises_MPa", t)
                 if a:
                     lo_vm.append(a[0]); hi_vm.append(a[1])
     out["T"] = T or ([builtins.min(lo_T), builtins.max(hi_T)] if lo_T else [300, 3000])
