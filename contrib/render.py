@@ -117,7 +117,10 @@ class Run:
     fields on merged nodes), and its points where written."""
 
     def __init__(self, spec):
-        directory, _, label = spec.partition("=")
+        # DIR or DIR=LABEL (a directory name may itself hold '=').
+        directory, label = spec, ""
+        if not os.path.isdir(spec) and "=" in spec:
+            directory, _, label = spec.rpartition("=")
         self.dir = directory
         self.label = label or os.path.basename(os.path.normpath(directory))
         grid, self.format = open_series(directory, "grid")

@@ -1,3 +1,4 @@
+cmake_minimum_required(VERSION 3.13) # literal @WORKDIR@ below (policy CMP0053)
 # Run femp on tests/render_tiny.prm (NPROC ranks) in WORKDIR, once with VTU
 # and once with HDF5 output, then each command of CHECKS (separated by '|',
 # '@DIR@' replaced by the output directories 'vtu hdf5'): the render test
