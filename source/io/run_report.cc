@@ -33,7 +33,9 @@ namespace femp
   {
     const double time = control.time();
     const double wall = control.wall_time();
-    const double left = control.wall_time_left();
+    // (The estimate at the last step is round-off: shown as 0.)
+    const double left =
+      control.wall_time_left() < 0.01 ? 0. : control.wall_time_left();
     out << std::setprecision(4) << "t = " << std::setw(10) << time
         << " s  step " << std::setw(7) << control.step()
         << "  dt = " << std::setw(10) << control.time_step()
