@@ -12,40 +12,23 @@ stresses, value - T0 for the temperature (T0 = --t0, default 300 K).
 --output N compares probe_line_<name>_<N>.csv (default: the last output of
 each run, which for a run stopped by 'Stop when peak temperature below'
 may lie at a slightly different time; the files' '# time' lines are
-printed). Standard library only.
+printed). Python 3 with numpy; the files are read by contrib/femp_post.py.
 """
 import argparse
-import csv
-import glob
 import os
 import sys
 
-
-def read(path):
-    """Columns of a femp probe-line CSV and its '# time = ...' header."""
-    time = None
-    rows = []
-    with open(path) as f:
-        for line in f:
-            if line.startswith("#"):
-                if "time" in line:
-                    time = line.strip("# \n")
-                continue
-            rows.append(line)
-    cols = {}
-    for r in csv.DictReader(rows):
-        for k, v in r.items():
-            cols.setdefault(k.strip(), []).append(float(v))
-    return cols, time
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
 
 
-def probe_file(directory, line, n):
-    if n is not None:
-        return os.path.join(directory, "probe_line_%s_%05d.csv" % (line, n))
-    files = sorted(glob.glob(os.path.join(directory, "probe_line_%s_*.csv" % line)))
-    if not files:
-        sys.exit("no probe line %s in %s" % (line, directory))
-    return files[-1]
+def read(directory, line, n):
+    """Columns of a probe line's output n (None: the last) and its time."""
+    try:
+        t = femp_post.Run(directory).probe_line(line, n)
+    except FileNotFoundError as e:
+        sys.exit(str(e))
+    return t, "time = %.8g s" % t.time
 
 
 def main():
@@ -63,13 +46,11 @@ def main():
     if a.lines:
         lines = a.lines.split(",")
     else:
-        names = glob.glob(os.path.join(a.reference, "probe_line_*_00000.csv"))
-        lines = sorted(os.path.basename(f)[len("probe_line_"):-len("_00000.csv")]
-                       for f in names)
+        lines = femp_post.Run(a.reference).probe_line_names()
     print("line,column,peak,largest_difference,relative,samples,time_reference,time_other")
     for line in lines:
-        ref, t_ref = read(probe_file(a.reference, line, a.output))
-        oth, t_oth = read(probe_file(a.other, line, a.output))
+        ref, t_ref = read(a.reference, line, a.output)
+        oth, t_oth = read(a.other, line, a.output)
         for col in a.columns.split(","):
             if col not in ref or col not in oth:
                 continue

@@ -6,28 +6,21 @@ last output (probe_line_<name>_<n>.csv).
 Usage: /usr/bin/python3 contrib/plot_scene.py OUTPUT_DIR [PNG]
 Needs Debian's python3-matplotlib and python3-numpy.
 """
-import csv
-import glob
 import os
 import sys
 
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
 
 out = sys.argv[1] if len(sys.argv) > 1 else "output"
 png = sys.argv[2] if len(sys.argv) > 2 else os.path.join(out, "scene.png")
+run = femp_post.Run(out)
 
-
-def read(path):
-    with open(path) as f:
-        lines = [l for l in f if not l.startswith("#")]
-    rows = list(csv.DictReader(lines))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
-
-
-pool = read(os.path.join(out, "melt_pool.csv"))
+pool = run.melt_pool()
 fig, ax = plt.subplots(1, 2, figsize=(11, 4))
 t = pool["time"] * 1e3
 for key, label in (("length", "length"), ("width", "width"), ("depth", "depth below substrate top")):
@@ -39,12 +32,10 @@ ax0b.plot(t, pool["T_max"], "k:", label="T_max")
 ax0b.set_ylabel("peak temperature (K)")
 ax[0].legend(loc="upper left")
 ax[0].set_title("melt pool")
-lines = sorted(glob.glob(os.path.join(out, "probe_line_*_*.csv")))
-names = sorted({os.path.basename(p).split("_")[2] for p in lines})
-for name in names:
-    last = sorted(glob.glob(os.path.join(out, f"probe_line_{name}_*.csv")))[-1]
-    d = read(last)
-    ax[1].plot(d["s"] * 1e6, d["T"], label=f"{name} ({os.path.basename(last)})")
+for name in run.probe_line_names():
+    d = run.probe_line(name)
+    ax[1].plot(d["s"] * 1e6, d["T"],
+               label="%s (output %d, t = %.3g s)" % (name, d.n, d.time))
 ax[1].set_xlabel("distance along line (um)")
 ax[1].set_ylabel("T (K)")
 ax[1].legend()

@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Pictures of a track scene (e.g. prm/case_3_2_reduced.prm) as SVG, with
-the Python standard library only (no matplotlib, no numpy, no ParaView).
+Python 3 and numpy (the files are read by contrib/femp_post.py; no
+matplotlib, no ParaView; h5py for HDF5 output).
 
     python3 contrib/plot_track_svg.py OUTPUT_DIR [FIGURE_DIR] [--x X] [--y Y] [--n N] [--prefix P]
 
 reads from OUTPUT_DIR the field output number N (default: the last one):
-grid_<N>.*.vtu (deal.II's zlib-compressed VTU pieces, one per rank),
-probe_line_<name>_<N>.csv and track_shape_<N>.csv, and writes to FIGURE_DIR
+the grid (VTU or HDF5), probe_line_<name>_<N>.csv and track_shape_<N>.csv,
+and writes to FIGURE_DIR
 (default: OUTPUT_DIR), each name preceded by P (default: none):
 
   section_T.svg, section_von_mises.svg   cross-section at x = X (default:
@@ -28,65 +29,32 @@ the largest difference between the first two runs relative to the first
 run's peak |value|, per panel and over all panels of a field (e.g. FEMP
 against all-MPM, doc/cases.md).
 """
-import base64
-import csv
 import glob
 import math
 import os
 import re
-import struct
 import sys
-import zlib
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
 
 
 # ---------------------------------------------------------------- reading
-def _decode(text, vtype):
-    """One binary DataArray of a zlib-compressed VTU (UInt32 headers)."""
-    text = "".join(text.split())
-    first = base64.b64decode(text[:8])
-    nblocks = struct.unpack("<I", first[:4])[0]
-    hlen = 4 * (3 + nblocks)
-    hb64 = 4 * math.ceil(hlen / 3)
-    header = struct.unpack("<%dI" % (3 + nblocks), base64.b64decode(text[:hb64])[:hlen])
-    data = base64.b64decode(text[hb64:])
-    raw, pos = b"", 0
-    for size in header[3:]:
-        raw += zlib.decompress(data[pos:pos + size])
-        pos += size
-    fmt = {"Float32": "f", "Float64": "d", "Int32": "i", "UInt8": "B"}[vtype]
-    n = len(raw) // struct.calcsize(fmt)
-    return struct.unpack("<%d%s" % (n, fmt), raw)
-
-
-def read_cells(output_dir, n):
-    """Cell centres (x, y, z) and fields of every piece of output n."""
-    cells = {}
-    for piece in sorted(glob.glob(os.path.join(output_dir, "grid_%05d.*.vtu" % n))):
-        text = open(piece).read()
-        arrays = {}
-        for m in re.finditer(r'<DataArray([^>]*)>([^<]*)</DataArray>', text):
-            attrs = m.group(1)
-            if 'format="binary"' not in attrs:
-                continue
-            vtype = re.search(r'type="(\w+)"', attrs).group(1)
-            name = re.search(r'Name="(\w+)"', attrs)
-            arrays[name.group(1) if name else "points"] = _decode(m.group(2), vtype)
-        pts = arrays.pop("points")
-        for k in ("connectivity", "offsets", "types"):
-            arrays.pop(k, None)
-        nv = len(pts) // 3
-        per_cell = 8 if "connectivity" not in arrays else 8
-        for c in range(nv // per_cell):
-            v = range(c * per_cell, (c + 1) * per_cell)
-            centre = tuple(round(sum(pts[3 * i + d] for i in v) / per_cell, 9) for d in range(3))
-            cells[centre] = {k: a[c * per_cell] for k, a in arrays.items()}
-    return cells
-
-
-def read_csv(path):
-    rows = [r for r in csv.reader(l for l in open(path) if not l.startswith("#"))]
-    head, body = rows[0], rows[1:]
-    return {h: [r[i] for r in body] for i, h in enumerate(head)}
+def section(grid, axis, value, field):
+    """{(a, b): value} of the metal cells (alpha >= 1/2) whose centre
+    coordinate 'axis' (0 = x, 1 = y) is the nearest to 'value'; (a, b) the
+    other horizontal coordinate and z."""
+    c = grid.centres
+    levels = np.unique(np.round(c[:, axis], 9))
+    level = levels[np.argmin(np.abs(levels - value))]
+    keep = np.isclose(c[:, axis], level, rtol=0, atol=1e-9)
+    if "alpha" in grid:
+        keep &= grid["alpha"] >= 0.5
+    other = 1 - axis
+    return level, {(float(a), float(b)): float(v) for a, b, v in
+                   zip(c[keep, other], c[keep, 2], grid[field][keep])}
 
 
 # ---------------------------------------------------------------- drawing
@@ -255,17 +223,12 @@ def compare(args):
             if "@" in d:
                 d, m = d.rsplit("@", 1)
                 m = int(m)
-            if m is None:
-                m = max(
-                    int(re.search(r"_(\d{5})\.csv$", f).group(1))
-                    for f in glob.glob(os.path.join(d, "probe_line_%s_*.csv" % line)))
-            f = os.path.join(d, "probe_line_%s_%05d.csv" % (line, m))
-            times.add(open(f).readline().split("=")[1].split()[0])
-            c = read_csv(f)
+            c = femp_post.Run(d).probe_line(line, m)
+            times.add("%g" % c.time)
             axis = "z" if len(set(c["x"])) == 1 and len(set(c["y"])) == 1 else \
                 "y" if len(set(c["x"])) == 1 else "x"
-            series.append((label, [float(x) * 1e6 for x in c[axis]],
-                           [float(v) * scale for v in c[field]], palette[i % len(palette)]))
+            series.append((label, list(c[axis] * 1e6), list(c[field] * scale),
+                           palette[i % len(palette)]))
         if len(series) >= 2:
             a, b = series[0][2], series[1][2]
             peak = max(abs(v) for v in a) or 1
@@ -301,47 +264,45 @@ def main():
     fig = args[1] if len(args) > 1 else out
     prefix = opts.get("--prefix", "")
     os.makedirs(fig, exist_ok=True)
-    numbers = sorted(int(m.group(1)) for f in os.listdir(out)
-                     for m in [re.match(r"grid_(\d{5})\.pvtu$", f)] if m)
+    run = femp_post.Run(out)
+    numbers = [m for m, _ in run.outputs()]
     if not numbers:
-        sys.exit("no grid_<n>.pvtu in " + out)
+        sys.exit("no grid output (grid.pvd or grid.xdmf) in " + out)
     n = int(opts.get("--n", numbers[-1]))
 
     shape_file = os.path.join(out, "track_shape_%05d.csv" % n)
-    shape = read_csv(shape_file) if os.path.exists(shape_file) else None
-    first_line = open(shape_file).readline() if shape else ""
-    z_top = float(re.search(r"substrate top z = ([-0-9.e+]+)", first_line).group(1)) if shape else None
+    shape = run.track_shape(n) if os.path.exists(shape_file) else None
+    z_top = None
+    if shape:
+        for h in shape.header:
+            m = re.search(r"substrate top z = ([-0-9.e+]+)", h)
+            if m:
+                z_top = float(m.group(1))
     centre_y = cross_x = None
     if shape:
-        cy = [float(y) for s, y in zip(shape["section"], shape["y"]) if s == "centre"]
-        cx = [float(x) for s, x in zip(shape["section"], shape["x"]) if s == "cross_1"]
-        centre_y = cy[0] if cy else None
-        cross_x = cx[0] if cx else None
+        cy = shape["y"][shape["section"] == "centre"]
+        cx = shape["x"][shape["section"] == "cross_1"]
+        centre_y = float(cy[0]) if len(cy) else None
+        cross_x = float(cx[0]) if len(cx) else None
     x_cut = float(opts.get("--x", cross_x if cross_x is not None else 0))
     y_cut = float(opts.get("--y", centre_y if centre_y is not None else 0))
 
-    cells = read_cells(out, n)
-    xs = sorted({c[0] for c in cells})
-    ys = sorted({c[1] for c in cells})
-    xc = min(xs, key=lambda x: abs(x - x_cut))
-    yc = min(ys, key=lambda y: abs(y - y_cut))
-    time = open(glob.glob(os.path.join(out, "probe_line_*_%05d.csv" % n))[0]).readline().split("=")[1].split()[0] \
-        if glob.glob(os.path.join(out, "probe_line_*_%05d.csv" % n)) else "?"
+    grid = run.grid(n)
+    time = "%g" % grid.time
 
     def surface(section, coord):
         if not shape:
             return []
-        return [(float(a), float(z)) for s, a, z in
-                zip(shape["section"], shape[coord], shape["surface_z"]) if s == section]
+        keep = shape["section"] == section
+        return [(float(a), float(z)) for a, z in
+                zip(shape[coord][keep], shape["surface_z"][keep])]
 
     for field, unit, scale, name in (("T", "K", 1, "section_T.svg"),
                                      ("von_mises", "MPa", 1e-6, "section_von_mises.svg")):
-        if not any(field in v for v in cells.values()):
+        if field not in grid:
             continue
-        cross = {(c[1], c[2]): v[field] for c, v in cells.items()
-                 if c[0] == xc and v.get("alpha", 1) >= 0.5}
-        longi = {(c[0], c[2]): v[field] for c, v in cells.items()
-                 if c[1] == yc and v.get("alpha", 1) >= 0.5}
+        xc, cross = section(grid, 0, x_cut, field)
+        yc, longi = section(grid, 1, y_cut, field)
         section_plot(os.path.join(fig, prefix + name), "%s at t = %s s" % (field, time),
                      [("cross-section x = %.0f um (y, z)" % (xc * 1e6), cross, surface("cross_1", "y")),
                       ("longitudinal section y = %.0f um (x, z)" % (yc * 1e6), longi, surface("centre", "x"))],
@@ -349,13 +310,14 @@ def main():
 
     palette = ["#1b6ca8", "#d1495b", "#2e933c", "#edae49", "#6a4c93", "#333333"]
     series = []
-    for i, f in enumerate(sorted(glob.glob(os.path.join(out, "probe_line_*_%05d.csv" % n)))):
-        d = read_csv(f)
+    for i, label in enumerate(run.probe_line_names()):
+        if n not in run.probe_line_numbers(label):
+            continue
+        d = run.probe_line(label, n)
         if "sigma_xx" not in d:
             continue
-        label = re.match(r".*probe_line_(.*)_\d{5}\.csv", f).group(1)
-        series.append((label, [float(s) * 1e6 for s in d["s"]],
-                       [float(v) * 1e-6 for v in d["sigma_xx"]], palette[i % len(palette)]))
+        series.append((label, list(d["s"] * 1e6), list(d["sigma_xx"] * 1e-6),
+                       palette[i % len(palette)]))
     if series:
         line_plot(os.path.join(fig, prefix + "probe_sigma_xx.svg"),
                   "sigma_xx along the probe lines, t = %s s" % time,

@@ -755,8 +755,18 @@ namespace femp
       write_series();
     if (control->output_due())
       write_output(control->is_last());
+    // The hottest metal of the workpiece, not of a drop in the gas, and
+    // the pool now (result.pool is of the last time-series row, which may
+    // lie up to a 'Time series interval' back).
     if (control->progress_due())
-      report->progress(*control, heat->max_temperature(), result.pool);
+      report->progress(*control,
+                       workpiece_peak_temperature(),
+                       measure_melt_pool(*grid,
+                                         heat->temperature(),
+                                         heat->metal_fraction(),
+                                         material.liquidus,
+                                         points_prm.substrate_top,
+                                         material.solidus));
   }
 
   template <int dim>

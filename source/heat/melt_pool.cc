@@ -2,7 +2,8 @@
 // with the isotherm located by linear interpolation between cell centres.
 // Only melt connected to colder metal counts: liquid spatter flying through
 // the gas (melt cells with no path of melt cells to colder metal) is left
-// out, so a droplet above the bed does not stretch the pool's box.
+// out, so a droplet above the bed does not stretch the pool's box, and once
+// the track has solidified a drop still liquid in the gas is no pool.
 // The same measurement restricted to the cells below the original substrate
 // top, at the solidus, gives the fusion zone as a metallographic cross-
 // section of the track shows it (width and depth in the substrate).
@@ -61,22 +62,34 @@ namespace femp
       // The pool: melt cells connected through melt face neighbours to a
       // melt cell that touches colder metal. Seeds first, then grow: local
       // sweeps until nothing changes on this rank, a ghost exchange, and
-      // again until no rank changes. With no seed at all (everything
-      // molten) every melt cell counts.
+      // again until no rank changes. With no seed, every melt cell counts
+      // when no metal is colder (everything molten); otherwise the melt is
+      // only detached drops, and there is no pool.
       std::vector<double> in_pool(alpha.size(), 0.);
-      unsigned int        n_seeds = 0;
+      unsigned int        n_seeds[2] = {0, 0}; // seeds, colder metal cells
       for (const auto idx : grid.owned_cells())
-        if (melt(idx))
-          face_neighbours(idx, [&](const std::size_t nb) {
-            if (alpha[nb] > 0 && T[nb] < T_iso && in_pool[idx] == 0)
-              {
-                in_pool[idx] = 1;
-                ++n_seeds;
-              }
-          });
-      if (Utilities::MPI::sum(n_seeds, comm) == 0)
-        for (const auto idx : grid.owned_cells())
-          in_pool[idx] = melt(idx) ? 1 : 0;
+        {
+          if (alpha[idx] > 0 && T[idx] < T_iso)
+            ++n_seeds[1];
+          if (melt(idx))
+            face_neighbours(idx, [&](const std::size_t nb) {
+              if (alpha[nb] > 0 && T[nb] < T_iso && in_pool[idx] == 0)
+                {
+                  in_pool[idx] = 1;
+                  ++n_seeds[0];
+                }
+            });
+        }
+      unsigned int n_global[2];
+      Utilities::MPI::sum(ArrayView<const unsigned int>(n_seeds, 2),
+                          comm,
+                          ArrayView<unsigned int>(n_global, 2));
+      if (n_global[0] == 0)
+        {
+          if (n_global[1] == 0)
+            for (const auto idx : grid.owned_cells())
+              in_pool[idx] = melt(idx) ? 1 : 0;
+        }
       else
         for (;;)
           {

@@ -34,15 +34,17 @@ namespace femp
   {
     const double time = control.time();
     const double wall = control.wall_time();
-    const double left = control.wall_time_left();
+    // (The estimate at the last step is round-off: shown as 0.)
+    const double left =
+      control.wall_time_left() < 0.01 ? 0. : control.wall_time_left();
     progress::reported();
     out << std::setprecision(4) << "t = " << std::setw(10) << time
         << " s  step " << std::setw(7) << control.step()
         << "  dt = " << std::setw(10) << control.time_step()
-        << " s  T_max = " << std::setw(8) << T_max
-        << " K  pool L x W x D = " << pool.length * 1e6 << " x "
+        << " s  T_max(attached metal) = " << std::setw(8) << T_max
+        << " K  melt pool L x W x D = " << pool.length * 1e6 << " x "
         << pool.width * 1e6 << " x " << pool.depth * 1e6 << " um  wall "
-        << std::setprecision(3) << wall << " s, left ~" << left << " s"
+        << std::setprecision(3) << wall << " s, ~" << left << " s left"
         << std::endl;
   }
 
@@ -156,7 +158,9 @@ namespace femp
         << " (evaporation " << e.evaporation << ", convection " << e.convection
         << ", radiation " << e.radiation
         << " at the end of each step), fixed faces " << s.boundary
-        << ", stored " << s.stored << "; balance error "
+        << ", stored " << s.stored
+        << "; relative balance error |laser + fixed faces - losses - stored| "
+           "/ max(laser + |fixed faces|, losses) "
         << std::abs(s.laser + s.boundary - s.losses - s.stored) / scale
         << std::endl;
     if (e.laser_incident > 0)
@@ -172,7 +176,8 @@ namespace femp
       out << std::setprecision(6) << "  with melt flow, energy created (J"
           << (dim == 2 ? "/m" : "") << ") by the upwind convection of T "
           << s.advection << " and by points moving between cells "
-          << s.moved_points << "; balance error with these counted as sources "
+          << s.moved_points
+          << "; relative balance error with these counted as sources "
           << std::abs(s.laser + s.boundary + s.advection + s.moved_points -
                       s.losses - s.stored) /
                scale

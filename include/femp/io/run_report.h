@@ -109,7 +109,9 @@ namespace femp
       H0 = H;
     }
 
-    /// The progress line of the step just taken.
+    /// The progress line of the step just taken: @p T_max is the hottest
+    /// metal attached to the substrate (attached_metal.h), @p pool the
+    /// melt pool (melt_pool.h), both at the end of the step.
     void
     progress(const SimulationControl &control,
              const double             T_max,

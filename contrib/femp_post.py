@@ -1,0 +1,372 @@
+"""femp_post: a femp run's output as numpy arrays, for plot scripts.
+
+    import sys; sys.path.insert(0, "contrib")     # or copy this file
+    import femp_post
+    run = femp_post.Run("output")                  # an Output/Directory
+    pool = run.melt_pool()         # {"time": array, "length": ..., ...}
+    cd = run.probe_line("CD")      # last output; run.probe_line("CD", 2)
+    cd.time, cd["s"], cd["T"]      # its time (s) and columns
+    g = run.grid()                 # last grid output, VTU or HDF5 alike
+    g.time, g.centres, g["T"]      # cell centres (C x dim, m), cell values
+    p = run.points()               # material points where written
+    p.positions, p["temperature"]
+
+Needs Python 3 and numpy (Debian: python3-numpy); h5py (python3-h5py) only
+for runs written with Output/Format = hdf5. SI units throughout, as in the
+files (doc/output.md lists the fields and their units). What it reads:
+
+  melt_pool.csv             Run.melt_pool()     the time series of the pool
+  probe_points.csv          Run.probe_points()  the probe points' series
+  absorption.csv            Run.absorption()    ray-traced laser series
+  probe_line_<L>_<n>.csv    Run.probe_line(L, n), Run.probe_line_names()
+  track_shape_<n>.csv       Run.track_shape(n)
+  track_bead.csv            Run.track_bead()
+  any other femp CSV        read_csv(path)
+  grid.pvd / grid.xdmf      Run.outputs(): [(n, time)] of the field outputs
+  grid_<n>.pvtu (VTU), grid_mesh*.h5 + grid_<n>.h5 (HDF5)   Run.grid(n)
+  points_<n>.pvtu, points_<n>.h5                             Run.points(n)
+
+Every table is a Table: a dict of column name -> 1D float array, with
+.time (the '# time = ... s' line of the file, else None) and .header (its
+'#' lines). n = None means the last output; n < 0 counts from the end.
+"""
+import base64
+import glob
+import os
+import re
+import struct
+import xml.etree.ElementTree as ET
+import zlib
+
+import numpy as np
+
+
+class Table(dict):
+    """Columns of a CSV (name -> float array) with the file's '#' lines."""
+
+    def __init__(self, columns=None, header=(), time=None):
+        super().__init__(columns or {})
+        self.header = list(header)
+        self.time = time
+
+    def __len__(self):
+        return len(next(iter(self.values()))) if dict.__len__(self) else 0
+
+    def n_rows(self):
+        return len(self)
+
+
+def read_csv(path):
+    """A femp CSV file: '#' comment lines, a header row, numeric rows.
+    Non-numeric columns (e.g. 'section' of track_shape) stay strings."""
+    header, rows = [], []
+    with open(path) as f:
+        for line in f:
+            if line.startswith("#"):
+                header.append(line[1:].strip())
+            elif line.strip():
+                rows.append(line.rstrip("\n").split(","))
+    if not rows:
+        raise ValueError("femp_post: %s has no header row" % path)
+    names = [h.strip() for h in rows[0]]
+    body = rows[1:]
+    cols = {}
+    for i, name in enumerate(names):
+        values = [r[i].strip() for r in body]
+        try:
+            cols[name] = np.array([float(v) for v in values])
+        except ValueError:
+            cols[name] = np.array(values)
+    time = None
+    for h in header:
+        m = re.match(r"time\s*=\s*([-+0-9.eE]+)", h)
+        if m:
+            time = float(m.group(1))
+    return Table(cols, header, time)
+
+
+class Fields(dict):
+    """One field output: name -> array of one value per cell (grid) or per
+    point (points), with .time (s), .n (the output number) and .centres
+    (grid: cell centres, C x dim) or .positions (points: N x dim)."""
+
+    def __init__(self, columns, time, n, coordinates, kind):
+        super().__init__(columns)
+        self.time = time
+        self.n = n
+        if kind == "grid":
+            self.centres = coordinates
+        else:
+            self.positions = coordinates
+
+
+# ------------------------------------------------------------- VTU pieces
+def _decode_vtu_array(text, vtype, compressed, h="I"):
+    """One inline base64 binary DataArray (UInt32 headers, h = "I", as
+    deal.II writes them; "Q" for UInt64), zlib-compressed or not."""
+    text = "".join(text.split())
+    dtype = {"Float32": "<f4", "Float64": "<f8", "Int32": "<i4",
+             "UInt32": "<u4", "Int64": "<i8", "UInt64": "<u8",
+             "UInt8": "u1", "Int8": "i1"}[vtype]
+    w = struct.calcsize("<" + h)
+    if not compressed:
+        raw = base64.b64decode(text)
+        size = struct.unpack("<" + h, raw[:w])[0]
+        return np.frombuffer(raw[w:w + size], dtype=dtype)
+    first = base64.b64decode(text[:4 * ((w + 2) // 3 + 1)])
+    nblocks = struct.unpack("<" + h, first[:w])[0]
+    hlen = w * (3 + nblocks)
+    hb64 = 4 * ((hlen + 2) // 3)
+    header = struct.unpack("<%d%s" % (3 + nblocks, h),
+                           base64.b64decode(text[:hb64])[:hlen])
+    data = base64.b64decode(text[hb64:])
+    parts, pos = [], 0
+    for size in header[3:]:
+        parts.append(zlib.decompress(data[pos:pos + size]))
+        pos += size
+    return np.frombuffer(b"".join(parts), dtype=dtype)
+
+
+def read_vtu(path):
+    """Points (N x 3), point-data arrays (name -> array, N or N x k), and
+    the cell offsets of one VTU piece."""
+    text = open(path).read()
+    compressed = "vtkZLibDataCompressor" in text[:400]
+    h = "Q" if 'header_type="UInt64"' in text[:400] else "I"
+    arrays, offsets, points = {}, None, None
+    section = None
+    for m in re.finditer(r"<(PointData|CellData|Points|Cells)\b|"
+                         r"<DataArray([^>]*)>([^<]*)</DataArray>", text):
+        if m.group(1):
+            section = m.group(1)
+            continue
+        attrs = m.group(2)
+        if 'format="binary"' not in attrs:
+            continue
+        vtype = re.search(r'type="(\w+)"', attrs).group(1)
+        name = re.search(r'Name="([^"]+)"', attrs)
+        ncomp = re.search(r'NumberOfComponents="(\d+)"', attrs)
+        a = _decode_vtu_array(m.group(3), vtype, compressed, h)
+        if ncomp and int(ncomp.group(1)) > 1:
+            a = a.reshape(-1, int(ncomp.group(1)))
+        if section == "Points":
+            points = a.reshape(-1, 3)
+        elif section == "Cells":
+            if name and name.group(1) == "offsets":
+                offsets = a
+        elif section == "PointData" and name:
+            arrays[name.group(1)] = a
+    return points, arrays, offsets
+
+
+def _pieces(directory, pvtu):
+    """The VTU pieces a PVTU record names."""
+    text = open(os.path.join(directory, pvtu)).read()
+    return [os.path.join(directory, s)
+            for s in re.findall(r'<Piece\s+Source="([^"]+)"', text)]
+
+
+# ------------------------------------------------------------------- Run
+class Run:
+    """The output directory of one femp run (Output/Directory)."""
+
+    def __init__(self, directory):
+        self.dir = directory
+        if not os.path.isdir(directory):
+            raise FileNotFoundError("femp_post: no directory '%s'"
+                                    % directory)
+        if os.path.exists(self.path("grid.xdmf")) and not os.path.exists(
+                self.path("grid.pvd")):
+            self.format = "hdf5"
+        else:
+            self.format = "vtu"
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
+
+    # CSV series
+    def melt_pool(self):
+        """melt_pool.csv: time, length, width, depth (m), volume (m^3),
+        T_max (K), solidus width and depth (m), every Time series
+        interval."""
+        return read_csv(self.path("melt_pool.csv"))
+
+    def probe_points(self):
+        return read_csv(self.path("probe_points.csv"))
+
+    def absorption(self):
+        return read_csv(self.path("absorption.csv"))
+
+    def track_bead(self):
+        return read_csv(self.path("track_bead.csv"))
+
+    def _numbers(self, pattern):
+        out = []
+        for f in glob.glob(self.path(pattern.replace("%05d", "[0-9]" * 5))):
+            m = re.search(r"_(\d{5})\.[a-z]+$", f)
+            if m:
+                out.append(int(m.group(1)))
+        return sorted(out)
+
+    def _pick(self, numbers, n, what):
+        if not numbers:
+            raise FileNotFoundError("femp_post: no %s in '%s'"
+                                    % (what, self.dir))
+        if n is None:
+            return numbers[-1]
+        if n < 0:
+            return numbers[n]
+        return n
+
+    def probe_line_names(self):
+        names = set()
+        for f in glob.glob(self.path("probe_line_*_[0-9]*.csv")):
+            m = re.match(r"probe_line_(.+)_\d{5}\.csv$", os.path.basename(f))
+            if m:
+                names.add(m.group(1))
+        return sorted(names)
+
+    def probe_line_numbers(self, name):
+        return self._numbers("probe_line_%s_%%05d.csv" % name)
+
+    def probe_line(self, name, n=None):
+        """probe_line_<name>_<n>.csv: s (distance along the line), x, y,
+        (z), and the sampled fields; .time is the output's time."""
+        n = self._pick(self.probe_line_numbers(name), n,
+                       "probe line '%s'" % name)
+        t = read_csv(self.path("probe_line_%s_%05d.csv" % (name, n)))
+        t.n = n
+        return t
+
+    def track_shape(self, n=None):
+        n = self._pick(self._numbers("track_shape_%05d.csv"), n,
+                       "track_shape_<n>.csv")
+        t = read_csv(self.path("track_shape_%05d.csv" % n))
+        t.n = n
+        return t
+
+    # field output
+    def outputs(self, kind="grid"):
+        """[(n, time)] of the field outputs of 'grid' or 'points', in
+        order, from the index (grid.pvd or grid.xdmf)."""
+        if self.format == "vtu":
+            index = self.path(kind + ".pvd")
+            if not os.path.exists(index):
+                return []
+            out = []
+            for ds in ET.parse(index).getroot().iter("DataSet"):
+                m = re.search(r"_(\d{5})\.pvtu$", ds.get("file"))
+                out.append((int(m.group(1)), float(ds.get("timestep"))))
+            return out
+        return [(n, t) for n, t, _ in self._xdmf(kind)]
+
+    def _xdmf(self, kind):
+        index = self.path(kind + ".xdmf")
+        if not os.path.exists(index):
+            return []
+        out = []
+        for g in ET.parse(index).getroot().iter("Grid"):
+            time = g.find("Time")
+            if time is None:
+                continue
+            items = {}
+            for item in g.iter("DataItem"):
+                f, _, dset = item.text.strip().partition(":/")
+                items[dset] = os.path.join(self.dir, f)
+            fields = {}
+            for a in g.iter("Attribute"):
+                f, _, dset = a.find("DataItem").text.strip().partition(":/")
+                fields[a.get("Name")] = (os.path.join(self.dir, f), dset)
+            geometry = g.find("Geometry").find("DataItem").text.strip()
+            topology = g.find("Topology").find("DataItem")
+            m = re.search(r"_(\d{5})\.h5$", next(iter(fields.values()))[0]
+                          if fields else geometry.partition(":/")[0])
+            out.append((int(m.group(1)) if m else len(out),
+                        float(time.get("Value")),
+                        {"geometry": geometry.partition(":/"),
+                         "topology": (topology.text.strip().partition(":/")
+                                      if topology is not None else None),
+                         "fields": fields}))
+        return out
+
+    def _time_of(self, kind, n):
+        for m, t in self.outputs(kind):
+            if m == n:
+                return t
+        return None
+
+    def grid(self, n=None):
+        """Grid output n: Fields with one value per cell and .centres."""
+        numbers = [m for m, _ in self.outputs("grid")]
+        n = self._pick(numbers, n, "grid output")
+        if self.format == "hdf5":
+            return self._grid_hdf5(n)
+        centres, cols = [], {}
+        for piece in _pieces(self.dir, "grid_%05d.pvtu" % n):
+            pts, arrays, offsets = read_vtu(piece)
+            corners = int(offsets[0]) if offsets is not None else 8
+            dim = 3 if corners == 8 else 2
+            c = pts.reshape(-1, corners, 3)[:, :, :dim].mean(axis=1)
+            centres.append(c)
+            for k, a in arrays.items():
+                cols.setdefault(k, []).append(
+                    a.reshape(len(c), corners, *a.shape[1:]).mean(axis=1))
+        return Fields({k: np.concatenate(v) for k, v in cols.items()},
+                      self._time_of("grid", n), n, np.concatenate(centres),
+                      "grid")
+
+    def _grid_hdf5(self, n):
+        import h5py
+        entry = [e for e in self._xdmf("grid") if e[0] == n][0]
+        info = entry[2]
+        mesh_file = os.path.join(self.dir, info["geometry"][0]) \
+            if not os.path.isabs(info["geometry"][0]) else info["geometry"][0]
+        with h5py.File(mesh_file, "r") as f:
+            nodes = f[info["geometry"][2]][:]
+            cells = f[info["topology"][2]][:]
+        centres = nodes[cells.astype(np.int64)].mean(axis=1)
+        cols = {}
+        for name, (file, dset) in info["fields"].items():
+            with h5py.File(file, "r") as f:
+                cols[name] = f[dset][:].reshape(len(centres), -1).squeeze(1) \
+                    if f[dset].ndim == 2 and f[dset].shape[1] == 1 \
+                    else f[dset][:]
+        return Fields(cols, entry[1], n, centres, "grid")
+
+    def points(self, n=None):
+        """Points output n (where written): Fields with one value per
+        point and .positions (N x dim)."""
+        numbers = [m for m, _ in self.outputs("points")]
+        n = self._pick(numbers, n, "points output")
+        if self.format == "hdf5":
+            import h5py
+            entry = [e for e in self._xdmf("points") if e[0] == n][0]
+            info = entry[2]
+            cols = {}
+            file = os.path.join(self.dir, info["geometry"][0])
+            with h5py.File(file, "r") as f:
+                pos = f[info["geometry"][2]][:]
+            for name, (file, dset) in info["fields"].items():
+                with h5py.File(file, "r") as f:
+                    a = f[dset][:]
+                cols[name] = a[:, 0] if a.ndim == 2 and a.shape[1] == 1 else a
+            return Fields(cols, entry[1], n, pos, "points")
+        pos, cols = [], {}
+        for piece in _pieces(self.dir, "points_%05d.pvtu" % n):
+            pts, arrays, _ = read_vtu(piece)
+            pos.append(pts)
+            for k, a in arrays.items():
+                cols.setdefault(k, []).append(a)
+        pos = np.concatenate(pos) if pos else np.zeros((0, 3))
+        return Fields({k: np.concatenate(v) for k, v in cols.items()},
+                      self._time_of("points", n), n, pos, "points")
+
+
+def von_mises(f):
+    """von Mises stress (Pa) of a points' Fields from stress_xx ... _yz."""
+    s = {k: f["stress_" + k] for k in ("xx", "yy", "zz", "xy", "xz", "yz")
+         if "stress_" + k in f}
+    return np.sqrt(0.5 * ((s["xx"] - s["yy"]) ** 2 + (s["yy"] - s["zz"]) ** 2
+                          + (s["zz"] - s["xx"]) ** 2)
+                   + 3 * (s.get("xy", 0) ** 2 + s.get("xz", 0) ** 2
+                          + s.get("yz", 0) ** 2))
