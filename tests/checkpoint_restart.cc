@@ -240,6 +240,10 @@ namespace
                                 "probe_line_AB_00003.csv",
                                 "thermal_history_full_0.csv"})
       identical(f, file_text("out0/" + f) == file_text("out1/" + f));
+    // A build (Build/Layer schedule): its pores too (doc/builds.md).
+    if (file_text(scene).find("Layer schedule") != std::string::npos)
+      for (const std::string f : {"porosity.csv", "pores.csv"})
+        identical(f, file_text("out0/" + f) == file_text("out1/" + f));
     for (const std::string f : {"grid.pvd", "points.pvd"})
       identical(f + " (but its date)",
                 file_text("out0/" + f, true) == file_text("out1/" + f, true));

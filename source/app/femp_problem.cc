@@ -74,6 +74,9 @@ namespace femp
     SolidStress<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
     Checkpoint<3>::Parameters::declare_parameters(prm);
+    // [builds hook] layer schedule and pore detector (doc/builds.md)
+    LayerSchedule<3>::Parameters::declare_parameters(prm);
+    PoreDetector<3>::Parameters::declare_parameters(prm);
   }
 
   template <int dim>
@@ -112,11 +115,15 @@ namespace femp
     output_prm.parse_parameters(prm);
     history_prm.parse_parameters(prm);
     track_prm.parse_parameters(prm);
+    // [builds hook] a layer schedule needs points (the recoated powder).
+    build_prm.parse_parameters(prm);
+    porosity_prm.parse_parameters(prm);
     // A bare plate without flow or solid carries no points (Material
     // points/Carry points = auto).
     points_prm.resolve_carry(melt_flow,
                              solid_enabled,
-                             track_prm.enabled(melt_flow));
+                             track_prm.enabled(melt_flow) ||
+                               build_prm.enabled());
     output_prm.check(grid_prm.lower_corner, grid_prm.upper_corner);
     if (solid_enabled)
       {
@@ -151,6 +158,15 @@ namespace femp
     report = std::make_unique<RunReport<dim>>(comm, pcout);
     laser  = std::make_unique<Laser<dim>>(laser_prm);
     laser->check_path_inside(grid_prm.lower_corner, grid_prm.upper_corner);
+    // [builds hook] the layer schedule, refused before any work when a
+    // layer does not fit the domain.
+    if (build_prm.enabled())
+      layers = std::make_unique<LayerSchedule<dim>>(
+        build_prm,
+        laser->segments(),
+        points_prm.substrate_top + std::max(0., points_prm.layer_thickness),
+        grid_prm.upper_corner[dim - 1],
+        grid_prm.cell_size);
   }
 
   template <int dim>
@@ -307,6 +323,14 @@ namespace femp
     }
     if (melt_flow)
       setup_flow();
+    // [builds hook] recoater and pore detector (doc/builds.md).
+    if (layers)
+      recoater =
+        std::make_unique<Recoater<dim>>(points_prm, material.density, *grid);
+    if (porosity_prm.enabled(layers != nullptr) && points->carried())
+      pores = std::make_unique<PoreDetector<dim>>(porosity_prm,
+                                                  *grid,
+                                                  points_prm.substrate_top);
     output = std::make_unique<Output<dim>>(output_prm, *grid);
     if (track_prm.enabled(melt_flow))
       {
@@ -500,6 +524,11 @@ namespace femp
         const double dt = control->next_time_step();
         workpiece_peak.reset();
 
+        // [builds hook] 0. Recoat: the powder of a layer starting in this
+        //    step (doc/builds.md).
+        if (recoater)
+          recoat_layers(dt);
+
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
         //    points move (the melt-flow and solid modules, step 3), so
         //    nothing to do here; gamma and the properties follow T inside
@@ -558,6 +587,57 @@ namespace femp
     if (flow)
       f.velocity = &flow->cell_velocity();
     return f;
+  }
+
+  // [builds] the recoat step and the pore output (doc/builds.md).
+  template <int dim>
+  void
+  FempProblem<dim>::recoat_layers(const double dt)
+  {
+    const double t = control->time();
+    for (const auto &layer : layers->layers())
+      {
+        // Each layer in the one step whose [t, t + dt) holds its start
+        // (the same steps after a resume: no state to save).
+        if (!(layer.start_time >= t && layer.start_time < t + dt))
+          continue;
+        TimerOutput::Scope scope(timer, "recoat");
+        const double       T = build_prm.powder_temperature > 0 ?
+                                 build_prm.powder_temperature :
+                                 heat_prm.reference_temperature;
+        const auto         r = recoater->recoat(*points, layer, T);
+        // The new points: alpha and the heat of the cells they entered.
+        point_heat->points_changed_cells();
+        pcout << "Recoat: layer " << r.layer << " at t = " << t
+              << " s: " << r.grains << " grains, packing fraction "
+              << std::setprecision(3) << r.packing << " of the "
+              << r.fill_volume << (dim == 3 ? " m^3" : " m^2")
+              << " between the surface (z " << r.surface_min << " to "
+              << r.surface_max << " m) and the top " << layer.top << " m; "
+              << r.points << " points at " << T << " K" << std::setprecision(6)
+              << std::endl;
+      }
+  }
+
+  template <int dim>
+  void
+  FempProblem<dim>::find_pores(const unsigned int                        n,
+                               std::vector<typename Output<dim>::Field> &fields,
+                               std::vector<std::vector<double>>         &data)
+  {
+    auto shares = PoreDetector<dim>::powder_shares(*grid,
+                                                   *points,
+                                                   material.solidus,
+                                                   material.liquidus);
+    auto r      = pores->find(heat->metal_fraction(), &shares.first);
+    pores->write(output_prm.directory, n, control->time(), r);
+    data.resize(3);
+    data[0] = std::move(r.pore_number);
+    data[1] = std::move(shares.first);
+    data[2] = std::move(shares.second);
+    fields.push_back({"pore", &data[0], false});
+    fields.push_back({"unfused_powder", &data[1], false});
+    fields.push_back({"partially_molten", &data[2], false});
   }
 
   template <int dim>
@@ -943,6 +1023,10 @@ namespace femp
     fields.push_back({"laser_source", &heat->laser_source()});
     fields.push_back({"phase", &phase, false});
     fields.push_back({"zone", &zone, false});
+    // [builds hook] pores and unfused powder (doc/builds.md).
+    std::vector<std::vector<double>> pore_data;
+    if (pores)
+      find_pores(n, fields, pore_data);
     const bool with_points =
       points->carried() && (output_prm.write_points == "always" ||
                             (output_prm.write_points == "last" && last));
@@ -1092,6 +1176,9 @@ namespace femp
     // Series written outside Output: drop their rows after the checkpoint.
     if (track_shape)
       track_shape->resume(output_prm.directory, control->time());
+    // [builds hook]
+    if (pores)
+      pores->resume(output_prm.directory, control->time());
     if (heat_enabled && heat->ray_traced() &&
         Utilities::MPI::this_mpi_process(comm) == 0)
       {

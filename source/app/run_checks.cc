@@ -296,10 +296,11 @@ namespace femp
                 "coordinates: a line scan of zero length takes no time, so "
                 "the laser would deposit nothing (power 0 turns it off)");
       }
-    else
+    else if (get(prm, "Laser", "Scan path format") == "femp")
       {
         // Every segment line must hold the numbers of this dimension's
-        // format (the 3D format read in 2D would shift every column).
+        // format (the 3D format read in 2D would shift every column; the
+        // other formats are checked by their reader, heat/scan_path.h).
         std::ifstream in(path_file);
         require(static_cast<bool>(in),
                 "Laser/Scan path file",

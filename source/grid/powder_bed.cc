@@ -21,6 +21,8 @@ namespace femp
     double layer_volume = 1;
     for (int d = 0; d < dim; ++d)
       layer_volume *= spec.upper[d] - spec.lower[d];
+    if (spec.fill_volume > 0) // recoating: the space above the surface
+      layer_volume = spec.fill_volume;
     auto grain_volume = [dim](const double r) {
       return dim == 3 ? 4. / 3. * M_PI * r * r * r : M_PI * r * r;
     };
@@ -73,7 +75,26 @@ namespace femp
               c[d] =
                 spec.lower[d] + unit(rng) * (spec.upper[d] - spec.lower[d]);
             double z = spec.lower[v] + r;
-            for (int i = -1; i <= 1; ++i)
+            if (spec.rest_height) // recoating: on the surface below
+              z = std::max(z, spec.rest_height(c, r));
+            // Periodic lateral faces (recoating): every grain placed, at
+            // its nearest image.
+            if (spec.periodic)
+              for (const Grain &g : bed.grains)
+                {
+                  double d2 = 0;
+                  for (int d = 0; d < dim - 1; ++d)
+                    {
+                      const double L  = spec.upper[d] - spec.lower[d];
+                      double       dx = g.center[d] - c[d];
+                      dx -= L * std::round(dx / L);
+                      d2 += dx * dx;
+                    }
+                  const double rr = (g.radius + r) * (g.radius + r);
+                  if (d2 < rr)
+                    z = std::max(z, g.center[v] + std::sqrt(rr - d2));
+                }
+            for (int i = -1; i <= 1 && !spec.periodic; ++i)
               for (int j = (dim == 3 ? -1 : 0); j <= (dim == 3 ? 1 : 0); ++j)
                 {
                   const auto range = columns.equal_range(column_key(c, i, j));

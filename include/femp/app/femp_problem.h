@@ -20,6 +20,8 @@
 
 #include <femp/app/simulation_control.h>
 #include <femp/base/material.h>
+#include <femp/builds/pore_detector.h>
+#include <femp/builds/recoater.h>
 #include <femp/coupling/fluid_solid_forces.h>
 #include <femp/coupling/point_heat_exchange.h>
 #include <femp/flow/incompressible_flow.h>
@@ -115,6 +117,12 @@ namespace femp
     typename SolidFEM<dim>::Parameters    fem_prm;
     typename TrackShape<dim>::Parameters  track_prm;
     typename Checkpoint<dim>::Parameters  checkpoint_prm;
+    // [builds] Layer schedule, recoater, pore detector (doc/builds.md).
+    typename LayerSchedule<dim>::Parameters build_prm;
+    typename PoreDetector<dim>::Parameters  porosity_prm;
+    std::unique_ptr<LayerSchedule<dim>>     layers;   ///< null: one layer
+    std::unique_ptr<Recoater<dim>>          recoater; ///< null: one layer
+    std::unique_ptr<PoreDetector<dim>>      pores;    ///< null unless on
 
     // The modules; flow and solid exist only when switched on.
     std::unique_ptr<BackgroundGrid<dim>>     grid;
@@ -173,6 +181,19 @@ namespace femp
     /// escaped power, absorbed fraction, hits per ray).
     void
     write_absorption_series();
+    /// [builds] 0. Spread the powder of the layers whose start time lies
+    /// in [t, t + @p dt) (LayerSchedule, Recoater); then alpha and the
+    /// heat of the cells that gained powder (PointHeatExchange).
+    void
+    recoat_layers(const double dt);
+    /// [builds] 5. The pores at output number @p n (PoreDetector): rows of
+    /// porosity.csv and pores.csv, and the cell fields pore,
+    /// unfused_powder and partially_molten appended to @p fields (their
+    /// data kept in @p data).
+    void
+    find_pores(const unsigned int                        n,
+               std::vector<typename Output<dim>::Field> &fields,
+               std::vector<std::vector<double>>         &data);
     /// 2. Temperature in fluid, solid and powder (eq. 1).
     void
     temperature_step(const double dt);

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace femp
@@ -32,6 +33,18 @@ namespace femp
     double                packing_fraction = 0.5;
     std::uint64_t         seed             = 1;
     unsigned int          max_attempts     = 200000;
+    /// Recoating (builds/recoater.h): the lowest centre height at which a
+    /// grain of radius r dropped at horizontal position c rests on the
+    /// surface below the layer (the re-solidified track and the powder
+    /// beside it); empty: the flat bottom lower[dim-1] of the box.
+    std::function<double(const std::array<double, 3> &c, double r)> rest_height;
+    /// Recoating: the volume between that surface and the top of the box,
+    /// which the packing fraction refers to; 0: the box's volume.
+    double fill_volume = 0;
+    /// Recoating: the lateral faces are periodic (a grain near one face
+    /// rests on the grains near the opposite one, at their nearest image);
+    /// false: grains may cross the lateral faces and are cut there.
+    bool periodic = false;
   };
 
   struct PowderBed

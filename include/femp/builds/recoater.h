@@ -1,0 +1,154 @@
+// femp: layer-by-layer builds (doc/builds.md, "Recoating"): the layer
+// schedule (when each layer after the first starts and how high its powder
+// reaches) and the recoater that spreads a new powder layer over the current
+// surface at that time.
+//
+// Schedule ('Build' subsection): from the scan path (each rise of the
+// segments' height, heat/scan_path.h, starts a layer at the beginning of
+// that segment: the jump to the new layer; a dwell with the laser off before
+// it cools the last layer) or from listed start times and one layer
+// thickness. Layer k's powder reaches the height
+//   top_k = substrate top + first powder layer + (z_k - z_1)
+// (z_k: its height in the scan path; with listed times z_k - z_1 = (k - 1)
+// x thickness).
+//
+// Recoating a layer: the surface is the top of the highest point in each
+// lattice column (spacing: Material points/Point spacing) of the domain,
+// collected over the ranks; grains of the first layer's size distribution
+// are dropped by the same ballistic packing (grid/powder_bed.h) onto it,
+// each resting on the surface (the re-solidified track and the unfused
+// powder beside it) or on a grain already placed, the blade at top_k
+// rejecting those that would stick out; the packing fraction refers to the
+// volume between the surface and top_k. The lattice points inside each grain
+// and above the surface become powder points at 'Build/Powder temperature'.
+// The bed depends only on the points' positions and the seed (the first
+// layer's seed + the layer number), so every rank builds the same bed.
+#ifndef femp_recoater_h
+#define femp_recoater_h
+
+#include <deal.II/base/parameter_handler.h>
+
+#include <femp/grid/background_grid.h>
+#include <femp/grid/material_points.h>
+#include <femp/heat/laser.h>
+
+#include <string>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  /// When each layer after the first starts, and where its powder ends.
+  template <int dim>
+  class LayerSchedule
+  {
+  public:
+    struct Parameters
+    {
+      /// Build/Layer schedule: "none", "scan path" or "times".
+      std::string source = "none";
+      /// Build/Layer thickness (m), with "times".
+      double thickness = 30e-6;
+      /// Build/Layer start times (s), with "times".
+      std::vector<double> start_times;
+      /// Build/Powder temperature (K); 0: the ambient temperature.
+      double powder_temperature = 0;
+
+      static void
+      declare_parameters(ParameterHandler &prm);
+      void
+      parse_parameters(ParameterHandler &prm);
+      bool
+      enabled() const
+      {
+        return source != "none";
+      }
+    };
+
+    struct Layer
+    {
+      unsigned int number;     ///< 2, 3, ... (the first layer is the scene's)
+      double       start_time; ///< s
+      double       top;        ///< height reached by its powder, m
+      double       thickness;  ///< nominal: top minus the last top, m
+    };
+
+    /// Build the schedule from @p prm and the laser's @p segments; the
+    /// first layer's powder ends at @p first_top (substrate top + powder
+    /// layer thickness). Throws InputError when a layer does not fit below
+    /// the domain's top @p domain_top less two cells of @p cell_size (the
+    /// free surface needs gas above it) or the times are not increasing.
+    LayerSchedule(const Parameters                                &prm,
+                  const std::vector<typename Laser<dim>::Segment> &segments,
+                  const double                                     first_top,
+                  const double                                     domain_top,
+                  const double                                     cell_size);
+
+    const std::vector<Layer> &
+    layers() const
+    {
+      return list;
+    }
+    /// The layers whose start time lies in (t0, t1] (t1 rounded up by a
+    /// relative 1e-12): those to recoat in the step that starts at t0
+    /// (with t0 < 0: from the start).
+    std::vector<Layer>
+    starting_in(const double t0, const double t1) const;
+
+  private:
+    std::vector<Layer> list;
+  };
+
+  /// Spreads a powder layer over the current surface (see above).
+  template <int dim>
+  class Recoater
+  {
+  public:
+    /// What one recoat did (the same on every rank).
+    struct Report
+    {
+      unsigned int  layer        = 0;
+      unsigned int  grains       = 0;
+      std::uint64_t points       = 0; ///< points added
+      double        fill_volume  = 0; ///< between surface and blade, m^3
+      double        packing      = 0; ///< grains' volume / fill volume
+      double        point_volume = 0; ///< of the points added, m^3
+      double        surface_min = 0, surface_max = 0; ///< m
+    };
+
+    /// @p powder: the first layer's grain sizes, packing fraction and seed
+    /// (Material points/Powder layer); @p density: the metal's, kg/m^3.
+    Recoater(const typename MaterialPoints<dim>::Parameters &powder,
+             const double                                    density,
+             const BackgroundGrid<dim>                      &grid);
+
+    /// Per lattice column (spacing: the point spacing; x fastest), the top
+    /// of the highest point in it (position + half the spacing), the
+    /// domain's bottom where it holds none. Collective.
+    std::vector<double>
+    surface(const MaterialPoints<dim> &points) const;
+
+    /// Spread layer @p layer (its number and top) at temperature @p T over
+    /// the points' surface: new powder points in @p points. Collective.
+    Report
+    recoat(MaterialPoints<dim>                      &points,
+           const typename LayerSchedule<dim>::Layer &layer,
+           const double                              T) const;
+
+  private:
+    const typename MaterialPoints<dim>::Parameters powder;
+    const double                                   density;
+    const BackgroundGrid<dim>                     &grid;
+    /// Insert the (owned cell, position) pairs @p added as powder points
+    /// at @p T, with ids after every existing one. Collective.
+    void
+    insert_powder(MaterialPoints<dim>                               &points,
+                  std::vector<std::pair<std::uint32_t, Point<dim>>> &added,
+                  const double                                       T) const;
+    /// Lattice columns per horizontal direction (1 in 2D for y).
+    std::array<unsigned int, 2> n_columns{{1, 1}};
+  };
+} // namespace femp
+
+#endif

@@ -1,0 +1,421 @@
+// femp: the layer schedule and the recoater of a layer-by-layer build (see
+// the header and doc/builds.md, "Recoating"), on the ballistic packing of
+// grid/powder_bed.h.
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/base/input_checks.h>
+#include <femp/builds/recoater.h>
+#include <femp/grid/powder_bed.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace femp
+{
+  template <int dim>
+  void
+  LayerSchedule<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Build");
+    prm.declare_entry(
+      "Layer schedule",
+      "none",
+      Patterns::Selection("none|scan path|times"),
+      "When a new powder layer is spread (doc/builds.md). none: one layer "
+      "(the scene's powder). 'scan path': a layer starts where the height of "
+      "the scan path's segments rises (Laser/Scan path file in a format "
+      "with heights), its powder reaching the first layer's top plus the "
+      "rise. times: at 'Layer start times', each 'Layer thickness' higher.");
+    prm.declare_entry("Layer thickness",
+                      "30e-6",
+                      Patterns::Double(0.),
+                      "With 'Layer schedule = times': how much higher each "
+                      "new layer's powder reaches than the last, m; range "
+                      "(0, inf).");
+    prm.declare_entry("Layer start times",
+                      "",
+                      Patterns::Anything(),
+                      "With 'Layer schedule = times': the times at which the "
+                      "layers after the first are spread, s, increasing and "
+                      "positive, separated by ','.");
+    prm.declare_entry("Powder temperature",
+                      "0",
+                      Patterns::Double(0.),
+                      "Temperature of the spread powder, K; 0: the ambient "
+                      "(Heat transfer/Reference temperature). Range [0, "
+                      "inf).");
+    prm.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  LayerSchedule<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    prm.enter_subsection("Build");
+    source                  = prm.get("Layer schedule");
+    thickness               = prm.get_double("Layer thickness");
+    powder_temperature      = prm.get_double("Powder temperature");
+    const std::string times = prm.get("Layer start times");
+    prm.leave_subsection();
+    start_times.clear();
+    for (const auto &t : Utilities::split_string_list(times, ','))
+      {
+        char        *end = nullptr;
+        const double v   = std::strtod(t.c_str(), &end);
+        require(end != t.c_str() && *end == '\0' && v > 0 &&
+                  (start_times.empty() || v > start_times.back()),
+                "Build/Layer start times",
+                times,
+                "it must list increasing positive times (s) separated by ','");
+        start_times.push_back(v);
+      }
+    if (source == "times")
+      {
+        require(!start_times.empty(),
+                "Build/Layer start times",
+                times,
+                "'Layer schedule = times' needs at least one start time");
+        require(thickness > 0,
+                "Build/Layer thickness",
+                thickness,
+                "it must be positive (m)");
+      }
+  }
+
+  template <int dim>
+  LayerSchedule<dim>::LayerSchedule(
+    const Parameters                                &prm,
+    const std::vector<typename Laser<dim>::Segment> &segments,
+    const double                                     first_top,
+    const double                                     domain_top,
+    const double                                     cell_size)
+  {
+    if (prm.source == "times")
+      for (unsigned int k = 0; k < prm.start_times.size(); ++k)
+        list.push_back({k + 2,
+                        prm.start_times[k],
+                        first_top + (k + 1) * prm.thickness,
+                        prm.thickness});
+    else if (prm.source == "scan path" && !segments.empty())
+      {
+        // The first layer: the height of the first segment with the laser
+        // on (moves before it place the beam). A later layer starts with
+        // the first segment that ends higher than the layer before (the
+        // jump up to it).
+        auto seg = segments.begin();
+        while (seg != segments.end() && seg->power <= 0)
+          ++seg;
+        const double z1 = seg != segments.end() ? seg->end[dim - 1] : 0.;
+        double       z  = z1;
+        for (; seg != segments.end(); ++seg)
+          if (const auto &s = *seg; s.end[dim - 1] > z + 1e-9)
+            {
+              list.push_back({static_cast<unsigned int>(list.size() + 2),
+                              s.t_begin,
+                              first_top + (s.end[dim - 1] - z1),
+                              s.end[dim - 1] - z});
+              z = s.end[dim - 1];
+            }
+        require(!list.empty(),
+                "Build/Layer schedule",
+                prm.source,
+                "the scan path's segments all lie at one height: there is "
+                "no second layer (use a format with heights, or 'none')");
+      }
+    // The last layer's powder must leave two cells of gas below the top.
+    if (!list.empty())
+      {
+        const Layer &last = list.back();
+        require(last.top <= domain_top - 2 * cell_size * (1 - 1e-9),
+                prm.source == "times" ? "Build/Layer start times" :
+                                        "Build/Layer schedule",
+                prm.source,
+                "layer " + std::to_string(last.number) + "'s powder reaches " +
+                  num(last.top) + " m, above the domain's top " +
+                  num(domain_top) + " m less two cells (" +
+                  num(domain_top - 2 * cell_size) +
+                  " m): raise Grid/Upper corner or use fewer or thinner "
+                  "layers");
+      }
+  }
+
+  template <int dim>
+  std::vector<typename LayerSchedule<dim>::Layer>
+  LayerSchedule<dim>::starting_in(const double t0, const double t1) const
+  {
+    std::vector<Layer> due;
+    for (const auto &l : list)
+      if (l.start_time > t0 && l.start_time <= t1 * (1 + 1e-12))
+        due.push_back(l);
+    return due;
+  }
+
+  template <int dim>
+  Recoater<dim>::Recoater(
+    const typename MaterialPoints<dim>::Parameters &powder,
+    const double                                    density,
+    const BackgroundGrid<dim>                      &grid)
+      : powder(powder)
+      , density(density)
+      , grid(grid)
+  {
+    const double s = powder.point_spacing;
+    for (int d = 0; d < dim - 1; ++d)
+      n_columns[d] = static_cast<unsigned int>(
+        std::ceil(grid.n_cells()[d] * grid.h() / s * (1 - 1e-12)));
+  }
+
+  template <int dim>
+  std::vector<double>
+  Recoater<dim>::surface(const MaterialPoints<dim> &points) const
+  {
+    const double        s  = powder.point_spacing;
+    const auto         &x0 = grid.origin();
+    std::vector<double> top(static_cast<std::size_t>(n_columns[0]) *
+                              n_columns[1],
+                            x0[dim - 1]);
+    for (const auto &p : points.particle_handler())
+      {
+        const Point<dim> &x = p.get_location();
+        std::size_t       c = 0;
+        for (int d = dim - 2; d >= 0; --d)
+          {
+            const long i = static_cast<long>(std::floor((x[d] - x0[d]) / s));
+            c =
+              c * n_columns[d] + std::clamp<long>(i, 0, long(n_columns[d]) - 1);
+          }
+        top[c] = std::max(top[c], x[dim - 1] + 0.5 * s);
+      }
+    std::vector<double> global(top.size());
+    Utilities::MPI::max(ArrayView<const double>(top),
+                        grid.communicator(),
+                        ArrayView<double>(global));
+    return global;
+  }
+
+  template <int dim>
+  typename Recoater<dim>::Report
+  Recoater<dim>::recoat(MaterialPoints<dim>                      &points,
+                        const typename LayerSchedule<dim>::Layer &layer,
+                        const double                              T) const
+  {
+    const int    v       = dim - 1;
+    const double s       = powder.point_spacing;
+    const auto  &x0      = grid.origin();
+    const double h       = grid.h();
+    const auto   floor_z = surface(points);
+    const double area    = dim == 3 ? s * s : s;
+
+    Report r;
+    r.layer       = layer.number;
+    r.surface_min = *std::min_element(floor_z.begin(), floor_z.end());
+    r.surface_max = *std::max_element(floor_z.begin(), floor_z.end());
+    for (const double z : floor_z)
+      r.fill_volume += std::max(0., layer.top - z) * area;
+    if (r.fill_volume <= 0 || r.surface_min >= layer.top)
+      return r;
+
+    // The bed is periodic across the lateral faces (the bed goes on beyond
+    // them): grains that cross a face come back through the opposite one,
+    // so the volume of grains placed is the volume inside the domain, and
+    // no grain rests on a lateral face (a bed cut there is looser at the
+    // faces and denser inside).
+    PowderBedSpec spec;
+    spec.dim      = dim;
+    spec.periodic = true;
+    for (int d = 0; d < dim; ++d)
+      {
+        spec.lower[d] = x0[d];
+        spec.upper[d] = x0[d] + grid.n_cells()[d] * h;
+      }
+    spec.lower[v]         = r.surface_min;
+    spec.upper[v]         = layer.top;
+    spec.mean_diameter    = powder.mean_diameter;
+    spec.std_diameter     = powder.std_diameter;
+    spec.min_diameter     = powder.min_diameter;
+    spec.max_diameter     = powder.max_diameter;
+    spec.packing_fraction = powder.packing_fraction;
+    spec.seed             = powder.seed + 7919ull * layer.number;
+    spec.fill_volume      = r.fill_volume;
+    // Column index of horizontal lattice index i (x) and j (y).
+    const auto column = [&](const long i, const long j) {
+      return std::size_t(i) + std::size_t(n_columns[0]) * std::size_t(j);
+    };
+    // A grain of radius rad at c rests where it first touches the surface
+    // (the heights at the column centres within its radius).
+    spec.rest_height = [&](const std::array<double, 3> &c, const double rad) {
+      double z     = -std::numeric_limits<double>::infinity();
+      long   lo[2] = {0, 0}, hi[2] = {0, 0};
+      for (int d = 0; d < dim - 1; ++d)
+        {
+          lo[d] = long(std::floor((c[d] - rad - x0[d]) / s - 0.5));
+          hi[d] = long(std::ceil((c[d] + rad - x0[d]) / s - 0.5));
+        }
+      for (long j = lo[1]; j <= hi[1]; ++j)
+        for (long i = lo[0]; i <= hi[0]; ++i)
+          {
+            double     d2     = 0;
+            const long idx[2] = {i, j};
+            for (int d = 0; d < dim - 1; ++d)
+              {
+                const double dx = x0[d] + (idx[d] + 0.5) * s - c[d];
+                d2 += dx * dx;
+              }
+            // Beyond a lateral face: the periodic image's column.
+            const long n0 = n_columns[0], n1 = n_columns[1];
+            const long ci = ((i % n0) + n0) % n0;
+            const long cj = ((j % n1) + n1) % n1;
+            if (d2 <= rad * rad)
+              z = std::max(z,
+                           floor_z[column(ci, cj)] + std::sqrt(rad * rad - d2));
+          }
+      return z;
+    };
+    const PowderBed bed = pack_powder_bed(spec);
+    r.grains            = bed.grains.size();
+    r.packing           = bed.achieved_packing_fraction;
+
+    // The lattice points inside each grain, above the surface of their
+    // column, in owned cells.
+    std::vector<std::pair<std::uint32_t, Point<dim>>> added;
+    // Each grain and its periodic images across the lateral faces.
+    std::vector<Grain> images;
+    for (const auto &g : bed.grains)
+      for (int a = -1; a <= 1; ++a)
+        for (int b = (dim == 3 ? -1 : 0); b <= (dim == 3 ? 1 : 0); ++b)
+          {
+            Grain     i     = g;
+            const int k[2]  = {a, b};
+            bool      reach = true;
+            for (int d = 0; d < dim - 1; ++d)
+              {
+                const double L = spec.upper[d] - spec.lower[d];
+                i.center[d] += k[d] * L;
+                reach = reach && i.center[d] + i.radius > spec.lower[d] &&
+                        i.center[d] - i.radius < spec.upper[d];
+              }
+            if (reach)
+              images.push_back(i);
+          }
+    for (const auto &g : images)
+      {
+        std::array<long, dim> first, last;
+        bool                  empty = false;
+        for (int d = 0; d < dim; ++d)
+          {
+            const double lo = std::max(g.center[d] - g.radius, x0[d]);
+            const double hi =
+              std::min(g.center[d] + g.radius, x0[d] + grid.n_cells()[d] * h);
+            first[d] = static_cast<long>(std::ceil((lo - x0[d]) / s - 0.5));
+            last[d]  = static_cast<long>(std::ceil((hi - x0[d]) / s - 0.5)) - 1;
+            empty    = empty || last[d] < first[d];
+          }
+        if (empty)
+          continue;
+        std::array<long, dim> i = first;
+        for (bool more = true; more;)
+          {
+            Point<dim> p;
+            double     r2 = 0;
+            for (int d = 0; d < dim; ++d)
+              {
+                p[d] = x0[d] + (i[d] + 0.5) * s;
+                r2 += (p[d] - g.center[d]) * (p[d] - g.center[d]);
+              }
+            const std::size_t col =
+              column(std::clamp<long>(i[0], 0, n_columns[0] - 1),
+                     dim == 3 ? std::clamp<long>(i[1], 0, n_columns[1] - 1) :
+                                0);
+            if (r2 <= g.radius * g.radius && p[v] >= floor_z[col] &&
+                grid.in_domain(p))
+              {
+                const auto ijk = grid.cell_of(p);
+                if (grid.in_box(ijk))
+                  {
+                    const auto idx = grid.local_index(ijk);
+                    if (grid.cell_status()[idx] == BackgroundGrid<dim>::owned)
+                      added.emplace_back(idx, p);
+                  }
+              }
+            int d = 0;
+            for (; d < dim; ++d)
+              {
+                if (++i[d] <= last[d])
+                  break;
+                i[d] = first[d];
+              }
+            more = d < dim;
+          }
+      }
+    // Two grains may share a lattice site where they touch: keep one.
+    std::sort(added.begin(), added.end(), [](const auto &a, const auto &b) {
+      if (a.first != b.first)
+        return a.first < b.first;
+      for (int d = dim - 1; d >= 0; --d)
+        if (a.second[d] != b.second[d])
+          return a.second[d] < b.second[d];
+      return false;
+    });
+    added.erase(std::unique(added.begin(),
+                            added.end(),
+                            [](const auto &a, const auto &b) {
+                              return a.first == b.first && a.second == b.second;
+                            }),
+                added.end());
+    r.points =
+      Utilities::MPI::sum<std::uint64_t>(added.size(), grid.communicator());
+    r.point_volume = r.points * std::pow(s, dim);
+    insert_powder(points, added, T);
+    return r;
+  }
+
+  template <int dim>
+  void
+  Recoater<dim>::insert_powder(
+    MaterialPoints<dim>                               &points,
+    std::vector<std::pair<std::uint32_t, Point<dim>>> &added,
+    const double                                       T) const
+  {
+    // Ids after the largest one in use, numbered across the ranks in rank
+    // order; then the handler sorts them into its cells and the points'
+    // cache is rebuilt (MaterialPoints::points_moved()).
+    using P                 = typename MaterialPoints<dim>::PropertyIndex;
+    auto         &handler   = points.particle_handler_for_update();
+    std::uint64_t n_local64 = added.size(), offset64 = 0;
+    MPI_Exscan(
+      &n_local64, &offset64, 1, MPI_UINT64_T, MPI_SUM, grid.communicator());
+    if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
+      offset64 = 0;
+    const types::particle_index first =
+      handler.get_next_free_particle_index() + offset64;
+    const double        s      = powder.point_spacing;
+    const double        volume = std::pow(s, dim);
+    std::vector<double> props(points.n_properties(), 0.);
+    props[P::mass]             = density * volume;
+    props[P::volume]           = volume;
+    props[P::temperature]      = T;
+    props[P::peak_temperature] = T;
+    props[P::state]            = MaterialPoints<dim>::powder;
+    const double h             = grid.h();
+    for (std::size_t n = 0; n < added.size(); ++n)
+      {
+        const auto       &cell = grid.cell_iterator(added[n].first);
+        const Point<dim> &p    = added[n].second;
+        Point<dim>        ref;
+        const Point<dim>  v0 = cell->vertex(0);
+        for (int d = 0; d < dim; ++d)
+          ref[d] = (p[d] - v0[d]) / h;
+        handler.insert_particle(
+          p, ref, first + n, cell, ArrayView<const double>(props));
+      }
+    handler.update_cached_numbers();
+    points.points_moved();
+  }
+
+  template class LayerSchedule<2>;
+  template class LayerSchedule<3>;
+  template class Recoater<2>;
+  template class Recoater<3>;
+} // namespace femp
