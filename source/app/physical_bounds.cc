@@ -362,21 +362,6 @@ namespace femp
     }
   } // namespace
 
-  std::string
-  flow_limit_name(const unsigned int governing)
-  {
-    switch (governing)
-      {
-        case 0:
-          return "set by the convective limit (the flow speed and "
-                 "'Melt flow/Courant number'; at rest 'Physics/Gravity')";
-        case 1:
-          return "set by the viscous limit ('Melt flow/Viscosity')";
-        default:
-          return "set by the capillary limit ('Melt flow/Surface tension')";
-      }
-  }
-
   void
   check_step_floors(dealii::ParameterHandler &prm)
   {

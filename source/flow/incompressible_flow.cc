@@ -1331,6 +1331,97 @@ namespace femp
     pressure_solver.restart(ps);
   }
 
+  template <int dim>
+  bool
+  IncompressibleFlow<dim>::advance_over(const double                 time,
+                                        const double                 dt,
+                                        const CellFields<dim>       &fields,
+                                        const std::function<bool()> &may_melt,
+                                        const SubcycleControl       &control)
+  {
+    // Sub-cycle with the current limits (they change as the flow speeds
+    // up), or with the prescribed step, in equal pieces that end with the
+    // temperature step. The limits and which one governed are recorded for
+    // the report at the end of the run.
+    const unsigned int resorts = stats.resorts;
+    auto              &r       = subcycles;
+    // Nothing to flow, and nothing can start to: the last flow step had no
+    // fluid cell (its pressure, nodal velocities and forces on the solid
+    // are zero) and no metal cell is above the solidus, so the points'
+    // states left no point fluid. A flow step would change nothing; skip it
+    // (in the cooling after the laser's path, once the last drop has
+    // solidified).
+    if (may_melt && stats.steps > 0 && stats.n_fluid_cells == 0 && !may_melt())
+      {
+        ++r.idle_steps;
+        return false;
+      }
+    double       t     = 0;
+    unsigned int n_sub = 0;
+    while (t < dt * (1 - 1e-12))
+      {
+        const auto l = stable_time_step();
+        r.record(l, prm.time_step > 0);
+        const double wanted = prm.time_step > 0 ? prm.time_step : l.min();
+        // Equal sub-steps over the rest of the temperature step, none above
+        // the wanted step: no tiny last sub-step (uneven sub-steps shortened
+        // the droplet period in prm/oscillating_droplet.prm).
+        const double rest = dt - t;
+        const double dt_f =
+          rest / std::max(1., std::ceil(rest / wanted * (1 - 1e-12)));
+        // Collective: the limits are global, so is the count. A sub-step
+        // that cannot move the time on ends the run at once.
+        if (++n_sub > control.max_substeps || !(t + dt_f > t))
+          throw CollectiveError(
+            InputError("Run limits/Maximum flow sub-steps",
+                       std::to_string(control.max_substeps),
+                       "the flow needed more sub-steps in the temperature "
+                       "step of " +
+                         num(dt) + " s (sub-step now " + num(dt_f) + " s, " +
+                         flow_limit_name(l.governing()) +
+                         (prm.time_step > 0 ? " ('Melt flow/Time step' "
+                                              "prescribed)" :
+                                              "") +
+                         ": the flow may have blown up); raise "
+                         "the bound if the flow is right")
+              .what());
+        step(dt_f, fields);
+        t += dt_f;
+        // Feedback during a long sub-cycle (the progress line comes only
+        // between temperature steps).
+        const double wall = control.wall_time ? control.wall_time() : 0.;
+        if (wall > next_substep_report)
+          {
+            if (control.log)
+              *control.log << "  melt flow: sub-step " << n_sub
+                           << " of the temperature "
+                           << "step at t = " << time << " s, " << t / dt * 100
+                           << " % done, sub-step " << dt_f << " s (wall "
+                           << wall << " s)" << std::endl;
+            next_substep_report = wall + 30;
+          }
+      }
+    if (control.wall_time)
+      next_substep_report = control.wall_time() + 30;
+    r.record_substeps(n_sub);
+    return stats.resorts != resorts;
+  }
+
+  std::string
+  flow_limit_name(const unsigned int governing)
+  {
+    switch (governing)
+      {
+        case 0:
+          return "set by the convective limit (the flow speed and "
+                 "'Melt flow/Courant number'; at rest 'Physics/Gravity')";
+        case 1:
+          return "set by the viscous limit ('Melt flow/Viscosity')";
+        default:
+          return "set by the capillary limit ('Melt flow/Surface tension')";
+      }
+  }
+
   template class IncompressibleFlow<2>;
   template class IncompressibleFlow<3>;
 } // namespace femp

@@ -1,16 +1,19 @@
-// femp: the top-level problem. It reads the scene, owns the modules and
-// what joins them, and runs the macro time step of the paper's sec. 2.6:
+// femp: the top-level problem, a sequencer. It reads the scene (Scene),
+// builds the modules, registers what they write (ResultsOutput) and what
+// state they carry (ModuleStates), and runs the macro time step of the
+// paper's sec. 2.6:
 //   1. tag cells from the points, update alpha, gamma and properties;
 //   2. temperature in fluid, solid and powder (HeatTransfer, eq. 1), then
 //      the cell temperatures to the points (eq. 2);
-//   3. flow in the melt pool (IncompressibleFlow, eqs. 3-4), sub-cycled,
-//      the heat carried by points that changed cells (PointHeatExchange);
-//      with the solid, the fluid forces on the solid's nodes (eq. 13,
-//      FluidSolidForces);
+//   3. flow in the melt pool (IncompressibleFlow::advance_over, eqs. 3-4),
+//      sub-cycled, the heat carried by points that changed cells
+//      (PointHeatExchange); with the solid, the fluid forces on the solid's
+//      nodes (eq. 13, FluidSolidForces);
 //   4. solid by MPM + FE with transition-node coupling (SolidStress,
 //      eqs. 5-17), sub-cycled to the macro time, loaded by those fluid
 //      forces held constant over its sub-steps;
-//   5. output (Output, RunReport) when the SimulationControl says so.
+//   5. output (ResultsOutput, RunReport) when the SimulationControl says so.
+// The step and the early ends are the TimeStepPolicy's.
 #ifndef femp_femp_problem_h
 #define femp_femp_problem_h
 
@@ -18,10 +21,11 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/app/module_states.h>
+#include <femp/app/results_output.h>
+#include <femp/app/scene.h>
 #include <femp/app/simulation_control.h>
-#include <femp/base/material.h>
-#include <femp/builds/pore_detector.h>
-#include <femp/builds/recoater.h>
+#include <femp/app/time_step_policy.h>
 #include <femp/coupling/fluid_solid_forces.h>
 #include <femp/coupling/point_heat_exchange.h>
 #include <femp/flow/incompressible_flow.h>
@@ -32,22 +36,15 @@
 #include <femp/heat/laser.h>
 #include <femp/heat/thermal_history.h>
 #include <femp/io/checkpoint.h>
-#include <femp/io/output.h>
 #include <femp/io/run_report.h>
 #include <femp/io/track_shape.h>
 #include <femp/solid/solid_stress.h>
 
-#include <fstream>
 #include <memory>
-#include <optional>
 
 namespace femp
 {
   using namespace dealii;
-
-  /// Declare every parameter of femp (all modules) in @p prm.
-  void
-  declare_all_parameters(ParameterHandler &prm);
 
   template <int dim>
   class FempProblem
@@ -84,45 +81,8 @@ namespace femp
   private:
     MPI_Comm           comm;
     ConditionalOStream pcout;
-    /// Wall time (s) after which a long melt-flow sub-cycle reports.
-    double next_substep_report = 30;
-    /// workpiece_peak_temperature() of the current step (reset at its start).
-    std::optional<double> workpiece_peak;
-    /// 'Time stepping/Time step after solidification' in use at this step.
-    bool           cooling_step = false;
-    TimeParameters time_prm;
-    /// The material, owner of the data that several modules read (density,
-    /// solidus, liquidus, evaporation data), passed by const reference.
-    Material material;
-    /// Physics/Gravity, m/s^2: the one gravity of the flow and the solid.
-    Tensor<1, dim>                           gravity;
-    typename BackgroundGrid<dim>::Parameters grid_prm;
-    typename MaterialPoints<dim>::Parameters points_prm;
-    typename HeatTransfer<dim>::Parameters   heat_prm;
-    typename Laser<dim>::Parameters          laser_prm;
-    /// Laser/Absorption model and the ray tracer's parameters.
-    typename RayTracedAbsorption<dim>::Parameters absorption_prm;
-    /// Ray traced: absorption.csv of the output directory (rank 0).
-    std::unique_ptr<std::ofstream>           absorption_csv;
-    typename Output<dim>::Parameters         output_prm;
-    typename ThermalHistory<dim>::Parameters history_prm;
-    bool                                     melt_flow = false;
-    /// Physics/Heat transfer: false freezes the temperature field.
-    bool                                         heat_enabled = true;
-    typename IncompressibleFlow<dim>::Parameters flow_prm;
-    bool                                         solid_enabled = false;
-    /// Reads the density and solidus of @ref material.
-    SolidMaterial                         solid_material{material};
-    typename SolidStress<dim>::Parameters solid_prm;
-    typename SolidFEM<dim>::Parameters    fem_prm;
-    typename TrackShape<dim>::Parameters  track_prm;
-    typename Checkpoint<dim>::Parameters  checkpoint_prm;
-    // [builds] Layer schedule, recoater, pore detector (doc/builds.md).
-    typename LayerSchedule<dim>::Parameters build_prm;
-    typename PoreDetector<dim>::Parameters  porosity_prm;
-    std::unique_ptr<LayerSchedule<dim>>     layers;   ///< null: one layer
-    std::unique_ptr<Recoater<dim>>          recoater; ///< null: one layer
-    std::unique_ptr<PoreDetector<dim>>      pores;    ///< null unless on
+    /// Every module's parameters, checked.
+    Scene<dim> scene;
 
     // The modules; flow and solid exist only when switched on.
     std::unique_ptr<BackgroundGrid<dim>>     grid;
@@ -132,36 +92,37 @@ namespace femp
     std::unique_ptr<IncompressibleFlow<dim>> flow;
     std::unique_ptr<SolidStress<dim>>        solid;
     std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
+    std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
+    // Builds (doc/builds.md): null with one layer / without pore detection.
+    std::unique_ptr<LayerSchedule<dim>> layers;
+    std::unique_ptr<Recoater<dim>>      recoater;
+    std::unique_ptr<PoreDetector<dim>>  pores;
     // What joins them.
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
-    // Clock, output and report.
-    std::unique_ptr<SimulationControl> control;
-    std::unique_ptr<Output<dim>>       output;
-    std::unique_ptr<RunReport<dim>>    report;
-    std::unique_ptr<TrackShape<dim>>   track_shape; ///< null unless on
-    std::unique_ptr<Checkpoint<dim>>   checkpoint;
-    TimerOutput                        timer;
-    Summary                            result;
+    // Clock, step policy, output, report, state.
+    std::unique_ptr<SimulationControl>   control;
+    std::unique_ptr<TimeStepPolicy<dim>> time_steps;
+    std::unique_ptr<ResultsOutput<dim>>  results;
+    std::unique_ptr<RunReport<dim>>      report;
+    std::unique_ptr<Checkpoint<dim>>     checkpoint;
+    ModuleStates<dim>                    states;
+    TimerOutput                          timer;
+    Summary                              result;
 
-    /// 'Solid FEM/Zone upper corner = auto': the FE zone's top below a
-    /// conservative melt depth of the scene's laser (fe_zone_depth.h).
-    void
-    place_fe_zone_automatically();
-    /// Checks that need several modules' parameters (before any work).
-    void
-    check_across_modules();
     void
     setup();
     void
     setup_flow();
     void
     setup_solid();
+    /// The heat's output fields and files (each module registers its own
+    /// where it is built).
     void
-    print_scene() const;
-    /// The melting regime of the scene's laser (normalized enthalpy).
+    register_heat_output();
+    /// Every module with state, in checkpoint order.
     void
-    print_melting_regime() const;
+    register_states();
 
     /// The shared cell fields of the present state (cell_fields.h), for
     /// the modules that read them: T, gamma and alpha of the heat, the
@@ -169,79 +130,41 @@ namespace femp
     CellFields<dim>
     cell_fields() const;
 
+    /// The recoater and the pore detector, with the pores' output.
+    void
+    setup_builds();
+
     // The steps of the macro time step (paper sec. 2.6), in run() order.
-    /// The step chooser of the SimulationControl.
-    double
-    choose_time_step(const unsigned int step, const double time);
-    /// Refuses (at the first step) a run that would need more than
-    /// 'Time stepping/Maximum number of steps' steps of @p dt.
-    void
-    check_projected_steps(const unsigned int step, const double dt) const;
-    /// Ray traced: one row of absorption.csv (time, incident, absorbed,
-    /// escaped power, absorbed fraction, hits per ray).
-    void
-    write_absorption_series();
-    /// [builds] 0. Spread the powder of the layers whose start time lies
-    /// in [t, t + @p dt) (LayerSchedule, Recoater); then alpha and the
-    /// heat of the cells that gained powder (PointHeatExchange).
+    /// 0. Spread the powder of the layers whose start time lies in
+    /// [t, t + @p dt) (LayerSchedule, Recoater); then alpha and the heat of
+    /// the cells that gained powder (PointHeatExchange).
     void
     recoat_layers(const double dt);
-    /// [builds] 5. The pores at output number @p n (PoreDetector): rows of
-    /// porosity.csv and pores.csv, and the cell fields pore,
-    /// unfused_powder and partially_molten appended to @p fields (their
-    /// data kept in @p data).
-    void
-    find_pores(const unsigned int                        n,
-               std::vector<typename Output<dim>::Field> &fields,
-               std::vector<std::vector<double>>         &data);
     /// 2. Temperature in fluid, solid and powder (eq. 1).
     void
     temperature_step(const double dt);
     /// The cell temperatures to the points (eq. 2); their states follow.
     void
     cells_to_points();
-    /// 3. The flow sub-cycled over @p dt; then alpha and the heat of points
-    /// that changed cells (PointHeatExchange).
+    /// 3. The flow over the step of @p dt; then alpha and the heat of
+    /// points that changed cells (PointHeatExchange).
     void
-    flow_substeps(const double dt);
+    flow_step(const double dt);
     /// 3. With the solid: the fluid forces on the solid's nodes.
     void
     fluid_forces_on_solid();
     /// 4. The solid to the end of the step, loaded by those forces.
     void
     solid_step();
-    /// 'Time stepping/Stop when peak temperature below': once the laser's
-    /// path has ended by the end of the step of @p dt and the hottest metal
-    /// cell is below that temperature, make this step the last (the
-    /// SimulationControl stops after it) and say so.
-    void
-    stop_if_cooled_down(const double dt);
-    /// Peak temperature of the metal attached to the substrate
-    /// (attached_metal.h), computed once per temperature step: the stop
-    /// test and the solid's cooling switch read the same T and alpha.
-    /// Collective.
-    double
-    workpiece_peak_temperature();
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
-    /// The checkpoint (doc/checkpoint.md): what the scene must share with
-    /// a checkpoint; every module's state of the present step; the state
-    /// of the checkpoint read, after setup().
-    typename Checkpoint<dim>::Scene
-    checkpoint_scene() const;
-    void
-    restore_checkpoint();
-
     void
     write_series();
     void
     write_output(const bool last);
-    /// The track's surface and bead (TrackShape) for output number @p n.
     void
-    write_track_shape(const unsigned int n, const double time);
-    std::vector<typename Output<dim>::Field>
-    output_fields() const;
+    restore_checkpoint();
   };
 } // namespace femp
 

@@ -11,6 +11,8 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/flow/incompressible_flow.h>
+
 #include <string>
 
 namespace femp
@@ -45,11 +47,6 @@ namespace femp
   void
   check_step_floors(dealii::ParameterHandler &prm);
 
-  /// The limit of the melt-flow step by its index (StepLimits::governing():
-  /// 0 convective, 1 viscous, 2 capillary) and the parameter that sets it,
-  /// for messages.
-  std::string
-  flow_limit_name(unsigned int governing);
 } // namespace femp
 
 #endif

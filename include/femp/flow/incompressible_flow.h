@@ -34,6 +34,7 @@
 #ifndef femp_incompressible_flow_h
 #define femp_incompressible_flow_h
 
+#include <deal.II/base/conditional_ostream.h>
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/tensor.h>
 #include <deal.II/base/timer.h>
@@ -47,6 +48,8 @@
 #include <femp/grid/material_points.h>
 
 #include <array>
+#include <functional>
+#include <limits>
 #include <vector>
 
 namespace femp
@@ -168,6 +171,54 @@ namespace femp
       unsigned int  volume_skipped    = 0; ///< volume solves not converged
     };
 
+    /// The fluid step limits over the run: the smallest of each, how
+    /// many sub-steps each governed (convective, viscous, capillary,
+    /// prescribed), the sub-steps per temperature step and the idle
+    /// temperature steps (advance_over()).
+    struct SubcycleRecord
+    {
+      double convective         = std::numeric_limits<double>::infinity();
+      double viscous            = std::numeric_limits<double>::infinity();
+      double capillary          = std::numeric_limits<double>::infinity();
+      double capillary_fraction = 1;
+      std::array<unsigned long, 4> governed{};
+      unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
+      unsigned int max_substeps = 0;
+      /// Temperature steps without a flow step: no fluid cell at the last
+      /// flow step and no metal above the solidus.
+      unsigned long idle_steps = 0;
+
+      /// Book the limits @p l of one fluid sub-step; @p prescribed: the
+      /// step was Melt flow/Time step.
+      void
+      record(const StepLimits &l, const bool prescribed)
+      {
+        convective         = std::min(convective, l.convective);
+        viscous            = std::min(viscous, l.viscous);
+        capillary          = std::min(capillary, l.capillary);
+        capillary_fraction = l.capillary_fraction;
+        ++governed[prescribed ? 3 : l.governing()];
+      }
+      /// Book the number of sub-steps of one temperature step.
+      void
+      record_substeps(const unsigned int n)
+      {
+        min_substeps = std::min(min_substeps, n);
+        max_substeps = std::max(max_substeps, n);
+      }
+    };
+
+    /// What the sub-cycle of advance_over() takes from the run.
+    struct SubcycleControl
+    {
+      /// 'Run limits/Maximum flow sub-steps' per temperature step.
+      unsigned int max_substeps = 100000;
+      /// The run's wall clock, s (a long sub-cycle reports every 30 s).
+      std::function<double()> wall_time;
+      /// Where a long sub-cycle reports (null: nowhere).
+      ConditionalOStream *log = nullptr;
+    };
+
     IncompressibleFlow(const Parameters          &prm,
                        const Material            &material,
                        const BackgroundGrid<dim> &grid,
@@ -189,6 +240,33 @@ namespace femp
     ///    required when either is switched on.
     void
     step(const double dt, const CellFields<dim> &fields = CellFields<dim>());
+    /// The flow over the temperature step [@p time, @p time + @p dt]:
+    /// sub-cycled in equal pieces, each at most the current stable step
+    /// (or 'Melt flow/Time step'), the last one ending with the
+    /// temperature step; the limits are booked in subcycle_record().
+    /// Skipped (an idle step) when the last flow step had no fluid cell and
+    /// @p may_melt says that no metal is above the solidus (empty: always
+    /// flow). Stops (collective InputError) after more than
+    /// @p control.max_substeps sub-steps. Returns true if points changed
+    /// cells.
+    bool
+    advance_over(const double                 time,
+                 const double                 dt,
+                 const CellFields<dim>       &fields,
+                 const std::function<bool()> &may_melt,
+                 const SubcycleControl       &control);
+    /// The sub-cycle bookkeeping over the run (checkpoint: set it back).
+    const SubcycleRecord &
+    subcycle_record() const
+    {
+      return subcycles;
+    }
+    void
+    set_subcycle_record(const SubcycleRecord &r)
+    {
+      subcycles = r;
+    }
+
     /// step() without the refusal of a step above the viscous or capillary
     /// limit (the step rejection and the non-finite check remain): for the
     /// forced-step experiments of doc/stability.md only.
@@ -392,8 +470,16 @@ namespace femp
       cell_dissipation; // mu u^T K u per owned fluid cell, W (W/m in 2D)
     std::vector<double> volume_source; // -c e per owned fluid cell
 
-    Statistics stats;
+    Statistics     stats;
+    SubcycleRecord subcycles;
+    /// Wall time (s) after which a long sub-cycle reports.
+    double next_substep_report = 30;
   };
+  /// The name of the flow's step limit with index @p governing (0
+  /// convective, 1 viscous, 2 capillary) and the parameter that sets it,
+  /// for messages.
+  std::string
+  flow_limit_name(const unsigned int governing);
 } // namespace femp
 
 #endif

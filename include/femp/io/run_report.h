@@ -46,42 +46,9 @@ namespace femp
     unsigned int  pressure_matrix_builds = 0; ///< matrix + AMG setups
     unsigned long pressure_cg_iterations = 0; ///< total
     double        max_fluid_speed        = 0; ///< m/s, at the end
-    /// Fluid step limits, s: the smallest of each over the run, how many
-    /// sub-steps each governed (convective, viscous, capillary,
-    /// prescribed), and the sub-steps per temperature step.
-    struct FlowLimits
-    {
-      double convective         = std::numeric_limits<double>::infinity();
-      double viscous            = std::numeric_limits<double>::infinity();
-      double capillary          = std::numeric_limits<double>::infinity();
-      double capillary_fraction = 1;
-      std::array<unsigned long, 4> governed{};
-      unsigned int min_substeps = std::numeric_limits<unsigned int>::max();
-      unsigned int max_substeps = 0;
-      /// Temperature steps without a flow step: no fluid cell at the last
-      /// flow step and no metal above the solidus.
-      unsigned long idle_steps = 0;
-
-      /// Book the limits @p l of one fluid sub-step; @p prescribed: the
-      /// step was Melt flow/Time step.
-      void
-      record(const typename IncompressibleFlow<dim>::StepLimits &l,
-             const bool                                          prescribed)
-      {
-        convective         = std::min(convective, l.convective);
-        viscous            = std::min(viscous, l.viscous);
-        capillary          = std::min(capillary, l.capillary);
-        capillary_fraction = l.capillary_fraction;
-        ++governed[prescribed ? 3 : l.governing()];
-      }
-      /// Book the number of sub-steps of one temperature step.
-      void
-      record_substeps(const unsigned int n)
-      {
-        min_substeps = std::min(min_substeps, n);
-        max_substeps = std::max(max_substeps, n);
-      }
-    } flow_limits;
+    /// Fluid step limits over the run (IncompressibleFlow::SubcycleRecord).
+    using FlowLimits = typename IncompressibleFlow<dim>::SubcycleRecord;
+    FlowLimits flow_limits;
     /// Solid (if Physics/Solid stress): steps and final energies.
     unsigned int                        solid_steps = 0;
     typename SolidStress<dim>::Energies solid_energy;

@@ -1,0 +1,140 @@
+// femp: what a run writes, in one list: the cell fields (each registered
+// once by the module that owns it, with where it goes: the probe series,
+// the probe lines, the field files), the fields computed only when output
+// is written (phase, zone, the solid's stresses), and the extra files
+// written beside them (ray-traced absorption, track shape). The driver
+// asks it to write the time series and the field output when the
+// SimulationControl says they are due; the formats are Output's.
+#ifndef femp_results_output_h
+#define femp_results_output_h
+
+#include <femp/grid/background_grid.h>
+#include <femp/grid/material_points.h>
+#include <femp/heat/heat_transfer.h>
+#include <femp/heat/melt_pool.h>
+#include <femp/io/output.h>
+#include <femp/io/track_shape.h>
+
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class ResultsOutput
+  {
+  public:
+    /// Where a field goes; each reach includes the ones after it.
+    enum class Reach
+    {
+      probes, ///< the probe-point series (columns), probe lines, field files
+      lines,  ///< probe lines and field files
+      files   ///< field files only
+    };
+
+    /// A file written beside the standard output; every function may be
+    /// empty.
+    struct Writer
+    {
+      /// With every row of the time series, at @p time.
+      std::function<void(const double time)> series;
+      /// With every field output number @p n at @p time.
+      std::function<void(const unsigned int n, const double time)> fields;
+      /// On resume from a checkpoint at @p time: cut the files back.
+      std::function<void(const double time)> resume;
+    };
+
+    ResultsOutput(const typename Output<dim>::Parameters &prm,
+                  const BackgroundGrid<dim>              &grid,
+                  MaterialPoints<dim>                    &points);
+
+    /// A cell field kept by a module (it must outlive this object).
+    void
+    add_field(const std::string         &name,
+              const std::vector<double> &values,
+              const Reach                reach,
+              const bool                 continuous = true);
+    /// Cell fields computed when field output is written: @p compute fills
+    /// one vector per name.
+    void
+    add_fields(
+      const std::vector<std::string>                                &names,
+      const std::function<void(std::vector<std::vector<double>> &)> &compute,
+      const Reach                                                    reach,
+      const bool continuous = true);
+    /// A file written beside the standard output.
+    void
+    add_writer(const Writer &w)
+    {
+      writers.push_back(w);
+    }
+
+    /// Open the files (with @p resume: Output's load_state() reopens the
+    /// series; the writers are cut back by resume()). Call after every
+    /// field with Reach::probes is added.
+    void
+    initialize(const bool resume);
+    /// One row of the time series at @p time with the melt pool @p pool.
+    void
+    write_series(const double time, const MeltPoolSize &pool);
+    /// Field output number @p n at @p time (@p last: the run's last step).
+    void
+    write_fields(const unsigned int n, const double time, const bool last);
+    /// On resume from a checkpoint at @p time.
+    void
+    resume(const double time);
+
+    /// The formats' writer (its state goes into a checkpoint).
+    Output<dim> &
+    output()
+    {
+      return *out;
+    }
+
+  private:
+    struct Entry
+    {
+      std::vector<std::string>                                names;
+      const std::vector<double>                              *values = nullptr;
+      std::function<void(std::vector<std::vector<double>> &)> compute;
+      Reach                                                   reach;
+      bool                                                    continuous;
+    };
+    const typename Output<dim>::Parameters &prm;
+    MaterialPoints<dim>                    &points;
+    std::unique_ptr<Output<dim>>            out;
+    std::vector<Entry>                      entries;
+    std::vector<Writer>                     writers;
+
+    /// The fields that reach at least @p reach (kept fields only for
+    /// Reach::probes), in the order probes, lines, files; @p computed
+    /// holds the values of the computed ones.
+    std::vector<typename Output<dim>::Field>
+    fields(const Reach reach, std::vector<std::vector<double>> *computed) const;
+  };
+
+  /// Ray-traced absorption: absorption.csv in @p directory (rank 0), one
+  /// row per time-series row (time, incident, absorbed, escaped power,
+  /// absorbed fraction, hits per ray of the last trace).
+  template <int dim>
+  typename ResultsOutput<dim>::Writer
+  absorption_series(const HeatTransfer<dim> &heat,
+                    const std::string       &directory,
+                    const MPI_Comm           comm);
+
+  /// The track's surface and bead (TrackShape) with every field output.
+  template <int dim>
+  typename ResultsOutput<dim>::Writer
+  track_shape_files(TrackShape<dim>           &track,
+                    const MaterialPoints<dim> &points,
+                    const HeatTransfer<dim>   &heat,
+                    const double               liquidus,
+                    const std::string         &directory);
+} // namespace femp
+
+#endif

@@ -1,0 +1,224 @@
+// femp: the one list of what a run writes (results_output.h).
+#include <deal.II/base/mpi.h>
+
+#include <femp/app/results_output.h>
+#include <femp/base/input_checks.h>
+
+#include <iomanip>
+
+namespace femp
+{
+  template <int dim>
+  ResultsOutput<dim>::ResultsOutput(const typename Output<dim>::Parameters &prm,
+                                    const BackgroundGrid<dim> &grid,
+                                    MaterialPoints<dim>       &points)
+      : prm(prm)
+      , points(points)
+      , out(std::make_unique<Output<dim>>(prm, grid))
+  {
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::add_field(const std::string         &name,
+                                const std::vector<double> &values,
+                                const Reach                reach,
+                                const bool                 continuous)
+  {
+    entries.push_back({{name}, &values, {}, reach, continuous});
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::add_fields(
+    const std::vector<std::string>                                &names,
+    const std::function<void(std::vector<std::vector<double>> &)> &compute,
+    const Reach                                                    reach,
+    const bool                                                     continuous)
+  {
+    AssertThrow(reach != Reach::probes,
+                ExcMessage("a computed field cannot be a probe series column"));
+    entries.push_back({names, nullptr, compute, reach, continuous});
+  }
+
+  template <int dim>
+  std::vector<typename Output<dim>::Field>
+  ResultsOutput<dim>::fields(const Reach                       reach,
+                             std::vector<std::vector<double>> *computed) const
+  {
+    std::vector<typename Output<dim>::Field> f;
+    for (const Reach r : {Reach::probes, Reach::lines, Reach::files})
+      {
+        if (static_cast<int>(r) > static_cast<int>(reach))
+          break;
+        for (const auto &e : entries)
+          if (e.reach == r)
+            {
+              if (e.values)
+                f.push_back({e.names[0], e.values, e.continuous});
+              else if (computed)
+                {
+                  std::vector<std::vector<double>> v;
+                  e.compute(v);
+                  for (std::size_t i = 0; i < e.names.size(); ++i)
+                    {
+                      computed->push_back(std::move(v[i]));
+                      f.push_back({e.names[i], nullptr, e.continuous});
+                    }
+                }
+            }
+      }
+    // The computed values' addresses, once the list holds them all.
+    if (computed)
+      {
+        std::size_t k = 0;
+        for (auto &field : f)
+          if (!field.values)
+            field.values = &(*computed)[k++];
+      }
+    return f;
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::initialize(const bool resume)
+  {
+    std::vector<std::string> names;
+    for (const auto &f : fields(Reach::probes, nullptr))
+      names.push_back(f.name);
+    out->initialize(names, resume);
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::write_series(const double time, const MeltPoolSize &pool)
+  {
+    out->write_series(time, fields(Reach::probes, nullptr), pool);
+    for (const auto &w : writers)
+      if (w.series)
+        w.series(time);
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::write_fields(const unsigned int n,
+                                   const double       time,
+                                   const bool         last)
+  {
+    points.flush_point_temperatures();
+    std::vector<std::vector<double>> computed;
+    computed.reserve(32); // addresses kept in the field list
+    const auto all = fields(Reach::files, &computed);
+    std::vector<typename Output<dim>::Field> lines;
+    {
+      // Probe lines: the fields that reach them (the list's first part).
+      std::size_t n_lines = 0;
+      for (const auto &e : entries)
+        if (e.reach != Reach::files)
+          n_lines += e.names.size();
+      lines.assign(all.begin(), all.begin() + n_lines);
+    }
+    const bool with_points =
+      points.carried() &&
+      (prm.write_points == "always" || (prm.write_points == "last" && last));
+    out->write_fields(n,
+                      time,
+                      all,
+                      with_points ? &points.particle_handler() : nullptr,
+                      points.used_property_names());
+    out->write_probe_lines(n, time, lines);
+    for (const auto &w : writers)
+      if (w.fields)
+        w.fields(n, time);
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::resume(const double time)
+  {
+    for (const auto &w : writers)
+      if (w.resume)
+        w.resume(time);
+  }
+
+  template <int dim>
+  typename ResultsOutput<dim>::Writer
+  absorption_series(const HeatTransfer<dim> &heat,
+                    const std::string       &directory,
+                    const MPI_Comm           comm)
+  {
+    if (Utilities::MPI::this_mpi_process(comm) != 0)
+      return {};
+    auto csv  = std::make_shared<std::unique_ptr<std::ofstream>>();
+    auto name = directory + "/absorption.csv";
+    typename ResultsOutput<dim>::Writer w;
+    w.series = [csv, name, directory, &heat](const double time) {
+      if (!*csv)
+        {
+          *csv = std::make_unique<std::ofstream>(name);
+          **csv << "time,incident,absorbed,escaped,absorbed_fraction,"
+                   "hits_per_ray\n";
+        }
+      // The last trace: of the step that ended at this time.
+      const auto &r = heat.last_trace();
+      **csv << std::setprecision(8) << time << ',' << r.incident << ','
+            << r.absorbed << ',' << r.escaped << ','
+            << (r.incident > 0 ? r.absorbed / r.incident : 0.) << ','
+            << double(r.n_hits) / std::max(1u, r.n_rays) << '\n';
+      (*csv)->flush();
+      require(bool(**csv),
+              "Output/Directory",
+              directory,
+              "absorption.csv cannot be written there");
+    };
+    w.resume = [csv, name](const double time) {
+      *csv = std::make_unique<std::ofstream>();
+      reopen_series_at(**csv, name, time);
+      if (!(*csv)->is_open())
+        csv->reset();
+    };
+    return w;
+  }
+
+  template <int dim>
+  typename ResultsOutput<dim>::Writer
+  track_shape_files(TrackShape<dim>           &track,
+                    const MaterialPoints<dim> &points,
+                    const HeatTransfer<dim>   &heat,
+                    const double               liquidus,
+                    const std::string         &directory)
+  {
+    typename ResultsOutput<dim>::Writer w;
+    w.fields =
+      [&track, &points, &heat, liquidus, directory](const unsigned int n,
+                                                    const double       time) {
+        const auto sections =
+          track.measure(heat.metal_fraction(),
+                        track.resolidified_cells(points, liquidus));
+        track.write(directory, n, time, sections);
+      };
+    w.resume = [&track, directory](const double time) {
+      track.resume(directory, time);
+    };
+    return w;
+  }
+
+  template class ResultsOutput<2>;
+  template class ResultsOutput<3>;
+  template ResultsOutput<2>::Writer
+  absorption_series(const HeatTransfer<2> &, const std::string &, MPI_Comm);
+  template ResultsOutput<3>::Writer
+  absorption_series(const HeatTransfer<3> &, const std::string &, MPI_Comm);
+  template ResultsOutput<2>::Writer
+  track_shape_files(TrackShape<2> &,
+                    const MaterialPoints<2> &,
+                    const HeatTransfer<2> &,
+                    double,
+                    const std::string &);
+  template ResultsOutput<3>::Writer
+  track_shape_files(TrackShape<3> &,
+                    const MaterialPoints<3> &,
+                    const HeatTransfer<3> &,
+                    double,
+                    const std::string &);
+} // namespace femp
