@@ -43,7 +43,7 @@
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
 #include <femp/flow/incompressible_flow.h>
-#include <femp/io/checkpoint.h>
+#include <femp/grid/cell_state.h>
 
 #include <algorithm>
 #include <cmath>

@@ -14,8 +14,8 @@
 #include <deal.II/numerics/data_out.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/state_stream.h>
 #include <femp/grid/material_points.h>
-#include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/solid/solid_stress.h>
 

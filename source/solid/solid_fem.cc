@@ -8,7 +8,7 @@
 #include <deal.II/grid/grid_generator.h>
 
 #include <femp/base/input_checks.h>
-#include <femp/io/checkpoint.h>
+#include <femp/base/state_stream.h>
 #include <femp/solid/solid_fem.h>
 
 #include <algorithm>

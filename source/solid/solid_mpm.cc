@@ -3,7 +3,7 @@
 // the choice of variant and the cell-crossing rules).
 #include <deal.II/base/mpi.h>
 
-#include <femp/io/checkpoint.h>
+#include <femp/grid/cell_state.h>
 #include <femp/solid/solid_mpm.h>
 
 #include <algorithm>

@@ -8,7 +8,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
-#include <femp/io/checkpoint.h>
+#include <femp/grid/cell_state.h>
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_stress.h>
 
