@@ -18,6 +18,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/app/run_report.h>
 #include <femp/app/simulation_control.h>
 #include <femp/base/material.h>
 #include <femp/coupling/fluid_solid_forces.h>
@@ -31,7 +32,6 @@
 #include <femp/heat/thermal_history.h>
 #include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
-#include <femp/io/run_report.h>
 #include <femp/io/track_shape.h>
 #include <femp/solid/solid_stress.h>
 

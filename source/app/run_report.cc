@@ -3,7 +3,7 @@
 // the solid energies of eqs. 5-17 and the melt-flow statistics.
 #include <deal.II/base/mpi.h>
 
-#include <femp/io/run_report.h>
+#include <femp/app/run_report.h>
 
 #include <algorithm>
 #include <cmath>
