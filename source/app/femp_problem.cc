@@ -244,21 +244,21 @@ namespace femp
     std::function<unsigned int(const Point<dim> &)>
     partition_cost(const typename MaterialPoints<dim>::Parameters &points,
                    const typename SolidFEM<dim>::Parameters       &fem,
+                   const Point<dim>                               &origin,
                    const double                                    h,
                    const bool                                      solid)
     {
       if (!points.carry_points)
         return {};
-      const double full       = std::pow(h / points.point_spacing, dim);
-      const double top        = points.substrate_top;
-      const double powder_top = top + std::max(0., points.layer_thickness);
-      const double packing    = points.packing_fraction;
+      const double      full       = std::pow(h / points.point_spacing, dim);
+      const double      top        = points.substrate_top;
+      const double      powder_top = top + std::max(0., points.layer_thickness);
+      const double      packing    = points.packing_fraction;
+      const FeZone<dim> fe_zone    = fem.zone(origin, h);
       return [=](const Point<dim> &c) {
         const double z     = c[dim - 1];
-        bool         in_fe = fem.enabled;
-        for (int d = 0; d < dim && in_fe; ++d)
-          in_fe = c[d] > fem.lower_corner[d] && c[d] < fem.upper_corner[d];
-        double n = 0, n_mpm = 0;
+        const bool   in_fe = fe_zone.contains(c);
+        double       n = 0, n_mpm = 0;
         if (z < top)
           n = full, n_mpm = solid && !in_fe ? full : 0.;
         else if (z < powder_top)
@@ -275,8 +275,11 @@ namespace femp
     {
       TimerOutput::Scope t(timer, "setup: grid");
       grid = std::make_unique<BackgroundGrid<dim>>(grid_prm, comm);
-      grid->create(partition_cost<dim>(
-        points_prm, fem_prm, grid_prm.cell_size, solid_enabled));
+      grid->create(partition_cost<dim>(points_prm,
+                                       fem_prm,
+                                       grid_prm.lower_corner,
+                                       grid_prm.cell_size,
+                                       solid_enabled));
     }
     {
       TimerOutput::Scope t(timer, "setup: material points");

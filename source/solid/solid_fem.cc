@@ -282,16 +282,6 @@ namespace femp
   }
 
   template <int dim>
-  bool
-  SolidFEM<dim>::in_zone(const std::array<int, dim> &ijk) const
-  {
-    for (int d = 0; d < dim; ++d)
-      if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
-        return false;
-    return true;
-  }
-
-  template <int dim>
   std::uint64_t
   SolidFEM<dim>::zone_cell_id(const std::array<int, dim> &ijk) const
   {
@@ -346,17 +336,13 @@ namespace femp
   void
   SolidFEM<dim>::set_zone()
   {
-    const double h = grid.h();
-    for (int d = 0; d < dim; ++d)
-      {
-        zlo[d] = static_cast<int>(
-          std::round((prm.lower_corner[d] - grid.origin()[d]) / h));
-        zn[d] = static_cast<int>(
-          std::round((prm.upper_corner[d] - prm.lower_corner[d]) / h));
-      }
+    zone = FeZone<dim>(
+      true, prm.lower_corner, prm.upper_corner, grid.origin(), grid.h());
+    zlo = zone.first_cell();
+    zn  = zone.n_cells();
     for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
       if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
-        in_zone_cell[idx] = in_zone(grid.global_index(idx));
+        in_zone_cell[idx] = zone.contains_cell(grid.global_index(idx));
   }
 
   template <int dim>
@@ -1242,14 +1228,12 @@ namespace femp
   bool
   SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
   {
-    const auto    ijk = grid.cell_of(x);
-    std::uint64_t id  = 0;
+    const auto ijk = grid.cell_of(x);
+    if (!zone.contains_cell(ijk))
+      return false;
+    std::uint64_t id = 0;
     for (int d = dim - 1; d >= 0; --d)
-      {
-        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
-          return false;
-        id = id * zn[d] + (ijk[d] - zlo[d]);
-      }
+      id = id * zn[d] + (ijk[d] - zlo[d]);
     const auto it = std::lower_bound(element_by_id.begin(),
                                      element_by_id.end(),
                                      std::make_pair(id, std::uint32_t(0)));
