@@ -65,6 +65,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/solid/constitutive.h>
 #include <femp/solid/fe_zone.h>
+#include <femp/solid/hourglass.h>
 
 #include <array>
 #include <limits>
@@ -112,7 +113,7 @@ namespace femp
     };
 
     static constexpr unsigned int n_corners = 1u << dim;
-    static constexpr unsigned int n_hg      = dim == 2 ? 1 : 4;
+    static constexpr unsigned int n_hg      = hourglass::n_modes<dim>;
     /// Doubles per transition node in the exchange buffer: grid mass, grid
     /// momentum (dim), force without hourglass (dim), hourglass force (dim).
     static constexpr unsigned int tr_width = 1 + 3 * dim;
