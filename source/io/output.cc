@@ -17,7 +17,7 @@
 #include <femp/base/state_stream.h>
 #include <femp/grid/material_points.h>
 #include <femp/io/output.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -415,7 +415,7 @@ namespace femp
       std::vector<std::string> names = {"T", "gamma", "alpha", "p"};
       for (int d = 0; d < dim; ++d)
         names.push_back(std::string("u_") + char('x' + d));
-      for (const auto &n : SolidStress<dim>::cell_field_names())
+      for (const auto &n : SolidSubCycle<dim>::cell_field_names())
         names.push_back(n);
       for (const char *n : {"laser_source", "phase", "zone", "subdomain"})
         names.push_back(n);

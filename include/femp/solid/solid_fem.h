@@ -49,7 +49,7 @@
 // Transition nodes (doc/method.md, "Solid"): FE nodes on a face of the zone
 // that is not a domain face (they touch grid cells outside the zone). They are
 // numbered globally from geometry (every rank knows all of them); see
-// solid_stress.h for the exchange of their sums.
+// solid_sub_cycle.h for the exchange of their sums.
 #ifndef femp_solid_fem_h
 #define femp_solid_fem_h
 
@@ -294,7 +294,7 @@ namespace femp
     /// arithmetic as at the end of update_elements()).
     void
     load_state(std::vector<StateReader> &parts);
-    /// The checkpoint section of an FE zone that is off (SolidStress then
+    /// The checkpoint section of an FE zone that is off (SolidSubCycle then
     /// holds no SolidFEM): the layout of save_state() without elements,
     /// nodes or transition nodes, so that the solid's section keeps one
     /// format.

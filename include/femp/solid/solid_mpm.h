@@ -72,7 +72,7 @@
 // bound to its new cell when that cell is owned by this rank (flat arrays
 // only; the ParticleHandler is updated by MaterialPoints::relocate_points()
 // when the state is written back). When a point enters a cell of another
-// rank, SolidStress calls resort() after the step: write back, send it to
+// rank, SolidSubCycle calls resort() after the step: write back, send it to
 // that rank (MaterialPoints::relocate_points()), gather again. A point that
 // enters the finite-element zone or leaves the domain stops the run with a
 // message (the FE zone has no place for it).

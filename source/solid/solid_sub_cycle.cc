@@ -1,7 +1,7 @@
 // femp: the solid step (paper eqs. 5-17, doc/method.md, "Solid" and "Macro time
 // step"): MPM and FE coupled at the transition nodes through the
 // background-grid nodes, with sub-cycling against the temperature step; see
-// solid_stress.h.
+// solid_sub_cycle.h.
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
@@ -10,7 +10,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/grid/cell_state.h>
 #include <femp/solid/fe_zone_depth.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <cmath>
 #include <filesystem>
@@ -55,7 +55,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  SolidSubCycle<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
     prm.declare_entry("Time step",
@@ -233,7 +233,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  SolidSubCycle<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
     time_step     = prm.get_double("Time step");
@@ -323,9 +323,9 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::Parameters::stable_limit(const SolidMaterial &m,
-                                             const double         h,
-                                             const double         s) const
+  SolidSubCycle<dim>::Parameters::stable_limit(const SolidMaterial &m,
+                                               const double         h,
+                                               const double         s) const
   {
     const double c  = std::sqrt(m.max_p_wave_modulus() /
                                ((s > 0 ? s : mass_scaling) * m.density()));
@@ -335,7 +335,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::Parameters::check(
+  SolidSubCycle<dim>::Parameters::check(
     const SolidMaterial                            &m,
     const typename BackgroundGrid<dim>::Parameters &g) const
   {
@@ -358,7 +358,7 @@ namespace femp
   }
 
   template <int dim>
-  SolidStress<dim>::SolidStress(
+  SolidSubCycle<dim>::SolidSubCycle(
     const Parameters                         &prm,
     const typename SolidFEM<dim>::Parameters &fem_prm,
     const SolidMaterial                      &material,
@@ -379,8 +379,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::initialize(const std::vector<double> &T,
-                               const std::string         &directory)
+  SolidSubCycle<dim>::initialize(const std::vector<double> &T,
+                                 const std::string         &directory)
   {
     nodes.resize(grid.n_local_nodes());
     if (mass_floor)
@@ -419,7 +419,7 @@ namespace femp
 
   template <int dim>
   std::array<std::uint8_t, 2 * dim>
-  SolidStress<dim>::set_boundary_flags()
+  SolidSubCycle<dim>::set_boundary_flags()
   {
     // Boundary flags of the nodes of owned cells.
     constrained.assign(grid.n_local_nodes(), 0);
@@ -465,7 +465,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::find_active_nodes()
+  SolidSubCycle<dim>::find_active_nodes()
   {
     const auto &ns = grid.node_strides();
     const auto &lo = grid.box_lower();
@@ -593,7 +593,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::rebuild_live(const std::vector<double> *T, const double w)
+  SolidSubCycle<dim>::rebuild_live(const std::vector<double> *T, const double w)
   {
     std::vector<std::uint32_t> old;
     old.swap(live_nodes);
@@ -637,7 +637,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::extend_live(const std::vector<double> &T, const double w)
+  SolidSubCycle<dim>::extend_live(const std::vector<double> &T, const double w)
   {
     const auto &reached = mpm.nodes_reached();
     if (reached.size() > nodes_seen)
@@ -672,9 +672,9 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::add_live_cell(const std::uint32_t        c,
-                                  const std::vector<double> *T,
-                                  const double               w)
+  SolidSubCycle<dim>::add_live_cell(const std::uint32_t        c,
+                                    const std::vector<double> *T,
+                                    const double               w)
   {
     if (!cell_live[c])
       cell_live[c] = 1, live_cells.push_back(c);
@@ -684,7 +684,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::open_output_files(const std::string &directory)
+  SolidSubCycle<dim>::open_output_files(const std::string &directory)
   {
     csv_directory = directory;
     if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
@@ -721,10 +721,10 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::advance(const double               t,
-                            const std::vector<double> &T,
-                            const bool                 final,
-                            const NodalForces         *external_forces)
+  SolidSubCycle<dim>::advance(const double               t,
+                              const std::vector<double> &T,
+                              const bool                 final,
+                              const NodalForces         *external_forces)
   {
     check_fe_zone_solid(T, t);
     if (fem)
@@ -790,9 +790,9 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::step(const double       dt,
-                         const double       w,
-                         const NodalForces *external_forces)
+  SolidSubCycle<dim>::step(const double       dt,
+                           const double       w,
+                           const NodalForces *external_forces)
   {
     particles_to_grid(external_forces);                   // 1. P2G
     const double merge_loss = merge_transition_nodes(dt); // 2. transition
@@ -822,7 +822,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::particles_to_grid(const NodalForces *external_forces)
+  SolidSubCycle<dim>::particles_to_grid(const NodalForces *external_forces)
   {
     // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
     // partial sums of this rank, on the grid nodes of MPM cells.
@@ -843,7 +843,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::merge_transition_nodes(const double dt)
+  SolidSubCycle<dim>::merge_transition_nodes(const double dt)
   {
     // 2. Transition nodes (eqs. 14-17): partial grid and FE sums of this
     // rank, summed over all ranks in one reduction; every rank then holds
@@ -898,7 +898,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::sum_grid_partials()
+  SolidSubCycle<dim>::sum_grid_partials()
   {
     grid.sum_shared_nodes(nodes.mass);
     for (int d = 0; d < dim; ++d)
@@ -916,7 +916,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::update_grid_momentum(const double dt)
+  SolidSubCycle<dim>::update_grid_momentum(const double dt)
   {
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
@@ -983,7 +983,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_transition_velocities()
+  SolidSubCycle<dim>::set_transition_velocities()
   {
     // Transition nodes: merged mass, velocity and acceleration of step 2.
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
@@ -1000,7 +1000,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::external_power(const NodalForces *external_forces) const
+  SolidSubCycle<dim>::external_power(const NodalForces *external_forces) const
   {
     double ext_power = 0;
     if (external_forces) // partial forces: the rank sum is the total
@@ -1012,7 +1012,7 @@ namespace femp
 
   template <int dim>
   std::array<double, 2>
-  SolidStress<dim>::grid_to_points(const double dt)
+  SolidSubCycle<dim>::grid_to_points(const double dt)
   {
     // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
     // momenta (in the same loop as G2P), grid velocities.
@@ -1033,7 +1033,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::remap_work_of_step(const double dt) const
+  SolidSubCycle<dim>::remap_work_of_step(const double dt) const
   {
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
     // Re-map work (booked, doc/solid.md "Energies"): the nodal forces f_I
@@ -1082,7 +1082,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_grid_velocities()
+  SolidSubCycle<dim>::set_grid_velocities()
   {
     for (const auto n : live_nodes)
       for (int d = 0; d < dim; ++d)
@@ -1094,13 +1094,13 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::book_energies(const double                 dt,
-                                  const double                 ext_power,
-                                  const std::array<double, 2> &fe_energy,
-                                  const double                 transfer,
-                                  const double                 work,
-                                  const double                 remap_work,
-                                  const double                 withheld)
+  SolidSubCycle<dim>::book_energies(const double                 dt,
+                                    const double                 ext_power,
+                                    const std::array<double, 2> &fe_energy,
+                                    const double                 transfer,
+                                    const double                 work,
+                                    const double                 remap_work,
+                                    const double                 withheld)
   {
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
@@ -1182,7 +1182,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::stop_inverted(const double dt) const
+  SolidSubCycle<dim>::stop_inverted(const double dt) const
   {
     // The first collapsed point, else the first inverted or distorted
     // element, of the lowest rank that has one (collective: every rank
@@ -1230,7 +1230,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::grid_point_kinetic(const bool updated) const
+  SolidSubCycle<dim>::grid_point_kinetic(const bool updated) const
   {
     double k = 0;
     for (const auto &[n, t] : live_counted) // no mass at the others
@@ -1256,10 +1256,10 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::check_point_count(const double       n_now,
-                                      const double       n_expected,
-                                      const std::string &where,
-                                      const double       time) const
+  SolidSubCycle<dim>::check_point_count(const double       n_now,
+                                        const double       n_expected,
+                                        const std::string &where,
+                                        const double       time) const
   {
     if (n_now == n_expected)
       return;
@@ -1274,7 +1274,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_small_mass_cutoff(const double fraction)
+  SolidSubCycle<dim>::set_small_mass_cutoff(const double fraction)
   {
     // A node of mass fraction eps of a full node's, next to a point whose
     // stiffness it feels in full (shape-function gradient ~ 1/h), is
@@ -1290,7 +1290,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_mass_floor(const bool on)
+  SolidSubCycle<dim>::set_mass_floor(const bool on)
   {
     mass_floor = on;
     mpm.set_stiffness_rows(on);
@@ -1302,7 +1302,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::find_state_changes()
+  SolidSubCycle<dim>::find_state_changes()
   {
     // (Flow and solid together, doc/solid.md.) States change only in the
     // temperature step; the flow changes velocities of fluid points only,
@@ -1319,7 +1319,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::gather_points()
+  SolidSubCycle<dim>::gather_points()
   {
     typename SolidMPM<dim>::Exchange e;
     if (!mpm_cells.empty())
@@ -1375,8 +1375,8 @@ namespace femp
   }
 
   template <int dim>
-  typename SolidStress<dim>::Energies
-  SolidStress<dim>::energies(const bool with_hourglass_mode) const
+  typename SolidSubCycle<dim>::Energies
+  SolidSubCycle<dim>::energies(const bool with_hourglass_mode) const
   {
     Energies e;
     e.external        = W_ext;
@@ -1402,7 +1402,7 @@ namespace femp
 
   template <int dim>
   std::vector<std::array<double, 2>>
-  SolidStress<dim>::probe(const std::vector<Point<dim>> &x) const
+  SolidSubCycle<dim>::probe(const std::vector<Point<dim>> &x) const
   {
     std::vector<double> v(3 * x.size(), 0.);
     for (std::size_t i = 0; i < x.size(); ++i)
@@ -1434,8 +1434,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::cell_stress_fields(std::vector<double> &sxx,
-                                       std::vector<double> &vm) const
+  SolidSubCycle<dim>::cell_stress_fields(std::vector<double> &sxx,
+                                         std::vector<double> &vm) const
   {
     std::vector<std::vector<double>> f;
     cell_fields(f);
@@ -1445,14 +1445,14 @@ namespace femp
 
   template <int dim>
   std::vector<std::string>
-  SolidStress<dim>::cell_field_names()
+  SolidSubCycle<dim>::cell_field_names()
   {
     return {"sigma_xx", "sigma_yy", "sigma_zz", "von_mises", "plastic_strain"};
   }
 
   template <int dim>
   void
-  SolidStress<dim>::cell_fields(std::vector<std::vector<double>> &f) const
+  SolidSubCycle<dim>::cell_fields(std::vector<std::vector<double>> &f) const
   {
     f.assign(5, std::vector<double>(grid.n_local(), 0.));
     std::vector<double> count(grid.n_local(), 0.);
@@ -1467,8 +1467,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::check_fe_zone_solid(const std::vector<double> &T,
-                                        const double               t) const
+  SolidSubCycle<dim>::check_fe_zone_solid(const std::vector<double> &T,
+                                          const double               t) const
   {
     if (!guard_fe_zone)
       return;
@@ -1524,7 +1524,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::fe_elements_off_rank() const
+  SolidSubCycle<dim>::fe_elements_off_rank() const
   {
     return Utilities::MPI::sum(fem ? double(fem->n_elements_off_rank()) : 0.,
                                comm);
@@ -1532,7 +1532,7 @@ namespace femp
 
   template <int dim>
   std::array<double, 2>
-  SolidStress<dim>::sizes() const
+  SolidSubCycle<dim>::sizes() const
   {
     return {{Utilities::MPI::sum(double(mpm.n_points()), comm),
              Utilities::MPI::sum(fem ? double(fem->n_elements()) : 0., comm)}};
@@ -1540,14 +1540,14 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::largest_rank_points() const
+  SolidSubCycle<dim>::largest_rank_points() const
   {
     return Utilities::MPI::max(double(mpm.n_points()), comm);
   }
 
   template <int dim>
   bool
-  SolidStress<dim>::row_due(const double t_old, const double t_new) const
+  SolidSubCycle<dim>::row_due(const double t_old, const double t_new) const
   {
     // Stateless (a resumed run decides the same): a row when the step
     // crosses a multiple of the interval.
@@ -1561,7 +1561,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::write_rows()
+  SolidSubCycle<dim>::write_rows()
   {
     if (!prm.energy_file.empty() || !prm.probes.empty())
       {
@@ -1606,7 +1606,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::save_state(StateWriter &out) const
+  SolidSubCycle<dim>::save_state(StateWriter &out) const
   {
     // The sub-step clock and the energy accounts (global: the same on every
     // rank).
@@ -1668,7 +1668,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::measure_and_adapt_scaling(const bool adapt)
+  SolidSubCycle<dim>::measure_and_adapt_scaling(const bool adapt)
   {
     // The quasi-static gauge (doc/speed_accuracy.md, sections 1 and 3):
     // the mean kinetic energy of the advance's steps over the elastic
@@ -1702,7 +1702,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::check_energy_created(const double elastic_energy) const
+  SolidSubCycle<dim>::check_energy_created(const double elastic_energy) const
   {
     // A solid step above the stable limit can grow a mode that stays
     // finite (no point collapses, no element inverts: the material points
@@ -1740,8 +1740,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::load_state(std::vector<StateReader> &parts,
-                               const std::string        &directory)
+  SolidSubCycle<dim>::load_state(std::vector<StateReader> &parts,
+                                 const std::string        &directory)
   {
     double        a[10];
     std::uint64_t energy_size = 0, probe_size = 0;
@@ -1847,7 +1847,7 @@ namespace femp
 
   template <int dim>
   std::string
-  SolidStress<dim>::use_cooling_step()
+  SolidSubCycle<dim>::use_cooling_step()
   {
     const double c2 = prm.safety_factor_solidified;
     if (cooling_step || !(c2 > safety))
@@ -1875,7 +1875,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_mass_scaling(const double s)
+  SolidSubCycle<dim>::set_mass_scaling(const double s)
   {
     // Velocities kept (the kinematic velocity of the thermal expansion
     // does not depend on s); the kinetic energy follows the mass, and the
@@ -1892,6 +1892,6 @@ namespace femp
     dt_solid = safety * prm.stable_limit(mat, grid.h(), s);
   }
 
-  template class SolidStress<2>;
-  template class SolidStress<3>;
+  template class SolidSubCycle<2>;
+  template class SolidSubCycle<3>;
 } // namespace femp

@@ -1,7 +1,8 @@
-// femp: SolidStress<dim>, the solid step of the macro step (doc/method.md,
+// femp: SolidSubCycle<dim>, the solid of the macro step (doc/method.md,
 // "Solid" and "Macro time step", paper eqs. 5-17): material points (SolidMPM)
 // and finite elements (SolidFEM) coupled through the background-grid nodes,
-// sub-cycled against the temperature step.
+// sub-cycled against the temperature step, with its energy balance and
+// mass scaling.
 //
 // Coupling (eqs. 14-17). The FE mesh is its own triangulation, aligned
 // with the grid (solid_fem.h), so a transition node i coincides with a grid
@@ -52,8 +53,8 @@
 // and the ratio K / |W_int| (how far from quasi-static a mass-scaled run
 // is) go to a CSV file. Every gather and re-sort also counts the solid
 // points globally and stops the run if one was lost.
-#ifndef femp_solid_stress_h
-#define femp_solid_stress_h
+#ifndef femp_solid_sub_cycle_h
+#define femp_solid_sub_cycle_h
 
 #include <deal.II/base/parameter_handler.h>
 
@@ -76,7 +77,7 @@ namespace femp
   class StateReader;
 
   template <int dim>
-  class SolidStress
+  class SolidSubCycle
   {
   public:
     struct Parameters
@@ -172,11 +173,11 @@ namespace femp
       }
     };
 
-    SolidStress(const Parameters                         &prm,
-                const typename SolidFEM<dim>::Parameters &fem_prm,
-                const SolidMaterial                      &material,
-                const BackgroundGrid<dim>                &grid,
-                MaterialPoints<dim>                      &points);
+    SolidSubCycle(const Parameters                         &prm,
+                  const typename SolidFEM<dim>::Parameters &fem_prm,
+                  const SolidMaterial                      &material,
+                  const BackgroundGrid<dim>                &grid,
+                  MaterialPoints<dim>                      &points);
 
     /// Set up the FE zone, boundary flags and the temperature history from
     /// the cell temperatures @p T at time 0. @p directory receives the CSV
