@@ -70,7 +70,7 @@ namespace femp
     ThermalHistory<3>::Parameters::declare_parameters(prm);
     TrackShape<3>::Parameters::declare_parameters(prm);
     SolidMaterial::declare_parameters(prm);
-    SolidSubCycle<3>::Parameters::declare_parameters(prm);
+    SolidStress<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
     Checkpoint<3>::Parameters::declare_parameters(prm);
   }
@@ -361,7 +361,7 @@ namespace femp
   FempProblem<dim>::setup_solid()
   {
     TimerOutput::Scope t(timer, "setup: solid");
-    solid = std::make_unique<SolidSubCycle<dim>>(
+    solid = std::make_unique<SolidStress<dim>>(
       solid_prm, fem_prm, solid_material, *grid, *points);
     if (flow)
       {
@@ -922,7 +922,7 @@ namespace femp
     if (solid)
       {
         solid->cell_fields(solid_fields);
-        const auto names = SolidSubCycle<dim>::cell_field_names();
+        const auto names = SolidStress<dim>::cell_field_names();
         for (std::size_t i = 0; i < names.size(); ++i)
           fields.push_back({names[i], &solid_fields[i]});
       }

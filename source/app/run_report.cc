@@ -50,7 +50,7 @@ namespace femp
                          const HeatTransfer<dim>       &heat,
                          const MaterialPoints<dim>     &points,
                          const IncompressibleFlow<dim> *flow,
-                         const SolidSubCycle<dim>      *solid,
+                         const SolidStress<dim>        *solid,
                          const double                   moved_points,
                          RunSummary<dim>               &s) const
   {

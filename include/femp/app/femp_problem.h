@@ -7,7 +7,7 @@
 //      the heat carried by points that changed cells (PointHeatExchange);
 //      with the solid, the fluid forces on the solid's nodes (eq. 13,
 //      FluidSolidForces);
-//   4. solid by MPM + FE with transition-node coupling (SolidSubCycle,
+//   4. solid by MPM + FE with transition-node coupling (SolidStress,
 //      eqs. 5-17), sub-cycled to the macro time, loaded by those fluid
 //      forces held constant over its sub-steps;
 //   5. output (Output, RunReport) when the SimulationControl says so.
@@ -33,7 +33,7 @@
 #include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/io/track_shape.h>
-#include <femp/solid/solid_sub_cycle.h>
+#include <femp/solid/solid_stress.h>
 
 #include <fstream>
 #include <memory>
@@ -110,11 +110,11 @@ namespace femp
     typename IncompressibleFlow<dim>::Parameters flow_prm;
     bool                                         solid_enabled = false;
     /// Reads the density and solidus of @ref material.
-    SolidMaterial                           solid_material{material};
-    typename SolidSubCycle<dim>::Parameters solid_prm;
-    typename SolidFEM<dim>::Parameters      fem_prm;
-    typename TrackShape<dim>::Parameters    track_prm;
-    typename Checkpoint<dim>::Parameters    checkpoint_prm;
+    SolidMaterial                         solid_material{material};
+    typename SolidStress<dim>::Parameters solid_prm;
+    typename SolidFEM<dim>::Parameters    fem_prm;
+    typename TrackShape<dim>::Parameters  track_prm;
+    typename Checkpoint<dim>::Parameters  checkpoint_prm;
 
     // The modules; flow and solid exist only when switched on.
     std::unique_ptr<BackgroundGrid<dim>>     grid;
@@ -122,7 +122,7 @@ namespace femp
     std::unique_ptr<MaterialPoints<dim>>     points;
     std::unique_ptr<HeatTransfer<dim>>       heat;
     std::unique_ptr<IncompressibleFlow<dim>> flow;
-    std::unique_ptr<SolidSubCycle<dim>>      solid;
+    std::unique_ptr<SolidStress<dim>>        solid;
     std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
     // What joins them.
     std::unique_ptr<PointHeatExchange<dim>> point_heat;

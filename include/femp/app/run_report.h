@@ -14,7 +14,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/melt_pool.h>
-#include <femp/solid/solid_sub_cycle.h>
+#include <femp/solid/solid_stress.h>
 
 #include <array>
 #include <limits>
@@ -83,8 +83,8 @@ namespace femp
       }
     } flow_limits;
     /// Solid (if Physics/Solid stress): steps and final energies.
-    unsigned int                          solid_steps = 0;
-    typename SolidSubCycle<dim>::Energies solid_energy;
+    unsigned int                        solid_steps = 0;
+    typename SolidStress<dim>::Energies solid_energy;
   };
 
   template <int dim>
@@ -123,7 +123,7 @@ namespace femp
            const HeatTransfer<dim>       &heat,
            const MaterialPoints<dim>     &points,
            const IncompressibleFlow<dim> *flow,
-           const SolidSubCycle<dim>      *solid,
+           const SolidStress<dim>        *solid,
            const double                   moved_points,
            RunSummary<dim>               &s) const;
 
