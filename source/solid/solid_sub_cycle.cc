@@ -373,8 +373,11 @@ namespace femp
               std::make_unique<SolidFEM<dim>>(fem_prm, grid, material) :
               nullptr)
   {
-    scaling.factor = prm.mass_scaling;
-    safety         = prm.safety_factor;
+    scaling = MassScalingController(prm.mass_scaling,
+                                    prm.max_kinetic_ratio,
+                                    prm.min_factor,
+                                    prm.max_factor);
+    safety  = prm.safety_factor;
   }
 
   template <int dim>
@@ -390,11 +393,9 @@ namespace femp
     dt_solid             = prm.time_step > 0 ? prm.time_step :
                                                safety * prm.stable_limit(mat, grid.h());
     const auto face_bits = set_boundary_flags();
-    scaling              = MassScalingState();
-    scaling.factor       = prm.mass_scaling;
-    phase_K_dt = phase_time = 0;
+    scaling.reset();
     if (fem)
-      fem->setup(scaling.factor, face_bits, prm.gravity, T);
+      fem->setup(scaling.factor(), face_bits, prm.gravity, T);
     else
       no_fe_zone.assign(grid.n_local(), 0);
     find_active_nodes();
@@ -404,7 +405,7 @@ namespace femp
     T_next  = T;
     t_solid = t_prev = 0;
     steps            = 0;
-    mpm.gather(zone_mask(), scaling.factor);
+    mpm.gather(zone_mask(), scaling.factor());
     K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() +
                                    (fem ? fem->kinetic_energy() : 0.),
                                  comm);
@@ -765,8 +766,7 @@ namespace femp
           extend_live(T, w);
         last_w = w;
         T_solid.swap(T_next);
-        phase_K_dt += K * (t_next - t_solid);
-        phase_time += t_next - t_solid;
+        scaling.add_step(K, t_next - t_solid);
         const bool row = row_due(t_solid, t_next);
         t_solid        = t_next;
         if (row)
@@ -1284,7 +1284,7 @@ namespace femp
     // step, doc/solid.md "Cooling after the workpiece has solidified").
     small_mass_fraction = fraction;
     const double c      = safety / prm.safety_factor;
-    small_mass          = fraction * c * c * scaling.factor * mat.density() *
+    small_mass          = fraction * c * c * scaling.factor() * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
 
@@ -1329,7 +1329,7 @@ namespace femp
         // Nothing melted, solidified or lost here: the gather may keep
         // the arrays of the last one (SolidMPM::gather()).
         mpm.gather(zone_mask(),
-                   scaling.factor,
+                   scaling.factor(),
                    e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
     have_pending_exchange = false;
@@ -1396,7 +1396,7 @@ namespace femp
     e.withheld       = W_withheld;
     e.melted         = K_melted;
     e.solidified     = K_solidified;
-    e.scaling_jump   = scaling.kinetic_jump;
+    e.scaling_jump   = scaling.state().kinetic_jump;
     return e;
   }
 
@@ -1580,8 +1580,9 @@ namespace femp
                       << e.kinetic / std::max(std::abs(e.internal), 1e-300)
                       << "," << e.hourglass_mode << "," << e.transfer << ","
                       << e.melted << "," << e.solidified << "," << e.remap
-                      << "," << scaling.factor << "," << scaling.last_ratio
-                      << "," << e.scaling_jump << "," << e.withheld << "\n";
+                      << "," << scaling.factor() << ","
+                      << scaling.state().last_ratio << "," << e.scaling_jump
+                      << "," << e.withheld << "\n";
         if (probe_out)
           {
             *probe_out << std::setprecision(10) << t_solid;
@@ -1656,11 +1657,7 @@ namespace femp
       SolidFEM<dim>::save_no_zone(out);
     // The mass-scaling factor (adaptive mass scaling changes it) and its
     // measurement over the current solid phase.
-    for (const double a : {scaling.factor,
-                           scaling.last_ratio,
-                           scaling.kinetic_jump,
-                           phase_K_dt,
-                           phase_time})
+    for (const double a : scaling.saved_values())
       out.put(a);
     // Added last, so that checkpoints written without it still load (as 0).
     out.put(W_withheld);
@@ -1673,29 +1670,15 @@ namespace femp
     // The quasi-static gauge (doc/speed_accuracy.md, sections 1 and 3):
     // the mean kinetic energy of the advance's steps over the elastic
     // energy stored at its end (cell temperatures of the last step).
-    const double u      = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
+    const double u = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
                                            (fem ? fem->elastic_energy() : 0.),
                                          comm);
-    const double k_mean = phase_time > 0 ? phase_K_dt / phase_time : K;
-    scaling.last_ratio =
-      u > 0 ? k_mean / u :
-              (k_mean > 0 ? std::numeric_limits<double>::infinity() : 0.);
-    phase_K_dt = phase_time = 0;
+    scaling.measure(u, K);
     check_energy_created(u);
     if (!adapt)
       return;
-    // Quasi-static motion is kinematic (thermal expansion), K ~ s: the
-    // factor that brings the ratio to r_max is s r_max / r. Up by at most
-    // x2 per temperature step, down at once; rounded down to a power of
-    // 2^(1/4), so that round-off of the global sums (rank count) cannot
-    // change the factor and the factor holds while r lies in
-    // (2^(-1/4) r_max, r_max].
-    const double s = scaling.factor, r = scaling.last_ratio;
-    double       target = r > 0 ? s * prm.max_kinetic_ratio / r : 2 * s;
-    target              = std::min(target, 2 * s);
-    if (target > 0)
-      target = std::exp2(std::floor(4 * std::log2(target) + 1e-9) / 4);
-    target = std::max(prm.min_factor, std::min(prm.max_factor, target));
+    const double s      = scaling.factor();
+    const double target = scaling.target();
     if (target != s)
       set_mass_scaling(target);
   }
@@ -1787,17 +1770,14 @@ namespace femp
       // of the setup.
       if (fem)
         fem->set_mass_scaling(b[0]);
-      scaling.factor = b[0];
+      scaling.restore({{b[0], b[1], b[2], b[3], b[4]}});
       // The Courant number in use is the one the checkpoint's step was
       // taken with (it may be the one after solidification).
       if (prm.time_step == 0)
-        safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor);
+        safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor());
       cooling_step = prm.safety_factor_solidified > prm.safety_factor &&
                      safety > prm.safety_factor * (1 + 1e-6);
       set_small_mass_cutoff(small_mass_fraction);
-      scaling.last_ratio   = b[1];
-      scaling.kinetic_jump = b[2];
-      phase_K_dt = b[3], phase_time = b[4];
     }
     W_withheld = 0; // not in checkpoints written before it was booked
     for (std::size_t f = 0; f < parts.size(); ++f)
@@ -1855,15 +1835,15 @@ namespace femp
     // The stresses depend on s and C through sqrt(s) / C
     // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
     // (C2 / C)^2, and the step, C sqrt(s), by (C2 / C)^2 as well.
-    const double s_old = scaling.factor, c_old = safety, dt_old = dt_solid;
+    const double s_old = scaling.factor(), c_old = safety, dt_old = dt_solid;
     const double r = c2 / c_old;
     safety         = c2;
     set_mass_scaling(s_old * r * r);
     cooling_step = true;
     std::ostringstream m;
     m << "safety factor " << c_old << " -> " << c2 << ", mass scaling " << s_old
-      << " -> " << scaling.factor << " (sqrt(s)/C kept at "
-      << std::sqrt(scaling.factor) / safety << "), solid step " << dt_old
+      << " -> " << scaling.factor() << " (sqrt(s)/C kept at "
+      << std::sqrt(scaling.factor()) / safety << "), solid step " << dt_old
       << " -> " << dt_solid << " s";
     if (mass_floor)
       m << ", light-node mass floor x " << r * r;
@@ -1880,14 +1860,12 @@ namespace femp
     // Velocities kept (the kinematic velocity of the thermal expansion
     // does not depend on s); the kinetic energy follows the mass, and the
     // jump is booked so that the balance still closes.
-    const double r = s / scaling.factor;
-    scaling.kinetic_jump += (r - 1) * K;
+    const double r = scaling.change_to(s, K);
     K *= r;
     K_points *= r;
     mpm.set_mass_scaling(s);
     if (fem)
       fem->set_mass_scaling(s);
-    scaling.factor = s;
     set_small_mass_cutoff(small_mass_fraction); // from the factor, not by r
     dt_solid = safety * prm.stable_limit(mat, grid.h(), s);
   }

@@ -61,6 +61,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 #include <femp/solid/constitutive.h>
+#include <femp/solid/mass_scaling.h>
 #include <femp/solid/solid_fem.h>
 #include <femp/solid/solid_mpm.h>
 
@@ -322,20 +323,12 @@ namespace femp
                Utilities::MPI::sum(double(c[2]), comm)}};
     }
     /// State of the mass scaling (the adaptive controller's; constant with
-    /// a fixed factor): what a checkpoint must keep.
-    struct MassScalingState
-    {
-      double factor = 1; ///< current s
-      /// Ratio K / U_el measured at the end of the last solid advance
-      /// (mean kinetic energy of its steps over the stored elastic energy).
-      double last_ratio = 0;
-      /// Kinetic energy booked for the changes of s so far, J (2D: J/m).
-      double kinetic_jump = 0;
-    };
+    /// a fixed factor; mass_scaling.h).
+    using MassScalingState = MassScalingController::State;
     const MassScalingState &
     mass_scaling_state() const
     {
-      return scaling;
+      return scaling.state();
     }
     /// Global energies (collective). Without @p with_hourglass_mode the
     /// reference hourglass energy (a diagnostic of the output, not of the
@@ -486,16 +479,13 @@ namespace femp
     /// kg/m; 0: off).
     double small_mass = 0;
     /// set_mass_floor(): the light-node mass floor is on.
-    bool             mass_floor          = false;
-    double           small_mass_fraction = 0; ///< the cutoff it was set from
-    MassScalingState scaling;
+    bool   mass_floor          = false;
+    double small_mass_fraction = 0; ///< the cutoff it was set from
+    MassScalingController scaling;
     /// Courant number of the automatic step in use: safety_factor, or
     /// safety_factor_solidified after use_cooling_step().
     double safety       = 0.5;
     bool   cooling_step = false;
-    /// Integral of K over the solid steps of the current advance and its
-    /// length (the mean kinetic energy of the controller), J s and s.
-    double phase_K_dt = 0, phase_time = 0;
 
     /// One solid step of size @p dt; @p w: weight of the step's end time
     /// between the last two temperature fields; @p external_forces as in
