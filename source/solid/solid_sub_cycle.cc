@@ -406,13 +406,11 @@ namespace femp
     t_solid = t_prev = 0;
     steps            = 0;
     mpm.gather(zone_mask(), scaling.factor());
-    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() +
-                                   (fem ? fem->kinetic_energy() : 0.),
-                                 comm);
-    W_ext = W_int = 0;
-    D_transfer = K_melted = K_solidified = W_remap = W_withheld = 0;
+    const double K0 = Utilities::MPI::sum(mpm.kinetic_energy() +
+                                            (fem ? fem->kinetic_energy() : 0.),
+                                          comm);
     n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
-    K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
+    ledger.start(K0, Utilities::MPI::sum(mpm.kinetic_energy(), comm));
 
     rebuild_live(nullptr, 0.);
     open_output_files(directory);
@@ -766,7 +764,7 @@ namespace femp
           extend_live(T, w);
         last_w = w;
         T_solid.swap(T_next);
-        scaling.add_step(K, t_next - t_solid);
+        scaling.add_step(ledger.kinetic(), t_next - t_solid);
         const bool row = row_due(t_solid, t_next);
         t_solid        = t_next;
         if (row)
@@ -1120,14 +1118,9 @@ namespace femp
     Utilities::MPI::sum(ArrayView<const double>(sums, 10),
                         comm,
                         ArrayView<double>(sums, 10));
-    K = sums[0] + sums[6];
-    W_int += sums[1];
-    W_ext += sums[2];
-    D_transfer += sums[5] - sums[0]; // sums[0]: point kinetic energy now
-    W_remap += sums[7];
-    W_withheld += sums[9];
-    K_points         = sums[0];
-    const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
+    ledger.book_step(
+      sums[0], sums[6], sums[1], sums[2], sums[5], sums[7], sums[9]);
+    const bool blown = !ledger.finite();
     if (!blown && sums[8] > 0)
       stop_inverted(dt);
     if (blown || sums[3] > 0)
@@ -1167,11 +1160,8 @@ namespace femp
         Utilities::MPI::sum(ArrayView<const double>(after, 4),
                             comm,
                             ArrayView<double>(after, 4));
-        D_transfer -= after[0] + after[3] - sums[0];
-        K_melted += after[3];
+        ledger.book_resort(sums[0], after[0], after[3], sums[6]);
         n_set_aside += after[2];
-        K        = after[0] + sums[6];
-        K_points = after[0];
         check_point_count(after[1],
                           n_points_global - after[2],
                           "re-sorting",
@@ -1368,36 +1358,20 @@ namespace femp
     // The points' kinetic energy changes by what the melted points took
     // out and the solidified ones brought (booked; any other change shows
     // in the balance).
-    K_melted += sums[3];
-    K_solidified += sums[4];
-    K += sums[6] - K_points;
-    K_points = sums[6];
+    ledger.book_exchange(sums[3], sums[4], sums[6]);
   }
 
   template <int dim>
   typename SolidSubCycle<dim>::Energies
   SolidSubCycle<dim>::energies(const bool with_hourglass_mode) const
   {
-    Energies e;
-    e.external        = W_ext;
-    e.internal        = W_int;
-    e.kinetic         = K;
-    e.initial_kinetic = K0;
     std::array<double, 2> hg{{0., 0.}};
     if (fem)
       hg = fem->hourglass_energy(with_hourglass_mode);
     Utilities::MPI::sum(ArrayView<const double>(hg.data(), 2),
                         comm,
                         ArrayView<double>(hg.data(), 2));
-    e.hourglass      = hg[0];
-    e.hourglass_mode = hg[1];
-    e.transfer       = D_transfer;
-    e.remap          = W_remap;
-    e.withheld       = W_withheld;
-    e.melted         = K_melted;
-    e.solidified     = K_solidified;
-    e.scaling_jump   = scaling.state().kinetic_jump;
-    return e;
+    return ledger.energies(hg[0], hg[1], scaling.state().kinetic_jump);
   }
 
   template <int dim>
@@ -1615,17 +1589,9 @@ namespace femp
     out.put(t_prev);
     out.put(dt_solid);
     out.put(steps);
-    for (const double a : {W_ext,
-                           W_int,
-                           K0,
-                           K,
-                           D_transfer,
-                           K_melted,
-                           K_solidified,
-                           W_remap,
-                           K_points,
-                           n_points_global})
+    for (const double a : ledger.saved_values())
       out.put(a);
+    out.put(n_points_global);
     // Temperatures of the last sub-step, of the last advance() (the start
     // of the next interpolation) and the spare buffer of the sub-steps.
     save_cell_fields(out, grid, {&T_solid, &T_prev, &T_next});
@@ -1660,7 +1626,7 @@ namespace femp
     for (const double a : scaling.saved_values())
       out.put(a);
     // Added last, so that checkpoints written without it still load (as 0).
-    out.put(W_withheld);
+    out.put(ledger.withheld());
   }
 
   template <int dim>
@@ -1673,7 +1639,7 @@ namespace femp
     const double u = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
                                            (fem ? fem->elastic_energy() : 0.),
                                          comm);
-    scaling.measure(u, K);
+    scaling.measure(u, ledger.kinetic());
     check_energy_created(u);
     if (!adapt)
       return;
@@ -1739,9 +1705,8 @@ namespace femp
         if (f > 0)
           continue;
         t_solid = ts, t_prev = tp, dt_solid = dts, steps = n;
-        W_ext = a[0], W_int = a[1], K0 = a[2], K = a[3], D_transfer = a[4];
-        K_melted = a[5], K_solidified = a[6], W_remap = a[7];
-        K_points = a[8], n_points_global = a[9];
+        ledger.restore(a);
+        n_points_global = a[9];
       }
     load_cell_fields(parts, grid, {&T_solid, &T_prev, &T_next});
     for (std::size_t f = 0; f < parts.size(); ++f)
@@ -1779,13 +1744,14 @@ namespace femp
                      safety > prm.safety_factor * (1 + 1e-6);
       set_small_mass_cutoff(small_mass_fraction);
     }
-    W_withheld = 0; // not in checkpoints written before it was booked
+    // Not in checkpoints written before it was booked: 0.
+    ledger.restore_withheld(0);
     for (std::size_t f = 0; f < parts.size(); ++f)
       if (!parts[f].at_end())
         {
           const double x = parts[f].get<double>();
           if (f == 0)
-            W_withheld = x;
+            ledger.restore_withheld(x);
         }
     have_pending_exchange = false;
 
@@ -1860,9 +1826,8 @@ namespace femp
     // Velocities kept (the kinematic velocity of the thermal expansion
     // does not depend on s); the kinetic energy follows the mass, and the
     // jump is booked so that the balance still closes.
-    const double r = scaling.change_to(s, K);
-    K *= r;
-    K_points *= r;
+    const double r = scaling.change_to(s, ledger.kinetic());
+    ledger.scale_kinetic(r);
     mpm.set_mass_scaling(s);
     if (fem)
       fem->set_mass_scaling(s);

@@ -62,6 +62,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/constitutive.h>
 #include <femp/solid/mass_scaling.h>
+#include <femp/solid/solid_energy_ledger.h>
 #include <femp/solid/solid_fem.h>
 #include <femp/solid/solid_mpm.h>
 
@@ -133,46 +134,8 @@ namespace femp
                    const double         s = 0) const;
     };
 
-    struct Energies
-    {
-      double external = 0, internal = 0, kinetic = 0, hourglass = 0;
-      double initial_kinetic = 0;
-      /// Energy of the hourglass modes measured with the reference
-      /// stiffness kappa = 0.05 even when control is off (stability studies:
-      /// how large the zero-energy modes have grown).
-      double hourglass_mode = 0;
-      /// Kinetic energy lost in the point-grid transfers (MPM: P2G of the
-      /// point momenta, incl. the projection onto the boundary conditions,
-      /// and G2P; measured per step as K_points - K_grid after P2G plus
-      /// K_grid - K_points after the grid update; FLIP can make it < 0).
-      double transfer = 0;
-      /// Kinetic energy of points that melted (left the solid) and of
-      /// points that solidified (entered it), summed over the run.
-      double melted = 0, solidified = 0;
-      /// Work of the nodal forces on the part of the updated grid velocity
-      /// that the MUSL re-map takes back, dt/2 f_I . (v_I - v_remap,I),
-      /// summed over the steps: energy the MPM update creates (> 0) or
-      /// destroys, a numerical error of MUSL, booked so that the balance
-      /// tests the rest (doc/solid.md "Energies").
-      double remap = 0;
-      /// Kinetic energy created (> 0) or removed by changes of the
-      /// mass-scaling factor at kept velocities (adaptive mass scaling:
-      /// (s_new / s_old - 1) K at each change), summed over the run.
-      double scaling_jump = 0;
-      /// Work that the forces withheld at light nodes (below 'Small mass
-      /// cutoff') would have done on those nodes' velocities, dt f_I . v_I
-      /// summed over the steps: the stress work counts these nodes, the
-      /// kinetic energy does not (< 0 when the withheld forces oppose the
-      /// motion: energy the cutoff leaves in it).
-      double withheld = 0;
-      double
-      balance() const
-      {
-        return external + remap - (kinetic - initial_kinetic) - internal -
-               hourglass - transfer - melted + solidified + scaling_jump -
-               withheld;
-      }
-    };
+    /// The energies of the solid (solid_energy_ledger.h).
+    using Energies = SolidEnergies;
 
     SolidSubCycle(const Parameters                         &prm,
                   const typename SolidFEM<dim>::Parameters &fem_prm,
@@ -433,17 +396,11 @@ namespace femp
     std::vector<double>       T_solid, T_prev, T_next;
     double                    t_solid = 0, t_prev = 0, dt_solid = 0;
     unsigned int              steps = 0;
-    double                    W_ext = 0, W_int = 0, K0 = 0, K = 0; // global
-    double D_transfer = 0, K_melted = 0, K_solidified = 0;         // global
+    /// The energy accounts (global).
+    SolidEnergyLedger ledger;
     /// Points set aside in detached drops (n_points_set_aside()); not
     /// saved in checkpoints (a resumed run counts from there).
-    double n_set_aside = 0;
-    /// re-map work of the MUSL update, with the velocity jumps of the FE
-    /// node forces at the transition nodes (global)
-    double W_remap = 0;
-    /// Energies::withheld, summed over the steps, J.
-    double W_withheld      = 0;
-    double K_points        = 0; ///< kinetic energy of the points (global)
+    double n_set_aside     = 0;
     double n_points_global = 0; ///< solid points after the last step
     /// Grid nodes whose point kinetic energy this rank counts (each node
     /// on one rank: the owner of the cell with the node as lower corner,
