@@ -372,6 +372,7 @@ namespace femp
       , fem(fem_prm.enabled ?
               std::make_unique<SolidFEM<dim>>(fem_prm, grid, material) :
               nullptr)
+      , region(grid)
   {
     scaling = MassScalingController(prm.mass_scaling,
                                     prm.max_kinetic_ratio,
@@ -466,171 +467,48 @@ namespace femp
   void
   SolidSubCycle<dim>::find_active_nodes()
   {
-    const auto &ns = grid.node_strides();
-    const auto &lo = grid.box_lower();
-    // Grid nodes a step touches: nodes of owned cells outside the FE zone,
-    // and the transition nodes among the nodes of owned cells.
-    {
-      std::vector<std::uint8_t> active(grid.n_local_nodes(), 0),
-        owned_node(grid.n_local_nodes(), 0);
-      for (const auto n : grid.owned_cell_nodes())
-        owned_node[n] = 1;
-      for (const auto c : grid.owned_cells())
-        if (!zone_mask()[c])
-          {
-            const std::size_t n0 = grid.first_node_of_cell(c);
-            for (unsigned int a = 0; a < (1u << dim); ++a)
-              {
-                std::size_t n = n0;
-                for (int d = 0; d < dim; ++d)
-                  if (a & (1u << d))
-                    n += ns[d];
-                active[n] = 1;
-              }
-          }
-      mpm_cells.clear();
-      fe_cells.clear();
-      for (const auto c : grid.owned_cells())
-        (zone_mask()[c] ? fe_cells : mpm_cells).push_back(c);
-      guard_fe_zone = Utilities::MPI::max(int(!fe_cells.empty()), comm) > 0;
-      grid_transition.clear();
-      const auto &size = grid.box_size();
-      for (std::size_t t = 0; t < n_transition(); ++t)
-        {
-          const auto &ijk = fem->transition_node(t);
-          bool        in  = true;
-          for (int d = 0; d < dim; ++d)
-            in = in && ijk[d] >= lo[d] && ijk[d] <= lo[d] + size[d];
-          if (!in)
-            continue;
-          const std::size_t n = grid.local_node_index(ijk);
-          if (!owned_node[n])
-            continue;
-          active[n] = 1;
-          grid_transition.emplace_back(t, n);
-        }
-      active_nodes.clear();
-      for (std::size_t n = 0; n < active.size(); ++n)
-        if (active[n])
-          active_nodes.push_back(n);
-      tr_buffer.assign(SolidFEM<dim>::tr_width * n_transition(), 0.);
-      tr_fgrid.assign(dim * n_transition(), 0.);
-
-      // Nodes whose point kinetic energy this rank counts (see header).
-      std::vector<std::int32_t> tr_of(grid.n_local_nodes(), -1);
-      for (const auto &[t, n] : grid_transition)
-        tr_of[n] = t;
-      // Global grid index of the local node n (the node box starts at lo).
-      const auto node_ijk = [&](std::size_t r) {
-        std::array<int, dim> ijk;
-        for (int d = dim - 1; d >= 0; --d)
-          {
-            ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
-            r %= ns[d];
-          }
-        return ijk;
-      };
-      counted_nodes.clear();
-      for (const auto n : active_nodes)
-        {
-          // The cell named for the node (the last cell for nodes on a top
-          // face).
-          std::array<int, dim> ijk = node_ijk(n);
-          for (int d = 0; d < dim; ++d)
-            ijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
-          if (grid.in_box(ijk) && grid.cell_status()[grid.local_index(ijk)] ==
-                                    BackgroundGrid<dim>::owned)
-            counted_nodes.emplace_back(n, tr_of[n]);
-        }
-      counted_as.assign(grid.n_local_nodes(), -2);
-      for (const auto &[n, t] : counted_nodes)
-        counted_as[n] = t;
-
-      // Always live: the transition nodes, the nodes that another rank's
-      // cells share (sum_shared_nodes() writes them) and the probe cells.
-      fixed_live_nodes.clear();
-      for (const auto &[t, n] : grid_transition)
-        fixed_live_nodes.push_back(n);
-      for (const auto n : active_nodes)
-        {
-          const std::array<int, dim> ijk    = node_ijk(n);
-          bool                       shared = false;
-          for (unsigned int a = 0; a < (1u << dim) && !shared; ++a)
-            {
-              std::array<int, dim> c  = ijk;
-              bool                 in = true;
-              for (int d = 0; d < dim; ++d)
-                {
-                  c[d] -= (a >> d) & 1u;
-                  in = in && c[d] >= 0 && c[d] < int(grid.n_cells()[d]);
-                }
-              shared = in && (!grid.in_box(c) ||
-                              grid.cell_status()[grid.local_index(c)] !=
-                                BackgroundGrid<dim>::owned);
-            }
-          if (shared)
-            fixed_live_nodes.push_back(n);
-        }
-      fixed_live_cells.clear();
-      for (const auto &x : prm.probes)
-        {
-          const auto ijk = grid.cell_of(x);
-          if (!grid.in_box(ijk))
-            continue;
-          const auto c = grid.local_index(ijk);
-          if (grid.cell_status()[c] == BackgroundGrid<dim>::owned &&
-              !zone_mask()[c])
-            fixed_live_cells.push_back(c);
-        }
-      node_live.assign(grid.n_local_nodes(), 0);
-      cell_live.assign(grid.n_local(), 0);
-      live_nodes.clear();
-      live_cells.clear();
-      live_counted.clear();
-    }
+    // The transition nodes among the nodes of owned cells, then the nodes
+    // and cells a step visits (solid_active_region.h).
+    const auto               &lo = grid.box_lower();
+    std::vector<std::uint8_t> owned_node(grid.n_local_nodes(), 0);
+    for (const auto n : grid.owned_cell_nodes())
+      owned_node[n] = 1;
+    grid_transition.clear();
+    const auto &size = grid.box_size();
+    for (std::size_t t = 0; t < n_transition(); ++t)
+      {
+        const auto &ijk = fem->transition_node(t);
+        bool        in  = true;
+        for (int d = 0; d < dim; ++d)
+          in = in && ijk[d] >= lo[d] && ijk[d] <= lo[d] + size[d];
+        if (!in)
+          continue;
+        const std::size_t n = grid.local_node_index(ijk);
+        if (!owned_node[n])
+          continue;
+        grid_transition.emplace_back(t, n);
+      }
+    tr_buffer.assign(SolidFEM<dim>::tr_width * n_transition(), 0.);
+    tr_fgrid.assign(dim * n_transition(), 0.);
+    region.setup(zone_mask(), grid_transition, prm.probes, comm);
   }
 
   template <int dim>
   void
   SolidSubCycle<dim>::rebuild_live(const std::vector<double> *T, const double w)
   {
-    std::vector<std::uint32_t> old;
-    old.swap(live_nodes);
-    for (const auto n : old)
-      node_live[n] = 0;
-    auto add = [&](const std::uint32_t n) {
-      if (!node_live[n])
-        node_live[n] = 1, live_nodes.push_back(n);
-    };
-    for (const auto n : fixed_live_nodes)
-      add(n);
-    const auto &reached = mpm.nodes_reached();
-    for (const auto n : reached)
-      add(n);
-    nodes_seen = reached.size();
-    std::sort(live_nodes.begin(), live_nodes.end());
-    // Nodes that leave: zero, as the next step's update would leave them.
-    for (const auto n : old)
-      if (!node_live[n])
-        {
-          nodes.mass[n] = 0;
-          for (int d = 0; d < dim; ++d)
-            nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] = 0;
-        }
-    live_counted.clear();
-    for (const auto n : live_nodes)
-      if (counted_as[n] > -2)
-        live_counted.emplace_back(n, counted_as[n]);
-
-    for (const auto c : live_cells)
-      cell_live[c] = 0;
-    live_cells.clear();
-    for (const auto c : fixed_live_cells)
-      add_live_cell(c, T, w);
-    const auto &cells = mpm.cells_reached();
-    for (const auto c : cells)
-      add_live_cell(c, T, w);
-    cells_seen = cells.size();
+    region.rebuild(
+      mpm.nodes_reached(),
+      mpm.cells_reached(),
+      [&](const std::uint32_t n) {
+        nodes.mass[n] = 0;
+        for (int d = 0; d < dim; ++d)
+          nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] = 0;
+      },
+      [&](const std::uint32_t c) {
+        if (T)
+          T_next[c] = T_prev[c] + w * ((*T)[c] - T_prev[c]);
+      });
     regathered = false;
   }
 
@@ -638,47 +516,11 @@ namespace femp
   void
   SolidSubCycle<dim>::extend_live(const std::vector<double> &T, const double w)
   {
-    const auto &reached = mpm.nodes_reached();
-    if (reached.size() > nodes_seen)
-      {
-        const std::size_t n0 = live_nodes.size(), c0 = live_counted.size();
-        for (std::size_t i = nodes_seen; i < reached.size(); ++i)
-          {
-            const auto n = reached[i];
-            if (node_live[n])
-              continue;
-            node_live[n] = 1;
-            live_nodes.push_back(n);
-            if (counted_as[n] > -2)
-              live_counted.emplace_back(n, counted_as[n]);
-          }
-        nodes_seen = reached.size();
-        std::sort(live_nodes.begin() + n0, live_nodes.end());
-        std::inplace_merge(live_nodes.begin(),
-                           live_nodes.begin() + n0,
-                           live_nodes.end());
-        std::sort(live_counted.begin() + c0, live_counted.end());
-        std::inplace_merge(live_counted.begin(),
-                           live_counted.begin() + c0,
-                           live_counted.end());
-      }
-    const auto &cells = mpm.cells_reached();
-    for (std::size_t i = cells_seen; i < cells.size(); ++i)
-      if (!cell_live[cells[i]])
-        add_live_cell(cells[i], &T, w);
-    cells_seen = cells.size();
-  }
-
-  template <int dim>
-  void
-  SolidSubCycle<dim>::add_live_cell(const std::uint32_t        c,
-                                    const std::vector<double> *T,
-                                    const double               w)
-  {
-    if (!cell_live[c])
-      cell_live[c] = 1, live_cells.push_back(c);
-    if (T)
-      T_next[c] = T_prev[c] + w * ((*T)[c] - T_prev[c]);
+    region.extend(mpm.nodes_reached(),
+                  mpm.cells_reached(),
+                  [&](const std::uint32_t c) {
+                    T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
+                  });
   }
 
   template <int dim>
@@ -753,7 +595,7 @@ namespace femp
         // (Cells of the FE zone: the elements interpolate their own.) Only
         // the cells that hold points (live_cells): the others follow at
         // the end of the advance.
-        for (const auto c : live_cells)
+        for (const auto c : region.live_cells())
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
         step(t_next - t_solid, w, external_forces);
         // Cells and nodes that points reached in the step (their cells'
@@ -777,9 +619,9 @@ namespace femp
       }
     // The temperature of the last step at the cells without points (as if
     // interpolated at every step), for points that solidify there.
-    for (const auto c : mpm_cells)
+    for (const auto c : region.mpm_cells())
       {
-        if (gathered && !cell_live[c])
+        if (gathered && !region.is_live_cell(c))
           T_solid[c] = T_prev[c] + last_w * (T[c] - T_prev[c]);
         T_prev[c] = T[c];
       }
@@ -824,7 +666,7 @@ namespace femp
   {
     // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
     // partial sums of this rank, on the grid nodes of MPM cells.
-    for (const auto n : live_nodes)
+    for (const auto n : region.live_nodes())
       {
         nodes.mass[n] = 0;
         for (int d = 0; d < dim; ++d)
@@ -835,7 +677,7 @@ namespace femp
     mpm.p2g(nodes, prm.gravity);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
-        for (const auto n : live_nodes)
+        for (const auto n : region.live_nodes())
           nodes.force[d][n] += (*external_forces)[d][n];
   }
 
@@ -922,7 +764,7 @@ namespace femp
     // The light-node mass floor (set_mass_floor()): kappa times the
     // node's stiffness row sum.
     const double kappa = mass_floor ? safety * safety / (4. * dim) : 0.;
-    for (const auto n : live_nodes)
+    for (const auto n : region.live_nodes())
       {
         const double m       = nodes.mass[n];
         const double m_floor = mass_floor ? kappa * nodes.stiffness[n] : 0.;
@@ -947,7 +789,7 @@ namespace femp
                 // rank that counts it (a transition node, counted_as >= 0,
                 // takes the merged update of step 2).
                 const double f = nodes.force[d][n], a = f / m_floor;
-                if (counted_as[n] == -1)
+                if (region.counted_as(n) == -1)
                   withheld += dt * (1 - m / m_floor) * f *
                               (nodes.momentum[d][n] / m + 0.5 * dt * a);
                 nodes.momentum[d][n] += dt * m * a;
@@ -965,7 +807,7 @@ namespace femp
                 // (Energies::withheld), each node on the rank that counts
                 // it (a transition node, counted_as >= 0, takes the merged
                 // update of step 2).
-                if (counted_as[n] == -1)
+                if (region.counted_as(n) == -1)
                   withheld += dt * nodes.force[d][n] * nodes.momentum[d][n] / m;
                 nodes.force[d][n]    = 0;
                 nodes.velocity[d][n] = nodes.momentum[d][n] / m;
@@ -1003,7 +845,7 @@ namespace femp
     double ext_power = 0;
     if (external_forces) // partial forces: the rank sum is the total
       for (int d = 0; d < dim; ++d)
-        for (const auto n : live_nodes) // velocity 0 at the others
+        for (const auto n : region.live_nodes()) // velocity 0 at the others
           ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
     return ext_power;
   }
@@ -1015,7 +857,7 @@ namespace femp
     // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
     // momenta (in the same loop as G2P), grid velocities.
     for (int d = 0; d < dim; ++d)
-      for (const auto n : live_nodes)
+      for (const auto n : region.live_nodes())
         nodes.momentum[d][n] = 0;
     mpm.g2p(nodes, dt);
     const std::array<double, 2> fe_energy =
@@ -1052,7 +894,7 @@ namespace femp
     // grid force f_g keeps the re-map jump); without it the balance of the
     // elastic shock test was 0.12 (doc/solid.md).
     double remap_work = 0;
-    for (const auto &[n, t] : live_counted) // no mass at the others
+    for (const auto &[n, t] : region.live_counted()) // no mass at the others
       if (nodes.mass[n] > 0)
         for (int d = 0; d < dim; ++d)
           if (!(constrained[n] & (1u << d)))
@@ -1082,7 +924,7 @@ namespace femp
   void
   SolidSubCycle<dim>::set_grid_velocities()
   {
-    for (const auto n : live_nodes)
+    for (const auto n : region.live_nodes())
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
           (nodes.mass[n] > 0 && !(constrained[n] & (1u << d))) ?
@@ -1223,7 +1065,7 @@ namespace femp
   SolidSubCycle<dim>::grid_point_kinetic(const bool updated) const
   {
     double k = 0;
-    for (const auto &[n, t] : live_counted) // no mass at the others
+    for (const auto &[n, t] : region.live_counted()) // no mass at the others
       {
         const double m = nodes.mass[n];
         if (m <= 0)
@@ -1301,7 +1143,7 @@ namespace femp
     // solid takes no step in this temperature step (its step longer than
     // the temperature step), the next call finds the exchange again,
     // relative to the same gather.
-    if (mpm_cells.empty())
+    if (region.mpm_cells().empty())
       return;
     pending_exchange      = mpm.exchange_since_gather();
     have_pending_exchange = true;
@@ -1312,7 +1154,7 @@ namespace femp
   SolidSubCycle<dim>::gather_points()
   {
     typename SolidMPM<dim>::Exchange e;
-    if (!mpm_cells.empty())
+    if (!region.mpm_cells().empty())
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
@@ -1444,11 +1286,11 @@ namespace femp
   SolidSubCycle<dim>::check_fe_zone_solid(const std::vector<double> &T,
                                           const double               t) const
   {
-    if (!guard_fe_zone)
+    if (!region.guard_fe_zone())
       return;
     const double T_s   = mat.melt_temperature();
     double       T_max = -std::numeric_limits<double>::infinity();
-    for (const auto c : fe_cells)
+    for (const auto c : region.fe_cells())
       T_max = std::max(T_max, T[c]);
     T_max = Utilities::MPI::max(T_max, comm);
     if (!(T_max >= T_s))
@@ -1459,11 +1301,11 @@ namespace femp
     std::array<double, dim> where;
     where.fill(-std::numeric_limits<double>::infinity());
     double z_low = std::numeric_limits<double>::infinity();
-    for (const auto c : fe_cells)
+    for (const auto c : region.fe_cells())
       if (T[c] >= T_s)
         z_low = std::min(z_low, grid.cell_center(c)[dim - 1]);
     z_low = Utilities::MPI::min(z_low, comm);
-    for (const auto c : fe_cells)
+    for (const auto c : region.fe_cells())
       if (T[c] >= T_s &&
           std::abs(grid.cell_center(c)[dim - 1] - z_low) < 1e-3 * h)
         {

@@ -62,6 +62,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/solid/constitutive.h>
 #include <femp/solid/mass_scaling.h>
+#include <femp/solid/solid_active_region.h>
 #include <femp/solid/solid_energy_ledger.h>
 #include <femp/solid/solid_fem.h>
 #include <femp/solid/solid_mpm.h>
@@ -209,7 +210,7 @@ namespace femp
     void
     set_detached_cells(const std::vector<std::uint32_t> &cells)
     {
-      if (!mpm_cells.empty())
+      if (!region.mpm_cells().empty())
         mpm.set_aside_cells(cells);
     }
     /// Solid points set aside in detached drops so far (global count of
@@ -375,16 +376,8 @@ namespace femp
     }
 
     SolidNodeFields<dim> nodes;
-    /// Grid nodes of this rank's owned cells outside the FE zone plus the
-    /// transition nodes among its owned-cell nodes: the only grid nodes a
-    /// solid step touches.
-    std::vector<std::uint32_t> active_nodes;
-    /// Owned cells outside the FE zone (the only cells whose temperature
-    /// the points need; none: no gather of the points at all).
-    std::vector<std::uint32_t> mpm_cells;
-    /// Owned cells inside the FE zone (the solidus guard).
-    std::vector<std::uint32_t> fe_cells;
-    bool                       guard_fe_zone = false; ///< any FE zone cell
+    /// The grid nodes and cells a step visits (solid_active_region.h).
+    SolidActiveRegion<dim> region;
     /// (transition index, local grid node) for transition nodes among the
     /// nodes of this rank's owned cells.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> grid_transition;
@@ -401,32 +394,9 @@ namespace femp
     /// Points set aside in detached drops (n_points_set_aside()); not
     /// saved in checkpoints (a resumed run counts from there).
     double n_set_aside     = 0;
-    double n_points_global = 0; ///< solid points after the last step
-    /// Grid nodes whose point kinetic energy this rank counts (each node
-    /// on one rank: the owner of the cell with the node as lower corner,
-    /// clamped at the upper domain faces), with their transition index or
-    /// -1.
-    std::vector<std::pair<std::uint32_t, std::int32_t>> counted_nodes;
-    /// The part of the above that a step visits (doc/performance.md,
-    /// "Solid steps visit only the nodes that carry mass"): the corners of
-    /// the cells that held points since the last gather
-    /// (SolidMPM::nodes_reached()), the transition nodes and the nodes
-    /// shared with another rank (live_nodes, ascending, so that sums keep
-    /// their order; live_counted: of counted_nodes, same order); the cells
-    /// that held points since the last gather and the probe cells
-    /// (live_cells: the cells whose temperature a step interpolates). All
-    /// node fields are zero at other nodes of active_nodes.
-    std::vector<std::uint32_t>                          live_nodes, live_cells;
-    std::vector<std::pair<std::uint32_t, std::int32_t>> live_counted;
-    std::vector<std::uint8_t>                           node_live, cell_live;
-    std::vector<std::uint32_t> fixed_live_nodes, fixed_live_cells;
-    /// Per local node: its transition index in counted_nodes, -1 for a
-    /// counted node that is not one, -2 if not counted.
-    std::vector<std::int32_t> counted_as;
-    /// Entries of nodes_reached() and cells_reached() already live.
-    std::size_t nodes_seen = 0, cells_seen = 0;
-    bool        regathered = false; ///< a re-sort gathered the points
-    double      last_w     = -1;    ///< w of the last step of an advance
+    double n_points_global = 0;     ///< solid points after the last step
+    bool   regathered      = false; ///< a re-sort gathered the points
+    double last_w          = -1;    ///< w of the last step of an advance
     std::unique_ptr<std::ofstream> energy_out, probe_out;
     std::string                    csv_directory; ///< of energy_out, probe_out
     /// State changes found by find_state_changes() for the next gather.
@@ -470,11 +440,6 @@ namespace femp
     /// live (their cells get the step's temperature in T_next).
     void
     extend_live(const std::vector<double> &T, const double w);
-    /// Marks @p c live; with @p T, T_next[c] of the step of weight @p w.
-    void
-    add_live_cell(const std::uint32_t        c,
-                  const std::vector<double> *T,
-                  const double               w);
     void
     open_output_files(const std::string &directory);
     /// The parts of step(), in this order: 1. P2G (partial sums of this
