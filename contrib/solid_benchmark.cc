@@ -24,7 +24,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <cmath>
 #include <ctime>
@@ -69,14 +69,14 @@ namespace
     SolidMaterial sm(mat); // defaults: steel, E 193 GPa, sigma_y 250 MPa
     sm.yield_stress = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
     sm.velocity_transfer = transfer;
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     sp.fixed_faces = {"z-"};
     sp.energy_file = "";
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled      = fe;
     fp.lower_corner = gp.lower_corner;
     fp.upper_corner = gp.upper_corner;
-    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     const auto sizes = solid.sizes();

@@ -16,7 +16,7 @@
 // cells; it is run on all ranks and again on one rank alone
 // (MPI_COMM_SELF), and the results must agree to round-off.
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include "solid_tools.h"
 
@@ -44,7 +44,7 @@ namespace
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(0.2, 0);
     fp.upper_corner = Point<dim>(1.6, 0.3);
-    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     for (int s = 1; s <= 10; ++s)
@@ -98,7 +98,7 @@ main(int argc, char **argv)
   fp.enabled      = true;
   fp.lower_corner = Point<dim>(0, 0);
   fp.upper_corner = Point<dim>(1.6, 0.4);
-  SolidStress<dim>    solid(sp, fp, sm, grid, points);
+  SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
   std::vector<double> T = grid.make_field(300.);
   solid.initialize(T, "");
 

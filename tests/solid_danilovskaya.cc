@@ -29,7 +29,7 @@
 // all-MPM run with the FLIP velocity transfer (not checked: it misses the
 // 5 % target; APIC is the default, see doc/solid.md).
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <fstream>
 
@@ -119,7 +119,7 @@ namespace
     sm.expansion         = 1;
     sm.bulk_viscosity    = bulk_viscosity;
     sm.velocity_transfer = transfer;
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     sp.safety_factor = 0.9;
     sp.roller_faces  = {"y-", "y+"};
     sp.energy_file   = "";
@@ -127,7 +127,7 @@ namespace
     fp.enabled      = fe_end > 0;
     fp.lower_corner = Point<dim>(0, 0);
     fp.upper_corner = Point<dim>(fe_end, h);
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim> solid(sp, fp, sm, grid, points);
     solid.initialize(heat.temperature(), "");
 
     const std::vector<Point<dim>> probes = {Point<dim>(1.0 + 1e-9, 0.5 * h),

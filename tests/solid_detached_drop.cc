@@ -1,5 +1,5 @@
 // Solid points of a detached drop are set aside, out of the solid, and
-// come back when the drop is no longer detached (SolidStress::
+// come back when the drop is no longer detached (SolidSubCycle::
 // set_detached_cells(), SolidMPM::set_aside_cells(); doc/solid.md
 // "Detached drops").
 //
@@ -21,7 +21,7 @@
 // The energy balance of the solid stays zero (nothing else moves). Runs
 // on 1 and 2 ranks against one output.
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include "solid_tools.h"
 
@@ -86,7 +86,8 @@ main(int argc, char **argv)
 
   const SolidMaterial sm = elastic_block_material(block.material);
   auto                sp = block_supports<dim>();
-  SolidStress<dim> solid(sp, fe_block<dim>(false, size, 0.), sm, grid, points);
+  SolidSubCycle<dim>  solid(
+    sp, fe_block<dim>(false, size, 0.), sm, grid, points);
   const std::vector<double> T = grid.make_field(300.);
   solid.initialize(T, "");
   const double n_all = solid.sizes()[0];

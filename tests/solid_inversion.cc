@@ -1,7 +1,7 @@
 // Detection of a collapsed material point and of an inverted finite element
 // (doc/stability.md). A 2D block (16 x 8 cells of 0.1 m, E = 100 Pa,
 // nu = 0.3, rho = 1, elastic) is driven by nodal forces, calling
-// SolidStress directly:
+// SolidSubCycle directly:
 // 1. all material points, a converging force f = -F (x - x_c) at every
 //    node: the points are squeezed through the centre, a point volume
 //    V (1 + tr L dt) turns negative while everything is still finite;
@@ -20,7 +20,7 @@
 // Each stop must be an exception naming the solid step, the time, the
 // position and what to change, thrown on every rank at the same step.
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include "solid_tools.h"
 
@@ -56,10 +56,10 @@ namespace
     auto               &grid   = block.grid;
     auto               &points = *block.points;
     const SolidMaterial sm     = elastic_block_material(block.material);
-    typename SolidStress<dim>::Parameters sp;
-    sp.energy_file      = "";
-    const auto       fp = fe_block<dim>(fe, size, kappa, distortion_limit);
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    typename SolidSubCycle<dim>::Parameters sp;
+    sp.energy_file        = "";
+    const auto         fp = fe_block<dim>(fe, size, kappa, distortion_limit);
+    SolidSubCycle<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
 

@@ -24,7 +24,7 @@
 //   small factor of that of the fragment at xi = 1/4.
 // Runs on 1 and 2 ranks against one output.
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <cmath>
 
@@ -40,7 +40,7 @@ namespace
   /// The solid's energies after the run with the small-mass cutoff
   /// @p cutoff or (@p floor) the mass floor, the fragment's point at local
   /// coordinates (@p xi, @p xi) of its cell, safety factor @p C.
-  SolidStress<dim>::Energies
+  SolidSubCycle<dim>::Energies
   run(const double cutoff,
       const bool   floor,
       const double xi,
@@ -71,7 +71,7 @@ namespace
     const SolidMaterial sm = elastic_block_material(block.material);
     auto                sp = block_supports<dim>();
     sp.safety_factor       = C;
-    SolidStress<dim> solid(
+    SolidSubCycle<dim> solid(
       sp, fe_block<dim>(false, size, 0.), sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");

@@ -24,7 +24,7 @@
 // Runs on 1 and 2 ranks against one output. Optional argument: a directory
 // for the energy files of both runs.
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include "solid_tools.h"
 
@@ -59,7 +59,7 @@ namespace
     fp.upper_corner = Point<dim>(1.6, 0.3);
     if (!directory.empty())
       sp.energy_file = "solid_melt_energy_" + name + ".csv";
-    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, directory);
     const double n0 = solid.sizes()[0];

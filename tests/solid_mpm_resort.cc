@@ -10,10 +10,10 @@
 // rigid translation, zero stress (a uniform velocity has no gradient), velocity
 // unchanged. A third scene throws a block of points into the finite-element
 // zone in one step, beyond what its rank sees on two ranks: the run must
-// stop with a diagnostic (SolidStress counts the solid points at every
+// stop with a diagnostic (SolidSubCycle counts the solid points at every
 // gather and re-sort). Runs on 1 and 2 ranks against one output.
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <map>
 
@@ -58,11 +58,11 @@ namespace
     sm.youngs_modulus    = PiecewiseLinear(1.);
     sm.poisson_ratio     = 0.3;
     sm.velocity_transfer = transfer;
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     sp.energy_file = "";
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled = false;
-    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     // Initial positions by particle id (to compare with the translation).
     std::map<types::particle_index, Point<dim>> x0;
@@ -160,14 +160,14 @@ namespace
       }
     SolidMaterial sm(mat); // density 1, solidus 1e6
     sm.youngs_modulus = PiecewiseLinear(1.);
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     sp.energy_file = "";
     sp.time_step   = dt;
     typename SolidFEM<dim>::Parameters fp;
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(1.0, 0);
     fp.upper_corner = Point<dim>(1.6, 0.4);
-    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     bool stopped = false;

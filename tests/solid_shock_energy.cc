@@ -28,7 +28,7 @@
 // "sf=<safety factor>", "hg=<hourglass coefficient>", "ztop=<top of the
 // FE zone, m>", and a directory for the energy file (any other argument).
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include "test_tools.h"
 
@@ -73,7 +73,7 @@ namespace
     sm.bulk_viscosity    = o.b1;
     sm.velocity_transfer = o.flip ? SolidMaterial::VelocityTransfer::flip :
                                     SolidMaterial::VelocityTransfer::apic;
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     if (o.bc)
       {
         sp.fixed_faces  = {"z-"};
@@ -86,7 +86,7 @@ namespace
     fp.lower_corner          = Point<dim>(0, 0, 0);
     fp.upper_corner          = Point<dim>(0.8, 0.4, o.ztop);
     fp.hourglass_coefficient = o.hg;
-    SolidStress<dim>    solid(sp, fp, sm, grid, points);
+    SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, o.directory);
     const double n0 = solid.sizes()[0];

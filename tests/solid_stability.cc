@@ -27,7 +27,7 @@
 // and the energies against the same run at 0.5 x the limit
 // (doc/stability.md, "Solid, past the limit").
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include "solid_tools.h"
 
@@ -67,7 +67,7 @@ namespace
     auto               &grid   = block.grid;
     auto               &points = *block.points;
     const SolidMaterial sm     = elastic_block_material(block.material);
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     sp.time_step = dt;
     // Impact: free body (the checkerboard modes are zero-energy modes);
     // bending: a cantilever fixed at x = 0.
@@ -79,9 +79,9 @@ namespace
         sp.roller_faces = {"x-", "x+"};
         sp.gravity[1]   = -1.;
       }
-    sp.energy_file      = "";
-    const auto       fp = fe_block<dim>(fe, size, kappa, distortion_limit);
-    SolidStress<dim> solid(sp, fp, sm, grid, points);
+    sp.energy_file        = "";
+    const auto         fp = fe_block<dim>(fe, size, kappa, distortion_limit);
+    SolidSubCycle<dim> solid(sp, fp, sm, grid, points);
     const std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
 
@@ -136,10 +136,10 @@ main(int argc, char **argv)
                   ExcMessage("KIND must be mpm, fe or fe0"));
       const Material thermal = unit_material(); // density 1
       SolidMaterial  sm      = elastic_block_material(thermal);
-      typename SolidStress<dim>::Parameters sp;
-      const double                          limit = sp.stable_limit(sm, 0.1);
-      const double                          kappa = kind == "fe0" ? 0. : 0.1;
-      const bool                            fe    = kind != "mpm";
+      typename SolidSubCycle<dim>::Parameters sp;
+      const double                            limit = sp.stable_limit(sm, 0.1);
+      const double                            kappa = kind == "fe0" ? 0. : 0.1;
+      const bool                              fe    = kind != "mpm";
       const auto attempt = [&](const double c, Result &r) -> std::string {
         try
           {
@@ -268,9 +268,9 @@ main(int argc, char **argv)
     SolidMaterial  sm(thermal);
     sm.youngs_modulus = PiecewiseLinear(100.);
     sm.poisson_ratio  = 0.3;
-    typename SolidStress<dim>::Parameters sp;
-    const double                          limit  = sp.stable_limit(sm, 0.1);
-    bool                                  caught = false, named = false;
+    typename SolidSubCycle<dim>::Parameters sp;
+    const double                            limit  = sp.stable_limit(sm, 0.1);
+    bool                                    caught = false, named = false;
     try
       {
         run(0.1, 3 * limit, 50, comm);
@@ -298,9 +298,9 @@ main(int argc, char **argv)
   {
     const Material      thermal = unit_material(); // density 1
     const SolidMaterial sm      = elastic_block_material(thermal);
-    typename SolidStress<dim>::Parameters sp;
-    const double                          limit   = sp.stable_limit(sm, 0.1);
-    bool                                  created = false;
+    typename SolidSubCycle<dim>::Parameters sp;
+    const double                            limit   = sp.stable_limit(sm, 0.1);
+    bool                                    created = false;
     try
       {
         run(0.1, 1.5 * limit, 20, comm, true, false);
@@ -336,10 +336,10 @@ main(int argc, char **argv)
       const Point<dim>    size(1.6, 0.8);
       SolidBlock<dim>     block(size, h, 0.8, unit_material(), comm, 300., 2);
       const SolidMaterial sm = elastic_block_material(block.material);
-      typename SolidStress<dim>::Parameters sp;
+      typename SolidSubCycle<dim>::Parameters sp;
       sp.energy_file = "";
       sp.gravity[1]  = 5.;
-      SolidStress<dim> solid(
+      SolidSubCycle<dim> solid(
         sp, fe_block<dim>(false, size, 0.1), sm, block.grid, *block.points);
       solid.set_flow_owns_fluid_points(flow);
       const std::vector<double> T = block.grid.make_field(300.);

@@ -6,7 +6,7 @@
 #define femp_solid_tools_h
 
 #include <femp/grid/material_points.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <memory>
 #include <string>
@@ -128,10 +128,10 @@ namespace femp_test
   /// Supports of the blocks: bottom fixed, sides on rollers; no energy
   /// file.
   template <int dim>
-  typename SolidStress<dim>::Parameters
+  typename SolidSubCycle<dim>::Parameters
   block_supports()
   {
-    typename SolidStress<dim>::Parameters sp;
+    typename SolidSubCycle<dim>::Parameters sp;
     sp.fixed_faces  = {"y-"};
     sp.roller_faces = {"x-", "x+"};
     sp.energy_file  = "";

@@ -244,19 +244,17 @@ namespace femp
     // Without points every cell costs the same: no function.
     if (!points.carry_points)
       return {};
-    const double h          = grid.cell_size;
-    const double full       = std::pow(h / points.point_spacing, dim);
-    const double top        = points.substrate_top;
-    const double powder_top = top + std::max(0., points.layer_thickness);
-    const double packing    = points.packing_fraction;
-    const auto   fe         = fem;
-    const bool   with_solid = solid;
+    const double      h          = grid.cell_size;
+    const double      full       = std::pow(h / points.point_spacing, dim);
+    const double      top        = points.substrate_top;
+    const double      powder_top = top + std::max(0., points.layer_thickness);
+    const double      packing    = points.packing_fraction;
+    const FeZone<dim> fe_zone    = fem.zone(grid.lower_corner, h);
+    const bool        with_solid = solid;
     return [=](const Point<dim> &c) {
       const double z     = c[dim - 1];
-      bool         in_fe = fe.enabled;
-      for (int d = 0; d < dim && in_fe; ++d)
-        in_fe = c[d] > fe.lower_corner[d] && c[d] < fe.upper_corner[d];
-      double n = 0, n_mpm = 0;
+      const bool   in_fe = fe_zone.contains(c);
+      double       n = 0, n_mpm = 0;
       if (z < top)
         n = full, n_mpm = with_solid && !in_fe ? full : 0.;
       else if (z < powder_top)

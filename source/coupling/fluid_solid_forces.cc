@@ -15,7 +15,7 @@ namespace femp
       : grid(grid)
       , points(points)
       , density(density)
-      , fe_zone(fe_zone)
+      , fe_zone(fe_zone.zone(grid.origin(), grid.h()))
   {
     for (int d = 0; d < dim; ++d)
       node_force[d] = grid.make_node_field();
@@ -41,13 +41,7 @@ namespace femp
     const auto   ijk   = grid.global_index(c);
     std::array<double, n_corners> share;
     // 1 in the FE zone, else min(1, 2 m_I / m_ref).
-    bool fe = fe_zone.enabled;
-    for (int d = 0; d < dim; ++d)
-      {
-        const double xc = x0[d] + (ijk[d] + 0.5) * h;
-        fe = fe && xc > fe_zone.lower_corner[d] && xc < fe_zone.upper_corner[d];
-      }
-    if (fe)
+    if (fe_zone.contains_cell(ijk))
       {
         share.fill(1.);
         return share;

@@ -44,7 +44,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/flow/incompressible_flow.h>
-#include <femp/io/checkpoint.h>
+#include <femp/grid/cell_state.h>
 
 #include <algorithm>
 #include <cmath>

@@ -5,9 +5,9 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/grid/cell_state.h>
 #include <femp/grid/material_points.h>
 #include <femp/grid/powder_bed.h>
-#include <femp/io/checkpoint.h>
 
 #include <algorithm>
 #include <array>

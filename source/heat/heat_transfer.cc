@@ -8,8 +8,8 @@
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
 #include <femp/base/progress_watchdog.h>
+#include <femp/grid/cell_state.h>
 #include <femp/heat/heat_transfer.h>
-#include <femp/io/checkpoint.h>
 
 #include <algorithm>
 #include <cmath>

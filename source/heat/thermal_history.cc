@@ -2,8 +2,8 @@
 // rate, G and R per cell of the grid); see include/femp/heat/thermal_history.h.
 #include <deal.II/base/mpi.h>
 
+#include <femp/grid/cell_state.h>
 #include <femp/heat/thermal_history.h>
-#include <femp/io/checkpoint.h>
 
 #include <cmath>
 #include <fstream>

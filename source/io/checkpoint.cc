@@ -51,15 +51,6 @@ namespace femp
     }
   } // namespace
 
-  void
-  StateReader::check(const std::uint64_t n) const
-  {
-    AssertThrow(n <= std::uint64_t(end - p),
-                ExcMessage("checkpoint: the section '" + what +
-                           "' is shorter than its reader expects (a "
-                           "checkpoint of another version of femp?)"));
-  }
-
   template <int dim>
   void
   Checkpoint<dim>::Parameters::declare_parameters(ParameterHandler &prm)

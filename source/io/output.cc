@@ -1,10 +1,9 @@
-// femp: output of the grid fields and the material points as VTU/PVTU
-// pieces with a .pvd index, or as HDF5 with an XDMF index (grid: the mesh
-// once in grid_mesh.h5, one value per cell and field per output in
-// grid_<n>.h5; points: one points_<n>.h5 per output since they move),
-// written collectively by all ranks through MPI-IO with zlib compression;
-// the chosen fields and point properties only; CSV probes and the
-// melt-pool time series. Every index is
+// femp: Output<dim>, the output of the grid fields and the material points
+// as VTU/PVTU pieces with a .pvd index (vtu_pvtu.h), or as HDF5 with an
+// XDMF index (hdf5_xdmf.h; grid: the mesh once in grid_mesh.h5, one value
+// per cell and field per output in grid_<n>.h5; points: one points_<n>.h5
+// per output since they move); the chosen fields and point properties only;
+// the CSV probes (probes.cc) and the melt-pool time series. Every index is
 // rewritten after a barrier under a temporary name and then renamed, so a
 // killed run leaves an index that lists complete files only.
 #include <deal.II/base/data_out_base.h>
@@ -15,16 +14,18 @@
 
 #include <femp/base/input_checks.h>
 #include <femp/base/progress_watchdog.h>
+#include <femp/base/state_stream.h>
 #include <femp/grid/material_points.h>
-#include <femp/io/checkpoint.h>
+#include <femp/io/hdf5_xdmf.h>
 #include <femp/io/output.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/io/output_files.h>
+#include <femp/io/vtu_pvtu.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
-#include <hdf5.h>
 #include <iomanip>
 
 namespace femp
@@ -57,355 +58,6 @@ namespace femp
 
   namespace
   {
-    /// Throw, naming the file, if a write to @p out failed.
-    void
-    check_stream(const std::ostream &out, const std::string &file)
-    {
-      AssertThrow(static_cast<bool>(out),
-                  ExcMessage("cannot write the output file '" + file +
-                             "' (missing directory, no permission or disk "
-                             "full?)"));
-    }
-
-    /// Replace the index @p file by the one @p write puts into the stream,
-    /// once every rank has written its pieces (barrier), atomically: rank 0
-    /// writes a temporary file and renames it over the old one, so that a
-    /// reader, or a run killed meanwhile, never leaves a half-written index.
-    void
-    replace_index(const std::string                              &file,
-                  const std::function<void(const std::string &)> &write,
-                  const MPI_Comm                                  comm)
-    {
-      const int ierr = MPI_Barrier(comm);
-      AssertThrowMPI(ierr);
-      if (Utilities::MPI::this_mpi_process(comm) != 0)
-        return;
-      const std::string tmp = file + ".tmp";
-      write(tmp);
-      std::error_code error;
-      std::filesystem::rename(tmp, file, error);
-      AssertThrow(!error,
-                  ExcMessage("cannot replace '" + file + "' by '" + tmp +
-                             "': " + error.message()));
-    }
-
-    /// The ParaView index of a series of PVTU records.
-    void
-    write_pvd(const std::string                                 &file,
-              const std::vector<std::pair<double, std::string>> &records,
-              const MPI_Comm                                     comm)
-    {
-      replace_index(
-        file,
-        [&](const std::string &tmp) {
-          std::ofstream pvd(tmp);
-          DataOutBase::write_pvd_record(pvd, records);
-          pvd.close();
-          check_stream(pvd, tmp);
-        },
-        comm);
-    }
-
-    /// The XDMF index of a series of HDF5 files: one temporal collection
-    /// of the <Grid> elements @p entries (rank 0 writes it).
-    void
-    write_xdmf(const std::string              &file,
-               const std::vector<std::string> &entries,
-               const MPI_Comm                  comm)
-    {
-      replace_index(
-        file,
-        [&](const std::string &tmp) {
-          std::ofstream x(tmp);
-          x << "<?xml version=\"1.0\" ?>\n"
-            << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-            << "<Xdmf Version=\"2.0\">\n  <Domain>\n"
-            << "    <Grid Name=\"CellTime\" GridType=\"Collection\" "
-               "CollectionType=\"Temporal\">\n";
-          for (const auto &e : entries)
-            x << e;
-          x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
-          x.close();
-          check_stream(x, tmp);
-        },
-        comm);
-    }
-
-    /// One rank's part of an unstructured mesh with data sets on its nodes
-    /// or cells, as it goes into an HDF5 file: node coordinates and cells
-    /// (corner indices into this rank's nodes; none for points, corners =
-    /// 1: XDMF's Polyvertex needs no connectivity). Data sets flagged single
-    /// are stored as 4-byte floats (the VTU writer's precision), the others
-    /// as doubles.
-    struct H5Part
-    {
-      unsigned int              dim = 0, corners = 0;
-      std::uint64_t             n_nodes = 0, n_cells = 0;
-      bool                      single_nodes = false, compress = false;
-      std::vector<double>       nodes;
-      std::vector<unsigned int> cells;
-      struct DataSet
-      {
-        std::string         name;
-        bool                single, on_cells;
-        std::vector<double> values;
-      };
-      std::vector<DataSet> data;
-    };
-
-    /// Global sizes of the parts of all ranks and this rank's offsets.
-    struct H5Layout
-    {
-      std::uint64_t nodes = 0, cells = 0, node_offset = 0, cell_offset = 0;
-    };
-
-    /// Write rows [@p offset, @p offset + @p rows) of the 2D data set
-    /// @p name (global size @p global_rows x @p columns) from @p values,
-    /// collectively; a rank without rows takes part with an empty selection.
-    void
-    write_h5_dataset(const hid_t         file,
-                     const std::string  &name,
-                     const hid_t         file_type,
-                     const hid_t         memory_type,
-                     const std::uint64_t global_rows,
-                     const std::uint64_t columns,
-                     const std::uint64_t offset,
-                     const std::uint64_t rows,
-                     const void         *values,
-                     const std::string  &file_name,
-                     const bool          compress = false)
-    {
-      const hsize_t dims[2]    = {global_rows, columns};
-      const hsize_t count[2]   = {rows, columns};
-      const hsize_t start[2]   = {offset, 0};
-      const hid_t   file_space = H5Screate_simple(2, dims, nullptr);
-      // Compressed: zlib level 1 (as the VTU pieces) on chunks of 2^16 rows.
-      const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
-      if (compress && global_rows > 0)
-        {
-          const hsize_t chunk[2] = {std::min<hsize_t>(global_rows, 1 << 16),
-                                    columns};
-          H5Pset_chunk(create, 2, chunk);
-          H5Pset_deflate(create, 1);
-        }
-      const hid_t set = H5Dcreate2(file,
-                                   name.c_str(),
-                                   file_type,
-                                   file_space,
-                                   H5P_DEFAULT,
-                                   create,
-                                   H5P_DEFAULT);
-      H5Pclose(create);
-      const hid_t memory_space = H5Screate_simple(2, count, nullptr);
-      herr_t      status       = 0;
-      if (rows > 0)
-        status = H5Sselect_hyperslab(
-          file_space, H5S_SELECT_SET, start, nullptr, count, nullptr);
-      else
-        status =
-          std::min(H5Sselect_none(file_space), H5Sselect_none(memory_space));
-      const hid_t transfer = H5Pcreate(H5P_DATASET_XFER);
-      H5Pset_dxpl_mpio(transfer, H5FD_MPIO_COLLECTIVE);
-      static const double none = 0;
-      const bool ok = file_space >= 0 && set >= 0 && memory_space >= 0 &&
-                      status >= 0 &&
-                      H5Dwrite(set,
-                               memory_type,
-                               memory_space,
-                               file_space,
-                               transfer,
-                               rows > 0 ? values : &none) >= 0;
-      H5Pclose(transfer);
-      H5Sclose(memory_space);
-      H5Dclose(set);
-      H5Sclose(file_space);
-      AssertThrow(ok,
-                  ExcMessage("cannot write the data set '" + name +
-                             "' of the output file '" + file_name + "'"));
-    }
-
-    /// Create @p name for parallel writing by all ranks of @p comm.
-    hid_t
-    create_h5_file(const std::string &name, const MPI_Comm comm)
-    {
-      const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
-      H5Pset_fapl_mpio(access, comm, MPI_INFO_NULL);
-      const hid_t file =
-        H5Fcreate(name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
-      H5Pclose(access);
-      AssertThrow(file >= 0,
-                  ExcMessage("cannot write the output file '" + name +
-                             "' (missing directory, no permission or disk "
-                             "full?)"));
-      return file;
-    }
-
-    /// Write the parts of all ranks (collective; a rank may have none)
-    /// into one HDF5 file: with @p write_mesh the data sets /nodes and
-    /// /cells into @p mesh_file, the data sets into @p data_file (the same
-    /// name: one file). Returns the global sizes.
-    H5Layout
-    write_h5(const std::string &mesh_file,
-             const std::string &data_file,
-             const bool         write_mesh,
-             const H5Part      &part,
-             const MPI_Comm     comm)
-    {
-      H5Layout            l;
-      const std::uint64_t local[2]  = {part.n_nodes, part.n_cells};
-      std::uint64_t       offset[2] = {0, 0}, total[2] = {0, 0};
-      int ierr = MPI_Exscan(local, offset, 2, MPI_UINT64_T, MPI_SUM, comm);
-      AssertThrowMPI(ierr);
-      if (Utilities::MPI::this_mpi_process(comm) == 0)
-        offset[0] = offset[1] = 0;
-      ierr = MPI_Allreduce(local, total, 2, MPI_UINT64_T, MPI_SUM, comm);
-      AssertThrowMPI(ierr);
-      l.nodes = total[0], l.cells = total[1];
-      l.node_offset = offset[0], l.cell_offset = offset[1];
-      hid_t file = -1;
-      if (write_mesh)
-        {
-          AssertThrow(part.nodes.size() == local[0] * part.dim &&
-                        part.cells.size() ==
-                          (part.corners > 1 ? local[1] * part.corners : 0),
-                      ExcInternalError());
-          file = create_h5_file(mesh_file, comm);
-          // Single precision converted here: with compression, HDF5 writes
-          // collectively only without type conversions.
-          std::vector<float> single(part.single_nodes ? part.nodes.size() : 0);
-          std::copy(part.nodes.begin(),
-                    part.nodes.begin() + single.size(),
-                    single.begin());
-          write_h5_dataset(
-            file,
-            "nodes",
-            part.single_nodes ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE,
-            part.single_nodes ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE,
-            l.nodes,
-            part.dim,
-            l.node_offset,
-            local[0],
-            part.single_nodes ? static_cast<const void *>(single.data()) :
-                                static_cast<const void *>(part.nodes.data()),
-            mesh_file,
-            part.compress);
-          if (part.corners > 1)
-            {
-              std::vector<std::uint32_t> cells(part.cells.size());
-              for (std::size_t i = 0; i < cells.size(); ++i)
-                cells[i] = part.cells[i] + l.node_offset;
-              write_h5_dataset(file,
-                               "cells",
-                               H5T_NATIVE_UINT32,
-                               H5T_NATIVE_UINT32,
-                               l.cells,
-                               part.corners,
-                               l.cell_offset,
-                               local[1],
-                               cells.data(),
-                               mesh_file);
-            }
-          if (mesh_file != data_file)
-            {
-              AssertThrow(H5Fclose(file) >= 0,
-                          ExcMessage("cannot close '" + mesh_file + "'"));
-              file = -1;
-            }
-        }
-      if (file < 0)
-        file = create_h5_file(data_file, comm);
-      for (const auto &set : part.data)
-        {
-          const unsigned int k = set.on_cells;
-          AssertThrow(set.values.size() == local[k],
-                      ExcMessage("data set '" + set.name + "' of " +
-                                 std::to_string(set.values.size()) +
-                                 " values for " + std::to_string(local[k]) +
-                                 (k ? " cells" : " nodes")));
-          std::vector<float> single(set.single ? set.values.size() : 0);
-          std::copy(set.values.begin(),
-                    set.values.begin() + single.size(),
-                    single.begin());
-          const hid_t type = set.single ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
-          write_h5_dataset(file,
-                           set.name,
-                           type,
-                           type,
-                           total[k],
-                           1,
-                           offset[k],
-                           local[k],
-                           set.single ?
-                             static_cast<const void *>(single.data()) :
-                             static_cast<const void *>(set.values.data()),
-                           data_file,
-                           part.compress);
-        }
-      AssertThrow(H5Fclose(file) >= 0,
-                  ExcMessage("cannot close '" + data_file + "'"));
-      return l;
-    }
-
-    /// The XDMF <Grid> element of one output: geometry and topology from
-    /// @p mesh_file, the data sets of @p part from @p data_file (names
-    /// relative to the index's directory), sizes from @p l.
-    std::string
-    xdmf_entry(const double       time,
-               const std::string &mesh_file,
-               const std::string &data_file,
-               const H5Part      &part,
-               const H5Layout    &l)
-    {
-      std::ostringstream x;
-      auto               item = [&](const std::uint64_t rows,
-                      const unsigned int  columns,
-                      const std::string  &number,
-                      const unsigned int  precision,
-                      const std::string  &file,
-                      const std::string  &set) {
-        x << "          <DataItem Dimensions=\"" << rows << ' ' << columns
-          << "\" NumberType=\"" << number << "\" Precision=\"" << precision
-          << "\" Format=\"HDF\">\n            " << file << ":/" << set
-          << "\n          </DataItem>\n";
-      };
-      x << "      <Grid Name=\"mesh\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << std::setprecision(10) << time << "\"/>\n"
-        << "        <Geometry GeometryType=\"" << (part.dim == 2 ? "XY" : "XYZ")
-        << "\">\n";
-      item(l.nodes,
-           part.dim,
-           "Float",
-           part.single_nodes ? 4 : 8,
-           mesh_file,
-           "nodes");
-      x << "        </Geometry>\n";
-      if (part.corners == 1)
-        x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\""
-          << l.cells << "\" NodesPerElement=\"1\"/>\n";
-      else
-        {
-          x << "        <Topology TopologyType=\""
-            << (part.corners == 4 ? "Quadrilateral" : "Hexahedron")
-            << "\" NumberOfElements=\"" << l.cells << "\">\n";
-          item(l.cells, part.corners, "UInt", 4, mesh_file, "cells");
-          x << "        </Topology>\n";
-        }
-      for (const auto &set : part.data)
-        {
-          x << "        <Attribute Name=\"" << set.name
-            << "\" AttributeType=\"Scalar\" Center=\""
-            << (set.on_cells ? "Cell" : "Node") << "\">\n";
-          item(set.on_cells ? l.cells : l.nodes,
-               1,
-               "Float",
-               set.single ? 4 : 8,
-               data_file,
-               set.name);
-          x << "        </Attribute>\n";
-        }
-      x << "      </Grid>\n";
-      return x.str();
-    }
 
     /// Every grid field femp writes (FempProblem::write_output); a run
     /// writes those of the physics it has switched on.
@@ -416,7 +68,7 @@ namespace femp
       std::vector<std::string> names = {"T", "gamma", "alpha", "p"};
       for (int d = 0; d < dim; ++d)
         names.push_back(std::string("u_") + char('x' + d));
-      for (const auto &n : SolidStress<dim>::cell_field_names())
+      for (const auto &n : SolidSubCycle<dim>::cell_field_names())
         names.push_back(n);
       for (const char *n : {"laser_source", "phase", "zone", "subdomain"})
         names.push_back(n);
@@ -445,63 +97,6 @@ namespace femp
       return names;
     }
 
-    /// Whether @p name is in @p selection (empty: all are).
-    bool
-    selected(const std::vector<std::string> &selection, const std::string &name)
-    {
-      return selection.empty() ||
-             std::find(selection.begin(), selection.end(), name) !=
-               selection.end();
-    }
-
-    /// Material points as 0-dimensional patches (one per point) with the
-    /// point id and the chosen properties, for the VTU and the HDF5 writers.
-    template <int dim>
-    class PointPatches : public DataOutInterface<0, dim>
-    {
-    public:
-      PointPatches(const Particles::ParticleHandler<dim> &points,
-                   const std::vector<std::string>        &property_names,
-                   const std::vector<std::string>        &selection)
-      {
-        std::vector<unsigned int> columns;
-        names = {"id"};
-        for (unsigned int i = 0; i < property_names.size(); ++i)
-          if (selected(selection, property_names[i]))
-            {
-              columns.push_back(i);
-              names.push_back(property_names[i]);
-            }
-        patches.resize(points.n_locally_owned_particles());
-        unsigned int i = 0;
-        for (const auto &point : points)
-          {
-            auto &patch       = patches[i];
-            patch.vertices[0] = point.get_location();
-            patch.patch_index = i++;
-            patch.data.reinit(names.size(), 1);
-            patch.data(0, 0) = point.get_id();
-            const auto props = point.get_properties();
-            for (unsigned int c = 0; c < columns.size(); ++c)
-              patch.data(c + 1, 0) = props[columns[c]];
-          }
-      }
-
-    private:
-      std::vector<DataOutBase::Patch<0, dim>> patches;
-      std::vector<std::string>                names;
-
-      const std::vector<DataOutBase::Patch<0, dim>> &
-      get_patches() const override
-      {
-        return patches;
-      }
-      std::vector<std::string>
-      get_dataset_names() const override
-      {
-        return names;
-      }
-    };
   } // namespace
 
   template <int dim>
@@ -753,90 +348,6 @@ namespace femp
   }
 
   template <int dim>
-  std::vector<double>
-  Output<dim>::sample(const std::vector<Point<dim>> &points,
-                      const std::vector<Field>      &fields) const
-  {
-    // The owner of the cell that contains a point contributes its values;
-    // everybody else adds zeros. With linear interpolation, the owner of
-    // each of the 2^dim cells around the point adds its weighted values and
-    // weight to a second block (owned cells only: no ghost values needed).
-    const std::size_t   nf = fields.size();
-    const std::size_t   np = points.size();
-    const std::size_t   nw = nf + 1; // weighted sums of the fields and weight
-    std::vector<double> v(np * nf + (prm.probe_linear ? np * nw : 0), 0.);
-    const auto         &status = grid.cell_status();
-    auto                owned  = [&](const std::array<int, dim> &ijk) {
-      return grid.in_box(ijk) &&
-             status[grid.local_index(ijk)] == BackgroundGrid<dim>::owned;
-    };
-    const std::vector<double> *alpha = nullptr;
-    for (const auto &f : fields)
-      if (f.name == "alpha")
-        alpha = f.values;
-    for (std::size_t i = 0; i < np; ++i)
-      {
-        const auto ijk = grid.cell_of(points[i]);
-        if (owned(ijk))
-          for (std::size_t f = 0; f < nf; ++f)
-            v[i * nf + f] = (*fields[f].values)[grid.local_index(ijk)];
-        if (!prm.probe_linear)
-          continue;
-        // Lower cell of the centre stencil and the local coordinates; at
-        // the domain's faces the stencil shrinks to the boundary cell.
-        std::array<int, dim>    lo;
-        std::array<double, dim> t;
-        for (int d = 0; d < dim; ++d)
-          {
-            const double s = (points[i][d] - grid.origin()[d]) / grid.h() - 0.5;
-            const int    n = grid.n_cells()[d];
-            lo[d]          = static_cast<int>(std::floor(s));
-            t[d]           = s - lo[d];
-            if (lo[d] < 0)
-              lo[d] = 0, t[d] = 0;
-            if (lo[d] >= n - 1)
-              lo[d] = n - 1, t[d] = 0;
-          }
-        double *const acc = v.data() + np * nf + i * nw;
-        for (unsigned int c = 0; c < (1u << dim); ++c)
-          {
-            std::array<int, dim> cell = lo;
-            double               w    = 1;
-            for (int d = 0; d < dim; ++d)
-              {
-                const bool up = (c >> d) & 1;
-                cell[d] += up;
-                w *= up ? t[d] : 1 - t[d];
-              }
-            if (w == 0 || !owned(cell))
-              continue;
-            const auto idx = grid.local_index(cell);
-            if (alpha)
-              w *= (*alpha)[idx];
-            for (std::size_t f = 0; f < nf; ++f)
-              acc[f] += w * (*fields[f].values)[idx];
-            acc[nf] += w;
-          }
-      }
-    std::vector<double> global(v.size());
-    Utilities::MPI::sum(ArrayView<const double>(v),
-                        grid.communicator(),
-                        ArrayView<double>(global));
-    if (prm.probe_linear)
-      for (std::size_t i = 0; i < np; ++i)
-        {
-          const double *const acc = global.data() + np * nf + i * nw;
-          if (acc[nf] <= 0)
-            continue;
-          for (std::size_t f = 0; f < nf; ++f)
-            if (fields[f].continuous)
-              global[i * nf + f] = acc[f] / acc[nf];
-        }
-    global.resize(np * nf);
-    return global;
-  }
-
-  template <int dim>
   void
   Output<dim>::write_fields(const unsigned int                     n,
                             const double                           time,
@@ -1066,46 +577,6 @@ namespace femp
         probe_csv << '\n';
         probe_csv.flush();
         check_stream(probe_csv, prm.directory + "/probe_points.csv");
-      }
-  }
-
-  template <int dim>
-  void
-  Output<dim>::write_probe_lines(const unsigned int        n,
-                                 const double              time,
-                                 const std::vector<Field> &probe_fields)
-  {
-    for (const auto &line : prm.probe_lines)
-      {
-        std::vector<Point<dim>> pts;
-        for (unsigned int i = 0; i < line.n_samples; ++i)
-          pts.push_back(line.start + (double(i) / (line.n_samples - 1)) *
-                                       (line.end - line.start));
-        const auto v = sample(pts, probe_fields);
-        if (Utilities::MPI::this_mpi_process(grid.communicator()) != 0)
-          continue;
-        const std::string file = prm.directory + "/probe_line_" + line.name +
-                                 "_" + Utilities::int_to_string(n, 5) + ".csv";
-        std::ofstream out(file);
-        check_stream(out, file);
-        out << "# time = " << std::setprecision(8) << time << " s\n";
-        out << "s";
-        for (int d = 0; d < dim; ++d)
-          out << ',' << char('x' + d);
-        for (const auto &f : probe_fields)
-          out << ',' << f.name;
-        out << '\n';
-        for (unsigned int i = 0; i < pts.size(); ++i)
-          {
-            out << pts[i].distance(line.start);
-            for (int d = 0; d < dim; ++d)
-              out << ',' << pts[i][d];
-            for (std::size_t f = 0; f < probe_fields.size(); ++f)
-              out << ',' << v[i * probe_fields.size() + f];
-            out << '\n';
-          }
-        out.close();
-        check_stream(out, file);
       }
   }
 

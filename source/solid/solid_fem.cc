@@ -8,7 +8,8 @@
 #include <deal.II/grid/grid_generator.h>
 
 #include <femp/base/input_checks.h>
-#include <femp/io/checkpoint.h>
+#include <femp/base/state_stream.h>
+#include <femp/solid/hourglass.h>
 #include <femp/solid/solid_fem.h>
 
 #include <algorithm>
@@ -158,30 +159,7 @@ namespace femp
 
   namespace
   {
-    /// s_a,d = +-1: sign of corner a (bit d set: upper side) in direction d.
-    constexpr double
-    sgn(const unsigned int a, const unsigned int d)
-    {
-      return ((a >> d) & 1u) ? 1. : -1.;
-    }
-    /// H_ma = prod_{d in m} s_a,d: the transform's matrix (see fwht).
-    constexpr double
-    hadamard(const unsigned int m, const unsigned int a)
-    {
-      double h = 1;
-      for (unsigned int d = 0; d < 3; ++d)
-        if ((m >> d) & 1u)
-          h *= sgn(a, d);
-      return h;
-    }
-    /// Flanagan-Belytschko hourglass base vector alpha as a transform index
-    /// (a product of two or more s_d: xy in 2D; xy, xz, yz, xyz in 3D).
-    template <int dim>
-    constexpr unsigned int
-    hg_mask(const unsigned int al)
-    {
-      return dim == 2 ? 3u : (al == 0 ? 3u : al == 1 ? 5u : al == 2 ? 6u : 7u);
-    }
+    using hourglass::mode_mask;
 
     /// In-place Walsh-Hadamard transform over the 2^dim corners (bit d of
     /// the corner index: upper side in direction d): x_m <- sum_a H_ma x_a
@@ -247,13 +225,6 @@ namespace femp
   }
 
   template <int dim>
-  double
-  SolidFEM<dim>::hourglass_stiffness(const double T, const double kappa) const
-  {
-    return kappa * mat.p_wave_modulus(T) * V * bb / n_corners;
-  }
-
-  template <int dim>
   void
   SolidFEM<dim>::setup(const double                             mass_scaling,
                        const std::array<std::uint8_t, 2 * dim> &face_bits,
@@ -279,16 +250,6 @@ namespace femp
     set_transition_nodes(face_bits, m_el, mass, node_ijk);
     set_temperature_exchange(T);
     element_loop<false>(0, 1);
-  }
-
-  template <int dim>
-  bool
-  SolidFEM<dim>::in_zone(const std::array<int, dim> &ijk) const
-  {
-    for (int d = 0; d < dim; ++d)
-      if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
-        return false;
-    return true;
   }
 
   template <int dim>
@@ -346,17 +307,13 @@ namespace femp
   void
   SolidFEM<dim>::set_zone()
   {
-    const double h = grid.h();
-    for (int d = 0; d < dim; ++d)
-      {
-        zlo[d] = static_cast<int>(
-          std::round((prm.lower_corner[d] - grid.origin()[d]) / h));
-        zn[d] = static_cast<int>(
-          std::round((prm.upper_corner[d] - prm.lower_corner[d]) / h));
-      }
+    zone = FeZone<dim>(
+      true, prm.lower_corner, prm.upper_corner, grid.origin(), grid.h());
+    zlo = zone.first_cell();
+    zn  = zone.n_cells();
     for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
       if (grid.cell_status()[idx] != BackgroundGrid<dim>::outside)
-        in_zone_cell[idx] = in_zone(grid.global_index(idx));
+        in_zone_cell[idx] = zone.contains_cell(grid.global_index(idx));
   }
 
   template <int dim>
@@ -971,7 +928,7 @@ namespace femp
     constexpr unsigned int W = simd_lanes;
     for (unsigned int al = 0; al < n_hg; ++al)
       for (int i = 0; i < dim; ++i)
-        eb.q[al][i] += dt * Vc[hg_mask<dim>(al)][i];
+        eb.q[al][i] += dt * Vc[mode_mask<dim>(al)][i];
     VD Ts, Te;
     if (nl == W)
       {
@@ -1046,7 +1003,7 @@ namespace femp
     VD                     C[nc][dim];
     for (unsigned int al = 0; al < n_hg; ++al)
       for (int i = 0; i < dim; ++i)
-        C[hg_mask<dim>(al)][i] = -k * eb.q[al][i];
+        C[mode_mask<dim>(al)][i] = -k * eb.q[al][i];
     for (int i = 0; i < dim; ++i)
       {
         C[0][i] = VD{} + c.mg[i];
@@ -1084,39 +1041,12 @@ namespace femp
         }
   }
 
-  // Hourglass pass at the transition nodes: the hourglass forces of this
-  // rank's elements there, kept out of the grid's force and added back
-  // locally (eq. 17).
-  template <int dim>
-  void
-  SolidFEM<dim>::transition_hourglass_forces(const double kfac)
-  {
-    std::fill(tr_hg.begin(), tr_hg.end(), 0.);
-    if (!(kfac > 0))
-      return;
-    for (const auto &tc : tr_corners)
-      {
-        const ElementBlock &eb = blocks[tc[0] / simd_lanes];
-        const unsigned int  l  = tc[0] % simd_lanes;
-        const double        k  = kfac * mat.youngs_modulus.value(eb.T[l]);
-        for (int i = 0; i < dim; ++i)
-          for (unsigned int al = 0; al < n_hg; ++al)
-            tr_hg[dim * tc[2] + i] -=
-              k * hadamard(hg_mask<dim>(al), tc[1]) * eb.q[al][i][l];
-      }
-  }
-
   template <int dim>
   [[gnu::always_inline]] inline simd_double
   SolidFEM<dim>::hourglass_distortion(const ElementBlock &eb,
                                       const double        hgB) const
   {
-    simd_double hq = {};
-    for (unsigned int al = 0; al < n_hg; ++al)
-      for (int i = 0; i < dim; ++i)
-        if (hg_mask<dim>(al) & (1u << i))
-          hq += eb.q[al][i] < 0 ? -eb.q[al][i] : eb.q[al][i];
-    return hgB * hq;
+    return hourglass::distortion<dim>(eb.q, hgB);
   }
 
   template <int dim>
@@ -1208,48 +1138,15 @@ namespace femp
   }
 
   template <int dim>
-  std::array<double, 2>
-  SolidFEM<dim>::hourglass_energy(const bool with_reference) const
-  {
-    // Each energy summed element by element in the same order as a pass of
-    // its own would (k as hourglass_stiffness() computes it).
-    const double          kappa = prm.hourglass_coefficient, kappa_ref = 0.05;
-    std::array<double, 2> energy{{0., 0.}};
-    const bool            scene = kappa != 0;
-    if (!scene && !with_reference)
-      return energy;
-    for (std::size_t e = 0; e < element_id.size(); ++e)
-      {
-        const ElementBlock &eb = blocks[e / simd_lanes];
-        const unsigned int  l  = e % simd_lanes;
-        const double        M  = mat.p_wave_modulus(eb.T[l]);
-        const double        k  = kappa * M * V * bb / n_corners;
-        const double        kr = kappa_ref * M * V * bb / n_corners;
-        for (unsigned int al = 0; al < n_hg; ++al)
-          for (int i = 0; i < dim; ++i)
-            {
-              const double q = eb.q[al][i][l];
-              if (scene)
-                energy[0] += 0.5 * k * q * q;
-              if (with_reference)
-                energy[1] += 0.5 * kr * q * q;
-            }
-      }
-    return energy;
-  }
-
-  template <int dim>
   bool
   SolidFEM<dim>::probe(const Point<dim> &x, double &sxx, double &T) const
   {
-    const auto    ijk = grid.cell_of(x);
-    std::uint64_t id  = 0;
+    const auto ijk = grid.cell_of(x);
+    if (!zone.contains_cell(ijk))
+      return false;
+    std::uint64_t id = 0;
     for (int d = dim - 1; d >= 0; --d)
-      {
-        if (ijk[d] < zlo[d] || ijk[d] >= zlo[d] + zn[d])
-          return false;
-        id = id * zn[d] + (ijk[d] - zlo[d]);
-      }
+      id = id * zn[d] + (ijk[d] - zlo[d]);
     const auto it = std::lower_bound(element_by_id.begin(),
                                      element_by_id.end(),
                                      std::make_pair(id, std::uint32_t(0)));

@@ -23,6 +23,7 @@
 
 #include <femp/app/module_states.h>
 #include <femp/app/results_output.h>
+#include <femp/app/run_report.h>
 #include <femp/app/scene.h>
 #include <femp/app/simulation_control.h>
 #include <femp/app/time_step_policy.h>
@@ -36,7 +37,6 @@
 #include <femp/heat/laser.h>
 #include <femp/heat/thermal_history.h>
 #include <femp/io/checkpoint.h>
-#include <femp/io/run_report.h>
 #include <femp/io/track_shape.h>
 #include <femp/solid/solid_stress.h>
 

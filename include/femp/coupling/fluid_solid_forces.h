@@ -69,12 +69,12 @@ namespace femp
     }
 
   private:
-    const BackgroundGrid<dim>                &grid;
-    const MaterialPoints<dim>                &points;
-    const double                              density;
-    const typename SolidFEM<dim>::Parameters &fe_zone;
-    FaceForces                                face_force;
-    NodeForces                                node_force;
+    const BackgroundGrid<dim> &grid;
+    const MaterialPoints<dim> &points;
+    const double               density;
+    const FeZone<dim>          fe_zone;
+    FaceForces                 face_force;
+    NodeForces                 node_force;
     // The cells where face_force may be non-zero (the flow's last call),
     // and those whose corners the last spread wrote: only they are reset,
     // so a few liquid drops cost a few cells, not passes over the grid.

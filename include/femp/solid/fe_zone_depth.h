@@ -28,7 +28,7 @@
 //    are not in the formula: the guard below catches what it misses.
 //
 // 2. The guard: a finite element at or above the solidus means the zone was
-//    placed too high. SolidStress checks it at every temperature step and
+//    placed too high. SolidSubCycle checks it at every temperature step and
 //    stops the run with FeZoneMelted's message (position, time, depth to
 //    use).
 #ifndef femp_fe_zone_depth_h

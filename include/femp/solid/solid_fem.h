@@ -49,7 +49,7 @@
 // Transition nodes (doc/method.md, "Solid"): FE nodes on a face of the zone
 // that is not a domain face (they touch grid cells outside the zone). They are
 // numbered globally from geometry (every rank knows all of them); see
-// solid_stress.h for the exchange of their sums.
+// solid_sub_cycle.h for the exchange of their sums.
 #ifndef femp_solid_fem_h
 #define femp_solid_fem_h
 
@@ -64,6 +64,8 @@
 
 #include <femp/grid/background_grid.h>
 #include <femp/solid/constitutive.h>
+#include <femp/solid/fe_zone.h>
+#include <femp/solid/hourglass.h>
 
 #include <array>
 #include <limits>
@@ -101,10 +103,17 @@ namespace femp
       /// Zone corners on grid lines and inside the domain.
       void
       check(const typename BackgroundGrid<dim>::Parameters &grid) const;
+      /// The zone of these parameters on a grid with origin @p origin and
+      /// cell size @p h (no zone unless 'Use finite elements').
+      FeZone<dim>
+      zone(const Point<dim> &origin, const double h) const
+      {
+        return FeZone<dim>(enabled, lower_corner, upper_corner, origin, h);
+      }
     };
 
     static constexpr unsigned int n_corners = 1u << dim;
-    static constexpr unsigned int n_hg      = dim == 2 ? 1 : 4;
+    static constexpr unsigned int n_hg      = hourglass::n_modes<dim>;
     /// Doubles per transition node in the exchange buffer: grid mass, grid
     /// momentum (dim), force without hourglass (dim), hourglass force (dim).
     static constexpr unsigned int tr_width = 1 + 3 * dim;
@@ -134,6 +143,12 @@ namespace femp
     zone_mask() const
     {
       return in_zone_cell;
+    }
+    /// The FE zone as a box of grid cells.
+    const FeZone<dim> &
+    fe_zone() const
+    {
+      return zone;
     }
     std::size_t
     n_elements() const
@@ -279,7 +294,7 @@ namespace femp
     /// arithmetic as at the end of update_elements()).
     void
     load_state(std::vector<StateReader> &parts);
-    /// The checkpoint section of an FE zone that is off (SolidStress then
+    /// The checkpoint section of an FE zone that is off (SolidSubCycle then
     /// holds no SolidFEM): the layout of save_state() without elements,
     /// nodes or transition nodes, so that the solid's section keeps one
     /// format.
@@ -302,7 +317,10 @@ namespace femp
     std::shared_ptr<const Utilities::MPI::Partitioner> node_partitioner;
     LinearAlgebra::distributed::Vector<double>         force; ///< dim per node
 
-    std::array<int, dim> zlo, zn; ///< zone: first cell index, cells
+    /// The zone (fe_zone.h); zlo, zn: its first cell index and cells per
+    /// direction, for the index arithmetic of the mesh.
+    FeZone<dim>          zone;
+    std::array<int, dim> zlo, zn;
     double               V = 0, bb = 0, mass_scale = 1;
     Tensor<1, dim>       g;
 
@@ -411,7 +429,7 @@ namespace femp
 
     std::vector<std::uint8_t> in_zone_cell;
 
-    /// The parts of setup(): the zone (zlo, zn, in_zone_cell); the FE
+    /// The parts of setup(): the zone (zone, zlo, zn, in_zone_cell); the FE
     /// triangulation, its dofs and the node partitioner; the owned
     /// elements sorted by zone index, with the structured index of each
     /// local node; the node box; the element arrays and SIMD blocks; the
@@ -442,11 +460,9 @@ namespace femp
                          const std::vector<std::array<int, dim>> &node_ijk);
     void
     set_temperature_exchange(const std::vector<double> &T);
-    /// Zone geometry: cell @p ijk in the zone; lexicographic zone index of
-    /// a cell and of a node; a zone node on a zone face that is not a
-    /// domain face; the fixed components of a node on the domain faces.
-    bool
-    in_zone(const std::array<int, dim> &ijk) const;
+    /// Zone geometry: lexicographic zone index of a cell and of a node; a
+    /// zone node on a zone face that is not a domain face; the fixed
+    /// components of a node on the domain faces.
     std::uint64_t
     zone_cell_id(const std::array<int, dim> &ijk) const;
     std::uint64_t

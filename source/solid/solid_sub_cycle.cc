@@ -1,7 +1,7 @@
 // femp: the solid step (paper eqs. 5-17, doc/method.md, "Solid" and "Macro time
 // step"): MPM and FE coupled at the transition nodes through the
 // background-grid nodes, with sub-cycling against the temperature step; see
-// solid_stress.h.
+// solid_sub_cycle.h.
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
@@ -9,9 +9,9 @@
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
 #include <femp/base/progress_watchdog.h>
-#include <femp/io/checkpoint.h>
+#include <femp/grid/cell_state.h>
 #include <femp/solid/fe_zone_depth.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <cmath>
 #include <filesystem>
@@ -56,7 +56,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  SolidSubCycle<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
     prm.declare_entry("Time step",
@@ -234,7 +234,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  SolidSubCycle<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
     prm.enter_subsection("Solid");
     time_step     = prm.get_double("Time step");
@@ -324,9 +324,9 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::Parameters::stable_limit(const SolidMaterial &m,
-                                             const double         h,
-                                             const double         s) const
+  SolidSubCycle<dim>::Parameters::stable_limit(const SolidMaterial &m,
+                                               const double         h,
+                                               const double         s) const
   {
     const double c  = std::sqrt(m.max_p_wave_modulus() /
                                ((s > 0 ? s : mass_scaling) * m.density()));
@@ -336,7 +336,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::Parameters::check(
+  SolidSubCycle<dim>::Parameters::check(
     const SolidMaterial                            &m,
     const typename BackgroundGrid<dim>::Parameters &g) const
   {
@@ -359,7 +359,7 @@ namespace femp
   }
 
   template <int dim>
-  SolidStress<dim>::SolidStress(
+  SolidSubCycle<dim>::SolidSubCycle(
     const Parameters                         &prm,
     const typename SolidFEM<dim>::Parameters &fem_prm,
     const SolidMaterial                      &material,
@@ -373,15 +373,19 @@ namespace femp
       , fem(fem_prm.enabled ?
               std::make_unique<SolidFEM<dim>>(fem_prm, grid, material) :
               nullptr)
+      , region(grid)
   {
-    scaling.factor = prm.mass_scaling;
-    safety         = prm.safety_factor;
+    scaling = MassScalingController(prm.mass_scaling,
+                                    prm.max_kinetic_ratio,
+                                    prm.min_factor,
+                                    prm.max_factor);
+    safety  = prm.safety_factor;
   }
 
   template <int dim>
   void
-  SolidStress<dim>::initialize(const std::vector<double> &T,
-                               const std::string         &directory)
+  SolidSubCycle<dim>::initialize(const std::vector<double> &T,
+                                 const std::string         &directory)
   {
     nodes.resize(grid.n_local_nodes());
     if (mass_floor)
@@ -391,11 +395,9 @@ namespace femp
     dt_solid             = prm.time_step > 0 ? prm.time_step :
                                                safety * prm.stable_limit(mat, grid.h());
     const auto face_bits = set_boundary_flags();
-    scaling              = MassScalingState();
-    scaling.factor       = prm.mass_scaling;
-    phase_K_dt = phase_time = 0;
+    scaling.reset();
     if (fem)
-      fem->setup(scaling.factor, face_bits, prm.gravity, T);
+      fem->setup(scaling.factor(), face_bits, prm.gravity, T);
     else
       no_fe_zone.assign(grid.n_local(), 0);
     find_active_nodes();
@@ -405,14 +407,12 @@ namespace femp
     T_next  = T;
     t_solid = t_prev = 0;
     steps            = 0;
-    mpm.gather(zone_mask(), scaling.factor);
-    K0 = K = Utilities::MPI::sum(mpm.kinetic_energy() +
-                                   (fem ? fem->kinetic_energy() : 0.),
-                                 comm);
-    W_ext = W_int = 0;
-    D_transfer = K_melted = K_solidified = W_remap = W_withheld = 0;
+    mpm.gather(zone_mask(), scaling.factor());
+    const double K0 = Utilities::MPI::sum(mpm.kinetic_energy() +
+                                            (fem ? fem->kinetic_energy() : 0.),
+                                          comm);
     n_points_global = Utilities::MPI::sum(double(mpm.n_points()), comm);
-    K_points        = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
+    ledger.start(K0, Utilities::MPI::sum(mpm.kinetic_energy(), comm));
 
     rebuild_live(nullptr, 0.);
     open_output_files(directory);
@@ -420,7 +420,7 @@ namespace femp
 
   template <int dim>
   std::array<std::uint8_t, 2 * dim>
-  SolidStress<dim>::set_boundary_flags()
+  SolidSubCycle<dim>::set_boundary_flags()
   {
     // Boundary flags of the nodes of owned cells.
     constrained.assign(grid.n_local_nodes(), 0);
@@ -466,226 +466,67 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::find_active_nodes()
+  SolidSubCycle<dim>::find_active_nodes()
   {
-    const auto &ns = grid.node_strides();
-    const auto &lo = grid.box_lower();
-    // Grid nodes a step touches: nodes of owned cells outside the FE zone,
-    // and the transition nodes among the nodes of owned cells.
-    {
-      std::vector<std::uint8_t> active(grid.n_local_nodes(), 0),
-        owned_node(grid.n_local_nodes(), 0);
-      for (const auto n : grid.owned_cell_nodes())
-        owned_node[n] = 1;
-      for (const auto c : grid.owned_cells())
-        if (!zone_mask()[c])
-          {
-            const std::size_t n0 = grid.first_node_of_cell(c);
-            for (unsigned int a = 0; a < (1u << dim); ++a)
-              {
-                std::size_t n = n0;
-                for (int d = 0; d < dim; ++d)
-                  if (a & (1u << d))
-                    n += ns[d];
-                active[n] = 1;
-              }
-          }
-      mpm_cells.clear();
-      fe_cells.clear();
-      for (const auto c : grid.owned_cells())
-        (zone_mask()[c] ? fe_cells : mpm_cells).push_back(c);
-      guard_fe_zone = Utilities::MPI::max(int(!fe_cells.empty()), comm) > 0;
-      grid_transition.clear();
-      const auto &size = grid.box_size();
-      for (std::size_t t = 0; t < n_transition(); ++t)
-        {
-          const auto &ijk = fem->transition_node(t);
-          bool        in  = true;
-          for (int d = 0; d < dim; ++d)
-            in = in && ijk[d] >= lo[d] && ijk[d] <= lo[d] + size[d];
-          if (!in)
-            continue;
-          const std::size_t n = grid.local_node_index(ijk);
-          if (!owned_node[n])
-            continue;
-          active[n] = 1;
-          grid_transition.emplace_back(t, n);
-        }
-      active_nodes.clear();
-      for (std::size_t n = 0; n < active.size(); ++n)
-        if (active[n])
-          active_nodes.push_back(n);
-      tr_buffer.assign(SolidFEM<dim>::tr_width * n_transition(), 0.);
-      tr_fgrid.assign(dim * n_transition(), 0.);
-
-      // Nodes whose point kinetic energy this rank counts (see header).
-      std::vector<std::int32_t> tr_of(grid.n_local_nodes(), -1);
-      for (const auto &[t, n] : grid_transition)
-        tr_of[n] = t;
-      // Global grid index of the local node n (the node box starts at lo).
-      const auto node_ijk = [&](std::size_t r) {
-        std::array<int, dim> ijk;
-        for (int d = dim - 1; d >= 0; --d)
-          {
-            ijk[d] = lo[d] + static_cast<int>(r / ns[d]);
-            r %= ns[d];
-          }
-        return ijk;
-      };
-      counted_nodes.clear();
-      for (const auto n : active_nodes)
-        {
-          // The cell named for the node (the last cell for nodes on a top
-          // face).
-          std::array<int, dim> ijk = node_ijk(n);
-          for (int d = 0; d < dim; ++d)
-            ijk[d] = std::min(ijk[d], int(grid.n_cells()[d]) - 1);
-          if (grid.in_box(ijk) && grid.cell_status()[grid.local_index(ijk)] ==
-                                    BackgroundGrid<dim>::owned)
-            counted_nodes.emplace_back(n, tr_of[n]);
-        }
-      counted_as.assign(grid.n_local_nodes(), -2);
-      for (const auto &[n, t] : counted_nodes)
-        counted_as[n] = t;
-
-      // Always live: the transition nodes, the nodes that another rank's
-      // cells share (sum_shared_nodes() writes them) and the probe cells.
-      fixed_live_nodes.clear();
-      for (const auto &[t, n] : grid_transition)
-        fixed_live_nodes.push_back(n);
-      for (const auto n : active_nodes)
-        {
-          const std::array<int, dim> ijk    = node_ijk(n);
-          bool                       shared = false;
-          for (unsigned int a = 0; a < (1u << dim) && !shared; ++a)
-            {
-              std::array<int, dim> c  = ijk;
-              bool                 in = true;
-              for (int d = 0; d < dim; ++d)
-                {
-                  c[d] -= (a >> d) & 1u;
-                  in = in && c[d] >= 0 && c[d] < int(grid.n_cells()[d]);
-                }
-              shared = in && (!grid.in_box(c) ||
-                              grid.cell_status()[grid.local_index(c)] !=
-                                BackgroundGrid<dim>::owned);
-            }
-          if (shared)
-            fixed_live_nodes.push_back(n);
-        }
-      fixed_live_cells.clear();
-      for (const auto &x : prm.probes)
-        {
-          const auto ijk = grid.cell_of(x);
-          if (!grid.in_box(ijk))
-            continue;
-          const auto c = grid.local_index(ijk);
-          if (grid.cell_status()[c] == BackgroundGrid<dim>::owned &&
-              !zone_mask()[c])
-            fixed_live_cells.push_back(c);
-        }
-      node_live.assign(grid.n_local_nodes(), 0);
-      cell_live.assign(grid.n_local(), 0);
-      live_nodes.clear();
-      live_cells.clear();
-      live_counted.clear();
-    }
+    // The transition nodes among the nodes of owned cells, then the nodes
+    // and cells a step visits (solid_active_region.h).
+    const auto               &lo = grid.box_lower();
+    std::vector<std::uint8_t> owned_node(grid.n_local_nodes(), 0);
+    for (const auto n : grid.owned_cell_nodes())
+      owned_node[n] = 1;
+    grid_transition.clear();
+    const auto &size = grid.box_size();
+    for (std::size_t t = 0; t < n_transition(); ++t)
+      {
+        const auto &ijk = fem->transition_node(t);
+        bool        in  = true;
+        for (int d = 0; d < dim; ++d)
+          in = in && ijk[d] >= lo[d] && ijk[d] <= lo[d] + size[d];
+        if (!in)
+          continue;
+        const std::size_t n = grid.local_node_index(ijk);
+        if (!owned_node[n])
+          continue;
+        grid_transition.emplace_back(t, n);
+      }
+    tr_buffer.assign(SolidFEM<dim>::tr_width * n_transition(), 0.);
+    tr_fgrid.assign(dim * n_transition(), 0.);
+    region.setup(zone_mask(), grid_transition, prm.probes, comm);
   }
 
   template <int dim>
   void
-  SolidStress<dim>::rebuild_live(const std::vector<double> *T, const double w)
+  SolidSubCycle<dim>::rebuild_live(const std::vector<double> *T, const double w)
   {
-    std::vector<std::uint32_t> old;
-    old.swap(live_nodes);
-    for (const auto n : old)
-      node_live[n] = 0;
-    auto add = [&](const std::uint32_t n) {
-      if (!node_live[n])
-        node_live[n] = 1, live_nodes.push_back(n);
-    };
-    for (const auto n : fixed_live_nodes)
-      add(n);
-    const auto &reached = mpm.nodes_reached();
-    for (const auto n : reached)
-      add(n);
-    nodes_seen = reached.size();
-    std::sort(live_nodes.begin(), live_nodes.end());
-    // Nodes that leave: zero, as the next step's update would leave them.
-    for (const auto n : old)
-      if (!node_live[n])
-        {
-          nodes.mass[n] = 0;
-          for (int d = 0; d < dim; ++d)
-            nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] = 0;
-        }
-    live_counted.clear();
-    for (const auto n : live_nodes)
-      if (counted_as[n] > -2)
-        live_counted.emplace_back(n, counted_as[n]);
-
-    for (const auto c : live_cells)
-      cell_live[c] = 0;
-    live_cells.clear();
-    for (const auto c : fixed_live_cells)
-      add_live_cell(c, T, w);
-    const auto &cells = mpm.cells_reached();
-    for (const auto c : cells)
-      add_live_cell(c, T, w);
-    cells_seen = cells.size();
+    region.rebuild(
+      mpm.nodes_reached(),
+      mpm.cells_reached(),
+      [&](const std::uint32_t n) {
+        nodes.mass[n] = 0;
+        for (int d = 0; d < dim; ++d)
+          nodes.momentum[d][n] = nodes.force[d][n] = nodes.velocity[d][n] = 0;
+      },
+      [&](const std::uint32_t c) {
+        if (T)
+          T_next[c] = T_prev[c] + w * ((*T)[c] - T_prev[c]);
+      });
     regathered = false;
   }
 
   template <int dim>
   void
-  SolidStress<dim>::extend_live(const std::vector<double> &T, const double w)
+  SolidSubCycle<dim>::extend_live(const std::vector<double> &T, const double w)
   {
-    const auto &reached = mpm.nodes_reached();
-    if (reached.size() > nodes_seen)
-      {
-        const std::size_t n0 = live_nodes.size(), c0 = live_counted.size();
-        for (std::size_t i = nodes_seen; i < reached.size(); ++i)
-          {
-            const auto n = reached[i];
-            if (node_live[n])
-              continue;
-            node_live[n] = 1;
-            live_nodes.push_back(n);
-            if (counted_as[n] > -2)
-              live_counted.emplace_back(n, counted_as[n]);
-          }
-        nodes_seen = reached.size();
-        std::sort(live_nodes.begin() + n0, live_nodes.end());
-        std::inplace_merge(live_nodes.begin(),
-                           live_nodes.begin() + n0,
-                           live_nodes.end());
-        std::sort(live_counted.begin() + c0, live_counted.end());
-        std::inplace_merge(live_counted.begin(),
-                           live_counted.begin() + c0,
-                           live_counted.end());
-      }
-    const auto &cells = mpm.cells_reached();
-    for (std::size_t i = cells_seen; i < cells.size(); ++i)
-      if (!cell_live[cells[i]])
-        add_live_cell(cells[i], &T, w);
-    cells_seen = cells.size();
+    region.extend(mpm.nodes_reached(),
+                  mpm.cells_reached(),
+                  [&](const std::uint32_t c) {
+                    T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
+                  });
   }
 
   template <int dim>
   void
-  SolidStress<dim>::add_live_cell(const std::uint32_t        c,
-                                  const std::vector<double> *T,
-                                  const double               w)
-  {
-    if (!cell_live[c])
-      cell_live[c] = 1, live_cells.push_back(c);
-    if (T)
-      T_next[c] = T_prev[c] + w * ((*T)[c] - T_prev[c]);
-  }
-
-  template <int dim>
-  void
-  SolidStress<dim>::open_output_files(const std::string &directory)
+  SolidSubCycle<dim>::open_output_files(const std::string &directory)
   {
     csv_directory = directory;
     if (!directory.empty() && Utilities::MPI::this_mpi_process(comm) == 0)
@@ -722,10 +563,10 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::advance(const double               t,
-                            const std::vector<double> &T,
-                            const bool                 final,
-                            const NodalForces         *external_forces)
+  SolidSubCycle<dim>::advance(const double               t,
+                              const std::vector<double> &T,
+                              const bool                 final,
+                              const NodalForces         *external_forces)
   {
     check_fe_zone_solid(T, t);
     if (fem)
@@ -772,7 +613,7 @@ namespace femp
         // (Cells of the FE zone: the elements interpolate their own.) Only
         // the cells that hold points (live_cells): the others follow at
         // the end of the advance.
-        for (const auto c : live_cells)
+        for (const auto c : region.live_cells())
           T_next[c] = T_prev[c] + w * (T[c] - T_prev[c]);
         step(t_next - t_solid, w, external_forces);
         // Cells and nodes that points reached in the step (their cells'
@@ -783,8 +624,7 @@ namespace femp
           extend_live(T, w);
         last_w = w;
         T_solid.swap(T_next);
-        phase_K_dt += K * (t_next - t_solid);
-        phase_time += t_next - t_solid;
+        scaling.add_step(ledger.kinetic(), t_next - t_solid);
         const bool row = row_due(t_solid, t_next);
         t_solid        = t_next;
         if (row)
@@ -797,9 +637,9 @@ namespace femp
       }
     // The temperature of the last step at the cells without points (as if
     // interpolated at every step), for points that solidify there.
-    for (const auto c : mpm_cells)
+    for (const auto c : region.mpm_cells())
       {
-        if (gathered && !cell_live[c])
+        if (gathered && !region.is_live_cell(c))
           T_solid[c] = T_prev[c] + last_w * (T[c] - T_prev[c]);
         T_prev[c] = T[c];
       }
@@ -808,9 +648,9 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::step(const double       dt,
-                         const double       w,
-                         const NodalForces *external_forces)
+  SolidSubCycle<dim>::step(const double       dt,
+                           const double       w,
+                           const NodalForces *external_forces)
   {
     particles_to_grid(external_forces);                   // 1. P2G
     const double merge_loss = merge_transition_nodes(dt); // 2. transition
@@ -840,11 +680,11 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::particles_to_grid(const NodalForces *external_forces)
+  SolidSubCycle<dim>::particles_to_grid(const NodalForces *external_forces)
   {
     // 1. Mass, momentum and forces of the points to the grid (eqs. 11-13),
     // partial sums of this rank, on the grid nodes of MPM cells.
-    for (const auto n : live_nodes)
+    for (const auto n : region.live_nodes())
       {
         nodes.mass[n] = 0;
         for (int d = 0; d < dim; ++d)
@@ -855,13 +695,13 @@ namespace femp
     mpm.p2g(nodes, prm.gravity);
     if (external_forces)
       for (int d = 0; d < dim; ++d)
-        for (const auto n : live_nodes)
+        for (const auto n : region.live_nodes())
           nodes.force[d][n] += (*external_forces)[d][n];
   }
 
   template <int dim>
   double
-  SolidStress<dim>::merge_transition_nodes(const double dt)
+  SolidSubCycle<dim>::merge_transition_nodes(const double dt)
   {
     // 2. Transition nodes (eqs. 14-17): partial grid and FE sums of this
     // rank, summed over all ranks in one reduction; every rank then holds
@@ -916,7 +756,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::sum_grid_partials()
+  SolidSubCycle<dim>::sum_grid_partials()
   {
     grid.sum_shared_nodes(nodes.mass);
     for (int d = 0; d < dim; ++d)
@@ -934,7 +774,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::update_grid_momentum(const double dt)
+  SolidSubCycle<dim>::update_grid_momentum(const double dt)
   {
     // 3. Grid momentum update with boundary conditions; force -> f / m;
     // transition nodes from step 2.
@@ -942,7 +782,7 @@ namespace femp
     // The light-node mass floor (set_mass_floor()): kappa times the
     // node's stiffness row sum.
     const double kappa = mass_floor ? safety * safety / (4. * dim) : 0.;
-    for (const auto n : live_nodes)
+    for (const auto n : region.live_nodes())
       {
         const double m       = nodes.mass[n];
         const double m_floor = mass_floor ? kappa * nodes.stiffness[n] : 0.;
@@ -967,7 +807,7 @@ namespace femp
                 // rank that counts it (a transition node, counted_as >= 0,
                 // takes the merged update of step 2).
                 const double f = nodes.force[d][n], a = f / m_floor;
-                if (counted_as[n] == -1)
+                if (region.counted_as(n) == -1)
                   withheld += dt * (1 - m / m_floor) * f *
                               (nodes.momentum[d][n] / m + 0.5 * dt * a);
                 nodes.momentum[d][n] += dt * m * a;
@@ -985,7 +825,7 @@ namespace femp
                 // (Energies::withheld), each node on the rank that counts
                 // it (a transition node, counted_as >= 0, takes the merged
                 // update of step 2).
-                if (counted_as[n] == -1)
+                if (region.counted_as(n) == -1)
                   withheld += dt * nodes.force[d][n] * nodes.momentum[d][n] / m;
                 nodes.force[d][n]    = 0;
                 nodes.velocity[d][n] = nodes.momentum[d][n] / m;
@@ -1001,7 +841,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_transition_velocities()
+  SolidSubCycle<dim>::set_transition_velocities()
   {
     // Transition nodes: merged mass, velocity and acceleration of step 2.
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
@@ -1018,24 +858,24 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::external_power(const NodalForces *external_forces) const
+  SolidSubCycle<dim>::external_power(const NodalForces *external_forces) const
   {
     double ext_power = 0;
     if (external_forces) // partial forces: the rank sum is the total
       for (int d = 0; d < dim; ++d)
-        for (const auto n : live_nodes) // velocity 0 at the others
+        for (const auto n : region.live_nodes()) // velocity 0 at the others
           ext_power += (*external_forces)[d][n] * nodes.velocity[d][n];
     return ext_power;
   }
 
   template <int dim>
   std::array<double, 2>
-  SolidStress<dim>::grid_to_points(const double dt)
+  SolidSubCycle<dim>::grid_to_points(const double dt)
   {
     // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
     // momenta (in the same loop as G2P), grid velocities.
     for (int d = 0; d < dim; ++d)
-      for (const auto n : live_nodes)
+      for (const auto n : region.live_nodes())
         nodes.momentum[d][n] = 0;
     mpm.g2p(nodes, dt);
     const std::array<double, 2> fe_energy =
@@ -1051,7 +891,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::remap_work_of_step(const double dt) const
+  SolidSubCycle<dim>::remap_work_of_step(const double dt) const
   {
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
     // Re-map work (booked, doc/solid.md "Energies"): the nodal forces f_I
@@ -1072,7 +912,7 @@ namespace femp
     // grid force f_g keeps the re-map jump); without it the balance of the
     // elastic shock test was 0.12 (doc/solid.md).
     double remap_work = 0;
-    for (const auto &[n, t] : live_counted) // no mass at the others
+    for (const auto &[n, t] : region.live_counted()) // no mass at the others
       if (nodes.mass[n] > 0)
         for (int d = 0; d < dim; ++d)
           if (!(constrained[n] & (1u << d)))
@@ -1100,9 +940,9 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_grid_velocities()
+  SolidSubCycle<dim>::set_grid_velocities()
   {
-    for (const auto n : live_nodes)
+    for (const auto n : region.live_nodes())
       for (int d = 0; d < dim; ++d)
         nodes.velocity[d][n] =
           (nodes.mass[n] > 0 && !(constrained[n] & (1u << d))) ?
@@ -1112,13 +952,13 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::book_energies(const double                 dt,
-                                  const double                 ext_power,
-                                  const std::array<double, 2> &fe_energy,
-                                  const double                 transfer,
-                                  const double                 work,
-                                  const double                 remap_work,
-                                  const double                 withheld)
+  SolidSubCycle<dim>::book_energies(const double                 dt,
+                                    const double                 ext_power,
+                                    const std::array<double, 2> &fe_energy,
+                                    const double                 transfer,
+                                    const double                 work,
+                                    const double                 remap_work,
+                                    const double                 withheld)
   {
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
@@ -1138,14 +978,9 @@ namespace femp
     Utilities::MPI::sum(ArrayView<const double>(sums, 10),
                         comm,
                         ArrayView<double>(sums, 10));
-    K = sums[0] + sums[6];
-    W_int += sums[1];
-    W_ext += sums[2];
-    D_transfer += sums[5] - sums[0]; // sums[0]: point kinetic energy now
-    W_remap += sums[7];
-    W_withheld += sums[9];
-    K_points         = sums[0];
-    const bool blown = !std::isfinite(K) || !std::isfinite(W_int);
+    ledger.book_step(
+      sums[0], sums[6], sums[1], sums[2], sums[5], sums[7], sums[9]);
+    const bool blown = !ledger.finite();
     if (!blown && sums[8] > 0)
       stop_inverted(dt);
     if (blown || sums[3] > 0)
@@ -1185,11 +1020,8 @@ namespace femp
         Utilities::MPI::sum(ArrayView<const double>(after, 4),
                             comm,
                             ArrayView<double>(after, 4));
-        D_transfer -= after[0] + after[3] - sums[0];
-        K_melted += after[3];
+        ledger.book_resort(sums[0], after[0], after[3], sums[6]);
         n_set_aside += after[2];
-        K        = after[0] + sums[6];
-        K_points = after[0];
         check_point_count(after[1],
                           n_points_global - after[2],
                           "re-sorting",
@@ -1200,7 +1032,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::stop_inverted(const double dt) const
+  SolidSubCycle<dim>::stop_inverted(const double dt) const
   {
     // The first collapsed point, else the first inverted or distorted
     // element, of the lowest rank that has one (collective: every rank
@@ -1248,10 +1080,10 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::grid_point_kinetic(const bool updated) const
+  SolidSubCycle<dim>::grid_point_kinetic(const bool updated) const
   {
     double k = 0;
-    for (const auto &[n, t] : live_counted) // no mass at the others
+    for (const auto &[n, t] : region.live_counted()) // no mass at the others
       {
         const double m = nodes.mass[n];
         if (m <= 0)
@@ -1274,10 +1106,10 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::check_point_count(const double       n_now,
-                                      const double       n_expected,
-                                      const std::string &where,
-                                      const double       time) const
+  SolidSubCycle<dim>::check_point_count(const double       n_now,
+                                        const double       n_expected,
+                                        const std::string &where,
+                                        const double       time) const
   {
     if (n_now == n_expected)
       return;
@@ -1292,7 +1124,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_small_mass_cutoff(const double fraction)
+  SolidSubCycle<dim>::set_small_mass_cutoff(const double fraction)
   {
     // A node of mass fraction eps of a full node's, next to a point whose
     // stiffness it feels in full (shape-function gradient ~ 1/h), is
@@ -1302,13 +1134,13 @@ namespace femp
     // step, doc/solid.md "Cooling after the workpiece has solidified").
     small_mass_fraction = fraction;
     const double c      = safety / prm.safety_factor;
-    small_mass          = fraction * c * c * scaling.factor * mat.density() *
+    small_mass          = fraction * c * c * scaling.factor() * mat.density() *
                  std::pow(grid.h(), dim) / (1u << dim);
   }
 
   template <int dim>
   void
-  SolidStress<dim>::set_mass_floor(const bool on)
+  SolidSubCycle<dim>::set_mass_floor(const bool on)
   {
     mass_floor = on;
     mpm.set_stiffness_rows(on);
@@ -1320,7 +1152,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::find_state_changes()
+  SolidSubCycle<dim>::find_state_changes()
   {
     // (Flow and solid together, doc/solid.md.) States change only in the
     // temperature step; the flow changes velocities of fluid points only,
@@ -1329,7 +1161,7 @@ namespace femp
     // solid takes no step in this temperature step (its step longer than
     // the temperature step), the next call finds the exchange again,
     // relative to the same gather.
-    if (mpm_cells.empty())
+    if (region.mpm_cells().empty())
       return;
     pending_exchange      = mpm.exchange_since_gather();
     have_pending_exchange = true;
@@ -1337,17 +1169,17 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::gather_points()
+  SolidSubCycle<dim>::gather_points()
   {
     typename SolidMPM<dim>::Exchange e;
-    if (!mpm_cells.empty())
+    if (!region.mpm_cells().empty())
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
         // Nothing melted, solidified or lost here: the gather may keep
         // the arrays of the last one (SolidMPM::gather()).
         mpm.gather(zone_mask(),
-                   scaling.factor,
+                   scaling.factor(),
                    e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
     have_pending_exchange = false;
@@ -1386,41 +1218,25 @@ namespace femp
     // The points' kinetic energy changes by what the melted points took
     // out and the solidified ones brought (booked; any other change shows
     // in the balance).
-    K_melted += sums[3];
-    K_solidified += sums[4];
-    K += sums[6] - K_points;
-    K_points = sums[6];
+    ledger.book_exchange(sums[3], sums[4], sums[6]);
   }
 
   template <int dim>
-  typename SolidStress<dim>::Energies
-  SolidStress<dim>::energies(const bool with_hourglass_mode) const
+  typename SolidSubCycle<dim>::Energies
+  SolidSubCycle<dim>::energies(const bool with_hourglass_mode) const
   {
-    Energies e;
-    e.external        = W_ext;
-    e.internal        = W_int;
-    e.kinetic         = K;
-    e.initial_kinetic = K0;
     std::array<double, 2> hg{{0., 0.}};
     if (fem)
       hg = fem->hourglass_energy(with_hourglass_mode);
     Utilities::MPI::sum(ArrayView<const double>(hg.data(), 2),
                         comm,
                         ArrayView<double>(hg.data(), 2));
-    e.hourglass      = hg[0];
-    e.hourglass_mode = hg[1];
-    e.transfer       = D_transfer;
-    e.remap          = W_remap;
-    e.withheld       = W_withheld;
-    e.melted         = K_melted;
-    e.solidified     = K_solidified;
-    e.scaling_jump   = scaling.kinetic_jump;
-    return e;
+    return ledger.energies(hg[0], hg[1], scaling.state().kinetic_jump);
   }
 
   template <int dim>
   std::vector<std::array<double, 2>>
-  SolidStress<dim>::probe(const std::vector<Point<dim>> &x) const
+  SolidSubCycle<dim>::probe(const std::vector<Point<dim>> &x) const
   {
     std::vector<double> v(3 * x.size(), 0.);
     for (std::size_t i = 0; i < x.size(); ++i)
@@ -1452,8 +1268,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::cell_stress_fields(std::vector<double> &sxx,
-                                       std::vector<double> &vm) const
+  SolidSubCycle<dim>::cell_stress_fields(std::vector<double> &sxx,
+                                         std::vector<double> &vm) const
   {
     std::vector<std::vector<double>> f;
     cell_fields(f);
@@ -1463,14 +1279,14 @@ namespace femp
 
   template <int dim>
   std::vector<std::string>
-  SolidStress<dim>::cell_field_names()
+  SolidSubCycle<dim>::cell_field_names()
   {
     return {"sigma_xx", "sigma_yy", "sigma_zz", "von_mises", "plastic_strain"};
   }
 
   template <int dim>
   void
-  SolidStress<dim>::cell_fields(std::vector<std::vector<double>> &f) const
+  SolidSubCycle<dim>::cell_fields(std::vector<std::vector<double>> &f) const
   {
     f.assign(5, std::vector<double>(grid.n_local(), 0.));
     std::vector<double> count(grid.n_local(), 0.);
@@ -1485,14 +1301,14 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::check_fe_zone_solid(const std::vector<double> &T,
-                                        const double               t) const
+  SolidSubCycle<dim>::check_fe_zone_solid(const std::vector<double> &T,
+                                          const double               t) const
   {
-    if (!guard_fe_zone)
+    if (!region.guard_fe_zone())
       return;
     const double T_s   = mat.melt_temperature();
     double       T_max = -std::numeric_limits<double>::infinity();
-    for (const auto c : fe_cells)
+    for (const auto c : region.fe_cells())
       T_max = std::max(T_max, T[c]);
     T_max = Utilities::MPI::max(T_max, comm);
     if (!(T_max >= T_s))
@@ -1503,11 +1319,11 @@ namespace femp
     std::array<double, dim> where;
     where.fill(-std::numeric_limits<double>::infinity());
     double z_low = std::numeric_limits<double>::infinity();
-    for (const auto c : fe_cells)
+    for (const auto c : region.fe_cells())
       if (T[c] >= T_s)
         z_low = std::min(z_low, grid.cell_center(c)[dim - 1]);
     z_low = Utilities::MPI::min(z_low, comm);
-    for (const auto c : fe_cells)
+    for (const auto c : region.fe_cells())
       if (T[c] >= T_s &&
           std::abs(grid.cell_center(c)[dim - 1] - z_low) < 1e-3 * h)
         {
@@ -1542,7 +1358,7 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::fe_elements_off_rank() const
+  SolidSubCycle<dim>::fe_elements_off_rank() const
   {
     return Utilities::MPI::sum(fem ? double(fem->n_elements_off_rank()) : 0.,
                                comm);
@@ -1550,7 +1366,7 @@ namespace femp
 
   template <int dim>
   std::array<double, 2>
-  SolidStress<dim>::sizes() const
+  SolidSubCycle<dim>::sizes() const
   {
     return {{Utilities::MPI::sum(double(mpm.n_points()), comm),
              Utilities::MPI::sum(fem ? double(fem->n_elements()) : 0., comm)}};
@@ -1558,14 +1374,14 @@ namespace femp
 
   template <int dim>
   double
-  SolidStress<dim>::largest_rank_points() const
+  SolidSubCycle<dim>::largest_rank_points() const
   {
     return Utilities::MPI::max(double(mpm.n_points()), comm);
   }
 
   template <int dim>
   bool
-  SolidStress<dim>::row_due(const double t_old, const double t_new) const
+  SolidSubCycle<dim>::row_due(const double t_old, const double t_new) const
   {
     // Stateless (a resumed run decides the same): a row when the step
     // crosses a multiple of the interval.
@@ -1579,7 +1395,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::write_rows()
+  SolidSubCycle<dim>::write_rows()
   {
     if (!prm.energy_file.empty() || !prm.probes.empty())
       {
@@ -1598,8 +1414,9 @@ namespace femp
                       << e.kinetic / std::max(std::abs(e.internal), 1e-300)
                       << "," << e.hourglass_mode << "," << e.transfer << ","
                       << e.melted << "," << e.solidified << "," << e.remap
-                      << "," << scaling.factor << "," << scaling.last_ratio
-                      << "," << e.scaling_jump << "," << e.withheld << "\n";
+                      << "," << scaling.factor() << ","
+                      << scaling.state().last_ratio << "," << e.scaling_jump
+                      << "," << e.withheld << "\n";
         if (probe_out)
           {
             *probe_out << std::setprecision(10) << t_solid;
@@ -1624,7 +1441,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::save_state(StateWriter &out) const
+  SolidSubCycle<dim>::save_state(StateWriter &out) const
   {
     // The sub-step clock and the energy accounts (global: the same on every
     // rank).
@@ -1632,17 +1449,9 @@ namespace femp
     out.put(t_prev);
     out.put(dt_solid);
     out.put(steps);
-    for (const double a : {W_ext,
-                           W_int,
-                           K0,
-                           K,
-                           D_transfer,
-                           K_melted,
-                           K_solidified,
-                           W_remap,
-                           K_points,
-                           n_points_global})
+    for (const double a : ledger.saved_values())
       out.put(a);
+    out.put(n_points_global);
     // Temperatures of the last sub-step, of the last advance() (the start
     // of the next interpolation) and the spare buffer of the sub-steps.
     save_cell_fields(out, grid, {&T_solid, &T_prev, &T_next});
@@ -1674,53 +1483,35 @@ namespace femp
       SolidFEM<dim>::save_no_zone(out);
     // The mass-scaling factor (adaptive mass scaling changes it) and its
     // measurement over the current solid phase.
-    for (const double a : {scaling.factor,
-                           scaling.last_ratio,
-                           scaling.kinetic_jump,
-                           phase_K_dt,
-                           phase_time})
+    for (const double a : scaling.saved_values())
       out.put(a);
     // Added last, so that checkpoints written without it still load (as 0).
-    out.put(W_withheld);
+    out.put(ledger.withheld());
   }
 
   template <int dim>
   void
-  SolidStress<dim>::measure_and_adapt_scaling(const bool adapt)
+  SolidSubCycle<dim>::measure_and_adapt_scaling(const bool adapt)
   {
     // The quasi-static gauge (doc/speed_accuracy.md, sections 1 and 3):
     // the mean kinetic energy of the advance's steps over the elastic
     // energy stored at its end (cell temperatures of the last step).
-    const double u      = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
+    const double u = Utilities::MPI::sum(mpm.elastic_energy(T_solid) +
                                            (fem ? fem->elastic_energy() : 0.),
                                          comm);
-    const double k_mean = phase_time > 0 ? phase_K_dt / phase_time : K;
-    scaling.last_ratio =
-      u > 0 ? k_mean / u :
-              (k_mean > 0 ? std::numeric_limits<double>::infinity() : 0.);
-    phase_K_dt = phase_time = 0;
+    scaling.measure(u, ledger.kinetic());
     check_energy_created(u);
     if (!adapt)
       return;
-    // Quasi-static motion is kinematic (thermal expansion), K ~ s: the
-    // factor that brings the ratio to r_max is s r_max / r. Up by at most
-    // x2 per temperature step, down at once; rounded down to a power of
-    // 2^(1/4), so that round-off of the global sums (rank count) cannot
-    // change the factor and the factor holds while r lies in
-    // (2^(-1/4) r_max, r_max].
-    const double s = scaling.factor, r = scaling.last_ratio;
-    double       target = r > 0 ? s * prm.max_kinetic_ratio / r : 2 * s;
-    target              = std::min(target, 2 * s);
-    if (target > 0)
-      target = std::exp2(std::floor(4 * std::log2(target) + 1e-9) / 4);
-    target = std::max(prm.min_factor, std::min(prm.max_factor, target));
+    const double s      = scaling.factor();
+    const double target = scaling.target();
     if (target != s)
       set_mass_scaling(target);
   }
 
   template <int dim>
   void
-  SolidStress<dim>::check_energy_created(const double elastic_energy) const
+  SolidSubCycle<dim>::check_energy_created(const double elastic_energy) const
   {
     // A solid step above the stable limit can grow a mode that stays
     // finite (no point collapses, no element inverts: the material points
@@ -1758,8 +1549,8 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::load_state(std::vector<StateReader> &parts,
-                               const std::string        &directory)
+  SolidSubCycle<dim>::load_state(std::vector<StateReader> &parts,
+                                 const std::string        &directory)
   {
     double        a[10];
     std::uint64_t energy_size = 0, probe_size = 0;
@@ -1774,9 +1565,8 @@ namespace femp
         if (f > 0)
           continue;
         t_solid = ts, t_prev = tp, dt_solid = dts, steps = n;
-        W_ext = a[0], W_int = a[1], K0 = a[2], K = a[3], D_transfer = a[4];
-        K_melted = a[5], K_solidified = a[6], W_remap = a[7];
-        K_points = a[8], n_points_global = a[9];
+        ledger.restore(a);
+        n_points_global = a[9];
       }
     load_cell_fields(parts, grid, {&T_solid, &T_prev, &T_next});
     for (std::size_t f = 0; f < parts.size(); ++f)
@@ -1805,25 +1595,23 @@ namespace femp
       // of the setup.
       if (fem)
         fem->set_mass_scaling(b[0]);
-      scaling.factor = b[0];
+      scaling.restore({{b[0], b[1], b[2], b[3], b[4]}});
       // The Courant number in use is the one the checkpoint's step was
       // taken with (it may be the one after solidification).
       if (prm.time_step == 0)
-        safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor);
+        safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor());
       cooling_step = prm.safety_factor_solidified > prm.safety_factor &&
                      safety > prm.safety_factor * (1 + 1e-6);
       set_small_mass_cutoff(small_mass_fraction);
-      scaling.last_ratio   = b[1];
-      scaling.kinetic_jump = b[2];
-      phase_K_dt = b[3], phase_time = b[4];
     }
-    W_withheld = 0; // not in checkpoints written before it was booked
+    // Not in checkpoints written before it was booked: 0.
+    ledger.restore_withheld(0);
     for (std::size_t f = 0; f < parts.size(); ++f)
       if (!parts[f].at_end())
         {
           const double x = parts[f].get<double>();
           if (f == 0)
-            W_withheld = x;
+            ledger.restore_withheld(x);
         }
     have_pending_exchange = false;
 
@@ -1865,7 +1653,7 @@ namespace femp
 
   template <int dim>
   std::string
-  SolidStress<dim>::use_cooling_step()
+  SolidSubCycle<dim>::use_cooling_step()
   {
     const double c2 = prm.safety_factor_solidified;
     if (cooling_step || !(c2 > safety))
@@ -1873,15 +1661,15 @@ namespace femp
     // The stresses depend on s and C through sqrt(s) / C
     // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
     // (C2 / C)^2, and the step, C sqrt(s), by (C2 / C)^2 as well.
-    const double s_old = scaling.factor, c_old = safety, dt_old = dt_solid;
+    const double s_old = scaling.factor(), c_old = safety, dt_old = dt_solid;
     const double r = c2 / c_old;
     safety         = c2;
     set_mass_scaling(s_old * r * r);
     cooling_step = true;
     std::ostringstream m;
     m << "safety factor " << c_old << " -> " << c2 << ", mass scaling " << s_old
-      << " -> " << scaling.factor << " (sqrt(s)/C kept at "
-      << std::sqrt(scaling.factor) / safety << "), solid step " << dt_old
+      << " -> " << scaling.factor() << " (sqrt(s)/C kept at "
+      << std::sqrt(scaling.factor()) / safety << "), solid step " << dt_old
       << " -> " << dt_solid << " s";
     if (mass_floor)
       m << ", light-node mass floor x " << r * r;
@@ -1893,23 +1681,20 @@ namespace femp
 
   template <int dim>
   void
-  SolidStress<dim>::set_mass_scaling(const double s)
+  SolidSubCycle<dim>::set_mass_scaling(const double s)
   {
     // Velocities kept (the kinematic velocity of the thermal expansion
     // does not depend on s); the kinetic energy follows the mass, and the
     // jump is booked so that the balance still closes.
-    const double r = s / scaling.factor;
-    scaling.kinetic_jump += (r - 1) * K;
-    K *= r;
-    K_points *= r;
+    const double r = scaling.change_to(s, ledger.kinetic());
+    ledger.scale_kinetic(r);
     mpm.set_mass_scaling(s);
     if (fem)
       fem->set_mass_scaling(s);
-    scaling.factor = s;
     set_small_mass_cutoff(small_mass_fraction); // from the factor, not by r
     dt_solid = safety * prm.stable_limit(mat, grid.h(), s);
   }
 
-  template class SolidStress<2>;
-  template class SolidStress<3>;
+  template class SolidSubCycle<2>;
+  template class SolidSubCycle<3>;
 } // namespace femp

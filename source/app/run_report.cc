@@ -3,8 +3,8 @@
 // the solid energies of eqs. 5-17 and the melt-flow statistics.
 #include <deal.II/base/mpi.h>
 
+#include <femp/app/run_report.h>
 #include <femp/base/progress_watchdog.h>
-#include <femp/io/run_report.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,215 @@
+// femp: SolidEnergyLedger, the energy accounts of the solid (doc/solid.md
+// "Energies"; global sums, J or J/m in 2D): external work (gravity, fluid
+// forces), stress work int sigma : D (internal), kinetic energy and its
+// initial value, the kinetic energy lost in the MPM transfers, the kinetic
+// energy of points that melted (left the solid) or solidified (entered
+// it), the re-map work of MUSL and the work withheld at light nodes. The
+// balance
+//   W_ext - (K - K_0) - W_int - E_HG - D_transfer - K_melted + K_solidified
+//   + W_remap + (mass-scaling jumps) - W_withheld
+// closes to round-off for a stable solid; SolidSubCycle books into it
+// after every step, gather and re-sort, and writes it to the energy file.
+// No equation of the paper: a check of eqs. 5-17.
+#ifndef femp_solid_energy_ledger_h
+#define femp_solid_energy_ledger_h
+
+#include <array>
+#include <cmath>
+
+namespace femp
+{
+  /// The energies of the solid at one time.
+  struct SolidEnergies
+  {
+    double external = 0, internal = 0, kinetic = 0, hourglass = 0;
+    double initial_kinetic = 0;
+    /// Energy of the hourglass modes measured with the reference
+    /// stiffness kappa = 0.05 even when control is off (stability studies:
+    /// how large the zero-energy modes have grown).
+    double hourglass_mode = 0;
+    /// Kinetic energy lost in the point-grid transfers (MPM: P2G of the
+    /// point momenta, incl. the projection onto the boundary conditions,
+    /// and G2P; measured per step as K_points - K_grid after P2G plus
+    /// K_grid - K_points after the grid update; FLIP can make it < 0).
+    double transfer = 0;
+    /// Kinetic energy of points that melted (left the solid) and of
+    /// points that solidified (entered it), summed over the run.
+    double melted = 0, solidified = 0;
+    /// Work of the nodal forces on the part of the updated grid velocity
+    /// that the MUSL re-map takes back, dt/2 f_I . (v_I - v_remap,I),
+    /// summed over the steps: energy the MPM update creates (> 0) or
+    /// destroys, a numerical error of MUSL, booked so that the balance
+    /// tests the rest (doc/solid.md "Energies").
+    double remap = 0;
+    /// Kinetic energy created (> 0) or removed by changes of the
+    /// mass-scaling factor at kept velocities (adaptive mass scaling:
+    /// (s_new / s_old - 1) K at each change), summed over the run.
+    double scaling_jump = 0;
+    /// Work that the forces withheld at light nodes (below 'Small mass
+    /// cutoff') would have done on those nodes' velocities, dt f_I . v_I
+    /// summed over the steps: the stress work counts these nodes, the
+    /// kinetic energy does not (< 0 when the withheld forces oppose the
+    /// motion: energy the cutoff leaves in it).
+    double withheld = 0;
+    double
+    balance() const
+    {
+      return external + remap - (kinetic - initial_kinetic) - internal -
+             hourglass - transfer - melted + solidified + scaling_jump -
+             withheld;
+    }
+  };
+
+  class SolidEnergyLedger
+  {
+  public:
+    /// Start of a run: kinetic energy @p K_total of the solid, @p K_points
+    /// of its points; nothing booked.
+    void
+    start(const double K_total, const double K_points)
+    {
+      K0 = K = K_total;
+      W_ext = W_int = 0;
+      D_transfer = K_melted = K_solidified = W_remap = W_withheld = 0;
+      K_p                                                         = K_points;
+    }
+    /// The global sums of one step: kinetic energy of the points
+    /// @p k_points and of the FE nodes @p k_fe after it, stress work
+    /// @p work, external work @p external, the points' kinetic energy after
+    /// P2G minus the grid's after the update, and so on (@p transfer: the
+    /// grid side of the transfer loss), re-map work @p remap and withheld
+    /// work @p withheld.
+    void
+    book_step(const double k_points,
+              const double k_fe,
+              const double work,
+              const double external,
+              const double transfer,
+              const double remap,
+              const double withheld)
+    {
+      K = k_points + k_fe;
+      W_int += work;
+      W_ext += external;
+      D_transfer += transfer - k_points; // k_points: point kinetic energy now
+      W_remap += remap;
+      W_withheld += withheld;
+      K_p = k_points;
+    }
+    /// After a re-sort within a step whose points had @p k_step: the
+    /// points' kinetic energy counted again, @p k_now, of which @p k_aside
+    /// left the solid into detached drops (booked as melted); @p k_fe as
+    /// in book_step().
+    void
+    book_resort(const double k_step,
+                const double k_now,
+                const double k_aside,
+                const double k_fe)
+    {
+      D_transfer -= k_now + k_aside - k_step;
+      K_melted += k_aside;
+      K   = k_now + k_fe;
+      K_p = k_now;
+    }
+    /// At a gather: the kinetic energy that melted points took out,
+    /// @p k_melted, and solidified ones brought, @p k_solidified; the
+    /// points' kinetic energy is now @p k_points.
+    void
+    book_exchange(const double k_melted,
+                  const double k_solidified,
+                  const double k_points)
+    {
+      K_melted += k_melted;
+      K_solidified += k_solidified;
+      K += k_points - K_p;
+      K_p = k_points;
+    }
+    /// The masses changed by the factor @p r at kept velocities.
+    void
+    scale_kinetic(const double r)
+    {
+      K *= r;
+      K_p *= r;
+    }
+    /// Kinetic energy of the solid now.
+    double
+    kinetic() const
+    {
+      return K;
+    }
+    /// Whether the kinetic energy and the stress work are finite.
+    bool
+    finite() const
+    {
+      return std::isfinite(K) && std::isfinite(W_int);
+    }
+    /// The energies, with the hourglass energies @p hourglass and
+    /// @p hourglass_mode and the mass-scaling jump @p scaling_jump.
+    SolidEnergies
+    energies(const double hourglass,
+             const double hourglass_mode,
+             const double scaling_jump) const
+    {
+      SolidEnergies e;
+      e.external        = W_ext;
+      e.internal        = W_int;
+      e.kinetic         = K;
+      e.initial_kinetic = K0;
+      e.hourglass       = hourglass;
+      e.hourglass_mode  = hourglass_mode;
+      e.transfer        = D_transfer;
+      e.remap           = W_remap;
+      e.withheld        = W_withheld;
+      e.melted          = K_melted;
+      e.solidified      = K_solidified;
+      e.scaling_jump    = scaling_jump;
+      return e;
+    }
+    /// Checkpoint: the accounts in a fixed order (W_ext, W_int, K_0, K,
+    /// D_transfer, K_melted, K_solidified, W_remap, K_points), and the
+    /// withheld work (written last in the checkpoint).
+    std::array<double, 9>
+    saved_values() const
+    {
+      return {{W_ext,
+               W_int,
+               K0,
+               K,
+               D_transfer,
+               K_melted,
+               K_solidified,
+               W_remap,
+               K_p}};
+    }
+    /// From the 9 values of saved_values() at @p a.
+    void
+    restore(const double *a)
+    {
+      W_ext = a[0], W_int = a[1], K0 = a[2], K = a[3], D_transfer = a[4];
+      K_melted = a[5], K_solidified = a[6], W_remap = a[7];
+      K_p = a[8];
+    }
+    double
+    withheld() const
+    {
+      return W_withheld;
+    }
+    void
+    restore_withheld(const double w)
+    {
+      W_withheld = w;
+    }
+
+  private:
+    double W_ext = 0, W_int = 0, K0 = 0, K = 0;
+    double D_transfer = 0, K_melted = 0, K_solidified = 0;
+    /// re-map work of the MUSL update, with the velocity jumps of the FE
+    /// node forces at the transition nodes
+    double W_remap = 0;
+    /// SolidEnergies::withheld, summed over the steps, J.
+    double W_withheld = 0;
+    double K_p        = 0; ///< kinetic energy of the points
+  };
+} // namespace femp
+
+#endif
