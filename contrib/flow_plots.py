@@ -11,7 +11,7 @@ measure S/S0 over t/T, T the analytic period of the 2D mode-2 oscillation);
 the plot shows them with the analytic exp(-gamma t) cos(2 pi t/T).
 
 Each dam-break output is labelled with its file name, or with LABEL when
-given as PATH:LABEL. The band around the experiment is the issue's 10 %."""
+given as PATH:LABEL. The band around the experiment is the 10 % target."""
 import re
 import sys
 

@@ -362,7 +362,7 @@ namespace femp
         v[1] = std::move(shares.first);
         v[2] = std::move(shares.second);
       },
-      Reach::files,
+      ResultsOutput<dim>::Reach::files,
       false);
     typename ResultsOutput<dim>::Writer w;
     w.resume = [this](const double time) {
