@@ -8,8 +8,6 @@
 #include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
 
-#include <iomanip>
-
 namespace femp
 {
   template <int dim>
@@ -29,15 +27,7 @@ namespace femp
     report  = std::make_unique<RunReport<dim>>(comm, pcout);
     laser   = std::make_unique<Laser<dim>>(scene.laser);
     laser->check_path_inside(scene.grid.lower_corner, scene.grid.upper_corner);
-    // The layer schedule, refused before any work when a layer does not
-    // fit the domain.
-    if (scene.build.enabled())
-      layers = std::make_unique<LayerSchedule<dim>>(
-        scene.build,
-        laser->segments(),
-        scene.points.substrate_top + std::max(0., scene.points.layer_thickness),
-        scene.grid.upper_corner[dim - 1],
-        scene.grid.cell_size);
+    builds = std::make_unique<BuildSteps<dim>>(scene, *laser);
   }
 
   template <int dim>
@@ -69,37 +59,31 @@ namespace femp
     point_heat->initial_temperatures(scene.points.bodies, scene.heat);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
-      heat->set_metal_fraction(points->metal_fraction());
+      point_heat->initial_metal_fraction();
     }
     results =
       std::make_unique<ResultsOutput<dim>>(scene.output, *grid, *points);
-    register_heat_output();
+    add_heat_output(*results,
+                    *heat,
+                    *points,
+                    scene.heat_enabled,
+                    scene.output.directory,
+                    comm);
     if (scene.melt_flow)
       setup_flow();
-    setup_builds();
+    builds->setup(*grid, *points, *heat, *control, *results);
     if (scene.track.enabled(scene.melt_flow))
-      {
-        // Centre line and default cross-section from the laser's first
-        // segment (the middle of the domain without a path).
-        Point<dim> a = grid->origin(), b = grid->origin();
-        for (int d = 0; d < dim; ++d)
-          a[d] = b[d] =
-            0.5 * (scene.grid.lower_corner[d] + scene.grid.upper_corner[d]);
-        if (!laser->segments().empty())
-          a = laser->segments().front().start,
-          b = laser->segments().front().end;
-        track_shape =
-          std::make_unique<TrackShape<dim>>(scene.track,
-                                            *grid,
-                                            dim == 3 ? a[1] : 0.,
-                                            scene.points.substrate_top,
-                                            0.5 * (a[0] + b[0]));
-        results->add_writer(track_shape_files(*track_shape,
-                                              *points,
-                                              *heat,
-                                              scene.material.liquidus,
-                                              scene.output.directory));
-      }
+      track_shape = add_track_shape(*results,
+                                    scene.track,
+                                    *grid,
+                                    0.5 * (scene.grid.lower_corner +
+                                           scene.grid.upper_corner),
+                                    *laser,
+                                    *points,
+                                    *heat,
+                                    scene.points.substrate_top,
+                                    scene.material.liquidus,
+                                    scene.output.directory);
     if (scene.history.enabled)
       history = std::make_unique<ThermalHistory<dim>>(*grid,
                                                       scene.material.solidus,
@@ -141,23 +125,13 @@ namespace femp
   FempProblem<dim>::setup_solid()
   {
     TimerOutput::Scope t(timer, "setup: solid");
-    solid = std::make_unique<SolidStress<dim>>(
+    solid = std::make_unique<SolidSubCycle<dim>>(
       scene.solid_stress, scene.fem, scene.solid_material, *grid, *points);
     if (flow)
       {
-        // Flow and solid together (doc/solid.md): the flow owns the
-        // fluid points' velocities; its forces on the solid enter
-        // through the solid's external nodal forces.
-        solid->set_flow_owns_fluid_points(true);
-        // Fragments that solidify where the flow left them: light nodes
-        // accelerated as if they had the mass at which the step is
-        // stable for them, or (`Solid/Light nodes = no force`) no force
-        // on nodes with less than `Solid/Small mass cutoff` of a full
-        // node's mass (stability estimate and choice: doc/solid.md).
-        if (scene.solid_stress.light_nodes == "mass floor")
-          solid->set_mass_floor(true);
-        else
-          solid->set_small_mass_cutoff(scene.solid_stress.small_mass_cutoff);
+        // Flow and solid together (doc/solid.md): the fluid forces on the
+        // solid enter through the solid's external nodal forces.
+        solid->share_points_with_flow();
         fluid_solid = std::make_unique<FluidSolidForces<dim>>(
           *grid, *points, scene.material.density, scene.fem);
       }
@@ -173,41 +147,9 @@ namespace femp
     // Mises, equivalent plastic strain (FE element or mean over the
     // cell's solid points).
     results->add_fields(
-      SolidStress<dim>::cell_field_names(),
+      SolidSubCycle<dim>::cell_field_names(),
       [this](std::vector<std::vector<double>> &v) { solid->cell_fields(v); },
       ResultsOutput<dim>::Reach::lines);
-  }
-
-  template <int dim>
-  void
-  FempProblem<dim>::register_heat_output()
-  {
-    using Reach = typename ResultsOutput<dim>::Reach;
-    auto &r     = *results;
-    // Columns of the probe series, probe lines and field files: in the
-    // order of registration within each reach.
-    r.add_field("T", heat->temperature(), Reach::probes);
-    r.add_field("gamma", heat->liquid_fraction(), Reach::probes);
-    r.add_field("alpha", heat->metal_fraction(), Reach::probes);
-    r.add_field("laser_source", heat->laser_source(), Reach::files);
-    // The phase (0 gas, 1 solid, 2 mushy, 3 liquid) and the zone tags of
-    // the points (tags: never interpolated).
-    r.add_fields(
-      {"phase", "zone"},
-      [this](std::vector<std::vector<double>> &v) {
-        const auto         &a = heat->metal_fraction();
-        const auto         &g = heat->liquid_fraction();
-        std::vector<double> phase(grid->n_local(), 0.);
-        for (std::size_t i = 0; i < phase.size(); ++i)
-          phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
-        v.clear();
-        v.push_back(std::move(phase));
-        v.push_back(points->zone_tags(a, heat->temperature()));
-      },
-      Reach::files,
-      false);
-    if (scene.heat_enabled && heat->ray_traced())
-      r.add_writer(absorption_series(*heat, scene.output.directory, comm));
   }
 
   template <int dim>
@@ -277,12 +219,12 @@ namespace femp
         time_steps->begin_step();
 
         // 0. Recoat: the powder of a layer starting in this step.
-        if (recoater)
-          recoat_layers(dt);
+        builds->recoat(control->time(), dt, *points, *point_heat, timer, pcout);
 
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
-        //    points move (the melt-flow and solid modules, step 3), so
-        //    nothing to do here; gamma and the properties follow T inside
+        //    points change cells, and PointHeatExchange::follow_points()
+        //    renews it right after each module that moves them (recoat,
+        //    flow, solid); gamma and the properties follow T inside
         //    HeatTransfer::advance().
 
         // 2. Temperature in fluid, solid and powder (eq. 1), then to the
@@ -328,76 +270,6 @@ namespace femp
       history->write(scene.output.directory);
     timer.print_summary();
     print_timer_statistics(timer, comm); // min/avg/max over the ranks
-  }
-
-  template <int dim>
-  void
-  FempProblem<dim>::setup_builds()
-  {
-    if (layers)
-      recoater = std::make_unique<Recoater<dim>>(scene.points,
-                                                 scene.material.density,
-                                                 *grid);
-    if (!(scene.porosity.enabled(layers != nullptr) && points->carried()))
-      return;
-    pores = std::make_unique<PoreDetector<dim>>(scene.porosity,
-                                                *grid,
-                                                scene.points.substrate_top);
-    // Pores and unfused powder with every field output: rows of
-    // porosity.csv and pores.csv, and three cell fields.
-    results->add_fields(
-      {"pore", "unfused_powder", "partially_molten"},
-      [this](std::vector<std::vector<double>> &v) {
-        auto shares = PoreDetector<dim>::powder_shares(*grid,
-                                                       *points,
-                                                       scene.material.solidus,
-                                                       scene.material.liquidus);
-        auto r      = pores->find(heat->metal_fraction(), &shares.first);
-        pores->write(scene.output.directory,
-                     control->output_number(),
-                     control->time(),
-                     r);
-        v.resize(3);
-        v[0] = std::move(r.pore_number);
-        v[1] = std::move(shares.first);
-        v[2] = std::move(shares.second);
-      },
-      ResultsOutput<dim>::Reach::files,
-      false);
-    typename ResultsOutput<dim>::Writer w;
-    w.resume = [this](const double time) {
-      pores->resume(scene.output.directory, time);
-    };
-    results->add_writer(w);
-  }
-
-  template <int dim>
-  void
-  FempProblem<dim>::recoat_layers(const double dt)
-  {
-    const double t = control->time();
-    for (const auto &layer : layers->layers())
-      {
-        // Each layer in the one step whose [t, t + dt) holds its start
-        // (the same steps after a resume: no state to save).
-        if (!(layer.start_time >= t && layer.start_time < t + dt))
-          continue;
-        TimerOutput::Scope scope(timer, "recoat");
-        const double       T = scene.build.powder_temperature > 0 ?
-                                 scene.build.powder_temperature :
-                                 scene.heat.reference_temperature;
-        const auto         r = recoater->recoat(*points, layer, T);
-        // The new points: alpha and the heat of the cells they entered.
-        point_heat->points_changed_cells();
-        pcout << "Recoat: layer " << r.layer << " at t = " << t
-              << " s: " << r.grains << " grains, packing fraction "
-              << std::setprecision(3) << r.packing << " of the "
-              << r.fill_volume << (dim == 3 ? " m^3" : " m^2")
-              << " between the surface (z " << r.surface_min << " to "
-              << r.surface_max << " m) and the top " << layer.top << " m; "
-              << r.points << " points at " << T << " K" << std::setprecision(6)
-              << std::endl;
-      }
   }
 
   template <int dim>
@@ -470,11 +342,10 @@ namespace femp
       may_melt = [this]() {
         return !(heat->max_temperature() < scene.material.solidus);
       };
-    if (!flow->advance_over(control->time(), dt, cell_fields(), may_melt, c))
-      return;
+    flow->advance_over(control->time(), dt, cell_fields(), may_melt, c);
     // Points changed cells: new alpha, and the heat they bring.
     TimerOutput::Scope scope(timer, "flow: alpha and new metal cells");
-    point_heat->points_changed_cells();
+    point_heat->follow_points();
   }
 
   template <int dim>
@@ -503,6 +374,9 @@ namespace femp
                    heat->temperature(),
                    control->is_last(),
                    fluid_solid ? &fluid_solid->nodal_forces() : nullptr);
+    // Points the solid carried into other cells: new alpha, and the heat
+    // they bring, before the output and the next step read alpha.
+    point_heat->follow_points();
   }
 
   template <int dim>
@@ -519,12 +393,19 @@ namespace femp
     if (control->progress_due())
       report->progress(*control,
                        time_steps->workpiece_peak_temperature(),
-                       measure_melt_pool(*grid,
-                                         heat->temperature(),
-                                         heat->metal_fraction(),
-                                         scene.material.liquidus,
-                                         scene.points.substrate_top,
-                                         scene.material.solidus));
+                       melt_pool());
+  }
+
+  template <int dim>
+  MeltPoolSize
+  FempProblem<dim>::melt_pool() const
+  {
+    return measure_melt_pool(*grid,
+                             heat->temperature(),
+                             heat->metal_fraction(),
+                             scene.material.liquidus,
+                             scene.points.substrate_top,
+                             scene.material.solidus);
   }
 
   template <int dim>
@@ -532,12 +413,7 @@ namespace femp
   FempProblem<dim>::write_series()
   {
     TimerOutput::Scope t(timer, "time series");
-    result.pool = measure_melt_pool(*grid,
-                                    heat->temperature(),
-                                    heat->metal_fraction(),
-                                    scene.material.liquidus,
-                                    scene.points.substrate_top,
-                                    scene.material.solidus);
+    result.pool = melt_pool();
     results->write_series(control->time(), result.pool);
     control->series_written();
   }

@@ -1,6 +1,6 @@
 // femp: physical plausibility of a scene before any work (see the header).
 // The step limits are those the modules use: IncompressibleFlow's
-// material_limits() (eqs. 3-4), SolidStress's stable_limit() (eqs.
+// material_limits() (eqs. 3-4), SolidSubCycle's stable_limit() (eqs.
 // 11-17), the explicit temperature step of eq. (1) for a full metal cell.
 #include <deal.II/base/utilities.h>
 
@@ -11,7 +11,7 @@
 #include <femp/flow/incompressible_flow.h>
 #include <femp/heat/laser.h>
 #include <femp/solid/constitutive.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -324,7 +324,7 @@ namespace femp
         {
           SolidMaterial sm(mat);
           sm.parse_parameters(prm);
-          typename SolidStress<dim>::Parameters sp;
+          typename SolidSubCycle<dim>::Parameters sp;
           sp.parse_parameters(prm);
           const double limit = sp.stable_limit(sm, h);
           const double dt_s =

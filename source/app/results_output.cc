@@ -205,6 +205,67 @@ namespace femp
 
   template class ResultsOutput<2>;
   template class ResultsOutput<3>;
+  template <int dim>
+  void
+  add_heat_output(ResultsOutput<dim>        &results,
+                  const HeatTransfer<dim>   &heat,
+                  const MaterialPoints<dim> &points,
+                  const bool                 heat_enabled,
+                  const std::string         &directory,
+                  const MPI_Comm             comm)
+  {
+    using Reach = typename ResultsOutput<dim>::Reach;
+    // Columns of the probe series, probe lines and field files: in the
+    // order of registration within each reach.
+    results.add_field("T", heat.temperature(), Reach::probes);
+    results.add_field("gamma", heat.liquid_fraction(), Reach::probes);
+    results.add_field("alpha", heat.metal_fraction(), Reach::probes);
+    results.add_field("laser_source", heat.laser_source(), Reach::files);
+    // The phase and the zone tags of the points (tags: never
+    // interpolated).
+    results.add_fields(
+      {"phase", "zone"},
+      [&heat, &points](std::vector<std::vector<double>> &v) {
+        const auto         &a = heat.metal_fraction();
+        const auto         &g = heat.liquid_fraction();
+        std::vector<double> phase(a.size(), 0.);
+        for (std::size_t i = 0; i < phase.size(); ++i)
+          phase[i] = a[i] <= 0 ? 0 : (g[i] <= 0 ? 1 : (g[i] < 1 ? 2 : 3));
+        v.clear();
+        v.push_back(std::move(phase));
+        v.push_back(points.zone_tags(a, heat.temperature()));
+      },
+      Reach::files,
+      false);
+    if (heat_enabled && heat.ray_traced())
+      results.add_writer(absorption_series(heat, directory, comm));
+  }
+
+  template <int dim>
+  std::unique_ptr<TrackShape<dim>>
+  add_track_shape(ResultsOutput<dim>                         &results,
+                  const typename TrackShape<dim>::Parameters &prm,
+                  const BackgroundGrid<dim>                  &grid,
+                  const Point<dim>                           &centre,
+                  const Laser<dim>                           &laser,
+                  const MaterialPoints<dim>                  &points,
+                  const HeatTransfer<dim>                    &heat,
+                  const double                                substrate_top,
+                  const double                                liquidus,
+                  const std::string                          &directory)
+  {
+    // Centre line and default cross-section from the laser's first
+    // segment (the middle of the domain without a path).
+    Point<dim> a = centre, b = centre;
+    if (!laser.segments().empty())
+      a = laser.segments().front().start, b = laser.segments().front().end;
+    auto track = std::make_unique<TrackShape<dim>>(
+      prm, grid, dim == 3 ? a[1] : 0., substrate_top, 0.5 * (a[0] + b[0]));
+    results.add_writer(
+      track_shape_files(*track, points, heat, liquidus, directory));
+    return track;
+  }
+
   template ResultsOutput<2>::Writer
   absorption_series(const HeatTransfer<2> &, const std::string &, MPI_Comm);
   template ResultsOutput<3>::Writer
@@ -221,4 +282,40 @@ namespace femp
                     const HeatTransfer<3> &,
                     double,
                     const std::string &);
+  template void
+  add_heat_output(ResultsOutput<2> &,
+                  const HeatTransfer<2> &,
+                  const MaterialPoints<2> &,
+                  bool,
+                  const std::string &,
+                  MPI_Comm);
+  template void
+  add_heat_output(ResultsOutput<3> &,
+                  const HeatTransfer<3> &,
+                  const MaterialPoints<3> &,
+                  bool,
+                  const std::string &,
+                  MPI_Comm);
+  template std::unique_ptr<TrackShape<2>>
+  add_track_shape(ResultsOutput<2> &,
+                  const TrackShape<2>::Parameters &,
+                  const BackgroundGrid<2> &,
+                  const Point<2> &,
+                  const Laser<2> &,
+                  const MaterialPoints<2> &,
+                  const HeatTransfer<2> &,
+                  double,
+                  double,
+                  const std::string &);
+  template std::unique_ptr<TrackShape<3>>
+  add_track_shape(ResultsOutput<3> &,
+                  const TrackShape<3>::Parameters &,
+                  const BackgroundGrid<3> &,
+                  const Point<3> &,
+                  const Laser<3> &,
+                  const MaterialPoints<3> &,
+                  const HeatTransfer<3> &,
+                  double,
+                  double,
+                  const std::string &);
 } // namespace femp

@@ -58,7 +58,7 @@ namespace femp
                          const HeatTransfer<dim>       &heat,
                          const MaterialPoints<dim>     &points,
                          const IncompressibleFlow<dim> *flow,
-                         const SolidStress<dim>        *solid,
+                         const SolidSubCycle<dim>      *solid,
                          const double                   moved_points,
                          RunSummary<dim>               &s) const
   {

@@ -68,7 +68,7 @@ namespace femp
     ThermalHistory<3>::Parameters::declare_parameters(prm);
     TrackShape<3>::Parameters::declare_parameters(prm);
     SolidMaterial::declare_parameters(prm);
-    SolidStress<3>::Parameters::declare_parameters(prm);
+    SolidSubCycle<3>::Parameters::declare_parameters(prm);
     SolidFEM<3>::Parameters::declare_parameters(prm);
     Checkpoint<3>::Parameters::declare_parameters(prm);
     LayerSchedule<3>::Parameters::declare_parameters(prm);
@@ -298,7 +298,7 @@ namespace femp
                     const MaterialPoints<dim> &mp,
                     const HeatTransfer<dim>   &heat_module,
                     const Laser<dim>          &laser_module,
-                    const SolidStress<dim>    *solid_module) const
+                    const SolidSubCycle<dim>  *solid_module) const
   {
     const std::string index = output.format == "hdf5" ? ".xdmf" : ".pvd";
     pcout << "femp: " << dim << "D scene, "

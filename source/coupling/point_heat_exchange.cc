@@ -59,8 +59,27 @@ namespace femp
 
   template <int dim>
   void
+  PointHeatExchange<dim>::initial_metal_fraction()
+  {
+    heat.set_metal_fraction(points.metal_fraction());
+    alpha_moves = points.point_moves();
+  }
+
+  template <int dim>
+  bool
+  PointHeatExchange<dim>::follow_points()
+  {
+    if (points.point_moves() == alpha_moves)
+      return false;
+    points_changed_cells();
+    return true;
+  }
+
+  template <int dim>
+  void
   PointHeatExchange<dim>::points_changed_cells()
   {
+    alpha_moves             = points.point_moves();
     const bool heat_enabled = !heat.is_frozen();
     // Energy bookkeeping: the stored enthalpy before and after (collective).
     const double        H_before = heat_enabled ? heat.stored_enthalpy() : 0.;

@@ -532,6 +532,7 @@ namespace femp
     if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
       offset64 = 0;
     const types::particle_index offset = offset64;
+    ++moves_global; // the cells' points are new (point_moves())
 
     const double        h = grid.h();
     std::vector<double> props(n_props, 0.);
@@ -1139,6 +1140,7 @@ namespace femp
   {
     handler.sort_particles_into_subdomains_and_cells();
     index_occupied_cells();
+    ++moves_global;
   }
 
   template <int dim>
@@ -1224,14 +1226,19 @@ namespace femp
           scan_cell(idx, cell);
     // One reduction for both: did a point go beyond the ghost layer
     // anywhere, does any rank send points?
-    const std::array<unsigned int, 2> flags{
-      {!local ? 1u : 0u, outgoing.empty() ? 0u : 1u}};
-    std::array<unsigned int, 2> any;
-    Utilities::MPI::max(ArrayView<const unsigned int>(flags.data(), 2),
+    // (And, for point_moves(), does any point change cells?)
+    const std::array<unsigned int, 3> flags{
+      {!local ? 1u : 0u,
+       outgoing.empty() ? 0u : 1u,
+       outgoing.empty() && moves.empty() ? 0u : 1u}};
+    std::array<unsigned int, 3> any;
+    Utilities::MPI::max(ArrayView<const unsigned int>(flags.data(), 3),
                         grid.communicator(),
-                        ArrayView<unsigned int>(any.data(), 2));
+                        ArrayView<unsigned int>(any.data(), 3));
     if (any[0] != 0)
       return false;
+    if (any[2] != 0)
+      ++moves_global;
     // One by one, last first (so that the iterators of the earlier points of
     // a cell stay valid), and the cached numbers updated once at the end:
     // remove_particles() would update them as well, and each update loops

@@ -1124,6 +1124,17 @@ namespace femp
 
   template <int dim>
   void
+  SolidSubCycle<dim>::share_points_with_flow()
+  {
+    set_flow_owns_fluid_points(true);
+    if (prm.light_nodes == "mass floor")
+      set_mass_floor(true);
+    else
+      set_small_mass_cutoff(prm.small_mass_cutoff);
+  }
+
+  template <int dim>
+  void
   SolidSubCycle<dim>::set_small_mass_cutoff(const double fraction)
   {
     // A node of mass fraction eps of a full node's, next to a point whose

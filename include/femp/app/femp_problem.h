@@ -9,7 +9,7 @@
 //      sub-cycled, the heat carried by points that changed cells
 //      (PointHeatExchange); with the solid, the fluid forces on the solid's
 //      nodes (eq. 13, FluidSolidForces);
-//   4. solid by MPM + FE with transition-node coupling (SolidStress,
+//   4. solid by MPM + FE with transition-node coupling (SolidSubCycle,
 //      eqs. 5-17), sub-cycled to the macro time, loaded by those fluid
 //      forces held constant over its sub-steps;
 //   5. output (ResultsOutput, RunReport) when the SimulationControl says so.
@@ -21,6 +21,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/app/build_steps.h>
 #include <femp/app/module_states.h>
 #include <femp/app/results_output.h>
 #include <femp/app/run_report.h>
@@ -38,7 +39,7 @@
 #include <femp/heat/thermal_history.h>
 #include <femp/io/checkpoint.h>
 #include <femp/io/track_shape.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <memory>
 
@@ -72,6 +73,12 @@ namespace femp
     {
       return *points;
     }
+    /// The heat module after run() (tests read its cell fields).
+    const HeatTransfer<dim> &
+    heat_transfer() const
+    {
+      return *heat;
+    }
     /// Write a checkpoint of the present state now (collective; after
     /// run(), tests compare the final states of two runs by it); returns
     /// its directory.
@@ -90,13 +97,11 @@ namespace femp
     std::unique_ptr<MaterialPoints<dim>>     points;
     std::unique_ptr<HeatTransfer<dim>>       heat;
     std::unique_ptr<IncompressibleFlow<dim>> flow;
-    std::unique_ptr<SolidStress<dim>>        solid;
+    std::unique_ptr<SolidSubCycle<dim>>      solid;
     std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
     std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
-    // Builds (doc/builds.md): null with one layer / without pore detection.
-    std::unique_ptr<LayerSchedule<dim>> layers;
-    std::unique_ptr<Recoater<dim>>      recoater;
-    std::unique_ptr<PoreDetector<dim>>  pores;
+    // Builds of several layers and pores (doc/builds.md).
+    std::unique_ptr<BuildSteps<dim>> builds;
     // What joins them.
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
@@ -116,10 +121,6 @@ namespace femp
     setup_flow();
     void
     setup_solid();
-    /// The heat's output fields and files (each module registers its own
-    /// where it is built).
-    void
-    register_heat_output();
     /// Every module with state, in checkpoint order.
     void
     register_states();
@@ -130,16 +131,7 @@ namespace femp
     CellFields<dim>
     cell_fields() const;
 
-    /// The recoater and the pore detector, with the pores' output.
-    void
-    setup_builds();
-
     // The steps of the macro time step (paper sec. 2.6), in run() order.
-    /// 0. Spread the powder of the layers whose start time lies in
-    /// [t, t + @p dt) (LayerSchedule, Recoater); then alpha and the heat of
-    /// the cells that gained powder (PointHeatExchange).
-    void
-    recoat_layers(const double dt);
     /// 2. Temperature in fluid, solid and powder (eq. 1).
     void
     temperature_step(const double dt);
@@ -161,6 +153,9 @@ namespace femp
     output_results();
     void
     write_series();
+    /// The melt pool now (measure_melt_pool()).
+    MeltPoolSize
+    melt_pool() const;
     void
     write_output(const bool last);
     void

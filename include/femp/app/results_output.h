@@ -135,6 +135,35 @@ namespace femp
                     const HeatTransfer<dim>   &heat,
                     const double               liquidus,
                     const std::string         &directory);
+
+  /// The heat module's output, registered on @p results: T, gamma and
+  /// alpha (probes), the laser source, the phase (0 gas, 1 solid, 2 mushy,
+  /// 3 liquid) and the points' zone tags (files), and with a ray-traced
+  /// laser absorption.csv (absorption_series()) when @p heat_enabled.
+  template <int dim>
+  void
+  add_heat_output(ResultsOutput<dim>        &results,
+                  const HeatTransfer<dim>   &heat,
+                  const MaterialPoints<dim> &points,
+                  const bool                 heat_enabled,
+                  const std::string         &directory,
+                  const MPI_Comm             comm);
+
+  /// The track shape (TrackShape) along the laser's first segment (the
+  /// domain's @p centre without a path), its files registered on
+  /// @p results (track_shape_files()).
+  template <int dim>
+  std::unique_ptr<TrackShape<dim>>
+  add_track_shape(ResultsOutput<dim>                         &results,
+                  const typename TrackShape<dim>::Parameters &prm,
+                  const BackgroundGrid<dim>                  &grid,
+                  const Point<dim>                           &centre,
+                  const Laser<dim>                           &laser,
+                  const MaterialPoints<dim>                  &points,
+                  const HeatTransfer<dim>                    &heat,
+                  const double                                substrate_top,
+                  const double                                liquidus,
+                  const std::string                          &directory);
 } // namespace femp
 
 #endif

@@ -14,7 +14,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/melt_pool.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <array>
 #include <limits>
@@ -50,8 +50,8 @@ namespace femp
     using FlowLimits = typename IncompressibleFlow<dim>::SubcycleRecord;
     FlowLimits flow_limits;
     /// Solid (if Physics/Solid stress): steps and final energies.
-    unsigned int                        solid_steps = 0;
-    typename SolidStress<dim>::Energies solid_energy;
+    unsigned int                          solid_steps = 0;
+    typename SolidSubCycle<dim>::Energies solid_energy;
   };
 
   template <int dim>
@@ -92,7 +92,7 @@ namespace femp
            const HeatTransfer<dim>       &heat,
            const MaterialPoints<dim>     &points,
            const IncompressibleFlow<dim> *flow,
-           const SolidStress<dim>        *solid,
+           const SolidSubCycle<dim>      *solid,
            const double                   moved_points,
            RunSummary<dim>               &s) const;
 

@@ -25,7 +25,7 @@
 #include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/io/track_shape.h>
-#include <femp/solid/solid_stress.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <functional>
 
@@ -70,11 +70,11 @@ namespace femp
     typename ThermalHistory<dim>::Parameters      history;
     typename IncompressibleFlow<dim>::Parameters  flow;
     /// Reads the density and solidus of @ref material.
-    SolidMaterial                         solid_material{material};
-    typename SolidStress<dim>::Parameters solid_stress;
-    typename SolidFEM<dim>::Parameters    fem;
-    typename TrackShape<dim>::Parameters  track;
-    typename Checkpoint<dim>::Parameters  checkpoint;
+    SolidMaterial                           solid_material{material};
+    typename SolidSubCycle<dim>::Parameters solid_stress;
+    typename SolidFEM<dim>::Parameters      fem;
+    typename TrackShape<dim>::Parameters    track;
+    typename Checkpoint<dim>::Parameters    checkpoint;
     /// Layers, recoating and pores (doc/builds.md).
     typename LayerSchedule<dim>::Parameters build;
     typename PoreDetector<dim>::Parameters  porosity;
@@ -106,7 +106,7 @@ namespace femp
           const MaterialPoints<dim> &mp,
           const HeatTransfer<dim>   &heat_module,
           const Laser<dim>          &laser_module,
-          const SolidStress<dim>    *solid_module) const;
+          const SolidSubCycle<dim>  *solid_module) const;
 
   private:
     /// 'Solid FEM/Zone upper corner = auto': the FE zone's top below a

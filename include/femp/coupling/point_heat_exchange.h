@@ -4,12 +4,16 @@
 //  - at the start, points outside the initial bodies take the initial
 //    temperature at their position, and the cells of initial bodies the
 //    mean temperature of their points;
-//  - after the points changed cells (the flow moved them), the new metal
-//    fraction alpha, and either each cell takes the mean specific enthalpy
-//    C(T) + L_m gamma(T) of the points now in it (Heat transfer/Advection
-//    by melt flow = points: the points carry the heat), or only cells that
-//    gained metal take the mean temperature of their points ('upwind': the
-//    heat moves by upwind convection of T in the heat equation).
+//  - after the points changed cells (whoever moved them: the flow, the
+//    solid, the recoater; MaterialPoints::point_moves() tells), the new
+//    metal fraction alpha, and either each cell takes the mean specific
+//    enthalpy C(T) + L_m gamma(T) of the points now in it (Heat
+//    transfer/Advection by melt flow = points: the points carry the heat), or
+//    only cells that gained metal take the mean temperature of their points
+//    ('upwind': the heat moves by upwind convection of T in the heat equation).
+// It is the one keeper of alpha: the only caller of
+// HeatTransfer::set_metal_fraction() in a run, which stores alpha for the
+// heat equation and its readers (cell_fields.h).
 // It keeps the energy account of these exchanges ('moved_points': the
 // change of the stored enthalpy of the grid they caused, zero for a
 // conservative exchange).
@@ -40,6 +44,19 @@ namespace femp
       const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
       const typename HeatTransfer<dim>::Parameters &heat_prm);
 
+    /// The metal fraction of the points as they were created (no heat
+    /// exchange): the start of the run. Collective.
+    void
+    initial_metal_fraction();
+
+    /// If points changed cells since alpha was last computed (the count
+    /// MaterialPoints::point_moves() moved on, whoever moved them):
+    /// points_changed_cells(), and true; else nothing, and false. Call
+    /// after each module that may move points across cells, before the
+    /// readers of alpha. Collective.
+    bool
+    follow_points();
+
     /// The points changed cells: new alpha for the heat module and the heat
     /// the points bring (see the header comment); with a frozen
     /// temperature only alpha. Collective.
@@ -66,6 +83,8 @@ namespace femp
     HeatTransfer<dim>   &heat;
     const bool           carried_by_points;
     double               moved_points = 0;
+    // MaterialPoints::point_moves() when alpha was last computed.
+    std::uint64_t alpha_moves = 0;
   };
 } // namespace femp
 

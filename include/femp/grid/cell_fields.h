@@ -8,14 +8,14 @@
 //                                                      recoil pressure)
 //   liquid fraction    HeatTransfer (from T, the       IncompressibleFlow
 //     gamma            enthalpy relation)              (Darcy damping)
-//   metal fraction     HeatTransfer::set_metal_fraction (output, probes)
-//     alpha            from the points (PointHeatExchange)
+//   metal fraction     PointHeatExchange, whenever     HeatTransfer, output,
+//     alpha            points changed cells (kept by  probes, stop test
+//                      HeatTransfer for its readers)
 //   cell velocity u    IncompressibleFlow (mean of     HeatTransfer (upwind
 //                      the nodes of fluid cells)       convection of T)
 //
 // All fields cover the local box of the background grid with ghost values
-// current. A field the caller does not have stays nullptr; each reader
-// documents what it does then (e.g. the flow takes gamma = 1).
+// current. A missing field is nullptr (each reader says what it does then).
 // FempProblem::cell_fields() builds the view of the present state.
 #ifndef femp_cell_fields_h
 #define femp_cell_fields_h
@@ -32,8 +32,8 @@ namespace femp
     const std::vector<double> *temperature = nullptr;
     /// Liquid fraction gamma in [0, 1] (writer: HeatTransfer).
     const std::vector<double> *liquid_fraction = nullptr;
-    /// Metal fraction alpha in [0, 1] (writer: HeatTransfer, from the
-    /// points).
+    /// Metal fraction alpha in [0, 1] (writer: PointHeatExchange, from the
+    /// points; kept by HeatTransfer).
     const std::vector<double> *metal_fraction = nullptr;
     /// Cell-centred fluid velocity, one array per direction, m/s (writer:
     /// IncompressibleFlow).

@@ -214,6 +214,19 @@ namespace femp
               cell_begin[c + 1] - cell_begin[c]};
     }
 
+    /// How many times points were moved across cells so far: every
+    /// relocate_points() that moved a point on some rank, every
+    /// points_moved() and every filling (create(), create_region()) counts
+    /// one, whoever called it (the flow, the solid, the recoater). The same
+    /// on every rank: the mark by which the keeper of the metal fraction
+    /// (PointHeatExchange::follow_points()) sees that alpha is stale. A
+    /// checkpoint's restore does not count (alpha is restored with it).
+    std::uint64_t
+    point_moves() const
+    {
+      return moves_global;
+    }
+
     /// Where the handler's points stand now, for a writer that keeps pool
     /// handles of some points between steps (the solid's gather): see
     /// layout_unchanged().
@@ -301,9 +314,9 @@ namespace femp
     /// or below it). With @p metal (the metal fraction the heat equation
     /// solves, from the last alpha pass): the points of a cell where it is
     /// 0 keep their temperature. Such a cell was gas at that pass, and its
-    /// temperature is stale: points entered it since (moved by the solid,
-    /// whose moves are followed by no alpha pass), and the next pass gives
-    /// it their enthalpy.
+    /// temperature is stale: points entered it since (a caller that moved
+    /// points and did not renew alpha yet), and the next pass gives it
+    /// their enthalpy.
     /// In the cells marked by set_fixed_cells() (the FE zone, whose points
     /// never move or melt) at or below the solidus, only the cell's
     /// temperature and its highest value are recorded; the points get them
@@ -422,8 +435,10 @@ namespace femp
     // See layout_mark(): bumped by every full re-index of the cache; the
     // count of relocate_points() calls that moved points, and per local
     // cell the last such call that moved a point into or out of it.
-    std::uint64_t              layout_generation = 0;
-    std::uint64_t              relocations       = 0;
+    std::uint64_t layout_generation = 0;
+    std::uint64_t relocations       = 0;
+    // See point_moves() (collective, unlike the two above).
+    std::uint64_t              moves_global = 0;
     std::vector<std::uint64_t> cell_moved_at;
     // Whether relocate_points() moved a point into or out of local cell
     // @p c since @p mark (same generation assumed).

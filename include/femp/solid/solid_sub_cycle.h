@@ -166,6 +166,15 @@ namespace femp
             const bool                 final,
             const NodalForces         *external_forces = nullptr);
 
+    /// The melt flow runs beside the solid (doc/solid.md, "Flow and solid
+    /// together"): the flow owns the fluid points' velocities
+    /// (set_flow_owns_fluid_points()), and fragments that solidify where
+    /// the flow left them meet the light-node rule of the parameters
+    /// ('Light nodes': set_mass_floor() or set_small_mass_cutoff() with
+    /// 'Small mass cutoff'). Call before initialize().
+    void
+    share_points_with_flow();
+
     /// The melt flow runs beside the solid: fluid points keep their
     /// velocity at the gather (SolidMPM::set_flow_owns_fluid_points()).
     void

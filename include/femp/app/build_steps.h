@@ -1,0 +1,72 @@
+// femp: BuildSteps, what a build of several layers adds to the macro time
+// step (doc/builds.md): the layer schedule (LayerSchedule, refused before
+// any work when a layer does not fit the domain), the recoat of each layer
+// in the step where it starts (Recoater; then the metal fraction and the
+// heat of the cells that gained powder follow, PointHeatExchange), and the
+// pores and unfused powder with every field output (PoreDetector). Each
+// part exists only when the scene asks for it.
+#ifndef femp_build_steps_h
+#define femp_build_steps_h
+
+#include <deal.II/base/conditional_ostream.h>
+#include <deal.II/base/timer.h>
+
+#include <femp/app/results_output.h>
+#include <femp/app/scene.h>
+#include <femp/app/simulation_control.h>
+#include <femp/builds/pore_detector.h>
+#include <femp/builds/recoater.h>
+#include <femp/coupling/point_heat_exchange.h>
+
+#include <memory>
+
+namespace femp
+{
+  using namespace dealii;
+
+  template <int dim>
+  class BuildSteps
+  {
+  public:
+    /// The layer schedule of the scene along the laser's path (none with
+    /// one layer); throws InputError when a layer does not fit.
+    BuildSteps(const Scene<dim> &scene, const Laser<dim> &laser);
+
+    /// Once the grid, the points and the heat exist: the recoater (with
+    /// layers) and the pore detector with its output fields and files
+    /// (with 'Porosity' on and carried points).
+    void
+    setup(const BackgroundGrid<dim> &grid,
+          const MaterialPoints<dim> &points,
+          const HeatTransfer<dim>   &heat,
+          const SimulationControl   &control,
+          ResultsOutput<dim>        &results);
+
+    /// Step 0 of the macro step: spread the powder of each layer whose
+    /// start time lies in [@p t, @p t + @p dt) (the same steps after a
+    /// resume: no state to keep); then alpha and the heat of the cells
+    /// that gained powder (@p point_heat). Collective.
+    void
+    recoat(const double              t,
+           const double              dt,
+           MaterialPoints<dim>      &points,
+           PointHeatExchange<dim>   &point_heat,
+           TimerOutput              &timer,
+           const ConditionalOStream &pcout);
+
+    /// The schedule (null with one layer).
+    const LayerSchedule<dim> *
+    layers() const
+    {
+      return schedule.get();
+    }
+
+  private:
+    const Scene<dim>                   &scene;
+    std::unique_ptr<LayerSchedule<dim>> schedule;
+    std::unique_ptr<Recoater<dim>>      recoater;
+    std::unique_ptr<PoreDetector<dim>>  pores;
+  };
+} // namespace femp
+
+#endif
