@@ -12,7 +12,8 @@ stresses, value - T0 for the temperature (T0 = --t0, default 300 K).
 --output N compares probe_line_<name>_<N>.csv (default: the last output of
 each run, which for a run stopped by 'Stop when peak temperature below'
 may lie at a slightly different time; the files' '# time' lines are
-printed). Python 3 with numpy; the files are read by contrib/femp_post.py.
+printed). --fail-above R exits with status 1 when a relative difference
+exceeds R (a check for scripts and tests). Python 3 with numpy; the files are read by contrib/femp_post.py.
 """
 import argparse
 import os
@@ -42,12 +43,15 @@ def main():
     ap.add_argument("--columns", default="sigma_xx,von_mises,T")
     ap.add_argument("--alpha", type=float, default=0.95)
     ap.add_argument("--t0", type=float, default=300.0)
+    ap.add_argument("--fail-above", type=float, default=None,
+                    help="exit 1 when a relative difference exceeds this")
     a = ap.parse_args()
     if a.lines:
         lines = a.lines.split(",")
     else:
         lines = femp_post.Run(a.reference).probe_line_names()
     print("line,column,peak,largest_difference,relative,samples,time_reference,time_other")
+    worst = 0.0
     for line in lines:
         ref, t_ref = read(a.reference, line, a.output)
         oth, t_oth = read(a.other, line, a.output)
@@ -61,9 +65,14 @@ def main():
             offset = a.t0 if col == "T" else 0.0
             peak = max(abs(ref[col][i] - offset) for i in keep)
             diff = max(abs(ref[col][i] - oth[col][i]) for i in keep)
+            rel = diff / peak if peak > 0 else 0.0
+            worst = max(worst, rel)
             print("%s,%s,%.4g,%.4g,%.3f,%d,%s,%s" % (
-                line, col, peak, diff, diff / peak if peak > 0 else 0.0,
-                len(keep), t_ref, t_oth))
+                line, col, peak, diff, rel, len(keep), t_ref, t_oth))
+    if a.fail_above is not None:
+        if worst > a.fail_above:
+            sys.exit("largest relative difference %.3g exceeds %g" % (worst, a.fail_above))
+        print("largest relative difference %.3g, within %g" % (worst, a.fail_above))
 
 
 if __name__ == "__main__":

@@ -305,7 +305,11 @@ namespace femp
         require(static_cast<bool>(in),
                 "Laser/Scan path file",
                 short_value(path_file),
-                "the file cannot be opened");
+                std::filesystem::path(path_file).is_relative() ?
+                  "the file cannot be opened (a relative path is read "
+                  "from the directory femp is started in, " +
+                    std::filesystem::current_path().string() + ")" :
+                  std::string("the file cannot be opened"));
         const unsigned int wanted = 2 * (dim - 1) + 2;
         std::string        line;
         unsigned int       line_no = 0;

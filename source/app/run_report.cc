@@ -42,10 +42,14 @@ namespace femp
         << " s  step " << std::setw(7) << control.step()
         << "  dt = " << std::setw(10) << control.time_step()
         << " s  T_max(attached metal) = " << std::setw(8) << T_max
-        << " K  melt pool L x W x D = " << pool.length * 1e6 << " x "
-        << pool.width * 1e6 << " x " << pool.depth * 1e6 << " um  wall "
-        << std::setprecision(3) << wall << " s, ~" << left << " s left"
-        << std::endl;
+        << " K  melt pool L x ";
+    if (dim == 3) // in 2D the pool has a length and a depth only
+      out << "W x ";
+    out << "D = " << pool.length * 1e6 << " x ";
+    if (dim == 3)
+      out << pool.width * 1e6 << " x ";
+    out << pool.depth * 1e6 << " um  wall " << std::setprecision(3) << wall
+        << " s, ~" << left << " s left" << std::endl;
   }
 
   template <int dim>
@@ -95,7 +99,7 @@ namespace femp
             << ", hourglass " << se.hourglass;
         if (se.withheld != 0) // light nodes with the melt flow
           out << ", withheld at light nodes " << se.withheld;
-        out << ", balance " << se.balance() << "; kinetic/internal "
+        out << ", balance " << se.balance() << "; kinetic / |stress work| "
             << se.kinetic / std::max(1e-300, std::abs(se.internal))
             << std::endl;
         const auto hd = solid->largest_hourglass_distortion(); // collective

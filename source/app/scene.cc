@@ -308,9 +308,15 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       pcout << bg.n_cells()[d] << (d + 1 < dim ? " x " : ")\n");
     if (mp.carried())
-      pcout << "  material points: " << mp.n_global_points() << " ("
-            << mp.n_powder_grains() << " powder grains, packing fraction "
-            << std::setprecision(3) << mp.achieved_packing_fraction() << ")\n";
+      {
+        pcout << "  material points: " << mp.n_global_points();
+        if (mp.n_powder_grains() > 0)
+          pcout << " (" << mp.n_powder_grains()
+                << " powder grains, packing fraction " << std::setprecision(3)
+                << mp.achieved_packing_fraction() << ")\n";
+        else
+          pcout << " (no powder layer)\n";
+      }
     else
       pcout << "  material points: none (Material points/Carry points = auto: "
                "a bare plate without melt flow or solid; alpha from the "

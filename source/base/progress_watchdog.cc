@@ -60,8 +60,8 @@ namespace femp
                 << "time " << std::setprecision(6) << time.load() << " s, step "
                 << step.load();
               if (n_sub.load() > 0)
-                s << ", sub-step " << n_sub.load() << " of " << dt_sub.load()
-                  << " s";
+                s << ", sub-step " << n_sub.load() << " (each " << dt_sub.load()
+                  << " s)";
               s << ", wall " << std::setprecision(4) << t * 1e-9 << " s)\n";
               std::cout << s.str() << std::flush;
             }

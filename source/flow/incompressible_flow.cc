@@ -1398,7 +1398,7 @@ namespace femp
               *control.log << "  melt flow: sub-step " << n_sub
                            << " of the temperature "
                            << "step at t = " << time << " s, " << t / dt * 100
-                           << " % done, sub-step " << dt_f << " s (wall "
+                           << " % done, sub-steps of " << dt_f << " s (wall "
                            << wall << " s)" << std::endl;
             next_substep_report = wall + 30;
           }

@@ -5,6 +5,7 @@
 #include <femp/heat/scan_path.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -51,7 +52,11 @@ namespace femp
       require(static_cast<bool>(in),
               parameter,
               file,
-              "the file cannot be opened");
+              std::filesystem::path(file).is_relative() ?
+                "the file cannot be opened (a relative path is read from "
+                "the directory femp is started in, " +
+                  std::filesystem::current_path().string() + ")" :
+                std::string("the file cannot be opened"));
       std::vector<Line> lines;
       std::string       text;
       unsigned int      n = 0;
