@@ -4,6 +4,7 @@
 
   contrib/validate.py scenes   [--check]
   contrib/validate.py run      [--cases REGEX] [--setting S] [--np N]
+                               [--set 'SECTION/ENTRY=VALUE' ...]
                                [--build build] [--out build/validation]
                                [--max-wall SECONDS]
   contrib/validate.py reevaluate [--out build/validation]
@@ -25,7 +26,9 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
   curvature, 2 smoothing passes, point shifting 2), one run directory per
   case and setting under --out; a run whose result.json exists is skipped
   (resumable). Variants for the domain-size check: setting 'large' (the
-  domain 1.5 x wider and deeper).
+  domain 1.5 x wider and deeper). Any other setting name with --set
+  overrides runs the scenes with those femp parameters (e.g. --setting
+  cell --set 'Melt flow/Recoil temperature=cell').
 report: reads every finished run, writes doc/validation.md's tables and
   figures (SVG, standard library only).
 regime: the normalized enthalpy of every measured track (as femp's scene
@@ -517,13 +520,15 @@ def end_state(run_dir, alloy):
     recoil pressure zeta_p p_sat(T) it gives (Clausius-Clapeyron with the
     alloy's evaporation data, as femp computes it), the fastest melt."""
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    import plot_track_svg as P
+    import femp_post
     out = os.path.join(run_dir, "output")
-    ns = [int(m.group(1)) for f in os.listdir(out)
-          for m in [re.match(r"grid_([0-9]+)\.pvtu$", f)] if m]
-    if not ns:
+    try:
+        g = femp_post.Run(out).grid()
+    except (OSError, ValueError, KeyError, IndexError):
         return {}
-    cells = P.read_cells(out, max(ns))
+    names = list(g.keys())
+    cells = {tuple(float(x) for x in c): {k: float(g[k][i]) for k in names}
+             for i, c in enumerate(g.centres)}
     scene = open(os.path.join(run_dir, "scene.prm")).read()
     h = scene_value(scene, "Cell size")[0]
     ztop = scene_value(scene, "Substrate top")[0]
@@ -583,6 +588,9 @@ def run_case(args, exe, c, setting):
     sets = {"Output/Directory": os.path.join(d, "output")}
     if setting == "fine":
         sets.update(FINE)
+    for kv in args.set or []:
+        k, v = kv.split("=", 1)
+        sets[k] = v
     cmd = femp_cmd(args, exe, sets, scene)
     print("run %s [%s] ..." % (c["name"], setting), flush=True)
     t0 = time.time()
@@ -731,15 +739,19 @@ def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
 SETTING_NAMES = {"default": "default free surface",
                  "fine": "fine surface (height function, 2 smoothing passes, "
                          "point shifting 2)",
-                 "large": "default free surface, domain 1.5 x wider and deeper"}
-COLOURS = {"default": "#1f5fbf", "fine": "#d9480f", "large": "#2b8a3e"}
+                 "large": "default free surface, domain 1.5 x wider and deeper",
+                 "median": "recoil from the median surface temperature "
+                           "(former default)",
+                 "cell": "recoil from the cell's own temperature"}
+COLOURS = {"default": "#1f5fbf", "fine": "#d9480f", "large": "#2b8a3e",
+           "median": "#868e96", "cell": "#ae3ec9"}
 
 
 def cmd_report(args):
     res = load_results(args.out)
     allc = {c["name"]: c for c in cases()}
     os.makedirs(args.img, exist_ok=True)
-    settings = [s for s in ("default", "fine", "large")
+    settings = [s for s in ("default", "median", "cell", "fine", "large")
                 if any(k[0] == s for k in res)]
     # figures
     for what in ("width", "depth"):
@@ -877,7 +889,11 @@ def main():
                                        "pipeline", "regime"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
-    ap.add_argument("--setting", default="default", choices=["default", "fine", "large"])
+    ap.add_argument("--setting", default="default",
+                    help="default, fine, large, or any other name for a run "
+                    "with --set overrides")
+    ap.add_argument("--set", action="append", metavar="SECTION/ENTRY=VALUE",
+                    help="a femp parameter for this setting (repeatable)")
     ap.add_argument("--np", type=int, default=2)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=None)

@@ -360,8 +360,10 @@ namespace femp
   {
     // Regime by the normalized enthalpy of King et al. (2014),
     // eta P/(pi h_s sqrt(D v r_b^3)), h_s = rho c T_s, D = lambda/(rho c)
-    // at the solidus, largest over the laser-on segments; keyhole-mode
-    // melting above about 30 (doc/absorption.md).
+    // at the solidus, largest over the laser-on segments. The thresholds
+    // are those of the measured single tracks in this definition
+    // (doc/validation.md, "Which regime"): conduction below about 2.5,
+    // transition or keyhole from about 3 (depth/width 0.7 and more).
     const double Ts    = material.solidus;
     const double rc    = material.density * material.specific_heat.value(Ts);
     const double D     = material.conductivity.value(Ts) / rc;
@@ -376,12 +378,14 @@ namespace femp
     if (ratio > 0)
       pcout << "  regime: normalized enthalpy eta P/(pi h_s sqrt(D v r_b^3)) = "
             << std::setprecision(3) << ratio
-            << (ratio >= 30 ?
-                  " >= 30: keyhole mode likely; a fixed absorptivity on the "
-                  "first surface underestimates the depth there" :
-                  (ratio >= 20 ? " (near the keyhole transition at ~30)" :
-                                 " < 30: conduction mode\n"));
-    if (ratio >= 20)
+            << (ratio >= 3 ?
+                  " >= 3: transition or keyhole mode likely; a fixed "
+                  "absorptivity on the first surface underestimates the "
+                  "depth there" :
+                  (ratio >= 2.5 ?
+                     " (near the conduction-to-keyhole transition at ~3)" :
+                     " < 2.5: conduction mode\n"));
+    if (ratio >= 2.5)
       pcout << (heat_module.ray_traced() ?
                   "; ray-traced absorption on (doc/absorption.md)\n" :
                   "; use 'Laser/Absorption model = ray traced' "

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace femp
 {
@@ -64,6 +65,18 @@ namespace femp
                       "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
                       "L_v, M, T_v, p0 from the Heat transfer subsection. "
                       "Range [0, 1].");
+    prm.declare_entry(
+      "Recoil temperature",
+      "limited",
+      Patterns::Selection("median|limited|cell"),
+      "The surface temperature T of a free-surface cell's recoil pressure "
+      "(see doc/flow.md, \"Recoil pressure\"): 'limited' (default), the "
+      "cell's own temperature limited to the range of those of the other "
+      "free-surface cells among its 3^dim neighbours (a single-cell "
+      "extremum is cut to its neighbours' nearest value); 'cell', the cell's "
+      "own temperature; 'median', the median of the temperatures of the "
+      "free-surface cells among its 3^dim neighbours, itself included (near "
+      "a temperature peak typically 0.3 of the cell-wise recoil).");
   }
 
   template <int dim>
@@ -76,6 +89,12 @@ namespace femp
     surface_tension_gradient =
       prm.get_double("Surface tension temperature derivative");
     recoil_coefficient = prm.get_double("Recoil coefficient");
+    {
+      const std::string t = prm.get("Recoil temperature");
+      recoil_temperature  = t == "cell"    ? RecoilTemperature::cell :
+                            t == "limited" ? RecoilTemperature::limited :
+                                             RecoilTemperature::median;
+    }
     require(surface_tension >= 0,
             "Melt flow/Surface tension",
             surface_tension,
@@ -460,23 +479,25 @@ namespace femp
   }
 
   // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
-  // surface cell (doc/flow.md, "3D track with recoil"). T_s is the median
-  // of the cell temperatures over the surface cells among its 3^dim
-  // neighbours (itself included; the mean of the two middle values for an
-  // even count). The cell temperature of single surface cells has outliers:
-  // on the 3D track, surface cells at the top of melting powder grains
-  // reached 8,000-17,000 K next to cells at 4,500-6,000 K (fragments of
-  // 2-30 cells), and the exponential turned that into recoil jumps of
-  // 1e9-3e10 Pa between neighbouring cells, which blew the fragment apart
-  // at 300-5,000 m/s (the spikes of the convective limit). The median drops
-  // such a single-cell outlier, gives a fragment of a few cells one recoil
-  // pressure on its whole surface (no net force or internal drive, as for a
-  // uniformly hot droplet), and keeps the cell's own temperature where T is
-  // linear along a flat surface (in 2D wherever T is monotone along it); at
-  // a smooth temperature peak it takes about the value one cell away. Cost
-  // on the track: the recoil of surface cells above 4000 K is typically
-  // 0.3 (0.03-0.65) of the cell-wise value (the surface T varies by several
-  // hundred K per cell near the beam).
+  // surface cell (doc/flow.md, "Recoil pressure"). T_s (Melt flow/Recoil
+  // temperature): 'limited' (default), the cell's own temperature limited
+  // to the range of the temperatures of the other surface cells among its
+  // 3^dim neighbours; 'cell', its own temperature; 'median', the median
+  // over the surface cells among its 3^dim neighbours (itself included; the
+  // mean of the two middle values for an even count). Single surface cells
+  // can be far hotter than all their neighbours: on the 3D track, before
+  // the heat equation's fix of partly filled surface cells, cells at the
+  // top of melting powder grains reached 8,000-17,000 K next to cells at
+  // 4,500-6,000 K, and the exponential turned that into recoil jumps of
+  // 1e9-3e10 Pa that blew the fragment apart at 300-5,000 m/s. Both the
+  // limiter and the median cut such a single-cell extremum to its
+  // neighbours' values and keep the cell's own temperature where T is
+  // monotone along the surface. At a smooth peak the limiter takes the
+  // hottest neighbour's value (a second-order cut), the median about the
+  // value one cell away: near the beam the surface T falls by several
+  // hundred K per cell, and the median's recoil above 4000 K was typically
+  // 0.3 (0.03-0.65) of the cell-wise value, which starved the vapour
+  // depression (doc/studies/2026-12-02-recoil-surface-temperature.md).
   template <int dim>
   void
   FreeSurface<dim>::add_recoil_pressure(
@@ -489,18 +510,34 @@ namespace femp
     const double Tv    = mat.evaporation_temperature;
     const double a =
       mat.latent_heat_evaporation * mat.molar_mass / (R_gas * Tv);
+    using RT = typename Parameters::RecoilTemperature;
     std::array<double, 27> Ts;
     for (const auto c : fluid_cells)
       {
         if (surface_mark[c] == 0)
           continue;
-        unsigned int n = 0;
-        for (const auto o : stencil)
-          if (surface_mark[c + o] != 0)
-            Ts[n++] = (*temperature)[c + o];
-        std::sort(Ts.begin(), Ts.begin() + n);
-        const double T =
-          (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
+        double T = (*temperature)[c];
+        if (prm.recoil_temperature == RT::median)
+          {
+            unsigned int n = 0;
+            for (const auto o : stencil)
+              if (surface_mark[c + o] != 0)
+                Ts[n++] = (*temperature)[c + o];
+            std::sort(Ts.begin(), Ts.begin() + n);
+            T = (n % 2) ? Ts[n / 2] : 0.5 * (Ts[n / 2 - 1] + Ts[n / 2]);
+          }
+        else if (prm.recoil_temperature == RT::limited)
+          {
+            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            for (const auto o : stencil)
+              if (o != 0 && surface_mark[c + o] != 0)
+                {
+                  lo = std::min(lo, (*temperature)[c + o]);
+                  hi = std::max(hi, (*temperature)[c + o]);
+                }
+            if (lo <= hi)
+              T = std::min(std::max(T, lo), hi);
+          }
         if (T > 0)
           p_surface[c] += prm.recoil_coefficient * mat.ambient_pressure *
                           std::exp(a * (T - Tv) / T);

@@ -19,8 +19,8 @@
 // - p_s = sigma div(n) + recoil: n = -grad alpha/|grad alpha| at the nodes
 //   of a surface cell (pair-averaged differences of the cell values) and
 //   div(n) at its centre (edge-averaged differences); the recoil from the
-//   surface temperature round the cell (median over the surface cells
-//   among its 3^dim neighbours);
+//   cell's temperature limited to the range of its surface neighbours'
+//   (Melt flow/Recoil temperature);
 // - Marangoni: traction dsigma/dT (grad T - (n.grad T) n) on the fluid-gas
 //   faces, weighted by |n_d|, spread to the face nodes;
 // - walls: zero normal velocity on the domain boundary (free slip) and zero
@@ -163,6 +163,7 @@ namespace femp
     surface_tension          = surface.surface_tension;
     surface_tension_gradient = surface.surface_tension_gradient;
     recoil_coefficient       = surface.recoil_coefficient;
+    recoil_temperature       = surface.recoil_temperature;
     curvature_smoothing      = surface.curvature_smoothing;
     height_function          = surface.height_function;
     pressure.parse_parameters(prm);
@@ -213,6 +214,7 @@ namespace femp
     s.surface_tension          = surface_tension;
     s.surface_tension_gradient = surface_tension_gradient;
     s.recoil_coefficient       = recoil_coefficient;
+    s.recoil_temperature       = recoil_temperature;
     s.curvature_smoothing      = curvature_smoothing;
     s.height_function          = height_function;
     return s;

@@ -12,7 +12,8 @@
 //    |grad alpha| of eq. (3), optionally averaged along the surface
 //    (Melt flow/Curvature smoothing);
 //  - the recoil pressure zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] added to
-//    p_s, from the median surface temperature round the cell;
+//    p_s, from the cell's temperature limited to its surface neighbours'
+//    (or the cell's own, or their median: Melt flow/Recoil temperature);
 //  - the Marangoni traction dsigma/dT (grad T - (n.grad T) n) on the
 //    fluid-gas faces, weighted by |n_d|, spread to the face nodes.
 // IncompressibleFlow imposes p_s as the Dirichlet pressure at the interface
@@ -45,6 +46,15 @@ namespace femp
       double surface_tension          = 0; ///< sigma, N/m (0: off)
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       double recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
+      /// Which surface temperature the recoil pressure of a surface cell
+      /// takes (Melt flow/Recoil temperature).
+      enum class RecoilTemperature
+      {
+        median,  ///< median over the surface cells of the 3^dim stencil
+        limited, ///< the cell's own, limited to its surface neighbours'
+        cell     ///< the cell's own
+      };
+      RecoilTemperature recoil_temperature = RecoilTemperature::limited;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
       /// Curvature from heights of alpha in columns of 7 cells (true) or
@@ -53,7 +63,8 @@ namespace femp
 
       /// The free-surface entries of the subsection Melt flow (the caller
       /// has entered it): Curvature, Curvature smoothing, Surface tension,
-      /// Surface tension temperature derivative, Recoil coefficient.
+      /// Surface tension temperature derivative, Recoil coefficient, Recoil
+      /// temperature.
       static void
       declare_parameters(ParameterHandler &prm);
       /// Read them (inside Melt flow) and check their ranges.
@@ -170,9 +181,8 @@ namespace femp
     capillary_and_marangoni(const std::vector<double>        &type,
                             const std::vector<std::uint32_t> &fluid_cells,
                             const std::vector<double>        *temperature);
-    /// Add the recoil pressure of the surface cells to p_s, from the
-    /// surface temperature of their neighbourhood (median over the surface
-    /// cells among the 3^dim neighbours).
+    /// Add the recoil pressure of the surface cells to p_s, from their
+    /// surface temperature (Parameters::recoil_temperature).
     void
     add_recoil_pressure(const std::vector<std::uint32_t> &fluid_cells,
                         const std::vector<double>        *temperature);

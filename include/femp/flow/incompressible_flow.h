@@ -93,6 +93,11 @@ namespace femp
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
       double recoil_coefficient = 0;
+      /// The surface temperature of the recoil (Melt flow/Recoil
+      /// temperature).
+      typename FreeSurface<dim>::Parameters::RecoilTemperature
+        recoil_temperature =
+          FreeSurface<dim>::Parameters::RecoilTemperature::limited;
       /// Tolerance, iteration limit and preconditioner of the pressure
       /// solve.
       typename PressureSolver<dim>::Parameters pressure;
