@@ -243,6 +243,12 @@ namespace femp
                  *history,
                  "it was written without 'Thermal history/Enable' (the "
                  "history before it is lost)");
+    if (tracks)
+      states.add(
+        "tracks",
+        [this](StateWriter &out) { tracks->save_state(out); },
+        [this](std::vector<StateReader> &in) { tracks->load_state(in[0]); },
+        "it was written without the track record (Build/Track report)");
     if (flow)
       states.add("flow", *flow);
     if (solid)
@@ -276,7 +282,10 @@ namespace femp
         const double dt = control->next_time_step();
         time_steps->begin_step();
 
-        // 0. Recoat: the powder of a layer starting in this step.
+        // 0. Recoat: the powder of a layer starting in this step (the
+        //    record of the track before it closed first).
+        if (tracks)
+          record_tracks(dt);
         if (recoater)
           recoat_layers(dt);
 
@@ -297,6 +306,8 @@ namespace femp
           flow_step(dt);
         if (fluid_solid)
           fluid_forces_on_solid();
+        if (tracks)
+          tracks->observe(heat->temperature(), heat->metal_fraction());
 
         if (time_steps->cooled_down(control->time() + dt))
           control->request_stop();
@@ -314,6 +325,8 @@ namespace femp
           write_checkpoint();
       }
 
+    if (tracks)
+      record_tracks(0., true);
     points->flush_point_temperatures();
     if (flow)
       result.flow_limits = flow->subcycle_record();
@@ -338,6 +351,18 @@ namespace femp
       recoater = std::make_unique<Recoater<dim>>(scene.points,
                                                  scene.material.density,
                                                  *grid);
+    // Tracks and layers: tracks.csv, layers.csv, probe lines per track.
+    std::vector<double> starts;
+    if (layers)
+      for (const auto &l : layers->layers())
+        starts.push_back(l.start_time);
+    const auto list = TrackRecord<dim>::find_tracks(laser->segments(), starts);
+    if (scene.track_record.enabled(list.size(), layers != nullptr) &&
+        scene.heat_enabled && !list.empty())
+      tracks = std::make_unique<TrackRecord<dim>>(*grid,
+                                                  list,
+                                                  scene.material.solidus,
+                                                  scene.output.directory);
     if (!(scene.porosity.enabled(layers != nullptr) && points->carried()))
       return;
     pores = std::make_unique<PoreDetector<dim>>(scene.porosity,
@@ -398,6 +423,41 @@ namespace femp
               << r.points << " points at " << T << " K" << std::setprecision(6)
               << std::endl;
       }
+  }
+
+  template <int dim>
+  void
+  FempProblem<dim>::record_tracks(const double dt, const bool last)
+  {
+    const double t = control->time();
+    if (!last && !tracks->due(t + dt))
+      return;
+    TimerOutput::Scope scope(timer, "track record");
+    // The fused metal fraction alpha (1 - s_p): unfused powder is no bead.
+    std::vector<double> fused = heat->metal_fraction();
+    if (points->carried())
+      {
+        const auto shares = PoreDetector<dim>::powder_shares(
+          *grid, *points, scene.material.solidus, scene.material.liquidus);
+        for (std::size_t i = 0; i < fused.size(); ++i)
+          fused[i] *= 1. - shares.first[i];
+      }
+    const auto rows = last ?
+                        tracks->finish(t, fused, heat->temperature()) :
+                        tracks->update(t, t + dt, fused, heat->temperature());
+    for (const auto &r : rows)
+      {
+        results->write_probe_lines("track_" +
+                                     Utilities::int_to_string(r.track, 3),
+                                   t);
+        pcout << "Track " << r.track << " (layer " << r.layer
+              << ") measured at t = " << t << " s: bead height "
+              << r.bead_height << " m, width " << r.width
+              << " m, re-melt depth " << r.remelt_depth << " m, overlap "
+              << r.overlap_ratio << std::endl;
+      }
+    if (last)
+      results->write_probe_lines("end", t);
   }
 
   template <int dim>

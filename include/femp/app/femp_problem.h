@@ -97,6 +97,7 @@ namespace femp
     std::unique_ptr<LayerSchedule<dim>> layers;
     std::unique_ptr<Recoater<dim>>      recoater;
     std::unique_ptr<PoreDetector<dim>>  pores;
+    std::unique_ptr<TrackRecord<dim>>   tracks; ///< null unless reported
     // What joins them.
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
@@ -140,6 +141,12 @@ namespace femp
     /// the cells that gained powder (PointHeatExchange).
     void
     recoat_layers(const double dt);
+    /// 0. Close and open the track records due before t + @p dt
+    /// (TrackRecord): rows of tracks.csv and the probe lines after each
+    /// track; @p last: at the end of the run (the open record, and the
+    /// probe lines '_end').
+    void
+    record_tracks(const double dt, const bool last = false);
     /// 2. Temperature in fluid, solid and powder (eq. 1).
     void
     temperature_step(const double dt);
