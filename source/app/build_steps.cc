@@ -1,5 +1,6 @@
 // femp: BuildSteps (see the header): the layer schedule, the recoat in the
-// step where a layer starts, and the pore detector's output.
+// step where a layer starts, the pore detector's output and the record of
+// each track.
 #include <femp/app/build_steps.h>
 
 #include <iomanip>
@@ -9,6 +10,7 @@ namespace femp
   template <int dim>
   BuildSteps<dim>::BuildSteps(const Scene<dim> &scene, const Laser<dim> &laser)
       : scene(scene)
+      , laser(laser)
   {
     if (scene.build.enabled())
       schedule = std::make_unique<LayerSchedule<dim>>(
@@ -27,10 +29,25 @@ namespace femp
                          const SimulationControl   &control,
                          ResultsOutput<dim>        &results)
   {
+    grid_ptr    = &grid;
+    heat_ptr    = &heat;
+    results_ptr = &results;
     if (schedule)
       recoater = std::make_unique<Recoater<dim>>(scene.points,
                                                  scene.material.density,
                                                  grid);
+    // Tracks and layers: tracks.csv, layers.csv, probe lines per track.
+    std::vector<double> starts;
+    if (schedule)
+      for (const auto &l : schedule->layers())
+        starts.push_back(l.start_time);
+    const auto list = TrackRecord<dim>::find_tracks(laser.segments(), starts);
+    if (scene.track_record.enabled(list.size(), schedule != nullptr) &&
+        scene.heat_enabled && !list.empty())
+      tracks = std::make_unique<TrackRecord<dim>>(grid,
+                                                  list,
+                                                  scene.material.solidus,
+                                                  scene.output.directory);
     if (!(scene.porosity.enabled(schedule != nullptr) && points.carried()))
       return;
     pores = std::make_unique<PoreDetector<dim>>(scene.porosity,
@@ -98,6 +115,53 @@ namespace femp
               << r.points << " points at " << T << " K" << std::setprecision(6)
               << std::endl;
       }
+  }
+
+  template <int dim>
+  void
+  BuildSteps<dim>::record_tracks(const double               t,
+                                 const double               dt,
+                                 const bool                 last,
+                                 const MaterialPoints<dim> &points,
+                                 TimerOutput               &timer,
+                                 const ConditionalOStream  &pcout)
+  {
+    if (!tracks || (!last && !tracks->due(t + dt)))
+      return;
+    TimerOutput::Scope scope(timer, "track record");
+    // The fused metal fraction alpha (1 - s_p): unfused powder is no bead.
+    std::vector<double> fused = heat_ptr->metal_fraction();
+    if (points.carried())
+      {
+        const auto shares = PoreDetector<dim>::powder_shares(
+          *grid_ptr, points, scene.material.solidus, scene.material.liquidus);
+        for (std::size_t i = 0; i < fused.size(); ++i)
+          fused[i] *= 1. - shares.first[i];
+      }
+    const auto rows =
+      last ? tracks->finish(t, fused, heat_ptr->temperature()) :
+             tracks->update(t, t + dt, fused, heat_ptr->temperature());
+    for (const auto &r : rows)
+      {
+        results_ptr->write_probe_lines("track_" +
+                                         Utilities::int_to_string(r.track, 3),
+                                       t);
+        pcout << "Track " << r.track << " (layer " << r.layer
+              << ") measured at t = " << t << " s: bead height "
+              << r.bead_height << " m, width " << r.width
+              << " m, re-melt depth " << r.remelt_depth << " m, overlap "
+              << r.overlap_ratio << std::endl;
+      }
+    if (last)
+      results_ptr->write_probe_lines("end", t);
+  }
+
+  template <int dim>
+  void
+  BuildSteps<dim>::observe_tracks() const
+  {
+    if (tracks)
+      tracks->observe(heat_ptr->temperature(), heat_ptr->metal_fraction());
   }
 
   template class BuildSteps<2>;

@@ -185,6 +185,12 @@ namespace femp
                  *history,
                  "it was written without 'Thermal history/Enable' (the "
                  "history before it is lost)");
+    if (auto *tracks = builds->track_record())
+      states.add(
+        "tracks",
+        [tracks](StateWriter &out) { tracks->save_state(out); },
+        [tracks](std::vector<StateReader> &in) { tracks->load_state(in[0]); },
+        "it was written without the track record (Build/Track report)");
     if (flow)
       states.add("flow", *flow);
     if (solid)
@@ -218,7 +224,10 @@ namespace femp
         const double dt = control->next_time_step();
         time_steps->begin_step();
 
-        // 0. Recoat: the powder of a layer starting in this step.
+        // 0. The record of a track that ended, then the recoat: the powder
+        //    of a layer starting in this step.
+        builds->record_tracks(
+          control->time(), dt, false, *points, timer, pcout);
         builds->recoat(control->time(), dt, *points, *point_heat, timer, pcout);
 
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
@@ -239,6 +248,7 @@ namespace femp
           flow_step(dt);
         if (fluid_solid)
           fluid_forces_on_solid();
+        builds->observe_tracks();
 
         if (time_steps->cooled_down(control->time() + dt))
           control->request_stop();
@@ -256,6 +266,7 @@ namespace femp
           write_checkpoint();
       }
 
+    builds->record_tracks(control->time(), 0., true, *points, timer, pcout);
     points->flush_point_temperatures();
     if (flow)
       result.flow_limits = flow->subcycle_record();

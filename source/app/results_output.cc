@@ -101,6 +101,18 @@ namespace femp
 
   template <int dim>
   void
+  ResultsOutput<dim>::write_probe_lines(const std::string &tag,
+                                        const double       time)
+  {
+    if (prm.probe_lines.empty())
+      return;
+    std::vector<std::vector<double>> computed;
+    computed.reserve(32); // addresses kept in the field list
+    out->write_probe_lines(tag, time, fields(Reach::lines, &computed));
+  }
+
+  template <int dim>
+  void
   ResultsOutput<dim>::write_fields(const unsigned int n,
                                    const double       time,
                                    const bool         last)

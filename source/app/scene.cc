@@ -73,6 +73,7 @@ namespace femp
     Checkpoint<3>::Parameters::declare_parameters(prm);
     LayerSchedule<3>::Parameters::declare_parameters(prm);
     PoreDetector<3>::Parameters::declare_parameters(prm);
+    TrackRecord<3>::Parameters::declare_parameters(prm);
   }
 
   template <int dim>
@@ -108,6 +109,7 @@ namespace femp
     track.parse_parameters(prm);
     build.parse_parameters(prm);
     porosity.parse_parameters(prm);
+    track_record.parse_parameters(prm);
     // A bare plate without flow or solid carries no points (Material
     // points/Carry points = auto); a layer schedule needs them (the
     // recoated powder).

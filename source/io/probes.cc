@@ -104,6 +104,15 @@ namespace femp
                                  const double              time,
                                  const std::vector<Field> &probe_fields)
   {
+    write_probe_lines(Utilities::int_to_string(n, 5), time, probe_fields);
+  }
+
+  template <int dim>
+  void
+  Output<dim>::write_probe_lines(const std::string        &tag,
+                                 const double              time,
+                                 const std::vector<Field> &probe_fields)
+  {
     for (const auto &line : prm.probe_lines)
       {
         std::vector<Point<dim>> pts;
@@ -113,8 +122,8 @@ namespace femp
         const auto v = sample(pts, probe_fields);
         if (Utilities::MPI::this_mpi_process(grid.communicator()) != 0)
           continue;
-        const std::string file = prm.directory + "/probe_line_" + line.name +
-                                 "_" + Utilities::int_to_string(n, 5) + ".csv";
+        const std::string file =
+          prm.directory + "/probe_line_" + line.name + "_" + tag + ".csv";
         std::ofstream out(file);
         check_stream(out, file);
         out << "# time = " << std::setprecision(8) << time << " s\n";
@@ -146,6 +155,14 @@ namespace femp
                     const std::vector<Field> &) const;
   template void
   Output<2>::write_probe_lines(const unsigned int,
+                               const double,
+                               const std::vector<Field> &);
+  template void
+  Output<2>::write_probe_lines(const std::string &,
+                               const double,
+                               const std::vector<Field> &);
+  template void
+  Output<3>::write_probe_lines(const std::string &,
                                const double,
                                const std::vector<Field> &);
   template void

@@ -3,8 +3,10 @@
 // any work when a layer does not fit the domain), the recoat of each layer
 // in the step where it starts (Recoater; then the metal fraction and the
 // heat of the cells that gained powder follow, PointHeatExchange), and the
-// pores and unfused powder with every field output (PoreDetector). Each
-// part exists only when the scene asks for it.
+// pores and unfused powder with every field output (PoreDetector), and the
+// record of each finished track and layer (TrackRecord: tracks.csv,
+// layers.csv, probe lines after each track). Each part exists only when the
+// scene asks for it.
 #ifndef femp_build_steps_h
 #define femp_build_steps_h
 
@@ -16,6 +18,7 @@
 #include <femp/app/simulation_control.h>
 #include <femp/builds/pore_detector.h>
 #include <femp/builds/recoater.h>
+#include <femp/builds/track_record.h>
 #include <femp/coupling/point_heat_exchange.h>
 
 #include <memory>
@@ -54,6 +57,29 @@ namespace femp
            TimerOutput              &timer,
            const ConditionalOStream &pcout);
 
+    /// Step 0 of the macro step, before the recoat: close the track
+    /// records due before @p t + @p dt (rows of tracks.csv and the probe
+    /// lines after each track); @p last: at the end of the run (the open
+    /// record and the probe lines '_end'). Collective.
+    void
+    record_tracks(const double               t,
+                  const double               dt,
+                  const bool                 last,
+                  const MaterialPoints<dim> &points,
+                  TimerOutput               &timer,
+                  const ConditionalOStream  &pcout);
+
+    /// After the flow, each macro step: the open track's melt extent.
+    void
+    observe_tracks() const;
+
+    /// The track record (null unless reported), for the checkpoint.
+    TrackRecord<dim> *
+    track_record() const
+    {
+      return tracks.get();
+    }
+
     /// The schedule (null with one layer).
     const LayerSchedule<dim> *
     layers() const
@@ -63,9 +89,15 @@ namespace femp
 
   private:
     const Scene<dim>                   &scene;
+    const Laser<dim>                   &laser;
     std::unique_ptr<LayerSchedule<dim>> schedule;
     std::unique_ptr<Recoater<dim>>      recoater;
     std::unique_ptr<PoreDetector<dim>>  pores;
+    std::unique_ptr<TrackRecord<dim>>   tracks;
+    // Set by setup(), read by the track record.
+    const BackgroundGrid<dim> *grid_ptr    = nullptr;
+    const HeatTransfer<dim>   *heat_ptr    = nullptr;
+    ResultsOutput<dim>        *results_ptr = nullptr;
   };
 } // namespace femp
 

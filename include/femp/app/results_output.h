@@ -88,6 +88,10 @@ namespace femp
     /// On resume from a checkpoint at @p time.
     void
     resume(const double time);
+    /// The probe lines alone at @p time, in files named with @p tag
+    /// (probe_line_<name>_<tag>.csv).
+    void
+    write_probe_lines(const std::string &tag, const double time);
 
     /// The formats' writer (its state goes into a checkpoint).
     Output<dim> &

@@ -15,6 +15,7 @@
 #include <femp/base/material.h>
 #include <femp/builds/pore_detector.h>
 #include <femp/builds/recoater.h>
+#include <femp/builds/track_record.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
@@ -78,6 +79,7 @@ namespace femp
     /// Layers, recoating and pores (doc/builds.md).
     typename LayerSchedule<dim>::Parameters build;
     typename PoreDetector<dim>::Parameters  porosity;
+    typename TrackRecord<dim>::Parameters   track_record;
 
     /// The cadence of field output, time series and progress line (read
     /// from the Output parameters, here only).

@@ -106,6 +106,11 @@ namespace femp
     write_probe_lines(const unsigned int        n,
                       const double              time,
                       const std::vector<Field> &probe_fields);
+    /// The same into files probe_line_<name>_<tag>.csv.
+    void
+    write_probe_lines(const std::string        &tag,
+                      const double              time,
+                      const std::vector<Field> &probe_fields);
 
     const Parameters &
     parameters() const
