@@ -65,7 +65,10 @@ namespace femp
     if (!scene.heat_enabled)
       heat->freeze();
     point_heat = std::make_unique<PointHeatExchange<dim>>(
-      *points, *heat, scene.heat.advection_by_melt_flow == "points");
+      *points,
+      *heat,
+      scene.heat.advection_by_melt_flow ==
+        HeatTransfer<dim>::Parameters::Advection::points);
     point_heat->initial_temperatures(scene.points.bodies, scene.heat);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
@@ -154,7 +157,8 @@ namespace femp
         // stable for them, or (`Solid/Light nodes = no force`) no force
         // on nodes with less than `Solid/Small mass cutoff` of a full
         // node's mass (stability estimate and choice: doc/solid.md).
-        if (scene.solid_stress.light_nodes == "mass floor")
+        if (scene.solid_stress.light_nodes ==
+            SolidStress<dim>::Parameters::LightNodes::mass_floor)
           solid->set_mass_floor(true);
         else
           solid->set_small_mass_cutoff(scene.solid_stress.small_mass_cutoff);
