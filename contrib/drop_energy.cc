@@ -62,7 +62,8 @@ main(int argc, char **argv)
   prm.flip_fraction       = flip;
   prm.point_shifting      = shift;
   prm.curvature_smoothing = passes;
-  prm.height_function     = hf;
+  prm.curvature           = (hf) ? decltype(prm.curvature)::height_function :
+                                   decltype(prm.curvature)::alpha_gradient;
   FlowScene<dim> scene(
     Point<dim>(L, L),
     h,

@@ -65,7 +65,9 @@ run(const Case  &c,
   prm.gravity             = Tensor<1, dim>();
   prm.surface_tension     = sigma;
   prm.curvature_smoothing = c.passes;
-  prm.height_function     = c.height_function;
+  prm.curvature           = (c.height_function) ?
+                              decltype(prm.curvature)::height_function :
+                              decltype(prm.curvature)::alpha_gradient;
   prm.point_shifting      = c.shifting;
   const double h          = L / c.cells;
   Point<dim>   size;

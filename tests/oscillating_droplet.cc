@@ -72,7 +72,9 @@ run(const double       fraction,
       prm.curvature_smoothing = smoothing >= 0 ? smoothing : 2;
       if (volume >= 0)
         prm.volume_correction = volume;
-      prm.height_function = height_function;
+      prm.curvature = (height_function) ?
+                        decltype(prm.curvature)::height_function :
+                        decltype(prm.curvature)::alpha_gradient;
       FlowScene<dim> scene(
         Point<dim>(L, L),
         h,

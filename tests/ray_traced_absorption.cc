@@ -33,7 +33,7 @@ main(int argc, char **argv)
   BackgroundGrid<dim> grid(gp, comm);
   grid.create();
   RayTracedAbsorption<dim>::Parameters prm;
-  prm.model = "ray traced";
+  prm.model = decltype(prm.model)::ray_traced;
   // The optical constants this test was written with (n = 3.5, k = 4.5),
   // set explicitly: the expected output does not follow the defaults.
   prm.refractive_index       = 3.5;

@@ -46,7 +46,7 @@ main(int argc, char **argv)
   lp.end_point   = axis + Point<dim>(50e-6, 0, 0);
   const Laser<dim>                     laser(lp);
   RayTracedAbsorption<dim>::Parameters rp;
-  rp.model = "ray traced";
+  rp.model = decltype(rp.model)::ray_traced;
   // The optical constants this test was written with (n = 3.5, k = 4.5),
   // set explicitly: the expected output does not follow the defaults.
   rp.refractive_index       = 3.5;

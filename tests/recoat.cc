@@ -87,7 +87,7 @@ main(int argc, char **argv)
 
   // The schedule: two layers by times, 40 um each.
   typename LayerSchedule<dim>::Parameters lp;
-  lp.source                    = "times";
+  lp.source                    = LayerSource::times;
   lp.thickness                 = 40e-6;
   lp.start_times               = {1e-3, 2e-3};
   const double       first_top = pp.substrate_top + pp.layer_thickness;

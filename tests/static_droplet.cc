@@ -64,7 +64,9 @@ main(int argc, char **argv)
         typename IncompressibleFlow<dim>::Parameters prm;
         prm.flip_fraction      = flip;
         prm.capillary_fraction = c_frac;
-        prm.height_function    = height_function;
+        prm.curvature          = (height_function) ?
+                                   decltype(prm.curvature)::height_function :
+                                   decltype(prm.curvature)::alpha_gradient;
         if (smoothed)
           {
             prm.point_shifting      = no_shifting ? 0 : 2;

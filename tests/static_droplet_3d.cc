@@ -35,10 +35,11 @@ main(int argc, char **argv)
       typename IncompressibleFlow<dim>::Parameters prm;
       prm.point_shifting      = 2;
       prm.curvature_smoothing = 2;
-      prm.height_function     = hf == 1;
-      prm.viscosity           = mu;
-      prm.gravity             = Tensor<1, dim>();
-      prm.surface_tension     = sigma;
+      prm.curvature = (hf == 1) ? decltype(prm.curvature)::height_function :
+                                  decltype(prm.curvature)::alpha_gradient;
+      prm.viscosity = mu;
+      prm.gravity   = Tensor<1, dim>();
+      prm.surface_tension = sigma;
       checks.print(hf ? "curvature: height function" :
                         "curvature: alpha gradient",
                    R_h);

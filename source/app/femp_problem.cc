@@ -55,7 +55,10 @@ namespace femp
     if (!scene.heat_enabled)
       heat->freeze();
     point_heat = std::make_unique<PointHeatExchange<dim>>(
-      *points, *heat, scene.heat.advection_by_melt_flow == "points");
+      *points,
+      *heat,
+      scene.heat.advection_by_melt_flow ==
+        HeatTransfer<dim>::Parameters::Advection::points);
     point_heat->initial_temperatures(scene.points.bodies, scene.heat);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");

@@ -132,7 +132,9 @@ namespace femp
     }
     const bool with_points =
       points.carried() &&
-      (prm.write_points == "always" || (prm.write_points == "last" && last));
+      (prm.write_points == Output<dim>::Parameters::WritePoints::always ||
+       (prm.write_points == Output<dim>::Parameters::WritePoints::last &&
+        last));
     out->write_fields(n,
                       time,
                       all,

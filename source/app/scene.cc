@@ -302,7 +302,8 @@ namespace femp
                     const Laser<dim>          &laser_module,
                     const SolidSubCycle<dim>  *solid_module) const
   {
-    const std::string index = output.format == "hdf5" ? ".xdmf" : ".pvd";
+    const std::string index =
+      output.format == Output<dim>::Parameters::Format::hdf5 ? ".xdmf" : ".pvd";
     pcout << "femp: " << dim << "D scene, "
           << Utilities::MPI::n_mpi_processes(comm) << " MPI rank(s)\n"
           << "  background grid: " << bg.n_global_cells() << " cells of "
@@ -323,8 +324,11 @@ namespace femp
       pcout << "  material points: none (Material points/Carry points = auto: "
                "a bare plate without melt flow or solid; alpha from the "
                "substrate's lattice)"
-            << (output.write_points != "never" ?
-                  "; 'Output/Write material points = " + output.write_points +
+            << (output.write_points !=
+                    Output<dim>::Parameters::WritePoints::never ?
+                  "; 'Output/Write material points = " +
+                    choice_name(output.write_points,
+                                Output<dim>::Parameters::write_points_names()) +
                     "' writes nothing (Carry points = always for point files)" :
                   std::string())
             << "\n";

@@ -3,6 +3,7 @@
 #include <femp/app/simulation_control.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
 
@@ -11,74 +12,76 @@
 namespace femp
 {
   void
+  SimulationControl::Parameters::add_parameters(ParameterTable &table)
+  {
+    table.enter_subsection("Time stepping");
+    table.add("End time",
+              end_time,
+              Patterns::Double(0.),
+              "Simulated time at which the run ends, s; range (0, inf).");
+    table.add("Time step",
+              time_step,
+              Patterns::Double(0.),
+              "Temperature step, s; 0 chooses it automatically as the "
+              "safety factor times the stable limit. A prescribed step "
+              "above the stable limit is refused. Range [0, inf).");
+    table.add("Safety factor",
+              safety_factor,
+              Patterns::Double(0., 1.),
+              "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
+              "(diffusion) and h/|u| (convection) used as the "
+              "automatic step; range (0, 1].");
+    table.add("Time step after solidification",
+              time_step_solidified,
+              Patterns::Double(0.),
+              "Temperature step, s, while the laser's path has "
+              "ended and the workpiece (the metal attached to the "
+              "substrate; detached spatter may still be liquid) is "
+              "below the solidus: the cooling, where temperatures "
+              "change slowly, in fewer steps; the flow and the solid "
+              "sub-cycle inside it as before. At most 'Safety "
+              "factor' times the stable limit of the step (the "
+              "smaller is taken). Checked at every step: metal that "
+              "melts again brings 'Time step' back. 0 (default): "
+              "'Time step' to the end. Range 0 or [Time step, inf) "
+              "with a prescribed 'Time step' (doc/cases.md, "
+              "\"Longer temperature steps in the cooling\").");
+    table.add("Maximum number of steps",
+              max_steps,
+              Patterns::Integer(1),
+              "Stop after this many steps even before the end time.");
+    table.add("Stop when peak temperature below",
+              stop_temperature,
+              Patterns::Double(0.),
+              "K; 0: off. Once the laser has finished its path (the "
+              "end of its last segment; it is off after that), end "
+              "the run at the first temperature step after which the "
+              "hottest cell of the metal attached to the substrate "
+              "is below this temperature (metal connected to the "
+              "bottom of the domain through cells with alpha > 1/2, "
+              "and the partly filled cells on it: spatter droplets "
+              "in the gas do not count), with "
+              "the field output of the last step (e.g. the residual "
+              "stress on the probe lines after cooling). The run "
+              "still ends at 'End time' at the latest. Range 0 or "
+              "above the initial temperature.");
+    table.leave_subsection();
+  }
+
+  void
   SimulationControl::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Time stepping");
-    prm.declare_entry(
-      "End time",
-      "1e-3",
-      Patterns::Double(0.),
-      "Simulated time at which the run ends, s; range (0, inf).");
-    prm.declare_entry("Time step",
-                      "0",
-                      Patterns::Double(0.),
-                      "Temperature step, s; 0 chooses it automatically as the "
-                      "safety factor times the stable limit. A prescribed step "
-                      "above the stable limit is refused. Range [0, inf).");
-    prm.declare_entry(
-      "Safety factor",
-      "0.5",
-      Patterns::Double(0., 1.),
-      "Fraction C of the stable limit h^2 rho c / sum(lambda_f) "
-      "(diffusion) and h/|u| (convection) used as the "
-      "automatic step; range (0, 1].");
-    prm.declare_entry("Time step after solidification",
-                      "0",
-                      Patterns::Double(0.),
-                      "Temperature step, s, while the laser's path has "
-                      "ended and the workpiece (the metal attached to the "
-                      "substrate; detached spatter may still be liquid) is "
-                      "below the solidus: the cooling, where temperatures "
-                      "change slowly, in fewer steps; the flow and the solid "
-                      "sub-cycle inside it as before. At most 'Safety "
-                      "factor' times the stable limit of the step (the "
-                      "smaller is taken). Checked at every step: metal that "
-                      "melts again brings 'Time step' back. 0 (default): "
-                      "'Time step' to the end. Range 0 or [Time step, inf) "
-                      "with a prescribed 'Time step' (doc/cases.md, "
-                      "\"Longer temperature steps in the cooling\").");
-    prm.declare_entry("Maximum number of steps",
-                      "100000000",
-                      Patterns::Integer(1),
-                      "Stop after this many steps even before the end time.");
-    prm.declare_entry("Stop when peak temperature below",
-                      "0",
-                      Patterns::Double(0.),
-                      "K; 0: off. Once the laser has finished its path (the "
-                      "end of its last segment; it is off after that), end "
-                      "the run at the first temperature step after which the "
-                      "hottest cell of the metal attached to the substrate "
-                      "is below this temperature (metal connected to the "
-                      "bottom of the domain through cells with alpha > 1/2, "
-                      "and the partly filled cells on it: spatter droplets "
-                      "in the gas do not count), with "
-                      "the field output of the last step (e.g. the residual "
-                      "stress on the probe lines after cooling). The run "
-                      "still ends at 'End time' at the latest. Range 0 or "
-                      "above the initial temperature.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   void
   SimulationControl::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Time stepping");
-    end_time             = prm.get_double("End time");
-    time_step            = prm.get_double("Time step");
-    safety_factor        = prm.get_double("Safety factor");
-    time_step_solidified = prm.get_double("Time step after solidification");
-    max_steps            = prm.get_integer("Maximum number of steps");
-    stop_temperature     = prm.get_double("Stop when peak temperature below");
     prm.leave_subsection();
     require(end_time > 0,
             "Time stepping/End time",

@@ -1,106 +1,109 @@
 // femp: thermophysical material data (eq. 1 coefficients), parameters and
 // their validation.
 #include <femp/base/material.h>
+#include <femp/base/parameter_table.h>
 
 namespace femp
 {
   void
-  Material::declare_parameters(ParameterHandler &prm)
+  Material::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Material");
-    prm.declare_entry("Density",
-                      "7955",
-                      Patterns::Double(),
-                      "Metal density rho_m, kg/m^3; range (0, inf). Default: "
-                      "316L stainless steel (Kim 1975).");
-    prm.declare_entry("Specific heat",
-                      "300:499.2, 1670:681.2, 1730:770.4",
-                      Patterns::Anything(),
-                      "Metal specific heat c_m(T), J/(kg K), > 0: a number, or "
-                      "'T1:c1, T2:c2, ...' piecewise linear in T (K), held "
-                      "constant outside. Default: 316L (Kim 1975, type 316: "
-                      "459.3 + 0.1329 T solid, 300-1670 K; 770.4 liquid).");
-    prm.declare_entry("Thermal conductivity",
-                      "300:13.96, 1670:35.48, 1730:18.08, 3000:22.25",
-                      Patterns::Anything(),
-                      "Metal thermal conductivity lambda_m(T), W/(m K), > 0: "
-                      "a number or a 'T:value' table as for the specific heat. "
-                      "Default: 316L (Kim 1975, type 316: 9.248 + 0.01571 T "
-                      "solid, 300-1670 K; 12.41 + 0.003279 T liquid, "
-                      "1730-3000 K).");
-    prm.declare_entry("Solidus temperature",
-                      "1670",
-                      Patterns::Double(),
-                      "Solidus T_s, K; range (0, liquidus).");
-    prm.declare_entry("Liquidus temperature",
-                      "1730",
-                      Patterns::Double(),
-                      "Liquidus T_l, K; range (solidus, inf). The liquid "
-                      "fraction rises linearly from T_s to T_l.");
-    prm.declare_entry("Latent heat of fusion",
-                      "2.68e5",
-                      Patterns::Double(),
-                      "L_m, J/kg; range [0, inf).");
-    prm.declare_entry("Latent heat of evaporation",
-                      "7.41e6",
-                      Patterns::Double(0.),
-                      "L_v of the surface loss of eq. (1) and of the recoil "
-                      "pressure, J/kg; range [0, inf).");
-    prm.declare_entry(
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Material");
+    table.add("Density",
+              density,
+              Patterns::Double(),
+              "Metal density rho_m, kg/m^3; range (0, inf). Default: "
+              "316L stainless steel (Kim 1975).");
+    if (table.declaring())
+      prm.declare_entry(
+        "Specific heat",
+        "300:499.2, 1670:681.2, 1730:770.4",
+        Patterns::Anything(),
+        "Metal specific heat c_m(T), J/(kg K), > 0: a number, or "
+        "'T1:c1, T2:c2, ...' piecewise linear in T (K), held "
+        "constant outside. Default: 316L (Kim 1975, type 316: "
+        "459.3 + 0.1329 T solid, 300-1670 K; 770.4 liquid).");
+    if (table.declaring())
+      prm.declare_entry(
+        "Thermal conductivity",
+        "300:13.96, 1670:35.48, 1730:18.08, 3000:22.25",
+        Patterns::Anything(),
+        "Metal thermal conductivity lambda_m(T), W/(m K), > 0: "
+        "a number or a 'T:value' table as for the specific heat. "
+        "Default: 316L (Kim 1975, type 316: 9.248 + 0.01571 T "
+        "solid, 300-1670 K; 12.41 + 0.003279 T liquid, "
+        "1730-3000 K).");
+    table.add("Solidus temperature",
+              solidus,
+              Patterns::Double(),
+              "Solidus T_s, K; range (0, liquidus).");
+    table.add("Liquidus temperature",
+              liquidus,
+              Patterns::Double(),
+              "Liquidus T_l, K; range (solidus, inf). The liquid "
+              "fraction rises linearly from T_s to T_l.");
+    table.add("Latent heat of fusion",
+              latent_heat_fusion,
+              Patterns::Double(),
+              "L_m, J/kg; range [0, inf).");
+    table.add("Latent heat of evaporation",
+              latent_heat_evaporation,
+              Patterns::Double(0.),
+              "L_v of the surface loss of eq. (1) and of the recoil "
+              "pressure, J/kg; range [0, inf).");
+    table.add(
       "Evaporation temperature",
-      "3090",
+      evaporation_temperature,
       Patterns::Double(0.),
       "Boiling temperature T_v at the ambient pressure, K; range (0, inf).");
-    prm.declare_entry(
-      "Molar mass",
-      "0.0558",
-      Patterns::Double(0.),
-      "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
-    prm.declare_entry("Ambient pressure",
-                      "101325",
-                      Patterns::Double(0.),
-                      "Ambient pressure p_0, Pa; range [0, inf).");
-    prm.declare_entry("Gas density",
-                      "1.6",
-                      Patterns::Double(),
-                      "Ambient gas density rho_g, kg/m^3; range [0, inf). "
-                      "Enters partially filled cells and the surface weighting "
-                      "2 rho c/(rho_m c_m + rho_g c_g) of eq. (1).");
-    prm.declare_entry(
-      "Gas specific heat",
-      "520",
-      Patterns::Double(),
-      "Ambient gas specific heat c_g, J/(kg K); range [0, inf).");
-    prm.declare_entry("Gas thermal conductivity",
-                      "0.018",
-                      Patterns::Double(),
-                      "Ambient gas conductivity lambda_g, W/(m K): the gas "
-                      "share of a partly filled cell's conductivity and the "
-                      "conduction from detached drops (Heat transfer/"
-                      "Detached drops); range [0, inf). Cells without metal "
-                      "are not solved.");
-    prm.leave_subsection();
+    table.add("Molar mass",
+              molar_mass,
+              Patterns::Double(0.),
+              "Molar mass M of the metal vapour, kg/mol; range (0, inf).");
+    table.add("Ambient pressure",
+              ambient_pressure,
+              Patterns::Double(0.),
+              "Ambient pressure p_0, Pa; range [0, inf).");
+    table.add("Gas density",
+              gas_density,
+              Patterns::Double(),
+              "Ambient gas density rho_g, kg/m^3; range [0, inf). "
+              "Enters partially filled cells and the surface weighting "
+              "2 rho c/(rho_m c_m + rho_g c_g) of eq. (1).");
+    table.add("Gas specific heat",
+              gas_specific_heat,
+              Patterns::Double(),
+              "Ambient gas specific heat c_g, J/(kg K); range [0, inf).");
+    table.add("Gas thermal conductivity",
+              gas_conductivity,
+              Patterns::Double(),
+              "Ambient gas conductivity lambda_g, W/(m K): the gas "
+              "share of a partly filled cell's conductivity and the "
+              "conduction from detached drops (Heat transfer/"
+              "Detached drops); range [0, inf). Cells without metal "
+              "are not solved.");
+    table.leave_subsection();
+  }
+
+  void
+  Material::declare_parameters(ParameterHandler &prm)
+  {
+    Material       defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   void
   Material::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Material");
-    density            = prm.get_double("Density");
-    specific_heat      = PiecewiseLinear::parse(prm.get("Specific heat"),
+    specific_heat = PiecewiseLinear::parse(prm.get("Specific heat"),
                                            "Material/Specific heat");
-    conductivity       = PiecewiseLinear::parse(prm.get("Thermal conductivity"),
+    conductivity  = PiecewiseLinear::parse(prm.get("Thermal conductivity"),
                                           "Material/Thermal conductivity");
-    solidus            = prm.get_double("Solidus temperature");
-    liquidus           = prm.get_double("Liquidus temperature");
-    latent_heat_fusion = prm.get_double("Latent heat of fusion");
-    gas_density        = prm.get_double("Gas density");
-    gas_specific_heat  = prm.get_double("Gas specific heat");
-    gas_conductivity   = prm.get_double("Gas thermal conductivity");
-    latent_heat_evaporation = prm.get_double("Latent heat of evaporation");
-    evaporation_temperature = prm.get_double("Evaporation temperature");
-    molar_mass              = prm.get_double("Molar mass");
-    ambient_pressure        = prm.get_double("Ambient pressure");
     prm.leave_subsection();
     require(evaporation_temperature > 0,
             "Material/Evaporation temperature",

@@ -4,6 +4,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/builds/pore_detector.h>
 #include <femp/io/output.h>
 
@@ -17,51 +18,63 @@ namespace femp
 {
   template <int dim>
   void
-  PoreDetector<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  PoreDetector<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Porosity");
-    prm.declare_entry(
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Porosity");
+    table.add(
       "Detect pores",
-      "auto",
-      Patterns::Selection("auto|true|false"),
+      detect,
+      {{AutoSwitch::automatic, "auto"},
+       {AutoSwitch::on, "true"},
+       {AutoSwitch::off, "false"}},
       "Find the pores (gas enclosed in the fused metal, doc/builds.md) at "
       "every field output: porosity.csv (count, gas volume, relative "
       "density of the built region), pores.csv (each pore's volume, "
       "equivalent diameter and centroid) and the cell fields pore, "
       "unfused_powder and partially_molten (scenes that carry material "
       "points only). auto: with a layer schedule (Build/Layer schedule).");
-    prm.declare_entry(
+    table.add(
       "Fused fraction threshold",
-      "0.5",
+      threshold,
       Patterns::Double(0., 1.),
       "A cell is open (gas or unfused powder, through which the free gas "
       "reaches) when its fused metal fraction alpha (1 - s_p), s_p the "
       "share of its points' volume that is powder that never melted, is "
       "below this value; -. Range (0, 1).");
-    prm.declare_entry("Minimum pore volume",
-                      "0",
-                      Patterns::Double(0.),
-                      "Pores whose gas volume is smaller are not listed, "
-                      "m^3 (2D: m^2); range [0, inf).");
-    prm.declare_entry(
-      "Built region bottom",
-      "",
-      Patterns::Anything(),
-      "The relative density is that of the cells whose centre lies at or "
-      "above this vertical coordinate (z in 3D, y in 2D), m; empty: the "
-      "substrate top (Material points/Substrate top). Range: inside the "
-      "domain.");
-    prm.leave_subsection();
+    table.add("Minimum pore volume",
+              min_volume,
+              Patterns::Double(0.),
+              "Pores whose gas volume is smaller are not listed, "
+              "m^3 (2D: m^2); range [0, inf).");
+    if (table.declaring())
+      prm.declare_entry(
+        "Built region bottom",
+        "",
+        Patterns::Anything(),
+        "The relative density is that of the cells whose centre lies at or "
+        "above this vertical coordinate (z in 3D, y in 2D), m; empty: the "
+        "substrate top (Material points/Substrate top). Range: inside the "
+        "domain.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  PoreDetector<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   PoreDetector<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Porosity");
-    detect              = prm.get("Detect pores");
-    threshold           = prm.get_double("Fused fraction threshold");
-    min_volume          = prm.get_double("Minimum pore volume");
     const std::string b = prm.get("Built region bottom");
     prm.leave_subsection();
     require(threshold > 0 && threshold < 1,

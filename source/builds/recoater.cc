@@ -5,6 +5,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/builds/recoater.h>
 #include <femp/grid/powder_bed.h>
 
@@ -14,49 +15,69 @@
 
 namespace femp
 {
+  const Choices<LayerSource> &
+  layer_source_names()
+  {
+    static const Choices<LayerSource> names = {{LayerSource::none, "none"},
+                                               {LayerSource::scan_path,
+                                                "scan path"},
+                                               {LayerSource::times, "times"}};
+    return names;
+  }
+
   template <int dim>
   void
-  LayerSchedule<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  LayerSchedule<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Build");
-    prm.declare_entry(
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Build");
+    table.add(
       "Layer schedule",
-      "none",
-      Patterns::Selection("none|scan path|times"),
+      source,
+      layer_source_names(),
       "When a new powder layer is spread (doc/builds.md). none: one layer "
       "(the scene's powder). 'scan path': a layer starts where the height of "
       "the scan path's segments rises (Laser/Scan path file in a format "
       "with heights), its powder reaching the first layer's top plus the "
       "rise. times: at 'Layer start times', each 'Layer thickness' higher.");
-    prm.declare_entry("Layer thickness",
-                      "30e-6",
-                      Patterns::Double(0.),
-                      "With 'Layer schedule = times': how much higher each "
-                      "new layer's powder reaches than the last, m; range "
-                      "(0, inf).");
-    prm.declare_entry("Layer start times",
-                      "",
-                      Patterns::Anything(),
-                      "With 'Layer schedule = times': the times at which the "
-                      "layers after the first are spread, s, increasing and "
-                      "positive, separated by ','.");
-    prm.declare_entry("Powder temperature",
-                      "0",
-                      Patterns::Double(0.),
-                      "Temperature of the spread powder, K; 0: the ambient "
-                      "(Heat transfer/Reference temperature). Range [0, "
-                      "inf).");
-    prm.leave_subsection();
+    table.add("Layer thickness",
+              thickness,
+              Patterns::Double(0.),
+              "With 'Layer schedule = times': how much higher each "
+              "new layer's powder reaches than the last, m; range "
+              "(0, inf).");
+    if (table.declaring())
+      prm.declare_entry("Layer start times",
+                        "",
+                        Patterns::Anything(),
+                        "With 'Layer schedule = times': the times at which the "
+                        "layers after the first are spread, s, increasing and "
+                        "positive, separated by ','.");
+    table.add("Powder temperature",
+              powder_temperature,
+              Patterns::Double(0.),
+              "Temperature of the spread powder, K; 0: the ambient "
+              "(Heat transfer/Reference temperature). Range [0, "
+              "inf).");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  LayerSchedule<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   LayerSchedule<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Build");
-    source                  = prm.get("Layer schedule");
-    thickness               = prm.get_double("Layer thickness");
-    powder_temperature      = prm.get_double("Powder temperature");
     const std::string times = prm.get("Layer start times");
     prm.leave_subsection();
     start_times.clear();
@@ -71,7 +92,7 @@ namespace femp
                 "it must list increasing positive times (s) separated by ','");
         start_times.push_back(v);
       }
-    if (source == "times")
+    if (source == LayerSource::times)
       {
         require(!start_times.empty(),
                 "Build/Layer start times",
@@ -92,13 +113,13 @@ namespace femp
     const double                                     domain_top,
     const double                                     cell_size)
   {
-    if (prm.source == "times")
+    if (prm.source == LayerSource::times)
       for (unsigned int k = 0; k < prm.start_times.size(); ++k)
         list.push_back({k + 2,
                         prm.start_times[k],
                         first_top + (k + 1) * prm.thickness,
                         prm.thickness});
-    else if (prm.source == "scan path" && !segments.empty())
+    else if (prm.source == LayerSource::scan_path && !segments.empty())
       {
         // The first layer: the height of the first segment with the laser
         // on (moves before it place the beam). A later layer starts with
@@ -120,7 +141,7 @@ namespace femp
             }
         require(!list.empty(),
                 "Build/Layer schedule",
-                prm.source,
+                choice_name(prm.source, layer_source_names()),
                 "the scan path's segments all lie at one height: there is "
                 "no second layer (use a format with heights, or 'none')");
       }
@@ -129,9 +150,9 @@ namespace femp
       {
         const Layer &last = list.back();
         require(last.top <= domain_top - 2 * cell_size * (1 - 1e-9),
-                prm.source == "times" ? "Build/Layer start times" :
-                                        "Build/Layer schedule",
-                prm.source,
+                prm.source == LayerSource::times ? "Build/Layer start times" :
+                                                   "Build/Layer schedule",
+                choice_name(prm.source, layer_source_names()),
                 "layer " + std::to_string(last.number) + "'s powder reaches " +
                   num(last.top) + " m, above the domain's top " +
                   num(domain_top) + " m less two cells (" +

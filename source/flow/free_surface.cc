@@ -3,6 +3,7 @@
 // Marangoni traction (paper sec. 2.3, eq. 3; doc/flow.md). See
 // include/femp/flow/free_surface.h.
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/flow/free_surface.h>
 
 #include <algorithm>
@@ -21,80 +22,81 @@ namespace femp
 
   template <int dim>
   void
+  FreeSurface<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    table.add("Curvature smoothing",
+              curvature_smoothing,
+              Patterns::Integer(0, 4),
+              "Passes of the curvature smoothing: each pass replaces "
+              "the capillary pressure of a free-surface cell by the "
+              "mean over the free-surface cells among its 3^dim "
+              "neighbours (see doc/flow.md); 0: none. Allowed: 0, "
+              "2 or 4 (an odd number of passes flips the sign of the "
+              "curvature's cell-to-cell noise, and the surface goes "
+              "unstable; doc/stability.md).");
+    table.add("Curvature",
+              curvature,
+              {{Curvature::alpha_gradient, "alpha gradient"},
+               {Curvature::height_function, "height function"}},
+              "How the curvature div(n) of a free-surface cell is "
+              "computed (doc/flow.md): 'alpha gradient' (default), "
+              "the divergence of the normalized gradient of the "
+              "smoothed metal fraction at the cell's corners; "
+              "'height function', the heights of the metal fraction "
+              "summed over columns of 7 cells along the normal's "
+              "largest component, 3 (2D) or 3 x 3 (3D) columns, "
+              "falling back to the alpha gradient where a column "
+              "does not cross the surface (melt thinner than about "
+              "3 cells, walls).");
+    table.add("Surface tension",
+              surface_tension,
+              Patterns::Double(0.),
+              "Surface tension coefficient sigma, N/m (0: no surface "
+              "tension); enters as the capillary pressure sigma div(n) "
+              "at the free surface. Range [0, inf).");
+    table.add("Surface tension temperature derivative",
+              surface_tension_gradient,
+              Patterns::Double(),
+              "dsigma/dT of the Marangoni stress, N/(m K) (negative "
+              "for most metals; 0: no Marangoni stress). Range any "
+              "real number.");
+    table.add("Recoil coefficient",
+              recoil_coefficient,
+              Patterns::Double(0., 1.),
+              "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
+              "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
+              "L_v, M, T_v, p0 from the Heat transfer subsection. "
+              "Range [0, 1].");
+    table.add("Recoil temperature",
+              recoil_temperature,
+              {{RecoilTemperature::limited, "limited"},
+               {RecoilTemperature::cell, "cell"},
+               {RecoilTemperature::median, "median"}},
+              "The surface temperature T of a free-surface cell's recoil "
+              "pressure (see doc/flow.md, \"Recoil pressure\"): 'limited' "
+              "(default), the cell's own temperature limited to the range of "
+              "those of the other free-surface cells among its 3^dim "
+              "neighbours (a single-cell extremum is cut to its neighbours' "
+              "nearest value); 'cell', the cell's own temperature; 'median', "
+              "the median of the temperatures of the free-surface cells among "
+              "its 3^dim neighbours, itself included.");
+  }
+
+  template <int dim>
+  void
   FreeSurface<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.declare_entry("Curvature smoothing",
-                      "0",
-                      Patterns::Integer(0, 4),
-                      "Passes of the curvature smoothing: each pass replaces "
-                      "the capillary pressure of a free-surface cell by the "
-                      "mean over the free-surface cells among its 3^dim "
-                      "neighbours (see doc/flow.md); 0: none. Allowed: 0, "
-                      "2 or 4 (an odd number of passes flips the sign of the "
-                      "curvature's cell-to-cell noise, and the surface goes "
-                      "unstable; doc/stability.md).");
-    prm.declare_entry("Curvature",
-                      "alpha gradient",
-                      Patterns::Selection("alpha gradient|height function"),
-                      "How the curvature div(n) of a free-surface cell is "
-                      "computed (doc/flow.md): 'alpha gradient' (default), "
-                      "the divergence of the normalized gradient of the "
-                      "smoothed metal fraction at the cell's corners; "
-                      "'height function', the heights of the metal fraction "
-                      "summed over columns of 7 cells along the normal's "
-                      "largest component, 3 (2D) or 3 x 3 (3D) columns, "
-                      "falling back to the alpha gradient where a column "
-                      "does not cross the surface (melt thinner than about "
-                      "3 cells, walls).");
-    prm.declare_entry("Surface tension",
-                      "0",
-                      Patterns::Double(0.),
-                      "Surface tension coefficient sigma, N/m (0: no surface "
-                      "tension); enters as the capillary pressure sigma div(n) "
-                      "at the free surface. Range [0, inf).");
-    prm.declare_entry("Surface tension temperature derivative",
-                      "0",
-                      Patterns::Double(),
-                      "dsigma/dT of the Marangoni stress, N/(m K) (negative "
-                      "for most metals; 0: no Marangoni stress). Range any "
-                      "real number.");
-    prm.declare_entry("Recoil coefficient",
-                      "0",
-                      Patterns::Double(0., 1.),
-                      "zeta_p of the recoil pressure zeta_p p0 exp[L_v M "
-                      "(T - T_v)/(R T T_v)] (about 0.54; 0: no recoil), with "
-                      "L_v, M, T_v, p0 from the Heat transfer subsection. "
-                      "Range [0, 1].");
-    prm.declare_entry(
-      "Recoil temperature",
-      "limited",
-      Patterns::Selection("median|limited|cell"),
-      "The surface temperature T of a free-surface cell's recoil pressure "
-      "(see doc/flow.md, \"Recoil pressure\"): 'limited' (default), the "
-      "cell's own temperature limited to the range of those of the other "
-      "free-surface cells among its 3^dim neighbours (a single-cell "
-      "extremum is cut to its neighbours' nearest value); 'cell', the cell's "
-      "own temperature; 'median', the median of the temperatures of the "
-      "free-surface cells among its 3^dim neighbours, itself included (near "
-      "a temperature peak typically 0.3 of the cell-wise recoil).");
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   FreeSurface<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
-    curvature_smoothing = prm.get_integer("Curvature smoothing");
-    height_function     = prm.get("Curvature") == "height function";
-    surface_tension     = prm.get_double("Surface tension");
-    surface_tension_gradient =
-      prm.get_double("Surface tension temperature derivative");
-    recoil_coefficient = prm.get_double("Recoil coefficient");
-    {
-      const std::string t = prm.get("Recoil temperature");
-      recoil_temperature  = t == "cell"    ? RecoilTemperature::cell :
-                            t == "limited" ? RecoilTemperature::limited :
-                                             RecoilTemperature::median;
-    }
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     require(surface_tension >= 0,
             "Melt flow/Surface tension",
             surface_tension,
@@ -154,7 +156,8 @@ namespace femp
     locate_interface(type, fluid_cells);
     if (!prm.any())
       return;
-    if (prm.height_function && prm.surface_tension > 0)
+    if (prm.curvature == Parameters::Curvature::height_function &&
+        prm.surface_tension > 0)
       height_columns(type);
     capillary_and_marangoni(type, fluid_cells, temperature);
     if (prm.recoil_coefficient > 0 ||
@@ -426,7 +429,8 @@ namespace femp
                 }
           }
         double ps = prm.surface_tension * div / (h * (1u << (dim - 1)));
-        if (prm.height_function && prm.surface_tension > 0)
+        if (prm.curvature == Parameters::Curvature::height_function &&
+            prm.surface_tension > 0)
           {
             const double k = height_function_curvature(c, nc);
             if (std::isfinite(k))

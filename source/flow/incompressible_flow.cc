@@ -42,6 +42,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/cell_state.h>
@@ -68,96 +69,97 @@ namespace femp
 
   template <int dim>
   void
+  IncompressibleFlow<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Melt flow");
+    table.add("Viscosity",
+              viscosity,
+              Patterns::Double(0.),
+              "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
+    table.add("Darcy constant",
+              darcy_constant,
+              Patterns::Double(0.),
+              "Mushy-zone constant K_c of the Darcy damping "
+              "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
+    table.add("Darcy epsilon",
+              darcy_epsilon,
+              Patterns::Double(0.),
+              "eps0 of the Darcy damping, avoids division by zero; "
+              "range (0, 1].");
+    table.add("FLIP fraction",
+              flip_fraction,
+              Patterns::Double(0., 1.),
+              "beta of the grid-to-point update: 1 pure FLIP, 0 pure "
+              "PIC; range [0, 1].");
+    table.add("Courant number",
+              cfl,
+              Patterns::Double(0.),
+              "C of the convective limit dt <= C h / u_max; range (0, 1].");
+    table.add("Capillary step fraction",
+              capillary_fraction,
+              Patterns::Double(0.),
+              "Fraction of the capillary limit sqrt(rho h^3/(2 pi "
+              "sigma)) used by the automatic fluid step (surface "
+              "tension is explicit on the old geometry; "
+              "doc/flow.md); range (0, 1].");
+    table.add("Time step",
+              time_step,
+              Patterns::Double(0.),
+              "Prescribed fluid step, s; 0 (default) chooses it "
+              "automatically at every sub-step as the smallest of the "
+              "convective, viscous and (fraction of the) capillary "
+              "limits. A prescribed step above the viscous limit "
+              "h^2 rho/(2 dim mu) or the capillary limit is refused; "
+              "above the convective limit the step-halving safety "
+              "applies. Range [0, inf).");
+    table.add("Point shifting",
+              point_shifting,
+              Patterns::Double(0.),
+              "Coefficient A of the point shifting: each fluid point "
+              "is moved, besides its advection, by -A h |u| dt "
+              "grad(alpha) (alpha the metal fraction at the nodes, "
+              "tangential part only next to the free surface, at "
+              "most h/4 per step), which keeps the points evenly "
+              "spread (see doc/flow.md); dimensionless, 0 switches it "
+              "off. Range [0, 10].");
+    table.add("Volume correction",
+              volume_correction,
+              Patterns::Double(0.),
+              "Relaxation factor c of the volume correction: each "
+              "step the fluid points move, besides their advection, "
+              "by grad(psi), where lap(psi) = c (V_c/h^dim - 1) on the "
+              "fluid cells (V_c the volume of the metal points in the "
+              "cell; only the over-filled part in cells next to gas) "
+              "with psi = 0 at the free surface, so that cells "
+              "over-filled by bunched points push them apart and "
+              "under-filled ones pull them in (at most h/4 per step; "
+              "velocities unchanged). Keeps the fluid volume of the "
+              "points (see doc/flow.md); dimensionless, 0 switches it "
+              "off. Range [0, 1].");
+    if (table.declaring())
+      FreeSurface<dim>::Parameters::declare_parameters(prm);
+    if (table.declaring())
+      PressureSolver<dim>::Parameters::declare_parameters(prm);
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   IncompressibleFlow<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Melt flow");
-    prm.declare_entry(
-      "Viscosity",
-      "6e-3",
-      Patterns::Double(0.),
-      "Dynamic viscosity mu of the melt, Pa s; range [0, inf).");
-    prm.declare_entry(
-      "Darcy constant",
-      "1e8",
-      Patterns::Double(0.),
-      "Mushy-zone constant K_c of the Darcy damping "
-      "K_c (1-gamma)^2/(gamma^3+eps0) u, kg/(m^3 s); range [0, inf).");
-    prm.declare_entry("Darcy epsilon",
-                      "1e-3",
-                      Patterns::Double(0.),
-                      "eps0 of the Darcy damping, avoids division by zero; "
-                      "range (0, 1].");
-    prm.declare_entry("FLIP fraction",
-                      "0.95",
-                      Patterns::Double(0., 1.),
-                      "beta of the grid-to-point update: 1 pure FLIP, 0 pure "
-                      "PIC; range [0, 1].");
-    prm.declare_entry(
-      "Courant number",
-      "0.25",
-      Patterns::Double(0.),
-      "C of the convective limit dt <= C h / u_max; range (0, 1].");
-    prm.declare_entry("Capillary step fraction",
-                      "0.5",
-                      Patterns::Double(0.),
-                      "Fraction of the capillary limit sqrt(rho h^3/(2 pi "
-                      "sigma)) used by the automatic fluid step (surface "
-                      "tension is explicit on the old geometry; the "
-                      "oscillating-droplet study in doc/flow.md chose 0.5); "
-                      "range (0, 1].");
-    prm.declare_entry("Time step",
-                      "0",
-                      Patterns::Double(0.),
-                      "Prescribed fluid step, s; 0 (default) chooses it "
-                      "automatically at every sub-step as the smallest of the "
-                      "convective, viscous and (fraction of the) capillary "
-                      "limits. A prescribed step above the viscous limit "
-                      "h^2 rho/(2 dim mu) or the capillary limit is refused; "
-                      "above the convective limit the step-halving safety "
-                      "applies. Range [0, inf).");
-    prm.declare_entry("Point shifting",
-                      "0",
-                      Patterns::Double(0.),
-                      "Coefficient A of the point shifting: each fluid point "
-                      "is moved, besides its advection, by -A h |u| dt "
-                      "grad(alpha) (alpha the metal fraction at the nodes, "
-                      "tangential part only next to the free surface, at "
-                      "most h/4 per step), which keeps the points evenly "
-                      "spread (see doc/flow.md); dimensionless, 0 switches it "
-                      "off. Range [0, 10].");
-    prm.declare_entry("Volume correction",
-                      "0",
-                      Patterns::Double(0.),
-                      "Relaxation factor c of the volume correction: each "
-                      "step the fluid points move, besides their advection, "
-                      "by grad(psi), where lap(psi) = c (V_c/h^dim - 1) on the "
-                      "fluid cells (V_c the volume of the metal points in the "
-                      "cell; only the over-filled part in cells next to gas) "
-                      "with psi = 0 at the free surface, so that cells "
-                      "over-filled by bunched points push them apart and "
-                      "under-filled ones pull them in (at most h/4 per step; "
-                      "velocities unchanged). Keeps the fluid volume of the "
-                      "points (see doc/flow.md); dimensionless, 0 switches it "
-                      "off. Range [0, 1].");
-    FreeSurface<dim>::Parameters::declare_parameters(prm);
-    PressureSolver<dim>::Parameters::declare_parameters(prm);
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   IncompressibleFlow<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Melt flow");
-    viscosity          = prm.get_double("Viscosity");
-    darcy_constant     = prm.get_double("Darcy constant");
-    darcy_epsilon      = prm.get_double("Darcy epsilon");
-    flip_fraction      = prm.get_double("FLIP fraction");
-    cfl                = prm.get_double("Courant number");
-    capillary_fraction = prm.get_double("Capillary step fraction");
-    time_step          = prm.get_double("Time step");
-    point_shifting     = prm.get_double("Point shifting");
-    volume_correction  = prm.get_double("Volume correction");
     typename FreeSurface<dim>::Parameters surface;
     surface.parse_parameters(prm);
     surface_tension          = surface.surface_tension;
@@ -165,7 +167,7 @@ namespace femp
     recoil_coefficient       = surface.recoil_coefficient;
     recoil_temperature       = surface.recoil_temperature;
     curvature_smoothing      = surface.curvature_smoothing;
-    height_function          = surface.height_function;
+    curvature                = surface.curvature;
     pressure.parse_parameters(prm);
     prm.leave_subsection();
     require(viscosity >= 0,
@@ -216,7 +218,7 @@ namespace femp
     s.recoil_coefficient       = recoil_coefficient;
     s.recoil_temperature       = recoil_temperature;
     s.curvature_smoothing      = curvature_smoothing;
-    s.height_function          = height_function;
+    s.curvature                = curvature;
     return s;
   }
 

@@ -9,6 +9,7 @@
 #include <deal.II/lac/trilinos_sparsity_pattern.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/flow/pressure_solver.h>
 
 #include <algorithm>
@@ -26,60 +27,61 @@ namespace femp
 
   template <int dim>
   void
+  PressureSolver<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    table.add("Solver tolerance",
+              solver_tolerance,
+              Patterns::Double(0.),
+              "Relative residual of the pressure CG solve; range (0, 1e-2].");
+    table.add("Maximum iterations",
+              max_iterations,
+              Patterns::Integer(1),
+              "Most CG iterations per pressure solve; range [1, inf).");
+    table.add("Pressure preconditioner",
+              preconditioner,
+              {{Preconditioner::automatic, "auto"},
+               {Preconditioner::amg, "amg"},
+               {Preconditioner::jacobi, "jacobi"}},
+              "Preconditioner of the pressure CG solve: 'amg' "
+              "(Trilinos ML, a hierarchy set up at each change of "
+              "the fluid set), 'jacobi' (the matrix diagonal, no "
+              "setup), or 'auto': Jacobi while the band round the "
+              "fluid has fewer than 'AMG minimum rows' rows over all "
+              "ranks and its solves need at most 'Jacobi iteration "
+              "limit' iterations, AMG otherwise (doc/flow.md, \"One "
+              "fluid step\", step 4).");
+    table.add("AMG minimum rows",
+              amg_minimum_rows,
+              Patterns::Integer(0),
+              "With 'Pressure preconditioner = auto': the smallest "
+              "band, in rows (cells) over all ranks, that the AMG "
+              "preconditions; range [0, inf), 0: always AMG. Smaller "
+              "bands take Jacobi, whose solves need no setup "
+              "(doc/flow.md).");
+    table.add("Jacobi iteration limit",
+              jacobi_iteration_limit,
+              Patterns::Integer(1),
+              "With 'Pressure preconditioner = auto': a Jacobi solve "
+              "that needs more CG iterations than this hands the "
+              "pressure to the AMG for the rest of the run (or until "
+              "a resume); range [1, inf).");
+  }
+
+  template <int dim>
+  void
   PressureSolver<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.declare_entry(
-      "Solver tolerance",
-      "1e-10",
-      Patterns::Double(0.),
-      "Relative residual of the pressure CG solve; range (0, 1e-2].");
-    prm.declare_entry("Maximum iterations",
-                      "1000",
-                      Patterns::Integer(1),
-                      "Most CG iterations per pressure solve; range [1, inf).");
-    prm.declare_entry("Pressure preconditioner",
-                      "auto",
-                      Patterns::Selection("auto|amg|jacobi"),
-                      "Preconditioner of the pressure CG solve: 'amg' "
-                      "(Trilinos ML, a hierarchy set up at each change of "
-                      "the fluid set), 'jacobi' (the matrix diagonal, no "
-                      "setup), or 'auto': Jacobi while the band round the "
-                      "fluid has fewer than 'AMG minimum rows' rows over all "
-                      "ranks and its solves need at most 'Jacobi iteration "
-                      "limit' iterations, AMG otherwise (doc/flow.md, \"One "
-                      "fluid step\", step 4).");
-    prm.declare_entry("AMG minimum rows",
-                      "10000",
-                      Patterns::Integer(0),
-                      "With 'Pressure preconditioner = auto': the smallest "
-                      "band, in rows (cells) over all ranks, that the AMG "
-                      "preconditions; range [0, inf), 0: always AMG. Below "
-                      "it the hierarchy's setup at nearly every step costs "
-                      "more than Jacobi's extra iterations: measured faster "
-                      "with Jacobi up to 7,300 rows (the paper-scale track "
-                      "at 100 W), larger bands not measured.");
-    prm.declare_entry(
-      "Jacobi iteration limit",
-      "60",
-      Patterns::Integer(1),
-      "With 'Pressure preconditioner = auto': a Jacobi solve "
-      "that needs more CG iterations than this hands the "
-      "pressure to the AMG for the rest of the run (or until "
-      "a resume); range [1, inf). Tracks need 23-32 per solve (at most 55 "
-      "measured), a resting drop or a closed cavity 60-230, "
-      "where a hierarchy that is kept across steps is "
-      "cheaper.");
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   PressureSolver<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
-    solver_tolerance       = prm.get_double("Solver tolerance");
-    max_iterations         = prm.get_integer("Maximum iterations");
-    preconditioner         = prm.get("Pressure preconditioner");
-    amg_minimum_rows       = prm.get_integer("AMG minimum rows");
-    jacobi_iteration_limit = prm.get_integer("Jacobi iteration limit");
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     require(solver_tolerance > 0 && solver_tolerance <= 1e-2,
             "Melt flow/Solver tolerance",
             solver_tolerance,
@@ -149,8 +151,8 @@ namespace femp
     // than 'Jacobi iteration limit' iterations, then AMG for the rest of
     // the run: a flow whose fluid set changes seldom, such as a resting
     // drop or a closed cavity, is better served by kept hierarchies.
-    use_jacobi = prm.preconditioner == "jacobi" ||
-                 (prm.preconditioner == "auto" &&
+    use_jacobi = prm.preconditioner == Parameters::Preconditioner::jacobi ||
+                 (prm.preconditioner == Parameters::Preconditioner::automatic &&
                   matrix.m() < prm.amg_minimum_rows && !jacobi_too_slow);
     new_hierarchy = !use_jacobi && (renumbered || set_changed || !amg_current);
     if (use_jacobi)
@@ -423,7 +425,8 @@ namespace femp
             else
               cg.solve(matrix, solution, rhs, amg);
             total += control.last_step();
-            if (use_jacobi && prm.preconditioner == "auto" &&
+            if (use_jacobi &&
+                prm.preconditioner == Parameters::Preconditioner::automatic &&
                 control.last_step() > prm.jacobi_iteration_limit)
               jacobi_too_slow = true;
             else if (fresh && !use_jacobi)

@@ -4,6 +4,7 @@
 #include <deal.II/grid/grid_generator.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 
 #include <algorithm>
@@ -15,51 +16,64 @@ namespace femp
 {
   template <int dim>
   void
+  BackgroundGrid<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Background grid");
+    if (table.declaring())
+      prm.declare_entry(
+        "Lower corner",
+        "0, 0, 0",
+        Patterns::List(Patterns::Double(), 1, 3),
+        "Lower corner of the domain box, in m. A comma-separated "
+        "list of 1..3 coordinates; the first dim are used.");
+    if (table.declaring())
+      prm.declare_entry("Upper corner",
+                        "1e-3, 4e-4, 2e-4",
+                        Patterns::List(Patterns::Double(), 1, 3),
+                        "Upper corner of the domain box, in m. Each extent "
+                        "(upper - lower) must be positive and an integer "
+                        "multiple of the cell size.");
+    table.add("Cell size",
+              cell_size,
+              Patterns::Double(0.),
+              "Edge length h of the cubic background cells, in m; "
+              "range (0, domain extent]. The same grid carries "
+              "temperature, pressure and nodal velocities.");
+    table.add("Partition",
+              partition_by_cost,
+              {{true, "cost"}, {false, "cells"}},
+              "How the grid is split over the MPI ranks. 'cost': "
+              "pieces of equal expected work, from the scene's "
+              "geometry at the start (a cell counts 1, each material "
+              "point expected in it 2, and each point the solid "
+              "steps by MPM 40 more: the solid's point loops "
+              "dominate a coupled run). 'cells': pieces of equal "
+              "numbers of cells. Results agree to round-off; only "
+              "the time differs. One rank: no effect.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   BackgroundGrid<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Background grid");
-    prm.declare_entry("Lower corner",
-                      "0, 0, 0",
-                      Patterns::List(Patterns::Double(), 1, 3),
-                      "Lower corner of the domain box, in m. A comma-separated "
-                      "list of 1..3 coordinates; the first dim are used.");
-    prm.declare_entry("Upper corner",
-                      "1e-3, 4e-4, 2e-4",
-                      Patterns::List(Patterns::Double(), 1, 3),
-                      "Upper corner of the domain box, in m. Each extent "
-                      "(upper - lower) must be positive and an integer "
-                      "multiple of the cell size.");
-    prm.declare_entry("Cell size",
-                      "8e-6",
-                      Patterns::Double(0.),
-                      "Edge length h of the cubic background cells, in m; "
-                      "range (0, domain extent]. The same grid carries "
-                      "temperature, pressure and nodal velocities.");
-    prm.declare_entry("Partition",
-                      "cost",
-                      Patterns::Selection("cost|cells"),
-                      "How the grid is split over the MPI ranks. 'cost': "
-                      "pieces of equal expected work, from the scene's "
-                      "geometry at the start (a cell counts 1, each material "
-                      "point expected in it 2, and each point the solid "
-                      "steps by MPM 40 more: the solid's point loops "
-                      "dominate a coupled run). 'cells': pieces of equal "
-                      "numbers of cells. Results agree to round-off; only "
-                      "the time differs. One rank: no effect.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   BackgroundGrid<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Background grid");
     lower_corner =
       parse_point<dim>(prm.get("Lower corner"), "Background grid/Lower corner");
     upper_corner =
       parse_point<dim>(prm.get("Upper corner"), "Background grid/Upper corner");
-    cell_size         = prm.get_double("Cell size");
-    partition_by_cost = prm.get("Partition") == "cost";
     prm.leave_subsection();
 
     require(cell_size > 0,

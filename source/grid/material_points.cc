@@ -5,6 +5,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/grid/cell_state.h>
 #include <femp/grid/material_points.h>
 #include <femp/grid/powder_bed.h>
@@ -20,32 +21,32 @@ namespace femp
 {
   template <int dim>
   void
-  MaterialPoints<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  MaterialPoints<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Material points");
-    prm.declare_entry("Point spacing",
-                      "4e-6",
-                      Patterns::Double(0.),
-                      "Spacing of the lattice on which material points are "
-                      "placed, m; range (0, cell size / sub-cell divisions].");
-    prm.declare_entry(
-      "Substrate top",
-      "1.5e-4",
-      Patterns::Double(),
-      "Vertical coordinate (z in 3D, y in 2D) of the top of the "
-      "substrate block, m; the block fills the domain below it. "
-      "Range [lower corner, upper corner].");
-    prm.declare_entry("Sub-cell divisions",
-                      "2",
-                      Patterns::Integer(1, 4),
-                      "Sub-cells per direction n used to compute the metal "
-                      "fraction alpha by occupation (cells holding melt, i.e. "
-                      "a point that is or has been fluid, take the volume of "
-                      "their points instead); range 1..4.");
-    prm.declare_entry(
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Material points");
+    table.add("Point spacing",
+              point_spacing,
+              Patterns::Double(0.),
+              "Spacing of the lattice on which material points are "
+              "placed, m; range (0, cell size / sub-cell divisions].");
+    table.add("Substrate top",
+              substrate_top,
+              Patterns::Double(),
+              "Vertical coordinate (z in 3D, y in 2D) of the top of the "
+              "substrate block, m; the block fills the domain below it. "
+              "Range [lower corner, upper corner].");
+    table.add("Sub-cell divisions",
+              subcells,
+              Patterns::Integer(1, 4),
+              "Sub-cells per direction n used to compute the metal "
+              "fraction alpha by occupation (cells holding melt, i.e. "
+              "a point that is or has been fluid, take the volume of "
+              "their points instead); range 1..4.");
+    table.add(
       "Carry points",
-      "auto",
-      Patterns::Selection("auto|always"),
+      carry,
+      {{AutoSwitch::automatic, "auto"}, {AutoSwitch::on, "always"}},
       "Whether the scene carries material points. 'auto': only where "
       "something needs them, i.e. a powder layer (Layer thickness > 0), "
       "initial bodies, Physics/Melt flow, Physics/Solid stress or the "
@@ -55,78 +56,76 @@ namespace femp
       "per-step transfer of temperatures to points costs nothing, and "
       "no point files are written. 'always': points in every scene (to "
       "write them).");
-    prm.enter_subsection("Powder layer");
-    prm.declare_entry(
-      "Layer thickness",
-      "5e-5",
-      Patterns::Double(0.),
-      "Thickness of the powder layer on the substrate, m; 0 for "
-      "no powder. Range [0, upper corner - substrate top].");
-    prm.declare_entry(
-      "Mean grain diameter",
-      "30e-6",
-      Patterns::Double(0.),
-      "Mean diameter of the normally distributed grain sizes, m.");
-    prm.declare_entry(
-      "Grain diameter deviation",
-      "8e-6",
-      Patterns::Double(0.),
-      "Standard deviation of the grain diameters, m; range [0, inf).");
-    prm.declare_entry("Minimum grain diameter",
-                      "15e-6",
-                      Patterns::Double(0.),
-                      "Smallest grain diameter, m (the distribution is "
-                      "truncated); range (0, maximum].");
-    prm.declare_entry("Maximum grain diameter",
-                      "45e-6",
-                      Patterns::Double(0.),
-                      "Largest grain diameter, m; also capped by the layer "
-                      "thickness. Range [minimum, inf).");
-    prm.declare_entry("Packing fraction",
-                      "0.45",
-                      Patterns::Double(0., 0.64),
-                      "Target volume fraction of grains in the layer; random "
-                      "sequential addition reaches about 0.3-0.45 (3D). Range "
-                      "(0, 0.64].");
-    prm.declare_entry("Random seed",
-                      "1",
-                      Patterns::Integer(0),
-                      "Seed of the packing; the same seed gives the same bed.");
-    prm.leave_subsection();
-    prm.declare_entry(
-      "Initial bodies",
-      "",
-      Patterns::Anything(),
-      "Bodies of material points placed at the start besides the substrate "
-      "and the powder (flow scenes: a liquid column, a drop, a pool), "
-      "separated by ';'. Each is 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' "
-      "(lower and upper corner, m) or 'STATE ellipsoid: cx,cy[,cz] -> "
-      "ax,ay[,az] : T' (centre and semi-axes, m; equal semi-axes give a "
-      "circle or sphere), with STATE one of fluid, solid, powder and T the "
-      "temperature of its points, K (range (0, inf); the cells it fills take "
-      "the mean temperature of their points). A body must lie inside the "
-      "domain and must not overlap the powder layer; below the substrate "
-      "top it re-states the substrate's points. Empty (default): none.");
-    prm.leave_subsection();
+    table.enter_subsection("Powder layer");
+    table.add("Layer thickness",
+              layer_thickness,
+              Patterns::Double(0.),
+              "Thickness of the powder layer on the substrate, m; 0 for "
+              "no powder. Range [0, upper corner - substrate top].");
+    table.add("Mean grain diameter",
+              mean_diameter,
+              Patterns::Double(0.),
+              "Mean diameter of the normally distributed grain sizes, m.");
+    table.add("Grain diameter deviation",
+              std_diameter,
+              Patterns::Double(0.),
+              "Standard deviation of the grain diameters, m; range [0, inf).");
+    table.add("Minimum grain diameter",
+              min_diameter,
+              Patterns::Double(0.),
+              "Smallest grain diameter, m (the distribution is "
+              "truncated); range (0, maximum].");
+    table.add("Maximum grain diameter",
+              max_diameter,
+              Patterns::Double(0.),
+              "Largest grain diameter, m; also capped by the layer "
+              "thickness. Range [minimum, inf).");
+    table.add("Packing fraction",
+              packing_fraction,
+              Patterns::Double(0., 0.64),
+              "Target volume fraction of grains in the layer; random "
+              "sequential addition reaches about 0.3-0.45 (3D). Range "
+              "(0, 0.64].");
+    table.add("Random seed",
+              seed,
+              Patterns::Integer(0),
+              "Seed of the packing; the same seed gives the same bed.");
+    table.leave_subsection();
+    if (table.declaring())
+      prm.declare_entry(
+        "Initial bodies",
+        "",
+        Patterns::Anything(),
+        "Bodies of material points placed at the start besides the substrate "
+        "and the powder (flow scenes: a liquid column, a drop, a pool), "
+        "separated by ';'. Each is 'STATE box: x0,y0[,z0] -> x1,y1[,z1] : T' "
+        "(lower and upper corner, m) or 'STATE ellipsoid: cx,cy[,cz] -> "
+        "ax,ay[,az] : T' (centre and semi-axes, m; equal semi-axes give a "
+        "circle or sphere), with STATE one of fluid, solid, powder and T the "
+        "temperature of its points, K (range (0, inf); the cells it fills take "
+        "the mean temperature of their points). A body must lie inside the "
+        "domain and must not overlap the powder layer; below the substrate "
+        "top it re-states the substrate's points. Empty (default): none.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  MaterialPoints<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   MaterialPoints<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Material points");
-    point_spacing = prm.get_double("Point spacing");
-    substrate_top = prm.get_double("Substrate top");
-    subcells      = prm.get_integer("Sub-cell divisions");
-    carry         = prm.get("Carry points");
     prm.enter_subsection("Powder layer");
-    layer_thickness  = prm.get_double("Layer thickness");
-    mean_diameter    = prm.get_double("Mean grain diameter");
-    std_diameter     = prm.get_double("Grain diameter deviation");
-    min_diameter     = prm.get_double("Minimum grain diameter");
-    max_diameter     = prm.get_double("Maximum grain diameter");
-    packing_fraction = prm.get_double("Packing fraction");
-    seed             = prm.get_integer("Random seed");
     prm.leave_subsection();
     const std::string list = prm.get("Initial bodies");
     prm.leave_subsection();
@@ -265,7 +264,7 @@ namespace femp
                                                  const bool solid,
                                                  const bool track_shape)
   {
-    carry_points = carry == "always" || layer_thickness > 0 ||
+    carry_points = carry == AutoSwitch::on || layer_thickness > 0 ||
                    !bodies.empty() || melt_flow || solid || track_shape;
   }
 

@@ -7,6 +7,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/grid/cell_state.h>
 #include <femp/heat/heat_transfer.h>
@@ -29,130 +30,147 @@ namespace femp
 
   template <int dim>
   void
-  HeatTransfer<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  HeatTransfer<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Heat transfer");
-    prm.declare_entry("Initial temperature",
-                      "300",
-                      Patterns::Anything(),
-                      "Initial temperature of the metal (and of the cells), K: "
-                      "a number (uniform), or a function of the position x, y "
-                      "(2D) or x, y, z (3D), in m, in the syntax of deal.II's "
-                      "FunctionParser (muparser; e.g. '1800 + 1000*x' or "
-                      "'if(y < 1e-5, 300, 1800)'). Its value must be finite "
-                      "and positive at every cell centre; range (0, inf). "
-                      "Points of 'Material points/Initial bodies' take the "
-                      "temperature of their body instead. With 'Physics/Heat "
-                      "transfer = false' this field stays frozen.");
-    prm.declare_entry("Reference temperature",
-                      "300",
-                      Patterns::Double(0.),
-                      "Ambient temperature T_ref for convection and radiation "
-                      "losses, K; range (0, inf).");
-    prm.declare_entry(
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Heat transfer");
+    if (table.declaring())
+      prm.declare_entry(
+        "Initial temperature",
+        "300",
+        Patterns::Anything(),
+        "Initial temperature of the metal (and of the cells), K: "
+        "a number (uniform), or a function of the position x, y "
+        "(2D) or x, y, z (3D), in m, in the syntax of deal.II's "
+        "FunctionParser (muparser; e.g. '1800 + 1000*x' or "
+        "'if(y < 1e-5, 300, 1800)'). Its value must be finite "
+        "and positive at every cell centre; range (0, inf). "
+        "Points of 'Material points/Initial bodies' take the "
+        "temperature of their body instead. With 'Physics/Heat "
+        "transfer = false' this field stays frozen.");
+    table.add("Reference temperature",
+              reference_temperature,
+              Patterns::Double(0.),
+              "Ambient temperature T_ref for convection and radiation "
+              "losses, K; range (0, inf).");
+    table.add(
       "Convection coefficient",
-      "10",
+      convection_coefficient,
       Patterns::Double(0.),
       "Surface heat transfer coefficient h, W/(m^2 K); range [0, inf).");
-    prm.declare_entry("Detached drops",
-                      "off",
-                      Patterns::Selection("off|sphere"),
-                      "Heat loss of detached metal: a drop of a few "
-                      "face-connected metal cells (at most 'Detached drop "
-                      "cells') with no other metal face neighbour inside "
-                      "the domain (spatter, or a loose grain). 'off' "
-                      "(default): such a drop has no surface for the central "
-                      "difference of alpha (or a small one) and no metal to "
-                      "conduct to, so it keeps its heat. 'sphere': it loses "
-                      "heat as a sphere of its metal volume in still gas "
-                      "(2D: a cylinder), over the "
-                      "sphere's surface: the convection, radiation and "
-                      "evaporation losses plus conduction to the gas with "
-                      "the coefficient 2 k_g/d (Nusselt number 2, d the "
-                      "sphere's diameter, k_g = Material/Gas thermal "
-                      "conductivity; argon: 0.018 W/(m K) at 300 K, 0.043 at "
-                      "1000 K, 0.065 at 2000 K). With the solid, the "
-                      "solid points of such drops are left out of the solid, "
-                      "at rest (doc/solid.md). doc/equations.md.");
-    prm.declare_entry("Detached drop cells",
-                      "4",
-                      Patterns::Integer(1, 4),
-                      "With 'Detached drops = sphere': the largest drop, "
-                      "in cells, that counts as detached: a set of at most "
-                      "this many face-connected metal cells with no other "
-                      "metal face neighbour inside the domain. 1: single "
-                      "cells; 2: single cells and pairs; 3 and 4 also lines, "
-                      "L shapes and squares of cells, whose central "
-                      "differences of alpha give a few per cent to a quarter "
-                      "of the sphere's surface. Range 1 to 4 (finding a drop "
-                      "of N cells takes N exchanges of the ghost layer). "
-                      "doc/equations.md.");
-    prm.declare_entry(
-      "Emissivity",
-      "0.4",
-      Patterns::Double(0., 1.),
-      "Surface emissivity eps for radiation losses; range [0, 1].");
-    prm.declare_entry(
-      "Evaporation coefficient",
-      "0.82",
-      Patterns::Double(0., 1.),
-      "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
-      "evaporative cooling off; range [0, 1].");
-    prm.declare_entry("Fixed temperatures",
-                      "",
-                      Patterns::Map(Patterns::Selection("x-|x+|y-|y+|z-|z+"),
-                                    Patterns::Double(0.)),
-                      "Faces of the domain box held at a fixed temperature, as "
-                      "'face: T' pairs, e.g. 'z-: 300' (faces x-, x+, y-, y+, "
-                      "z-, z+; K). All other faces are insulated.");
-    prm.declare_entry("Laser deposition",
-                      "first surface",
-                      Patterns::Selection("first surface|gradient"),
-                      "How the laser's surface flux q enters the cells. 'first "
-                      "surface': in each vertical column of cells, q goes into "
-                      "the surface cells where the beam first meets metal "
-                      "(from the cell below the topmost one with alpha >= 1/2 "
-                      "upward), shared in proportion to the loss weight "
-                      "w |grad alpha| so that laser and surface losses act on "
-                      "the same cells (absorbed power = eta P; q/h into the "
-                      "topmost alpha >= 1/2 cell where the column has no "
-                      "surface cell there). 'gradient': "
-                      "q 2 rho c/(rho_m c_m + rho_g c_g) |grad alpha| in every "
-                      "surface cell, as written in eq. (1); in a powder bed "
-                      "this heats every grain surface under the beam, also "
-                      "shadowed ones, and absorbs more than eta P.");
-    prm.declare_entry("Advection by melt flow",
-                      "points",
-                      Patterns::Selection("points|upwind"),
-                      "How heat moves with the melt flow. 'points': the metal "
-                      "carries its enthalpy on the material points; when "
-                      "points change cells, a cell's metal takes the "
-                      "volume-weighted mean specific enthalpy C(T) + L_m "
-                      "gamma(T) of the points now in it, each at the "
-                      "temperature of the cell it came from (donor-cell "
-                      "upwind transport by the points themselves; conserves "
-                      "energy up to the difference between the grid's metal "
-                      "volume alpha h^dim and the points' volume). 'upwind': "
-                      "first-order upwind convection u . grad T of the cell "
-                      "temperature with the cell velocity of the flow (not "
-                      "conservative: metal moved between cells at different "
-                      "temperatures creates or destroys up to ~20 % of the "
-                      "laser energy in the 3D track, doc/verification.md). "
-                      "No effect without Physics/Melt flow.");
-    prm.declare_entry("Prescribed velocity",
-                      "",
-                      Patterns::Anything(),
-                      "Optional steady velocity field for the convection term, "
-                      "m/s, as dim expressions in x, y, z separated by ';' "
-                      "(e.g. '0.1; 0; 0'). Empty: no convection unless a flow "
-                      "solver provides a velocity.");
-    prm.leave_subsection();
+    table.add("Detached drops",
+              detached_drops,
+              {{false, "off"}, {true, "sphere"}},
+              "Heat loss of detached metal: a drop of a few "
+              "face-connected metal cells (at most 'Detached drop "
+              "cells') with no other metal face neighbour inside "
+              "the domain (spatter, or a loose grain). 'off' "
+              "(default): such a drop has no surface for the central "
+              "difference of alpha (or a small one) and no metal to "
+              "conduct to, so it keeps its heat. 'sphere': it loses "
+              "heat as a sphere of its metal volume in still gas "
+              "(2D: a cylinder), over the "
+              "sphere's surface: the convection, radiation and "
+              "evaporation losses plus conduction to the gas with "
+              "the coefficient 2 k_g/d (Nusselt number 2, d the "
+              "sphere's diameter, k_g = Material/Gas thermal "
+              "conductivity; argon: 0.018 W/(m K) at 300 K, 0.043 at "
+              "1000 K, 0.065 at 2000 K). With the solid, the "
+              "solid points of such drops are left out of the solid, "
+              "at rest (doc/solid.md). doc/equations.md.");
+    table.add("Detached drop cells",
+              detached_drop_cells,
+              Patterns::Integer(1, 4),
+              "With 'Detached drops = sphere': the largest drop, "
+              "in cells, that counts as detached: a set of at most "
+              "this many face-connected metal cells with no other "
+              "metal face neighbour inside the domain. 1: single "
+              "cells; 2: single cells and pairs; 3 and 4 also lines, "
+              "L shapes and squares of cells, whose central "
+              "differences of alpha give a few per cent to a quarter "
+              "of the sphere's surface. Range 1 to 4 (finding a drop "
+              "of N cells takes N exchanges of the ghost layer). "
+              "doc/equations.md.");
+    table.add("Emissivity",
+              emissivity,
+              Patterns::Double(0., 1.),
+              "Surface emissivity eps for radiation losses; range [0, 1].");
+    table.add("Evaporation coefficient",
+              evaporation_coefficient,
+              Patterns::Double(0., 1.),
+              "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
+              "evaporative cooling off; range [0, 1].");
+    if (table.declaring())
+      prm.declare_entry(
+        "Fixed temperatures",
+        "",
+        Patterns::Map(Patterns::Selection("x-|x+|y-|y+|z-|z+"),
+                      Patterns::Double(0.)),
+        "Faces of the domain box held at a fixed temperature, as "
+        "'face: T' pairs, e.g. 'z-: 300' (faces x-, x+, y-, y+, "
+        "z-, z+; K). All other faces are insulated.");
+    table.add("Laser deposition",
+              laser_deposition,
+              {{Deposition::first_surface, "first surface"},
+               {Deposition::gradient, "gradient"}},
+              "How the laser's surface flux q enters the cells. 'first "
+              "surface': in each vertical column of cells, q goes into "
+              "the surface cells where the beam first meets metal "
+              "(from the cell below the topmost one with alpha >= 1/2 "
+              "upward), shared in proportion to the loss weight "
+              "w |grad alpha| so that laser and surface losses act on "
+              "the same cells (absorbed power = eta P; q/h into the "
+              "topmost alpha >= 1/2 cell where the column has no "
+              "surface cell there). 'gradient': "
+              "q 2 rho c/(rho_m c_m + rho_g c_g) |grad alpha| in every "
+              "surface cell, as written in eq. (1); in a powder bed "
+              "this heats every grain surface under the beam, also "
+              "shadowed ones, and absorbs more than eta P.");
+    table.add("Advection by melt flow",
+              advection_by_melt_flow,
+              {{Advection::points, "points"}, {Advection::upwind, "upwind"}},
+              "How heat moves with the melt flow. 'points': the metal "
+              "carries its enthalpy on the material points; when "
+              "points change cells, a cell's metal takes the "
+              "volume-weighted mean specific enthalpy C(T) + L_m "
+              "gamma(T) of the points now in it, each at the "
+              "temperature of the cell it came from (donor-cell "
+              "upwind transport by the points themselves; conserves "
+              "energy up to the difference between the grid's metal "
+              "volume alpha h^dim and the points' volume). 'upwind': "
+              "first-order upwind convection u . grad T of the cell "
+              "temperature with the cell velocity of the flow (not "
+              "conservative: metal moved between cells at different "
+              "temperatures creates or destroys energy, "
+              "doc/verification.md). "
+              "No effect without Physics/Melt flow.");
+    if (table.declaring())
+      prm.declare_entry(
+        "Prescribed velocity",
+        "",
+        Patterns::Anything(),
+        "Optional steady velocity field for the convection term, "
+        "m/s, as dim expressions in x, y, z separated by ';' "
+        "(e.g. '0.1; 0; 0'). Empty: no convection unless a flow "
+        "solver provides a velocity.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  HeatTransfer<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   HeatTransfer<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Heat transfer");
     {
       // A plain number, or a function expression of the position.
@@ -193,15 +211,7 @@ namespace femp
           initial_temperature            = f->value(Point<dim>());
         }
     }
-    reference_temperature   = prm.get_double("Reference temperature");
-    convection_coefficient  = prm.get_double("Convection coefficient");
-    detached_drops          = prm.get("Detached drops") == "sphere";
-    detached_drop_cells     = prm.get_integer("Detached drop cells");
-    emissivity              = prm.get_double("Emissivity");
-    evaporation_coefficient = prm.get_double("Evaporation coefficient");
-    laser_deposition        = prm.get("Laser deposition");
-    prescribed_velocity     = Utilities::trim(prm.get("Prescribed velocity"));
-    advection_by_melt_flow  = prm.get("Advection by melt flow");
+    prescribed_velocity = Utilities::trim(prm.get("Prescribed velocity"));
     fixed_temperatures.clear();
     for (const auto &entry :
          Utilities::split_string_list(prm.get("Fixed temperatures"), ','))
@@ -410,7 +420,8 @@ namespace femp
   const std::array<std::vector<double>, dim> *
   HeatTransfer<dim>::convection_velocity(const CellFields<dim> &fields) const
   {
-    if (fields.velocity && prm.advection_by_melt_flow == "upwind")
+    if (fields.velocity &&
+        prm.advection_by_melt_flow == Parameters::Advection::upwind)
       return fields.velocity;
     return prescribed[0].empty() ? nullptr : &prescribed;
   }
@@ -743,11 +754,12 @@ namespace femp
   {
     const double V = std::pow(grid.h(), dim);
     Point<dim>   axis;
-    double       power         = 0;
-    const bool   laser_on      = laser.position(time, axis, power);
-    const bool   gradient_mode = prm.laser_deposition == "gradient";
-    const double rho_g_c_g     = mat.gas_density * mat.gas_specific_heat;
-    double       e_laser       = 0;
+    double       power    = 0;
+    const bool   laser_on = laser.position(time, axis, power);
+    const bool   gradient_mode =
+      prm.laser_deposition == Parameters::Deposition::gradient;
+    const double rho_g_c_g = mat.gas_density * mat.gas_specific_heat;
+    double       e_laser   = 0;
     // Loss weights w |grad alpha| at T^n; the losses themselves are taken
     // at the new temperature in advance() (pass C).
     for (const auto &s : surface)
@@ -800,7 +812,8 @@ namespace femp
     const typename RayTracedAbsorption<dim>::Parameters &absorption)
   {
     tracer.reset();
-    if (absorption.model == "ray traced")
+    if (absorption.model ==
+        RayTracedAbsorption<dim>::Parameters::Model::ray_traced)
       tracer = std::make_unique<RayTracedAbsorption<dim>>(absorption, grid);
   }
 

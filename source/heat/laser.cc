@@ -1,6 +1,7 @@
 // femp: Gaussian laser source of eq. (1) and its scan path (segments read
 // from the prm file or from a scan-path file).
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/scan_path.h>
 
@@ -11,81 +12,84 @@ namespace femp
 {
   template <int dim>
   void
+  Laser<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Laser");
+    table.add("Power",
+              power,
+              Patterns::Double(0.),
+              "Laser power P, W (in 2D: W per m of depth); range [0, inf).");
+    table.add("Absorptivity",
+              absorptivity,
+              Patterns::Double(0., 1.),
+              "Absorbed fraction eta of the laser power; range [0, 1].");
+    table.add("Beam radius",
+              beam_radius,
+              Patterns::Double(0.),
+              "1/e^2 radius r_b of the Gaussian beam, m; range (0, inf).");
+    table.add("Scan speed",
+              scan_speed,
+              Patterns::Double(0.),
+              "Speed of the beam along the line from 'Start point' to "
+              "'End point', m/s; range (0, inf).");
+    if (table.declaring())
+      prm.declare_entry(
+        "Start point",
+        "1e-4, 2e-4, 0",
+        Patterns::List(Patterns::Double(), 1, 3),
+        "Horizontal position of the beam axis at the start time, "
+        "m (the vertical coordinate is ignored).");
+    if (table.declaring())
+      prm.declare_entry("End point",
+                        "9e-4, 2e-4, 0",
+                        Patterns::List(Patterns::Double(), 1, 3),
+                        "Horizontal position where the line scan ends and the "
+                        "laser switches off, m.");
+    table.add("Start time",
+              start_time,
+              Patterns::Double(0.),
+              "Time at which the laser switches on, s; range [0, inf).");
+    table.add("Scan path file",
+              scan_path_file,
+              Patterns::Anything(),
+              "Optional file that replaces the single line: one segment "
+              "per line, 'x0 y0 x1 y1 speed power' (3D) or 'x0 x1 speed "
+              "power' (2D), m, m/s, W; power 0 moves the beam with the "
+              "laser off. Segments follow each other in time from "
+              "'Start time'. Lines starting with # are comments. A "
+              "relative path is relative to the working directory.");
+    table.add("Scan path format",
+              scan_path_format,
+              Patterns::Selection(scan_path_formats()),
+              "Format of 'Scan path file': 'femp' (above), "
+              "'adamantine_segment', 'adamantine_event_series' "
+              "(adamantine's scan paths, power = factor x 'Power') "
+              "or 'additivefoam' (AdditiveFOAM's scanPath, power in "
+              "W, W/m in 2D). These hold x, y, z (m), dwells and "
+              "jumps; a 2D scene takes (x, z) of a path at constant "
+              "y. Times count from 'Start time'. See doc/inputs.md.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   Laser<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Laser");
-    prm.declare_entry(
-      "Power",
-      "200",
-      Patterns::Double(0.),
-      "Laser power P, W (in 2D: W per m of depth); range [0, inf).");
-    prm.declare_entry(
-      "Absorptivity",
-      "0.35",
-      Patterns::Double(0., 1.),
-      "Absorbed fraction eta of the laser power; range [0, 1].");
-    prm.declare_entry(
-      "Beam radius",
-      "20e-6",
-      Patterns::Double(0.),
-      "1/e^2 radius r_b of the Gaussian beam, m; range (0, inf).");
-    prm.declare_entry("Scan speed",
-                      "2",
-                      Patterns::Double(0.),
-                      "Speed of the beam along the line from 'Start point' to "
-                      "'End point', m/s; range (0, inf).");
-    prm.declare_entry("Start point",
-                      "1e-4, 2e-4, 0",
-                      Patterns::List(Patterns::Double(), 1, 3),
-                      "Horizontal position of the beam axis at the start time, "
-                      "m (the vertical coordinate is ignored).");
-    prm.declare_entry("End point",
-                      "9e-4, 2e-4, 0",
-                      Patterns::List(Patterns::Double(), 1, 3),
-                      "Horizontal position where the line scan ends and the "
-                      "laser switches off, m.");
-    prm.declare_entry(
-      "Start time",
-      "0",
-      Patterns::Double(0.),
-      "Time at which the laser switches on, s; range [0, inf).");
-    prm.declare_entry(
-      "Scan path file",
-      "",
-      Patterns::Anything(),
-      "Optional file that replaces the single line: one segment "
-      "per line, 'x0 y0 x1 y1 speed power' (3D) or 'x0 x1 speed "
-      "power' (2D), m, m/s, W; power 0 moves the beam with the "
-      "laser off. Segments follow each other in time from "
-      "'Start time'. Lines starting with # are comments. A "
-      "relative path is relative to the working directory.");
-    prm.declare_entry("Scan path format",
-                      "femp",
-                      Patterns::Selection(scan_path_formats()),
-                      "Format of 'Scan path file': 'femp' (above), "
-                      "'adamantine_segment', 'adamantine_event_series' "
-                      "(adamantine's scan paths, power = factor x 'Power') "
-                      "or 'additivefoam' (AdditiveFOAM's scanPath, power in "
-                      "W, W/m in 2D). These hold x, y, z (m), dwells and "
-                      "jumps; a 2D scene takes (x, z) of a path at constant "
-                      "y. Times count from 'Start time'. See doc/inputs.md.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   Laser<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Laser");
-    power        = prm.get_double("Power");
-    absorptivity = prm.get_double("Absorptivity");
-    beam_radius  = prm.get_double("Beam radius");
-    scan_speed   = prm.get_double("Scan speed");
     start_point = parse_point<dim>(prm.get("Start point"), "Laser/Start point");
     end_point   = parse_point<dim>(prm.get("End point"), "Laser/End point");
-    start_time  = prm.get_double("Start time");
-    scan_path_file   = prm.get("Scan path file");
-    scan_path_format = prm.get("Scan path format");
     prm.leave_subsection();
     require(beam_radius > 0,
             "Laser/Beam radius",

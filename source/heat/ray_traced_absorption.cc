@@ -6,6 +6,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/heat/ray_traced_absorption.h>
 
 #include <algorithm>
@@ -17,14 +18,13 @@ namespace femp
 {
   template <int dim>
   void
-  RayTracedAbsorption<dim>::Parameters::declare_parameters(
-    ParameterHandler &prm)
+  RayTracedAbsorption<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Laser");
-    prm.declare_entry(
+    table.enter_subsection("Laser");
+    table.add(
       "Absorption model",
-      "fixed",
-      Patterns::Selection("fixed|ray traced"),
+      model,
+      {{Model::fixed, "fixed"}, {Model::ray_traced, "ray traced"}},
       "'fixed': the absorbed flux is 'Absorptivity' times the beam's flux, "
       "put into the cells where the vertical beam first meets metal "
       "('Heat transfer/Laser deposition'). 'ray traced': every temperature "
@@ -38,52 +38,58 @@ namespace femp
       "'Absorptivity' and 'Heat transfer/Laser deposition' are then not "
       "used. Recommended where the surface is deeply depressed (normalized "
       "enthalpy above ~20-30, see the scene log and doc/absorption.md).");
-    prm.declare_entry("Refractive index",
-                      "3.83",
-                      Patterns::Double(0.),
-                      "Real part n of the metal's complex refractive index at "
-                      "the laser wavelength (ray traced only), dimensionless; "
-                      "range (0, inf). The default is that of polished "
-                      "austenitic stainless steel (similar to 316) at "
-                      "1.064 um, room temperature (Karlsson and Ribbing, "
-                      "J. Appl. Phys. 53 (1982) 6340): n = 3.83, k = 5.34, "
-                      "normal-incidence absorptivity 0.296, matching femp's "
-                      "default material 316L. The material files of "
-                      "prm/materials set the value of their alloy "
-                      "(doc/absorption.md).");
-    prm.declare_entry(
-      "Extinction coefficient",
-      "5.34",
-      Patterns::Double(0.),
-      "Imaginary part k of the complex refractive index at the "
-      "laser wavelength (ray traced only), dimensionless; range "
-      "[0, inf). Default: stainless steel at 1.064 um (see "
-      "'Refractive index').");
-    prm.declare_entry("Rays per beam radius",
-                      "4",
-                      Patterns::Integer(1, 64),
-                      "Ray spacing r_b / this number on a square lattice (3D) "
-                      "or a line (2D) out to 2 r_b (ray traced only): "
-                      "4 gives 197 rays in 3D, 17 in 2D; range [1, 64].");
-    prm.declare_entry("Maximum reflections",
-                      "50",
-                      Patterns::Integer(0, 10000),
-                      "After this many reflections a ray's remaining power is "
-                      "absorbed where it is (ray traced only); range [0, "
-                      "10000].");
-    prm.leave_subsection();
+    table.add("Refractive index",
+              refractive_index,
+              Patterns::Double(0.),
+              "Real part n of the metal's complex refractive index at "
+              "the laser wavelength (ray traced only), dimensionless; "
+              "range (0, inf). The default is that of polished "
+              "austenitic stainless steel (similar to 316) at "
+              "1.064 um, room temperature (Karlsson and Ribbing, "
+              "J. Appl. Phys. 53 (1982) 6340): n = 3.83, k = 5.34, "
+              "normal-incidence absorptivity 0.296, matching femp's "
+              "default material 316L. The material files of "
+              "prm/materials set the value of their alloy "
+              "(doc/absorption.md).");
+    table.add("Extinction coefficient",
+              extinction_coefficient,
+              Patterns::Double(0.),
+              "Imaginary part k of the complex refractive index at the "
+              "laser wavelength (ray traced only), dimensionless; range "
+              "[0, inf). Default: stainless steel at 1.064 um (see "
+              "'Refractive index').");
+    table.add("Rays per beam radius",
+              rays_per_beam_radius,
+              Patterns::Integer(1, 64),
+              "Ray spacing r_b / this number on a square lattice (3D) "
+              "or a line (2D) out to 2 r_b (ray traced only): "
+              "4 gives 197 rays in 3D, 17 in 2D; range [1, 64].");
+    table.add("Maximum reflections",
+              max_reflections,
+              Patterns::Integer(0, 10000),
+              "After this many reflections a ray's remaining power is "
+              "absorbed where it is (ray traced only); range [0, "
+              "10000].");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  RayTracedAbsorption<dim>::Parameters::declare_parameters(
+    ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   RayTracedAbsorption<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Laser");
-    model                  = prm.get("Absorption model");
-    refractive_index       = prm.get_double("Refractive index");
-    extinction_coefficient = prm.get_double("Extinction coefficient");
-    rays_per_beam_radius   = prm.get_integer("Rays per beam radius");
-    max_reflections        = prm.get_integer("Maximum reflections");
     prm.leave_subsection();
     require(refractive_index > 0,
             "Laser/Refractive index",

@@ -2,6 +2,7 @@
 // rate, G and R per cell of the grid); see include/femp/heat/thermal_history.h.
 #include <deal.II/base/mpi.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/cell_state.h>
 #include <femp/heat/thermal_history.h>
 
@@ -14,28 +15,37 @@ namespace femp
 {
   template <int dim>
   void
-  ThermalHistory<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  ThermalHistory<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Output");
-    prm.declare_entry(
+    table.enter_subsection("Output");
+    table.add(
       "Thermal history",
-      "false",
-      Patterns::Bool(),
+      enabled,
       "Record every melt event of every metal cell (times of the liquidus "
       "rise, liquidus and solidus fall, s; cooling rate K/s, gradient G K/m "
       "and isotherm speed R m/s at the liquidus fall) and write them per "
       "rank to thermal_history_<rank>.csv (ExaCA layout x,y,z,tm,tl,cr) and "
       "thermal_history_full_<rank>.csv in 'Directory' at the end of the "
       "run. false costs nothing.");
-    prm.leave_subsection();
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  ThermalHistory<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   ThermalHistory<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Output");
-    enabled = prm.get_bool("Thermal history");
     prm.leave_subsection();
   }
 

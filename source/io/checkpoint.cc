@@ -4,6 +4,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
 
@@ -53,61 +54,67 @@ namespace femp
 
   template <int dim>
   void
+  Checkpoint<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    table.enter_subsection("Checkpoint");
+    table.add("Every steps",
+              every_steps,
+              Patterns::Integer(0),
+              "Write a checkpoint after every this many temperature "
+              "steps; 0: off. Range [0, inf).");
+    table.add("Every simulated time",
+              every_time,
+              Patterns::Double(0.),
+              "Write a checkpoint every this much simulated time, s; "
+              "0: off. Range [0, inf).");
+    table.add("Every wall minutes",
+              every_wall_minutes,
+              Patterns::Double(0.),
+              "Write a checkpoint when this many minutes of wall "
+              "time have passed since the start or the last "
+              "checkpoint, min; 0: off. Range [0, inf). With all "
+              "three triggers off (the default) checkpoints cost "
+              "nothing.");
+    table.add("Directory",
+              directory,
+              Patterns::Anything(),
+              "Where checkpoints go: a relative path is relative to "
+              "'Output/Directory', an absolute path is allowed. Each "
+              "checkpoint is a subdirectory step_<step number>; the "
+              "file 'index' names the last two, older ones are "
+              "removed (doc/checkpoint.md).");
+    table.add("Resume from",
+              resume_from,
+              Patterns::Anything(),
+              "Continue the run from this checkpoint: a checkpoint "
+              "directory (its index names the latest checkpoint) or "
+              "one checkpoint step_<n> in it; relative to the "
+              "working directory; empty: a new run. The same as the "
+              "command-line option --resume DIR. The scene must be "
+              "the one the checkpoint was written for (same grid, "
+              "dimension, physics, FE zone); 'Time stepping/End "
+              "time' may be raised. The time series in "
+              "'Output/Directory' lose their rows after the "
+              "checkpoint and continue.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   Checkpoint<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Checkpoint");
-    prm.declare_entry("Every steps",
-                      "0",
-                      Patterns::Integer(0),
-                      "Write a checkpoint after every this many temperature "
-                      "steps; 0: off. Range [0, inf).");
-    prm.declare_entry("Every simulated time",
-                      "0",
-                      Patterns::Double(0.),
-                      "Write a checkpoint every this much simulated time, s; "
-                      "0: off. Range [0, inf).");
-    prm.declare_entry("Every wall minutes",
-                      "0",
-                      Patterns::Double(0.),
-                      "Write a checkpoint when this many minutes of wall "
-                      "time have passed since the start or the last "
-                      "checkpoint, min; 0: off. Range [0, inf). With all "
-                      "three triggers off (the default) checkpoints cost "
-                      "nothing.");
-    prm.declare_entry("Directory",
-                      "checkpoint",
-                      Patterns::Anything(),
-                      "Where checkpoints go: a relative path is relative to "
-                      "'Output/Directory', an absolute path is allowed. Each "
-                      "checkpoint is a subdirectory step_<step number>; the "
-                      "file 'index' names the last two, older ones are "
-                      "removed (doc/checkpoint.md).");
-    prm.declare_entry("Resume from",
-                      "",
-                      Patterns::Anything(),
-                      "Continue the run from this checkpoint: a checkpoint "
-                      "directory (its index names the latest checkpoint) or "
-                      "one checkpoint step_<n> in it; relative to the "
-                      "working directory; empty: a new run. The same as the "
-                      "command-line option --resume DIR. The scene must be "
-                      "the one the checkpoint was written for (same grid, "
-                      "dimension, physics, FE zone); 'Time stepping/End "
-                      "time' may be raised. The time series in "
-                      "'Output/Directory' lose their rows after the "
-                      "checkpoint and continue.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   Checkpoint<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Checkpoint");
-    every_steps        = prm.get_integer("Every steps");
-    every_time         = prm.get_double("Every simulated time");
-    every_wall_minutes = prm.get_double("Every wall minutes");
-    directory          = prm.get("Directory");
-    resume_from        = prm.get("Resume from");
     prm.leave_subsection();
     require(!directory.empty(),
             "Checkpoint/Directory",

@@ -13,6 +13,7 @@
 #include <deal.II/numerics/data_out.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/base/state_stream.h>
 #include <femp/grid/material_points.h>
@@ -100,134 +101,151 @@ namespace femp
   } // namespace
 
   template <int dim>
+  const Choices<typename Output<dim>::Parameters::WritePoints> &
+  Output<dim>::Parameters::write_points_names()
+  {
+    static const Choices<WritePoints> names = {{WritePoints::always, "always"},
+                                               {WritePoints::last, "last"},
+                                               {WritePoints::never, "never"}};
+    return names;
+  }
+
+  template <int dim>
+  void
+  Output<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Output");
+    table.add("Directory",
+              directory,
+              Patterns::Anything(),
+              "Directory for all output files; created if missing. "
+              "A relative path is relative to the working directory; "
+              "an absolute path is allowed. The parameters used are "
+              "written into it as parameters.prm.");
+    if (table.declaring())
+      prm.declare_entry("Existing directory",
+                        "clear",
+                        Patterns::Selection("clear|refuse"),
+                        "What to do when 'Directory' holds the output of an "
+                        "earlier run (numbered grid_/points_/probe_line_ "
+                        "files, .pvd indices, the CSV series, parameters.prm): "
+                        "'clear' removes those files (and no others) before "
+                        "the run, so that no stale time step is mixed into the "
+                        "new series; 'refuse' stops before any work.");
+    table.add("Output interval",
+              output_interval,
+              Patterns::Double(0.),
+              "Simulated time between VTU/PVTU outputs of the fields, "
+              "s; 0 writes only the first and last state. Range [0, inf).");
+    table.add("Steps between outputs",
+              output_steps,
+              Patterns::Integer(0),
+              "Also write the fields every this many steps; 0: only "
+              "by 'Output interval'. Range [0, inf).");
+    table.add("Write material points",
+              write_points,
+              write_points_names(),
+              "Write the material points and their properties at every "
+              "field output ('always'), only with the last one "
+              "('last'), or not at all. Point files are large: about "
+              "100 bytes per point.");
+    table.add("Format",
+              format,
+              {{Format::vtu, "vtu"}, {Format::hdf5, "hdf5"}},
+              "File format of the grid fields and the material "
+              "points: 'vtu' writes compressed VTU pieces (one per "
+              "rank or group of ranks) with PVTU records and the "
+              "indices grid.pvd, points.pvd; 'hdf5' writes one "
+              "compressed HDF5 file per output for all ranks "
+              "(MPI-IO: grid_<n>.h5 with one value per cell, the "
+              "grid's mesh once in grid_mesh.h5; points_<n>.h5) "
+              "with the indices grid.xdmf, points.xdmf (ParaView: "
+              "open the .xdmf with the 'XDMF Reader'). Sizes and "
+              "write times of both: doc/output.md.");
+    if (table.declaring())
+      prm.declare_entry("Point properties",
+                        "all",
+                        Patterns::Anything(),
+                        "Material-point properties to write, 'all' or a "
+                        "comma-separated list of: mass (kg), volume (m^3), "
+                        "temperature (K), state (0 powder, 1 solid, 2 fluid), "
+                        "peak_temperature (K), "
+                        "velocity_x, velocity_y, velocity_z (m/s), stress_xx, "
+                        "stress_yy, stress_zz, stress_xy, stress_xz, stress_yz "
+                        "(Pa), plastic_strain (-), viscous_pressure (Pa), "
+                        "affine_velocity_xx ... affine_velocity_zz (1/s). "
+                        "Properties a scene does not carry (the stresses "
+                        "without the solid) are skipped; the point id is "
+                        "always written.");
+    if (table.declaring())
+      prm.declare_entry(
+        "Grid fields",
+        "all",
+        Patterns::Anything(),
+        "Grid cell fields to write, 'all' or a comma-separated "
+        "list of: T (K), gamma (liquid fraction, -), alpha "
+        "(metal fraction, -), p (Pa), u_x, u_y, u_z (m/s), "
+        "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
+        "plastic_strain (-), laser_source (W/m^3), phase (0 "
+        "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
+        "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
+        "scene switches off are skipped. Probe lines sample "
+        "their fields regardless.");
+    table.add("Time series interval",
+              series_interval,
+              Patterns::Double(0.),
+              "Simulated time between rows of the probe-point and "
+              "melt-pool CSV files, s; 0 writes a row every step.");
+    table.add("Progress interval",
+              progress_interval,
+              Patterns::Integer(1),
+              "Steps between progress lines on the screen; range [1, inf).");
+    if (table.declaring())
+      prm.declare_entry(
+        "Probe points",
+        "",
+        Patterns::Anything(),
+        "Points whose cell values are written to probe_points.csv, "
+        "as coordinate lists (m) separated by ';', e.g. "
+        "'1e-4,2e-4,1e-4; 2e-4,2e-4,1e-4'.");
+    table.add("Probe interpolation",
+              probe_linear,
+              {{false, "cell"}, {true, "linear"}},
+              "How probe points and probe lines read the cell fields: "
+              "'cell' gives the value of the cell that contains the "
+              "sample (piecewise constant, exact cell values); "
+              "'linear' interpolates between the nearest cell centres "
+              "(bilinear/trilinear), weighting each cell by its metal "
+              "fraction, so that an isotherm can be placed inside a "
+              "cell. Tags (phase, zone) are never interpolated.");
+    if (table.declaring())
+      prm.declare_entry("Probe lines",
+                        "",
+                        Patterns::Anything(),
+                        "Lines sampled at every field output into "
+                        "probe_line_<name>_<n>.csv, separated by ';', each "
+                        "'name: x0,y0,z0 -> x1,y1,z1 : samples' (m), e.g. "
+                        "'CD: -4e-4,0,-2e-5 -> 4e-4,0,-2e-5 : 201'.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
   void
   Output<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Output");
-    prm.declare_entry("Directory",
-                      "output",
-                      Patterns::Anything(),
-                      "Directory for all output files; created if missing. "
-                      "A relative path is relative to the working directory; "
-                      "an absolute path is allowed. The parameters used are "
-                      "written into it as parameters.prm.");
-    prm.declare_entry("Existing directory",
-                      "clear",
-                      Patterns::Selection("clear|refuse"),
-                      "What to do when 'Directory' holds the output of an "
-                      "earlier run (numbered grid_/points_/probe_line_ "
-                      "files, .pvd indices, the CSV series, parameters.prm): "
-                      "'clear' removes those files (and no others) before "
-                      "the run, so that no stale time step is mixed into the "
-                      "new series; 'refuse' stops before any work.");
-    prm.declare_entry(
-      "Output interval",
-      "1e-4",
-      Patterns::Double(0.),
-      "Simulated time between VTU/PVTU outputs of the fields, "
-      "s; 0 writes only the first and last state. Range [0, inf).");
-    prm.declare_entry("Steps between outputs",
-                      "0",
-                      Patterns::Integer(0),
-                      "Also write the fields every this many steps; 0: only "
-                      "by 'Output interval'. Range [0, inf).");
-    prm.declare_entry("Write material points",
-                      "last",
-                      Patterns::Selection("always|last|never"),
-                      "Write the material points and their properties at every "
-                      "field output ('always'), only with the last one "
-                      "('last'), or not at all. Point files are large: about "
-                      "100 bytes per point.");
-    prm.declare_entry("Format",
-                      "vtu",
-                      Patterns::Selection("vtu|hdf5"),
-                      "File format of the grid fields and the material "
-                      "points: 'vtu' writes compressed VTU pieces (one per "
-                      "rank or group of ranks) with PVTU records and the "
-                      "indices grid.pvd, points.pvd; 'hdf5' writes one "
-                      "compressed HDF5 file per output for all ranks "
-                      "(MPI-IO: grid_<n>.h5 with one value per cell, the "
-                      "grid's mesh once in grid_mesh.h5; points_<n>.h5) "
-                      "with the indices grid.xdmf, points.xdmf (ParaView: "
-                      "open the .xdmf with the 'XDMF Reader'). Sizes and "
-                      "write times of both: doc/output.md.");
-    prm.declare_entry("Point properties",
-                      "all",
-                      Patterns::Anything(),
-                      "Material-point properties to write, 'all' or a "
-                      "comma-separated list of: mass (kg), volume (m^3), "
-                      "temperature (K), state (0 powder, 1 solid, 2 fluid), "
-                      "peak_temperature (K), "
-                      "velocity_x, velocity_y, velocity_z (m/s), stress_xx, "
-                      "stress_yy, stress_zz, stress_xy, stress_xz, stress_yz "
-                      "(Pa), plastic_strain (-), viscous_pressure (Pa), "
-                      "affine_velocity_xx ... affine_velocity_zz (1/s). "
-                      "Properties a scene does not carry (the stresses "
-                      "without the solid) are skipped; the point id is "
-                      "always written.");
-    prm.declare_entry(
-      "Grid fields",
-      "all",
-      Patterns::Anything(),
-      "Grid cell fields to write, 'all' or a comma-separated "
-      "list of: T (K), gamma (liquid fraction, -), alpha "
-      "(metal fraction, -), p (Pa), u_x, u_y, u_z (m/s), "
-      "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
-      "plastic_strain (-), laser_source (W/m^3), phase (0 "
-      "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
-      "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
-      "scene switches off are skipped. Probe lines sample "
-      "their fields regardless.");
-    prm.declare_entry("Time series interval",
-                      "0",
-                      Patterns::Double(0.),
-                      "Simulated time between rows of the probe-point and "
-                      "melt-pool CSV files, s; 0 writes a row every step.");
-    prm.declare_entry(
-      "Progress interval",
-      "100",
-      Patterns::Integer(1),
-      "Steps between progress lines on the screen; range [1, inf).");
-    prm.declare_entry(
-      "Probe points",
-      "",
-      Patterns::Anything(),
-      "Points whose cell values are written to probe_points.csv, "
-      "as coordinate lists (m) separated by ';', e.g. "
-      "'1e-4,2e-4,1e-4; 2e-4,2e-4,1e-4'.");
-    prm.declare_entry("Probe interpolation",
-                      "cell",
-                      Patterns::Selection("cell|linear"),
-                      "How probe points and probe lines read the cell fields: "
-                      "'cell' gives the value of the cell that contains the "
-                      "sample (piecewise constant, exact cell values); "
-                      "'linear' interpolates between the nearest cell centres "
-                      "(bilinear/trilinear), weighting each cell by its metal "
-                      "fraction, so that an isotherm can be placed inside a "
-                      "cell. Tags (phase, zone) are never interpolated.");
-    prm.declare_entry("Probe lines",
-                      "",
-                      Patterns::Anything(),
-                      "Lines sampled at every field output into "
-                      "probe_line_<name>_<n>.csv, separated by ';', each "
-                      "'name: x0,y0,z0 -> x1,y1,z1 : samples' (m), e.g. "
-                      "'CD: -4e-4,0,-2e-5 -> 4e-4,0,-2e-5 : 201'.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   Output<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Output");
-    directory         = prm.get("Directory");
-    output_interval   = prm.get_double("Output interval");
-    write_points      = prm.get("Write material points");
-    output_steps      = prm.get_integer("Steps between outputs");
-    series_interval   = prm.get_double("Time series interval");
-    progress_interval = prm.get_integer("Progress interval");
-    probe_linear      = prm.get("Probe interpolation") == "linear";
-    format            = prm.get("Format");
     point_properties =
       parse_selection(prm.get("Point properties"),
                       MaterialPoints<dim>::property_names(
@@ -397,7 +415,7 @@ namespace femp
         return t.end();
       });
     const bool with_subdomain = selected(prm.grid_fields, "subdomain");
-    if (prm.format == "hdf5")
+    if (prm.format == Parameters::Format::hdf5)
       {
         // HDF5: the background grid, its partition and the order of the
         // cells never change during a run, so the mesh (node coordinates,
@@ -505,7 +523,7 @@ namespace femp
                                   const std::vector<std::string> &point_names)
   {
     const MPI_Comm comm = grid.communicator();
-    if (prm.format == "vtu")
+    if (prm.format == Parameters::Format::vtu)
       {
         PointPatches<dim> data_out(points, point_names, prm.point_properties);
         DataOutBase::VtkFlags flags;

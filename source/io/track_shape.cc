@@ -4,6 +4,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/io/track_shape.h>
 
 #include <iomanip>
@@ -12,42 +13,56 @@ namespace femp
 {
   template <int dim>
   void
+  TrackShape<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Output");
+    table.enter_subsection("Track shape");
+    table.add("Write",
+              write,
+              {{AutoSwitch::automatic, "auto"},
+               {AutoSwitch::on, "true"},
+               {AutoSwitch::off, "false"}},
+              "Write the track's shape at every field output: "
+              "track_shape_<n>.csv (the height z_s of the metal's top "
+              "surface, alpha = 1/2 interpolated along z, in every "
+              "grid column along the track's centre line and across "
+              "it at each 'Cross sections' position, with the bead "
+              "mark) and one row of track_bead.csv (the re-solidified "
+              "bead's length and height on the centre line, width "
+              "and height in each cross-section, m; doc/cases.md). "
+              "auto: with Physics/Melt flow. The centre line is the "
+              "column of cells that contains the start point of the "
+              "laser's first segment.");
+    if (table.declaring())
+      prm.declare_entry("Cross sections",
+                        "",
+                        Patterns::Anything(),
+                        "Positions x (m) of the cross-sections across the "
+                        "track (3D), separated by ','; each is the column of "
+                        "cells that contains x, inside the domain. Empty: one "
+                        "section at the middle of the laser's first segment.");
+    table.leave_subsection();
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   TrackShape<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Output");
-    prm.enter_subsection("Track shape");
-    prm.declare_entry("Write",
-                      "auto",
-                      Patterns::Selection("auto|true|false"),
-                      "Write the track's shape at every field output: "
-                      "track_shape_<n>.csv (the height z_s of the metal's top "
-                      "surface, alpha = 1/2 interpolated along z, in every "
-                      "grid column along the track's centre line and across "
-                      "it at each 'Cross sections' position, with the bead "
-                      "mark) and one row of track_bead.csv (the re-solidified "
-                      "bead's length and height on the centre line, width "
-                      "and height in each cross-section, m; doc/cases.md). "
-                      "auto: with Physics/Melt flow. The centre line is the "
-                      "column of cells that contains the start point of the "
-                      "laser's first segment.");
-    prm.declare_entry("Cross sections",
-                      "",
-                      Patterns::Anything(),
-                      "Positions x (m) of the cross-sections across the "
-                      "track (3D), separated by ','; each is the column of "
-                      "cells that contains x, inside the domain. Empty: one "
-                      "section at the middle of the laser's first segment.");
-    prm.leave_subsection();
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   TrackShape<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Output");
     prm.enter_subsection("Track shape");
-    write = prm.get("Write");
     cross_sections.clear();
     for (const auto &s :
          Utilities::split_string_list(prm.get("Cross sections"), ','))

@@ -1,6 +1,7 @@
 // femp: thermo-elasto-plastic stress update (paper eq. 5): Jaumann rate by
 // the Hughes-Winget rotation, thermal strain, J2 radial return with linear
 // isotropic hardening, temperature tables for E, H and sigma_y.
+#include <femp/base/parameter_table.h>
 #include <femp/solid/constitutive.h>
 
 #include <cmath>
@@ -8,79 +9,91 @@
 namespace femp
 {
   void
+  SolidMaterial::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Solid");
+    table.add("Bulk viscosity",
+              bulk_viscosity,
+              Patterns::Double(),
+              "Linear artificial bulk viscosity b1, -: the viscous "
+              "pressure q = b1 rho c h tr(D) (c: P-wave speed, h: cell "
+              "size) is added to the stress in the nodal forces and "
+              "damps the ringing behind stress fronts; the stable step "
+              "shrinks by sqrt(1 + b1^2) - b1. Range [0, 1]; 0 is off.");
+    table.add("Velocity transfer",
+              velocity_transfer,
+              {{VelocityTransfer::flip, "FLIP"},
+               {VelocityTransfer::apic, "APIC"}},
+              "How material points of the solid MPM exchange "
+              "velocities with the grid nodes: APIC (affine "
+              "particle-in-cell: points take the nodal velocities and "
+              "carry their gradient C_p; with one point per cell it "
+              "restores the nodal velocities exactly and meets case "
+              "3.1; with several points per cell its transfers "
+              "dissipate kinetic energy, booked in the energy file) "
+              "or FLIP (points add the nodal accelerations; smooths "
+              "the nodal velocities, misses case 3.1; its booked "
+              "transfer term is unreliable where nodes carry little "
+              "point mass; see doc/solid.md). "
+              "One of FLIP, APIC.");
+    table.enter_subsection("Material");
+    if (table.declaring())
+      prm.declare_entry(
+        "Young's modulus",
+        "1.93e11",
+        Patterns::Anything(),
+        "E(T), Pa: a constant or a table 'T1:E1, T2:E2, ...' "
+        "(K : Pa, T increasing, held constant outside). Every "
+        "value must be positive. The elasticity is of total "
+        "form (sigma = C(T) : eps_e), so the stress falls with "
+        "E: in scenes that melt the substrate give a table that "
+        "falls to a small value at the solidus (doc/solid.md "
+        "\"Material data of 316L\").");
+    if (table.declaring())
+      prm.declare_entry("Plastic modulus",
+                        "1e9",
+                        Patterns::Anything(),
+                        "Linear isotropic hardening modulus H(T) = d sigma_y / "
+                        "d eps_p, Pa: a constant or a table as for Young's "
+                        "modulus. Range [0, inf).");
+    if (table.declaring())
+      prm.declare_entry("Yield stress",
+                        "2.5e8",
+                        Patterns::Anything(),
+                        "Initial yield stress sigma_y(T), Pa: a constant or a "
+                        "table as for Young's modulus. Range (0, inf); use a "
+                        "huge value for a purely elastic solid.");
+    table.add("Poisson's ratio",
+              poisson_ratio,
+              Patterns::Double(),
+              "nu, -; range [0, 0.5).");
+    table.add("Thermal expansion coefficient",
+              expansion,
+              Patterns::Double(),
+              "Linear thermal expansion alpha, 1/K; range [0, inf). "
+              "The thermal stress modulus is beta = E alpha / (1 - 2 "
+              "nu); in a bar in uniaxial strain with nu = 0, beta = E "
+              "alpha.");
+    table.leave_subsection();
+    table.leave_subsection();
+  }
+
+  void
   SolidMaterial::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Solid");
-    prm.declare_entry(
-      "Bulk viscosity",
-      "0.1",
-      Patterns::Double(),
-      "Linear artificial bulk viscosity b1, -: the viscous "
-      "pressure q = b1 rho c h tr(D) (c: P-wave speed, h: cell "
-      "size) is added to the stress in the nodal forces and "
-      "damps the ringing behind stress fronts; the stable step "
-      "shrinks by sqrt(1 + b1^2) - b1. Range [0, 1]; 0 is off.");
-    prm.declare_entry("Velocity transfer",
-                      "APIC",
-                      Patterns::Selection("FLIP|APIC"),
-                      "How material points of the solid MPM exchange "
-                      "velocities with the grid nodes: APIC (affine "
-                      "particle-in-cell: points take the nodal velocities and "
-                      "carry their gradient C_p; with one point per cell it "
-                      "restores the nodal velocities exactly and meets case "
-                      "3.1; with several points per cell its transfers "
-                      "dissipate kinetic energy, booked in the energy file) "
-                      "or FLIP (points add the nodal accelerations; smooths "
-                      "the nodal velocities, misses case 3.1; its booked "
-                      "transfer term is unreliable where nodes carry little "
-                      "point mass; see doc/solid.md). "
-                      "One of FLIP, APIC.");
-    prm.enter_subsection("Material");
-    prm.declare_entry("Young's modulus",
-                      "1.93e11",
-                      Patterns::Anything(),
-                      "E(T), Pa: a constant or a table 'T1:E1, T2:E2, ...' "
-                      "(K : Pa, T increasing, held constant outside). Every "
-                      "value must be positive. The elasticity is of total "
-                      "form (sigma = C(T) : eps_e), so the stress falls with "
-                      "E: in scenes that melt the substrate give a table that "
-                      "falls to a small value at the solidus (doc/solid.md "
-                      "\"Material data of 316L\").");
-    prm.declare_entry("Plastic modulus",
-                      "1e9",
-                      Patterns::Anything(),
-                      "Linear isotropic hardening modulus H(T) = d sigma_y / "
-                      "d eps_p, Pa: a constant or a table as for Young's "
-                      "modulus. Range [0, inf).");
-    prm.declare_entry("Yield stress",
-                      "2.5e8",
-                      Patterns::Anything(),
-                      "Initial yield stress sigma_y(T), Pa: a constant or a "
-                      "table as for Young's modulus. Range (0, inf); use a "
-                      "huge value for a purely elastic solid.");
-    prm.declare_entry("Poisson's ratio",
-                      "0.3",
-                      Patterns::Double(),
-                      "nu, -; range [0, 0.5).");
-    prm.declare_entry("Thermal expansion coefficient",
-                      "1.7e-5",
-                      Patterns::Double(),
-                      "Linear thermal expansion alpha, 1/K; range [0, inf). "
-                      "The thermal stress modulus is beta = E alpha / (1 - 2 "
-                      "nu); in a bar in uniaxial strain with nu = 0, beta = E "
-                      "alpha.");
-    prm.leave_subsection();
-    prm.leave_subsection();
+    const Material thermal;
+    SolidMaterial  defaults(thermal);
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   void
   SolidMaterial::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Solid");
-    bulk_viscosity    = prm.get_double("Bulk viscosity");
-    velocity_transfer = prm.get("Velocity transfer") == "FLIP" ?
-                          VelocityTransfer::flip :
-                          VelocityTransfer::apic;
     prm.enter_subsection("Material");
     const std::string p = "Solid/Material/";
     youngs_modulus =
@@ -89,8 +102,6 @@ namespace femp
       PiecewiseLinear::parse(prm.get("Plastic modulus"), p + "Plastic modulus");
     yield_stress =
       PiecewiseLinear::parse(prm.get("Yield stress"), p + "Yield stress");
-    poisson_ratio = prm.get_double("Poisson's ratio");
-    expansion     = prm.get_double("Thermal expansion coefficient");
     prm.leave_subsection();
     prm.leave_subsection();
     require(youngs_modulus.min_value() > 0,

@@ -8,6 +8,7 @@
 #include <deal.II/grid/grid_generator.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/state_stream.h>
 #include <femp/solid/hourglass.h>
 #include <femp/solid/solid_fem.h>
@@ -22,82 +23,93 @@ namespace femp
 {
   template <int dim>
   void
+  SolidFEM<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Solid FEM");
+    table.add("Use finite elements",
+              enabled,
+              "Discretize the constant-solid zone below by finite "
+              "elements (FEMP). If false, all solid is material "
+              "points (all-MPM).");
+    if (table.declaring())
+      prm.declare_entry(
+        "Zone lower corner",
+        "0, 0, 0",
+        Patterns::Anything(),
+        "Lower corner of the box of the finite-element zone, m "
+        "(dim coordinates). It must lie on grid lines inside the "
+        "domain. Points inside the zone carry temperature only.");
+    if (table.declaring())
+      prm.declare_entry(
+        "Zone upper corner",
+        "0, 0, 0",
+        Patterns::Anything(),
+        "Upper corner of the finite-element zone, m (dim "
+        "coordinates); on grid lines, inside the domain, above "
+        "the lower corner in every direction. Or 'auto' (3D): "
+        "the zone spans the domain horizontally and its top is "
+        "the highest grid line at or below 'Material "
+        "points/Substrate top' - (1.1 d + 2 cells), d a "
+        "conservative melt depth from Rosenthal's moving point "
+        "source and its line-source limit sqrt(2 A P / (pi e "
+        "rho c_min v (T_s - T0))) for the laser's largest power "
+        "P, absorptivity A and speed v, the material's density, "
+        "smallest specific heat and conductivity table, solidus "
+        "T_s and 'Heat transfer/Initial temperature' T0 "
+        "(doc/cases.md). With either choice the run stops if a "
+        "finite element reaches the solidus.");
+    table.add("Hourglass coefficient",
+              hourglass_coefficient,
+              Patterns::Double(),
+              "kappa of the Flanagan-Belytschko hourglass stiffness "
+              "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
+              "(the default) switches hourglass control off. The "
+              "stiffness also resists the bending that a track's "
+              "thermal expansion imposes on the zone and moves the "
+              "stresses near a track away from all-MPM's "
+              "(doc/solid.md \"Hourglass control and the thermal "
+              "stress\"). With or without control the elements' "
+              "corners are checked: a mode that inverts one stops "
+              "the run. Use 0.01-0.1 for elements under loads that "
+              "drive the zero-energy modes (point or alternating "
+              "nodal loads).");
+    table.add("Hourglass distortion limit",
+              hourglass_distortion_limit,
+              Patterns::Double(),
+              "Largest change of an element corner's volume ratio "
+              "det(dx/dX) that the hourglass modes may make, -; "
+              "range (0, 1]. Measured per element at every solid "
+              "step as B sum |q| (B = 1 / (2^(dim-1) h), q the "
+              "hourglass mode amplitudes, first order); above the "
+              "limit the run stops with the element's position. "
+              "The modes carry no strain at the element centre, so "
+              "they do not show in the stresses or the energies, "
+              "but their corner displacements move the zone's "
+              "nodes and the points near it. femp's solid is a "
+              "small-strain model: the shipped scenes stay below "
+              "0.006 (the largest of a run is in the end report, "
+              "doc/stability.md). 1 leaves only the inverted-corner "
+              "check.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   SolidFEM<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Solid FEM");
-    prm.declare_entry("Use finite elements",
-                      "false",
-                      Patterns::Bool(),
-                      "Discretize the constant-solid zone below by finite "
-                      "elements (FEMP). If false, all solid is material "
-                      "points (all-MPM).");
-    prm.declare_entry("Zone lower corner",
-                      "0, 0, 0",
-                      Patterns::Anything(),
-                      "Lower corner of the box of the finite-element zone, m "
-                      "(dim coordinates). It must lie on grid lines inside the "
-                      "domain. Points inside the zone carry temperature only.");
-    prm.declare_entry("Zone upper corner",
-                      "0, 0, 0",
-                      Patterns::Anything(),
-                      "Upper corner of the finite-element zone, m (dim "
-                      "coordinates); on grid lines, inside the domain, above "
-                      "the lower corner in every direction. Or 'auto' (3D): "
-                      "the zone spans the domain horizontally and its top is "
-                      "the highest grid line at or below 'Material "
-                      "points/Substrate top' - (1.1 d + 2 cells), d a "
-                      "conservative melt depth from Rosenthal's moving point "
-                      "source and its line-source limit sqrt(2 A P / (pi e "
-                      "rho c_min v (T_s - T0))) for the laser's largest power "
-                      "P, absorptivity A and speed v, the material's density, "
-                      "smallest specific heat and conductivity table, solidus "
-                      "T_s and 'Heat transfer/Initial temperature' T0 "
-                      "(doc/cases.md). With either choice the run stops if a "
-                      "finite element reaches the solidus.");
-    prm.declare_entry("Hourglass coefficient",
-                      "0",
-                      Patterns::Double(),
-                      "kappa of the Flanagan-Belytschko hourglass stiffness "
-                      "k = kappa M V sum|b_a|^2 / 2^dim, -; range [0, 1]; 0 "
-                      "(the default) switches hourglass control off. The "
-                      "stiffness also resists the bending that a track's "
-                      "thermal expansion imposes on the zone: with 0.1 "
-                      "FEMP's stresses near a track lay 18-67 % of their "
-                      "peaks from all-MPM, without control within 1-12 % "
-                      "(doc/solid.md \"Hourglass control and the thermal "
-                      "stress\"). With or without control the elements' "
-                      "corners are checked: a mode that inverts one stops "
-                      "the run. Use 0.01-0.1 for elements under loads that "
-                      "drive the zero-energy modes (point or alternating "
-                      "nodal loads).");
-    prm.declare_entry("Hourglass distortion limit",
-                      "0.1",
-                      Patterns::Double(),
-                      "Largest change of an element corner's volume ratio "
-                      "det(dx/dX) that the hourglass modes may make, -; "
-                      "range (0, 1]. Measured per element at every solid "
-                      "step as B sum |q| (B = 1 / (2^(dim-1) h), q the "
-                      "hourglass mode amplitudes, first order); above the "
-                      "limit the run stops with the element's position. "
-                      "The modes carry no strain at the element centre, so "
-                      "they do not show in the stresses or the energies, "
-                      "but their corner displacements move the zone's "
-                      "nodes and the points near it. femp's solid is a "
-                      "small-strain model: the shipped scenes stay below "
-                      "0.006 (the largest of a run is in the end report, "
-                      "doc/stability.md). 1 leaves only the inverted-corner "
-                      "check.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   SolidFEM<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Solid FEM");
-    enabled                    = prm.get_bool("Use finite elements");
-    hourglass_coefficient      = prm.get_double("Hourglass coefficient");
-    hourglass_distortion_limit = prm.get_double("Hourglass distortion limit");
     if (enabled)
       {
         lower_corner  = parse_point<dim>(prm.get("Zone lower corner"),

@@ -8,6 +8,7 @@
 #include <femp/base/collective_error.h>
 #include <femp/base/error_location.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
 #include <femp/grid/cell_state.h>
 #include <femp/solid/fe_zone_depth.h>
@@ -56,206 +57,208 @@ namespace femp
 
   template <int dim>
   void
+  SolidSubCycle<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    ParameterHandler &prm = table.handler();
+    table.enter_subsection("Solid");
+    table.add("Time step",
+              time_step,
+              Patterns::Double(0.),
+              "Solid step, s; 0 chooses the safety factor times the "
+              "elastic limit h / (sqrt(dim) c), c = sqrt(M / (s rho)) "
+              "with the largest P-wave modulus M of the E(T) table and "
+              "the mass-scaling factor s. A step above the limit is "
+              "refused. Range [0, inf).");
+    table.add("Safety factor",
+              safety_factor,
+              Patterns::Double(0., 1.),
+              "Courant number C of the automatic solid step. With "
+              "material points the stresses depend on C and the "
+              "mass-scaling factor s through sqrt(s) / C (the "
+              "transfer loss per unit time): C = 0.8 with s times "
+              "2.56 gives the answer of C = 0.5 for 2.56x fewer "
+              "steps without the melt flow (doc/speed_accuracy.md); "
+              "with it 0.8 and 1 went unstable. Range (0, 1].");
+    table.add("Safety factor after solidification",
+              safety_factor_solidified,
+              Patterns::Double(0., 1.),
+              "With the melt flow only: the Courant number of the "
+              "automatic solid step once the laser's path has ended "
+              "and the workpiece has solidified (the metal attached "
+              "to the substrate below the solidus; detached spatter "
+              "may still be liquid). At that "
+              "moment the mass-scaling factor s is multiplied by "
+              "(this / Safety factor)^2, which keeps sqrt(s) / C and "
+              "with it the stresses (see 'Safety factor'), and the "
+              "solid step grows by (this / Safety factor)^2 (C "
+              "times sqrt(s)), and 'Small "
+              "mass cutoff' by (this / Safety factor)^2 (light nodes "
+              "are stable only above a mass fraction ~ C^2); the "
+              "cooling that follows costs that much fewer solid "
+              "steps. 0 "
+              "(default) keeps 'Safety factor' to the end. Range 0 "
+              "or [Safety factor, 1]; needs 'Time step = 0' and "
+              "'Mass scaling = fixed' (doc/solid.md \"Cooling after "
+              "the workpiece has solidified\").");
+    table.add("Mass scaling factor",
+              mass_scaling,
+              Patterns::Double(1.),
+              "Factor s >= 1 on the inertial mass of points and FE "
+              "nodes (gravity keeps the true mass): the stable step "
+              "grows by sqrt(s). Only for quasi-static scenes: watch "
+              "the kinetic-to-internal energy ratio in the energy "
+              "file (it should stay well below 0.1). With 'Mass "
+              "scaling = adaptive' the starting factor, which must "
+              "lie in [Minimum factor, Maximum factor]. Range [1, "
+              "inf).");
+    table.add("Mass scaling",
+              adaptive_scaling,
+              {{false, "fixed"}, {true, "adaptive"}},
+              "fixed: the inertial mass is scaled by 'Mass scaling "
+              "factor' throughout. adaptive: after every temperature "
+              "step in which the solid stepped, the factor s is set "
+              "from the ratio r = K / U_el of the mean kinetic energy "
+              "of those solid steps to the stored elastic energy "
+              "U_el = sum V sigma : C(T)^-1 : sigma / 2 (points and "
+              "elements): s_new = s r_max / r, at most 2 s, rounded "
+              "down to a power of 2^(1/4) and limited to [Minimum "
+              "factor, Maximum factor]; velocities are kept, the "
+              "solid step follows sqrt(s) and the kinetic energy "
+              "jump is booked in the energy file (doc/speed_accuracy.md, "
+              "section 3). Needs 'Time step = 0'.");
+    table.enter_subsection("Adaptive mass scaling");
+    table.add("Maximum kinetic energy ratio",
+              max_kinetic_ratio,
+              Patterns::Double(),
+              "Target r_max of the ratio of kinetic to stored elastic "
+              "energy K / U_el of the solid (dimensionless); used "
+              "with 'Mass scaling = adaptive'. Range (0, 1].");
+    table.add("Minimum factor",
+              min_factor,
+              Patterns::Double(),
+              "Smallest mass-scaling factor of the adaptive "
+              "controller (dimensionless); range [1, Maximum "
+              "factor].");
+    table.add("Maximum factor",
+              max_factor,
+              Patterns::Double(),
+              "Largest mass-scaling factor of the adaptive "
+              "controller (dimensionless); range [Minimum factor, "
+              "1e12].");
+    table.leave_subsection();
+    table.add("Light nodes",
+              light_nodes,
+              {{LightNodes::mass_floor, "mass floor"},
+               {LightNodes::no_force, "no force"}},
+              "Used only with the melt flow (Physics/Melt flow and "
+              "Solid stress both true): how the solid's grid update "
+              "treats nodes of small mass, which appear round solid "
+              "fragments that solidified where the flow left them "
+              "(a point near a cell face gives the opposite face's "
+              "nodes a tiny mass but a full shape-function gradient, "
+              "and their explicit update is unstable). 'mass floor': "
+              "each node is accelerated as if its mass were at least "
+              "C^2 / (4 dim) times the row sum of its stiffness over "
+              "c^2 (C the safety factor in use), the mass at which "
+              "the solid step is stable for it; the work of the part "
+              "of the force that it does not take is booked in the "
+              "energy file as withheld_work. 'no force': nodes below "
+              "'Small mass cutoff' take no force and keep their "
+              "velocity (fragments held by heavier nodes are then "
+              "strained without bound). doc/solid.md \"Small node "
+              "masses\".");
+    table.add("Small mass cutoff",
+              small_mass_cutoff,
+              Patterns::Double(),
+              "Used only with the melt flow and 'Light nodes = no "
+              "force': grid nodes whose inertial mass is below this "
+              "fraction of a full cell's node "
+              "(rho h^dim / 2^dim times the mass scaling) take no "
+              "force in the solid's grid update (the work the force "
+              "would have done is booked in the energy file as "
+              "withheld_work), so that points left by the flow near "
+              "a cell face (solidified fragments) do not make the "
+              "explicit update unstable; 0 is off. "
+              "Dimensionless, range [0, 1) (doc/solid.md \"Small "
+              "node masses\").");
+    if (table.declaring())
+      prm.declare_entry(
+        "Fixed faces",
+        "",
+        Patterns::Anything(),
+        "Domain faces whose grid nodes are fixed (zero "
+        "velocity): a comma-separated list of x-, x+, y-, y+, "
+        "z-, z+; empty for none. Faces not listed here or under "
+        "'Roller faces' are traction-free.");
+    if (table.declaring())
+      prm.declare_entry("Roller faces",
+                        "",
+                        Patterns::Anything(),
+                        "Domain faces whose grid nodes cannot move normal to "
+                        "the face (rollers); same format as 'Fixed faces'.");
+    table.add("Energy file",
+              energy_file,
+              Patterns::Anything(),
+              "CSV file (in the output directory) with the solid "
+              "energies after every solid step: external work, stress "
+              "work, kinetic, hourglass, balance, kinetic/internal "
+              "ratio, hourglass-mode energy, and the booked "
+              "exchanges: MPM transfer dissipation, kinetic energy "
+              "removed by melting and added by solidification, and "
+              "the re-map work of the MUSL update (J, 2D: J/m; "
+              "doc/solid.md), then the mass-scaling factor, the ratio "
+              "K / U_el of the kinetic to the stored elastic energy "
+              "(at the end of the last temperature step) and the "
+              "kinetic energy booked for changes of the factor "
+              "(adaptive mass scaling); empty for none.");
+    table.add("Row interval",
+              row_interval,
+              Patterns::Double(0),
+              "Simulated time between two rows of the 'Energy file' "
+              "and the 'Probe file', s; range [0, inf): a row is "
+              "written after the solid step that reaches or passes "
+              "each multiple of it; 0 writes a row after every solid "
+              "step. The energy accounts are summed at every step "
+              "either way; a row costs one pass over the FE elements "
+              "(the hourglass energy) and global sums, which long "
+              "runs with millions of solid steps need not pay each "
+              "step.");
+    table.add("Probe file",
+              probe_file,
+              Patterns::Anything(),
+              "CSV file (in the output directory) with sigma_xx (Pa) "
+              "and T (K) at the probe points after every solid step.");
+    if (table.declaring())
+      prm.declare_entry("Probe points",
+                        "",
+                        Patterns::Anything(),
+                        "Points 'x,y[,z]; x,y[,z]; ...' (m) whose cell stress "
+                        "and temperature are written to the probe file; empty "
+                        "for none.");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
   SolidSubCycle<dim>::Parameters::declare_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Solid");
-    prm.declare_entry("Time step",
-                      "0",
-                      Patterns::Double(0.),
-                      "Solid step, s; 0 chooses the safety factor times the "
-                      "elastic limit h / (sqrt(dim) c), c = sqrt(M / (s rho)) "
-                      "with the largest P-wave modulus M of the E(T) table and "
-                      "the mass-scaling factor s. A step above the limit is "
-                      "refused. Range [0, inf).");
-    prm.declare_entry("Safety factor",
-                      "0.5",
-                      Patterns::Double(0., 1.),
-                      "Courant number C of the automatic solid step. With "
-                      "material points the stresses depend on C and the "
-                      "mass-scaling factor s through sqrt(s) / C (the "
-                      "transfer loss per unit time): C = 0.8 with s times "
-                      "2.56 gives the answer of C = 0.5 for 2.56x fewer "
-                      "steps without the melt flow (doc/speed_accuracy.md); "
-                      "with it 0.8 and 1 went unstable. Range (0, 1].");
-    prm.declare_entry("Safety factor after solidification",
-                      "0",
-                      Patterns::Double(0., 1.),
-                      "With the melt flow only: the Courant number of the "
-                      "automatic solid step once the laser's path has ended "
-                      "and the workpiece has solidified (the metal attached "
-                      "to the substrate below the solidus; detached spatter "
-                      "may still be liquid). At that "
-                      "moment the mass-scaling factor s is multiplied by "
-                      "(this / Safety factor)^2, which keeps sqrt(s) / C and "
-                      "with it the stresses (see 'Safety factor'), and the "
-                      "solid step grows by (this / Safety factor)^2 (C "
-                      "times sqrt(s)), and 'Small "
-                      "mass cutoff' by (this / Safety factor)^2 (light nodes "
-                      "are stable only above a mass fraction ~ C^2); the "
-                      "cooling that follows costs that much fewer solid "
-                      "steps. 0 "
-                      "(default) keeps 'Safety factor' to the end. Range 0 "
-                      "or [Safety factor, 1]; needs 'Time step = 0' and "
-                      "'Mass scaling = fixed' (doc/solid.md \"Cooling after "
-                      "the workpiece has solidified\").");
-    prm.declare_entry("Mass scaling factor",
-                      "1",
-                      Patterns::Double(1.),
-                      "Factor s >= 1 on the inertial mass of points and FE "
-                      "nodes (gravity keeps the true mass): the stable step "
-                      "grows by sqrt(s). Only for quasi-static scenes: watch "
-                      "the kinetic-to-internal energy ratio in the energy "
-                      "file (it should stay well below 0.1). With 'Mass "
-                      "scaling = adaptive' the starting factor, which must "
-                      "lie in [Minimum factor, Maximum factor]. Range [1, "
-                      "inf).");
-    prm.declare_entry(
-      "Mass scaling",
-      "fixed",
-      Patterns::Selection("fixed|adaptive"),
-      "fixed: the inertial mass is scaled by 'Mass scaling "
-      "factor' throughout. adaptive: after every temperature "
-      "step in which the solid stepped, the factor s is set "
-      "from the ratio r = K / U_el of the mean kinetic energy "
-      "of those solid steps to the stored elastic energy "
-      "U_el = sum V sigma : C(T)^-1 : sigma / 2 (points and "
-      "elements): s_new = s r_max / r, at most 2 s, rounded "
-      "down to a power of 2^(1/4) and limited to [Minimum "
-      "factor, Maximum factor]; velocities are kept, the "
-      "solid step follows sqrt(s) and the kinetic energy "
-      "jump is booked in the energy file (doc/speed_accuracy.md, "
-      "section 3). Needs 'Time step = 0'.");
-    prm.enter_subsection("Adaptive mass scaling");
-    prm.declare_entry("Maximum kinetic energy ratio",
-                      "0.001",
-                      Patterns::Double(),
-                      "Target r_max of the ratio of kinetic to stored elastic "
-                      "energy K / U_el of the solid (dimensionless); used "
-                      "with 'Mass scaling = adaptive'. Range (0, 1].");
-    prm.declare_entry("Minimum factor",
-                      "1",
-                      Patterns::Double(),
-                      "Smallest mass-scaling factor of the adaptive "
-                      "controller (dimensionless); range [1, Maximum "
-                      "factor].");
-    prm.declare_entry("Maximum factor",
-                      "10000",
-                      Patterns::Double(),
-                      "Largest mass-scaling factor of the adaptive "
-                      "controller (dimensionless); range [Minimum factor, "
-                      "1e12].");
-    prm.leave_subsection();
-    prm.declare_entry("Light nodes",
-                      "mass floor",
-                      Patterns::Selection("mass floor|no force"),
-                      "Used only with the melt flow (Physics/Melt flow and "
-                      "Solid stress both true): how the solid's grid update "
-                      "treats nodes of small mass, which appear round solid "
-                      "fragments that solidified where the flow left them "
-                      "(a point near a cell face gives the opposite face's "
-                      "nodes a tiny mass but a full shape-function gradient, "
-                      "and their explicit update is unstable). 'mass floor': "
-                      "each node is accelerated as if its mass were at least "
-                      "C^2 / (4 dim) times the row sum of its stiffness over "
-                      "c^2 (C the safety factor in use), the mass at which "
-                      "the solid step is stable for it; the work of the part "
-                      "of the force that it does not take is booked in the "
-                      "energy file as withheld_work. 'no force': nodes below "
-                      "'Small mass cutoff' take no force and keep their "
-                      "velocity (fragments held by heavier nodes are then "
-                      "strained without bound). doc/solid.md \"Small node "
-                      "masses\".");
-    prm.declare_entry("Small mass cutoff",
-                      "0.05",
-                      Patterns::Double(),
-                      "Used only with the melt flow and 'Light nodes = no "
-                      "force': grid nodes whose inertial mass is below this "
-                      "fraction of a full cell's node "
-                      "(rho h^dim / 2^dim times the mass scaling) take no "
-                      "force in the solid's grid update (the work the force "
-                      "would have done is booked in the energy file as "
-                      "withheld_work), so that points left by the flow near "
-                      "a cell face (solidified fragments) do not make the "
-                      "explicit update unstable; 0 is off. "
-                      "Dimensionless, range [0, 1) (doc/solid.md \"Small "
-                      "node masses\").");
-    prm.declare_entry("Fixed faces",
-                      "",
-                      Patterns::Anything(),
-                      "Domain faces whose grid nodes are fixed (zero "
-                      "velocity): a comma-separated list of x-, x+, y-, y+, "
-                      "z-, z+; empty for none. Faces not listed here or under "
-                      "'Roller faces' are traction-free.");
-    prm.declare_entry("Roller faces",
-                      "",
-                      Patterns::Anything(),
-                      "Domain faces whose grid nodes cannot move normal to "
-                      "the face (rollers); same format as 'Fixed faces'.");
-    prm.declare_entry("Energy file",
-                      "solid_energy.csv",
-                      Patterns::Anything(),
-                      "CSV file (in the output directory) with the solid "
-                      "energies after every solid step: external work, stress "
-                      "work, kinetic, hourglass, balance, kinetic/internal "
-                      "ratio, hourglass-mode energy, and the booked "
-                      "exchanges: MPM transfer dissipation, kinetic energy "
-                      "removed by melting and added by solidification, and "
-                      "the re-map work of the MUSL update (J, 2D: J/m; "
-                      "doc/solid.md), then the mass-scaling factor, the ratio "
-                      "K / U_el of the kinetic to the stored elastic energy "
-                      "(at the end of the last temperature step) and the "
-                      "kinetic energy booked for changes of the factor "
-                      "(adaptive mass scaling); empty for none.");
-    prm.declare_entry("Row interval",
-                      "0",
-                      Patterns::Double(0),
-                      "Simulated time between two rows of the 'Energy file' "
-                      "and the 'Probe file', s; range [0, inf): a row is "
-                      "written after the solid step that reaches or passes "
-                      "each multiple of it; 0 writes a row after every solid "
-                      "step. The energy accounts are summed at every step "
-                      "either way; a row costs one pass over the FE elements "
-                      "(the hourglass energy) and global sums, which long "
-                      "runs with millions of solid steps need not pay each "
-                      "step.");
-    prm.declare_entry("Probe file",
-                      "solid_probes.csv",
-                      Patterns::Anything(),
-                      "CSV file (in the output directory) with sigma_xx (Pa) "
-                      "and T (K) at the probe points after every solid step.");
-    prm.declare_entry("Probe points",
-                      "",
-                      Patterns::Anything(),
-                      "Points 'x,y[,z]; x,y[,z]; ...' (m) whose cell stress "
-                      "and temperature are written to the probe file; empty "
-                      "for none.");
-    prm.leave_subsection();
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   SolidSubCycle<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
     prm.enter_subsection("Solid");
-    time_step     = prm.get_double("Time step");
-    safety_factor = prm.get_double("Safety factor");
-    safety_factor_solidified =
-      prm.get_double("Safety factor after solidification");
-    mass_scaling     = prm.get_double("Mass scaling factor");
-    adaptive_scaling = prm.get("Mass scaling") == "adaptive";
     prm.enter_subsection("Adaptive mass scaling");
-    max_kinetic_ratio = prm.get_double("Maximum kinetic energy ratio");
-    min_factor        = prm.get_double("Minimum factor");
-    max_factor        = prm.get_double("Maximum factor");
     prm.leave_subsection();
-    light_nodes       = prm.get("Light nodes");
-    small_mass_cutoff = prm.get_double("Small mass cutoff");
     fixed_faces = parse_faces(prm.get("Fixed faces"), "Solid/Fixed faces", dim);
     roller_faces =
       parse_faces(prm.get("Roller faces"), "Solid/Roller faces", dim);
-    energy_file  = prm.get("Energy file");
-    probe_file   = prm.get("Probe file");
-    row_interval = prm.get_double("Row interval");
     probes.clear();
     for (const auto &s :
          Utilities::split_string_list(prm.get("Probe points"), ';'))
@@ -1127,7 +1130,7 @@ namespace femp
   SolidSubCycle<dim>::share_points_with_flow()
   {
     set_flow_owns_fluid_points(true);
-    if (prm.light_nodes == "mass floor")
+    if (prm.light_nodes == Parameters::LightNodes::mass_floor)
       set_mass_floor(true);
     else
       set_small_mass_cutoff(prm.small_mass_cutoff);

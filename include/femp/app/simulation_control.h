@@ -10,6 +10,8 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/parameter_table.h>
+
 #include <chrono>
 #include <deque>
 #include <functional>
@@ -40,6 +42,14 @@ namespace femp
       /// K; 0: off. After the laser's path, end the run once the hottest
       /// metal cell is below this temperature (the driver asks for it).
       double stop_temperature = 0;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

@@ -10,6 +10,7 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_table.h>
 
 #include <algorithm>
 
@@ -34,6 +35,14 @@ namespace femp
     double evaporation_temperature = 3090.;   ///< T_v at p_0, K
     double molar_mass              = 0.0558;  ///< M of the vapour, kg/mol
     double ambient_pressure        = 101325.; ///< p_0, Pa
+
+    /// Declare (the members' values are the defaults) or read the
+
+    /// entries, each listed once.
+
+    void
+
+    add_parameters(ParameterTable &table);
 
     static void
     declare_parameters(ParameterHandler &prm);

@@ -31,6 +31,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 
@@ -50,7 +51,7 @@ namespace femp
     {
       /// Porosity/Detect pores: "auto" (with a layer schedule), "true" or
       /// "false"; only in scenes that carry points.
-      std::string detect = "auto";
+      AutoSwitch detect = AutoSwitch::automatic;
       /// Porosity/Fused fraction threshold (-): cells below are open.
       double threshold = 0.5;
       /// Porosity/Minimum pore volume (m^3): smaller pores are not listed.
@@ -58,6 +59,14 @@ namespace femp
       /// Porosity/Built region bottom (m); NaN: the substrate top.
       double bottom       = 0;
       bool   bottom_given = false;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -68,7 +77,8 @@ namespace femp
       bool
       enabled(const bool builds) const
       {
-        return detect == "true" || (detect == "auto" && builds);
+        return detect == AutoSwitch::on ||
+               (detect == AutoSwitch::automatic && builds);
       }
     };
 

@@ -28,6 +28,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 #include <femp/heat/laser.h>
@@ -39,6 +40,19 @@ namespace femp
 {
   using namespace dealii;
 
+  /// Where the layer start times come from: none (one layer), the scan
+  /// path's heights, or a list of times.
+  enum class LayerSource
+  {
+    none,
+    scan_path,
+    times
+  };
+
+  /// The input names of LayerSource (Build/Layer schedule).
+  const Choices<LayerSource> &
+  layer_source_names();
+
   /// When each layer after the first starts, and where its powder ends.
   template <int dim>
   class LayerSchedule
@@ -46,14 +60,22 @@ namespace femp
   public:
     struct Parameters
     {
-      /// Build/Layer schedule: "none", "scan path" or "times".
-      std::string source = "none";
+      /// Build/Layer schedule: when a new powder layer is spread.
+      LayerSource source = LayerSource::none;
       /// Build/Layer thickness (m), with "times".
       double thickness = 30e-6;
       /// Build/Layer start times (s), with "times".
       std::vector<double> start_times;
       /// Build/Powder temperature (K); 0: the ambient temperature.
       double powder_temperature = 0;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -62,7 +84,7 @@ namespace femp
       bool
       enabled() const
       {
-        return source != "none";
+        return source != LayerSource::none;
       }
     };
 

@@ -25,6 +25,7 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/base/material.h>
+#include <femp/base/parameter_table.h>
 #include <femp/flow/flow_cells.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
@@ -57,9 +58,15 @@ namespace femp
       RecoilTemperature recoil_temperature = RecoilTemperature::limited;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
-      /// Curvature from heights of alpha in columns of 7 cells (true) or
-      /// from the divergence of alpha's normalized gradient (false).
-      bool height_function = false;
+      /// How the curvature is computed: from the divergence of alpha's
+      /// normalized gradient, or from heights of alpha in columns of 7
+      /// cells.
+      enum class Curvature
+      {
+        alpha_gradient,
+        height_function
+      };
+      Curvature curvature = Curvature::alpha_gradient;
 
       /// The free-surface entries of the subsection Melt flow (the caller
       /// has entered it): Curvature, Curvature smoothing, Surface tension,
@@ -67,6 +74,9 @@ namespace femp
       /// temperature.
       static void
       declare_parameters(ParameterHandler &prm);
+      /// Declare or read these entries, each from its member.
+      void
+      add_parameters(ParameterTable &table);
       /// Read them (inside Melt flow) and check their ranges.
       void
       parse_parameters(ParameterHandler &prm);

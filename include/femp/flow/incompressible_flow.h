@@ -40,6 +40,7 @@
 #include <deal.II/base/timer.h>
 
 #include <femp/base/material.h>
+#include <femp/base/parameter_table.h>
 #include <femp/flow/flow_cells.h>
 #include <femp/flow/free_surface.h>
 #include <femp/flow/pressure_solver.h>
@@ -82,9 +83,9 @@ namespace femp
       double point_shifting = 0;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
-      /// Curvature by the height function (Melt flow/Curvature); false:
-      /// from the gradient of alpha.
-      bool height_function = false;
+      /// How the curvature is computed (Melt flow/Curvature).
+      typename FreeSurface<dim>::Parameters::Curvature curvature =
+        FreeSurface<dim>::Parameters::Curvature::alpha_gradient;
       /// Relaxation c of the volume correction (0: off): the points move,
       /// besides their advection, by grad(psi) with lap(psi) = c (V_c/h^dim
       /// - 1), V_c the point volume in the cell (doc/flow.md).
@@ -103,6 +104,10 @@ namespace femp
       typename PressureSolver<dim>::Parameters pressure;
 
       Parameters();
+      /// Declare (the members' values are the defaults) or read the
+      /// entries, each listed once.
+      void
+      add_parameters(ParameterTable &table);
       static void
       declare_parameters(ParameterHandler &prm);
       void

@@ -27,6 +27,7 @@
 #include <deal.II/lac/trilinos_sparse_matrix.h>
 #include <deal.II/lac/trilinos_vector.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/flow/flow_cells.h>
 #include <femp/grid/background_grid.h>
 
@@ -48,14 +49,24 @@ namespace femp
     {
       double       solver_tolerance = 1e-10; ///< relative CG residual
       unsigned int max_iterations   = 1000;
-      /// "auto", "amg" or "jacobi": the CG preconditioner; auto takes
-      /// Jacobi for bands of fewer than amg_minimum_rows rows (all ranks)
-      /// until a Jacobi solve needs more than jacobi_iteration_limit
-      /// iterations (then AMG for the rest of the run), ML AMG otherwise.
-      std::string  preconditioner         = "auto";
-      unsigned int amg_minimum_rows       = 10000;
-      unsigned int jacobi_iteration_limit = 60;
+      /// The CG preconditioner; automatic takes Jacobi for bands of fewer
+      /// than amg_minimum_rows rows (all ranks) until a Jacobi solve needs
+      /// more than jacobi_iteration_limit iterations (then AMG for the rest
+      /// of the run), ML AMG otherwise.
+      enum class Preconditioner
+      {
+        automatic,
+        amg,
+        jacobi
+      };
+      Preconditioner preconditioner         = Preconditioner::automatic;
+      unsigned int   amg_minimum_rows       = 10000;
+      unsigned int   jacobi_iteration_limit = 60;
 
+      /// Declare or read the solver entries of the subsection Melt flow
+      /// (the caller has entered it), each from its member.
+      void
+      add_parameters(ParameterTable &table);
       /// The solver entries of the subsection Melt flow (the caller has
       /// entered it): Solver tolerance, Maximum iterations.
       static void

@@ -17,6 +17,8 @@
 #include <deal.II/base/point.h>
 #include <deal.II/distributed/tria.h>
 
+#include <femp/base/parameter_table.h>
+
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -39,6 +41,14 @@ namespace femp
       /// "Partition": balance the cells' costs (true, 'cost') or their
       /// number (false, 'cells') over the ranks.
       bool partition_by_cost = true;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

@@ -29,6 +29,7 @@
 #include <deal.II/particles/particle_handler.h>
 
 #include <femp/base/material.h>
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 
 #include <functional>
@@ -96,8 +97,8 @@ namespace femp
       double       max_diameter     = 45e-6;
       double       packing_fraction = 0.45;
       unsigned int seed             = 1;
-      /// Material points/Carry points: "auto" or "always".
-      std::string carry = "auto";
+      /// Material points/Carry points: auto (automatic) or always (on).
+      AutoSwitch carry = AutoSwitch::automatic;
       /// Whether the scene carries points at all (resolve_carry()); false:
       /// create() makes none, alpha comes from the substrate's lattice
       /// geometry and the per-step transfer to points does nothing.
@@ -118,6 +119,14 @@ namespace femp
         inside(const Point<dim> &p) const;
       };
       std::vector<Body> bodies;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

@@ -24,6 +24,7 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/base/material.h>
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/heat/laser.h>
@@ -70,11 +71,30 @@ namespace femp
       /// zeta_q of eq. (1); the evaporation data are the Material's.
       double                        evaporation_coefficient = 0.82;
       std::map<std::string, double> fixed_temperatures;
-      std::string                   laser_deposition = "first surface";
-      std::string                   prescribed_velocity;
-      /// 'points' (metal carries its enthalpy on the points) or 'upwind'
-      /// (upwind convection of T with the flow's cell velocity).
-      std::string advection_by_melt_flow = "points";
+      /// How the laser's surface flux enters the cells.
+      enum class Deposition
+      {
+        first_surface,
+        gradient
+      };
+      Deposition  laser_deposition = Deposition::first_surface;
+      std::string prescribed_velocity;
+      /// points: the metal carries its enthalpy on the points; upwind:
+      /// upwind convection of T with the flow's cell velocity.
+      enum class Advection
+      {
+        points,
+        upwind
+      };
+      Advection advection_by_melt_flow = Advection::points;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

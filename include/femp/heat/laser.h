@@ -12,6 +12,8 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <femp/base/parameter_table.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -45,6 +47,14 @@ namespace femp
       double      start_time = 0.;
       std::string scan_path_file;
       std::string scan_path_format = "femp"; ///< see heat/scan_path.h
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

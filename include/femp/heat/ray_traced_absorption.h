@@ -19,6 +19,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 
 #include <cstdint>
@@ -37,13 +38,24 @@ namespace femp
     struct Parameters
     {
       /// 'fixed' (eq. 1, 'Laser/Absorptivity') or 'ray traced'.
-      std::string  model                  = "fixed";
+      /// fixed: 'Absorptivity' times the beam's flux; ray traced: the
+      /// Fresnel absorption of traced rays.
+      enum class Model
+      {
+        fixed,
+        ray_traced
+      };
+      Model        model                  = Model::fixed;
       double       refractive_index       = 3.83;
       double       extinction_coefficient = 5.34;
       unsigned int rays_per_beam_radius   = 4;
       unsigned int max_reflections        = 50;
 
       /// Entries of subsection Laser (declared beside Laser's own).
+      /// Declare (the members' values are the defaults) or read the
+      /// entries, each listed once.
+      void
+      add_parameters(ParameterTable &table);
       static void
       declare_parameters(ParameterHandler &prm);
       void

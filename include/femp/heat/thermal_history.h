@@ -17,6 +17,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 
 #include <string>
@@ -35,6 +36,14 @@ namespace femp
     struct Parameters
     {
       bool enabled = false;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

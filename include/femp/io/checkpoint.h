@@ -19,6 +19,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/base/state_stream.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_state.h>
@@ -48,6 +49,14 @@ namespace femp
       double       every_wall_minutes = 0; ///< min, 0: off
       std::string  directory          = "checkpoint";
       std::string  resume_from; ///< empty: a new run
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

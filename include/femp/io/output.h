@@ -8,6 +8,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/particles/particle_handler.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/heat/melt_pool.h>
 
@@ -38,8 +39,24 @@ namespace femp
     {
       std::string directory       = "output";
       double      output_interval = 1e-4;
-      std::string write_points    = "last"; ///< always|last|never
-      std::string format          = "vtu";  ///< vtu|hdf5
+      /// When the material points are written.
+      enum class WritePoints
+      {
+        always,
+        last,
+        never
+      };
+      /// The file format of grid fields and points.
+      enum class Format
+      {
+        vtu,
+        hdf5
+      };
+      WritePoints write_points = WritePoints::last;
+      /// The input names of WritePoints (Output/Write material points).
+      static const Choices<WritePoints>        &
+      write_points_names();
+      Format format = Format::vtu;
       /// Point properties and grid fields to write; empty: all.
       std::vector<std::string> point_properties, grid_fields;
       double                   series_interval   = 0;
@@ -50,6 +67,14 @@ namespace femp
       bool                    probe_linear = false;
       std::vector<Point<dim>> probe_points;
       std::vector<ProbeLine>  probe_lines;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

@@ -26,6 +26,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 #include <femp/io/output.h>
@@ -45,8 +46,16 @@ namespace femp
     /// Subsection 'Output/Track shape'.
     struct Parameters
     {
-      std::string         write = "auto"; ///< auto|true|false
+      AutoSwitch          write = AutoSwitch::automatic;
       std::vector<double> cross_sections; ///< x of each cross-section, m
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);
@@ -56,7 +65,8 @@ namespace femp
       bool
       enabled(const bool melt_flow) const
       {
-        return write == "true" || (write == "auto" && melt_flow);
+        return write == AutoSwitch::on ||
+               (write == AutoSwitch::automatic && melt_flow);
       }
     };
 

@@ -47,6 +47,7 @@
 
 #include <femp/base/input_checks.h>
 #include <femp/base/material.h>
+#include <femp/base/parameter_table.h>
 
 #include <cmath>
 
@@ -85,6 +86,10 @@ namespace femp
     VelocityTransfer velocity_transfer = VelocityTransfer::apic;
 
     /// Declares the entries of subsection "Solid/Material".
+    /// Declare (the members' values are the defaults) or read the
+    /// entries, each listed once.
+    void
+    add_parameters(ParameterTable &table);
     static void
     declare_parameters(ParameterHandler &prm);
     /// Reads subsection "Solid/Material" (density and solidus are the

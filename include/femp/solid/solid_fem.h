@@ -62,6 +62,7 @@
 #include <deal.II/fe/fe_q.h>
 #include <deal.II/lac/la_parallel_vector.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/solid/constitutive.h>
 #include <femp/solid/fe_zone.h>
@@ -95,6 +96,14 @@ namespace femp
       /// 'Zone upper corner = auto': the driver places the top below the
       /// estimated melt depth (fe_zone_depth.h) before check().
       bool automatic_top = false;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);

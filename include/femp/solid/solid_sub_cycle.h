@@ -58,6 +58,7 @@
 
 #include <deal.II/base/parameter_handler.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 #include <femp/solid/constitutive.h>
@@ -104,9 +105,15 @@ namespace femp
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
       /// With the melt flow only: how nodes of small mass are updated,
-      /// "mass floor" (set_mass_floor()) or "no force" (the cutoff below).
-      std::string light_nodes       = "mass floor";
-      double      small_mass_cutoff = 0.05;
+      /// by a mass floor (set_mass_floor()) or with no force (the cutoff
+      /// below).
+      enum class LightNodes
+      {
+        mass_floor,
+        no_force
+      };
+      LightNodes light_nodes       = LightNodes::mass_floor;
+      double     small_mass_cutoff = 0.05;
       /// m/s^2 (default: none); not an input of Solid: FempProblem sets
       /// it from Physics/Gravity.
       Tensor<1, dim>           gravity;
@@ -117,6 +124,14 @@ namespace femp
       /// (0: every solid step).
       double                  row_interval = 0;
       std::vector<Point<dim>> probes;
+
+      /// Declare (the members' values are the defaults) or read the
+
+      /// entries, each listed once.
+
+      void
+
+      add_parameters(ParameterTable &table);
 
       static void
       declare_parameters(ParameterHandler &prm);
