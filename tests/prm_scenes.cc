@@ -51,6 +51,24 @@ namespace
     return v;
   }
 
+  /// Whether two entries' texts say the same: equal numbers when both are
+  /// one number ("2.68e5" and "268000"), else equal texts.
+  bool
+  same_value(const std::string &a, const std::string &b)
+  {
+    try
+      {
+        std::size_t  na = 0, nb = 0;
+        const double x = std::stod(a, &na), y = std::stod(b, &nb);
+        if (na == a.size() && nb == b.size())
+          return x == y;
+      }
+    catch (const std::exception &)
+      {
+      }
+    return a == b;
+  }
+
   /// Parse @p text (named @p name in messages) and check the data.
   void
   parse_and_check(ParameterHandler  &prm,
@@ -121,9 +139,10 @@ main(int argc, char **argv)
               for (const auto &[path, entry] : material_entries)
                 if (solid || path[0] != "Solid")
                   {
-                    own = own ||
-                          get(scene, path, entry) != get(defaults, path, entry);
-                    if (get(scene, path, entry) != get(with, path, entry))
+                    own = own || !same_value(get(scene, path, entry),
+                                             get(defaults, path, entry));
+                    if (!same_value(get(scene, path, entry),
+                                    get(with, path, entry)))
                       changed.push_back(entry);
                   }
               same_as_316L =
