@@ -10,7 +10,10 @@
 #include <femp/base/parameter_file.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
+#include <sstream>
+#include <vector>
 
 #include "scene_driver.h"
 #include "test_tools.h"
@@ -49,6 +52,35 @@ namespace
     for (std::size_t i = 0; i < path.size(); ++i)
       prm.leave_subsection();
     return v;
+  }
+
+  /// Whether two entry values say the same: the same text, or the same
+  /// numbers in the same order (2.68e5 and 268000 are one value).
+  bool
+  same_value(const std::string &a, const std::string &b)
+  {
+    if (a == b)
+      return true;
+    const auto numbers = [](const std::string &text) {
+      std::vector<double> v;
+      std::string         t = text;
+      for (char &c : t)
+        if (c == ',' || c == ':')
+          c = ' ';
+      std::istringstream in(t);
+      std::string        word;
+      while (in >> word)
+        {
+          char        *end = nullptr;
+          const double x   = std::strtod(word.c_str(), &end);
+          if (*end != '\0')
+            return std::vector<double>();
+          v.push_back(x);
+        }
+      return v;
+    };
+    const auto va = numbers(a);
+    return !va.empty() && va == numbers(b);
   }
 
   /// Parse @p text (named @p name in messages) and check the data.
@@ -121,9 +153,10 @@ main(int argc, char **argv)
               for (const auto &[path, entry] : material_entries)
                 if (solid || path[0] != "Solid")
                   {
-                    own = own ||
-                          get(scene, path, entry) != get(defaults, path, entry);
-                    if (get(scene, path, entry) != get(with, path, entry))
+                    own = own || !same_value(get(scene, path, entry),
+                                             get(defaults, path, entry));
+                    if (!same_value(get(scene, path, entry),
+                                    get(with, path, entry)))
                       changed.push_back(entry);
                   }
               same_as_316L =
