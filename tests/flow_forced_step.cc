@@ -115,33 +115,18 @@ namespace
           MPI_Comm           comm)
   {
     const bool   visc = which == "viscous";
-    const double R = 0.25, h = R / R_over_h, L = 4 * R, rho = 1000, sigma = 1;
-    const double mu  = mu_given > 0 ? mu_given : visc ? 50 : 0.5;
-    const double eps = eps_given >= 0 ? eps_given : 0.1;
+    const double mu   = mu_given > 0 ? mu_given : visc ? 50 : 0.5;
+    const double eps  = eps_given >= 0 ? eps_given : 0.1;
     typename IncompressibleFlow<dim>::Parameters prm;
     prm.viscosity           = mu;
-    prm.gravity             = Tensor<1, dim>();
-    prm.surface_tension     = sigma;
     prm.point_shifting      = 2;
     prm.curvature_smoothing = smoothing >= 0 ? smoothing : 2;
     if (flip >= 0)
       prm.flip_fraction = flip;
-    const Point<dim> centre(0.5 * L, 0.5 * L);
-    FlowScene<dim>   scene(
-      Point<dim>(L, L),
-      h,
-      rho,
-      [&](const Point<dim> &x) {
-        const Tensor<1, dim> d = x - centre;
-        const double         c2 =
-          (d[0] * d[0] - d[1] * d[1]) / std::max(1e-300, d.norm_square());
-        return d.norm() < R * (1 + eps * c2);
-      },
-      prm,
-      comm);
-    const double omega = std::sqrt(6 * sigma / (rho * R * R * R));
-    const double gamma = 4 * mu / rho / (R * R);
-    const auto   lim0  = scene.flow->stable_time_step();
+    const Droplet   drop(R_over_h, eps, prm, comm);
+    FlowScene<dim> &scene = *drop.scene;
+    const double    omega = drop.omega, R = Droplet::R;
+    const auto      lim0 = scene.flow->stable_time_step();
     checks.print("viscous limit / capillary limit",
                  lim0.viscous / lim0.capillary,
                  3);
@@ -149,8 +134,7 @@ namespace
     const double S0 = S;
     if (!visc)
       {
-        const double T =
-          2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
+        const double        T = drop.period();
         std::vector<double> crossings;
         double              S_late = 0, u_late = 0, t_prev = 0;
         const Outcome       o = advance(

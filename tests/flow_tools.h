@@ -7,6 +7,7 @@
 #include <femp/grid/material_points.h>
 
 #include <functional>
+#include <memory>
 
 #include "test_tools.h"
 
@@ -88,6 +89,64 @@ namespace femp_test
       }
     return std::sqrt(s);
   }
+
+  /// The 2D oscillating droplet of tests/oscillating_droplet.cc and
+  /// tests/flow_forced_step.cc: a drop r = R (1 + eps cos 2 theta) of
+  /// R = 0.25 m, rho = 1000 kg/m^3, surface tension sigma = 1 N/m, in the
+  /// middle of a box of 4 R, cells of R / @p R_over_h, no gravity; the
+  /// viscosity and the other solver settings come with @p prm (gravity and
+  /// surface tension are set here).
+  struct Droplet
+  {
+    static constexpr double R = 0.25, rho = 1000, sigma = 1;
+
+    Droplet(const double                               R_over_h,
+            const double                               eps,
+            typename IncompressibleFlow<2>::Parameters prm,
+            MPI_Comm                                   comm)
+        : scene(make(R_over_h, eps, prm, comm))
+        , omega(std::sqrt(6 * sigma / (rho * R * R * R)))
+        , gamma(4 * prm.viscosity / rho / (R * R))
+    {
+    }
+
+    /// Period of the damped mode 2, 2 pi / sqrt(omega^2 - gamma^2), s.
+    double
+    period() const
+    {
+      return 2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
+    }
+
+    std::unique_ptr<FlowScene<2>> scene;
+    /// Mode-2 frequency sqrt(6 sigma / (rho R^3)) and viscous decay rate
+    /// 4 mu / (rho R^2), 1/s.
+    const double omega, gamma;
+
+  private:
+    static std::unique_ptr<FlowScene<2>>
+    make(const double                                R_over_h,
+         const double                                eps,
+         typename IncompressibleFlow<2>::Parameters &prm,
+         MPI_Comm                                    comm)
+    {
+      const double   L = 4 * R;
+      const Point<2> centre(0.5 * L, 0.5 * L);
+      prm.gravity         = Tensor<1, 2>();
+      prm.surface_tension = sigma;
+      return std::make_unique<FlowScene<2>>(
+        Point<2>(L, L),
+        R / R_over_h,
+        rho,
+        [&](const Point<2> &x) {
+          const Tensor<1, 2> d = x - centre;
+          const double       c2 =
+            (d[0] * d[0] - d[1] * d[1]) / std::max(1e-300, d.norm_square());
+          return d.norm() < R * (1 + eps * c2);
+        },
+        prm,
+        comm);
+    }
+  };
 
   /// Shape measure S = (xx - yy) / (xx + yy) of the points about their
   /// centre of mass, xx and yy the variances of x and y (collective): 0

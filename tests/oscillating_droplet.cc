@@ -56,13 +56,10 @@ run(const double       fraction,
 {
   constexpr int                                dim = 2;
   typename IncompressibleFlow<dim>::Parameters prm;
-  const double     R = 0.25, h = R / R_over_h, L = 4 * R, rho = 1000, sigma = 1;
-  const Point<dim> centre(0.5 * L, 0.5 * L);
+  const double R = Droplet::R, h = R / R_over_h, L = 4 * R;
   try
     {
       prm.viscosity          = mu;
-      prm.gravity            = Tensor<1, dim>();
-      prm.surface_tension    = sigma;
       prm.capillary_fraction = fraction;
       if (flip >= 0)
         prm.flip_fraction = flip;
@@ -75,22 +72,11 @@ run(const double       fraction,
       prm.curvature = (height_function) ?
                         decltype(prm.curvature)::height_function :
                         decltype(prm.curvature)::alpha_gradient;
-      FlowScene<dim> scene(
-        Point<dim>(L, L),
-        h,
-        rho,
-        [&](const Point<dim> &x) {
-          const Tensor<1, dim> d = x - centre;
-          const double         c2 =
-            (d[0] * d[0] - d[1] * d[1]) / std::max(1e-300, d.norm_square());
-          return d.norm() < R * (1 + eps * c2);
-        },
-        prm,
-        comm);
-      const double omega = std::sqrt(6 * sigma / (rho * R * R * R));
-      const double gamma = 4 * mu / rho / (R * R);
-      const double T_exact =
-        2 * numbers::PI / std::sqrt(omega * omega - gamma * gamma);
+      const Droplet   drop(R_over_h, eps, prm, comm);
+      FlowScene<dim> &scene   = *drop.scene;
+      const double    omega   = drop.omega;
+      const double    gamma   = drop.gamma;
+      const double    T_exact = drop.period();
 
       const auto shape = [&]() { return shape_measure(scene, comm); };
 
@@ -235,7 +221,7 @@ run(const double       fraction,
         std::round(umax / (omega * std::max(eps, 1e-300) * R) * 100) / 100);
       if (eps == 0)
         checks.print("static drop: spurious capillary number mu u_max / sigma",
-                     mu * umax / sigma);
+                     mu * umax / Droplet::sigma);
     }
   catch (const std::exception &e)
     {

@@ -26,6 +26,7 @@ namespace femp
     control = std::make_unique<SimulationControl>(scene.time, scene.cadence());
     report  = std::make_unique<RunReport<dim>>(comm, pcout);
     laser   = std::make_unique<Laser<dim>>(scene.laser);
+    report->watch_laser(*laser);
     laser->check_path_inside(scene.grid.lower_corner, scene.grid.upper_corner);
     builds = std::make_unique<BuildSteps<dim>>(scene, *laser);
   }

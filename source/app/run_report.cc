@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <sstream>
+#include <string>
 
 namespace femp
 {
@@ -28,6 +30,15 @@ namespace femp
 
   template <int dim>
   void
+  RunReport<dim>::watch_laser(const Laser<dim> &laser)
+  {
+    with_laser = std::any_of(laser.segments().begin(),
+                             laser.segments().end(),
+                             [](const auto &s) { return s.power > 0; });
+  }
+
+  template <int dim>
+  void
   RunReport<dim>::progress(const SimulationControl &control,
                            const double             T_max,
                            const MeltPoolSize      &pool) const
@@ -41,15 +52,21 @@ namespace femp
     out << std::setprecision(4) << "t = " << std::setw(10) << time
         << " s  step " << std::setw(7) << control.step()
         << "  dt = " << std::setw(10) << control.time_step()
-        << " s  T_max(attached metal) = " << std::setw(8) << T_max
-        << " K  melt pool L x ";
-    if (dim == 3) // in 2D the pool has a length and a depth only
-      out << "W x ";
-    out << "D = " << pool.length * 1e6 << " x ";
-    if (dim == 3)
-      out << pool.width * 1e6 << " x ";
-    out << pool.depth * 1e6 << " um  wall " << std::setprecision(3) << wall
-        << " s, ~" << left << " s left" << std::endl;
+        << " s  T_max(attached metal) = " << std::setw(8) << T_max << " K";
+    // The pool of a scene with a laser (a thermal shock or a flow check
+    // without one shows none).
+    if (with_laser)
+      {
+        out << "  melt pool L";
+        if (dim == 3) // in 2D the pool has a length and a depth only
+          out << " x W";
+        out << " = " << pool.length * 1e6;
+        if (dim == 3)
+          out << " x " << pool.width * 1e6;
+        out << " um, depth into the substrate " << pool.depth * 1e6 << " um";
+      }
+    out << "  wall " << std::setprecision(3) << wall << " s, ~" << left
+        << " s left" << std::endl;
   }
 
   template <int dim>
@@ -108,14 +125,6 @@ namespace femp
                  "corners "
               << std::setprecision(3) << hd[0] << " (limit " << hd[1] << ")"
               << std::setprecision(6) << std::endl;
-        const auto gathers = solid->gathers_kept(); // collective
-        if (gathers[0] + gathers[1] > 0)
-          out << "Solid: of " << gathers[2]
-              << " gathers of the MPM points (all ranks), " << gathers[0]
-              << " kept the arrays (no point melted, solidified or moved into "
-                 "or out of a member's cell since the last) and "
-              << gathers[1] << " read again only the cells whose points changed"
-              << std::endl;
         const unsigned long held = solid->n_points_held(); // collective
         if (held > 0)
           out << "Solid: " << held
@@ -155,36 +164,47 @@ namespace femp
             << std::endl;
         return;
       }
-    const double scale =
-      std::max(1e-300, std::max(s.laser + std::abs(s.boundary), s.losses));
-    out << std::setprecision(6) << "Energy (J" << (dim == 2 ? "/m" : "")
-        << "): laser " << s.laser << ", surface losses " << s.losses
-        << " (evaporation " << e.evaporation << ", convection " << e.convection
-        << ", radiation " << e.radiation
+    // The balance error relative to the energy that came in or went out;
+    // in a scene where none did (a frozen or closed scene), the absolute
+    // error in J.
+    const std::string unit = dim == 2 ? "J/m" : "J";
+    const double scale     = std::max(s.laser + std::abs(s.boundary), s.losses);
+    const auto   error = [&](const std::string &what, const double imbalance) {
+      std::ostringstream o;
+      o << std::setprecision(6);
+      if (scale > 0)
+        o << "relative balance error " << what
+          << " / max(laser + |fixed faces|, losses) " << imbalance / scale;
+      else
+        o << "balance error " << what << " " << imbalance << " " << unit
+          << " (no energy in or out)";
+      return o.str();
+    };
+    out << std::setprecision(6) << "Energy (" << unit << "): laser " << s.laser
+        << ", surface losses " << s.losses << " (evaporation " << e.evaporation
+        << ", convection " << e.convection << ", radiation " << e.radiation
         << " at the end of each step), fixed faces " << s.boundary
-        << ", stored " << s.stored
-        << "; relative balance error |laser + fixed faces - losses - stored| "
-           "/ max(laser + |fixed faces|, losses) "
-        << std::abs(s.laser + s.boundary - s.losses - s.stored) / scale
+        << ", stored " << s.stored << "; "
+        << error("|laser + fixed faces - losses - stored|",
+                 std::abs(s.laser + s.boundary - s.losses - s.stored))
         << std::endl;
     if (e.laser_incident > 0)
-      out << std::setprecision(6) << "  ray-traced laser (J"
-          << (dim == 2 ? "/m" : "") << "): incident " << e.laser_incident
-          << ", absorbed " << e.laser << " (fraction "
-          << e.laser / e.laser_incident << "), escaping " << e.laser_escaped
-          << "; |absorbed + escaping - incident| / incident "
+      out << std::setprecision(6) << "  ray-traced laser (" << unit
+          << "): incident " << e.laser_incident << ", absorbed " << e.laser
+          << " (fraction " << e.laser / e.laser_incident << "), escaping "
+          << e.laser_escaped
+          << "; relative error |absorbed + escaping - incident| / incident "
           << std::abs(e.laser + e.laser_escaped - e.laser_incident) /
                e.laser_incident
           << std::endl;
     if (with_flow)
-      out << std::setprecision(6) << "  with melt flow, energy created (J"
-          << (dim == 2 ? "/m" : "") << ") by the upwind convection of T "
-          << s.advection << " and by points moving between cells "
-          << s.moved_points
-          << "; relative balance error with these counted as sources "
-          << std::abs(s.laser + s.boundary + s.advection + s.moved_points -
-                      s.losses - s.stored) /
-               scale
+      out << std::setprecision(6) << "  with melt flow, energy created ("
+          << unit << ") by the upwind convection of T " << s.advection
+          << " and by points moving between cells " << s.moved_points
+          << "; with these counted as sources, "
+          << error("|laser + fixed faces + created - losses - stored|",
+                   std::abs(s.laser + s.boundary + s.advection +
+                            s.moved_points - s.losses - s.stored))
           << std::endl;
   }
 
@@ -194,29 +214,26 @@ namespace femp
                              const RunSummary<dim>         &s) const
   {
     const auto &st = flow.statistics();
-    out << "Melt flow: " << st.steps << " fluid steps, pressure matrix "
-        << "graph built " << st.matrix_rebuilds << " times, AMG "
-        << "hierarchy " << st.amg_setups << " times, CG iterations "
-        << st.cg_iterations << " in total (" << std::setprecision(3)
+    out << "Melt flow: " << st.steps << " fluid steps (" << st.halvings
+        << " redone as two halves), pressure CG " << std::setprecision(3)
         << double(st.cg_iterations) / std::max(1u, st.steps)
-        << " per solve, at most " << st.max_iterations << "), " << st.halvings
-        << " steps redone as halves, points "
-        << "re-sorted in " << st.resorts << " steps (" << st.global_sorts
-        << " with deal.II's global sort), " << st.n_fluid_cells
-        << " fluid cells and max speed " << st.max_point_speed
-        << " m/s at the end" << std::endl;
-    if (st.volume_iterations > 0 || st.volume_skipped > 0)
-      out << "Melt flow volume correction: " << st.volume_iterations
-          << " CG iterations in total, " << st.volume_skipped
+        << " iterations per solve (at most " << st.max_iterations << "), "
+        << st.n_fluid_cells << " fluid cells and largest point speed "
+        << st.max_point_speed << " m/s at the end" << std::endl;
+    if (st.volume_skipped > 0)
+      out << "Melt flow volume correction: " << st.volume_skipped
           << " solves not converged (no correction in those steps)"
           << std::endl;
     const auto &r = s.flow_limits;
     out << std::setprecision(4)
         << "Melt flow time step limits (smallest over the run): "
         << "convective " << r.convective << " s, viscous " << r.viscous
-        << " s, capillary " << r.capillary << " s (used x "
-        << r.capillary_fraction << ")\n"
-        << "  sub-steps governed by: convective " << r.governed[0]
+        << " s, capillary ";
+    if (std::isfinite(r.capillary))
+      out << r.capillary << " s (used x " << r.capillary_fraction << ")\n";
+    else
+      out << "none (no surface tension)\n";
+    out << "  sub-steps governed by: convective " << r.governed[0]
         << ", viscous " << r.governed[1] << ", capillary " << r.governed[2]
         << ", prescribed (Melt flow/Time step) " << r.governed[3]
         << "; sub-steps per temperature step "

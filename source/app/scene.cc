@@ -351,8 +351,10 @@ namespace femp
       }
     pcout << std::setprecision(3) << solid_line
           << "  output: " << output.directory << "/grid" << index << ", "
-          << (mp.carried() ? output.directory + "/points" + index + ", " :
-                             std::string())
+          << (mp.carried() && output.write_points !=
+                                Output<dim>::Parameters::WritePoints::never ?
+                output.directory + "/points" + index + ", " :
+                std::string())
           << output.directory << "/melt_pool.csv\n";
     if (dim == 3 && heat_enabled)
       print_melting_regime(pcout, heat_module, laser_module);

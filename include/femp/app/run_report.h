@@ -13,6 +13,7 @@
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/material_points.h>
 #include <femp/heat/heat_transfer.h>
+#include <femp/heat/laser.h>
 #include <femp/heat/melt_pool.h>
 #include <femp/solid/solid_sub_cycle.h>
 
@@ -76,9 +77,15 @@ namespace femp
       H0 = H;
     }
 
+    /// Show the melt pool in the progress line when @p laser has power on
+    /// some segment of its path.
+    void
+    watch_laser(const Laser<dim> &laser);
+
     /// The progress line of the step just taken: @p T_max is the hottest
     /// metal attached to the substrate (attached_metal.h), @p pool the
-    /// melt pool (melt_pool.h), both at the end of the step.
+    /// melt pool (melt_pool.h), both at the end of the step; the pool only
+    /// in a scene whose laser has power (watch_laser()).
     void
     progress(const SimulationControl &control,
              const double             T_max,
@@ -100,6 +107,9 @@ namespace femp
     MPI_Comm            comm;
     ConditionalOStream &out;
     double              H0 = 0;
+    /// Whether the laser has power on some segment (the progress line
+    /// shows the melt pool then).
+    bool with_laser = false;
 
     void
     print_energy(const RunSummary<dim>                          &s,
