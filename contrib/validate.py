@@ -13,6 +13,8 @@
   contrib/validate.py all      (run, then report; the ctest 'validation')
   contrib/validate.py pipeline --expected FILE [--build build]
   contrib/validate.py regime
+  contrib/validate.py width    [--out build/validation] [--cases REGEX]
+  contrib/validate.py conduction
 
 scenes: writes prm/validation/<case>.prm, one scene per measured case of
   the data sets in prm/validation/data/ (each file names its publication):
@@ -26,11 +28,20 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
   curvature, 2 smoothing passes, point shifting 2), one run directory per
   case and setting under --out; a run whose result.json exists is skipped
   (resumable). Variants for the domain-size check: setting 'large' (the
-  domain 1.5 x wider and deeper). Any other setting name with --set
+  domain 1.5 x wider and deeper); for the resolution study: 'h4' and 'h2'
+  (4 and 2 um cells instead of 8, points at half the cell size, the ray
+  lattice refined with the cells); diagnostics 'thermal' (no melt flow) and
+  'nomarangoni' (d sigma/dT = 0); 'a+b' combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
 report: reads every finished run, writes doc/validation.md's tables and
   figures (SVG, standard library only).
+width: what sets each finished run's fusion width (its last field
+  output): the widest section's distance behind the beam, the temperature
+  on the axis there, the melt's surface flow across the track.
+conduction: the Eagar-Tsai (pure conduction) fusion width and depth of
+  the Trapp conduction tracks with the measured absorptivity and constant
+  properties (averaged over 293 K..T_s, and at T_s).
 regime: the normalized enthalpy of every measured track (as femp's scene
   log computes it) with the flat-surface Fresnel absorptivity, the measured
   one and 0.35, beside the measured depth/width.
@@ -66,6 +77,21 @@ DEFAULT_CASES = r"^(amb_.*|trapp_(048|065|099|134|178)W)$"
 FINE = {"Melt flow/Curvature": "height function",
         "Melt flow/Curvature smoothing": "2",
         "Melt flow/Point shifting": "2"}
+
+
+def refined(h):
+    """The resolution study's settings: cell size h, points at h/2 and the
+    ray lattice refined with the cells (a ray per 7.5 um at 8 um cells, 4
+    rays per 30 um beam radius; 8 and 16 rays per radius at 4 and 2 um).
+    The scene's geometry is a multiple of 8 um, so it stays the same."""
+    return {"Background grid/Cell size": fmt(h),
+            "Material points/Point spacing": fmt(h / 2),
+            "Laser/Rays per beam radius": "%d" % round(4 * 8e-6 / h)}
+
+
+# Named settings of 'run' (their femp parameters; --set adds to them).
+# 'large' is the domain-size check (the scene 1.5 x wider and deeper).
+SETTINGS = {"default": {}, "large": {}, "fine": FINE}
 
 H = 8e-6          # cell size, m
 GAS = 48e-6       # gas above the plate, m
@@ -179,6 +205,23 @@ def track_geometry(c):
 
 def fmt(x):
     return "%.6g" % x
+
+
+SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
+                 # diagnostics of what sets the width (not validation
+                 # settings): no melt flow; no Marangoni stress
+                 "thermal": {"Physics/Melt flow": "false"},
+                 "nomarangoni": {
+                     "Melt flow/Surface tension temperature derivative": "0"}})
+
+
+def setting_parameters(setting):
+    """The femp parameters of a setting; 'a+b' combines named settings
+    (e.g. 'h4+fine'); a name not in SETTINGS has none (--set gives them)."""
+    sets = {}
+    for part in setting.split("+"):
+        sets.update(SETTINGS.get(part, {}))
+    return sets
 
 
 def material_comment(alloy):
@@ -392,6 +435,67 @@ def cmd_regime(args):
             ("%.1f" % (eta * base)) if eta else "-", 0.35 * base))
 
 
+def eagar_tsai(P, eta, rb, v, k, rho, cp, T0, Ts):
+    """Width and depth (m) of the region above Ts of the Eagar-Tsai
+    solution: a Gaussian surface source (1/e^2 radius rb, absorbed power
+    eta P) moving at v over a half-space of constant properties,
+    T - T0 = int_0^inf 2 eta P / (rho c) g_xy g_z dt' with the lateral
+    Gaussian g_xy of variance 2 a t' + rb^2/4 and the 1D kernel g_z of a
+    surface point source; quadrature on a log grid of t'."""
+    import numpy as np
+    a = k / (rho * cp)
+    s2 = rb * rb / 4
+    t = np.logspace(-11, -1, 3000)
+
+    def temp(x, y, z):
+        var = 2 * a * t + s2
+        f = (2 * eta * P / (rho * cp) / (2 * math.pi * var)
+             * np.exp(-((x + v * t) ** 2 + y * y) / (2 * var))
+             / np.sqrt(4 * math.pi * a * t) * np.exp(-z * z / (4 * a * t)))
+        return T0 + float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)))
+
+    def extent(direction):
+        best = 0.0
+        for x in np.linspace(-6 * rb, 2 * rb, 161):
+            if temp(x, 0, 0) < Ts:
+                continue
+            lo, hi = 0.0, 20 * rb
+            for _ in range(40):
+                m = 0.5 * (lo + hi)
+                ok = temp(x, m, 0) >= Ts if direction == "y" else temp(x, 0, m) >= Ts
+                lo, hi = (m, hi) if ok else (lo, m)
+            best = max(best, lo)
+        return best
+    return 2 * extent("y"), extent("z")
+
+
+def cmd_conduction(args):
+    """Pure conduction (Eagar-Tsai, constant properties, no latent heat,
+    no flow) with the measured absorptivity, for the Trapp conduction
+    tracks: which width the measured absorbed power gives without flow,
+    with the properties averaged over T0..T_s and taken at T_s."""
+    print("case         P(W) eta(meas.) | width/depth (um): measured | "
+          "mean 293 K..T_s | at T_s")
+    for c in cases():
+        if c["dataset"] != "Trapp 2017" or c["depth"] / c["width"] > 0.5:
+            continue
+        m = material(c["alloy"])
+        Ts, T0 = m["Ts"], c["T0"]
+        Tm = [T0 + (Ts - T0) * (i + 0.5) / 100 for i in range(100)]
+        k_mean = sum(m["k"](T) for T in Tm) / 100
+        cp_mean = sum(m["cp"](T) for T in Tm) / 100
+        out = []
+        for k, cp in ((k_mean, cp_mean), (m["k"](Ts), m["cp"](Ts))):
+            w, d = eagar_tsai(c["P"], c["absorptivity"], c["rb"], c["v"], k,
+                              m["rho"], cp, T0, Ts)
+            out.append("%5.1f / %4.1f" % (w * 1e6, d * 1e6))
+        print("%-12s %4.0f %6.3f      | %5.1f / %4.1f              | %s "
+              "(k %.1f, c_p %.0f) | %s (k %.1f, c_p %.0f)" % (
+                  c["name"], c["P"], c["absorptivity"], c["width"] * 1e6,
+                  c["depth"] * 1e6, out[0], k_mean, cp_mean, out[1],
+                  m["k"](Ts), m["cp"](Ts)))
+
+
 def cmd_scenes(args):
     os.makedirs(SCENES, exist_ok=True)
     bad = []
@@ -566,6 +670,91 @@ def end_state(run_dir, alloy):
     return r
 
 
+def width_state(run_dir, alloy):
+    """What sets the fusion zone's width, from the last field output of a
+    run: the cross-section (y-z plane of cells) where the region above the
+    solidus in the substrate is widest, its distance behind the beam, the
+    temperature of the top substrate cells on the track axis there, and
+    the sense of the melt's surface flow across the track: the mean of
+    u_y sign(y - y_axis) over the molten free surface (the top metal cell
+    of each column, above the solidus) and over its rim (the outermost such
+    cell on each side of each x slab); negative is inward, towards the
+    axis, as a positive d sigma / dT drives it. Needs numpy
+    (contrib/femp_post)."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import femp_post
+    import numpy as np
+    g = femp_post.Run(os.path.join(run_dir, "output")).grid()
+    scene = open(os.path.join(run_dir, "scene.prm")).read()
+    log = open(os.path.join(run_dir, "log.txt")).read()
+    m = re.search(r"background grid: [0-9]+ cells of ([0-9.e+-]+) m", log)
+    h = float(m.group(1)) if m else scene_value(scene, "Cell size")[0]
+    ztop = scene_value(scene, "Substrate top")[0]
+    xb, yc, _ = scene_value(scene, "End point")
+    Ts = material(alloy)["Ts"]
+    c = np.asarray(g.centres)
+    ijk = np.floor(c / h).astype(int)
+    n = ijk.max(axis=0) + 1
+    T = np.full(n, np.nan)
+    A = np.zeros(n)
+    U = np.zeros(n)
+    T[tuple(ijk.T)] = g["T"]
+    A[tuple(ijk.T)] = g["alpha"]
+    if "u_y" in g:
+        U[tuple(ijk.T)] = g["u_y"]
+    kt = int(round(ztop / h)) - 1            # top substrate row
+    y = (np.arange(n[1]) + 0.5) * h
+    jc = int(np.argmin(abs(y - yc)))
+    # width of the region above T_s in each x slab, at the top row
+    hot = (T[:, :, kt] >= Ts) & (A[:, :, kt] > 0)
+    widths = hot.sum(axis=1) * h
+    i_w = int(np.argmax(widths))
+    i_b = int(min(n[0] - 1, max(0, round(xb / h - 0.5))))
+
+    # the melt's free surface: the top metal cell of each column, molten
+    top = np.where(A >= 0.5, np.arange(n[2])[None, None, :], -1).max(axis=2)
+    ii, jj = np.nonzero(top >= 0)
+    kk = top[ii, jj]
+    molten = T[ii, jj, kk] >= Ts
+    ii, jj, kk = ii[molten], jj[molten], kk[molten]
+    side = np.sign(y[jj] - yc)
+    across = U[ii, jj, kk] * side          # > 0: outward, away from the axis
+    off = side != 0
+    # the rim: the outermost molten surface cell on each side of each slab
+    rim = np.zeros(len(ii), bool)
+    for i in np.unique(ii):
+        for sg in (-1, 1):
+            sel = np.nonzero((ii == i) & (side == sg))[0]
+            if len(sel):
+                rim[sel[np.argmax(abs(y[jj[sel]] - yc))]] = True
+    mean = lambda m: float(across[m].mean()) if m.any() else None
+    return dict(x_behind_beam=xb - (i_w + 0.5) * h, width_cells=float(widths[i_w]),
+                T_axis_top=float(T[i_w, jc, kt]),
+                flow_across_surface=mean(off), flow_across_rim=mean(rim & off))
+
+
+def cmd_width(args):
+    """The width diagnostics of every finished run under --out."""
+    allc = {c["name"]: c for c in cases()}
+    print("%-9s %-12s %8s %8s %10s %10s %12s %12s" % (
+        "setting", "case", "width", "measured", "behind(um)", "T_axis(K)",
+        "u_surface", "u_rim"))
+    for (setting, name), r in sorted(load_results(args.out).items()):
+        if not re.search(args.cases or ".", name) or r.get("incomplete"):
+            continue
+        try:
+            w = width_state(os.path.join(args.out, setting, name),
+                            allc[name]["alloy"])
+        except (OSError, ValueError, KeyError, IndexError) as ex:
+            print(setting, name, "no field output:", ex)
+            continue
+        f = lambda v: ("%+.2f" % v) if v is not None else "-"
+        print("%-9s %-12s %8.1f %8.1f %10.1f %10.0f %12s %12s" % (
+            setting, name, r["width"] * 1e6, allc[name]["width"] * 1e6,
+            w["x_behind_beam"] * 1e6, w["T_axis_top"],
+            f(w["flow_across_surface"]), f(w["flow_across_rim"])))
+
+
 def femp_cmd(args, exe, sets, scene):
     cmd = (["mpirun", "--allow-run-as-root", "--oversubscribe", "-np",
             str(args.np), exe] if args.np > 1 else [exe])
@@ -581,13 +770,12 @@ def run_case(args, exe, c, setting):
         return json.load(open(f))
     os.makedirs(d, exist_ok=True)
     scene = os.path.join(d, "scene.prm")
-    scale = 1.5 if setting == "large" else 1.0
+    scale = 1.5 if "large" in setting.split("+") else 1.0
     text = scene_text(c, scale).replace("include ../materials/",
                                         "include %s/prm/materials/" % ROOT)
     open(scene, "w").write(text)
     sets = {"Output/Directory": os.path.join(d, "output")}
-    if setting == "fine":
-        sets.update(FINE)
+    sets.update(setting_parameters(setting))
     for kv in args.set or []:
         k, v = kv.split("=", 1)
         sets[k] = v
@@ -736,28 +924,43 @@ def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
         fh.write("\n".join(o) + "\n")
 
 
-SETTING_NAMES = {"default": "default free surface",
+SETTING_NAMES = {"default": "default free surface, 8 um cells",
+                 "h4": "default free surface, 4 um cells",
+                 "h2": "default free surface, 2 um cells",
                  "fine": "fine surface (height function, 2 smoothing passes, "
-                         "point shifting 2)",
+                         "point shifting 2), 8 um cells",
                  "large": "default free surface, domain 1.5 x wider and deeper",
                  "median": "recoil from the median surface temperature "
                            "(former default)",
-                 "cell": "recoil from the cell's own temperature"}
-COLOURS = {"default": "#1f5fbf", "fine": "#d9480f", "large": "#2b8a3e",
-           "median": "#868e96", "cell": "#ae3ec9"}
+                 "cell": "recoil from the cell's own temperature",
+                 "thermal": "no melt flow (diagnostic)",
+                 "nomarangoni": "no Marangoni stress (diagnostic)"}
+COLOURS = {"default": "#1f5fbf", "h4": "#2b8a3e", "h2": "#0b7285",
+           "fine": "#d9480f", "large": "#5c940d", "median": "#868e96",
+           "cell": "#ae3ec9", "thermal": "#e67700", "nomarangoni": "#c2255c"}
+# Settings drawn in the figures (the validation's own; diagnostics and the
+# domain-size check are in the tables only).
+FIGURE_SETTINGS = ("default", "h4", "h2", "fine", "median", "cell")
+
+
+def setting_order(res):
+    known = list(SETTING_NAMES)
+    present = sorted({k[0] for k in res},
+                     key=lambda s: (known.index(s) if s in known else len(known), s))
+    return present
 
 
 def cmd_report(args):
     res = load_results(args.out)
+    RES_OUT[0] = args.out
     allc = {c["name"]: c for c in cases()}
     os.makedirs(args.img, exist_ok=True)
-    settings = [s for s in ("default", "median", "cell", "fine", "large")
-                if any(k[0] == s for k in res)]
+    settings = setting_order(res)
     # figures
     for what in ("width", "depth"):
         series = []
         for s in settings:
-            if s == "large":
+            if s not in FIGURE_SETTINGS:
                 continue
             pts = []
             for (st, name), r in sorted(res.items()):
@@ -767,10 +970,11 @@ def cmd_report(args):
                 pts.append((c[what] * 1e6, r[what] * 1e6, c[what + "_sd"] * 1e6,
                             0, c["label"] if s == "default" else ""))
             if pts:
-                series.append((SETTING_NAMES[s].split(" (")[0], COLOURS[s], pts))
+                series.append((SETTING_NAMES[s].split(" (")[0].replace(
+                    "default free surface, ", "femp, "), COLOURS[s], pts))
         if series:
             svg_scatter(os.path.join(args.img, "validation_%s.svg" % what), series,
-                        "Fusion-zone %s: femp against measured (8 um cells)" % what,
+                        "Fusion-zone %s: femp against measured" % what,
                         "measured %s (um), bar: spread" % what,
                         "femp %s (um)" % what)
     series = []
@@ -778,13 +982,14 @@ def cmd_report(args):
             if c["dataset"] == "Trapp 2017" and c.get("absorptivity")]
     series.append(("Trapp 2017 calorimetry", "#000000", meas))
     for s in settings:
-        if s == "large":
+        if s not in FIGURE_SETTINGS:
             continue
         pts = [(allc[n]["P"], r["absorbed"], 0, 0, "")
                for (st, n), r in sorted(res.items())
                if st == s and n.startswith("trapp") and r.get("absorbed") is not None]
         if pts:
-            series.append(("femp, " + SETTING_NAMES[s].split(" (")[0], COLOURS[s], pts))
+            series.append((SETTING_NAMES[s].split(" (")[0].replace(
+                "default free surface, ", "femp, "), COLOURS[s], pts))
     svg_scatter(os.path.join(args.img, "validation_absorption.svg"), series,
                 "Absorbed fraction at 500 mm/s, 316L, against power",
                 "laser power (W)", "absorbed fraction", diag=False,
@@ -802,7 +1007,7 @@ def cmd_report(args):
                      "absorbed (femp%s) | hits/ray | ΔH/h_s | steady (depth growth) | "
                      "wall (s) × ranks |" % (" / Trapp" if ds == "Trapp 2017" else ""))
         lines.append("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-        for st, n, r in sorted(rows, key=lambda x: (x[1], x[0])):
+        for st, n, r in sorted(rows, key=lambda x: (x[1], settings.index(x[0]))):
             c = allc[n]
             ab = ("%.3f" % r["absorbed"]) if r.get("absorbed") is not None else "-"
             if ds == "Trapp 2017":
@@ -822,11 +1027,52 @@ def cmd_report(args):
                                  r["t_reached"] * 1e6,
                                  track_geometry(c)["Ltr"] / c["v"] * 1e6))
                              if r.get("incomplete") else ""))
+    lines += dig_table(res, allc, settings)
     table = "\n".join(lines) + "\n"
     f = os.path.join(args.out, "tables.md")
     open(f, "w").write(table)
     print(table)
     print("wrote", f, "and the figures in", args.img)
+
+
+def dig_table(res, allc, settings):
+    """What digs the pool and what sets the width, for every finished run
+    with a field output at the end: the depression on the beam axis and its
+    deepest point (end_state), the hottest surface (median of T_max) and
+    the recoil zeta_p p_sat there, the share of the absorbed energy that
+    evaporation takes, the fastest melt, and the width diagnostics
+    (width_state)."""
+    lines = ["\n### What digs the pool and what sets the width\n",
+             "| case | setting | width (µm) | depth (µm) | depression on the axis / "
+             "deepest (µm) | hottest surface T (K) | ζ_p p_sat there (MPa) | "
+             "evaporation / absorbed | fastest melt (m/s) | widest section behind "
+             "the beam (µm) | surface flow across the track, whole pool / "
+             "rim (m/s, − inward) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for (st, n), r in sorted(res.items(),
+                             key=lambda x: (x[0][1], settings.index(x[0][0]))):
+        c = allc.get(n)
+        if not c or r.get("incomplete") or r.get("width") is None:
+            continue
+        try:
+            w = width_state(os.path.join(RES_OUT[0], st, n), c["alloy"])
+        except (OSError, ValueError, KeyError, IndexError):
+            w = {}
+        Lv, M, Tv = EVAPORATION[c["alloy"]]
+        p = lambda T: 0.54 * 101325 * math.exp(Lv * M * (T - Tv) / (8.314462618 * T * Tv))
+        f2 = lambda v: ("%+.2f" % v) if v is not None else "-"
+        ev = (r["evaporation_J"] / r["laser_J"]) if r.get("laser_J") else None
+        lines.append("| %s | %s | %s | %s | %s / %s | %.0f | %.2f | %s | %s | %s | %s / %s |" % (
+            c["label"], st, um(r["width"]), um(r["depth"]),
+            um(r.get("depression_axis")), um(r.get("depression")), r["T_max"],
+            p(r["T_max"]) / 1e6, ("%.0f %%" % (100 * ev)) if ev is not None else "-",
+            ("%.1f" % r["u_max"]) if r.get("u_max") is not None else "-",
+            um(w.get("x_behind_beam")), f2(w.get("flow_across_surface")),
+            f2(w.get("flow_across_rim"))))
+    return lines
+
+
+RES_OUT = [None]
 
 
 # ---------------------------------------------------------------- pipeline
@@ -886,7 +1132,7 @@ def same_numbers(a, b, rtol=1e-6):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
-                                       "pipeline", "regime"])
+                                       "pipeline", "regime", "width", "conduction"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
     ap.add_argument("--setting", default="default",
@@ -910,6 +1156,10 @@ def main():
         cmd_run(args)
     elif args.command == "regime":
         cmd_regime(args)
+    elif args.command == "conduction":
+        cmd_conduction(args)
+    elif args.command == "width":
+        cmd_width(args)
     elif args.command == "reevaluate":
         cmd_reevaluate(args)
     elif args.command == "report":
