@@ -77,7 +77,7 @@ namespace femp
     }
 
     /// The progress line of the step just taken: @p T_max is the hottest
-    /// metal attached to the substrate (attached_metal.h), @p pool the
+    /// metal attached to the substrate (MetalBodies), @p pool the
     /// melt pool (melt_pool.h), both at the end of the step.
     void
     progress(const SimulationControl &control,
