@@ -1,5 +1,5 @@
-// The metal attached to the substrate (attached_metal.h), which the stop
-// criterion 'Time stepping/Stop when peak temperature below' uses, on a
+// The metal attached to the substrate (MetalBodies, metal_bodies.h), which the
+// stop criterion 'Time stepping/Stop when peak temperature below' uses, on a
 // prescribed scene: a substrate (alpha = 1, 400 K) in the bottom rows of a
 // 16 x 8 x 14 cell box, and on it a thin winding tongue of metal that rises
 // to the top rows, runs along x and comes back down to end one cell above
@@ -14,7 +14,7 @@
 // partly filled cell (1500 K, the tip), and with the blob joined to the
 // substrate by a column of metal (2800 K). Runs on 1 and 2 ranks with the
 // same output.
-#include <femp/heat/attached_metal.h>
+#include <femp/grid/metal_bodies.h>
 
 #include <deque>
 

@@ -119,7 +119,9 @@ namespace
     p.detached_drops        = true;
     HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
     heat.initialize();
-    heat.set_metal_fraction(drop.alpha);
+    MetalBodies<dim> bodies(drop.grid, p.detached_drop_cells);
+    bodies.update(drop.alpha);
+    heat.set_metal_fraction(drop.alpha, &bodies);
     const double V = cells * a * std::pow(h, dim);
     const double d =
       dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
@@ -186,7 +188,9 @@ namespace
         p.detached_drop_cells   = largest;
         HeatTransfer<dim> heat(p, mat, drop.laser, drop.grid);
         heat.initialize();
-        heat.set_metal_fraction(drop.alpha);
+        MetalBodies<dim> bodies(drop.grid, on ? largest : 0);
+        bodies.update(drop.alpha);
+        heat.set_metal_fraction(drop.alpha, &bodies);
         for (int k = 0; k < 10; ++k)
           heat.advance(1e-7, k * 1e-7);
         const std::string at =
@@ -222,7 +226,9 @@ namespace
     p.detached_drops      = on;
     HeatTransfer<3> heat(p, mat, drop.laser, drop.grid);
     heat.initialize();
-    heat.set_metal_fraction(drop.alpha);
+    MetalBodies<3> bodies(drop.grid, on ? p.detached_drop_cells : 0);
+    bodies.update(drop.alpha);
+    heat.set_metal_fraction(drop.alpha, &bodies);
     const double dt      = 1e-7;
     double       t_solid = -1, t_500 = -1;
     for (int k = 0; k < 20000 && t_500 < 0; ++k)

@@ -55,11 +55,19 @@ namespace femp
     heat->set_absorption_model(scene.absorption);
     if (!scene.heat_enabled)
       heat->freeze();
+    // Detached drops are looked for only for the heat equation's losses.
+    bodies =
+      std::make_unique<MetalBodies<dim>>(*grid,
+                                         scene.heat_enabled &&
+                                             scene.heat.detached_drops ?
+                                           scene.heat.detached_drop_cells :
+                                           0);
     point_heat = std::make_unique<PointHeatExchange<dim>>(
       *points,
       *heat,
       scene.heat.advection_by_melt_flow ==
-        HeatTransfer<dim>::Parameters::Advection::points);
+        HeatTransfer<dim>::Parameters::Advection::points,
+      bodies.get());
     point_heat->initial_temperatures(scene.points.bodies, scene.heat);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
@@ -100,7 +108,7 @@ namespace femp
       setup_solid();
     register_states();
     time_steps = std::make_unique<TimeStepPolicy<dim>>(
-      scene, *laser, *grid, *heat, flow.get(), pcout);
+      scene, *laser, *heat, *bodies, flow.get(), pcout);
     control->set_step_chooser(
       [this](const unsigned int step, const double time) {
         return time_steps->choose(step, time, cell_fields());
@@ -333,7 +341,7 @@ namespace femp
     // change with alpha in each flow sub-cycle; read once per temperature
     // step, before the state changes are looked for).
     if (solid)
-      solid->set_detached_cells(heat->detached_cells());
+      solid->set_detached_cells(bodies->detached_cells());
     if (flow && solid)
       {
         // Points that melted leave the solid with the velocity they had
@@ -461,6 +469,7 @@ namespace femp
   {
     TimerOutput::Scope t(timer, "checkpoint");
     states.restore(*checkpoint);
+    point_heat->metal_fraction_restored();
     // Series written outside Output: drop their rows after the checkpoint.
     results->resume(control->time());
     checkpoint->release();

@@ -5,9 +5,12 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/app/physical_bounds.h>
+#include <femp/app/physics_switches.h>
+#include <femp/app/run_checks.h>
 #include <femp/app/simulation_control.h>
 #include <femp/base/input_checks.h>
 #include <femp/base/material.h>
+#include <femp/base/parameter_lookup.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/heat/laser.h>
 #include <femp/solid/constitutive.h>
@@ -21,35 +24,11 @@ namespace femp
 {
   namespace
   {
-    std::string
-    get(dealii::ParameterHandler &prm,
-        const std::string        &path,
-        const std::string        &name)
+    unsigned int
+    run_limit_substeps(const dealii::ParameterHandler &prm, const bool flow)
     {
-      const auto sections = dealii::Utilities::split_string_list(path, '/');
-      for (const auto &s : sections)
-        prm.enter_subsection(s);
-      const std::string v = prm.get(name);
-      for (std::size_t i = 0; i < sections.size(); ++i)
-        prm.leave_subsection();
-      return v;
-    }
-
-    double
-    get_double(dealii::ParameterHandler &prm,
-               const std::string        &path,
-               const std::string        &name)
-    {
-      return dealii::Utilities::string_to_double(get(prm, path, name));
-    }
-
-    long
-    prm_int(dealii::ParameterHandler &prm, const std::string &name)
-    {
-      prm.enter_subsection("Run limits");
-      const long n = prm.get_integer(name);
-      prm.leave_subsection();
-      return n;
+      const auto limits = RunLimits::Parameters::of(prm);
+      return flow ? limits.max_flow_substeps : limits.max_solid_substeps;
     }
 
     /// Entries whose values are names, not numbers.
@@ -133,17 +112,19 @@ namespace femp
   check_physical_relations(const dealii::ParameterHandler &prm_in)
   {
     auto        &prm = const_cast<dealii::ParameterHandler &>(prm_in);
-    const double Ts  = get_double(prm, "Material", "Solidus temperature");
-    const double Tl  = get_double(prm, "Material", "Liquidus temperature");
-    const double Tv  = get_double(prm, "Material", "Evaporation temperature");
+    const double Ts  = parameter_double(prm, "Material", "Solidus temperature");
+    const double Tl = parameter_double(prm, "Material", "Liquidus temperature");
+    const double Tv =
+      parameter_double(prm, "Material", "Evaporation temperature");
+    const auto physics = PhysicsSwitches::of(prm);
     // The evaporation temperature matters where the scene evaporates:
     // the surface loss of eq. (1) and the recoil pressure of the flow.
     const bool evaporates =
-      (get(prm, "Physics", "Heat transfer") == "true" &&
-       get_double(prm, "Heat transfer", "Evaporation coefficient") > 0 &&
-       get_double(prm, "Material", "Latent heat of evaporation") > 0) ||
-      (get(prm, "Physics", "Melt flow") == "true" &&
-       get_double(prm, "Melt flow", "Recoil coefficient") > 0);
+      (physics.heat_transfer &&
+       parameter_double(prm, "Heat transfer", "Evaporation coefficient") > 0 &&
+       parameter_double(prm, "Material", "Latent heat of evaporation") > 0) ||
+      (physics.melt_flow &&
+       parameter_double(prm, "Melt flow", "Recoil coefficient") > 0);
     require(!evaporates || !(Tl > Ts) || Tv > Tl,
             "Material/Evaporation temperature",
             Tv,
@@ -154,14 +135,14 @@ namespace femp
               "'Heat transfer/Evaporation coefficient = 0' and 'Melt "
               "flow/Recoil coefficient = 0')");
     const double Tref =
-      get_double(prm, "Heat transfer", "Reference temperature");
+      parameter_double(prm, "Heat transfer", "Reference temperature");
     require(!evaporates || Tref < Tv,
             "Heat transfer/Reference temperature",
             Tref,
             "the ambient must be colder than the evaporation temperature " +
               num(Tv) + " K");
-    const double rho   = get_double(prm, "Material", "Density");
-    const double rho_g = get_double(prm, "Material", "Gas density");
+    const double rho   = parameter_double(prm, "Material", "Density");
+    const double rho_g = parameter_double(prm, "Material", "Gas density");
     require(!(rho > 0) || rho_g < rho,
             "Material/Gas density",
             rho_g,
@@ -170,8 +151,8 @@ namespace femp
     // A beam far narrower than a cell: its melt pool cannot be resolved,
     // whatever the deposit does (between min_beam_cells and one cell the
     // Gaussian is averaged over each cell, so that none of it is lost).
-    const double       rb = get_double(prm, "Laser", "Beam radius");
-    const double       h  = get_double(prm, "Background grid", "Cell size");
+    const double rb = parameter_double(prm, "Laser", "Beam radius");
+    const double h  = parameter_double(prm, "Background grid", "Cell size");
     std::ostringstream s;
     s << "it must be at least " << min_beam_cells
       << " of the cell size (h = " << h
@@ -179,7 +160,7 @@ namespace femp
          "'Background grid/Cell size' or check the unit (m). A beam "
          "narrower than a cell is deposited as its average over each "
          "cell, so that the absorbed power is kept";
-    require(!(h > 0) || get_double(prm, "Laser", "Power") == 0 ||
+    require(!(h > 0) || parameter_double(prm, "Laser", "Power") == 0 ||
               rb >= min_beam_cells * h,
             "Laser/Beam radius",
             rb,
@@ -217,11 +198,12 @@ namespace femp
       time.parse_parameters(prm);
       Material mat;
       mat.parse_parameters(prm);
-      const double h     = get_double(prm, "Background grid", "Cell size");
-      const bool   heat  = get(prm, "Physics", "Heat transfer") == "true";
-      const bool   flow  = get(prm, "Physics", "Melt flow") == "true";
-      const bool   solid = get(prm, "Physics", "Solid stress") == "true";
-      const double g     = get_double(prm, "Physics", "Gravity");
+      const double h = parameter_double(prm, "Background grid", "Cell size");
+      const auto   physics = PhysicsSwitches::of(prm);
+      const bool   heat    = physics.heat_transfer;
+      const bool   flow    = physics.melt_flow;
+      const bool   solid   = physics.solid_stress;
+      const double g       = physics.gravity;
       if (!(h > 0) || !(time.end_time > 0))
         return; // the modules refuse these
       // The temperature step: prescribed, or the stable explicit step of a
@@ -275,9 +257,8 @@ namespace femp
           const double       wanted = fp.time_step > 0 ? fp.time_step : l.min();
           const double       dt     = dt_T > 0 ? dt_T : wanted;
           const double       n      = std::ceil(dt / wanted * (1 - 1e-12));
-          const unsigned int bound =
-            unsigned(prm_int(prm, "Maximum flow sub-steps"));
-          const std::string name = "Run limits/Maximum flow sub-steps";
+          const unsigned int bound  = run_limit_substeps(prm, true);
+          const std::string  name   = "Run limits/Maximum flow sub-steps";
           if (fp.time_step > 0)
             require_substeps(n,
                              bound,
@@ -332,7 +313,7 @@ namespace femp
           const double n = std::ceil(dt_T / dt_s * (1 - 1e-12));
           if (sp.time_step > 0)
             require_substeps(n,
-                             unsigned(prm_int(prm, "Maximum solid sub-steps")),
+                             run_limit_substeps(prm, false),
                              "Run limits/Maximum solid sub-steps",
                              "Solid/Time step",
                              sp.time_step,
@@ -349,8 +330,7 @@ namespace femp
                      "modulus of about 1e10 to 5e11 Pa; 'Solid/Mass scaling "
                      "factor' raises the step)";
               require_substeps(n,
-                               unsigned(
-                                 prm_int(prm, "Maximum solid sub-steps")),
+                               unsigned(run_limit_substeps(prm, false)),
                                "Run limits/Maximum solid sub-steps",
                                "Solid/Material/Young's modulus",
                                sm.max_p_wave_modulus(),

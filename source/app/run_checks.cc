@@ -4,8 +4,11 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
+#include <femp/app/physics_switches.h>
 #include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_lookup.h>
+#include <femp/io/output.h>
 #include <femp/io/output_lock.h>
 
 #include <cmath>
@@ -23,32 +26,6 @@ namespace femp
   namespace
   {
     RunLimits limits;
-
-    /// Value of @p name in the subsection path @p path ("A/B").
-    std::string
-    get(const dealii::ParameterHandler &prm_in,
-        const std::string              &path,
-        const std::string              &name)
-    {
-      auto      &prm      = const_cast<dealii::ParameterHandler &>(prm_in);
-      const auto sections = path.empty() ?
-                              std::vector<std::string>() :
-                              dealii::Utilities::split_string_list(path, '/');
-      for (const auto &s : sections)
-        prm.enter_subsection(s);
-      const std::string v = prm.get(name);
-      for (std::size_t i = 0; i < sections.size(); ++i)
-        prm.leave_subsection();
-      return v;
-    }
-
-    double
-    get_double(const dealii::ParameterHandler &prm,
-               const std::string              &path,
-               const std::string              &name)
-    {
-      return dealii::Utilities::string_to_double(get(prm, path, name));
-    }
 
     /// Physical memory of this machine in bytes (0 if unknown).
     double
@@ -167,50 +144,68 @@ namespace femp
   }
 
   void
-  declare_run_limits(dealii::ParameterHandler &prm)
+  RunLimits::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Run limits");
-    prm.declare_entry(
+    table.enter_subsection("Run limits");
+    table.add(
       "Memory limit",
-      "0",
+      memory_limit,
       dealii::Patterns::Double(0.),
       "Largest memory the scene may need, GiB, by a rough estimate from "
       "the number of cells, material points and probe samples made before "
       "any work; a larger scene is refused. 0: the physical memory of this "
       "machine (/proc/meminfo). Range [0, inf).");
-    prm.declare_entry(
+    table.add(
       "Disk limit",
-      "0",
+      disk_limit,
       dealii::Patterns::Double(0.),
       "Largest output the scene may write, GiB, by a rough estimate from "
       "the cells, the material points written, the number of field outputs "
       "('Output interval', 'End time') and the format, made before any "
       "work; a larger scene is refused. 0: the free space of the file "
       "system that holds 'Output/Directory'. Range [0, inf).");
-    prm.declare_entry(
+    table.add(
       "Maximum flow sub-steps",
-      "100000",
+      max_flow_substeps,
       dealii::Patterns::Integer(1),
       "Most melt-flow sub-steps within one temperature step; the run stops "
       "with an error when the flow needs more (a flow that blows up makes "
       "its stable step tiny). Range [1, inf).");
-    prm.declare_entry(
-      "Maximum solid sub-steps",
-      "100000",
-      dealii::Patterns::Integer(1),
-      "Most solid sub-steps within one temperature step; a scene whose "
-      "elastic step limit would need more is refused before any work. "
-      "Range [1, inf).");
-    prm.declare_entry(
+    table.add("Maximum solid sub-steps",
+              max_solid_substeps,
+              dealii::Patterns::Integer(1),
+              "Most solid sub-steps within one temperature step; a scene whose "
+              "elastic step limit would need more is refused before any work. "
+              "Range [1, inf).");
+    table.add(
       "Progress wall interval",
-      "30",
+      progress_wall_interval,
       dealii::Patterns::Double(0.01),
       "Longest wall time without a line of output, s: when the run has "
       "printed nothing for this long (a slow step, a long sub-cycle, "
       "output or a checkpoint being written), rank 0 prints 'femp: still "
       "working: <phase>' with the simulated time, the step and the "
       "sub-step. Range [0.01, inf).");
-    prm.leave_subsection();
+    table.leave_subsection();
+  }
+
+  RunLimits::Parameters
+  RunLimits::Parameters::of(const dealii::ParameterHandler &prm)
+  {
+    // Reading moves only the handler's position, which it restores.
+    Parameters     p;
+    ParameterTable table(const_cast<dealii::ParameterHandler &>(prm),
+                         ParameterTable::Mode::parse);
+    p.add_parameters(table);
+    return p;
+  }
+
+  void
+  declare_run_limits(dealii::ParameterHandler &prm)
+  {
+    RunLimits::Parameters defaults;
+    ParameterTable        table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   const RunLimits &
@@ -228,16 +223,15 @@ namespace femp
       "without '..' or an absolute path (Output/Directory may be absolute)";
     for (const std::string name : {"Energy file", "Probe file"})
       {
-        const std::string v = get(prm, "Solid", name);
+        const std::string v = parameter_text(prm, "Solid", name);
         const fs::path    p(v);
         bool              ok = !p.is_absolute();
         for (const auto &part : p)
           ok = ok && part != "..";
         require(ok, "Solid/" + name, short_value(v), allowed);
       }
-    for (const auto &l :
-         dealii::Utilities::split_string_list(get(prm, "Output", "Probe lines"),
-                                              ';'))
+    for (const auto &l : dealii::Utilities::split_string_list(
+           parameter_text(prm, "Output", "Probe lines"), ';'))
       {
         const std::string line_name =
           dealii::Utilities::split_string_list(l, ':').front();
@@ -253,9 +247,9 @@ namespace femp
   void
   check_values(const dealii::ParameterHandler &prm)
   {
-    const int         dim = std::stoi(get(prm, "", "Dimension"));
-    const std::string text =
-      dealii::Utilities::trim(get(prm, "Heat transfer", "Initial temperature"));
+    const int         dim  = std::stoi(parameter_text(prm, "", "Dimension"));
+    const std::string text = dealii::Utilities::trim(
+      parameter_text(prm, "Heat transfer", "Initial temperature"));
     char        *end = nullptr;
     const double T   = std::strtod(text.c_str(), &end);
     // (An expression is checked at every cell centre by HeatTransfer.)
@@ -266,21 +260,20 @@ namespace femp
               "it must be a finite temperature in (0, 1e5] K");
 
     const double packing =
-      get_double(prm, "Material points/Powder layer", "Packing fraction");
+      parameter_double(prm, "Material points/Powder layer", "Packing fraction");
     require(packing > 0 && packing <= 0.64,
             "Material points/Powder layer/Packing fraction",
             packing,
             "it must lie in (0, 0.64] (no powder: 'Layer thickness = 0')");
 
-    const std::string path_file = get(prm, "Laser", "Scan path file");
+    const std::string path_file =
+      parameter_text(prm, "Laser", "Scan path file");
     if (path_file.empty())
       {
-        const auto a =
-          dealii::Utilities::split_string_list(get(prm, "Laser", "Start point"),
-                                               ',');
-        const auto b =
-          dealii::Utilities::split_string_list(get(prm, "Laser", "End point"),
-                                               ',');
+        const auto a = dealii::Utilities::split_string_list(
+          parameter_text(prm, "Laser", "Start point"), ',');
+        const auto b = dealii::Utilities::split_string_list(
+          parameter_text(prm, "Laser", "End point"), ',');
         double length2 = 0;
         for (int d = 0; d < dim - 1 && d < int(a.size()) && d < int(b.size());
              ++d)
@@ -289,14 +282,14 @@ namespace femp
                              dealii::Utilities::string_to_double(a[d]);
             length2 += l * l;
           }
-        require(length2 > 0 || get_double(prm, "Laser", "Power") == 0,
+        require(length2 > 0 || parameter_double(prm, "Laser", "Power") == 0,
                 "Laser/End point",
-                short_value(get(prm, "Laser", "End point")),
+                short_value(parameter_text(prm, "Laser", "End point")),
                 "it must differ from 'Laser/Start point' in the horizontal "
                 "coordinates: a line scan of zero length takes no time, so "
                 "the laser would deposit nothing (power 0 turns it off)");
       }
-    else if (get(prm, "Laser", "Scan path format") == "femp")
+    else if (parameter_text(prm, "Laser", "Scan path format") == "femp")
       {
         // Every segment line must hold the numbers of this dimension's
         // format (the 3D format read in 2D would shift every column; the
@@ -369,10 +362,10 @@ namespace femp
       SceneSize  size;
       const int  dim = prm.get_integer("Dimension");
       const auto lo  = dealii::Utilities::split_string_list(
-        get(prm, "Background grid", "Lower corner"), ',');
+        parameter_text(prm, "Background grid", "Lower corner"), ',');
       const auto hi = dealii::Utilities::split_string_list(
-        get(prm, "Background grid", "Upper corner"), ',');
-      const double h = get_double(prm, "Background grid", "Cell size");
+        parameter_text(prm, "Background grid", "Upper corner"), ',');
+      const double h = parameter_double(prm, "Background grid", "Cell size");
       if (lo.size() < std::size_t(dim) || hi.size() < std::size_t(dim) ||
           !(h > 0))
         return size;
@@ -389,18 +382,21 @@ namespace femp
         }
       const double bottom = dealii::Utilities::string_to_double(lo[dim - 1]);
       const double spacing =
-        get_double(prm, "Material points", "Point spacing");
-      const double top = get_double(prm, "Material points", "Substrate top");
-      const double layer =
-        get_double(prm, "Material points/Powder layer", "Layer thickness");
-      const double packing =
-        get_double(prm, "Material points/Powder layer", "Packing fraction");
-      size.valid  = true;
-      size.cells  = cells;
-      size.points = spacing > 0 ?
-                      area * (std::max(0., top - bottom) + layer * packing) /
+        parameter_double(prm, "Material points", "Point spacing");
+      const double top =
+        parameter_double(prm, "Material points", "Substrate top");
+      const double layer   = parameter_double(prm,
+                                            "Material points/Powder layer",
+                                            "Layer thickness");
+      const double packing = parameter_double(prm,
+                                              "Material points/Powder layer",
+                                              "Packing fraction");
+      size.valid           = true;
+      size.cells           = cells;
+      size.points          = spacing > 0 ?
+                               area * (std::max(0., top - bottom) + layer * packing) /
                         std::pow(spacing, dim) :
-                      0.;
+                               0.;
       return size;
     }
   } // namespace
@@ -408,11 +404,10 @@ namespace femp
   void
   check_memory(dealii::ParameterHandler &prm, const unsigned int n_ranks)
   {
-    prm.enter_subsection("Run limits");
-    const double limit_gib    = prm.get_double("Memory limit");
-    limits.max_flow_substeps  = prm.get_integer("Maximum flow sub-steps");
-    limits.max_solid_substeps = prm.get_integer("Maximum solid sub-steps");
-    prm.leave_subsection();
+    const auto   run_limits   = RunLimits::Parameters::of(prm);
+    const double limit_gib    = run_limits.memory_limit;
+    limits.max_flow_substeps  = run_limits.max_flow_substeps;
+    limits.max_solid_substeps = run_limits.max_solid_substeps;
     // Cells of the background grid, metal points (substrate and powder).
     const SceneSize size = scene_size(prm);
     if (!size.valid)
@@ -420,9 +415,8 @@ namespace femp
     const double cells = size.cells, points = size.points;
     // Probe line samples.
     double samples = 0;
-    for (const auto &l :
-         dealii::Utilities::split_string_list(get(prm, "Output", "Probe lines"),
-                                              ';'))
+    for (const auto &l : dealii::Utilities::split_string_list(
+           parameter_text(prm, "Output", "Probe lines"), ';'))
       {
         const auto parts = dealii::Utilities::split_string_list(l, ':');
         if (parts.size() == 3)
@@ -431,8 +425,9 @@ namespace femp
     // Bytes per item, measured on the default 3D scene (156 250 cells,
     // 1.05 million points: 0.65 GB) and rounded up; flow and solid add
     // their matrices and point properties.
-    const bool   flow  = get(prm, "Physics", "Melt flow") == "true";
-    const bool   solid = get(prm, "Physics", "Solid stress") == "true";
+    const auto   physics = PhysicsSwitches::of(prm);
+    const bool   flow    = physics.melt_flow;
+    const bool   solid   = physics.solid_stress;
     const double bytes =
       cells * (1500. + (flow ? 1500. : 0.) + (solid ? 1000. : 0.)) +
       points * (400. + (solid ? 300. : 0.)) + samples * 200. + n_ranks * 100e6;
@@ -456,26 +451,34 @@ namespace femp
   void
   check_disk(dealii::ParameterHandler &prm)
   {
-    prm.enter_subsection("Run limits");
-    const double limit_gib = prm.get_double("Disk limit");
-    prm.leave_subsection();
-    const SceneSize size = scene_size(prm);
+    const double    limit_gib = RunLimits::Parameters::of(prm).disk_limit;
+    const SceneSize size      = scene_size(prm);
     if (!size.valid)
       return; // the modules report malformed corners
     const double cells = size.cells, points = size.points;
     // Field outputs: the first, one per 'Output interval', the last (a
     // step-based cadence is not known before the first step: not counted).
-    const double end      = get_double(prm, "Time stepping", "End time");
-    const double interval = get_double(prm, "Output", "Output interval");
+    const double end      = parameter_double(prm, "Time stepping", "End time");
+    const double interval = parameter_double(prm, "Output", "Output interval");
     const double outputs =
       2 + (interval > 0 ? std::floor(end / interval * (1 + 1e-12)) : 0.);
-    const std::string which = get(prm, "Output", "Write material points");
-    const double      point_outputs =
-      which == "always" ? outputs : (which == "last" ? 1. : 0.);
+    using OutputPrm    = Output<3>::Parameters;
+    const auto   which = parameter_choice(prm,
+                                        "Output",
+                                        "Write material points",
+                                        OutputPrm::write_points_names());
+    const double point_outputs =
+      which == OutputPrm::WritePoints::always ?
+        outputs :
+        (which == OutputPrm::WritePoints::last ? 1. : 0.);
     // Bytes per cell and per point and output, measured on the VTU output
     // of the 3D scenes (about 45 B per cell with every field, 100 B per
     // point) and rounded up; HDF5 writes about a quarter of that.
-    const double format = get(prm, "Output", "Format") == "hdf5" ? 0.25 : 1.;
+    const double format =
+      parameter_choice(prm, "Output", "Format", OutputPrm::format_names()) ==
+          OutputPrm::Format::hdf5 ?
+        0.25 :
+        1.;
     const double bytes =
       format * (outputs * cells * 50. + point_outputs * points * 100.);
     double limit = limit_gib * 1024. * 1024. * 1024.;
@@ -484,7 +487,7 @@ namespace femp
         // The free space where the output goes (its nearest existing
         // folder).
         std::filesystem::path dir =
-          std::filesystem::absolute(get(prm, "Output", "Directory"));
+          std::filesystem::absolute(parameter_text(prm, "Output", "Directory"));
         std::error_code ec;
         while (!dir.empty() && !std::filesystem::exists(dir, ec) &&
                dir != dir.root_path())
@@ -501,8 +504,8 @@ namespace femp
     s << "the scene would write about " << bytes / 1e9 << " GB (" << outputs
       << " field outputs of " << cells << " cells, " << point_outputs
       << " outputs of " << points << " material points, format "
-      << get(prm, "Output", "Format") << "), more than the " << limit / 1e9
-      << " GB "
+      << parameter_text(prm, "Output", "Format") << "), more than the "
+      << limit / 1e9 << " GB "
       << (limit_gib > 0 ? "allowed" : "free where 'Output/Directory' is")
       << ": raise 'Output/Output interval', set 'Output/Write material "
          "points = last' or 'never', use 'Output/Format = hdf5', or raise "
@@ -515,9 +518,13 @@ namespace femp
                            const MPI_Comm                  comm)
   {
     namespace fs                = std::filesystem;
-    const std::string directory = get(prm, "Output", "Directory");
-    const std::string policy    = get(prm, "Output", "Existing directory");
-    std::string       error;
+    const std::string directory = parameter_text(prm, "Output", "Directory");
+    const bool        refuse =
+      parameter_choice(prm,
+                       "Output",
+                       "Existing directory",
+                       Output<3>::Parameters::existing_directory_names());
+    std::string error;
     // One run per folder: the lock before anything there is cleared or
     // written (rank 0 takes it; every rank gets the outcome).
     {
@@ -552,9 +559,9 @@ namespace femp
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
           "track_shape_[0-9]+\\.csv|track_bead\\.csv|"
           "absorption\\.csv|parameters\\.prm|.*\\.(pvd|xdmf)\\.tmp");
-        const std::string     energy = get(prm, "Solid", "Energy file");
-        const std::string     probes = get(prm, "Solid", "Probe file");
-        std::error_code       ec;
+        const std::string energy = parameter_text(prm, "Solid", "Energy file");
+        const std::string probes = parameter_text(prm, "Solid", "Probe file");
+        std::error_code   ec;
         std::vector<fs::path> earlier;
         if (fs::is_directory(directory, ec))
           for (const auto &entry : fs::directory_iterator(directory, ec))
@@ -567,9 +574,9 @@ namespace femp
             }
         // Resuming a checkpoint continues this directory's series: they
         // stay (the rows after the checkpoint are dropped on resume).
-        if (!get(prm, "Checkpoint", "Resume from").empty())
+        if (!parameter_text(prm, "Checkpoint", "Resume from").empty())
           earlier.clear();
-        if (!earlier.empty() && policy == "refuse")
+        if (!earlier.empty() && refuse)
           error = InputError("Output/Directory",
                              short_value(directory),
                              "it holds the output of an earlier run (e.g. " +

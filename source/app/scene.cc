@@ -4,6 +4,7 @@
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
+#include <femp/app/physics_switches.h>
 #include <femp/app/scene.h>
 #include <femp/base/input_checks.h>
 #include <femp/solid/fe_zone_depth.h>
@@ -16,46 +17,15 @@ namespace femp
   void
   declare_all_parameters(ParameterHandler &prm)
   {
-    prm.declare_entry("Dimension",
-                      "3",
-                      Patterns::Integer(2, 3),
-                      "Space dimension of the scene: 2 or 3.");
-    prm.enter_subsection("Physics");
-    prm.declare_entry("Heat transfer",
-                      "true",
-                      Patterns::Bool(),
-                      "Solve the temperature equation (1). false: the "
-                      "temperature stays frozen at 'Heat transfer/Initial "
-                      "temperature' (a number or a function of x, y, z) and "
-                      "nothing of the heat equation is computed; the flow "
-                      "still takes its Marangoni stress, recoil and Darcy "
-                      "damping from this field, and points still change "
-                      "state with it. The step is then 'Time stepping/Time "
-                      "step', or with melt flow and 0 the fluid step.");
-    prm.declare_entry("Melt flow",
-                      "false",
-                      Patterns::Bool(),
-                      "Solve the melt-pool flow (eqs. 3-4) of the fluid points "
-                      "(subsection Melt flow): gravity, viscosity, Darcy "
-                      "damping, surface tension, Marangoni stress and recoil "
-                      "pressure.");
-    prm.declare_entry("Solid stress",
-                      "false",
-                      Patterns::Bool(),
-                      "Solve the thermal stress by MPM and FE (eqs. 5-17): "
-                      "subsections 'Solid' and 'Solid FEM'. With 'Melt flow' "
-                      "too, the flow moves the fluid points and the solid "
-                      "the solid points, and the fluid pressure and viscous "
-                      "forces on the faces to solid cells load the solid "
-                      "(doc/solid.md, 'Flow and solid together').");
-    prm.declare_entry("Gravity",
-                      "9.81",
-                      Patterns::Double(),
-                      "Magnitude g of the gravitational acceleration, m/s^2, "
-                      "acting along -y (2D) or -z (3D) on the melt flow and "
-                      "on the solid (the one gravity of both); range [0, "
-                      "inf).");
-    prm.leave_subsection();
+    {
+      ParameterTable table(prm, ParameterTable::Mode::declare);
+      unsigned int   dimension = 3;
+      table.add("Dimension",
+                dimension,
+                Patterns::Integer(2, 3),
+                "Space dimension of the scene: 2 or 3.");
+    }
+    PhysicsSwitches::declare_parameters(prm);
     SimulationControl::Parameters::declare_parameters(prm);
     Material::declare_parameters(prm);
     BackgroundGrid<3>::Parameters::declare_parameters(prm);
@@ -79,12 +49,12 @@ namespace femp
   template <int dim>
   Scene<dim>::Scene(ParameterHandler &prm, ConditionalOStream &out)
   {
-    prm.enter_subsection("Physics");
-    melt_flow      = prm.get_bool("Melt flow");
-    heat_enabled   = prm.get_bool("Heat transfer");
-    solid          = prm.get_bool("Solid stress");
-    const double g = prm.get_double("Gravity");
-    prm.leave_subsection();
+    PhysicsSwitches physics;
+    physics.parse_parameters(prm);
+    melt_flow      = physics.melt_flow;
+    heat_enabled   = physics.heat_transfer;
+    solid          = physics.solid_stress;
+    const double g = physics.gravity;
     require(g >= 0,
             "Physics/Gravity",
             g,

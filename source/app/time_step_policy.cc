@@ -3,7 +3,6 @@
 #include <femp/app/time_step_policy.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
-#include <femp/heat/attached_metal.h>
 
 #include <cmath>
 #include <iomanip>
@@ -14,14 +13,14 @@ namespace femp
   template <int dim>
   TimeStepPolicy<dim>::TimeStepPolicy(const Scene<dim>              &scene,
                                       const Laser<dim>              &laser,
-                                      const BackgroundGrid<dim>     &grid,
                                       HeatTransfer<dim>             &heat,
+                                      MetalBodies<dim>              &bodies,
                                       const IncompressibleFlow<dim> *flow,
                                       ConditionalOStream            &out)
       : scene(scene)
       , laser(laser)
-      , grid(grid)
       , heat(heat)
+      , bodies(bodies)
       , flow(flow)
       , out(out)
   {
@@ -41,9 +40,7 @@ namespace femp
   TimeStepPolicy<dim>::workpiece_peak_temperature()
   {
     if (!workpiece_peak)
-      workpiece_peak = attached_metal_max_temperature(grid,
-                                                      heat.temperature(),
-                                                      heat.metal_fraction());
+      workpiece_peak = bodies.workpiece_max_temperature(heat.temperature());
     return *workpiece_peak;
   }
 

@@ -28,6 +28,24 @@ namespace femp
       exponent.erase(0, exponent.find_first_not_of('0'));
       return text.substr(0, e + 1) + sign + exponent;
     }
+
+    /// An integer entry of type I (int, unsigned int) of @p table.
+    template <typename I>
+    void
+    add_integer(ParameterTable              &table,
+                const std::string           &name,
+                I                           &member,
+                const Patterns::PatternBase &pattern,
+                const std::string           &help)
+    {
+      if (table.declaring())
+        table.handler().declare_entry(name,
+                                      std::to_string(member),
+                                      pattern,
+                                      help);
+      else
+        member = table.handler().get_integer(name);
+    }
   } // namespace
 
   std::string
@@ -103,10 +121,7 @@ namespace femp
                       const Patterns::PatternBase &pattern,
                       const std::string           &help)
   {
-    if (declaring())
-      prm.declare_entry(name, std::to_string(member), pattern, help);
-    else
-      member = prm.get_integer(name);
+    add_integer(*this, name, member, pattern, help);
   }
 
   void
@@ -115,10 +130,7 @@ namespace femp
                       const Patterns::PatternBase &pattern,
                       const std::string           &help)
   {
-    if (declaring())
-      prm.declare_entry(name, std::to_string(member), pattern, help);
-    else
-      member = prm.get_integer(name);
+    add_integer(*this, name, member, pattern, help);
   }
 
   void

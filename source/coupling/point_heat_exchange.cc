@@ -8,11 +8,39 @@ namespace femp
   template <int dim>
   PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim> &points,
                                             HeatTransfer<dim>   &heat,
-                                            const bool carried_by_points)
+                                            const bool        carried_by_points,
+                                            MetalBodies<dim> *bodies)
       : points(points)
       , heat(heat)
       , carried_by_points(carried_by_points)
+      , bodies(bodies)
   {
+  }
+
+  template <int dim>
+  void
+  PointHeatExchange<dim>::new_metal_fraction(const std::vector<double> &alpha)
+  {
+    if (bodies)
+      bodies->update(alpha);
+    heat.set_metal_fraction(alpha, bodies);
+  }
+
+  template <int dim>
+  void
+  PointHeatExchange<dim>::metal_fraction_restored()
+  {
+    if (!bodies)
+      return;
+    // The heat restored alpha and its surface lists; the bodies follow,
+    // and the heat takes their detached drops if there are any (the rest
+    // of its state is the same after a second set_metal_fraction()).
+    bodies->update(heat.metal_fraction());
+    if (!bodies->detached_drops().empty())
+      {
+        const std::vector<double> alpha = heat.metal_fraction();
+        heat.set_metal_fraction(alpha, bodies);
+      }
   }
 
   template <int dim>
@@ -61,7 +89,7 @@ namespace femp
   void
   PointHeatExchange<dim>::initial_metal_fraction()
   {
-    heat.set_metal_fraction(points.metal_fraction());
+    new_metal_fraction(points.metal_fraction());
     alpha_moves = points.point_moves();
   }
 
@@ -96,7 +124,7 @@ namespace femp
                                          [this](const double T) {
                                            return heat.specific_enthalpy(T);
                                          });
-        heat.set_metal_fraction(alpha);
+        new_metal_fraction(alpha);
         heat.take_point_enthalpy(mean_e);
         moved_points += heat.stored_enthalpy() - H_before;
         return;
@@ -117,7 +145,7 @@ namespace femp
               heat.set_cell_temperature(idx, sum / n);
           }
     heat.update_ghosts();
-    heat.set_metal_fraction(alpha);
+    new_metal_fraction(alpha);
     if (heat_enabled)
       moved_points += heat.stored_enthalpy() - H_before;
   }

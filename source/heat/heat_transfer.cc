@@ -428,7 +428,8 @@ namespace femp
 
   template <int dim>
   void
-  HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a)
+  HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a,
+                                        const MetalBodies<dim>    *bodies)
   {
     alpha = a;
     if (frozen)
@@ -476,7 +477,7 @@ namespace femp
       if (norm > 1e-12 / h)
         surface.push_back({std::uint32_t(idx), norm});
     });
-    find_detached_cells();
+    take_detached_drops(bodies);
 
     // First-surface cells: per vertical column, the topmost cell with
     // alpha >= 1/2 over all ranks (one reduction per change of alpha). The
@@ -572,153 +573,29 @@ namespace femp
 
   // Detached metal (Heat transfer/Detached drops = sphere): a drop of at
   // most K = 'Detached drop cells' face-connected metal cells with no other
-  // metal face neighbour inside the domain has no surface for the central
-  // differences of alpha (a cell between two metal neighbours, or between
-  // two gas cells, sees a zero difference) or only a small one, and no
-  // metal to conduct to, so without a model of the gas round it a spatter
-  // drop keeps its temperature. The drop is taken as a sphere of its metal
-  // volume V = sum alpha h^3 (2D: a cylinder of section sum alpha h^2) in
-  // still gas, diameter d = (6 V/pi)^(1/3) (2D: (4 V/pi)^(1/2)): surface per
-  // cell volume 2 dim alpha/d for each of its cells, over which it loses
-  // q(T) (convection, radiation, evaporation) plus the conduction of a
-  // sphere in still gas, Nu k_g/d (T - T_ref) with Nu = 2 (a drop of 2-10
-  // um at 1 m/s relative to argon has Re < 1, where Nu stays near 2).
-  //
-  // Finding the drops, on any partition: a metal cell with K or more metal
-  // face neighbours lies in a body of more than K cells; the others
-  // (candidates, a few per cent of the metal cells: edges and corners)
-  // collect the global indices of the cells they reach, one layer of face
-  // neighbours per round, the sets passing through the ghost layer. A set
-  // that exceeds K cells, or meets a cell with K or more neighbours, marks
-  // a larger body. After K rounds a set of at most K cells is a whole drop
-  // (a body of more than K cells has more than K cells within K steps of
-  // each of its cells). The drop's volume sums the metal fractions of its
-  // cells in the order of their global indices, the same on every rank.
+  // metal face neighbour inside the domain (MetalBodies finds them) has no
+  // surface for the central differences of alpha (a cell between two metal
+  // neighbours, or between two gas cells, sees a zero difference) or only a
+  // small one, and no metal to conduct to, so without a model of the gas
+  // round it a spatter drop keeps its temperature. The drop is taken as a
+  // sphere of its metal volume (2D: a cylinder) in still gas, diameter d:
+  // surface per cell volume 2 dim alpha/d for each of its cells, over which
+  // it loses q(T) (convection, radiation, evaporation) plus the conduction
+  // of a sphere in still gas, Nu k_g/d (T - T_ref) with Nu = 2 (a drop of
+  // 2-10 um at 1 m/s relative to argon has Re < 1, where Nu stays near 2).
   template <int dim>
   void
-  HeatTransfer<dim>::find_detached_cells()
+  HeatTransfer<dim>::take_detached_drops(const MetalBodies<dim> *bodies)
   {
     for (const auto &dc : detached)
       gas_coefficient[dc.index] = 0;
     detached.clear();
-    if (!prm.detached_drops)
+    if (!prm.detached_drops || !bodies)
       return;
-    const unsigned int K         = prm.detached_drop_cells;
-    const auto        &st        = grid.strides();
-    const auto        &n         = grid.n_cells();
-    const double       h         = grid.h();
-    const auto         global_id = [&](const std::size_t idx) {
-      const auto ijk = grid.global_index(idx);
-      double     id  = 0;
-      for (int d = dim - 1; d >= 0; --d)
-        id = id * n[d] + ijk[d];
-      return id;
-    };
-    // Visit the metal face neighbours inside the domain of local cell idx
-    // (global index ijk).
-    const auto for_metal_neighbours_at =
-      [&](const std::size_t idx, const auto &ijk, auto &&f) {
-        for (int d = 0; d < dim; ++d)
-          {
-            if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
-              f(idx - st[d]);
-            if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
-              f(idx + st[d]);
-          }
-      };
-    const auto for_metal_neighbours = [&](const std::size_t idx, auto &&f) {
-      for_metal_neighbours_at(idx, grid.global_index(idx), f);
-    };
-    // Metal face neighbours per owned metal cell, to the ghost layer.
-    std::vector<double>       &count = gas_coefficient; // reused, zero here
-    std::vector<std::uint32_t> active;
-    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
-      if (alpha[idx] <= 0)
-        return;
-      unsigned int m = 0;
-      for_metal_neighbours_at(idx, ijk, [&](std::size_t) { ++m; });
-      count[idx] = m;
-      if (m < K)
-        active.push_back(idx);
-    });
-    if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
-      {
-        std::fill(count.begin(), count.end(), 0.);
-        return;
-      }
-    grid.update_ghosts(count);
-    if (drop_sets.size() != K + 1 || drop_sets[0].size() != alpha.size())
-      drop_sets.assign(K + 1, std::vector<double>(alpha.size(), 0.));
-    std::vector<double> &size = drop_sets[K];
-    for (const auto idx : active)
-      size[idx] = 1, drop_sets[0][idx] = global_id(idx);
-    std::vector<double> set;
-    for (unsigned int round = 0; round < K; ++round)
-      {
-        for (auto &field : drop_sets)
-          grid.update_ghosts(field);
-        for (const auto idx : active)
-          {
-            if (size[idx] > K)
-              continue; // a larger body
-            set.clear();
-            for (unsigned int k = 0; k < size[idx]; ++k)
-              set.push_back(drop_sets[k][idx]);
-            bool larger = false;
-            for_metal_neighbours(idx, [&](const std::size_t nb) {
-              larger = larger || count[nb] >= K || size[nb] > K;
-            });
-            if (!larger)
-              {
-                for_metal_neighbours(idx, [&](const std::size_t nb) {
-                  for (unsigned int k = 0; k < size[nb]; ++k)
-                    set.push_back(drop_sets[k][nb]);
-                });
-                std::sort(set.begin(), set.end());
-                set.erase(std::unique(set.begin(), set.end()), set.end());
-              }
-            if (larger || set.size() > K)
-              {
-                size[idx] = K + 1;
-                continue;
-              }
-            for (unsigned int k = 0; k < set.size(); ++k)
-              drop_sets[k][idx] = set[k];
-            size[idx] = set.size();
-          }
-        // Cells of larger bodies keep their mark (K + 1) for the
-        // neighbours; only the others go on.
-        active.erase(std::remove_if(active.begin(),
-                                    active.end(),
-                                    [&](const std::uint32_t idx) {
-                                      return size[idx] > K;
-                                    }),
-                     active.end());
-        if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
-          break;
-      }
-    // What is left are the drops' cells. Their metal fractions, from all
-    // ranks (drops are few).
-    std::vector<double> mine; // global index, alpha, ...
-    for (const auto idx : active)
-      mine.insert(mine.end(), {global_id(idx), alpha[idx]});
-    std::map<double, double> alpha_of;
-    for (const auto &part :
-         Utilities::MPI::all_gather(grid.communicator(), mine))
-      for (std::size_t i = 0; i + 1 < part.size(); i += 2)
-        alpha_of[part[i]] = part[i + 1];
-    for (const auto idx : active)
-      {
-        double a = 0;
-        for (unsigned int k = 0; k < size[idx]; ++k)
-          a += alpha_of.at(drop_sets[k][idx]);
-        const double V = a * std::pow(h, dim);
-        const double d =
-          dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
-        detached.push_back(
-          {idx, 2 * dim * alpha[idx] / d, 2 * mat.gas_conductivity / d});
-      }
-    std::fill(count.begin(), count.end(), 0.);
+    for (const auto &drop : bodies->detached_drops())
+      detached.push_back({drop.index,
+                          2 * dim * alpha[drop.index] / drop.diameter,
+                          2 * mat.gas_conductivity / drop.diameter});
     for (const auto &dc : detached)
       gas_coefficient[dc.index] = dc.gas_h;
   }

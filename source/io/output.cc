@@ -111,6 +111,23 @@ namespace femp
   }
 
   template <int dim>
+  const Choices<typename Output<dim>::Parameters::Format> &
+  Output<dim>::Parameters::format_names()
+  {
+    static const Choices<Format> names = {{Format::vtu, "vtu"},
+                                          {Format::hdf5, "hdf5"}};
+    return names;
+  }
+
+  template <int dim>
+  const Choices<bool> &
+  Output<dim>::Parameters::existing_directory_names()
+  {
+    static const Choices<bool> names = {{false, "clear"}, {true, "refuse"}};
+    return names;
+  }
+
+  template <int dim>
   void
   Output<dim>::Parameters::add_parameters(ParameterTable &table)
   {
@@ -123,16 +140,15 @@ namespace femp
               "A relative path is relative to the working directory; "
               "an absolute path is allowed. The parameters used are "
               "written into it as parameters.prm.");
-    if (table.declaring())
-      prm.declare_entry("Existing directory",
-                        "clear",
-                        Patterns::Selection("clear|refuse"),
-                        "What to do when 'Directory' holds the output of an "
-                        "earlier run (numbered grid_/points_/probe_line_ "
-                        "files, .pvd indices, the CSV series, parameters.prm): "
-                        "'clear' removes those files (and no others) before "
-                        "the run, so that no stale time step is mixed into the "
-                        "new series; 'refuse' stops before any work.");
+    table.add("Existing directory",
+              refuse_existing,
+              existing_directory_names(),
+              "What to do when 'Directory' holds the output of an "
+              "earlier run (numbered grid_/points_/probe_line_ "
+              "files, .pvd indices, the CSV series, parameters.prm): "
+              "'clear' removes those files (and no others) before "
+              "the run, so that no stale time step is mixed into the "
+              "new series; 'refuse' stops before any work.");
     table.add("Output interval",
               output_interval,
               Patterns::Double(0.),
@@ -152,7 +168,7 @@ namespace femp
               "100 bytes per point.");
     table.add("Format",
               format,
-              {{Format::vtu, "vtu"}, {Format::hdf5, "hdf5"}},
+              format_names(),
               "File format of the grid fields and the material "
               "points: 'vtu' writes compressed VTU pieces (one per "
               "rank or group of ranks) with PVTU records and the "

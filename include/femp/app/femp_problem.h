@@ -34,6 +34,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/material_points.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/thermal_history.h>
@@ -102,7 +103,9 @@ namespace femp
     std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
     // Builds of several layers and pores (doc/builds.md).
     std::unique_ptr<BuildSteps<dim>> builds;
-    // What joins them.
+    // What joins them: alpha's keeper and the bodies of metal of alpha
+    // (detached drops, workpiece) that heat, solid and stop test read.
+    std::unique_ptr<MetalBodies<dim>>       bodies;
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
     // Clock, step policy, output, report, state.

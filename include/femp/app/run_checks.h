@@ -11,6 +11,8 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/base/parameter_table.h>
+
 #include <string>
 
 namespace femp
@@ -35,6 +37,23 @@ namespace femp
     double       memory_limit       = 0;      ///< bytes, 0: no check
     unsigned int max_flow_substeps  = 100000; ///< per temperature step
     unsigned int max_solid_substeps = 100000; ///< per temperature step
+
+    /// The entries of subsection 'Run limits', each listed once (the
+    /// members' values are the defaults).
+    struct Parameters
+    {
+      double       memory_limit           = 0; ///< GiB; 0: this machine's
+      double       disk_limit             = 0; ///< GiB; 0: the free space
+      unsigned int max_flow_substeps      = 100000;
+      unsigned int max_solid_substeps     = 100000;
+      double       progress_wall_interval = 30; ///< s
+
+      void
+      add_parameters(ParameterTable &table);
+      /// Read from a handler that is not changed.
+      static Parameters
+      of(const dealii::ParameterHandler &prm);
+    };
   };
   const RunLimits &
   run_limits();

@@ -83,7 +83,7 @@ namespace femp
     watch_laser(const Laser<dim> &laser);
 
     /// The progress line of the step just taken: @p T_max is the hottest
-    /// metal attached to the substrate (attached_metal.h), @p pool the
+    /// metal attached to the substrate (MetalBodies), @p pool the
     /// melt pool (melt_pool.h), both at the end of the step; the pool only
     /// in a scene whose laser has power (watch_laser()).
     void

@@ -12,7 +12,7 @@
 //    the stop 'Stop when peak temperature below'.
 // The cooling step, the solid's switch and the stop test ask one question,
 // after_path_and_below(): has the laser's path ended and is the metal
-// attached to the substrate (attached_metal.h) below a temperature?
+// attached to the substrate (MetalBodies' workpiece) below a temperature?
 #ifndef femp_time_step_policy_h
 #define femp_time_step_policy_h
 
@@ -20,8 +20,8 @@
 
 #include <femp/app/scene.h>
 #include <femp/flow/incompressible_flow.h>
-#include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
 
@@ -35,11 +35,12 @@ namespace femp
   class TimeStepPolicy
   {
   public:
-    /// @p flow may be null (no melt flow).
+    /// @p flow may be null (no melt flow); @p bodies: the bodies of the
+    /// heat's alpha.
     TimeStepPolicy(const Scene<dim>              &scene,
                    const Laser<dim>              &laser,
-                   const BackgroundGrid<dim>     &grid,
                    HeatTransfer<dim>             &heat,
+                   MetalBodies<dim>              &bodies,
                    const IncompressibleFlow<dim> *flow,
                    ConditionalOStream            &out);
 
@@ -73,15 +74,16 @@ namespace femp
     solid_may_cool(const double time, const bool solid_uses_cooling_step);
 
     /// Peak temperature of the metal attached to the substrate
-    /// (attached_metal.h), computed once per temperature step. Collective.
+    /// (MetalBodies::workpiece_max_temperature()), computed once per
+    /// temperature step. Collective.
     double
     workpiece_peak_temperature();
 
   private:
     const Scene<dim>              &scene;
     const Laser<dim>              &laser;
-    const BackgroundGrid<dim>     &grid;
     HeatTransfer<dim>             &heat;
+    MetalBodies<dim>              &bodies;
     const IncompressibleFlow<dim> *flow;
     ConditionalOStream            &out;
     /// 'Time step after solidification' in use at this step.

@@ -13,7 +13,9 @@
 //    ('upwind': the heat moves by upwind convection of T in the heat equation).
 // It is the one keeper of alpha: the only caller of
 // HeatTransfer::set_metal_fraction() in a run, which stores alpha for the
-// heat equation and its readers (cell_fields.h).
+// heat equation and its readers (cell_fields.h), and of
+// MetalBodies::update(), which finds the bodies of metal of the same alpha
+// once for the heat, the solid and the stop test.
 // It keeps the energy account of these exchanges ('moved_points': the
 // change of the stored enthalpy of the grid they caused, zero for a
 // conservative exchange).
@@ -21,6 +23,7 @@
 #define femp_point_heat_exchange_h
 
 #include <femp/grid/material_points.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 
 namespace femp
@@ -30,9 +33,12 @@ namespace femp
   {
   public:
     /// @p carried_by_points: Heat transfer/Advection by melt flow = points.
+    /// @p bodies: updated with each new alpha and handed to the heat
+    /// (nullptr: no bodies, the heat finds no detached drops).
     PointHeatExchange(MaterialPoints<dim> &points,
                       HeatTransfer<dim>   &heat,
-                      const bool           carried_by_points);
+                      const bool           carried_by_points,
+                      MetalBodies<dim>    *bodies = nullptr);
 
     /// Initial temperatures: points outside the initial @p bodies take
     /// heat_prm's initial temperature at their position (when it is a
@@ -63,6 +69,11 @@ namespace femp
     void
     points_changed_cells();
 
+    /// After a checkpoint restored the heat's alpha: the bodies of metal
+    /// of it. Collective.
+    void
+    metal_fraction_restored();
+
     /// Change of the stored enthalpy caused by points_changed_cells() over
     /// the run, J (2D: J/m).
     double
@@ -82,9 +93,14 @@ namespace femp
     MaterialPoints<dim> &points;
     HeatTransfer<dim>   &heat;
     const bool           carried_by_points;
+    MetalBodies<dim>    *bodies;
     double               moved_points = 0;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
+
+    /// alpha changed: the bodies, then the heat.
+    void
+    new_metal_fraction(const std::vector<double> &alpha);
   };
 } // namespace femp
 

@@ -3,16 +3,25 @@
 // pointer into another). Each field has one writer:
 //
 //   field              writer                          readers
-//   temperature T      HeatTransfer (eq. 1)            IncompressibleFlow
-//                                                      (Marangoni stress,
-//                                                      recoil pressure)
+//   temperature T      HeatTransfer: advance() (eq. 1) IncompressibleFlow
+//                      and, for the cells whose        (Marangoni stress,
+//                      points changed, the heat they   recoil pressure),
+//                      bring (PointHeatExchange calls  points (eq. 2),
+//                      its set_cell_temperature(),     solid, output
+//                      take_point_enthalpy())
 //   liquid fraction    HeatTransfer (from T, the       IncompressibleFlow
 //     gamma            enthalpy relation)              (Darcy damping)
 //   metal fraction     PointHeatExchange, whenever     HeatTransfer, output,
-//     alpha            points changed cells (kept by  probes, stop test
-//                      HeatTransfer for its readers)
+//     alpha            points changed cells (stored    probes, builds
+//                      by HeatTransfer for its
+//                      readers)
 //   cell velocity u    IncompressibleFlow (mean of     HeatTransfer (upwind
 //                      the nodes of fluid cells)       convection of T)
+//
+// What alpha's bodies of metal are (MetalBodies: the detached drops, the
+// workpiece attached to the substrate) is found by the same writer from the
+// same alpha, once per change, and read by HeatTransfer (drop losses),
+// SolidSubCycle (points in drops set aside) and TimeStepPolicy (stop test).
 //
 // All fields cover the local box of the background grid with ghost values
 // current. A missing field is nullptr (each reader says what it does then).
@@ -28,7 +37,8 @@ namespace femp
   template <int dim>
   struct CellFields
   {
-    /// Cell temperature, K (writer: HeatTransfer).
+    /// Cell temperature, K (writer: HeatTransfer, with the heat of moved
+    /// points from PointHeatExchange).
     const std::vector<double> *temperature = nullptr;
     /// Liquid fraction gamma in [0, 1] (writer: HeatTransfer).
     const std::vector<double> *liquid_fraction = nullptr;

@@ -27,6 +27,7 @@
 #include <femp/base/parameter_table.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/ray_traced_absorption.h>
 
@@ -180,9 +181,12 @@ namespace femp
     }
 
     /// New metal fraction (owned cells and ghosts); rebuilds the list of
-    /// surface cells and the |grad alpha| weights.
+    /// surface cells and the |grad alpha| weights. With 'Detached drops =
+    /// sphere' the drops are those of @p bodies, found from the same alpha
+    /// (none when nullptr).
     void
-    set_metal_fraction(const std::vector<double> &alpha);
+    set_metal_fraction(const std::vector<double> &alpha,
+                       const MetalBodies<dim>    *bodies = nullptr);
 
     /// Specific enthalpy of the metal at @p T_cell, J/kg: C(T) + L_m
     /// gamma(T), C the antiderivative of c_m (the relation of the
@@ -270,17 +274,6 @@ namespace femp
     /// sum V [alpha rho_m (int c_m dT + L_m gamma) + (1-alpha) rho_g c_g dT].
     double
     stored_enthalpy() const;
-    /// The owned cells of the detached drops (Detached drops = sphere;
-    /// empty when off), in increasing local index; they change with alpha.
-    std::vector<std::uint32_t>
-    detached_cells() const
-    {
-      std::vector<std::uint32_t> c;
-      c.reserve(detached.size());
-      for (const auto &d : detached)
-        c.push_back(d.index);
-      return c;
-    }
     /// Global maximum temperature over metal cells after the last step.
     double
     max_temperature() const
@@ -336,11 +329,11 @@ namespace femp
     /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
     std::vector<double> laser_density, loss_weight;
     /// Detached metal cells (with Heat transfer/Detached drops = sphere): the
-    /// owned metal cells of drops of one or two cells (no other metal face
-    /// neighbour inside the domain). Each loses heat as part of a sphere
-    /// (2D: a cylinder) of the drop's metal volume in still gas: area per
-    /// cell volume 2 dim alpha/d (1/m) and gas coefficient 2 k_g/d
-    /// (W/(m^2 K)), d the sphere's diameter.
+    /// owned metal cells of the drops of MetalBodies (at most 'Detached drop
+    /// cells' cells, no other metal face neighbour inside the domain). Each
+    /// loses heat as part of a sphere (2D: a cylinder) of the drop's metal
+    /// volume in still gas: area per cell volume 2 dim alpha/d (1/m) and gas
+    /// coefficient 2 k_g/d (W/(m^2 K)), d the sphere's diameter.
     struct DetachedCell
     {
       std::uint32_t index;
@@ -348,11 +341,6 @@ namespace femp
       double        gas_h; ///< Nu k_g / d, W/(m^2 K)
     };
     std::vector<DetachedCell> detached;
-    /// find_detached_cells(): per cell of the local box, the global indices
-    /// of the drop found so far (detached_drop_cells fields) and their
-    /// number (the last field; more than detached_drop_cells: a larger
-    /// body). Read only at cells with few metal neighbours.
-    std::vector<std::vector<double>> drop_sets;
     /// gas_h of the detached cells per cell of the local box, 0 elsewhere
     /// (empty when Detached drops = off).
     std::vector<double> gas_coefficient;
@@ -482,10 +470,10 @@ namespace femp
     }
     void
     compute_surface_sources(const double dt, const double time);
-    /// Fill detached and gas_coefficient from alpha (after the surface
-    /// cells; nothing when Detached drops = off).
+    /// Fill detached and gas_coefficient from the drops of @p bodies and
+    /// alpha (nothing when Detached drops = off or @p bodies is nullptr).
     void
-    find_detached_cells();
+    take_detached_drops(const MetalBodies<dim> *bodies);
     /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
     double
     enthalpy_density(const double a, const double T) const;

@@ -57,6 +57,14 @@ namespace femp
       static const Choices<WritePoints>        &
       write_points_names();
       Format format = Format::vtu;
+      /// The input names of Format (Output/Format).
+      static const Choices<Format> &
+      format_names();
+      /// Output/Existing directory: 'refuse' (true) or 'clear' (false).
+      bool refuse_existing = false;
+      /// Its input names.
+      static const Choices<bool> &
+      existing_directory_names();
       /// Point properties and grid fields to write; empty: all.
       std::vector<std::string> point_properties, grid_fields;
       double                   series_interval   = 0;

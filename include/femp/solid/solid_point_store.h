@@ -42,7 +42,7 @@ namespace femp
                     MaterialPoints<dim>       &points);
 
     /// Cells (local indices, owned) whose solid points stay out of the
-    /// solid: the detached drops of the heat transfer ('Heat
+    /// solid: the detached drops of MetalBodies ('Heat
     /// transfer/Detached drops = sphere'), spatter of one or two cells
     /// with no metal face neighbour. A drop that solidifies in the gas is
     /// not part of the workpiece, and a body of a few points whose nodes

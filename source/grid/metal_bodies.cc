@@ -1,0 +1,333 @@
+// femp: the bodies of metal of alpha (see the header): the detached drops
+// (a search over the cells with few metal neighbours, K rounds through the
+// ghost layer) and the workpiece (a flood fill over the cells with
+// alpha > 1/2 from the bottom row of the domain, distributed over the ranks
+// through the ghost layer).
+#include <deal.II/base/mpi.h>
+
+#include <femp/grid/metal_bodies.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+namespace femp
+{
+  template <int dim>
+  MetalBodies<dim>::MetalBodies(const BackgroundGrid<dim> &grid,
+                                const unsigned int         max_drop_cells)
+      : grid(grid)
+      , max_drop_cells(max_drop_cells)
+  {
+  }
+
+  template <int dim>
+  void
+  MetalBodies<dim>::update(const std::vector<double> &a)
+  {
+    alpha             = a;
+    workpiece_current = false;
+    find_detached_drops();
+  }
+
+  template <int dim>
+  std::vector<std::uint32_t>
+  MetalBodies<dim>::detached_cells() const
+  {
+    std::vector<std::uint32_t> c;
+    c.reserve(drops.size());
+    for (const auto &d : drops)
+      c.push_back(d.index);
+    return c;
+  }
+
+  template <int dim>
+  const std::vector<std::uint8_t> &
+  MetalBodies<dim>::workpiece_cells()
+  {
+    if (!workpiece_current)
+      {
+        workpiece         = attached_metal_cells(grid, alpha);
+        workpiece_current = true;
+      }
+    return workpiece;
+  }
+
+  template <int dim>
+  double
+  MetalBodies<dim>::workpiece_max_temperature(const std::vector<double> &T)
+  {
+    return attached_metal_max_temperature(grid, T, alpha, workpiece_cells());
+  }
+
+  template <int dim>
+  void
+  MetalBodies<dim>::find_detached_drops()
+  {
+    drops.clear();
+    if (max_drop_cells == 0)
+      return;
+    const unsigned int K         = max_drop_cells;
+    const auto        &st        = grid.strides();
+    const auto        &n         = grid.n_cells();
+    const double       h         = grid.h();
+    const auto         global_id = [&](const std::size_t idx) {
+      const auto ijk = grid.global_index(idx);
+      double     id  = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * n[d] + ijk[d];
+      return id;
+    };
+    // Visit the metal face neighbours inside the domain of local cell idx
+    // (global index ijk).
+    const auto for_metal_neighbours_at =
+      [&](const std::size_t idx, const auto &ijk, auto &&f) {
+        for (int d = 0; d < dim; ++d)
+          {
+            if (ijk[d] > 0 && alpha[idx - st[d]] > 0)
+              f(idx - st[d]);
+            if (ijk[d] < int(n[d]) - 1 && alpha[idx + st[d]] > 0)
+              f(idx + st[d]);
+          }
+      };
+    const auto for_metal_neighbours = [&](const std::size_t idx, auto &&f) {
+      for_metal_neighbours_at(idx, grid.global_index(idx), f);
+    };
+    // Metal face neighbours per owned metal cell, to the ghost layer.
+    if (neighbour_count.size() != alpha.size())
+      neighbour_count.assign(alpha.size(), 0.);
+    std::vector<double>       &count = neighbour_count; // zero here
+    std::vector<std::uint32_t> active;
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      if (alpha[idx] <= 0)
+        return;
+      unsigned int m = 0;
+      for_metal_neighbours_at(idx, ijk, [&](std::size_t) { ++m; });
+      count[idx] = m;
+      if (m < K)
+        active.push_back(idx);
+    });
+    if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
+      {
+        std::fill(count.begin(), count.end(), 0.);
+        return;
+      }
+    grid.update_ghosts(count);
+    if (drop_sets.size() != K + 1 || drop_sets[0].size() != alpha.size())
+      drop_sets.assign(K + 1, std::vector<double>(alpha.size(), 0.));
+    std::vector<double> &size = drop_sets[K];
+    for (const auto idx : active)
+      size[idx] = 1, drop_sets[0][idx] = global_id(idx);
+    std::vector<double> set;
+    for (unsigned int round = 0; round < K; ++round)
+      {
+        for (auto &field : drop_sets)
+          grid.update_ghosts(field);
+        for (const auto idx : active)
+          {
+            if (size[idx] > K)
+              continue; // a larger body
+            set.clear();
+            for (unsigned int k = 0; k < size[idx]; ++k)
+              set.push_back(drop_sets[k][idx]);
+            bool larger = false;
+            for_metal_neighbours(idx, [&](const std::size_t nb) {
+              larger = larger || count[nb] >= K || size[nb] > K;
+            });
+            if (!larger)
+              {
+                for_metal_neighbours(idx, [&](const std::size_t nb) {
+                  for (unsigned int k = 0; k < size[nb]; ++k)
+                    set.push_back(drop_sets[k][nb]);
+                });
+                std::sort(set.begin(), set.end());
+                set.erase(std::unique(set.begin(), set.end()), set.end());
+              }
+            if (larger || set.size() > K)
+              {
+                size[idx] = K + 1;
+                continue;
+              }
+            for (unsigned int k = 0; k < set.size(); ++k)
+              drop_sets[k][idx] = set[k];
+            size[idx] = set.size();
+          }
+        // Cells of larger bodies keep their mark (K + 1) for the
+        // neighbours; only the others go on.
+        active.erase(std::remove_if(active.begin(),
+                                    active.end(),
+                                    [&](const std::uint32_t idx) {
+                                      return size[idx] > K;
+                                    }),
+                     active.end());
+        if (Utilities::MPI::sum(active.size(), grid.communicator()) == 0)
+          break;
+      }
+    // What is left are the drops' cells. Their metal fractions, from all
+    // ranks (drops are few).
+    std::vector<double> mine; // global index, alpha, ...
+    for (const auto idx : active)
+      mine.insert(mine.end(), {global_id(idx), alpha[idx]});
+    std::map<double, double> alpha_of;
+    for (const auto &part :
+         Utilities::MPI::all_gather(grid.communicator(), mine))
+      for (std::size_t i = 0; i + 1 < part.size(); i += 2)
+        alpha_of[part[i]] = part[i + 1];
+    for (const auto idx : active)
+      {
+        double a = 0;
+        for (unsigned int k = 0; k < size[idx]; ++k)
+          a += alpha_of.at(drop_sets[k][idx]);
+        const double V = a * std::pow(h, dim);
+        const double d =
+          dim == 3 ? std::cbrt(6 * V / M_PI) : std::sqrt(4 * V / M_PI);
+        drops.push_back({idx, V, d});
+      }
+    std::fill(count.begin(), count.end(), 0.);
+  }
+
+  template <int dim>
+  std::vector<std::uint8_t>
+  attached_metal_cells(const BackgroundGrid<dim> &grid,
+                       const std::vector<double> &alpha,
+                       unsigned int              *sweeps)
+  {
+    using Grid         = BackgroundGrid<dim>;
+    const auto &st     = grid.strides();
+    const auto &status = grid.cell_status();
+    const auto  metal  = [&](const std::size_t i) { return alpha[i] > 0.5; };
+
+    // label: 1 for attached cells (alpha > 1/2); a double field for the
+    // ghost exchange.
+    std::vector<double>        label = grid.make_field(0.);
+    std::vector<std::uint32_t> stack;
+    const auto                 visit = [&](const std::size_t i) {
+      if (status[i] == Grid::owned && label[i] == 0 && metal(i))
+        {
+          label[i] = 1;
+          stack.push_back(i);
+        }
+    };
+    for (const auto idx : grid.owned_cells())
+      if (grid.global_index(idx)[dim - 1] == 0)
+        visit(idx);
+
+    // Owned cells always have a neighbour entry (ghost or padding) in the
+    // box, so idx +- stride stays inside it.
+    std::vector<double> before;
+    unsigned int        n_sweeps = 0;
+    for (;;)
+      {
+        while (!stack.empty())
+          {
+            const std::size_t idx = stack.back();
+            stack.pop_back();
+            for (int d = 0; d < dim; ++d)
+              {
+                visit(idx + st[d]);
+                visit(idx - st[d]);
+              }
+          }
+        ++n_sweeps;
+        before = label;
+        grid.update_ghosts(label);
+        // Ghost cells that became attached seed their owned neighbours.
+        for (std::size_t i = 0; i < label.size(); ++i)
+          if (status[i] == Grid::ghost && label[i] != 0 && before[i] == 0)
+            {
+              const auto ijk = grid.global_index(i);
+              for (int d = 0; d < dim; ++d)
+                for (const int s : {-1, 1})
+                  {
+                    auto nb = ijk;
+                    nb[d] += s;
+                    if (grid.in_box(nb))
+                      visit(grid.local_index(nb));
+                  }
+            }
+        const unsigned long long n_new = stack.size();
+        if (Utilities::MPI::sum(n_new, grid.communicator()) == 0)
+          break;
+      }
+    if (sweeps)
+      *sweeps = n_sweeps;
+
+    // Counted: attached, or partly filled next to an attached cell (the
+    // labels of the ghosts are current after the last exchange).
+    std::vector<std::uint8_t> counted(label.size(), 0);
+    for (const auto idx : grid.owned_cells())
+      {
+        bool c = label[idx] != 0;
+        if (!c && alpha[idx] > 0)
+          for (int d = 0; d < dim && !c; ++d)
+            c = label[idx + st[d]] != 0 || label[idx - st[d]] != 0;
+        counted[idx] = c;
+      }
+    return counted;
+  }
+
+  template <int dim>
+  double
+  attached_metal_max_temperature(const BackgroundGrid<dim> &grid,
+                                 const std::vector<double> &T,
+                                 const std::vector<double> &alpha)
+  {
+    return attached_metal_max_temperature(grid,
+                                          T,
+                                          alpha,
+                                          attached_metal_cells(grid, alpha));
+  }
+
+  template <int dim>
+  double
+  attached_metal_max_temperature(const BackgroundGrid<dim>       &grid,
+                                 const std::vector<double>       &T,
+                                 const std::vector<double>       &alpha,
+                                 const std::vector<std::uint8_t> &counted)
+  {
+    const double lowest   = std::numeric_limits<double>::lowest();
+    double       local[2] = {lowest, lowest}; // counted, all metal
+    for (const auto idx : grid.owned_cells())
+      if (alpha[idx] > 0)
+        {
+          local[1] = std::max(local[1], T[idx]);
+          if (counted[idx])
+            local[0] = std::max(local[0], T[idx]);
+        }
+    double global[2];
+    Utilities::MPI::max(ArrayView<const double>(local, 2),
+                        grid.communicator(),
+                        ArrayView<double>(global, 2));
+    return global[0] > lowest ? global[0] : global[1];
+  }
+
+  template class MetalBodies<2>;
+  template class MetalBodies<3>;
+  template std::vector<std::uint8_t>
+  attached_metal_cells(const BackgroundGrid<2> &,
+                       const std::vector<double> &,
+                       unsigned int *);
+  template std::vector<std::uint8_t>
+  attached_metal_cells(const BackgroundGrid<3> &,
+                       const std::vector<double> &,
+                       unsigned int *);
+  template double
+  attached_metal_max_temperature(const BackgroundGrid<2> &,
+                                 const std::vector<double> &,
+                                 const std::vector<double> &);
+  template double
+  attached_metal_max_temperature(const BackgroundGrid<3> &,
+                                 const std::vector<double> &,
+                                 const std::vector<double> &);
+  template double
+  attached_metal_max_temperature(const BackgroundGrid<2> &,
+                                 const std::vector<double> &,
+                                 const std::vector<double> &,
+                                 const std::vector<std::uint8_t> &);
+  template double
+  attached_metal_max_temperature(const BackgroundGrid<3> &,
+                                 const std::vector<double> &,
+                                 const std::vector<double> &,
+                                 const std::vector<std::uint8_t> &);
+} // namespace femp
