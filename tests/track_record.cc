@@ -4,10 +4,12 @@
 //     y = 9.5 h, track 2 back along -x at y = 15.5 h (hatch 6 h), each
 //     from x = 5 h to 25 h; layer 2 (spread at 245 us; its base prescribed
 //     flat at z = 12 h): track 3 along +y at x = 15.5 h from y = 4 h to 20 h;
-//   - the peak temperature of track k while its record is open:
+//   - the peak temperature of track k while its laser is on:
 //     T_s + A (1 - (w / a)^2 - ((z - z0) / b)^2) (w: the distance from its
 //     axis), so the fusion zone (T >= T_s) is an elliptic cylinder of
-//     half-width a and half-depth b about z0;
+//     half-width a and half-depth b about z0; track 1's pool is still
+//     molten when track 2 starts and solidifies a step later: it must not
+//     count in track 2's zone;
 //   - the fused surface after track k: a parabolic bead of height H and
 //     half-width c on the base, written as the fused fraction of each cell
 //     (the share of its height below the surface).
@@ -87,55 +89,30 @@ main(int argc, char **argv)
   grid.create();
 
   // The scan path: three tracks, a jump between tracks 1 and 2, a dwell
-  // and the jump up to layer 2 (spread at 245 us) before track 3.
-  using Segment = Laser<dim>::Segment;
-  auto seg      = [](const Point<dim> &a,
-                const Point<dim> &b,
-                const double      P,
-                const double      t0,
-                const double      t1) {
-    Segment s;
-    s.start   = a;
-    s.end     = b;
-    s.power   = P;
-    s.speed   = a.distance(b) / (t1 - t0);
-    s.t_begin = t0;
-    s.t_end   = t1;
-    return s;
-  };
-  // Times on half steps (dt = 10 us), so that each record opens and
-  // closes in a step beyond round-off.
-  const std::vector<Segment> path         = {seg({5 * h, 9.5 * h, 10 * h},
-                                         {25 * h, 9.5 * h, 10 * h},
-                                         200,
-                                         5e-6,
-                                         1.05e-4),
-                                             seg({25 * h, 9.5 * h, 10 * h},
-                                         {25 * h, 15.5 * h, 10 * h},
-                                         0,
-                                         1.05e-4,
-                                         1.25e-4),
-                                             seg({25 * h, 15.5 * h, 10 * h},
-                                         {5 * h, 15.5 * h, 10 * h},
-                                         200,
-                                         1.25e-4,
-                                         2.25e-4),
-                                             seg({5 * h, 15.5 * h, 10 * h},
-                                         {5 * h, 15.5 * h, 10 * h},
-                                         0,
-                                         2.25e-4,
-                                         2.45e-4),
-                                             seg({5 * h, 15.5 * h, 14 * h},
-                                         {15.5 * h, 4 * h, 14 * h},
-                                         0,
-                                         2.45e-4,
-                                         2.65e-4),
-                                             seg({15.5 * h, 4 * h, 14 * h},
-                                         {15.5 * h, 20 * h, 14 * h},
-                                         200,
-                                         2.65e-4,
-                                         3.45e-4)};
-  const std::vector<double>  layer_starts = {2.45e-4};
+  // and the jump up to layer 2 (spread at 245 us) before track 3. Each
+  // segment: start and end (x, y, z in h), power (W), times (s). Times on
+  // half steps (dt = 10 us), so that each record opens and closes in a
+  // step beyond round-off.
+  const double table[6][9] = {
+    {5, 9.5, 10, 25, 9.5, 10, 200, 5e-6, 1.05e-4},
+    {25, 9.5, 10, 25, 15.5, 10, 0, 1.05e-4, 1.25e-4},
+    {25, 15.5, 10, 5, 15.5, 10, 200, 1.25e-4, 2.25e-4},
+    {5, 15.5, 10, 5, 15.5, 10, 0, 2.25e-4, 2.45e-4},
+    {5, 15.5, 14, 15.5, 4, 14, 0, 2.45e-4, 2.65e-4},
+    {15.5, 4, 14, 15.5, 20, 14, 200, 2.65e-4, 3.45e-4}};
+  std::vector<Laser<dim>::Segment> path;
+  for (const auto &row : table)
+    {
+      Laser<dim>::Segment s;
+      s.start   = Point<dim>(row[0] * h, row[1] * h, row[2] * h);
+      s.end     = Point<dim>(row[3] * h, row[4] * h, row[5] * h);
+      s.power   = row[6];
+      s.t_begin = row[7];
+      s.t_end   = row[8];
+      s.speed   = s.start.distance(s.end) / (s.t_end - s.t_begin);
+      path.push_back(s);
+    }
+  const std::vector<double> layer_starts = {2.45e-4};
   const auto tracks = TrackRecord<dim>::find_tracks(path, layer_starts);
   checks.at_most("|tracks found - 3|", std::abs(double(tracks.size()) - 3), 0);
   if (tracks.size() != 3)
@@ -157,15 +134,23 @@ main(int argc, char **argv)
   MPI_Barrier(comm);
   TrackRecord<dim> record(grid, tracks, Ts, dir);
 
-  // The prescribed fields: the temperature of a step [t, t + dt) is the
-  // peak of the track whose laser is on, or was on last, at its middle; the
-  // fused fraction at time t holds the beads finished by then, layer 2's
-  // flat base from 250 us (after track 2's record closed at 240 us).
-  auto temperature = [&](const double t, std::vector<double> &T) {
-    const double tm   = t + 5e-6;
-    const int    zone = tm < 1.25e-4 ? 0 : (tm < 2.45e-4 ? 1 : 2);
+  // The prescribed fields. The temperature of step n, [n dt, (n + 1) dt):
+  // the peak of the track whose laser is on; track 1's pool (its peak
+  // field) stays molten through the jump (steps 10, 11) and the first
+  // step of track 2 (12), solidifies in the next (13: its peak less 1.5 A,
+  // below T_s everywhere), then track 2's zone (14-22): the record of
+  // track 2 opens with track 1's pool molten and must not count it (its
+  // width is 2 a, not that of both zones). The dwell and jump to layer 2
+  // (23-25) and the step after track 3 (35): 300 K. The record sees the
+  // temperature of the step before when it opens or closes (300 K at
+  // n = 0). The fused fraction at time t holds the beads finished by then,
+  // layer 2's flat base from 250 us (after track 2's record closed at
+  // 240 us).
+  auto temperature = [&](const int n, std::vector<double> &T) {
+    const double shift = n == 13 ? -1.5 * A : 0.;
+    const int    zone = n <= 13 ? 0 : n <= 22 ? 1 : n >= 26 && n <= 34 ? 2 : -1;
     for (const auto i : grid.owned_cells())
-      T[i] = peak(zones[zone], grid.cell_center(i));
+      T[i] = zone < 0 ? 300. : peak(zones[zone], grid.cell_center(i)) + shift;
   };
   auto fused = [&](const double t, std::vector<double> &f) {
     for (const auto i : grid.owned_cells())
@@ -179,17 +164,17 @@ main(int argc, char **argv)
         f[i] = std::min(1., std::max(0., (zs - (x[2] - 0.5 * h)) / h));
       }
   };
-  std::vector<double> T = grid.make_field(0.), f = grid.make_field(0.);
+  std::vector<double> T = grid.make_field(300.), f = grid.make_field(0.);
   const double        dt = 1e-5;
   std::vector<TrackRecord<dim>::Row> rows;
   for (int n = 0; n < 36; ++n)
     {
       const double t = n * dt;
       fused(t, f);
-      temperature(t, T);
       if (record.due(t + dt))
         for (const auto &r : record.update(t, t + dt, f, T))
           rows.push_back(r);
+      temperature(n, T);
       fused(t + dt, f);
       record.observe(T, f);
     }

@@ -299,8 +299,9 @@ namespace femp
                 "Laser/Scan path file",
                 short_value(path_file),
                 std::filesystem::path(path_file).is_relative() ?
-                  "the file cannot be opened (a relative path is read "
-                  "from the directory femp is started in, " +
+                  "the file cannot be opened (a relative path is looked "
+                  "for next to the scene file that names it, then in the "
+                  "directory femp is started in, " +
                     std::filesystem::current_path().string() + ")" :
                   std::string("the file cannot be opened"));
         const unsigned int wanted = 2 * (dim - 1) + 2;

@@ -1,5 +1,6 @@
-// femp: scene files with 'include' lines relative to the including file's
-// folder, at any depth (include/femp/base/parameter_file.h).
+// femp: scene files with 'include' lines and scan-path files relative to the
+// folder of the file that names them, at any depth
+// (include/femp/base/parameter_file.h).
 #include <deal.II/base/exceptions.h>
 #include <deal.II/base/utilities.h>
 
@@ -52,6 +53,38 @@ namespace femp
       return dealii::Utilities::trim(name);
     }
 
+    /// For a line 'set Scan path file = NAME': NAME, which stands in
+    /// @p line at [@p begin, @p end); "" for any other line.
+    std::string
+    scan_path_name(const std::string &line,
+                   std::size_t       &begin,
+                   std::size_t       &end)
+    {
+      const std::size_t first = line.find_first_not_of(" \t");
+      if (first == std::string::npos || (line.compare(first, 4, "set ") != 0 &&
+                                         line.compare(first, 4, "SET ") != 0))
+        return "";
+      const std::size_t eq = line.find('=', first);
+      if (eq == std::string::npos)
+        return "";
+      // The entry's name, its blanks collapsed as deal.II does.
+      std::string entry;
+      for (std::size_t i = first + 4; i < eq; ++i)
+        if (line[i] != ' ' && line[i] != '\t')
+          entry += line[i];
+        else if (!entry.empty() && entry.back() != ' ')
+          entry += ' ';
+      if (dealii::Utilities::trim(entry) != "Scan path file")
+        return "";
+      end = std::min(line.find('#', eq), line.size());
+      while (end > eq + 1 && (line[end - 1] == ' ' || line[end - 1] == '\t'))
+        --end;
+      begin = line.find_first_not_of(" \t", eq + 1);
+      if (begin == std::string::npos || begin >= end)
+        return "";
+      return line.substr(begin, end - begin);
+    }
+
     std::string
     resolve(const std::string &file, const unsigned int depth)
     {
@@ -102,6 +135,18 @@ namespace femp
                   resolved_copies.files.emplace_back(target, beside.string());
                 }
               line = line.substr(0, first) + "include " + target;
+            }
+          // A relative scan-path file found next to this file: named by
+          // its path from the working directory (else left to be looked
+          // for there).
+          std::size_t       begin = 0, end = 0;
+          const std::string scan = scan_path_name(line, begin, end);
+          if (!scan.empty() && !folder.empty() && fs::path(scan).is_relative())
+            {
+              const fs::path path = folder / scan;
+              if (fs::exists(path) && !fs::is_directory(path))
+                line = line.substr(0, begin) +
+                       path.lexically_normal().string() + line.substr(end);
             }
           out << line << '\n';
         }

@@ -126,7 +126,13 @@ namespace femp
           out.push_back(close(time, fused, T));
         open_track = next_track++;
         is_open    = true;
+        // Metal still molten from an earlier track (at or above the
+        // solidus now) is not this track's until it has solidified: marked
+        // -1 until then (observe()).
         std::fill(peak.begin(), peak.end(), 0.);
+        for (const auto i : grid.owned_cells())
+          if (T[i] >= T_solidus)
+            peak[i] = -1.;
         if (list[open_track].in_layer == 1)
           {
             base         = surface(global(fused));
@@ -144,8 +150,17 @@ namespace femp
     if (!is_open)
       return;
     for (const auto i : grid.owned_cells())
-      if (alpha[i] >= 0.5)
-        peak[i] = std::max(peak[i], T[i]);
+      {
+        if (peak[i] < 0)
+          {
+            // Molten since the record opened: this track's once solid.
+            if (T[i] >= T_solidus)
+              continue;
+            peak[i] = 0.;
+          }
+        if (alpha[i] >= 0.5)
+          peak[i] = std::max(peak[i], T[i]);
+      }
   }
 
   template <int dim>

@@ -58,7 +58,9 @@ namespace femp
               "power' (2D), m, m/s, W; power 0 moves the beam with the "
               "laser off. Segments follow each other in time from "
               "'Start time'. Lines starting with # are comments. A "
-              "relative path is relative to the working directory.");
+              "relative path is looked for next to the scene file (or "
+              "included file) that sets it, then in the working "
+              "directory; given with --set, in the working directory.");
     table.add("Scan path format",
               scan_path_format,
               Patterns::Selection(scan_path_formats()),

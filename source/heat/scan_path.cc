@@ -53,8 +53,9 @@ namespace femp
               parameter,
               file,
               std::filesystem::path(file).is_relative() ?
-                "the file cannot be opened (a relative path is read from "
-                "the directory femp is started in, " +
+                "the file cannot be opened (a relative path is looked for "
+                "next to the scene file that names it, then in the "
+                "directory femp is started in, " +
                   std::filesystem::current_path().string() + ")" :
                 std::string("the file cannot be opened"));
       std::vector<Line> lines;

@@ -10,9 +10,12 @@
 //     schedule that started before it;
 //   - its record: from its start to the start of the next track (or of the
 //     next layer, before the recoat; the last track: to the end of the
-//     run), the peak temperature of every metal cell (alpha >= 1/2); the
-//     fusion zone is where that peak reached the solidus, its boundary
-//     interpolated linearly between cell centres;
+//     run), the peak temperature of every metal cell (alpha >= 1/2) that
+//     melted during it: a cell still at or above the solidus when the
+//     record opens (the pool of an earlier track) counts only after it
+//     has fallen below the solidus; the fusion zone is where that peak
+//     reached the solidus, its boundary interpolated linearly between
+//     cell centres;
 //   - the layer's base: the top of the fused metal (alpha (1 - s_p) = 1/2,
 //     s_p the unfused powder share, interpolated along the vertical) in
 //     every grid column when the layer's first track starts;
@@ -122,14 +125,16 @@ namespace femp
     /// metal fraction @p fused = alpha (1 - s_p) and the temperature @p T,
     /// owned values of the local box; write its row), then open the track
     /// that starts before @p t_next (its layer's first: the base from
-    /// @p fused). Returns the rows written. Collective.
+    /// @p fused; a cell with @p T at or above the solidus is still molten
+    /// from an earlier track). Returns the rows written. Collective.
     std::vector<Row>
     update(const double               time,
            const double               t_next,
            const std::vector<double> &fused,
            const std::vector<double> &T);
     /// After a temperature step: the peak temperature of the metal cells
-    /// (@p alpha >= 1/2) of the open record.
+    /// (@p alpha >= 1/2) of the open record (not of a cell molten since
+    /// the record opened: one that has not yet solidified).
     void
     observe(const std::vector<double> &T, const std::vector<double> &alpha);
     /// At the end of the run: close the open record at @p time. Collective.
@@ -176,7 +181,8 @@ namespace femp
     /// open.
     unsigned int open_track = 0, next_track = 0;
     bool         is_open = false;
-    /// Peak temperature per cell of the local box (owned values).
+    /// Peak temperature per cell of the local box (owned values); -1: still
+    /// molten from an earlier track.
     std::vector<double> peak;
     /// Global records kept: the previous closed track's peak, the base
     /// of the current layer per column.
