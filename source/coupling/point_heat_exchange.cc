@@ -33,14 +33,12 @@ namespace femp
     if (!bodies)
       return;
     // The heat restored alpha and its surface lists; the bodies follow,
-    // and the heat takes their detached drops if there are any (the rest
-    // of its state is the same after a second set_metal_fraction()).
+    // and the heat takes their detached drops (the rest of its state is
+    // the same after a second set_metal_fraction()). Every rank makes the
+    // call: the drops are per rank, set_metal_fraction() is collective.
     bodies->update(heat.metal_fraction());
-    if (!bodies->detached_drops().empty())
-      {
-        const std::vector<double> alpha = heat.metal_fraction();
-        heat.set_metal_fraction(alpha, bodies);
-      }
+    const std::vector<double> alpha = heat.metal_fraction();
+    heat.set_metal_fraction(alpha, bodies);
   }
 
   template <int dim>
