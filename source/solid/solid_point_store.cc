@@ -436,6 +436,39 @@ namespace femp
   }
 
   template <int dim>
+  std::array<double, dim + 3>
+  SolidPointStore<dim>::fastest_member() const
+  {
+    std::array<double, dim + 3> r;
+    r.fill(0.);
+    r[0]                      = -1;
+    const std::size_t n       = true_mass.size();
+    std::size_t       best    = n;
+    double            v2_best = -1;
+    for (std::size_t p = 0; p < n; ++p)
+      {
+        double v2 = 0;
+        for (int d = 0; d < dim; ++d)
+          v2 += v[d][p] * v[d][p];
+        if (v2 > v2_best)
+          v2_best = v2, best = p;
+      }
+    if (best == n)
+      return r;
+    r[0] = std::sqrt(v2_best);
+    for (int d = 0; d < dim; ++d)
+      r[1 + d] = x[d][best];
+    // The members share the cell index of the best one (any order).
+    double m = 0, count = 0;
+    for (std::size_t p = 0; p < n; ++p)
+      if (cell[p] == cell[best])
+        m += true_mass[p], count += 1;
+    r[1 + dim] = count;
+    r[2 + dim] = m / (mat.density() * std::pow(grid.h(), dim));
+    return r;
+  }
+
+  template <int dim>
   typename SolidPointStore<dim>::Exchange
   SolidPointStore<dim>::exchange_since_gather() const
   {

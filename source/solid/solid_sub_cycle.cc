@@ -14,6 +14,7 @@
 #include <femp/solid/fe_zone_depth.h>
 #include <femp/solid/solid_sub_cycle.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -1558,6 +1559,23 @@ namespace femp
          "too large for the state, e.g. near its stable limit with the melt "
          "flow). Use a smaller 'Solid/Safety factor' (or 'Solid/Time step'); "
          "the energy file shows where the balance grew";
+    // Where: the fastest solid point of all ranks (collective: every rank
+    // is here, the decision above is global).
+    const auto all = Utilities::MPI::all_gather(comm, mpm.fastest_member());
+    const auto f   = *std::max_element(all.begin(),
+                                     all.end(),
+                                     [](const auto &a, const auto &b) {
+                                       return a[0] < b[0];
+                                     });
+    if (f[0] >= 0)
+      {
+        s << ". The fastest solid point (" << f[0] << " m/s) is at (";
+        for (int d = 0; d < dim; ++d)
+          s << (d ? ", " : "") << f[1 + d];
+        s << ") m, with " << f[1 + dim]
+          << " solid points in its cell, their mass " << f[2 + dim]
+          << " of a full cell's";
+      }
     throw CollectiveError(s.str()); // the sums are global
   }
 

@@ -112,6 +112,12 @@ namespace femp
     {
       return true_mass.size();
     }
+    /// Where an instability shows first: the member with the largest
+    /// speed on this rank, {speed (m/s), its position (dim, m), the members
+    /// in its cell, the sum of their true masses over rho h^dim (the cell's
+    /// filling by the solid)}; speed -1 without members. Local.
+    std::array<double, dim + 3>
+    fastest_member() const;
     /// Checkpoint, between two advances of the solid (after scatter()):
     /// what is read before the next gather() rebuilds the flat arrays: the
     /// ids of the points of the last gather (state changes since), the
