@@ -697,6 +697,12 @@ namespace femp
     if (n_ranks > 1)
       s << " on " << n_ranks << " ranks (each part: its slowest rank)";
     s << "\n";
+    double timed = 0;
+    for (const auto &[t, name] : parts)
+      timed += t;
+    // What no section times on the slowest ranks: the scene's reading and
+    // checks, the step choice, the progress lines, the end report.
+    parts.emplace_back(std::max(0., total - timed), "other (not timed)");
     for (const auto &[t, name] : parts)
       s << "  " << std::left << std::setw(20) << name << std::right
         << std::setw(10) << std::setprecision(t < 10 ? 2 : 1) << t << " s"
