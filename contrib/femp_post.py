@@ -21,6 +21,8 @@ files (doc/output.md lists the fields and their units). What it reads:
   probe_line_<L>_<n>.csv    Run.probe_line(L, n), Run.probe_line_names()
   track_shape_<n>.csv       Run.track_shape(n)
   track_bead.csv            Run.track_bead()
+  porosity.csv, pores.csv   Run.porosity(), Run.pores(n)  builds: pores
+  tracks.csv, layers.csv    Run.tracks(), Run.layers()    builds: per track
   any other femp CSV        read_csv(path)
   grid.pvd / grid.xdmf      Run.outputs(): [(n, time)] of the field outputs
   grid_<n>.pvtu (VTU), grid_mesh*.h5 + grid_<n>.h5 (HDF5)   Run.grid(n)
@@ -199,6 +201,34 @@ class Run:
 
     def track_bead(self):
         return read_csv(self.path("track_bead.csv"))
+
+    # Builds (doc/builds.md)
+    def porosity(self):
+        """porosity.csv: per field output the pores' count, gas and powder
+        volume (m^3), the built metal and the relative density."""
+        return read_csv(self.path("porosity.csv"))
+
+    def pores(self, n=None):
+        """pores.csv: one row per pore (volume, powder, equivalent
+        diameter, centroid x, y[, z]) of field output n (None: every
+        output; n < 0 counts from the last output with a row)."""
+        t = read_csv(self.path("pores.csv"))
+        if n is None or not len(t.get("output", [])):
+            return t
+        outputs = sorted(set(int(x) for x in t["output"]))
+        if n < 0:
+            n = outputs[n] if -n <= len(outputs) else -1
+        keep = t["output"] == n
+        return Table({k: v[keep] for k, v in t.items()}, t.header, t.time)
+
+    def tracks(self):
+        """tracks.csv: per measured track its layer, times, bead height,
+        width, re-melt depth and overlap (m)."""
+        return read_csv(self.path("tracks.csv"))
+
+    def layers(self):
+        """layers.csv: per finished layer the means over its tracks."""
+        return read_csv(self.path("layers.csv"))
 
     def _numbers(self, pattern):
         out = []

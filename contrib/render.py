@@ -23,12 +23,21 @@
 #   cut_T      the metal cut along the track (the plane y = --cut-y, the
 #              half y < cut removed) coloured by T, with the melt pool's
 #              outline (liquid fraction gamma = 1/2) on the cut;
-#   cut_von_mises  the same cut coloured by the cells' von Mises stress.
+#   cut_von_mises  the same cut coloured by the cells' von Mises stress;
+#   cut_pores  the metal cut across the tracks (the plane x = --cut-x, the
+#              half x < cut removed) coloured by the cells' unfused powder
+#              share (the field unfused_powder: 0 fused metal, 1 powder that
+#              never melted), with the pores (cells of the field pore > 0,
+#              enclosed gas: doc/builds.md) behind the cut drawn in magenta;
+#              --cut-x pore puts the cut through the largest pore of that
+#              output (pores.csv). Needs a scene with pore detection
+#              (Porosity/Detect pores, on with a layer schedule).
 # Times (--times): 'last' (default), 'all', or comma-separated times in s;
 # each is matched to the nearest grid output (the points are drawn only
 # when they were written at that time: Output/Write material points =
 # always). Files: OUT/PREFIX<view>_<time in us>us.png.
 #
+# --palette writes 256-colour PNGs (python3-pil), about a third of the size.
 # --state FILE.pvsm also writes a ParaView state of the first view at the
 # first time, for turning the view by hand: paraview --state=FILE.pvsm.
 #
@@ -52,7 +61,8 @@ def parse_args(argv):
         description="3D pictures of a femp track (pvbatch).")
     p.add_argument("runs", nargs="+", help="output directory[=label]")
     p.add_argument("--views", default="T,von_mises,cut_T,cut_von_mises",
-                   help="comma-separated: T, von_mises, cut_T, cut_von_mises")
+                   help="comma-separated: T, von_mises, cut_T, "
+                        "cut_von_mises, cut_pores")
     p.add_argument("--times", default="last",
                    help="'last', 'all' or comma-separated times in s")
     p.add_argument("--out", default=".", help="directory of the PNG files")
@@ -66,12 +76,18 @@ def parse_args(argv):
                         "quarter of the grid's cell size)")
     p.add_argument("--cut-y", type=float, default=None,
                    help="y of the cut plane, m (default: the domain's middle)")
+    p.add_argument("--cut-x", default=None,
+                   help="x of the cut_pores plane, m, or 'pore' (through "
+                        "the largest pore; default: the domain's middle)")
     p.add_argument("--T-range", default=None,
                    help="colour range of T, K, as MIN,MAX (default: data)")
     p.add_argument("--vm-range", default=None,
                    help="colour range of von Mises, MPa, MIN,MAX")
     p.add_argument("--state", default=None,
                    help="also write a ParaView state file (.pvsm)")
+    p.add_argument("--palette", action="store_true",
+                   help="write 256-colour PNGs (python3-pil): about a third "
+                        "of the size, for pictures kept in a repository")
     p.add_argument("--check", action="store_true",
                    help="fail unless every picture has at least 2 %% of "
                         "its pixels drawn (not background)")
@@ -184,7 +200,8 @@ def apply_map(lut, preset):
             pass
 
 
-def colour(display, view, association, array, lut_name, title, rng):
+def colour(display, view, association, array, lut_name, title, rng,
+           fmt="%.0f"):
     ColorBy(display, (association, array))
     lut = GetColorTransferFunction(lut_name)
     apply_map(lut, "Turbo")
@@ -203,8 +220,8 @@ def colour(display, view, association, array, lut_name, title, rng):
     bar.WindowLocation = "Any Location"
     bar.Position = [0.87, 0.15]
     bar.AutomaticLabelFormat = 0
-    bar.LabelFormat = "%.0f"
-    bar.RangeLabelFormat = "%.0f"
+    bar.LabelFormat = fmt
+    bar.RangeLabelFormat = fmt
     return lut
 
 
@@ -298,8 +315,11 @@ def array_range(proxy, association, name, time):
 def set_camera(view, b, cut):
     cx, cy, cz = (b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2
     L = builtins.max(b[1] - b[0], b[3] - b[2], b[5] - b[4])
-    # From the front left, above: the track (along x) runs to the right.
+    # From the front left, above: the track (along x) runs to the right;
+    # a cut across the tracks (cut == "x") is seen from -x.
     d = (-0.55, -1.0, 0.75) if not cut else (-0.35, -1.0, 0.45)
+    if cut == "x":
+        d = (-1.0, 0.35, 0.45)
     n = math.sqrt(builtins.sum(x * x for x in d))
     view.CameraPosition = [cx + 2.6 * L * d[0] / n, cy + 2.6 * L * d[1] / n,
                            cz + 2.6 * L * d[2] / n]
@@ -311,7 +331,7 @@ def set_camera(view, b, cut):
     cam = view.GetActiveCamera()
     cam.Dolly(1.3)
     # Room for the colour bar on the right: the model a little to the left.
-    shift = [0.09 * L * x for x in (1.0, -0.55, 0)]
+    shift = [0.09 * L * x for x in (-d[1], d[0], 0)]
     view.CameraFocalPoint = [a + b for a, b in zip(view.CameraFocalPoint, shift)]
     view.CameraPosition = [a + b for a, b in zip(view.CameraPosition, shift)]
 
@@ -361,6 +381,11 @@ def draw(run, kind, t, view, args, rng):
     field = "T" if kind.endswith("T") else "vm"
     b = run.bounds
     metal = run.metal
+    if kind == "cut_pores":
+        draw_pores(run, t, view, args)
+        label(view, run)
+        set_camera(view, b, "x")
+        return
     if cut:
         y0 = args.cut_y if args.cut_y is not None else (b[2] + b[3]) / 2
         half = Clip(Input=run.metal)
@@ -417,6 +442,75 @@ def draw(run, kind, t, view, args, rng):
     set_camera(view, b, cut)
 
 
+def largest_pore_x(run, t):
+    """x of the centroid of the largest pore of the output at time t
+    (pores.csv of the run); None without pores."""
+    import csv
+    name = os.path.join(run.dir, "pores.csv")
+    if not os.path.exists(name):
+        return None
+    best = None
+    with open(name) as f:
+        for row in csv.DictReader(f):
+            if builtins.abs(float(row["time"]) - t) > 1e-3 * builtins.max(t, 1e-12):
+                continue
+            if best is None or float(row["volume"]) > float(best["volume"]):
+                best = row
+    return float(best["x"]) if best else None
+
+
+def draw_pores(run, t, view, args):
+    """The cut_pores view: the metal cut at x = x0 coloured by the cells'
+    unfused powder share, the pore cells beyond the cut in magenta."""
+    b = run.bounds
+    x0 = (b[0] + b[1]) / 2
+    if args.cut_x == "pore":
+        x = largest_pore_x(run, t)
+        if x is None:
+            print("render.py: no pore at t = %.4g s in %s: cut at the middle"
+                  % (t, run.dir))
+        else:
+            x0 = x
+    elif args.cut_x is not None:
+        x0 = float(args.cut_x)
+    if run.grid_reader.CellData.GetArray("unfused_powder") is None and \
+            run.grid_reader.PointData.GetArray("unfused_powder") is None:
+        sys.exit("render.py: cut_pores: '%s' has no field unfused_powder "
+                 "(a scene with Porosity/Detect pores)" % run.dir)
+    half = Clip(Input=run.metal)
+    half.ClipType = "Plane"
+    half.ClipType.Origin = [x0, 0, 0]
+    half.ClipType.Normal = [1, 0, 0]
+    half.Invert = 0  # keep x >= x0: the cut faces the camera
+    s = ExtractSurface(Input=half)
+    d = Show(s, view)
+    lut = colour(d, view, "CELLS", "unfused_powder", "unfused_powder",
+                 "unfused\npowder", [0, 1], "%.1f")
+    apply_map(lut, "Cool to Warm")
+    pores = Threshold(Input=run.cells)
+    pores.Scalars = ["CELLS", "pore"]
+    try:
+        pores.LowerThreshold = 0.5
+        pores.UpperThreshold = 1e30
+        pores.ThresholdMethod = "Between"
+    except AttributeError:  # ParaView before 5.10
+        pores.ThresholdRange = [0.5, 1e30]
+    beyond = Clip(Input=pores)
+    beyond.ClipType = "Plane"
+    beyond.ClipType.Origin = [x0 - 1e-3 * run.cell_size, 0, 0]
+    beyond.ClipType.Normal = [1, 0, 0]
+    beyond.Invert = 0
+    beyond.Crinkleclip = 1
+    dp = Show(beyond, view)
+    dp.ColorArrayName = ["POINTS", ""]
+    dp.AmbientColor = dp.DiffuseColor = [0.85, 0.0, 0.85]
+    note = Text(Text="cut at x = %.0f um; pores in magenta" % (x0 * 1e6))
+    dn = Show(note, view)
+    dn.Color = [0, 0, 0]
+    dn.FontSize = 16
+    dn.WindowLocation = "Lower Right Corner"
+
+
 def ranges(runs, kinds, t_of, args):
     """One colour range per field over all runs at their times."""
     out = {}
@@ -451,7 +545,7 @@ def ranges(runs, kinds, t_of, args):
 def main(argv):
     args = parse_args(argv)
     kinds = [k.strip() for k in args.views.split(",") if k.strip()]
-    allowed = ("T", "von_mises", "cut_T", "cut_von_mises")
+    allowed = ("T", "von_mises", "cut_T", "cut_von_mises", "cut_pores")
     for k in kinds:
         if k not in allowed:
             sys.exit("render.py: --views: '%s' is not one of %s"
@@ -515,12 +609,26 @@ def main(argv):
     for name in written:
         if not os.path.exists(name) or os.path.getsize(name) == 0:
             sys.exit("render.py: %s was not written" % name)
+        if args.palette:
+            to_palette(name)
         if args.check:
             f = drawn_fraction(name)
             print("render.py: %s: %.1f %% of the pixels drawn" % (name,
                                                                   100 * f))
             if f < 0.02:
                 sys.exit("render.py: %s is blank" % name)
+
+
+def to_palette(png):
+    """Rewrite a PNG with a palette of 256 colours (octree quantization,
+    no dithering)."""
+    try:
+        from PIL import Image
+    except ImportError:
+        sys.exit("render.py: --palette needs python3-pil")
+    im = Image.open(png).convert("RGB")
+    im.quantize(colors=256, method=Image.Quantize.FASTOCTREE,
+                dither=Image.Dither.NONE).save(png, optimize=True)
 
 
 def drawn_fraction(png):

@@ -291,8 +291,7 @@ namespace femp
                    result);
     if (history)
       history->write(scene.output.directory);
-    timer.print_summary();
-    print_timer_statistics(timer, comm); // min/avg/max over the ranks
+    print_cost_report(timer, scene.output.directory, comm);
   }
 
   template <int dim>

@@ -1,6 +1,6 @@
 // femp: checks of a scene before any work that span several modules or the
 // machine (scene file, output file names, memory, output directory), and
-// the run limits. No paper equations.
+// the run limits; the end-of-run cost report. No paper equations.
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/utilities.h>
 
@@ -11,14 +11,22 @@
 #include <femp/io/output.h>
 #include <femp/io/output_lock.h>
 
+#include <algorithm>
+#include <boost/serialization/map.hpp>
+#include <boost/serialization/string.hpp>
+#include <boost/serialization/utility.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace femp
@@ -553,13 +561,14 @@ namespace femp
       {
         // Files a run of femp writes: numbered VTU/PVTU pieces or HDF5
         // files, probe lines, the track shape, the .pvd/.xdmf indices,
-        // the CSV series and this parameter listing.
+        // the CSV series, this parameter listing and the timing table.
         const std::regex ours(
           "(grid|points)(_[0-9]+(\\.[0-9]+)?\\.(vtu|pvtu)|\\.pvd)|"
           "(grid|points)(_[0-9]+|_mesh)\\.h5|(grid|points)\\.xdmf|"
           "probe_line_.*_[0-9]+\\.csv|melt_pool\\.csv|probe_points\\.csv|"
           "track_shape_[0-9]+\\.csv|track_bead\\.csv|"
-          "absorption\\.csv|parameters\\.prm|.*\\.(pvd|xdmf)\\.tmp");
+          "absorption\\.csv|parameters\\.prm|timing\\.txt|.*\\.(pvd|xdmf)\\."
+          "tmp");
         const std::string energy = parameter_text(prm, "Solid", "Energy file");
         const std::string probes = parameter_text(prm, "Solid", "Probe file");
         std::error_code   ec;
@@ -629,20 +638,115 @@ namespace femp
       throw std::runtime_error(error);
   }
 
-  void
-  print_timer_statistics(const dealii::TimerOutput &timer, const MPI_Comm comm)
+  namespace
   {
-    if (dealii::Utilities::MPI::n_mpi_processes(comm) < 2)
+    /// When the program (the library) started: the total of the cost
+    /// report.
+    const auto program_start = std::chrono::steady_clock::now();
+
+    /// The part of the step a timer section belongs to: 'flow: ...' and
+    /// 'setup: ...' sections are summed as 'melt flow' and 'setup'.
+    std::string
+    part_of(const std::string &section)
+    {
+      if (section.rfind("flow: ", 0) == 0)
+        return "melt flow";
+      if (section.rfind("setup: ", 0) == 0)
+        return "setup";
+      return section;
+    }
+  } // namespace
+
+  void
+  print_cost_report(const dealii::TimerOutput &timer,
+                    const std::string         &directory,
+                    const MPI_Comm             comm)
+  {
+    using Sections = std::map<std::string, std::pair<double, unsigned int>>;
+    Sections   mine;
+    const auto wall =
+      timer.get_summary_data(dealii::TimerOutput::total_wall_time);
+    const auto calls = timer.get_summary_data(dealii::TimerOutput::n_calls);
+    for (const auto &[name, t] : wall)
+      mine[name] = {t, calls.count(name) ? (unsigned int) calls.at(name) : 0u};
+    const double total = std::chrono::duration<double>(
+                           std::chrono::steady_clock::now() - program_start)
+                           .count();
+    const auto all = dealii::Utilities::MPI::gather(comm, mine, 0);
+    if (dealii::Utilities::MPI::this_mpi_process(comm) != 0)
       return;
-    // Collective over the sections: only if all ranks have the same ones.
-    std::string names;
-    for (const auto &s :
-         timer.get_summary_data(dealii::TimerOutput::total_wall_time))
-      names += s.first + '\n';
-    unsigned long long hash = std::hash<std::string>()(names), lo = 0, hi = 0;
-    MPI_Allreduce(&hash, &lo, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, comm);
-    MPI_Allreduce(&hash, &hi, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, comm);
-    if (lo == hi)
-      timer.print_wall_time_statistics(comm);
+    const unsigned int n_ranks = all.size();
+
+    // The screen: the slowest rank's time per part.
+    std::map<std::string, double> part_max;
+    for (const auto &rank : all)
+      {
+        std::map<std::string, double> part;
+        for (const auto &[name, tc] : rank)
+          part[part_of(name)] += tc.first;
+        for (const auto &[name, t] : part)
+          part_max[name] = std::max(part_max[name], t);
+      }
+    std::vector<std::pair<double, std::string>> parts;
+    for (const auto &[name, t] : part_max)
+      parts.emplace_back(t, name);
+    std::sort(parts.rbegin(), parts.rend());
+    std::ostringstream s;
+    s << std::fixed;
+    s << "Wall time: " << std::setprecision(1) << total << " s";
+    if (n_ranks > 1)
+      s << " on " << n_ranks << " ranks (each part: its slowest rank)";
+    s << "\n";
+    double timed = 0;
+    for (const auto &[t, name] : parts)
+      timed += t;
+    // What no section times on the slowest ranks: the scene's reading and
+    // checks, the step choice, the progress lines, the end report.
+    parts.emplace_back(std::max(0., total - timed), "other (not timed)");
+    for (const auto &[t, name] : parts)
+      s << "  " << std::left << std::setw(20) << name << std::right
+        << std::setw(10) << std::setprecision(t < 10 ? 2 : 1) << t << " s"
+        << std::setw(7) << std::setprecision(1)
+        << (total > 0 ? 100 * t / total : 0.) << " %\n";
+    s << "  (per section and rank: " << directory << "/timing.txt)\n";
+    std::cout << s.str() << std::flush;
+
+    // The file: every section over the ranks.
+    std::set<std::string> names;
+    for (const auto &rank : all)
+      for (const auto &[name, tc] : rank)
+        names.insert(name);
+    std::ofstream f(directory + "/timing.txt");
+    f << "# femp: wall time per timer section over the " << n_ranks
+      << " rank(s), s; total since start " << std::setprecision(6) << total
+      << " s (rank 0). Columns: section, calls (rank 0), min, rank of min, "
+         "average, max, rank of max (a rank without the section counts "
+         "0)\n";
+    f << std::left << std::setw(34) << "section" << std::right << std::setw(10)
+      << "calls" << std::setw(12) << "min" << std::setw(6) << "rank"
+      << std::setw(12) << "average" << std::setw(12) << "max" << std::setw(6)
+      << "rank"
+      << "\n";
+    for (const auto &name : names)
+      {
+        double       lo = std::numeric_limits<double>::max(), hi = -1, sum = 0;
+        unsigned int r_lo = 0, r_hi = 0;
+        for (unsigned int r = 0; r < n_ranks; ++r)
+          {
+            const auto   it = all[r].find(name);
+            const double t  = it == all[r].end() ? 0. : it->second.first;
+            sum += t;
+            if (t < lo)
+              lo = t, r_lo = r;
+            if (t > hi)
+              hi = t, r_hi = r;
+          }
+        const auto   it0 = all[0].find(name);
+        const double n0  = it0 == all[0].end() ? 0 : it0->second.second;
+        f << std::left << std::setw(34) << name << std::right << std::setw(10)
+          << n0 << std::setprecision(4) << std::setw(12) << lo << std::setw(6)
+          << r_lo << std::setw(12) << sum / n_ranks << std::setw(12) << hi
+          << std::setw(6) << r_hi << "\n";
+      }
   }
 } // namespace femp

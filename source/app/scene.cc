@@ -9,6 +9,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/solid/fe_zone_depth.h>
 
+#include <algorithm>
 #include <iomanip>
 #include <sstream>
 
@@ -181,9 +182,30 @@ namespace femp
   SimulationControl::Cadence
   Scene<dim>::cadence() const
   {
+    // Without laser power (or without the heat) and without probe points
+    // the time series is melt_pool.csv alone, and no pool forms but from
+    // a start above the liquidus: a row at each field output (at the
+    // first and the last step when the fields are written only at the
+    // end) instead of at every step, where the measurement and the row
+    // cost as much as a step of a small scene.
+    double series_interval = output.series_interval;
+    if (output.probe_points.empty())
+      {
+        const auto &segments = Laser<dim>(laser).segments();
+        const bool  powered =
+          heat_enabled &&
+          std::any_of(segments.begin(), segments.end(), [](const auto &s) {
+            return s.power > 0;
+          });
+        if (!powered)
+          series_interval =
+            std::max(series_interval,
+                     output.output_interval > 0 ? output.output_interval :
+                                                  time.end_time);
+      }
     return {output.output_interval,
             output.output_steps,
-            output.series_interval,
+            series_interval,
             output.progress_interval};
   }
 

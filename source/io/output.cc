@@ -73,6 +73,9 @@ namespace femp
         names.push_back(n);
       for (const char *n : {"laser_source", "phase", "zone", "subdomain"})
         names.push_back(n);
+      // With pore detection (builds/pore_detector.h).
+      for (const char *n : {"pore", "unfused_powder", "partially_molten"})
+        names.push_back(n);
       return names;
     }
 
@@ -205,14 +208,20 @@ namespace femp
         "sigma_xx, sigma_yy, sigma_zz, von_mises (Pa), "
         "plastic_strain (-), laser_source (W/m^3), phase (0 "
         "gas, 1 solid, 2 mushy, 3 liquid), zone (0 gas, 1 "
-        "powder, 2 solid, 3 fluid), subdomain (MPI rank). Fields of physics a "
+        "powder, 2 solid, 3 fluid), subdomain (MPI rank); with pore "
+        "detection pore (number in pores.csv, 0 outside pores), "
+        "unfused_powder, partially_molten (shares, -). Fields of physics a "
         "scene switches off are skipped. Probe lines sample "
         "their fields regardless.");
     table.add("Time series interval",
               series_interval,
               Patterns::Double(0.),
               "Simulated time between rows of the probe-point and "
-              "melt-pool CSV files, s; 0 writes a row every step.");
+              "melt-pool CSV files, s; 0 writes a row every step. A scene "
+              "without laser power (or without the heat) and without "
+              "probe points writes melt_pool.csv at least an 'Output "
+              "interval' apart (at the first and the last step when that "
+              "is 0).");
     table.add("Progress interval",
               progress_interval,
               Patterns::Integer(1),

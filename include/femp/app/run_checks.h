@@ -89,11 +89,16 @@ namespace femp
   prepare_output_directory(const dealii::ParameterHandler &prm,
                            const MPI_Comm                  comm);
 
-  /// With several ranks, the minimum, average and maximum wall time of
-  /// each section of @p timer over the ranks (TimerOutput's statistics),
-  /// if every rank has the same sections (else nothing: no rank waits).
+  /// The end-of-run cost (collective): on the screen (rank 0) the wall
+  /// time since femp started and, per part of the step (the sections of
+  /// @p timer, those named 'flow: ...' or 'setup: ...' summed as one
+  /// part), the slowest rank's wall time and its share; in
+  /// @p directory/timing.txt every section with its calls and its
+  /// minimum, average and maximum wall time over the ranks.
   void
-  print_timer_statistics(const dealii::TimerOutput &timer, const MPI_Comm comm);
+  print_cost_report(const dealii::TimerOutput &timer,
+                    const std::string         &directory,
+                    const MPI_Comm             comm);
 } // namespace femp
 
 #endif
