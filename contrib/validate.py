@@ -15,6 +15,7 @@
   contrib/validate.py regime
   contrib/validate.py width    [--out build/validation] [--cases REGEX]
   contrib/validate.py conduction
+  contrib/validate.py spots    [--cases REGEX] [--end-time T] [--np N]
   contrib/validate.py conduction3d [--cases REGEX] [--h 8,4] [--eta A]
                                [--props file,nolatent,const]
 
@@ -53,6 +54,11 @@ conduction3d: an independent reference for femp's conduction (numpy
   file, exact Gaussian source on the top faces, the measured absorptivity,
   no flow, no losses) on the scene's plate and path: the fusion width on
   the top row of cells and at the surface, and the depth, at cell sizes h.
+spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
+  first part of the pulse on a plate cut to 0.64 x 0.64 x 0.30 mm: the
+  melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
+  (the depression's rise) against the measured melt and keyhole onsets
+  (resumable: a run with a time series is only evaluated).
 regime: the normalized enthalpy of every measured track (as femp's scene
   log computes it) with the flat-surface Fresnel absorptivity, the measured
   one and 0.35, beside the measured depth/width.
@@ -186,7 +192,8 @@ def cases():
         out.append(dict(
             name="simonds_%03dW" % round(P), dataset="Simonds 2018",
             alloy="316L", P=P, v=0.0, rb=151.5e-6, T0=293.15,
-            coupling=num(r["coupling"]), t_keyhole=num(r["t_keyhole_ms"]),
+            coupling=num(r["coupling"]), t_keyhole_ms=num(r["t_keyhole_ms"]),
+            t_melt_ms=num(r["t_melt_ms"]),
             weld_w=num(r["weld_W_um"]), label="%g W" % P,
             note="Simonds et al. 2018, stationary 10 ms, %g W, top-hat 303 um "
                  "(Gaussian of the same D4sigma)" % P))
@@ -615,6 +622,67 @@ def cmd_conduction3d(args):
                           r["width_surface"] * 1e6, r["depth"] * 1e6,
                           c["width"] * 1e6, c["depth"] * 1e6, r["cells"], r["steps"]),
                       flush=True)
+
+
+def spot_onsets(out):
+    """Melt and keyhole onset of a stationary-spot run from its time
+    series: the first time the hottest cell reaches the solidus, and the
+    times the absorbed fraction (absorption.csv) first reaches 0.35, 0.45
+    and 0.6 (the flat surface absorbs the Fresnel value, about 0.3 for
+    316L; the rise is the depression's multiple reflections)."""
+    a = read_csv(os.path.join(out, "absorption.csv"))
+    m = read_csv(os.path.join(out, "melt_pool.csv"))
+    r = {"t_melt": next((float(x["time"]) for x in m
+                         if float(x["T_max"]) >= material("316L")["Ts"]), None),
+         "t_end": float(a[-1]["time"]),
+         "absorbed_end": float(a[-1]["absorbed_fraction"]),
+         "hits_end": float(a[-1]["hits_per_ray"]),
+         "depth_end": float(m[-1]["depth"])}
+    for th in (0.35, 0.45, 0.6):
+        r["t_%.2f" % th] = next((float(x["time"]) for x in a
+                                 if float(x["absorbed_fraction"]) >= th), None)
+    return r
+
+
+def cmd_spots(args):
+    """Simonds' stationary spots, the first part of the pulse on a plate
+    cut to 0.64 x 0.64 x 0.304 mm (the rays reach 2 r_b = 303 um from the
+    axis), 8 um cells, 19 rays per beam radius (8 um apart): the melt and
+    keyhole onset against the measured ones."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    rx = re.compile(args.cases or r"^simonds_(626|463|378)W$")
+    for c in cases():
+        if c["v"] != 0 or not rx.search(c["name"]):
+            continue
+        d = os.path.join(args.out, "spots", c["name"])
+        out = os.path.join(d, "output")
+        if not os.path.exists(os.path.join(out, "absorption.csv")):
+            os.makedirs(d, exist_ok=True)
+            scene = os.path.join(d, "scene.prm")
+            open(scene, "w").write(spot_scene_text(c).replace(
+                "include ../materials/", "include %s/prm/materials/" % ROOT))
+            t_end = args.end_time or max(4e-4, 1.5e-3 * (c.get("t_keyhole_ms") or 0))
+            sets = {"Background grid/Upper corner": "0.00064, 0.00064, 0.000352",
+                    "Material points/Substrate top": "0.000304",
+                    "Laser/Start point": "0.000315, 0.00032, 0",
+                    "Laser/End point": "0.000325, 0.00032, 0",
+                    "Laser/Rays per beam radius": "19",
+                    "Time stepping/End time": fmt(t_end),
+                    "Output/Time series interval": "5e-06",
+                    "Output/Directory": out}
+            print("run %s to %.2f ms ..." % (c["name"], t_end * 1e3), flush=True)
+            run_timed(femp_cmd(args, exe, sets, scene), d,
+                      os.path.join(d, "log.txt"), args.max_wall)
+        r = spot_onsets(out)
+        f = lambda t: ("%.3f" % (t * 1e3)) if t else "-"
+        ms = lambda t: ("%.3f" % t) if t else "-"
+        print("%-14s melt onset %s ms (measured %s); absorbed >= 0.35 / 0.45 / "
+              "0.6 at %s / %s / %s ms (keyhole onset measured %s ms); at %.2f ms "
+              "absorbed %.3f, %.2f hits per ray, pool depth %.0f um" % (
+                  c["name"], f(r["t_melt"]), ms(c.get("t_melt_ms")), f(r["t_0.35"]),
+                  f(r["t_0.45"]), f(r["t_0.60"]), ms(c.get("t_keyhole_ms")),
+                  r["t_end"] * 1e3, r["absorbed_end"], r["hits_end"],
+                  r["depth_end"] * 1e6), flush=True)
 
 
 def cmd_scenes(args):
@@ -1291,7 +1359,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
                                        "pipeline", "regime", "width", "conduction",
-                                       "conduction3d"])
+                                       "conduction3d", "spots"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
     ap.add_argument("--setting", default="default",
@@ -1306,6 +1374,9 @@ def main():
     ap.add_argument("--max-wall", type=float, default=None)
     ap.add_argument("--expected", default=None)
     ap.add_argument("--h", default=None, help="conduction3d: cell sizes, um, e.g. '8,4'")
+    ap.add_argument("--end-time", type=float, default=None,
+                    help="spots: simulated time, s (default 1.5 x the measured "
+                    "keyhole onset, at least 0.4 ms)")
     ap.add_argument("--eta", type=float, default=None,
                     help="conduction3d: absorbed fraction (default: the measured one)")
     ap.add_argument("--props", default=None,
@@ -1324,6 +1395,8 @@ def main():
         cmd_conduction(args)
     elif args.command == "conduction3d":
         cmd_conduction3d(args)
+    elif args.command == "spots":
+        cmd_spots(args)
     elif args.command == "width":
         cmd_width(args)
     elif args.command == "reevaluate":
