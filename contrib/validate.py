@@ -15,6 +15,9 @@
   contrib/validate.py regime
   contrib/validate.py width    [--out build/validation] [--cases REGEX]
   contrib/validate.py conduction
+  contrib/validate.py spots    [--cases REGEX] [--end-time T] [--np N]
+  contrib/validate.py conduction3d [--cases REGEX] [--h 8,4] [--eta A]
+                               [--props file,nolatent,const]
 
 scenes: writes prm/validation/<case>.prm, one scene per measured case of
   the data sets in prm/validation/data/ (each file names its publication):
@@ -38,10 +41,24 @@ report: reads every finished run, writes doc/validation.md's tables and
   figures (SVG, standard library only).
 width: what sets each finished run's fusion width (its last field
   output): the widest section's distance behind the beam, the temperature
-  on the axis there, the melt's surface flow across the track.
+  on the axis there, the melt's surface flow across the track, and the
+  widest fusion width read on the top substrate row of cells (as
+  melt_pool.csv reads it) and at the original surface (the temperature
+  extrapolated from the two top rows).
 conduction: the Eagar-Tsai (pure conduction) fusion width and depth of
   the Trapp conduction tracks with the measured absorptivity and constant
-  properties (averaged over 293 K..T_s, and at T_s).
+  properties (averaged over 293 K..T_s, and at T_s), and the width h/2
+  below the surface (where the top row of cells of size h reads it).
+conduction3d: an independent reference for femp's conduction (numpy
+  finite volumes, explicit, k(T), c_p(T) and latent heat from the material
+  file, exact Gaussian source on the top faces, the measured absorptivity,
+  no flow, no losses) on the scene's plate and path: the fusion width on
+  the top row of cells and at the surface, and the depth, at cell sizes h.
+spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
+  first part of the pulse on a plate cut to 0.64 x 0.64 x 0.30 mm: the
+  melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
+  (the depression's rise) against the measured melt and keyhole onsets
+  (resumable: a run with a time series is only evaluated).
 regime: the normalized enthalpy of every measured track (as femp's scene
   log computes it) with the flat-surface Fresnel absorptivity, the measured
   one and 0.35, beside the measured depth/width.
@@ -175,7 +192,8 @@ def cases():
         out.append(dict(
             name="simonds_%03dW" % round(P), dataset="Simonds 2018",
             alloy="316L", P=P, v=0.0, rb=151.5e-6, T0=293.15,
-            coupling=num(r["coupling"]), t_keyhole=num(r["t_keyhole_ms"]),
+            coupling=num(r["coupling"]), t_keyhole_ms=num(r["t_keyhole_ms"]),
+            t_melt_ms=num(r["t_melt_ms"]),
             weld_w=num(r["weld_W_um"]), label="%g W" % P,
             note="Simonds et al. 2018, stationary 10 ms, %g W, top-hat 303 um "
                  "(Gaussian of the same D4sigma)" % P))
@@ -412,6 +430,8 @@ def material(alloy):
     return dict(rho=float(get("Density")), cp=table(get("Specific heat")),
                 k=table(get("Thermal conductivity")),
                 Ts=float(get("Solidus temperature")),
+                Tl=float(get("Liquidus temperature")),
+                L=float(get("Latent heat of fusion")),
                 n=float(get("Refractive index")),
                 kappa=float(get("Extinction coefficient")))
 
@@ -435,8 +455,9 @@ def cmd_regime(args):
             ("%.1f" % (eta * base)) if eta else "-", 0.35 * base))
 
 
-def eagar_tsai(P, eta, rb, v, k, rho, cp, T0, Ts):
-    """Width and depth (m) of the region above Ts of the Eagar-Tsai
+def eagar_tsai(P, eta, rb, v, k, rho, cp, T0, Ts, z_width=0.0):
+    """Width (at the depth z_width below the surface, the surface by
+    default) and depth (m) of the region above Ts of the Eagar-Tsai
     solution: a Gaussian surface source (1/e^2 radius rb, absorbed power
     eta P) moving at v over a half-space of constant properties,
     T - T0 = int_0^inf 2 eta P / (rho c) g_xy g_z dt' with the lateral
@@ -457,12 +478,13 @@ def eagar_tsai(P, eta, rb, v, k, rho, cp, T0, Ts):
     def extent(direction):
         best = 0.0
         for x in np.linspace(-6 * rb, 2 * rb, 161):
-            if temp(x, 0, 0) < Ts:
+            if temp(x, 0, z_width if direction == "y" else 0) < Ts:
                 continue
             lo, hi = 0.0, 20 * rb
             for _ in range(40):
                 m = 0.5 * (lo + hi)
-                ok = temp(x, m, 0) >= Ts if direction == "y" else temp(x, 0, m) >= Ts
+                ok = (temp(x, m, z_width) >= Ts if direction == "y"
+                      else temp(x, 0, m) >= Ts)
                 lo, hi = (m, hi) if ok else (lo, m)
             best = max(best, lo)
         return best
@@ -489,11 +511,178 @@ def cmd_conduction(args):
             w, d = eagar_tsai(c["P"], c["absorptivity"], c["rb"], c["v"], k,
                               m["rho"], cp, T0, Ts)
             out.append("%5.1f / %4.1f" % (w * 1e6, d * 1e6))
+        # the width read where femp's melt_pool.csv reads it: at the centre
+        # of the top substrate cell row, h/2 below the surface
+        rows = [eagar_tsai(c["P"], c["absorptivity"], c["rb"], c["v"], k_mean,
+                           m["rho"], cp_mean, T0, Ts, z_width=h / 2)[0]
+                for h in (8e-6, 4e-6)]
         print("%-12s %4.0f %6.3f      | %5.1f / %4.1f              | %s "
-              "(k %.1f, c_p %.0f) | %s (k %.1f, c_p %.0f)" % (
+              "(k %.1f, c_p %.0f) | %s (k %.1f, c_p %.0f) | width h/2 below "
+              "the surface (mean): %.1f (h = 8 um), %.1f (h = 4 um)" % (
                   c["name"], c["P"], c["absorptivity"], c["width"] * 1e6,
                   c["depth"] * 1e6, out[0], k_mean, cp_mean, out[1],
-                  m["k"](Ts), m["cp"](Ts)))
+                  m["k"](Ts), m["cp"](Ts), rows[0] * 1e6, rows[1] * 1e6))
+
+
+def conduction_3d(c, h, props="file", eta=None):
+    """An independent reference for femp's heat conduction on case @p c:
+    a cell-centred finite-volume solution (numpy, explicit in time) of
+    rho dH/dt = div(k grad T) with the enthalpy H(T) = rho (int c dT + L f_l)
+    and Kirchhoff fluxes (the difference of int k dT between neighbours,
+    exact for k(T) in 1D), the Gaussian beam (1/e^2 radius r_b, absorbed
+    power eta P, eta the measured absorptivity unless given) integrated exactly over
+    each top cell's face, moving over the plate of the scene (same start,
+    path and margins), half the plate (y >= 0, symmetry), no flow, no
+    surface losses. @p props: 'file' (the alloy's tables and latent heat),
+    'nolatent' (L = 0), 'const' (k, c_p averaged over T0..T_s, L = 0: the
+    Eagar-Tsai setting). Returns the fusion width read on the top row of
+    cells (h/2 below the surface) and at the surface (extrapolated from the
+    two top rows), and the depth, from the peak temperature of each cell,
+    median over sections at 40-70 % of the path."""
+    import numpy as np
+    m = material(c["alloy"])
+    rho, Ts, Tl, T0 = m["rho"], m["Ts"], m["Tl"], c["T0"]
+    eta = eta or c["absorptivity"]
+    P, rb, v = c["P"], c["rb"], c["v"]
+    Tm = [T0 + (Ts - T0) * (i + 0.5) / 100 for i in range(100)]
+    k_mean = sum(m["k"](T) for T in Tm) / 100
+    cp_mean = sum(m["cp"](T) for T in Tm) / 100
+    Tg = np.linspace(200.0, 6000.0, 58001)
+    if props == "const":
+        kg, cg, L = np.full_like(Tg, k_mean), np.full_like(Tg, cp_mean), 0.0
+    else:
+        kg = np.array([m["k"](T) for T in Tg])
+        cg = np.array([m["cp"](T) for T in Tg])
+        L = 0.0 if props == "nolatent" else m["L"]
+    cum = lambda f: np.concatenate([[0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(Tg))])
+    Hg = rho * (cum(cg) + L * np.clip((Tg - Ts) / (Tl - Ts), 0, 1))
+    Kg = cum(kg)                                     # Kirchhoff potential
+    x0, Ltr = MARGIN_START, track_geometry(c)["Ltr"]
+    nx = int(round((x0 + Ltr + MARGIN_END) / h))
+    ny, nz = int(round(2 * c["width"] / h)), int(round(max(120e-6, 4 * c["depth"]) / h))
+    T = np.full((nx, ny, nz), T0)                    # [x, y, z], z = 0 the top row
+    H = np.interp(T, Tg, Hg)
+    dt = 0.9 * rho * cg.min() * h * h / (6 * kg.max())
+    nsteps = int(math.ceil(Ltr / v / dt))
+    dt = Ltr / v / nsteps
+    s = rb / 2 * math.sqrt(2)                        # exp(-2 r^2/rb^2) = exp(-r^2/s^2)
+    erf = np.vectorize(math.erf)
+    yf, xf = np.arange(ny + 1) * h, np.arange(nx + 1) * h
+    gy = 0.5 * np.diff(erf(yf / s))                  # sums to 1/2: half the beam
+    K0 = float(np.interp(T0, Tg, Kg))
+    Tpk = T.copy()
+    for n in range(nsteps):
+        xb = x0 + v * (n + 0.5) * dt
+        gx = 0.5 * np.diff(erf((xf - xb) / s))
+        K = np.interp(T, Tg, Kg)
+        div = np.zeros_like(T)
+        for ax in range(3):
+            f = np.diff(K, axis=ax) / h
+            lo = [slice(None)] * 3
+            hi = [slice(None)] * 3
+            lo[ax], hi[ax] = slice(0, -1), slice(1, None)
+            div[tuple(lo)] += f
+            div[tuple(hi)] -= f
+        div[:, :, -1] += (K0 - K[:, :, -1]) / (0.5 * h)   # bottom at T0
+        H += dt * div / h
+        H[:, :, 0] += dt * eta * P * np.outer(gx, gy) / h ** 3
+        T = np.interp(H, Hg, Tg)
+        np.maximum(Tpk, T, out=Tpk)
+
+    def edge(prof):
+        hot = np.nonzero(prof >= Ts)[0]
+        if len(hot) == 0:
+            return 0.0
+        j = hot[-1]
+        if j + 1 >= len(prof):
+            return (j + 1) * h
+        return (j + 0.5) * h + h * (prof[j] - Ts) / (prof[j] - prof[j + 1])
+    sec = range(int((x0 + 0.4 * Ltr) / h), int((x0 + 0.7 * Ltr) / h))
+    surf = 1.5 * Tpk[:, :, 0] - 0.5 * Tpk[:, :, 1]
+    med = lambda a: float(np.median(a))
+    return dict(width_top_row=med([2 * edge(Tpk[i, :, 0]) for i in sec]),
+                width_surface=med([2 * edge(surf[i]) for i in sec]),
+                depth=med([edge(Tpk[i, 0, :]) for i in sec]),
+                cells=nx * ny * nz, steps=nsteps)
+
+
+def cmd_conduction3d(args):
+    """The reference conduction solution (conduction_3d) of the cases."""
+    rx = re.compile(args.cases or r"^trapp_032W$")
+    for c in cases():
+        if not rx.search(c["name"]) or not c.get("absorptivity"):
+            continue
+        for props in (args.props or "file,nolatent,const").split(","):
+            for h in (float(x) * 1e-6 for x in (args.h or "8,4").split(",")):
+                r = conduction_3d(c, h, props, args.eta)
+                print("%-12s %-9s h %4.1f um: width top row %5.1f um, at the "
+                      "surface %5.1f um, depth %5.1f um (measured %5.1f / %5.1f; "
+                      "%d cells, %d steps)" % (
+                          c["name"], props, h * 1e6, r["width_top_row"] * 1e6,
+                          r["width_surface"] * 1e6, r["depth"] * 1e6,
+                          c["width"] * 1e6, c["depth"] * 1e6, r["cells"], r["steps"]),
+                      flush=True)
+
+
+def spot_onsets(out):
+    """Melt and keyhole onset of a stationary-spot run from its time
+    series: the first time the hottest cell reaches the solidus, and the
+    times the absorbed fraction (absorption.csv) first reaches 0.35, 0.45
+    and 0.6 (the flat surface absorbs the Fresnel value, about 0.3 for
+    316L; the rise is the depression's multiple reflections)."""
+    a = read_csv(os.path.join(out, "absorption.csv"))
+    m = read_csv(os.path.join(out, "melt_pool.csv"))
+    r = {"t_melt": next((float(x["time"]) for x in m
+                         if float(x["T_max"]) >= material("316L")["Ts"]), None),
+         "t_end": float(a[-1]["time"]),
+         "absorbed_end": float(a[-1]["absorbed_fraction"]),
+         "hits_end": float(a[-1]["hits_per_ray"]),
+         "depth_end": float(m[-1]["depth"])}
+    for th in (0.35, 0.45, 0.6):
+        r["t_%.2f" % th] = next((float(x["time"]) for x in a
+                                 if float(x["absorbed_fraction"]) >= th), None)
+    return r
+
+
+def cmd_spots(args):
+    """Simonds' stationary spots, the first part of the pulse on a plate
+    cut to 0.64 x 0.64 x 0.304 mm (the rays reach 2 r_b = 303 um from the
+    axis), 8 um cells, 19 rays per beam radius (8 um apart): the melt and
+    keyhole onset against the measured ones."""
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    rx = re.compile(args.cases or r"^simonds_(626|463|378)W$")
+    for c in cases():
+        if c["v"] != 0 or not rx.search(c["name"]):
+            continue
+        d = os.path.join(args.out, "spots", c["name"])
+        out = os.path.join(d, "output")
+        if not os.path.exists(os.path.join(out, "absorption.csv")):
+            os.makedirs(d, exist_ok=True)
+            scene = os.path.join(d, "scene.prm")
+            open(scene, "w").write(spot_scene_text(c).replace(
+                "include ../materials/", "include %s/prm/materials/" % ROOT))
+            t_end = args.end_time or max(4e-4, 1.5e-3 * (c.get("t_keyhole_ms") or 0))
+            sets = {"Background grid/Upper corner": "0.00064, 0.00064, 0.000352",
+                    "Material points/Substrate top": "0.000304",
+                    "Laser/Start point": "0.000315, 0.00032, 0",
+                    "Laser/End point": "0.000325, 0.00032, 0",
+                    "Laser/Rays per beam radius": "19",
+                    "Time stepping/End time": fmt(t_end),
+                    "Output/Time series interval": "5e-06",
+                    "Output/Directory": out}
+            print("run %s to %.2f ms ..." % (c["name"], t_end * 1e3), flush=True)
+            run_timed(femp_cmd(args, exe, sets, scene), d,
+                      os.path.join(d, "log.txt"), args.max_wall)
+        r = spot_onsets(out)
+        f = lambda t: ("%.3f" % (t * 1e3)) if t else "-"
+        ms = lambda t: ("%.3f" % t) if t else "-"
+        print("%-14s melt onset %s ms (measured %s); absorbed >= 0.35 / 0.45 / "
+              "0.6 at %s / %s / %s ms (keyhole onset measured %s ms); at %.2f ms "
+              "absorbed %.3f, %.2f hits per ray, pool depth %.0f um" % (
+                  c["name"], f(r["t_melt"]), ms(c.get("t_melt_ms")), f(r["t_0.35"]),
+                  f(r["t_0.45"]), f(r["t_0.60"]), ms(c.get("t_keyhole_ms")),
+                  r["t_end"] * 1e3, r["absorbed_end"], r["hits_end"],
+                  r["depth_end"] * 1e6), flush=True)
 
 
 def cmd_scenes(args):
@@ -730,15 +919,50 @@ def width_state(run_dir, alloy):
     mean = lambda m: float(across[m].mean()) if m.any() else None
     return dict(x_behind_beam=xb - (i_w + 0.5) * h, width_cells=float(widths[i_w]),
                 T_axis_top=float(T[i_w, jc, kt]),
-                flow_across_surface=mean(off), flow_across_rim=mean(rim & off))
+                flow_across_surface=mean(off), flow_across_rim=mean(rim & off),
+                **fusion_width_rows(T, A, kt, h, Ts))
+
+
+def fusion_width_rows(T, A, kt, h, Ts):
+    """The widest fusion width of the last field output (cells T, metal
+    fraction A indexed [x, y, z], top substrate row kt) read two ways: on
+    the top substrate row, h/2 below the original surface, as femp's
+    melt_pool.csv reads it ('width_top_row'), and at the original surface,
+    the temperature extrapolated linearly from the two top rows
+    (1.5 T_kt - 0.5 T_kt-1; 'width_surface'); the crossing of T_s
+    interpolated linearly between cell centres in both. Where the pool's
+    edge lies under the beam the solidus meets the surface at an angle, and
+    the width shrinks linearly with depth: the top-row reading is then short
+    by an amount proportional to h."""
+    import numpy as np
+
+    def span(prof, ok):
+        hot = np.nonzero(ok & (prof >= Ts))[0]
+        if len(hot) == 0:
+            return 0.0
+        lo, hi = hot[0], hot[-1]
+        xl = (lo + 0.5) * h
+        if lo > 0 and ok[lo - 1]:
+            xl -= h * (prof[lo] - Ts) / (prof[lo] - prof[lo - 1])
+        xh = (hi + 0.5) * h
+        if hi + 1 < len(prof) and ok[hi + 1]:
+            xh += h * (prof[hi] - Ts) / (prof[hi] - prof[hi + 1])
+        return xh - xl
+
+    top, below = T[:, :, kt], T[:, :, kt - 1]
+    ok = (A[:, :, kt] >= 0.5) & (A[:, :, kt - 1] >= 0.5) & np.isfinite(top)
+    surf = 1.5 * top - 0.5 * below
+    w_top = max(span(top[i], ok[i]) for i in range(T.shape[0]))
+    w_surf = max(span(surf[i], ok[i]) for i in range(T.shape[0]))
+    return dict(width_top_row=float(w_top), width_surface=float(w_surf))
 
 
 def cmd_width(args):
     """The width diagnostics of every finished run under --out."""
     allc = {c["name"]: c for c in cases()}
-    print("%-9s %-12s %8s %8s %10s %10s %12s %12s" % (
+    print("%-9s %-12s %8s %8s %10s %10s %12s %12s %10s %10s" % (
         "setting", "case", "width", "measured", "behind(um)", "T_axis(K)",
-        "u_surface", "u_rim"))
+        "u_surface", "u_rim", "end:row", "end:surf"))
     for (setting, name), r in sorted(load_results(args.out).items()):
         if not re.search(args.cases or ".", name) or r.get("incomplete"):
             continue
@@ -749,10 +973,11 @@ def cmd_width(args):
             print(setting, name, "no field output:", ex)
             continue
         f = lambda v: ("%+.2f" % v) if v is not None else "-"
-        print("%-9s %-12s %8.1f %8.1f %10.1f %10.0f %12s %12s" % (
+        print("%-9s %-12s %8.1f %8.1f %10.1f %10.0f %12s %12s %10.1f %10.1f" % (
             setting, name, r["width"] * 1e6, allc[name]["width"] * 1e6,
             w["x_behind_beam"] * 1e6, w["T_axis_top"],
-            f(w["flow_across_surface"]), f(w["flow_across_rim"])))
+            f(w["flow_across_surface"]), f(w["flow_across_rim"]),
+            w["width_top_row"] * 1e6, w["width_surface"] * 1e6))
 
 
 def femp_cmd(args, exe, sets, scene):
@@ -1047,8 +1272,8 @@ def dig_table(res, allc, settings):
              "deepest (µm) | hottest surface T (K) | ζ_p p_sat there (MPa) | "
              "evaporation / absorbed | fastest melt (m/s) | widest section behind "
              "the beam (µm) | surface flow across the track, whole pool / "
-             "rim (m/s, − inward) |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "rim (m/s, − inward) | width at the end: top row / surface (µm) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for (st, n), r in sorted(res.items(),
                              key=lambda x: (x[0][1], settings.index(x[0][0]))):
         c = allc.get(n)
@@ -1062,13 +1287,14 @@ def dig_table(res, allc, settings):
         p = lambda T: 0.54 * 101325 * math.exp(Lv * M * (T - Tv) / (8.314462618 * T * Tv))
         f2 = lambda v: ("%+.2f" % v) if v is not None else "-"
         ev = (r["evaporation_J"] / r["laser_J"]) if r.get("laser_J") else None
-        lines.append("| %s | %s | %s | %s | %s / %s | %.0f | %.2f | %s | %s | %s | %s / %s |" % (
+        lines.append("| %s | %s | %s | %s | %s / %s | %.0f | %.2f | %s | %s | %s | %s / %s | %s / %s |" % (
             c["label"], st, um(r["width"]), um(r["depth"]),
             um(r.get("depression_axis")), um(r.get("depression")), r["T_max"],
             p(r["T_max"]) / 1e6, ("%.0f %%" % (100 * ev)) if ev is not None else "-",
             ("%.1f" % r["u_max"]) if r.get("u_max") is not None else "-",
             um(w.get("x_behind_beam")), f2(w.get("flow_across_surface")),
-            f2(w.get("flow_across_rim"))))
+            f2(w.get("flow_across_rim")), um(w.get("width_top_row")),
+            um(w.get("width_surface"))))
     return lines
 
 
@@ -1132,7 +1358,8 @@ def same_numbers(a, b, rtol=1e-6):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
-                                       "pipeline", "regime", "width", "conduction"])
+                                       "pipeline", "regime", "width", "conduction",
+                                       "conduction3d", "spots"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
     ap.add_argument("--setting", default="default",
@@ -1146,6 +1373,14 @@ def main():
     ap.add_argument("--img", default=os.path.join(ROOT, "doc", "img"))
     ap.add_argument("--max-wall", type=float, default=None)
     ap.add_argument("--expected", default=None)
+    ap.add_argument("--h", default=None, help="conduction3d: cell sizes, um, e.g. '8,4'")
+    ap.add_argument("--end-time", type=float, default=None,
+                    help="spots: simulated time, s (default 1.5 x the measured "
+                    "keyhole onset, at least 0.4 ms)")
+    ap.add_argument("--eta", type=float, default=None,
+                    help="conduction3d: absorbed fraction (default: the measured one)")
+    ap.add_argument("--props", default=None,
+                    help="conduction3d: 'file', 'nolatent', 'const' (comma-separated)")
     args = ap.parse_args()
     if args.out is None:
         args.out = os.path.join(args.build, "validation" if args.command != "pipeline"
@@ -1158,6 +1393,10 @@ def main():
         cmd_regime(args)
     elif args.command == "conduction":
         cmd_conduction(args)
+    elif args.command == "conduction3d":
+        cmd_conduction3d(args)
+    elif args.command == "spots":
+        cmd_spots(args)
     elif args.command == "width":
         cmd_width(args)
     elif args.command == "reevaluate":
