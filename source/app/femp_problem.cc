@@ -62,12 +62,20 @@ namespace femp
                                              scene.heat.detached_drops ?
                                            scene.heat.detached_drop_cells :
                                            0);
+    // The free surface of the metal only for the heat equation.
+    if (scene.heat_enabled)
+      surface =
+        std::make_unique<MetalSurface<dim>>(*grid,
+                                            scene.material,
+                                            scene.heat.reference_temperature,
+                                            scene.heat.detached_drops);
     point_heat = std::make_unique<PointHeatExchange<dim>>(
       *points,
       *heat,
       scene.heat.advection_by_melt_flow ==
         HeatTransfer<dim>::Parameters::Advection::points,
-      bodies.get());
+      bodies.get(),
+      surface.get());
     point_heat->initial_temperatures(scene.points.bodies, scene.heat);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
