@@ -363,17 +363,11 @@ namespace femp
   void
   FempProblem<dim>::flow_step(const double dt)
   {
-    typename IncompressibleFlow<dim>::SubcycleControl c;
-    c.max_substeps = run_limits().max_flow_substeps;
-    c.wall_time    = [this]() { return control->wall_time(); };
-    c.log          = &pcout;
-    // With a frozen temperature the flow never idles.
-    std::function<bool()> may_melt;
-    if (scene.heat_enabled)
-      may_melt = [this]() {
-        return !(heat->max_temperature() < scene.material.solidus);
-      };
-    flow->advance_over(control->time(), dt, cell_fields(), may_melt, c);
+    flow->advance_over(control->time(),
+                       dt,
+                       cell_fields(),
+                       time_steps->flow_may_melt(),
+                       time_steps->flow_subcycle(*control));
     // Points changed cells: new alpha, and the heat they bring.
     TimerOutput::Scope scope(timer, "flow: alpha and new metal cells");
     point_heat->follow_points();
@@ -392,14 +386,7 @@ namespace femp
   FempProblem<dim>::solid_step()
   {
     TimerOutput::Scope t(timer, "solid");
-    if (time_steps->solid_may_cool(control->time(), solid->uses_cooling_step()))
-      {
-        const std::string change = solid->use_cooling_step();
-        if (!change.empty())
-          pcout << "Solid: the melt has solidified after the laser's path "
-                   "(t = "
-                << control->time() << " s): " << change << std::endl;
-      }
+    time_steps->cool_solid_when_due(*solid, control->time());
     // Loaded by the fluid forces of step 3, with the flow.
     solid->advance(control->time(),
                    heat->temperature(),
@@ -463,12 +450,7 @@ namespace femp
   FempProblem<dim>::write_checkpoint()
   {
     TimerOutput::Scope t(timer, "checkpoint");
-    const std::string  dir =
-      states.write(*checkpoint, control->step(), control->time());
-    pcout << "Checkpoint: step " << control->step() << ", time "
-          << control->time() << " s -> " << dir << " ("
-          << checkpoint->bytes_written() << " bytes)" << std::endl;
-    return dir;
+    return states.write(*checkpoint, control->step(), control->time(), pcout);
   }
 
   template <int dim>
@@ -476,15 +458,11 @@ namespace femp
   FempProblem<dim>::restore_checkpoint()
   {
     TimerOutput::Scope t(timer, "checkpoint");
-    states.restore(*checkpoint);
+    states.restore(*checkpoint, pcout);
     point_heat->metal_fraction_restored();
     // Series written outside Output: drop their rows after the checkpoint.
     results->resume(control->time());
     checkpoint->release();
-    pcout << "Resumed from " << checkpoint->path_read() << " (written by "
-          << checkpoint->saved_ranks() << " rank(s)) at step "
-          << control->step() << ", time " << control->time() << " s"
-          << std::endl;
   }
 
   template class FempProblem<2>;
