@@ -26,6 +26,16 @@ using namespace femp_test;
 
 namespace
 {
+  /// The format of the input name @p name.
+  ScanPathFormat
+  format_named(const std::string &name)
+  {
+    for (const auto &c : scan_path_format_choices())
+      if (c.second == name)
+        return c.first;
+    throw std::logic_error("no scan path format " + name);
+  }
+
   int
   check_generated(const std::string &dir, Checks &checks)
   {
@@ -35,7 +45,7 @@ namespace
       {
         Laser<3>::Parameters lp;
         lp.scan_path_file   = dir + "/gen_" + format + ".txt";
-        lp.scan_path_format = format;
+        lp.scan_path_format = format_named(format);
         lp.power            = 200;
         lasers.push_back(std::make_unique<Laser<3>>(lp));
         checks.at_most(format + ": |emitted - 0.64 J| (J)",
@@ -90,7 +100,7 @@ main(int argc, char **argv)
       const std::string    file = dir + "/scan_path_" + format + ".txt";
       Laser<2>::Parameters lp;
       lp.scan_path_file   = file;
-      lp.scan_path_format = format;
+      lp.scan_path_format = format_named(format);
       lp.power            = 1e5;
       lp.start_time       = t0;
       Laser<2> laser(lp);
@@ -135,7 +145,7 @@ main(int argc, char **argv)
     {
       Laser<2>::Parameters lp;
       lp.scan_path_file   = dir + "/scan_path_3d_hatch.txt";
-      lp.scan_path_format = "additivefoam";
+      lp.scan_path_format = ScanPathFormat::additivefoam;
       Laser<2> laser(lp);
     }
   catch (const InputError &e)
@@ -150,7 +160,7 @@ main(int argc, char **argv)
   {
     Laser<3>::Parameters lp;
     lp.scan_path_file   = dir + "/scan_path_3d_hatch.txt";
-    lp.scan_path_format = "additivefoam";
+    lp.scan_path_format = ScanPathFormat::additivefoam;
     Laser<3> laser(lp);
     checks.at_most("3D hatch: |emitted - 0.096 J| (J)",
                    std::abs(emitted_energy<3>(laser.segments()) - 0.096),

@@ -62,12 +62,20 @@ namespace femp
                                              scene.heat.detached_drops ?
                                            scene.heat.detached_drop_cells :
                                            0);
+    // The free surface of the metal only for the heat equation.
+    if (scene.heat_enabled)
+      surface =
+        std::make_unique<MetalSurface<dim>>(*grid,
+                                            scene.material,
+                                            scene.heat.reference_temperature,
+                                            scene.heat.detached_drops);
     point_heat = std::make_unique<PointHeatExchange<dim>>(
       *points,
       *heat,
       scene.heat.advection_by_melt_flow ==
         HeatTransfer<dim>::Parameters::Advection::points,
-      bodies.get());
+      bodies.get(),
+      surface.get());
     point_heat->initial_temperatures(scene.points.bodies, scene.heat);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
@@ -354,17 +362,11 @@ namespace femp
   void
   FempProblem<dim>::flow_step(const double dt)
   {
-    typename IncompressibleFlow<dim>::SubcycleControl c;
-    c.max_substeps = run_limits().max_flow_substeps;
-    c.wall_time    = [this]() { return control->wall_time(); };
-    c.log          = &pcout;
-    // With a frozen temperature the flow never idles.
-    std::function<bool()> may_melt;
-    if (scene.heat_enabled)
-      may_melt = [this]() {
-        return !(heat->max_temperature() < scene.material.solidus);
-      };
-    flow->advance_over(control->time(), dt, cell_fields(), may_melt, c);
+    flow->advance_over(control->time(),
+                       dt,
+                       cell_fields(),
+                       time_steps->flow_may_melt(),
+                       time_steps->flow_subcycle(*control));
     // Points changed cells: new alpha, and the heat they bring.
     TimerOutput::Scope scope(timer, "flow: alpha and new metal cells");
     point_heat->follow_points();
@@ -383,14 +385,7 @@ namespace femp
   FempProblem<dim>::solid_step()
   {
     TimerOutput::Scope t(timer, "solid");
-    if (time_steps->solid_may_cool(control->time(), solid->uses_cooling_step()))
-      {
-        const std::string change = solid->use_cooling_step();
-        if (!change.empty())
-          pcout << "Solid: the melt has solidified after the laser's path "
-                   "(t = "
-                << control->time() << " s): " << change << std::endl;
-      }
+    time_steps->cool_solid_when_due(*solid, control->time());
     // Loaded by the fluid forces of step 3, with the flow.
     solid->advance(control->time(),
                    heat->temperature(),
@@ -454,12 +449,7 @@ namespace femp
   FempProblem<dim>::write_checkpoint()
   {
     TimerOutput::Scope t(timer, "checkpoint");
-    const std::string  dir =
-      states.write(*checkpoint, control->step(), control->time());
-    pcout << "Checkpoint: step " << control->step() << ", time "
-          << control->time() << " s -> " << dir << " ("
-          << checkpoint->bytes_written() << " bytes)" << std::endl;
-    return dir;
+    return states.write(*checkpoint, control->step(), control->time(), pcout);
   }
 
   template <int dim>
@@ -467,15 +457,11 @@ namespace femp
   FempProblem<dim>::restore_checkpoint()
   {
     TimerOutput::Scope t(timer, "checkpoint");
-    states.restore(*checkpoint);
+    states.restore(*checkpoint, pcout);
     point_heat->metal_fraction_restored();
     // Series written outside Output: drop their rows after the checkpoint.
     results->resume(control->time());
     checkpoint->release();
-    pcout << "Resumed from " << checkpoint->path_read() << " (written by "
-          << checkpoint->saved_ranks() << " rank(s)) at step "
-          << control->step() << ", time " << control->time() << " s"
-          << std::endl;
   }
 
   template class FempProblem<2>;

@@ -7,9 +7,10 @@ namespace femp
 {
   template <int dim>
   std::string
-  ModuleStates<dim>::write(Checkpoint<dim>   &checkpoint,
-                           const unsigned int step,
-                           const double       time) const
+  ModuleStates<dim>::write(Checkpoint<dim>    &checkpoint,
+                           const unsigned int  step,
+                           const double        time,
+                           ConditionalOStream &out) const
   {
     std::vector<StateWriter> bytes(entries.size());
     std::vector<std::pair<std::string, const StateWriter *>> sections;
@@ -18,12 +19,16 @@ namespace femp
         entries[i].save(bytes[i]);
         sections.emplace_back(entries[i].name, &bytes[i]);
       }
-    return checkpoint.write(step, time, sections);
+    const std::string dir = checkpoint.write(step, time, sections);
+    out << "Checkpoint: step " << step << ", time " << time << " s -> " << dir
+        << " (" << checkpoint.bytes_written() << " bytes)" << std::endl;
+    return dir;
   }
 
   template <int dim>
   void
-  ModuleStates<dim>::restore(const Checkpoint<dim> &checkpoint) const
+  ModuleStates<dim>::restore(const Checkpoint<dim> &checkpoint,
+                             ConditionalOStream    &out) const
   {
     for (const auto &e : entries)
       {
@@ -35,6 +40,10 @@ namespace femp
         auto parts = checkpoint.section(e.name);
         e.load(parts);
       }
+    out << "Resumed from " << checkpoint.path_read() << " (written by "
+        << checkpoint.saved_ranks() << " rank(s)) at step "
+        << checkpoint.saved_step() << ", time " << checkpoint.saved_time()
+        << " s" << std::endl;
   }
 
   template class ModuleStates<2>;

@@ -8,6 +8,7 @@
 #include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_lookup.h>
+#include <femp/heat/laser.h>
 #include <femp/io/output.h>
 #include <femp/io/output_lock.h>
 
@@ -297,7 +298,9 @@ namespace femp
                 "coordinates: a line scan of zero length takes no time, so "
                 "the laser would deposit nothing (power 0 turns it off)");
       }
-    else if (parameter_text(prm, "Laser", "Scan path format") == "femp")
+    else if (parameter_choice(
+               prm, "Laser", "Scan path format", scan_path_format_choices()) ==
+             ScanPathFormat::femp)
       {
         // Every segment line must hold the numbers of this dimension's
         // format (the 3D format read in 2D would shift every column; the

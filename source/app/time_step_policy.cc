@@ -1,5 +1,6 @@
 // femp: the time-step policy: the temperature step, the cooling step, the
 // projected step count and the termination criteria (time_step_policy.h).
+#include <femp/app/run_checks.h>
 #include <femp/app/time_step_policy.h>
 #include <femp/base/collective_error.h>
 #include <femp/base/input_checks.h>
@@ -157,6 +158,41 @@ namespace femp
     return scene.melt_flow && s.safety_factor_solidified > s.safety_factor &&
            !solid_uses_cooling_step &&
            after_path_and_below(time, scene.material.solidus);
+  }
+
+  template <int dim>
+  void
+  TimeStepPolicy<dim>::cool_solid_when_due(SolidSubCycle<dim> &solid,
+                                           const double        time)
+  {
+    if (!solid_may_cool(time, solid.uses_cooling_step()))
+      return;
+    const std::string change = solid.use_cooling_step();
+    if (!change.empty())
+      out << "Solid: the melt has solidified after the laser's path "
+             "(t = "
+          << time << " s): " << change << std::endl;
+  }
+
+  template <int dim>
+  typename IncompressibleFlow<dim>::SubcycleControl
+  TimeStepPolicy<dim>::flow_subcycle(const SimulationControl &control) const
+  {
+    typename IncompressibleFlow<dim>::SubcycleControl c;
+    c.max_substeps = run_limits().max_flow_substeps;
+    c.wall_time    = [&control]() { return control.wall_time(); };
+    c.log          = &out;
+    return c;
+  }
+
+  template <int dim>
+  std::function<bool()>
+  TimeStepPolicy<dim>::flow_may_melt() const
+  {
+    if (!scene.heat_enabled)
+      return {};
+    return
+      [this]() { return !(heat.max_temperature() < scene.material.solidus); };
   }
 
   template class TimeStepPolicy<2>;

@@ -15,13 +15,15 @@ namespace femp
 {
   template <int dim>
   void
-  TrackRecord<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  TrackRecord<dim>::Parameters::add_parameters(ParameterTable &table)
   {
-    prm.enter_subsection("Build");
-    prm.declare_entry(
+    table.enter_subsection("Build");
+    table.add(
       "Track report",
-      "auto",
-      Patterns::Selection("auto|true|false"),
+      report,
+      {{AutoSwitch::automatic, "auto"},
+       {AutoSwitch::on, "true"},
+       {AutoSwitch::off, "false"}},
       "Measure every track of the scan path (a run of segments with the "
       "laser on) when the next one starts, or the next layer, or the run "
       "ends: tracks.csv (per track: layer, times, bead height, width, "
@@ -31,16 +33,24 @@ namespace femp
       "at the end (probe_line_<name>_end.csv); doc/builds.md \"Tracks and "
       "layers\". auto: with a scan path of more than one track or a layer "
       "schedule.");
-    prm.leave_subsection();
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  TrackRecord<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
   }
 
   template <int dim>
   void
   TrackRecord<dim>::Parameters::parse_parameters(ParameterHandler &prm)
   {
-    prm.enter_subsection("Build");
-    report = prm.get("Track report");
-    prm.leave_subsection();
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
   }
 
   template <int dim>

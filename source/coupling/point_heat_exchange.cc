@@ -9,11 +9,13 @@ namespace femp
   PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim> &points,
                                             HeatTransfer<dim>   &heat,
                                             const bool        carried_by_points,
-                                            MetalBodies<dim> *bodies)
+                                            MetalBodies<dim> *bodies,
+                                            MetalSurface<dim> *surface)
       : points(points)
       , heat(heat)
       , carried_by_points(carried_by_points)
       , bodies(bodies)
+      , surface(surface)
   {
   }
 
@@ -23,22 +25,28 @@ namespace femp
   {
     if (bodies)
       bodies->update(alpha);
-    heat.set_metal_fraction(alpha, bodies);
+    if (!surface)
+      {
+        heat.set_metal_fraction(alpha, bodies);
+        return;
+      }
+    surface->update(alpha, bodies);
+    heat.set_metal_fraction(alpha, *surface);
   }
 
   template <int dim>
   void
   PointHeatExchange<dim>::metal_fraction_restored()
   {
-    if (!bodies)
+    if (!bodies && !surface)
       return;
-    // The heat restored alpha and its surface lists; the bodies follow,
-    // and the heat takes their detached drops (the rest of its state is
-    // the same after a second set_metal_fraction()). Every rank makes the
-    // call: the drops are per rank, set_metal_fraction() is collective.
-    bodies->update(heat.metal_fraction());
+    // The heat restored alpha and the surface lists it found itself; the
+    // bodies and the surface follow, and the heat takes them (the rest of
+    // its state is the same after a second set_metal_fraction()). Every
+    // rank makes the call: the drops are per rank, the updates and
+    // set_metal_fraction() are collective.
     const std::vector<double> alpha = heat.metal_fraction();
-    heat.set_metal_fraction(alpha, bodies);
+    new_metal_fraction(alpha);
   }
 
   template <int dim>

@@ -10,6 +10,17 @@
 
 namespace femp
 {
+  const Choices<ScanPathFormat> &
+  scan_path_format_choices()
+  {
+    static const Choices<ScanPathFormat> choices = {
+      {ScanPathFormat::femp, "femp"},
+      {ScanPathFormat::adamantine_segment, "adamantine_segment"},
+      {ScanPathFormat::adamantine_event_series, "adamantine_event_series"},
+      {ScanPathFormat::additivefoam, "additivefoam"}};
+    return choices;
+  }
+
   template <int dim>
   void
   Laser<dim>::Parameters::add_parameters(ParameterTable &table)
@@ -63,7 +74,7 @@ namespace femp
               "directory; given with --set, in the working directory.");
     table.add("Scan path format",
               scan_path_format,
-              Patterns::Selection(scan_path_formats()),
+              scan_path_format_choices(),
               "Format of 'Scan path file': 'femp' (above), "
               "'adamantine_segment', 'adamantine_event_series' "
               "(adamantine's scan paths, power = factor x 'Power') "
@@ -117,7 +128,7 @@ namespace femp
     };
     if (prm.scan_path_file.empty())
       add(prm.start_point, prm.end_point, prm.scan_speed, prm.power);
-    else if (prm.scan_path_format != "femp")
+    else if (prm.scan_path_format != ScanPathFormat::femp)
       path = read_scan_path<dim>(prm.scan_path_file,
                                  prm.scan_path_format,
                                  prm.power,
@@ -170,9 +181,10 @@ namespace femp
                                std::string("Laser/End point") :
                                std::string("Laser/Scan path file");
     // Paths read in other formats carry their height (layer) too.
-    const int n_checked =
-      prm.scan_path_file.empty() || prm.scan_path_format == "femp" ? dim - 1 :
-                                                                     dim;
+    const int n_checked = prm.scan_path_file.empty() ||
+                              prm.scan_path_format == ScanPathFormat::femp ?
+                            dim - 1 :
+                            dim;
     for (const auto &s : path)
       for (const auto &p : {s.start, s.end})
         for (int d = 0; d < n_checked; ++d)

@@ -161,12 +161,13 @@ namespace femp
 
   template <int dim>
   MeltPoolSize
-  measure_melt_pool(const BackgroundGrid<dim> &grid,
-                    const std::vector<double> &T,
-                    const std::vector<double> &alpha,
-                    const double               T_melt,
-                    const double               surface_height,
-                    const double               T_solidus)
+  measure_melt_pool(const BackgroundGrid<dim>       &grid,
+                    const std::vector<double>       &T,
+                    const std::vector<double>       &alpha,
+                    const double                     T_melt,
+                    const double                     surface_height,
+                    const double                     T_solidus,
+                    const std::vector<std::uint8_t> *workpiece)
   {
     const double big = std::numeric_limits<double>::max();
     MeltPoolSize r;
@@ -176,7 +177,20 @@ namespace femp
         Tmax = std::max(Tmax, T[idx]);
     r.T_max = Utilities::MPI::max(Tmax, grid.communicator());
 
-    const auto pool = isotherm_box(grid, T, alpha, T_melt, big);
+    // With the workpiece given, other metal (detached drops, powder not
+    // touching it) is taken as gas by the isotherm boxes.
+    std::vector<double> workpiece_alpha;
+    if (workpiece)
+      {
+        workpiece_alpha = alpha;
+        for (const auto idx : grid.owned_cells())
+          if (!(*workpiece)[idx])
+            workpiece_alpha[idx] = 0;
+        grid.update_ghosts(workpiece_alpha);
+      }
+    const std::vector<double> &metal = workpiece ? workpiece_alpha : alpha;
+
+    const auto pool = isotherm_box(grid, T, metal, T_melt, big);
     r.volume        = pool.volume;
     if (r.volume > 0)
       {
@@ -190,7 +204,7 @@ namespace femp
         r.depth  = std::max(0., surface_height - pool.lo[dim - 1]);
       }
 
-    const auto fusion = isotherm_box(grid, T, alpha, T_solidus, surface_height);
+    const auto fusion = isotherm_box(grid, T, metal, T_solidus, surface_height);
     if (fusion.volume > 0)
       {
         r.solidus_width =
@@ -206,12 +220,14 @@ namespace femp
                        const std::vector<double> &,
                        double,
                        double,
-                       double);
+                       double,
+                       const std::vector<std::uint8_t> *);
   template MeltPoolSize
   measure_melt_pool<3>(const BackgroundGrid<3> &,
                        const std::vector<double> &,
                        const std::vector<double> &,
                        double,
                        double,
-                       double);
+                       double,
+                       const std::vector<std::uint8_t> *);
 } // namespace femp

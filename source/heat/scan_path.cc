@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace femp
 {
@@ -275,23 +276,27 @@ namespace femp
   } // namespace
 
   std::vector<ScanPathPiece>
-  read_scan_path_pieces(const std::string &file,
-                        const std::string &format,
-                        const double       nominal_power,
-                        const double       start_time)
+  read_scan_path_pieces(const std::string   &file,
+                        const ScanPathFormat format,
+                        const double         nominal_power,
+                        const double         start_time)
   {
     std::vector<ScanPathPiece> path;
-    if (format == "adamantine_segment")
-      path = read_mode_lines(file, true, nominal_power, start_time);
-    else if (format == "additivefoam")
-      path = read_mode_lines(file, false, nominal_power, start_time);
-    else if (format == "adamantine_event_series")
-      path = read_event_series(file, nominal_power, start_time);
-    else
-      require(false,
-              "Laser/Scan path format",
-              format,
-              std::string("it must be one of ") + scan_path_formats());
+    switch (format)
+      {
+        case ScanPathFormat::adamantine_segment:
+          path = read_mode_lines(file, true, nominal_power, start_time);
+          break;
+        case ScanPathFormat::additivefoam:
+          path = read_mode_lines(file, false, nominal_power, start_time);
+          break;
+        case ScanPathFormat::adamantine_event_series:
+          path = read_event_series(file, nominal_power, start_time);
+          break;
+        case ScanPathFormat::femp:
+          throw std::logic_error("femp: the 'femp' scan path format is read "
+                                 "by Laser itself");
+      }
     require(!path.empty(),
             parameter,
             file,

@@ -37,6 +37,7 @@
 #include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
+#include <femp/heat/metal_surface.h>
 #include <femp/heat/thermal_history.h>
 #include <femp/io/checkpoint.h>
 #include <femp/io/track_shape.h>
@@ -103,9 +104,12 @@ namespace femp
     std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
     // Builds of several layers and pores (doc/builds.md).
     std::unique_ptr<BuildSteps<dim>> builds;
-    // What joins them: alpha's keeper and the bodies of metal of alpha
-    // (detached drops, workpiece) that heat, solid and stop test read.
+    // What joins them: alpha's keeper, the bodies of metal of alpha
+    // (detached drops, workpiece) that heat, solid and stop test read, and
+    // the free surface of alpha that the heat reads (null with the heat
+    // transfer off).
     std::unique_ptr<MetalBodies<dim>>       bodies;
+    std::unique_ptr<MetalSurface<dim>>      surface;
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
     // Clock, step policy, output, report, state.

@@ -6,6 +6,8 @@
 #ifndef femp_module_states_h
 #define femp_module_states_h
 
+#include <deal.II/base/conditional_ostream.h>
+
 #include <femp/io/checkpoint.h>
 
 #include <functional>
@@ -48,14 +50,17 @@ namespace femp
     }
 
     /// Write every registered module's section into a checkpoint at
-    /// @p step, @p time (collective); returns its directory.
+    /// @p step, @p time (collective), say so on @p out; returns its
+    /// directory.
     std::string
-    write(Checkpoint<dim>   &checkpoint,
-          const unsigned int step,
-          const double       time) const;
-    /// Restore every registered module from the checkpoint read.
+    write(Checkpoint<dim>    &checkpoint,
+          const unsigned int  step,
+          const double        time,
+          ConditionalOStream &out) const;
+    /// Restore every registered module from the checkpoint read, say so
+    /// on @p out.
     void
-    restore(const Checkpoint<dim> &checkpoint) const;
+    restore(const Checkpoint<dim> &checkpoint, ConditionalOStream &out) const;
 
   private:
     struct Entry

@@ -10,6 +10,8 @@
 //  - the cooling step 'Time step after solidification';
 //  - the termination criteria: the solid's switch to its cooling step and
 //    the stop 'Stop when peak temperature below'.
+// It also sets the flow's sub-cycle its limits (the sub-step bound, the
+// idle test: may the metal melt in this step?).
 // The cooling step, the solid's switch and the stop test ask one question,
 // after_path_and_below(): has the laser's path ended and is the metal
 // attached to the substrate (MetalBodies' workpiece) below a temperature?
@@ -19,12 +21,15 @@
 #include <deal.II/base/conditional_ostream.h>
 
 #include <femp/app/scene.h>
+#include <femp/app/simulation_control.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
+#include <femp/solid/solid_sub_cycle.h>
 
+#include <functional>
 #include <optional>
 
 namespace femp
@@ -72,6 +77,22 @@ namespace femp
     /// Collective.
     bool
     solid_may_cool(const double time, const bool solid_uses_cooling_step);
+
+    /// The solid's switch to its cooling step when solid_may_cool() says
+    /// so at @p time, said in a line. Collective.
+    void
+    cool_solid_when_due(SolidSubCycle<dim> &solid, const double time);
+
+    /// The limits of the flow's sub-cycle over a temperature step: 'Run
+    /// limits/Maximum flow sub-steps', the run's wall clock of @p control,
+    /// the report of a long sub-cycle to the output stream.
+    typename IncompressibleFlow<dim>::SubcycleControl
+    flow_subcycle(const SimulationControl &control) const;
+    /// The flow's idle test: may the metal melt in this step (the heat's
+    /// peak temperature is not below the solidus)? Empty with a frozen
+    /// temperature, where the flow never idles.
+    std::function<bool()>
+    flow_may_melt() const;
 
     /// Peak temperature of the metal attached to the substrate
     /// (MetalBodies::workpiece_max_temperature()), computed once per

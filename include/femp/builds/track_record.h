@@ -39,6 +39,7 @@
 #include <deal.II/base/parameter_handler.h>
 #include <deal.II/base/point.h>
 
+#include <femp/base/parameter_table.h>
 #include <femp/base/state_stream.h>
 #include <femp/grid/background_grid.h>
 #include <femp/heat/laser.h>
@@ -58,10 +59,14 @@ namespace femp
   public:
     struct Parameters
     {
-      /// Build/Track report: "auto" (a scan path of more than one track,
-      /// or a layer schedule), "true" or "false".
-      std::string report = "auto";
+      /// Build/Track report: automatic (a scan path of more than one
+      /// track, or a layer schedule), on or off.
+      AutoSwitch report = AutoSwitch::automatic;
 
+      /// Declare (the members' values are the defaults) or read the
+      /// entries, each listed once.
+      void
+      add_parameters(ParameterTable &table);
       static void
       declare_parameters(ParameterHandler &prm);
       void
@@ -71,8 +76,8 @@ namespace femp
       bool
       enabled(const unsigned int n_tracks, const bool builds) const
       {
-        return report == "true" ||
-               (report == "auto" && (n_tracks > 1 || builds));
+        return report == AutoSwitch::on ||
+               (report == AutoSwitch::automatic && (n_tracks > 1 || builds));
       }
     };
 

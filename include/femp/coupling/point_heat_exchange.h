@@ -15,7 +15,9 @@
 // HeatTransfer::set_metal_fraction() in a run, which stores alpha for the
 // heat equation and its readers (cell_fields.h), and of
 // MetalBodies::update(), which finds the bodies of metal of the same alpha
-// once for the heat, the solid and the stop test.
+// once for the heat, the solid and the stop test, and of
+// MetalSurface::update(), which finds the free surface of the same alpha
+// once for the heat (its laser and surface losses).
 // It keeps the energy account of these exchanges ('moved_points': the
 // change of the stored enthalpy of the grid they caused, zero for a
 // conservative exchange).
@@ -25,6 +27,7 @@
 #include <femp/grid/material_points.h>
 #include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
+#include <femp/heat/metal_surface.h>
 
 namespace femp
 {
@@ -33,12 +36,15 @@ namespace femp
   {
   public:
     /// @p carried_by_points: Heat transfer/Advection by melt flow = points.
-    /// @p bodies: updated with each new alpha and handed to the heat
-    /// (nullptr: no bodies, the heat finds no detached drops).
+    /// @p bodies and @p surface: updated with each new alpha, the surface
+    /// with the bodies' detached drops, and the surface handed to the heat
+    /// (nullptr: no bodies, no detached drops; no surface: the heat finds
+    /// it itself, or needs none when its temperature is frozen).
     PointHeatExchange(MaterialPoints<dim> &points,
                       HeatTransfer<dim>   &heat,
                       const bool           carried_by_points,
-                      MetalBodies<dim>    *bodies = nullptr);
+                      MetalBodies<dim>    *bodies  = nullptr,
+                      MetalSurface<dim>   *surface = nullptr);
 
     /// Initial temperatures: points outside the initial @p bodies take
     /// heat_prm's initial temperature at their position (when it is a
@@ -70,7 +76,7 @@ namespace femp
     points_changed_cells();
 
     /// After a checkpoint restored the heat's alpha: the bodies of metal
-    /// of it. Collective.
+    /// and the free surface of it. Collective.
     void
     metal_fraction_restored();
 
@@ -94,11 +100,12 @@ namespace femp
     HeatTransfer<dim>   &heat;
     const bool           carried_by_points;
     MetalBodies<dim>    *bodies;
+    MetalSurface<dim>   *surface;
     double               moved_points = 0;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
 
-    /// alpha changed: the bodies, then the heat.
+    /// alpha changed: the bodies, the surface, then the heat.
     void
     new_metal_fraction(const std::vector<double> &alpha);
   };

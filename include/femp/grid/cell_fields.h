@@ -21,7 +21,10 @@
 // What alpha's bodies of metal are (MetalBodies: the detached drops, the
 // workpiece attached to the substrate) is found by the same writer from the
 // same alpha, once per change, and read by HeatTransfer (drop losses),
-// SolidSubCycle (points in drops set aside) and TimeStepPolicy (stop test).
+// SolidSubCycle (points in drops set aside) and TimeStepPolicy (stop test);
+// so is alpha's free surface (MetalSurface: the surface cells with
+// |grad alpha|, the first-surface cells of the laser, the cells of detached
+// drops), read by HeatTransfer (laser, surface losses).
 //
 // All fields cover the local box of the background grid with ghost values
 // current. A missing field is nullptr (each reader says what it does then).

@@ -29,6 +29,7 @@
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/metal_bodies.h>
 #include <femp/heat/laser.h>
+#include <femp/heat/metal_surface.h>
 #include <femp/heat/ray_traced_absorption.h>
 
 #include <cstdint>
@@ -180,10 +181,16 @@ namespace femp
       return frozen;
     }
 
-    /// New metal fraction (owned cells and ghosts); rebuilds the list of
-    /// surface cells and the |grad alpha| weights. With 'Detached drops =
-    /// sphere' the drops are those of @p bodies, found from the same alpha
-    /// (none when nullptr).
+    /// New metal fraction (owned cells and ghosts) and its free surface
+    /// @p surface, found from the same alpha (MetalSurface::update(), once
+    /// per change, by alpha's keeper): the heat takes its lists of surface,
+    /// first-surface and detached cells and renews the properties.
+    void
+    set_metal_fraction(const std::vector<double> &alpha,
+                       const MetalSurface<dim>   &surface);
+    /// The same for a heat transfer used on its own (tests, studies): finds
+    /// the free surface of @p alpha itself, with the detached drops of
+    /// @p bodies (none when nullptr). Collective.
     void
     set_metal_fraction(const std::vector<double> &alpha,
                        const MetalBodies<dim>    *bodies = nullptr);
@@ -328,19 +335,11 @@ namespace femp
     /// Laser density of the last step, W/m^3; surface-loss weight
     /// w |grad alpha| of the surface cells (0 elsewhere), 1/m.
     std::vector<double> laser_density, loss_weight;
-    /// Detached metal cells (with Heat transfer/Detached drops = sphere): the
-    /// owned metal cells of the drops of MetalBodies (at most 'Detached drop
-    /// cells' cells, no other metal face neighbour inside the domain). Each
-    /// loses heat as part of a sphere (2D: a cylinder) of the drop's metal
-    /// volume in still gas: area per cell volume 2 dim alpha/d (1/m) and gas
-    /// coefficient 2 k_g/d (W/(m^2 K)), d the sphere's diameter.
-    struct DetachedCell
-    {
-      std::uint32_t index;
-      double        area;  ///< sphere surface / cell volume, 1/m
-      double        gas_h; ///< Nu k_g / d, W/(m^2 K)
-    };
-    std::vector<DetachedCell> detached;
+    /// The lists of the last MetalSurface handed to set_metal_fraction():
+    /// surface cells, first-surface cells, cells of detached drops.
+    std::vector<typename MetalSurface<dim>::SurfaceCell>  surface;
+    std::vector<typename MetalSurface<dim>::LaserCell>    first_surface;
+    std::vector<typename MetalSurface<dim>::DetachedCell> detached;
     /// gas_h of the detached cells per cell of the local box, 0 elsewhere
     /// (empty when Detached drops = off).
     std::vector<double> gas_coefficient;
@@ -350,22 +349,6 @@ namespace femp
     /// advance()); nullptr: none.
     const std::array<std::vector<double>, dim> *
     convection_velocity(const CellFields<dim> &fields) const;
-
-    struct SurfaceCell
-    {
-      std::uint32_t index;
-      double        grad_alpha; ///< |grad alpha|, 1/m
-    };
-    std::vector<SurfaceCell> surface;
-    /// Owned cells where the vertical beam first meets metal, with their
-    /// share (1/m) of the column's flux q: the cell gets q * share per volume,
-    /// the shares of a column sum to 1/h.
-    struct LaserCell
-    {
-      std::uint32_t index;
-      double        share;
-    };
-    std::vector<LaserCell> first_surface;
 
     struct FixedFace
     {
@@ -470,10 +453,6 @@ namespace femp
     }
     void
     compute_surface_sources(const double dt, const double time);
-    /// Fill detached and gas_coefficient from the drops of @p bodies and
-    /// alpha (nothing when Detached drops = off or @p bodies is nullptr).
-    void
-    take_detached_drops(const MetalBodies<dim> *bodies);
     /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
     double
     enthalpy_density(const double a, const double T) const;

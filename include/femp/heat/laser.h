@@ -22,6 +22,18 @@ namespace femp
 {
   using namespace dealii;
 
+  /// The formats of 'Laser/Scan path file' (heat/scan_path.h).
+  enum class ScanPathFormat
+  {
+    femp,
+    adamantine_segment,
+    adamantine_event_series,
+    additivefoam
+  };
+  /// Their names in the input ('Laser/Scan path format').
+  const Choices<ScanPathFormat> &
+  scan_path_format_choices();
+
   template <int dim>
   class Laser
   {
@@ -39,14 +51,14 @@ namespace femp
 
     struct Parameters
     {
-      double      power        = 200.;
-      double      absorptivity = 0.35;
-      double      beam_radius  = 20e-6;
-      double      scan_speed   = 2.;
-      Point<dim>  start_point, end_point;
-      double      start_time = 0.;
-      std::string scan_path_file;
-      std::string scan_path_format = "femp"; ///< see heat/scan_path.h
+      double         power        = 200.;
+      double         absorptivity = 0.35;
+      double         beam_radius  = 20e-6;
+      double         scan_speed   = 2.;
+      Point<dim>     start_point, end_point;
+      double         start_time = 0.;
+      std::string    scan_path_file;
+      ScanPathFormat scan_path_format = ScanPathFormat::femp;
 
       /// Declare (the members' values are the defaults) or read the
 

@@ -6,7 +6,9 @@
 //   width:  extent along y (3D) of the isotherm (2D: equal to the length),
 //   depth:  reference top surface height minus the lowest crossing.
 // The pool is the melt connected to colder metal (spatter in the gas is
-// not counted); where nothing is colder, all melt counts.
+// not counted); where nothing is colder, all melt counts. Given the cells
+// of the workpiece (the metal attached to the substrate, MetalBodies), only
+// these count: a detached drop, liquid or partly solid, is no pool.
 // Beside this liquidus box, the size as a cross-section of the track is
 // measured: the fusion zone is the region above the solidus T_s inside
 // the original substrate (cell centres below the substrate top), so the
@@ -17,6 +19,9 @@
 #define femp_melt_pool_h
 
 #include <femp/grid/background_grid.h>
+
+#include <cstdint>
+#include <vector>
 
 namespace femp
 {
@@ -33,15 +38,20 @@ namespace femp
   /// Global melt-pool size; @p T needs valid ghosts; @p alpha marks metal.
   /// @p T_melt: the pool's isotherm (liquidus); @p surface_height: the
   /// original substrate top, m; @p T_solidus: the isotherm of the fusion
-  /// zone inside the substrate (solidus_width, solidus_depth). Collective.
+  /// zone inside the substrate (solidus_width, solidus_depth);
+  /// @p workpiece: per cell of the local box 1 for the cells of the
+  /// workpiece (MetalBodies::workpiece_cells(), valid on owned cells), the
+  /// only metal the pool and the fusion zone count (nullptr: all metal).
+  /// T_max is over all metal cells. Collective.
   template <int dim>
   MeltPoolSize
-  measure_melt_pool(const BackgroundGrid<dim> &grid,
-                    const std::vector<double> &T,
-                    const std::vector<double> &alpha,
-                    const double               T_melt,
-                    const double               surface_height,
-                    const double               T_solidus);
+  measure_melt_pool(const BackgroundGrid<dim>       &grid,
+                    const std::vector<double>       &T,
+                    const std::vector<double>       &alpha,
+                    const double                     T_melt,
+                    const double                     surface_height,
+                    const double                     T_solidus,
+                    const std::vector<std::uint8_t> *workpiece = nullptr);
 } // namespace femp
 
 #endif

@@ -36,22 +36,15 @@ namespace femp
     double                power, t_begin, t_end;
   };
 
-  /// The values allowed for 'Laser/Scan path format'.
-  inline const char *
-  scan_path_formats()
-  {
-    return "femp|adamantine_segment|adamantine_event_series|additivefoam";
-  }
-
   /// Read @p file in @p format (not 'femp', which Laser reads itself). Times
   /// start at @p start_time; adamantine's power factors multiply
   /// @p nominal_power. Pieces of zero duration are dropped. Throws
   /// InputError naming 'Laser/Scan path file', the line and what is wrong.
   std::vector<ScanPathPiece>
-  read_scan_path_pieces(const std::string &file,
-                        const std::string &format,
-                        const double       nominal_power,
-                        const double       start_time);
+  read_scan_path_pieces(const std::string   &file,
+                        const ScanPathFormat format,
+                        const double         nominal_power,
+                        const double         start_time);
 
   /// femp's laser segments for a scene of dimension @p dim: in 3D (x, y, z)
   /// as read, in 2D (x, z); a 2D scene is one vertical plane y = const, so
@@ -64,10 +57,10 @@ namespace femp
   /// Both steps: read @p file and map it to @p dim.
   template <int dim>
   std::vector<typename Laser<dim>::Segment>
-  read_scan_path(const std::string &file,
-                 const std::string &format,
-                 const double       nominal_power,
-                 const double       start_time)
+  read_scan_path(const std::string   &file,
+                 const ScanPathFormat format,
+                 const double         nominal_power,
+                 const double         start_time)
   {
     return to_laser_segments<dim>(
       read_scan_path_pieces(file, format, nominal_power, start_time), file);
