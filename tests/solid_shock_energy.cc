@@ -21,8 +21,7 @@
 // against one output. Second case: the same with an elastic solid
 // (no yield), gated at 0.05 too: there the FE forces at the transition
 // nodes work on the hourglass add-back velocity (eq. 17) and on the merge
-// jump, booked with the re-map work since 2026-11-22 (0.12 before, -0.002
-// after).
+// jump, booked with the re-map work (the balance -0.002).
 // Optional arguments (studies, not the test): "flip", "nofe", "elastic",
 // "nomelt", "free" (no boundary conditions), "b1=<bulk viscosity>",
 // "sf=<safety factor>", "hg=<hourglass coefficient>", "ztop=<top of the

@@ -499,9 +499,9 @@ namespace femp
   // monotone along the surface. At a smooth peak the limiter takes the
   // hottest neighbour's value (a second-order cut), the median about the
   // value one cell away: near the beam the surface T falls by several
-  // hundred K per cell, and the median's recoil above 4000 K was typically
-  // 0.3 (0.03-0.65) of the cell-wise value, which starved the vapour
-  // depression (doc/studies/2026-12-02-recoil-surface-temperature.md).
+  // hundred K per cell, and the median's recoil above 4000 K is typically
+  // 0.3 (0.03-0.65) of the cell-wise value, which starves the vapour
+  // depression (doc/flow.md, "Recoil pressure").
   template <int dim>
   void
   FreeSurface<dim>::add_recoil_pressure(

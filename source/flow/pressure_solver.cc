@@ -139,13 +139,12 @@ namespace femp
     stats.n_fluid_cells =
       Utilities::MPI::sum(static_cast<unsigned long>(cells.fluid.size()), comm);
     // A new hierarchy whenever the set of fluid cells changed. Keeping one
-    // across set changes inside the band (tried until 2026-11-24) cost more
-    // than it saved: in the 0.2 ms 3D track the stale hierarchy needed 50
-    // CG iterations per solve on average and failed its limit in 1509 of
-    // 1917 steps (then set up anyway), against 7 with a fresh one; the
-    // track took 19.5 s against about 14 s. With the same set only the
-    // free-surface diagonal 1/theta changed, and the kept hierarchy is
-    // tried first (run_cg()).
+    // across set changes inside the band costs more than it saves: in the
+    // 0.2 ms 3D track the stale hierarchy needs 50 CG iterations per solve
+    // on average and fails its limit in 1509 of 1917 steps (then set up
+    // anyway), against 7 with a fresh one (doc/studies/flow.md). With the same
+    // set only the free-surface diagonal 1/theta changed, and the kept
+    // hierarchy is tried first (run_cg()).
     //
     // Jacobi (auto) on small bands until one of its solves needs more
     // than 'Jacobi iteration limit' iterations, then AMG for the rest of
