@@ -87,10 +87,9 @@ namespace femp
               "they do not show in the stresses or the energies, "
               "but their corner displacements move the zone's "
               "nodes and the points near it. femp's solid is a "
-              "small-strain model: the shipped scenes stay below "
-              "0.006 (the largest of a run is in the end report, "
-              "doc/stability.md). 1 leaves only the inverted-corner "
-              "check.");
+              "small-strain model; the largest value of a run is in "
+              "the end report (doc/stability.md). 1 leaves only the "
+              "inverted-corner check.");
     table.leave_subsection();
   }
 

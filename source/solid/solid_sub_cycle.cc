@@ -73,13 +73,12 @@ namespace femp
     table.add("Safety factor",
               safety_factor,
               Patterns::Double(0., 1.),
-              "Courant number C of the automatic solid step. With "
-              "material points the stresses depend on C and the "
-              "mass-scaling factor s through sqrt(s) / C (the "
-              "transfer loss per unit time): C = 0.8 with s times "
-              "2.56 gives the answer of C = 0.5 for 2.56x fewer "
-              "steps without the melt flow (doc/speed_accuracy.md); "
-              "with it 0.8 and 1 went unstable. Range (0, 1].");
+              "Courant number C of the automatic solid step, "
+              "dimensionless: the step is C times the elastic limit "
+              "(see 'Time step'). With material points the stresses "
+              "depend on C and the mass-scaling factor s through "
+              "sqrt(s) / C (the transfer loss per unit time; "
+              "doc/speed_accuracy.md). Range (0, 1].");
     table.add("Safety factor after solidification",
               safety_factor_solidified,
               Patterns::Double(0., 1.),
