@@ -42,9 +42,9 @@ report: reads every finished run, writes doc/validation.md's tables and
 width: what sets each finished run's fusion width (its last field
   output): the widest section's distance behind the beam, the temperature
   on the axis there, the melt's surface flow across the track, and the
-  widest fusion width read on the top substrate row of cells (as
-  melt_pool.csv reads it) and at the original surface (the temperature
-  extrapolated from the two top rows).
+  widest fusion width read on the top substrate row of cells (h/2 below
+  the surface) and at the original surface (the temperature extrapolated
+  from the two top rows, as femp's melt_pool.csv reads it).
 conduction: the Eagar-Tsai (pure conduction) fusion width and depth of
   the Trapp conduction tracks with the measured absorptivity and constant
   properties (averaged over 293 K..T_s, and at T_s), and the width h/2
@@ -511,8 +511,8 @@ def cmd_conduction(args):
             w, d = eagar_tsai(c["P"], c["absorptivity"], c["rb"], c["v"], k,
                               m["rho"], cp, T0, Ts)
             out.append("%5.1f / %4.1f" % (w * 1e6, d * 1e6))
-        # the width read where femp's melt_pool.csv reads it: at the centre
-        # of the top substrate cell row, h/2 below the surface
+        # the width read at the centre of the top substrate cell row, h/2
+        # below the surface (a reading on the cell centres alone)
         rows = [eagar_tsai(c["P"], c["absorptivity"], c["rb"], c["v"], k_mean,
                            m["rho"], cp_mean, T0, Ts, z_width=h / 2)[0]
                 for h in (8e-6, 4e-6)]
@@ -926,10 +926,10 @@ def width_state(run_dir, alloy):
 def fusion_width_rows(T, A, kt, h, Ts):
     """The widest fusion width of the last field output (cells T, metal
     fraction A indexed [x, y, z], top substrate row kt) read two ways: on
-    the top substrate row, h/2 below the original surface, as femp's
-    melt_pool.csv reads it ('width_top_row'), and at the original surface,
-    the temperature extrapolated linearly from the two top rows
-    (1.5 T_kt - 0.5 T_kt-1; 'width_surface'); the crossing of T_s
+    the top substrate row, h/2 below the original surface
+    ('width_top_row'), and at the original surface, the temperature
+    extrapolated linearly from the two top rows (1.5 T_kt - 0.5 T_kt-1;
+    'width_surface', as femp's melt_pool.csv reads it); the crossing of T_s
     interpolated linearly between cell centres in both. Where the pool's
     edge lies under the beam the solidus meets the surface at an angle, and
     the width shrinks linearly with depth: the top-row reading is then short

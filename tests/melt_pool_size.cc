@@ -12,6 +12,18 @@
 // liquidus width and depth, solidus width and depth inside the substrate,
 // each within 1 % of the ellipsoid's (the cell-centre sampling and the
 // linear interpolation of a quadratic profile err by O(h^2)).
+// Second field, the width at the surface: on a coarse grid (about 7 cells
+// across the pool) the dome's centre lies above the substrate top,
+// z_0 = c/3, so the isotherm meets the surface at an angle and is narrower
+// below it: its width at the surface z = 0 is 2 b sqrt(s^2 - (z_0/c)^2),
+// h/2 below it 8 % (solidus) and 15 % (liquidus) less: the cell-centre
+// reading's first-order error. The length and the widths at the solidus
+// (in the substrate) and the liquidus (at the free surface, gas above)
+// must be within the error bound of the surface reading: T extrapolated
+// linearly from the two top rows overshoots the quadratic profile by
+// 0.75 h^2/c^2 in s^2, a relative width error of 0.75 h^2/c^2 /
+// (2 (s^2 - (z_0/c)^2)) (2.7 % solidus, 4.7 % liquidus); the lateral
+// interpolation between cell centres errs the other way, by less.
 // Runs on 1 and 2 ranks with the same output.
 #include <femp/heat/melt_pool.h>
 
@@ -80,5 +92,61 @@ main(int argc, char **argv)
                  0.01);
   // With the bead counted, the solidus width would be the bead's.
   checks.print("bead width (excluded)", 2 * bead_half_width);
+
+  {
+    // The width at the surface: the dome's centre above the substrate top
+    // (z = 0, on a cell face), the track's axis on a cell face in y.
+    const double hc = 0.05;
+    const auto   gpc =
+      box<dim>(Point<dim>(0, 0, -0.6), Point<dim>(1, 1, 0.1), hc);
+    BackgroundGrid<dim> coarse(gpc, comm);
+    coarse.create();
+    const double        x0 = 0.52, y0 = 0.5, z0 = 0.1, cc = 0.3;
+    std::vector<double> a2 = coarse.make_field(0.);
+    std::vector<double> T2 = coarse.make_field(T0);
+    for (std::size_t i = 0; i < T2.size(); ++i)
+      {
+        const auto x = coarse.cell_center(i);
+        if (x[2] < 0)
+          {
+            a2[i]           = 1;
+            const double r2 = std::pow((x[0] - x0) / a, 2) +
+                              std::pow((x[1] - y0) / b, 2) +
+                              std::pow((x[2] - z0) / cc, 2);
+            T2[i] = T0 + (Tp - T0) * std::max(0., 1 - r2);
+          }
+      }
+    const auto at_surface = measure_melt_pool(coarse, T2, a2, Tl, 0., Ts);
+    // The isotherm's half-axis factor at height z.
+    const auto s_at = [&](const double Tiso, const double z) {
+      return std::sqrt(s(Tiso) * s(Tiso) - std::pow((z - z0) / cc, 2));
+    };
+    const double wl0 = 2 * b * s_at(Tl, 0), ll0 = 2 * a * s_at(Tl, 0);
+    const double ws0 = 2 * b * s_at(Ts, 0);
+    checks.print("coarse: liquidus width at the surface (exact)", wl0);
+    checks.print("coarse: liquidus length at the surface (exact)", ll0);
+    checks.print("coarse: solidus width at the surface (exact)", ws0);
+    // The reading h/2 below the surface falls short by this much.
+    const auto short_below = [&](const double Tiso) {
+      return 1 - s_at(Tiso, -0.5 * hc) / s_at(Tiso, 0);
+    };
+    checks.print("coarse: liquidus width h/2 below, relative shortfall",
+                 short_below(Tl));
+    checks.print("coarse: solidus width h/2 below, relative shortfall",
+                 short_below(Ts));
+    // The surface reading's error bound (above).
+    const auto bound = [&](const double Tiso) {
+      return 0.75 * hc * hc / (cc * cc) / (2 * std::pow(s_at(Tiso, 0), 2));
+    };
+    checks.at_most("coarse: liquidus width relative error",
+                   std::abs(at_surface.width - wl0) / wl0,
+                   bound(Tl));
+    checks.at_most("coarse: liquidus length relative error",
+                   std::abs(at_surface.length - ll0) / ll0,
+                   bound(Tl));
+    checks.at_most("coarse: solidus width relative error",
+                   std::abs(at_surface.solidus_width - ws0) / ws0,
+                   bound(Ts));
+  }
   return checks.exit_code();
 }

@@ -417,12 +417,15 @@ namespace femp
   MeltPoolSize
   FempProblem<dim>::melt_pool() const
   {
+    // Only the workpiece (the metal attached to the substrate) holds the
+    // pool: a detached drop, liquid or not, is no pool.
     return measure_melt_pool(*grid,
                              heat->temperature(),
                              heat->metal_fraction(),
                              scene.material.liquidus,
                              scene.points.substrate_top,
-                             scene.material.solidus);
+                             scene.material.solidus,
+                             &bodies->workpiece_cells());
   }
 
   template <int dim>

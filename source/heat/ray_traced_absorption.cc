@@ -61,9 +61,13 @@ namespace femp
     table.add("Rays per beam radius",
               rays_per_beam_radius,
               Patterns::Integer(1, 64),
-              "Ray spacing r_b / this number on a square lattice (3D) "
-              "or a line (2D) out to 2 r_b (ray traced only): "
-              "4 gives 197 rays in 3D, 17 in 2D; range [1, 64].");
+              "Rays per 1/e^2 beam radius r_b, dimensionless: the "
+              "rays start r_b / this number apart on a square lattice "
+              "(3D) or a line (2D) out to 2 r_b (ray traced only); 4 "
+              "gives 197 rays in 3D, 17 in 2D. Each hit's power is "
+              "spread over the surface cells round it by its position, "
+              "so a lattice about as fine as the cells suffices; range "
+              "[1, 64].");
     table.add("Maximum reflections",
               max_reflections,
               Patterns::Integer(0, 10000),
@@ -339,9 +343,9 @@ namespace femp
         }
     r.n_rays = start.size();
 
-    // Surface cell next to a hit: among the 3^dim cells round the cell of
-    // the point a quarter cell inside the metal, the surface cell nearest
-    // to that point; -1 if none.
+    // Surface cell next to a point (a hit's, a quarter cell inside the
+    // metal): among the 3^dim cells round its cell, the surface cell
+    // nearest to it; -1 if none.
     auto target = [&](const Point<dim> &q) -> long {
       std::array<int, dim> c;
       for (int d = 0; d < dim; ++d)
@@ -367,6 +371,50 @@ namespace femp
             best_d2 = d2, best = long(w.flat(ijk));
         }
       return best;
+    };
+
+    // A hit's power, spread over the cells round the point q with linear
+    // weights in the directions along the surface (all but the largest
+    // component of the normal @p nrm), each part into the surface cell
+    // nearest the centre of its column (the cell next to q where that
+    // column has none): the deposited power keeps the hit's position as
+    // its centre. Into one cell, it would move by up to h/2, towards the
+    // beam axis for every ray of a lattice slightly finer than the cells.
+    auto deposit = [&](const Point<dim>     &q,
+                       const Tensor<1, dim> &nrm,
+                       const long            cell,
+                       const double          a) {
+      int normal = 0;
+      for (int d = 1; d < dim; ++d)
+        if (std::abs(nrm[d]) > std::abs(nrm[normal]))
+          normal = d;
+      std::array<int, dim>    i0{};
+      std::array<double, dim> f{};
+      for (int d = 0; d < dim; ++d)
+        if (d != normal)
+          {
+            const double u = (q[d] - w.origin[d]) / h - 0.5;
+            i0[d]          = int(std::floor(u));
+            f[d]           = u - i0[d];
+          }
+      for (unsigned int c = 0; c < (1u << dim); ++c)
+        {
+          if (c & (1u << normal))
+            continue;
+          Point<dim> qc = q;
+          double     wt = 1;
+          for (int d = 0; d < dim; ++d)
+            if (d != normal)
+              {
+                const bool up = c & (1u << d);
+                wt *= up ? f[d] : 1 - f[d];
+                qc[d] = w.origin[d] + (i0[d] + up + 0.5) * h;
+              }
+          if (wt == 0)
+            continue;
+          const long tc = target(qc);
+          absorbed_in[tc < 0 ? cell : tc] += a * wt;
+        }
     };
 
     const double max_path = 8. * (w.n[0] + w.n[dim - 1]) * h;
@@ -422,8 +470,9 @@ namespace femp
             nrm                = gn > 1e-12 / h ? nrm / gn : -dir;
             if (dir * nrm > 0)
               nrm = -nrm;
-            const double cos_t = std::min(1., -(dir * nrm));
-            const long   cell  = target(hit - 0.25 * h * nrm);
+            const double     cos_t = std::min(1., -(dir * nrm));
+            const Point<dim> q     = hit - 0.25 * h * nrm;
+            const long       cell  = target(q);
             if (cell < 0)
               {
                 r.escaped += P; // no metal cell to take it (not expected)
@@ -433,7 +482,7 @@ namespace femp
             double     a    = P * fresnel_absorptivity(cos_t);
             if (last || P - a < 1e-6 * P0)
               a = P; // the small rest is absorbed here
-            absorbed_in[cell] += a;
+            deposit(q, nrm, cell, a);
             r.absorbed += a;
             P -= a;
             if (P <= 0)

@@ -1,7 +1,7 @@
 // femp: melt-pool size from the temperature field on the background grid.
 // The pool is the region above the melting isotherm T_m (the liquidus by
-// default); its boundary is located to sub-cell accuracy by linear
-// interpolation of T between neighbouring cell centres, in each direction.
+// default); its boundary is located by linear interpolation of T between
+// cell centres, the lateral one also at the surface (T extrapolated there).
 //   length: extent along x of the isotherm,
 //   width:  extent along y (3D) of the isotherm (2D: equal to the length),
 //   depth:  reference top surface height minus the lowest crossing.

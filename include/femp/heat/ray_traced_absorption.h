@@ -6,9 +6,9 @@
 // refractive index n + i k at the laser wavelength, and reflected
 // specularly with the rest of their power, until they leave the domain
 // (escaping power) or carry less than a tiny part of their start power
-// (which is then absorbed where they are). The absorbed power goes into the
-// surface cell next to each hit. Every ray's power splits exactly into
-// absorbed and escaping parts, so absorbed + escaping = P to round-off.
+// (which is then absorbed where they are); each hit's power is spread over
+// the surface cells round it by its position along the surface. Every ray's
+// power splits exactly into absorbed and escaping parts: their sum is P.
 // The metal fraction round the beam is gathered onto every rank and each
 // rank traces all rays, so the result does not depend on the partition.
 // The fixed-absorptivity model of eq. (1) stays the default
