@@ -17,7 +17,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <sstream>
 #include <type_traits>
+#include <unordered_map>
 
 namespace femp
 {
@@ -244,6 +246,7 @@ namespace femp
   {
     mass_scale     = mass_scaling;
     g              = gravity;
+    face_fix       = face_bits;
     const double h = grid.h();
     V              = std::pow(h, dim);
     const double b = 1. / (std::pow(2., dim - 1) * h);
@@ -345,24 +348,25 @@ namespace femp
     std::vector<unsigned int> reps(dim);
     for (int d = 0; d < dim; ++d)
       reps[d] = zn[d] >> r;
+    dof_handler.reset();
     tria.clear();
     GridGenerator::subdivided_hyper_rectangle(tria,
                                               reps,
                                               prm.lower_corner,
                                               prm.upper_corner);
     tria.refine_global(r);
-    dof_handler.reinit(tria);
-    dof_handler.distribute_dofs(fe);
-    const IndexSet &owned = dof_handler.locally_owned_dofs();
+    dof_handler = std::make_unique<DoFHandler<dim>>(tria);
+    dof_handler->distribute_dofs(fe);
+    const IndexSet &owned = dof_handler->locally_owned_dofs();
     IndexSet        ghosts;
-    DoFTools::extract_locally_active_dofs(dof_handler, ghosts);
+    DoFTools::extract_locally_active_dofs(*dof_handler, ghosts);
     ghosts.subtract_set(owned);
     node_partitioner =
       std::make_shared<Utilities::MPI::Partitioner>(owned, ghosts, comm);
     n_owned = owned.n_elements();
     n_local = n_owned + ghosts.n_elements();
     {
-      IndexSet vo(dim * dof_handler.n_dofs()), vg(dim * dof_handler.n_dofs());
+      IndexSet vo(dim * dof_handler->n_dofs()), vg(dim * dof_handler->n_dofs());
       if (n_owned > 0)
         vo.add_range(dim * owned.nth_index_in_set(0),
                      dim * (owned.nth_index_in_set(n_owned - 1) + 1));
@@ -382,7 +386,7 @@ namespace femp
                                          cells;
     std::vector<types::global_dof_index> dofs(n_corners);
     off_rank = 0;
-    for (const auto &cell : dof_handler.active_cell_iterators())
+    for (const auto &cell : dof_handler->active_cell_iterators())
       if (cell->is_locally_owned())
         {
           const auto ijk = grid.cell_of(cell->center());
@@ -1297,6 +1301,186 @@ namespace femp
   }
 
   template <int dim>
+  std::uint64_t
+  SolidFEM<dim>::raise_top(
+    const double new_top,
+    const std::vector<std::pair<std::uint64_t, std::array<double, 7>>>
+                              &new_cells,
+    const std::vector<double> &T)
+  {
+    constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 2;
+    const auto            &N        = grid.n_cells();
+    const double           h        = grid.h();
+    {
+      const double r   = (new_top - grid.origin()[dim - 1]) / h;
+      const int    top = static_cast<int>(std::round(r));
+      AssertThrow(std::abs(r - top) < 1e-6 &&
+                    top > zlo[dim - 1] + zn[dim - 1] && top <= int(N[dim - 1]),
+                  ExcMessage("FE zone hand-over: the new top " +
+                             std::to_string(new_top) +
+                             " m must be a grid line above the zone's top and "
+                             "inside the domain"));
+    }
+    // Keys independent of the zone's size: lexicographic indices of cells
+    // and nodes in the whole grid.
+    auto cell_key = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * N[d] + ijk[d];
+      return id;
+    };
+    auto node_key = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * (N[d] + 1) + ijk[d];
+      return id;
+    };
+    auto element_cell = [&](std::uint64_t r) {
+      std::array<int, dim> ijk;
+      for (int d = 0; d < dim; ++d)
+        ijk[d] = zlo[d] + int(r % zn[d]), r /= zn[d];
+      return ijk;
+    };
+    auto zone_node = [&](std::uint64_t r) {
+      std::array<int, dim> ijk;
+      for (int d = 0; d < dim; ++d)
+        ijk[d] = zlo[d] + int(r % (zn[d] + 1)), r /= zn[d] + 1;
+      return ijk;
+    };
+
+    // This rank's state under those keys (the values of save_state()).
+    const std::size_t          n_old = element_id.size();
+    std::vector<std::uint64_t> el_keys(n_old);
+    std::vector<double>        el_vals(n_values * n_old);
+    for (std::size_t e = 0; e < n_old; ++e)
+      {
+        el_keys[e]             = cell_key(element_cell(element_id[e]));
+        const ElementBlock &eb = blocks[e / simd_lanes];
+        const unsigned int  l  = e % simd_lanes;
+        double             *v  = &el_vals[n_values * e];
+        for (unsigned int k = 0; k < 6; ++k)
+          v[k] = eb.s[k][l];
+        v[6] = eb.eps_p[l], v[7] = eb.visc[l], v[8] = eb.T[l];
+        for (unsigned int k = 9; k < n_values - 2; ++k)
+          v[k] = eb.q[(k - 9) / dim][(k - 9) % dim][l];
+        v[n_values - 2] = T_end[e];
+        v[n_values - 1] = eb.dJ[l];
+      }
+    std::vector<std::uint64_t> nd_keys(n_owned);
+    std::vector<double>        nd_vals(dim * n_owned);
+    for (std::size_t ln = 0; ln < n_owned; ++ln)
+      {
+        nd_keys[ln] = node_key(zone_node(node_zone_id[box_of[ln]]));
+        for (int d = 0; d < dim; ++d)
+          nd_vals[dim * ln + d] = vel[d][box_of[ln]];
+      }
+    // The transition nodes are the same on every rank.
+    std::unordered_map<std::uint64_t, std::size_t> old_tr;
+    const std::vector<double>                      old_tr_vel = tr_vel;
+    for (std::size_t t = 0; t < tr_ijk.size(); ++t)
+      old_tr[node_key(tr_ijk[t])] = t;
+    std::vector<std::uint64_t> new_keys;
+    std::vector<double>        new_vals;
+    for (const auto &[key, a] : new_cells)
+      {
+        new_keys.push_back(key);
+        new_vals.insert(new_vals.end(), a.begin(), a.end());
+      }
+    const auto all_el_keys  = Utilities::MPI::all_gather(comm, el_keys);
+    const auto all_el_vals  = Utilities::MPI::all_gather(comm, el_vals);
+    const auto all_nd_keys  = Utilities::MPI::all_gather(comm, nd_keys);
+    const auto all_nd_vals  = Utilities::MPI::all_gather(comm, nd_vals);
+    const auto all_new_keys = Utilities::MPI::all_gather(comm, new_keys);
+    const auto all_new_vals = Utilities::MPI::all_gather(comm, new_vals);
+    std::unordered_map<std::uint64_t, const double *> old_el, old_nd, seed;
+    for (std::size_t r = 0; r < all_el_keys.size(); ++r)
+      {
+        for (std::size_t i = 0; i < all_el_keys[r].size(); ++i)
+          old_el[all_el_keys[r][i]] = &all_el_vals[r][n_values * i];
+        for (std::size_t i = 0; i < all_nd_keys[r].size(); ++i)
+          old_nd[all_nd_keys[r][i]] = &all_nd_vals[r][dim * i];
+        for (std::size_t i = 0; i < all_new_keys[r].size(); ++i)
+          seed[all_new_keys[r][i]] = &all_new_vals[r][7 * i];
+      }
+
+    // The taller zone, built as by setup() at the factor in use (the
+    // factor's later changes scale these masses).
+    prm.upper_corner[dim - 1] = new_top;
+    mass_scale_setup          = 0;
+    inv_mass_setup.clear(), owned_mass_setup.clear(), tr_mass_setup.clear();
+    setup(mass_scale, face_fix, g, T);
+
+    // Elements: old state, or the seed of a new one (T_end: the cell's
+    // temperature from setup()).
+    std::uint64_t added = 0;
+    for (std::size_t e = 0; e < element_id.size(); ++e)
+      {
+        const auto          ijk = element_cell(element_id[e]);
+        const std::uint64_t key = cell_key(ijk);
+        ElementBlock       &eb  = blocks[e / simd_lanes];
+        const unsigned int  l   = e % simd_lanes;
+        const auto          it  = old_el.find(key);
+        if (it != old_el.end())
+          {
+            const double *v = it->second;
+            for (unsigned int k = 0; k < 6; ++k)
+              eb.s[k][l] = v[k];
+            eb.eps_p[l] = v[6], eb.visc[l] = v[7], eb.T[l] = v[8];
+            for (unsigned int k = 9; k < n_values - 2; ++k)
+              eb.q[(k - 9) / dim][(k - 9) % dim][l] = v[k];
+            T_end[e] = v[n_values - 2];
+            eb.dJ[l] = v[n_values - 1];
+            continue;
+          }
+        const auto is = seed.find(key);
+        if (is == seed.end())
+          {
+            std::ostringstream m;
+            m << "FE zone hand-over: no state for the new element of grid "
+                 "cell (";
+            for (int d = 0; d < dim; ++d)
+              m << (d ? ", " : "") << ijk[d];
+            m << ") (no solid material point there)";
+            AssertThrow(false, ExcMessage(m.str()));
+          }
+        const double *v = is->second;
+        for (unsigned int k = 0; k < 6; ++k)
+          eb.s[k][l] = v[k];
+        eb.eps_p[l] = v[6], eb.visc[l] = 0, eb.T[l] = T_end[e];
+        for (unsigned int al = 0; al < n_hg; ++al)
+          for (int i = 0; i < dim; ++i)
+            eb.q[al][i][l] = 0;
+        eb.dJ[l] = 0;
+        ++added;
+      }
+    // Nodes: old velocity (an old transition node that is now inside the
+    // zone takes its transition velocity), new ones at rest.
+    for (std::size_t ln = 0; ln < n_local; ++ln)
+      {
+        const std::uint32_t n   = box_of[ln];
+        const std::uint64_t key = node_key(zone_node(node_zone_id[n]));
+        const auto          it  = old_nd.find(key);
+        const auto          tt  = old_tr.find(key);
+        for (int d = 0; d < dim; ++d)
+          vel[d][n] = it != old_nd.end() ? it->second[d] :
+                      tt != old_tr.end() ? old_tr_vel[dim * tt->second + d] :
+                                           0.;
+      }
+    for (std::size_t t = 0; t < tr_ijk.size(); ++t)
+      {
+        const auto tt = old_tr.find(node_key(tr_ijk[t]));
+        for (int d = 0; d < dim; ++d)
+          tr_vel[dim * t + d] =
+            tt != old_tr.end() ? old_tr_vel[dim * tt->second + d] : 0.;
+      }
+    for (const auto &[n, t] : tr_local)
+      for (int d = 0; d < dim; ++d)
+        vel[d][n] = tr_vel[dim * t + d];
+    forces_of_restored_state();
+    return Utilities::MPI::sum(added, comm);
+  }
+
+  template <int dim>
   void
   SolidFEM<dim>::save_state(StateWriter &out) const
   {
@@ -1423,6 +1607,14 @@ namespace femp
     AssertThrow(elements_set == n_el && nodes_set == n_local,
                 ExcMessage("checkpoint: the FE zone's elements or nodes of "
                            "this rank are not all in the checkpoint"));
+    forces_of_restored_state();
+  }
+
+  template <int dim>
+  void
+  SolidFEM<dim>::forces_of_restored_state()
+  {
+    const std::size_t n_el = element_id.size();
     // Spare lanes of the last block repeat the last element (as they do in
     // a run: same inputs, same arithmetic).
     if (n_el > 0)

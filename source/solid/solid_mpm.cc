@@ -559,6 +559,22 @@ namespace femp
   }
 
   template <int dim>
+  void
+  SolidMPM<dim>::add_cell_state(const std::vector<std::uint8_t>    &mask,
+                                std::vector<std::array<double, 8>> &sums) const
+  {
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      if (mask[cell[p]])
+        {
+          auto &a = sums[cell[p]];
+          for (unsigned int c = 0; c < n_stress; ++c)
+            a[c] += sigma[c][p];
+          a[6] += eps_p[p];
+          a[7] += 1;
+        }
+  }
+
+  template <int dim>
   bool
   SolidMPM<dim>::find_non_finite(Point<dim> &where) const
   {

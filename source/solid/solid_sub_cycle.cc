@@ -1387,6 +1387,89 @@ namespace femp
   }
 
   template <int dim>
+  std::array<double, 2>
+  SolidSubCycle<dim>::hand_over_rows(const double new_top)
+  {
+    AssertThrow(fem,
+                ExcMessage("the hand-over to finite elements needs an FE "
+                           "zone ('Solid FEM/Use finite elements = true')"));
+    // The points' state as the particles hold it after the last advance,
+    // with what melted or solidified since booked.
+    gather_points();
+    const auto &z   = fem->fe_zone();
+    const int   top = static_cast<int>(
+      std::round((new_top - grid.origin()[dim - 1]) / grid.h()));
+    // The owned cells of the new rows: inside the zone's horizontal
+    // extent, between its top and the new one.
+    std::vector<std::uint8_t>  rows(grid.n_local(), 0);
+    std::vector<std::uint32_t> cells;
+    for (const auto c : grid.owned_cells())
+      {
+        const auto ijk = grid.global_index(c);
+        bool       in =
+          ijk[dim - 1] >= z.first_cell()[dim - 1] + z.n_cells()[dim - 1] &&
+          ijk[dim - 1] < top;
+        for (int d = 0; d < dim - 1; ++d)
+          in = in && ijk[d] >= z.first_cell()[d] &&
+               ijk[d] < z.first_cell()[d] + z.n_cells()[d];
+        if (in)
+          rows[c] = 1, cells.push_back(c);
+      }
+    // Each new element: the mean over its cell's solid points (the
+    // arithmetic of cell_fields()).
+    std::vector<std::array<double, 8>> sums(grid.n_local());
+    for (auto &a : sums)
+      a.fill(0.);
+    mpm.add_cell_state(rows, sums);
+    const auto &N = grid.n_cells();
+    std::vector<std::pair<std::uint64_t, std::array<double, 7>>> seeds;
+    bool                                                         empty = false;
+    Point<dim>                                                   where;
+    for (const auto c : cells)
+      {
+        const auto &a   = sums[c];
+        const auto  ijk = grid.global_index(c);
+        if (!(a[7] > 0))
+          {
+            if (!empty)
+              for (int d = 0; d < dim; ++d)
+                where[d] = grid.origin()[d] + (ijk[d] + 0.5) * grid.h();
+            empty = true;
+            continue;
+          }
+        std::uint64_t key = 0;
+        for (int d = dim - 1; d >= 0; --d)
+          key = key * N[d] + ijk[d];
+        std::array<double, 7> m;
+        for (unsigned int k = 0; k < 7; ++k)
+          m[k] = a[k] / a[7];
+        seeds.emplace_back(key, m);
+      }
+    share_location(empty, where, comm);
+    if (Utilities::MPI::max(empty ? 1 : 0, comm) > 0)
+      {
+        std::ostringstream s;
+        s << "solid: the hand-over to finite elements up to z = " << new_top
+          << " m finds a cell without solid material points at x = " << where
+          << " m: only rows of solid metal can become finite elements";
+        throw CollectiveError(s.str());
+      }
+    const double K0    = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
+    const double added = fem->raise_top(new_top, seeds, T_solid);
+    find_active_nodes();
+    mpm.gather(zone_mask(), scaling.factor());
+    rebuild_live(nullptr, 0.);
+    const double K1     = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
+    const double n1     = Utilities::MPI::sum(double(mpm.n_points()), comm);
+    const double handed = n_points_global - n1;
+    n_points_global     = n1;
+    // The handed points' kinetic energy leaves the points' account like
+    // that of melted points (the new nodes start at rest).
+    ledger.book_exchange(K0 - K1, 0., K1);
+    return {{added, handed}};
+  }
+
+  template <int dim>
   double
   SolidSubCycle<dim>::largest_rank_points() const
   {

@@ -290,6 +290,27 @@ namespace femp
     double
     largest_distortion() const;
 
+    /// Raise the zone's top to the grid line @p new_top (m, above the
+    /// current top, below the domain's top), between two solid steps: the
+    /// FE triangulation, nodes, masses and transition nodes are built anew
+    /// for the taller box (the setup's arithmetic, at the mass-scaling
+    /// factor in use), the old elements keep their whole state (stress,
+    /// plastic strain, viscous pressure, temperatures, hourglass
+    /// amplitudes, volume change) and the old nodes their velocity (a node
+    /// of the old top takes its transition velocity); a new element takes
+    /// from @p new_cells (this rank's entries: the cell's lexicographic
+    /// index in the grid (x fastest), stress {xx, yy, zz, xy, xz, yz},
+    /// plastic strain) its stress and plastic strain and the cell
+    /// temperature of @p T, at rest and without hourglass amplitudes; the
+    /// new nodes start at rest. Every new element must be in @p new_cells
+    /// of some rank. Collective (all-gathers the zone's state: once per
+    /// hand-over). Returns the elements added (global).
+    std::uint64_t
+    raise_top(const double new_top,
+              const std::vector<std::pair<std::uint64_t, std::array<double, 7>>>
+                                        &new_cells,
+              const std::vector<double> &T);
+
     /// Checkpoint, between two solid steps: per owned element, keyed by its
     /// zone index, the stress, plastic strain, viscous pressure,
     /// temperature of the last step, hourglass mode amplitudes and end
@@ -320,9 +341,11 @@ namespace femp
     const SolidMaterial       &mat;
     MPI_Comm                   comm;
 
-    parallel::distributed::Triangulation<dim>          tria;
-    FE_Q<dim>                                          fe;
-    DoFHandler<dim>                                    dof_handler;
+    parallel::distributed::Triangulation<dim> tria;
+    FE_Q<dim>                                 fe;
+    /// Made anew with the mesh (raise_top() clears the triangulation,
+    /// which no DoFHandler may then hold).
+    std::unique_ptr<DoFHandler<dim>>                   dof_handler;
     std::shared_ptr<const Utilities::MPI::Partitioner> node_partitioner;
     LinearAlgebra::distributed::Vector<double>         force; ///< dim per node
 
@@ -332,6 +355,8 @@ namespace femp
     std::array<int, dim> zlo, zn;
     double               V = 0, bb = 0, mass_scale = 1;
     Tensor<1, dim>       g;
+    /// Fixed velocity components per domain face (setup()).
+    std::array<std::uint8_t, 2 * dim> face_fix{};
 
     // Node box: the local nodes (owned and ghost) are numbered
     // lexicographically in the bounding box of their structured indices
@@ -421,6 +446,13 @@ namespace femp
     /// Largest hourglass_distortion() after the last update_elements(), and
     /// since setup (this rank's elements).
     double max_distortion = 0, max_distortion_seen = 0;
+    /// After load_state() or raise_top() set the elements and nodes: the
+    /// spare lanes of the last block repeat the last element, the end
+    /// temperatures become the start ones, and the element forces of the
+    /// next step are computed from the state (the arithmetic of the end of
+    /// update_elements()).
+    void
+    forces_of_restored_state();
     /// Sums of the force components (@p f) of the shared nodes over ranks
     /// (compress(add), update_ghost_values of the vector @p force).
     void

@@ -241,6 +241,13 @@ namespace femp
     void
     add_cell_fields(std::vector<std::vector<double>> &f,
                     std::vector<double>              &count) const;
+    /// Add the stress {xx, yy, zz, xy, xz, yz} and the equivalent plastic
+    /// strain of every member in a cell with @p mask[idx] != 0 to that
+    /// cell's entry of @p sums (entries 0-5 and 6) and count it (entry 7):
+    /// the sums of the hand-over to finite elements (fe_zone_handover.h).
+    void
+    add_cell_state(const std::vector<std::uint8_t>    &mask,
+                   std::vector<std::array<double, 8>> &sums) const;
     /// Position of the first point with a non-finite state, if any.
     bool
     find_non_finite(Point<dim> &where) const;

@@ -361,6 +361,21 @@ namespace femp
     double
     largest_rank_points() const;
 
+    /// Hand the cell rows between the FE zone's top and the grid line
+    /// @p new_top (m) over from material points to finite elements
+    /// (fe_zone_handover.h), after an advance() and before the next: each
+    /// new element takes the mean stress and plastic strain of its cell's
+    /// solid points (the mean of the cell fields, cell_fields()), the
+    /// points there leave the solid (they carry temperature only, as in
+    /// the zone's other cells) and their kinetic energy is booked as
+    /// removed (Energies::melted). Every cell of the new rows must hold
+    /// solid points (an error names the first that does not); whether the
+    /// rows may be handed over (cooled, below the melt) is the caller's
+    /// choice (FeZoneHandover). Collective; returns the elements added and
+    /// the points handed over (global).
+    std::array<double, 2>
+    hand_over_rows(const double new_top);
+
     /// Checkpoint (doc/checkpoint.md), after an advance(): the sub-step
     /// clock, the temperatures it interpolates between, the energy
     /// accounts, the lengths of the CSV files (flushed here), then
