@@ -191,8 +191,9 @@ namespace femp
     double series_interval = output.series_interval;
     if (output.probe_points.empty())
       {
-        const auto &segments = Laser<dim>(laser).segments();
-        const bool  powered =
+        const Laser<dim> scan(laser);
+        const auto      &segments = scan.segments();
+        const bool       powered =
           heat_enabled &&
           std::any_of(segments.begin(), segments.end(), [](const auto &s) {
             return s.power > 0;
