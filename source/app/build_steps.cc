@@ -164,6 +164,20 @@ namespace femp
       tracks->observe(heat_ptr->temperature(), heat_ptr->metal_fraction());
   }
 
+  template <int dim>
+  void
+  BuildSteps<dim>::add_state(ModuleStates<dim> &states) const
+  {
+    if (!tracks)
+      return;
+    TrackRecord<dim> *t = tracks.get();
+    states.add(
+      "tracks",
+      [t](StateWriter &out) { t->save_state(out); },
+      [t](std::vector<StateReader> &in) { t->load_state(in[0]); },
+      "it was written without the track record (Build/Track report)");
+  }
+
   template class BuildSteps<2>;
   template class BuildSteps<3>;
 } // namespace femp

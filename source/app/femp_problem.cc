@@ -15,14 +15,12 @@ namespace femp
       : comm(comm)
       , pcout(std::cout, Utilities::MPI::this_mpi_process(comm) == 0)
       , scene(prm, pcout)
+      , states(scene.checkpoint,
+               scene.output.directory,
+               scene.checkpoint_scene(),
+               comm)
       , timer(pcout, TimerOutput::never, TimerOutput::wall_times)
   {
-    checkpoint = std::make_unique<Checkpoint<dim>>(scene.checkpoint,
-                                                   scene.output.directory,
-                                                   scene.checkpoint_scene(),
-                                                   comm);
-    if (checkpoint->resuming())
-      checkpoint->read(); // refuses a corrupt or mismatched one here
     control = std::make_unique<SimulationControl>(scene.time, scene.cadence());
     report  = std::make_unique<RunReport<dim>>(comm, pcout);
     laser   = std::make_unique<Laser<dim>>(scene.laser);
@@ -83,27 +81,11 @@ namespace femp
     }
     results =
       std::make_unique<ResultsOutput<dim>>(scene.output, *grid, *points);
-    add_heat_output(*results,
-                    *heat,
-                    *points,
-                    scene.heat_enabled,
-                    scene.output.directory,
-                    comm);
+    add_heat_output(*results, scene, *heat, *points, comm);
     if (scene.melt_flow)
       setup_flow();
     builds->setup(*grid, *points, *heat, *control, *results);
-    if (scene.track.enabled(scene.melt_flow))
-      track_shape = add_track_shape(*results,
-                                    scene.track,
-                                    *grid,
-                                    0.5 * (scene.grid.lower_corner +
-                                           scene.grid.upper_corner),
-                                    *laser,
-                                    *points,
-                                    *heat,
-                                    scene.points.substrate_top,
-                                    scene.material.liquidus,
-                                    scene.output.directory);
+    add_track_shape(*results, scene, *grid, *laser, *points, *heat);
     if (scene.history.enabled)
       history = std::make_unique<ThermalHistory<dim>>(*grid,
                                                       scene.material.solidus,
@@ -111,7 +93,7 @@ namespace femp
                                                       heat->temperature(),
                                                       heat->metal_fraction(),
                                                       0.);
-    results->initialize(checkpoint->resuming());
+    results->initialize(states.resuming());
     if (scene.solid)
       setup_solid();
     register_states();
@@ -132,12 +114,7 @@ namespace femp
       scene.flow, scene.material, *grid, *points, &timer);
     // The flow reads T and gamma, the heat (with 'Advection by melt flow =
     // upwind') the flow's cell velocity, from cell_fields() at each call.
-    // Output: pressure (Pa) and cell-centred fluid velocity (m/s).
-    using Reach                   = typename ResultsOutput<dim>::Reach;
-    static const char *u_names[3] = {"u_x", "u_y", "u_z"};
-    results->add_field("p", flow->pressure(), Reach::probes);
-    for (int d = 0; d < dim; ++d)
-      results->add_field(u_names[d], flow->cell_velocity()[d], Reach::probes);
+    add_flow_output(*results, *flow);
   }
 
   template <int dim>
@@ -158,18 +135,12 @@ namespace femp
     // On resume the solid's CSV files are cut back and reopened by its
     // load_state() instead.
     solid->initialize(heat->temperature(),
-                      checkpoint->resuming() ? std::string() :
-                                               scene.output.directory);
+                      states.resuming() ? std::string() :
+                                          scene.output.directory);
     // The FE zone's points never move nor melt (the solid stops the run
     // otherwise): the metal fraction bins them once.
     points->set_fixed_cells(solid->fe_zone_cells());
-    // Output (also on the probe lines): sigma_xx, sigma_yy, sigma_zz, von
-    // Mises, equivalent plastic strain (FE element or mean over the
-    // cell's solid points).
-    results->add_fields(
-      SolidSubCycle<dim>::cell_field_names(),
-      [this](std::vector<std::vector<double>> &v) { solid->cell_fields(v); },
-      ResultsOutput<dim>::Reach::lines);
+    add_solid_output(*results, *solid);
   }
 
   template <int dim>
@@ -182,35 +153,14 @@ namespace femp
     states.add("heat", *heat);
     states.add("points", *points);
     states.add("output", results->output());
-    states.add("trigger", *checkpoint);
-    states.add(
-      "run",
-      [this](StateWriter &out) {
-        out.put(report->initial_enthalpy());
-        out.put(point_heat->moved_points_energy());
-        out.put(result.pool);
-        out.put(flow ? flow->subcycle_record() : result.flow_limits);
-      },
-      [this](std::vector<StateReader> &parts) {
-        StateReader &in = parts[0];
-        report->set_initial_enthalpy(in.get<double>());
-        point_heat->set_moved_points_energy(in.get<double>());
-        result.pool        = in.get<MeltPoolSize>();
-        result.flow_limits = in.get<typename Summary::FlowLimits>();
-        if (flow)
-          flow->set_subcycle_record(result.flow_limits);
-      });
+    states.add("trigger", states.checkpoint_file());
+    report->add_state(states, *point_heat, flow.get());
     if (history)
       states.add("thermal history",
                  *history,
                  "it was written without 'Thermal history/Enable' (the "
                  "history before it is lost)");
-    if (auto *tracks = builds->track_record())
-      states.add(
-        "tracks",
-        [tracks](StateWriter &out) { tracks->save_state(out); },
-        [tracks](std::vector<StateReader> &in) { tracks->load_state(in[0]); },
-        "it was written without the track record (Build/Track report)");
+    builds->add_state(states);
     if (flow)
       states.add("flow", *flow);
     if (solid)
@@ -220,6 +170,12 @@ namespace femp
         [this](std::vector<StateReader> &in) {
           solid->load_state(in, scene.output.directory);
         });
+    // Once all is loaded: alpha's bodies and surface, and the series
+    // written outside Output cut back to the checkpoint.
+    states.after_restore([this] {
+      point_heat->metal_fraction_restored();
+      results->resume(control->time());
+    });
   }
 
   template <int dim>
@@ -228,15 +184,15 @@ namespace femp
   {
     control->start_clock();
     setup();
-    if (checkpoint->resuming())
-      restore_checkpoint();
+    if (states.resuming())
+      states.restore(pcout, timer);
     else
       {
         // The exact stability limit and the projected number of steps are
         // checked before anything is written.
         time_steps->choose(0, control->time(), cell_fields());
         report->start(*heat);
-        write_output(false);
+        results->write_fields(*control, timer, false);
       }
 
     while (control->running())
@@ -279,24 +235,16 @@ namespace femp
         if (solid)
           solid_step();
 
-        // 5. Output.
+        // 5. Output and checkpoint when due.
         output_results();
-        if (checkpoint->enabled() &&
-            checkpoint->due(control->step(), control->time()))
+        if (states.due(control->step(), control->time()))
           write_checkpoint();
       }
 
     builds->record_tracks(control->time(), 0., true, *points, timer, pcout);
     points->flush_point_temperatures();
-    if (flow)
-      result.flow_limits = flow->subcycle_record();
-    report->finish(*control,
-                   *heat,
-                   *points,
-                   flow.get(),
-                   solid.get(),
-                   point_heat->moved_points_energy(),
-                   result);
+    report->finish(
+      *control, *heat, *points, flow.get(), solid.get(), *point_heat);
     if (history)
       history->write(scene.output.directory);
     print_cost_report(timer, scene.output.directory, comm);
@@ -400,17 +348,15 @@ namespace femp
   void
   FempProblem<dim>::output_results()
   {
-    if (control->series_due())
-      write_series();
-    if (control->output_due())
-      write_output(control->is_last());
+    const auto pool = [this] { return melt_pool(); };
+    results->write_when_due(*control, timer, pool, report->series_pool());
     // The hottest metal of the workpiece, not of a drop in the gas, and
-    // the pool now (result.pool is of the last time-series row, which may
-    // lie up to a 'Time series interval' back).
-    if (control->progress_due())
-      report->progress(*control,
-                       time_steps->workpiece_peak_temperature(),
-                       melt_pool());
+    // the pool now (the series' pool may lie up to a 'Time series
+    // interval' back).
+    report->progress_when_due(
+      *control,
+      [this] { return time_steps->workpiece_peak_temperature(); },
+      pool);
   }
 
   template <int dim>
@@ -429,42 +375,10 @@ namespace femp
   }
 
   template <int dim>
-  void
-  FempProblem<dim>::write_series()
-  {
-    TimerOutput::Scope t(timer, "time series");
-    result.pool = melt_pool();
-    results->write_series(control->time(), result.pool);
-    control->series_written();
-  }
-
-  template <int dim>
-  void
-  FempProblem<dim>::write_output(const bool last)
-  {
-    TimerOutput::Scope t(timer, "output");
-    results->write_fields(control->output_number(), control->time(), last);
-    control->output_written();
-  }
-
-  template <int dim>
   std::string
   FempProblem<dim>::write_checkpoint()
   {
-    TimerOutput::Scope t(timer, "checkpoint");
-    return states.write(*checkpoint, control->step(), control->time(), pcout);
-  }
-
-  template <int dim>
-  void
-  FempProblem<dim>::restore_checkpoint()
-  {
-    TimerOutput::Scope t(timer, "checkpoint");
-    states.restore(*checkpoint, pcout);
-    point_heat->metal_fraction_restored();
-    // Series written outside Output: drop their rows after the checkpoint.
-    results->resume(control->time());
-    checkpoint->release();
+    return states.write(control->step(), control->time(), pcout, timer);
   }
 
   template class FempProblem<2>;

@@ -156,6 +156,35 @@ namespace femp
   }
 
   template <int dim>
+  void
+  ResultsOutput<dim>::write_when_due(SimulationControl &control,
+                                     TimerOutput       &timer,
+                                     const std::function<MeltPoolSize()> &pool,
+                                     MeltPoolSize &row_pool)
+  {
+    if (control.series_due())
+      {
+        TimerOutput::Scope t(timer, "time series");
+        row_pool = pool();
+        write_series(control.time(), row_pool);
+        control.series_written();
+      }
+    if (control.output_due())
+      write_fields(control, timer, control.is_last());
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::write_fields(SimulationControl &control,
+                                   TimerOutput       &timer,
+                                   const bool         last)
+  {
+    TimerOutput::Scope t(timer, "output");
+    write_fields(control.output_number(), control.time(), last);
+    control.output_written();
+  }
+
+  template <int dim>
   typename ResultsOutput<dim>::Writer
   absorption_series(const HeatTransfer<dim> &heat,
                     const std::string       &directory,
@@ -196,23 +225,23 @@ namespace femp
 
   template <int dim>
   typename ResultsOutput<dim>::Writer
-  track_shape_files(TrackShape<dim>           &track,
-                    const MaterialPoints<dim> &points,
-                    const HeatTransfer<dim>   &heat,
-                    const double               liquidus,
-                    const std::string         &directory)
+  track_shape_files(const std::shared_ptr<TrackShape<dim>> &track,
+                    const MaterialPoints<dim>              &points,
+                    const HeatTransfer<dim>                &heat,
+                    const double                            liquidus,
+                    const std::string                      &directory)
   {
     typename ResultsOutput<dim>::Writer w;
     w.fields =
-      [&track, &points, &heat, liquidus, directory](const unsigned int n,
-                                                    const double       time) {
+      [track, &points, &heat, liquidus, directory](const unsigned int n,
+                                                   const double       time) {
         const auto sections =
-          track.measure(heat.metal_fraction(),
-                        track.resolidified_cells(points, liquidus));
-        track.write(directory, n, time, sections);
+          track->measure(heat.metal_fraction(),
+                         track->resolidified_cells(points, liquidus));
+        track->write(directory, n, time, sections);
       };
-    w.resume = [&track, directory](const double time) {
-      track.resume(directory, time);
+    w.resume = [track, directory](const double time) {
+      track->resume(directory, time);
     };
     return w;
   }
@@ -222,10 +251,9 @@ namespace femp
   template <int dim>
   void
   add_heat_output(ResultsOutput<dim>        &results,
+                  const Scene<dim>          &scene,
                   const HeatTransfer<dim>   &heat,
                   const MaterialPoints<dim> &points,
-                  const bool                 heat_enabled,
-                  const std::string         &directory,
                   const MPI_Comm             comm)
   {
     using Reach = typename ResultsOutput<dim>::Reach;
@@ -251,85 +279,87 @@ namespace femp
       },
       Reach::files,
       false);
-    if (heat_enabled && heat.ray_traced())
-      results.add_writer(absorption_series(heat, directory, comm));
+    if (scene.heat_enabled && heat.ray_traced())
+      results.add_writer(absorption_series(heat, scene.output.directory, comm));
   }
 
   template <int dim>
-  std::unique_ptr<TrackShape<dim>>
-  add_track_shape(ResultsOutput<dim>                         &results,
-                  const typename TrackShape<dim>::Parameters &prm,
-                  const BackgroundGrid<dim>                  &grid,
-                  const Point<dim>                           &centre,
-                  const Laser<dim>                           &laser,
-                  const MaterialPoints<dim>                  &points,
-                  const HeatTransfer<dim>                    &heat,
-                  const double                                substrate_top,
-                  const double                                liquidus,
-                  const std::string                          &directory)
+  void
+  add_flow_output(ResultsOutput<dim>            &results,
+                  const IncompressibleFlow<dim> &flow)
   {
+    using Reach                   = typename ResultsOutput<dim>::Reach;
+    static const char *u_names[3] = {"u_x", "u_y", "u_z"};
+    results.add_field("p", flow.pressure(), Reach::probes);
+    for (int d = 0; d < dim; ++d)
+      results.add_field(u_names[d], flow.cell_velocity()[d], Reach::probes);
+  }
+
+  template <int dim>
+  void
+  add_solid_output(ResultsOutput<dim> &results, const SolidSubCycle<dim> &solid)
+  {
+    results.add_fields(
+      SolidSubCycle<dim>::cell_field_names(),
+      [&solid](std::vector<std::vector<double>> &v) { solid.cell_fields(v); },
+      ResultsOutput<dim>::Reach::lines);
+  }
+
+  template <int dim>
+  void
+  add_track_shape(ResultsOutput<dim>        &results,
+                  const Scene<dim>          &scene,
+                  const BackgroundGrid<dim> &grid,
+                  const Laser<dim>          &laser,
+                  const MaterialPoints<dim> &points,
+                  const HeatTransfer<dim>   &heat)
+  {
+    if (!scene.track.enabled(scene.melt_flow))
+      return;
     // Centre line and default cross-section from the laser's first
     // segment (the middle of the domain without a path).
+    const Point<dim> centre =
+      0.5 * (scene.grid.lower_corner + scene.grid.upper_corner);
     Point<dim> a = centre, b = centre;
     if (!laser.segments().empty())
       a = laser.segments().front().start, b = laser.segments().front().end;
-    auto track = std::make_unique<TrackShape<dim>>(
-      prm, grid, dim == 3 ? a[1] : 0., substrate_top, 0.5 * (a[0] + b[0]));
-    results.add_writer(
-      track_shape_files(*track, points, heat, liquidus, directory));
-    return track;
+    const auto track =
+      std::make_shared<TrackShape<dim>>(scene.track,
+                                        grid,
+                                        dim == 3 ? a[1] : 0.,
+                                        scene.points.substrate_top,
+                                        0.5 * (a[0] + b[0]));
+    results.add_writer(track_shape_files(
+      track, points, heat, scene.material.liquidus, scene.output.directory));
   }
 
   template ResultsOutput<2>::Writer
   absorption_series(const HeatTransfer<2> &, const std::string &, MPI_Comm);
   template ResultsOutput<3>::Writer
   absorption_series(const HeatTransfer<3> &, const std::string &, MPI_Comm);
-  template ResultsOutput<2>::Writer
-  track_shape_files(TrackShape<2> &,
-                    const MaterialPoints<2> &,
-                    const HeatTransfer<2> &,
-                    double,
-                    const std::string &);
-  template ResultsOutput<3>::Writer
-  track_shape_files(TrackShape<3> &,
-                    const MaterialPoints<3> &,
-                    const HeatTransfer<3> &,
-                    double,
-                    const std::string &);
-  template void
-  add_heat_output(ResultsOutput<2> &,
-                  const HeatTransfer<2> &,
-                  const MaterialPoints<2> &,
-                  bool,
-                  const std::string &,
-                  MPI_Comm);
-  template void
-  add_heat_output(ResultsOutput<3> &,
-                  const HeatTransfer<3> &,
-                  const MaterialPoints<3> &,
-                  bool,
-                  const std::string &,
-                  MPI_Comm);
-  template std::unique_ptr<TrackShape<2>>
-  add_track_shape(ResultsOutput<2> &,
-                  const TrackShape<2>::Parameters &,
-                  const BackgroundGrid<2> &,
-                  const Point<2> &,
-                  const Laser<2> &,
-                  const MaterialPoints<2> &,
-                  const HeatTransfer<2> &,
-                  double,
-                  double,
-                  const std::string &);
-  template std::unique_ptr<TrackShape<3>>
-  add_track_shape(ResultsOutput<3> &,
-                  const TrackShape<3>::Parameters &,
-                  const BackgroundGrid<3> &,
-                  const Point<3> &,
-                  const Laser<3> &,
-                  const MaterialPoints<3> &,
-                  const HeatTransfer<3> &,
-                  double,
-                  double,
-                  const std::string &);
+#define FEMP_INSTANTIATE(D)                                     \
+  template ResultsOutput<D>::Writer track_shape_files(          \
+    const std::shared_ptr<TrackShape<D>> &,                     \
+    const MaterialPoints<D> &,                                  \
+    const HeatTransfer<D> &,                                    \
+    double,                                                     \
+    const std::string &);                                       \
+  template void add_heat_output(ResultsOutput<D> &,             \
+                                const Scene<D> &,               \
+                                const HeatTransfer<D> &,        \
+                                const MaterialPoints<D> &,      \
+                                MPI_Comm);                      \
+  template void add_flow_output(ResultsOutput<D> &,             \
+                                const IncompressibleFlow<D> &); \
+  template void add_solid_output(ResultsOutput<D> &,            \
+                                 const SolidSubCycle<D> &);     \
+  template void add_track_shape(ResultsOutput<D> &,             \
+                                const Scene<D> &,               \
+                                const BackgroundGrid<D> &,      \
+                                const Laser<D> &,               \
+                                const MaterialPoints<D> &,      \
+                                const HeatTransfer<D> &);
+  FEMP_INSTANTIATE(2)
+  FEMP_INSTANTIATE(3)
+#undef FEMP_INSTANTIATE
 } // namespace femp

@@ -34,7 +34,45 @@ namespace femp
   {
     with_laser = std::any_of(laser.segments().begin(),
                              laser.segments().end(),
-                             [](const auto &s) { return s.power > 0; });
+                             [](const auto &seg) { return seg.power > 0; });
+  }
+
+  template <int dim>
+  void
+  RunReport<dim>::add_state(ModuleStates<dim>       &states,
+                            PointHeatExchange<dim>  &point_heat,
+                            IncompressibleFlow<dim> *flow)
+  {
+    states.add(
+      "run",
+      [this, &point_heat, flow](StateWriter &out) {
+        out.put(H0);
+        out.put(point_heat.moved_points_energy());
+        out.put(s.pool);
+        out.put(flow ? flow->subcycle_record() : s.flow_limits);
+      },
+      [this, &point_heat, flow](std::vector<StateReader> &parts) {
+        StateReader &in = parts[0];
+        H0              = in.get<double>();
+        point_heat.set_moved_points_energy(in.get<double>());
+        s.pool        = in.get<MeltPoolSize>();
+        s.flow_limits = in.get<typename RunSummary<dim>::FlowLimits>();
+        if (flow)
+          flow->set_subcycle_record(s.flow_limits);
+      });
+  }
+
+  template <int dim>
+  void
+  RunReport<dim>::progress_when_due(
+    const SimulationControl             &control,
+    const std::function<double()>       &T_max,
+    const std::function<MeltPoolSize()> &pool) const
+  {
+    if (!control.progress_due())
+      return;
+    const double T = T_max();
+    progress(control, T, pool());
   }
 
   template <int dim>
@@ -76,14 +114,15 @@ namespace femp
                          const MaterialPoints<dim>     &points,
                          const IncompressibleFlow<dim> *flow,
                          const SolidSubCycle<dim>      *solid,
-                         const double                   moved_points,
-                         RunSummary<dim>               &s) const
+                         const PointHeatExchange<dim>  &point_heat)
   {
     const bool heat_enabled = !heat.is_frozen();
     s.steps                 = control.step();
     s.time                  = control.time();
     s.T_max                 = heat.max_temperature();
-    s.moved_points          = moved_points;
+    s.moved_points          = point_heat.moved_points_energy();
+    if (flow)
+      s.flow_limits = flow->subcycle_record();
 
     const auto e = heat.energy_budget();
     s.laser      = e.laser;
@@ -137,7 +176,7 @@ namespace femp
                  "transfer/Detached drops) was set aside, out of the solid"
               << std::endl;
       }
-    print_energy(s, e, heat_enabled, flow != nullptr);
+    print_energy(e, heat_enabled, flow != nullptr);
     if (flow)
       {
         const auto &st           = flow->statistics();
@@ -145,14 +184,13 @@ namespace femp
         s.pressure_matrix_builds = st.matrix_rebuilds;
         s.pressure_cg_iterations = st.cg_iterations;
         s.max_fluid_speed        = st.max_point_speed;
-        print_flow(*flow, s);
+        print_flow(*flow);
       }
   }
 
   template <int dim>
   void
   RunReport<dim>::print_energy(
-    const RunSummary<dim>                          &s,
     const typename HeatTransfer<dim>::EnergyBudget &e,
     const bool                                      heat_enabled,
     const bool                                      with_flow) const
@@ -210,8 +248,7 @@ namespace femp
 
   template <int dim>
   void
-  RunReport<dim>::print_flow(const IncompressibleFlow<dim> &flow,
-                             const RunSummary<dim>         &s) const
+  RunReport<dim>::print_flow(const IncompressibleFlow<dim> &flow) const
   {
     const auto &st = flow.statistics();
     out << "Melt flow: " << st.steps << " fluid steps (" << st.halvings

@@ -13,6 +13,7 @@
 #include <deal.II/base/conditional_ostream.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/app/module_states.h>
 #include <femp/app/results_output.h>
 #include <femp/app/scene.h>
 #include <femp/app/simulation_control.h>
@@ -73,12 +74,10 @@ namespace femp
     void
     observe_tracks() const;
 
-    /// The track record (null unless reported), for the checkpoint.
-    TrackRecord<dim> *
-    track_record() const
-    {
-      return tracks.get();
-    }
+    /// The track record's state (with 'Build/Track report') as the
+    /// checkpoint section "tracks" of @p states.
+    void
+    add_state(ModuleStates<dim> &states) const;
 
     /// The schedule (null with one layer).
     const LayerSchedule<dim> *

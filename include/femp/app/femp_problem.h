@@ -39,8 +39,6 @@
 #include <femp/heat/laser.h>
 #include <femp/heat/metal_surface.h>
 #include <femp/heat/thermal_history.h>
-#include <femp/io/checkpoint.h>
-#include <femp/io/track_shape.h>
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <memory>
@@ -67,7 +65,7 @@ namespace femp
     const Summary &
     summary() const
     {
-      return result;
+      return report->summary();
     }
     /// The material points after run() (tests read their stresses).
     const MaterialPoints<dim> &
@@ -101,7 +99,6 @@ namespace femp
     std::unique_ptr<IncompressibleFlow<dim>> flow;
     std::unique_ptr<SolidSubCycle<dim>>      solid;
     std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
-    std::unique_ptr<TrackShape<dim>>         track_shape; ///< null unless on
     // Builds of several layers and pores (doc/builds.md).
     std::unique_ptr<BuildSteps<dim>> builds;
     // What joins them: alpha's keeper, the bodies of metal of alpha
@@ -112,15 +109,13 @@ namespace femp
     std::unique_ptr<MetalSurface<dim>>      surface;
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
-    // Clock, step policy, output, report, state.
+    // Clock, step policy, output, report, state and its checkpoint.
     std::unique_ptr<SimulationControl>   control;
     std::unique_ptr<TimeStepPolicy<dim>> time_steps;
     std::unique_ptr<ResultsOutput<dim>>  results;
     std::unique_ptr<RunReport<dim>>      report;
-    std::unique_ptr<Checkpoint<dim>>     checkpoint;
     ModuleStates<dim>                    states;
     TimerOutput                          timer;
-    Summary                              result;
 
     void
     setup();
@@ -158,15 +153,9 @@ namespace femp
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
-    void
-    write_series();
     /// The melt pool now (measure_melt_pool()).
     MeltPoolSize
     melt_pool() const;
-    void
-    write_output(const bool last);
-    void
-    restore_checkpoint();
   };
 } // namespace femp
 

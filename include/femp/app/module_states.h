@@ -1,27 +1,53 @@
 // femp: the modules that carry state from one step to the next, each under
-// a named checkpoint section (doc/checkpoint.md). A module registers once
-// (add(): its save_state() and load_state() are found by name); writing a
-// checkpoint and restoring from one are loops over the registered modules,
-// in the order of registration.
+// a named checkpoint section (doc/checkpoint.md), and the checkpoint they
+// are written to and restored from. A module registers once (add(): its
+// save_state() and load_state() are found by name); writing a checkpoint
+// and restoring from one are loops over the registered modules, in the
+// order of registration, then over what follows a restore (after_restore()).
 #ifndef femp_module_states_h
 #define femp_module_states_h
 
 #include <deal.II/base/conditional_ostream.h>
+#include <deal.II/base/timer.h>
 
 #include <femp/io/checkpoint.h>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace femp
 {
+  using namespace dealii;
+
   template <int dim>
   class ModuleStates
   {
   public:
     using Save = std::function<void(StateWriter &)>;
     using Load = std::function<void(std::vector<StateReader> &)>;
+
+    /// The checkpoint of @p prm (a relative directory lies in
+    /// @p output_directory); when resuming, it is read here, so that a
+    /// corrupt or mismatched one is refused before any work.
+    ModuleStates(const typename Checkpoint<dim>::Parameters &prm,
+                 const std::string                          &output_directory,
+                 const typename Checkpoint<dim>::Scene      &scene,
+                 MPI_Comm                                    comm);
+
+    /// Whether the run resumes from a checkpoint.
+    bool
+    resuming() const
+    {
+      return checkpoint->resuming();
+    }
+    /// The checkpoint itself (its triggers carry state too).
+    Checkpoint<dim> &
+    checkpoint_file()
+    {
+      return *checkpoint;
+    }
 
     /// A module with save_state(StateWriter &) and
     /// load_state(std::vector<StateReader> &) under section @p name.
@@ -48,19 +74,34 @@ namespace femp
     {
       entries.push_back({name, save, load, missing});
     }
-
-    /// Write every registered module's section into a checkpoint at
-    /// @p step, @p time (collective), say so on @p out; returns its
-    /// directory.
-    std::string
-    write(Checkpoint<dim>    &checkpoint,
-          const unsigned int  step,
-          const double        time,
-          ConditionalOStream &out) const;
-    /// Restore every registered module from the checkpoint read, say so
-    /// on @p out.
+    /// What follows a restore once every section is loaded, in the order
+    /// of registration.
     void
-    restore(const Checkpoint<dim> &checkpoint, ConditionalOStream &out) const;
+    after_restore(const std::function<void()> &then)
+    {
+      restored.push_back(then);
+    }
+
+    /// Whether a checkpoint is due after step @p step at @p time
+    /// (collective when the wall-clock trigger is on).
+    bool
+    due(const unsigned int step, const double time)
+    {
+      return checkpoint->enabled() && checkpoint->due(step, time);
+    }
+    /// Write every registered module's section into a checkpoint at
+    /// @p step, @p time (collective, timed on @p timer), say so on @p out;
+    /// returns its directory.
+    std::string
+    write(const unsigned int  step,
+          const double        time,
+          ConditionalOStream &out,
+          TimerOutput        &timer);
+    /// Restore every registered module from the checkpoint read (timed on
+    /// @p timer), run what follows a restore, say so on @p out, and let
+    /// the checkpoint's bytes go.
+    void
+    restore(ConditionalOStream &out, TimerOutput &timer);
 
   private:
     struct Entry
@@ -70,7 +111,9 @@ namespace femp
       Load        load;
       std::string missing;
     };
-    std::vector<Entry> entries;
+    std::unique_ptr<Checkpoint<dim>>   checkpoint;
+    std::vector<Entry>                 entries;
+    std::vector<std::function<void()>> restored;
   };
 } // namespace femp
 

@@ -2,18 +2,26 @@
 // once by the module that owns it, with where it goes: the probe series,
 // the probe lines, the field files), the fields computed only when output
 // is written (phase, zone, the solid's stresses), and the extra files
-// written beside them (ray-traced absorption, track shape). The driver
-// asks it to write the time series and the field output when the
-// SimulationControl says they are due; the formats are Output's.
+// written beside them (ray-traced absorption, track shape). Each module's
+// output is registered by one call (add_heat_output(), add_flow_output(),
+// add_solid_output(), add_track_shape()); the time series and the field
+// output are written when the SimulationControl says they are due
+// (write_when_due()); the formats are Output's.
 #ifndef femp_results_output_h
 #define femp_results_output_h
 
+#include <deal.II/base/timer.h>
+
+#include <femp/app/scene.h>
+#include <femp/app/simulation_control.h>
+#include <femp/flow/incompressible_flow.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/melt_pool.h>
 #include <femp/io/output.h>
 #include <femp/io/track_shape.h>
+#include <femp/solid/solid_sub_cycle.h>
 
 #include <fstream>
 #include <functional>
@@ -88,6 +96,22 @@ namespace femp
     /// On resume from a checkpoint at @p time.
     void
     resume(const double time);
+
+    /// The time series and the field output that @p control says are due
+    /// after the step just taken, timed on @p timer: a series row with the
+    /// melt pool @p pool measures (kept in @p row_pool), the field output
+    /// (the last one of the run at the end).
+    void
+    write_when_due(SimulationControl                   &control,
+                   TimerOutput                         &timer,
+                   const std::function<MeltPoolSize()> &pool,
+                   MeltPoolSize                        &row_pool);
+    /// The field output now, numbered and timed by @p control (@p last: the
+    /// run's last step), timed on @p timer.
+    void
+    write_fields(SimulationControl &control,
+                 TimerOutput       &timer,
+                 const bool         last);
     /// The probe lines alone at @p time, in files named with @p tag
     /// (probe_line_<name>_<tag>.csv).
     void
@@ -131,43 +155,55 @@ namespace femp
                     const std::string       &directory,
                     const MPI_Comm           comm);
 
-  /// The track's surface and bead (TrackShape) with every field output.
+  /// The track's surface and bead (TrackShape) with every field output;
+  /// the writer keeps @p track.
   template <int dim>
   typename ResultsOutput<dim>::Writer
-  track_shape_files(TrackShape<dim>           &track,
-                    const MaterialPoints<dim> &points,
-                    const HeatTransfer<dim>   &heat,
-                    const double               liquidus,
-                    const std::string         &directory);
+  track_shape_files(const std::shared_ptr<TrackShape<dim>> &track,
+                    const MaterialPoints<dim>              &points,
+                    const HeatTransfer<dim>                &heat,
+                    const double                            liquidus,
+                    const std::string                      &directory);
 
   /// The heat module's output, registered on @p results: T, gamma and
   /// alpha (probes), the laser source, the phase (0 gas, 1 solid, 2 mushy,
   /// 3 liquid) and the points' zone tags (files), and with a ray-traced
-  /// laser absorption.csv (absorption_series()) when @p heat_enabled.
+  /// laser absorption.csv (absorption_series()) when the @p scene has the
+  /// heat transfer on.
   template <int dim>
   void
   add_heat_output(ResultsOutput<dim>        &results,
+                  const Scene<dim>          &scene,
                   const HeatTransfer<dim>   &heat,
                   const MaterialPoints<dim> &points,
-                  const bool                 heat_enabled,
-                  const std::string         &directory,
                   const MPI_Comm             comm);
 
-  /// The track shape (TrackShape) along the laser's first segment (the
-  /// domain's @p centre without a path), its files registered on
-  /// @p results (track_shape_files()).
+  /// The flow's output: pressure (Pa) and cell-centred fluid velocity
+  /// (m/s), probes.
   template <int dim>
-  std::unique_ptr<TrackShape<dim>>
-  add_track_shape(ResultsOutput<dim>                         &results,
-                  const typename TrackShape<dim>::Parameters &prm,
-                  const BackgroundGrid<dim>                  &grid,
-                  const Point<dim>                           &centre,
-                  const Laser<dim>                           &laser,
-                  const MaterialPoints<dim>                  &points,
-                  const HeatTransfer<dim>                    &heat,
-                  const double                                substrate_top,
-                  const double                                liquidus,
-                  const std::string                          &directory);
+  void
+  add_flow_output(ResultsOutput<dim>            &results,
+                  const IncompressibleFlow<dim> &flow);
+
+  /// The solid's output (also on the probe lines): sigma_xx, sigma_yy,
+  /// sigma_zz, von Mises, equivalent plastic strain (FE element or mean
+  /// over the cell's solid points), computed when written.
+  template <int dim>
+  void
+  add_solid_output(ResultsOutput<dim>       &results,
+                   const SolidSubCycle<dim> &solid);
+
+  /// The track shape (TrackShape) along the laser's first segment (the
+  /// domain's centre without a path), its files registered on @p results
+  /// (track_shape_files()); nothing unless the @p scene asks for it.
+  template <int dim>
+  void
+  add_track_shape(ResultsOutput<dim>        &results,
+                  const Scene<dim>          &scene,
+                  const BackgroundGrid<dim> &grid,
+                  const Laser<dim>          &laser,
+                  const MaterialPoints<dim> &points,
+                  const HeatTransfer<dim>   &heat);
 } // namespace femp
 
 #endif

@@ -9,7 +9,10 @@
 
 #include <deal.II/base/conditional_ostream.h>
 
+#include <femp/app/module_states.h>
 #include <femp/app/simulation_control.h>
+#include <femp/base/state_stream.h>
+#include <femp/coupling/point_heat_exchange.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/material_points.h>
 #include <femp/heat/heat_transfer.h>
@@ -18,6 +21,7 @@
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <array>
+#include <functional>
 #include <limits>
 
 namespace femp
@@ -65,60 +69,76 @@ namespace femp
     void
     start(const HeatTransfer<dim> &heat);
 
-    /// The stored enthalpy at the start (checkpoint and resume).
-    double
-    initial_enthalpy() const
+    /// The summary numbers (complete after finish()).
+    const RunSummary<dim> &
+    summary() const
     {
-      return H0;
+      return s;
     }
+    /// The melt pool of the last time-series row (kept in the summary and
+    /// in a checkpoint).
+    MeltPoolSize &
+    series_pool()
+    {
+      return s.pool;
+    }
+
+    /// The run's accounts that no module keeps as the checkpoint section
+    /// "run" of @p states: the stored enthalpy at the start, the energy of
+    /// the points that moved (@p point_heat), the pool of the last series
+    /// row, the flow's step limits (of @p flow, null without the melt
+    /// flow). On restore the modules get theirs back.
     void
-    set_initial_enthalpy(const double H)
-    {
-      H0 = H;
-    }
+    add_state(ModuleStates<dim>       &states,
+              PointHeatExchange<dim>  &point_heat,
+              IncompressibleFlow<dim> *flow);
 
     /// Show the melt pool in the progress line when @p laser has power on
     /// some segment of its path.
     void
     watch_laser(const Laser<dim> &laser);
 
-    /// The progress line of the step just taken: @p T_max is the hottest
-    /// metal attached to the substrate (MetalBodies), @p pool the
-    /// melt pool (melt_pool.h), both at the end of the step; the pool only
-    /// in a scene whose laser has power (watch_laser()).
+    /// The progress line of the step just taken, when @p control says it
+    /// is due: @p T_max gives the hottest metal attached to the substrate
+    /// (MetalBodies), @p pool the melt pool (melt_pool.h), both at the end
+    /// of the step; the pool only in a scene whose laser has power
+    /// (watch_laser()).
     void
-    progress(const SimulationControl &control,
-             const double             T_max,
-             const MeltPoolSize      &pool) const;
+    progress_when_due(const SimulationControl             &control,
+                      const std::function<double()>       &T_max,
+                      const std::function<MeltPoolSize()> &pool) const;
 
-    /// Fill the end-of-run numbers of @p s from the modules (@p flow and
-    /// @p solid may be null) and print the report; @p moved_points is the
-    /// energy account of the point heat exchange. Collective.
+    /// Fill the end-of-run numbers of the summary from the modules
+    /// (@p flow and @p solid may be null; @p point_heat: the energy
+    /// account of the points that moved) and print the report. Collective.
     void
     finish(const SimulationControl       &control,
            const HeatTransfer<dim>       &heat,
            const MaterialPoints<dim>     &points,
            const IncompressibleFlow<dim> *flow,
            const SolidSubCycle<dim>      *solid,
-           const double                   moved_points,
-           RunSummary<dim>               &s) const;
+           const PointHeatExchange<dim>  &point_heat);
 
   private:
     MPI_Comm            comm;
     ConditionalOStream &out;
     double              H0 = 0;
+    RunSummary<dim>     s;
     /// Whether the laser has power on some segment (the progress line
     /// shows the melt pool then).
     bool with_laser = false;
 
+    /// The progress line (progress_when_due()).
     void
-    print_energy(const RunSummary<dim>                          &s,
-                 const typename HeatTransfer<dim>::EnergyBudget &e,
+    progress(const SimulationControl &control,
+             const double             T_max,
+             const MeltPoolSize      &pool) const;
+    void
+    print_energy(const typename HeatTransfer<dim>::EnergyBudget &e,
                  const bool                                      heat_enabled,
                  const bool with_flow) const;
     void
-    print_flow(const IncompressibleFlow<dim> &flow,
-               const RunSummary<dim>         &s) const;
+    print_flow(const IncompressibleFlow<dim> &flow) const;
   };
 } // namespace femp
 
