@@ -7,6 +7,7 @@
 #include <femp/app/physics_switches.h>
 #include <femp/app/run_checks.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_file.h>
 #include <femp/base/parameter_lookup.h>
 #include <femp/heat/laser.h>
 #include <femp/io/output.h>
@@ -309,12 +310,7 @@ namespace femp
         require(static_cast<bool>(in),
                 "Laser/Scan path file",
                 short_value(path_file),
-                std::filesystem::path(path_file).is_relative() ?
-                  "the file cannot be opened (a relative path is looked "
-                  "for next to the scene file that names it, then in the "
-                  "directory femp is started in, " +
-                    std::filesystem::current_path().string() + ")" :
-                  std::string("the file cannot be opened"));
+                unopened_file(path_file));
         const unsigned int wanted = 2 * (dim - 1) + 2;
         std::string        line;
         unsigned int       line_no = 0;

@@ -186,4 +186,15 @@ namespace femp
         AssertThrow(false, dealii::ExcMessage(msg));
       }
   }
+
+  std::string
+  unopened_file(const std::string &file)
+  {
+    if (!fs::path(file).is_relative())
+      return "the file cannot be opened";
+    return "the file cannot be opened (a relative path is looked for next "
+           "to the scene file that names it, then in the directory femp is "
+           "started in, " +
+           fs::current_path().string() + ")";
+  }
 } // namespace femp

@@ -1,6 +1,7 @@
 // femp: Gaussian laser source of eq. (1) and its scan path (segments read
 // from the prm file or from a scan-path file).
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_file.h>
 #include <femp/base/parameter_table.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/scan_path.h>
@@ -139,7 +140,7 @@ namespace femp
         require(static_cast<bool>(in),
                 "Laser/Scan path file",
                 prm.scan_path_file,
-                "the file cannot be opened");
+                unopened_file(prm.scan_path_file));
         std::string line;
         unsigned    line_no = 0;
         while (std::getline(in, line))

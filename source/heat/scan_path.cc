@@ -2,10 +2,10 @@
 // AdditiveFOAM's 'scanPath' files (formats in include/femp/heat/scan_path.h
 // and doc/inputs.md); they give the segments of the laser path of eq. (1).
 #include <femp/base/input_checks.h>
+#include <femp/base/parameter_file.h>
 #include <femp/heat/scan_path.h>
 
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -50,15 +50,7 @@ namespace femp
     read_lines(const std::string &file)
     {
       std::ifstream in(file);
-      require(static_cast<bool>(in),
-              parameter,
-              file,
-              std::filesystem::path(file).is_relative() ?
-                "the file cannot be opened (a relative path is looked for "
-                "next to the scene file that names it, then in the "
-                "directory femp is started in, " +
-                  std::filesystem::current_path().string() + ")" :
-                std::string("the file cannot be opened"));
+      require(static_cast<bool>(in), parameter, file, unopened_file(file));
       std::vector<Line> lines;
       std::string       text;
       unsigned int      n = 0;

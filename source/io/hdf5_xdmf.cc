@@ -92,10 +92,7 @@ namespace femp
       const hid_t file =
         H5Fcreate(name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
       H5Pclose(access);
-      AssertThrow(file >= 0,
-                  ExcMessage("cannot write the output file '" + name +
-                             "' (missing directory, no permission or disk "
-                             "full?)"));
+      check_written(file >= 0, name);
       return file;
     }
   } // namespace

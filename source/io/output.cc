@@ -530,14 +530,8 @@ namespace femp
                                "subdomain",
                                DataOut<dim>::type_cell_data);
     data_out.build_patches();
-    DataOutBase::VtkFlags flags;
-    flags.time              = time;
-    flags.compression_level = DataOutBase::VtkFlags::best_speed;
-    data_out.set_flags(flags);
-    const std::string name = data_out.write_vtu_with_pvtu_record(
-      prm.directory + "/", "grid", n, comm, 5, 8);
-    grid_records.emplace_back(time, name);
-    write_pvd(prm.directory + "/grid.pvd", grid_records, comm);
+    write_vtu_record(
+      data_out, prm.directory, "grid", n, time, grid_records, comm);
   }
 
   template <int dim>
@@ -551,14 +545,8 @@ namespace femp
     if (prm.format == Parameters::Format::vtu)
       {
         PointPatches<dim> data_out(points, point_names, prm.point_properties);
-        DataOutBase::VtkFlags flags;
-        flags.time              = time;
-        flags.compression_level = DataOutBase::VtkFlags::best_speed;
-        data_out.set_flags(flags);
-        const std::string name = data_out.write_vtu_with_pvtu_record(
-          prm.directory + "/", "points", n, comm, 5, 8);
-        point_records.emplace_back(time, name);
-        write_pvd(prm.directory + "/points.pvd", point_records, comm);
+        write_vtu_record(
+          data_out, prm.directory, "points", n, time, point_records, comm);
         return;
       }
     // HDF5: the points move, so each output holds their positions too (as
@@ -746,26 +734,21 @@ namespace femp
         throw InputError("Checkpoint/Resume from", prm.directory, msg);
       }
     // The indices list the outputs up to the checkpoint (none: removed).
-    for (const auto &[name, r] :
-         {std::make_pair(std::string("grid.pvd"), &grid_records),
-          std::make_pair(std::string("points.pvd"), &point_records)})
-      if (!r->empty())
-        write_pvd(prm.directory + "/" + name, *r, comm);
-      else if (Utilities::MPI::this_mpi_process(comm) == 0)
-        {
-          std::error_code ec;
-          std::filesystem::remove(prm.directory + "/" + name, ec);
-        }
-    for (const auto &[name, e] :
-         {std::make_pair(std::string("grid.xdmf"), &grid_entries),
-          std::make_pair(std::string("points.xdmf"), &point_entries)})
-      if (!e->empty())
-        write_xdmf(prm.directory + "/" + name, *e, comm);
-      else if (Utilities::MPI::this_mpi_process(comm) == 0)
-        {
-          std::error_code ec;
-          std::filesystem::remove(prm.directory + "/" + name, ec);
-        }
+    const auto rewrite =
+      [&](const std::string &name, const auto &records, const auto &write) {
+        const std::string file = prm.directory + "/" + name;
+        if (!records.empty())
+          write(file, records, comm);
+        else if (Utilities::MPI::this_mpi_process(comm) == 0)
+          {
+            std::error_code ec;
+            std::filesystem::remove(file, ec);
+          }
+      };
+    rewrite("grid.pvd", grid_records, write_pvd);
+    rewrite("points.pvd", point_records, write_pvd);
+    rewrite("grid.xdmf", grid_entries, write_xdmf);
+    rewrite("points.xdmf", point_entries, write_xdmf);
   }
 
   void

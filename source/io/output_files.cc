@@ -11,14 +11,21 @@ namespace femp
 {
   using namespace dealii;
 
+  /// Throw, naming the file, if writing @p file failed (@p ok false).
+  void
+  check_written(const bool ok, const std::string &file)
+  {
+    AssertThrow(ok,
+                ExcMessage("cannot write the output file '" + file +
+                           "' (missing directory, no permission or disk "
+                           "full?)"));
+  }
+
   /// Throw, naming the file, if a write to @p out failed.
   void
   check_stream(const std::ostream &out, const std::string &file)
   {
-    AssertThrow(static_cast<bool>(out),
-                ExcMessage("cannot write the output file '" + file +
-                           "' (missing directory, no permission or disk "
-                           "full?)"));
+    check_written(static_cast<bool>(out), file);
   }
 
   /// Replace the index @p file by the one @p write puts into the stream,

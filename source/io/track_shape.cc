@@ -5,6 +5,7 @@
 
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_table.h>
+#include <femp/io/output_files.h>
 #include <femp/io/track_shape.h>
 
 #include <iomanip>
@@ -275,16 +276,10 @@ namespace femp
   {
     if (Utilities::MPI::this_mpi_process(grid.communicator()) != 0)
       return;
-    const auto check = [](const std::ostream &out, const std::string &file) {
-      AssertThrow(static_cast<bool>(out),
-                  ExcMessage("cannot write the output file '" + file +
-                             "' (missing directory, no permission or disk "
-                             "full?)"));
-    };
     const std::string file =
       directory + "/track_shape_" + Utilities::int_to_string(n, 5) + ".csv";
     std::ofstream out(file);
-    check(out, file);
+    check_stream(out, file);
     out << "# time = " << std::setprecision(8) << time
         << " s; substrate top z = " << z_top << " m\n"
         << "section,x,y,surface_z,height,bead\n";
@@ -293,7 +288,7 @@ namespace femp
         out << s.name << ',' << s.x[c] << ',' << s.y[c] << ',' << s.surface[c]
             << ',' << s.surface[c] - z_top << ',' << s.bead[c] << '\n';
     out.close();
-    check(out, file);
+    check_stream(out, file);
 
     const std::string series = directory + "/track_bead.csv";
     if (!bead_csv.is_open())
@@ -310,7 +305,7 @@ namespace femp
       bead_csv << ',' << s.width << ',' << s.height;
     bead_csv << '\n';
     bead_csv.flush();
-    check(bead_csv, series);
+    check_stream(bead_csv, series);
   }
 
   template class TrackShape<2>;

@@ -26,6 +26,11 @@ namespace femp
   /// The text of @p file with its 'include' paths resolved as above.
   std::string
   resolve_includes(const std::string &file);
+
+  /// What an input error says when the file @p file that a parameter names
+  /// cannot be opened (for a relative path, where it was looked for).
+  std::string
+  unopened_file(const std::string &file);
 } // namespace femp
 
 #endif

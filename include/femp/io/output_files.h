@@ -14,6 +14,9 @@
 
 namespace femp
 {
+  /// Throw, naming the file, if writing @p file failed (@p ok false).
+  void
+  check_written(const bool ok, const std::string &file);
   /// Throw, naming the file, if a write to @p out failed.
   void
   check_stream(const std::ostream &out, const std::string &file);

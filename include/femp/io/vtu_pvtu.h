@@ -1,8 +1,8 @@
-// femp: the VTU/PVTU format of the output (ParaView): the .pvd index of a
-// series of PVTU records, and the material points as 0-dimensional patches
-// that deal.II's DataOutInterface writes as VTU pieces. The grid fields go
-// through deal.II's DataOut (Output::write_grid_output). No equation of the
-// paper.
+// femp: the VTU/PVTU format of the output (ParaView): one record of a
+// series (a VTU piece per rank, their PVTU record, the .pvd index of the
+// series), for the grid fields (deal.II's DataOut, filled by
+// Output::write_grid_output) and for the material points as 0-dimensional
+// patches. No equation of the paper.
 #ifndef femp_vtu_pvtu_h
 #define femp_vtu_pvtu_h
 
@@ -25,6 +25,20 @@ namespace femp
   write_pvd(const std::string                                 &file,
             const std::vector<std::pair<double, std::string>> &records,
             const MPI_Comm                                     comm);
+
+  /// One record of the VTU series @p name in @p directory: the pieces of
+  /// @p data (one per rank, compressed for speed, at @p time) and their
+  /// PVTU record <name>_<n>.pvtu, added to @p records; then the index
+  /// <name>.pvd of the series is replaced. Collective.
+  template <int patch_dim, int spacedim>
+  void
+  write_vtu_record(DataOutInterface<patch_dim, spacedim>       &data,
+                   const std::string                           &directory,
+                   const std::string                           &name,
+                   const unsigned int                           n,
+                   const double                                 time,
+                   std::vector<std::pair<double, std::string>> &records,
+                   const MPI_Comm                               comm);
 
   /// Material points as 0-dimensional patches (one per point) with the
   /// point id and the chosen properties, for the VTU and the HDF5 writers.
