@@ -48,14 +48,7 @@ namespace
                std::vector<double>       &T)
   {
     const double a = t <= 1 ? t : std::max(0., 2 - t);
-    for (const auto c : grid.owned_cells())
-      {
-        const Point<dim> x = grid.cell_center(c);
-        T[c]               = 300 + 100 * a *
-                       std::exp(-((x[0] - 0.8) * (x[0] - 0.8) +
-                                  (x[1] - 0.3) * (x[1] - 0.3)) /
-                                0.05);
-      }
+    hot_spot(grid, Point<dim>(0.8, 0.3), 100 * a, 0.05, T);
   }
 
   struct Scene
@@ -67,11 +60,8 @@ namespace
       sm.poisson_ratio = 0.3;
       auto sp          = block_supports<dim>();
       sp.gravity[1]    = -0.01;
-      typename SolidFEM<dim>::Parameters fp;
-      fp.enabled      = true;
-      fp.lower_corner = Point<dim>(0, 0);
-      fp.upper_corner = Point<dim>(1.6, 0.2);
-      solid           = std::make_unique<SolidSubCycle<dim>>(
+      const auto fp    = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2));
+      solid            = std::make_unique<SolidSubCycle<dim>>(
         sp, fp, sm, block.grid, *block.points);
       T = block.grid.make_field(300.);
       solid->initialize(T, "");

@@ -38,26 +38,16 @@ namespace
     auto               &points = *block.points;
     const SolidMaterial sm =
       block_material("300:0.02, 400:0.005", block.material);
-    auto sp       = block_supports<dim>();
-    sp.gravity[1] = -0.01;
-    typename SolidFEM<dim>::Parameters fp;
-    fp.enabled      = true;
-    fp.lower_corner = Point<dim>(0.2, 0);
-    fp.upper_corner = Point<dim>(1.6, 0.3);
+    auto sp                = block_supports<dim>();
+    sp.gravity[1]          = -0.01;
+    const auto          fp = fe_zone(Point<dim>(0.2, 0), Point<dim>(1.6, 0.3));
     SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
     for (int s = 1; s <= 10; ++s)
       {
         const double t = 0.05 * s;
-        for (const auto c : grid.owned_cells())
-          {
-            const Point<dim> x = grid.cell_center(c);
-            T[c]               = 300 + 200 * t *
-                           std::exp(-((x[0] - 0.3) * (x[0] - 0.3) +
-                                      (x[1] - 0.3) * (x[1] - 0.3)) /
-                                    0.05);
-          }
+        hot_spot(grid, Point<dim>(0.3, 0.3), 200 * t, 0.05, T);
         solid.advance(t, T, s == 10);
       }
     off_rank = solid.fe_elements_off_rank();
@@ -94,10 +84,7 @@ main(int argc, char **argv)
   sm.poisson_ratio = 0.3;
   auto sp          = block_supports<dim>();
   sp.gravity[1]    = -0.01;
-  typename SolidFEM<dim>::Parameters fp;
-  fp.enabled      = true;
-  fp.lower_corner = Point<dim>(0, 0);
-  fp.upper_corner = Point<dim>(1.6, 0.4);
+  const auto          fp = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.4));
   SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
   std::vector<double> T = grid.make_field(300.);
   solid.initialize(T, "");
@@ -108,14 +95,7 @@ main(int argc, char **argv)
   for (int s = 1; s <= n; ++s)
     {
       const double t = double(s) / n;
-      for (const auto c : grid.owned_cells())
-        {
-          const Point<dim> x = grid.cell_center(c);
-          T[c]               = 300 + 100 * t *
-                         std::exp(-((x[0] - 0.8) * (x[0] - 0.8) +
-                                    (x[1] - 0.8) * (x[1] - 0.8)) /
-                                  0.05);
-        }
+      hot_spot(grid, Point<dim>(0.8, 0.8), 100 * t, 0.05, T);
       solid.advance(t, T, s == n);
     }
 

@@ -52,11 +52,8 @@ namespace
     SolidMaterial sm     = block_material("300:0.05, 450:0.01", block.material);
     sm.poisson_ratio     = 0.3;
     sm.velocity_transfer = transfer;
-    auto                               sp = block_supports<dim>();
-    typename SolidFEM<dim>::Parameters fp;
-    fp.enabled      = true;
-    fp.lower_corner = Point<dim>(0, 0);
-    fp.upper_corner = Point<dim>(1.6, 0.3);
+    auto       sp        = block_supports<dim>();
+    const auto fp        = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.3));
     if (!directory.empty())
       sp.energy_file = "solid_melt_energy_" + name + ".csv";
     SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
@@ -74,13 +71,7 @@ namespace
         const double t = 0.02 * s;
         const double A =
           t < 0.3 ? 1000 * t : (t < 0.6 ? 300 - 200 * (t - 0.3) / 0.3 : 100);
-        for (const auto c : grid.owned_cells())
-          {
-            const Point<dim> x = grid.cell_center(c);
-            T[c] = 300 + A * std::exp(-((x[0] - 0.8) * (x[0] - 0.8) +
-                                        (x[1] - 0.8) * (x[1] - 0.8)) /
-                                      0.04);
-          }
+        hot_spot(grid, Point<dim>(0.8, 0.8), A, 0.04, T);
         points.cells_to_points(T);
         solid.advance(t, T, s == n);
         n_melted_max = std::max(n_melted_max, n0 - solid.sizes()[0]);

@@ -1,15 +1,17 @@
 // femp tests: the set-up shared by the 2D solid block tests (a substrate
 // block of material points on the background grid, the elastic-plastic
-// test material and the supports), as tests/flow_tools.h does for the flow
-// tests.
+// test material, the finite-element zone, the supports and a prescribed
+// hot spot), as tests/flow_tools.h does for the flow tests.
 #ifndef femp_solid_tools_h
 #define femp_solid_tools_h
 
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_sub_cycle.h>
 
+#include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "test_tools.h"
 
@@ -105,6 +107,19 @@ namespace femp_test
     return sm;
   }
 
+  /// A finite-element zone over the box [@p lower, @p upper], femp's
+  /// defaults otherwise.
+  template <int dim>
+  typename SolidFEM<dim>::Parameters
+  fe_zone(const Point<dim> &lower, const Point<dim> &upper)
+  {
+    typename SolidFEM<dim>::Parameters fp;
+    fp.enabled      = true;
+    fp.lower_corner = lower;
+    fp.upper_corner = upper;
+    return fp;
+  }
+
   /// A finite-element zone (on when @p enabled) covering [0, @p size], with
   /// hourglass coefficient @p kappa and hourglass distortion limit
   /// @p distortion_limit (femp's default unless given).
@@ -116,13 +131,31 @@ namespace femp_test
            const double      distortion_limit =
              typename SolidFEM<dim>::Parameters().hourglass_distortion_limit)
   {
-    typename SolidFEM<dim>::Parameters fp;
+    auto fp                       = fe_zone(Point<dim>(), size);
     fp.enabled                    = enabled;
-    fp.lower_corner               = Point<dim>();
-    fp.upper_corner               = size;
     fp.hourglass_coefficient      = kappa;
     fp.hourglass_distortion_limit = distortion_limit;
     return fp;
+  }
+
+  /// Prescribed cell temperatures of a hot spot in a 2D block: at the
+  /// centre x of each owned cell of @p grid, T = 300 K + @p rise
+  /// exp(-|x - @p centre|^2 / @p spread) (@p spread in m^2).
+  inline void
+  hot_spot(const BackgroundGrid<2> &grid,
+           const Point<2>          &centre,
+           const double             rise,
+           const double             spread,
+           std::vector<double>     &T)
+  {
+    for (const auto c : grid.owned_cells())
+      {
+        const Point<2> x = grid.cell_center(c);
+        T[c] =
+          300 + rise * std::exp(-((x[0] - centre[0]) * (x[0] - centre[0]) +
+                                  (x[1] - centre[1]) * (x[1] - centre[1])) /
+                                spread);
+      }
   }
 
   /// Supports of the blocks: bottom fixed, sides on rollers; no energy
