@@ -53,31 +53,13 @@ namespace femp
     heat->set_absorption_model(scene.absorption);
     if (!scene.heat_enabled)
       heat->freeze();
-    // Detached drops are looked for only for the heat equation's losses.
-    bodies =
-      std::make_unique<MetalBodies<dim>>(*grid,
-                                         scene.heat_enabled &&
-                                             scene.heat.detached_drops ?
-                                           scene.heat.detached_drop_cells :
-                                           0);
-    // The free surface of the metal only for the heat equation.
-    if (scene.heat_enabled)
-      surface =
-        std::make_unique<MetalSurface<dim>>(*grid,
-                                            scene.material,
-                                            scene.heat.reference_temperature,
-                                            scene.heat.detached_drops);
+    // alpha's keeper, with the bodies of metal and the free surface of
+    // alpha: the initial temperatures and alpha.
     point_heat = std::make_unique<PointHeatExchange<dim>>(
-      *points,
-      *heat,
-      scene.heat.advection_by_melt_flow ==
-        HeatTransfer<dim>::Parameters::Advection::points,
-      bodies.get(),
-      surface.get());
-    point_heat->initial_temperatures(scene.points.bodies, scene.heat);
+      *points, *heat, *grid, scene.material, scene.heat, scene.heat_enabled);
     {
       TimerOutput::Scope t(timer, "setup: metal fraction");
-      point_heat->initial_metal_fraction();
+      point_heat->start(scene.points.bodies, scene.heat);
     }
     results =
       std::make_unique<ResultsOutput<dim>>(scene.output, *grid, *points);
@@ -86,19 +68,12 @@ namespace femp
       setup_flow();
     builds->setup(*grid, *points, *heat, *control, *results);
     add_track_shape(*results, scene, *grid, *laser, *points, *heat);
-    if (scene.history.enabled)
-      history = std::make_unique<ThermalHistory<dim>>(*grid,
-                                                      scene.material.solidus,
-                                                      scene.material.liquidus,
-                                                      heat->temperature(),
-                                                      heat->metal_fraction(),
-                                                      0.);
     results->initialize(states.resuming());
     if (scene.solid)
       setup_solid();
     register_states();
     time_steps = std::make_unique<TimeStepPolicy<dim>>(
-      scene, *laser, *heat, *bodies, flow.get(), pcout);
+      scene, *laser, *heat, point_heat->bodies(), flow.get(), pcout);
     control->set_step_chooser(
       [this](const unsigned int step, const double time) {
         return time_steps->choose(step, time, cell_fields());
@@ -155,11 +130,9 @@ namespace femp
     states.add("output", results->output());
     states.add("trigger", states.checkpoint_file());
     report->add_state(states, *point_heat, flow.get());
-    if (history)
-      states.add("thermal history",
-                 *history,
-                 "it was written without 'Thermal history/Enable' (the "
-                 "history before it is lost)");
+    // The thermal history, when asked for, starts here: its state and its
+    // files (written at the end of the run).
+    add_thermal_history(*results, states, scene, *grid, *heat);
     builds->add_state(states);
     if (flow)
       states.add("flow", *flow);
@@ -245,8 +218,7 @@ namespace femp
     points->flush_point_temperatures();
     report->finish(
       *control, *heat, *points, flow.get(), solid.get(), *point_heat);
-    if (history)
-      history->write(scene.output.directory);
+    results->finish();
     print_cost_report(timer, scene.output.directory, comm);
   }
 
@@ -278,10 +250,7 @@ namespace femp
       TimerOutput::Scope t(timer, "temperature step");
       heat->advance(dt, control->time(), cell_fields());
     }
-    if (history)
-      history->observe(heat->temperature(),
-                       heat->metal_fraction(),
-                       control->time() + dt);
+    results->after_temperature_step(control->time() + dt);
   }
 
   template <int dim>
@@ -296,7 +265,7 @@ namespace femp
     // change with alpha in each flow sub-cycle; read once per temperature
     // step, before the state changes are looked for).
     if (solid)
-      solid->set_detached_cells(bodies->detached_cells());
+      solid->set_detached_cells(point_heat->bodies().detached_cells());
     if (flow && solid)
       {
         // Points that melted leave the solid with the velocity they had
@@ -348,7 +317,9 @@ namespace femp
   void
   FempProblem<dim>::output_results()
   {
-    const auto pool = [this] { return melt_pool(); };
+    const auto pool = [this] {
+      return workpiece_melt_pool(scene, *grid, *heat, point_heat->bodies());
+    };
     results->write_when_due(*control, timer, pool, report->series_pool());
     // The hottest metal of the workpiece, not of a drop in the gas, and
     // the pool now (the series' pool may lie up to a 'Time series
@@ -357,21 +328,6 @@ namespace femp
       *control,
       [this] { return time_steps->workpiece_peak_temperature(); },
       pool);
-  }
-
-  template <int dim>
-  MeltPoolSize
-  FempProblem<dim>::melt_pool() const
-  {
-    // Only the workpiece (the metal attached to the substrate) holds the
-    // pool: a detached drop, liquid or not, is no pool.
-    return measure_melt_pool(*grid,
-                             heat->temperature(),
-                             heat->metal_fraction(),
-                             scene.material.liquidus,
-                             scene.points.substrate_top,
-                             scene.material.solidus,
-                             &bodies->workpiece_cells());
   }
 
   template <int dim>

@@ -157,6 +157,24 @@ namespace femp
 
   template <int dim>
   void
+  ResultsOutput<dim>::after_temperature_step(const double time)
+  {
+    for (const auto &w : writers)
+      if (w.temperature_step)
+        w.temperature_step(time);
+  }
+
+  template <int dim>
+  void
+  ResultsOutput<dim>::finish()
+  {
+    for (const auto &w : writers)
+      if (w.finish)
+        w.finish();
+  }
+
+  template <int dim>
+  void
   ResultsOutput<dim>::write_when_due(SimulationControl &control,
                                      TimerOutput       &timer,
                                      const std::function<MeltPoolSize()> &pool,
@@ -333,10 +351,66 @@ namespace femp
       track, points, heat, scene.material.liquidus, scene.output.directory));
   }
 
+  template <int dim>
+  void
+  add_thermal_history(ResultsOutput<dim>        &results,
+                      ModuleStates<dim>         &states,
+                      const Scene<dim>          &scene,
+                      const BackgroundGrid<dim> &grid,
+                      const HeatTransfer<dim>   &heat)
+  {
+    if (!scene.history.enabled)
+      return;
+    const auto history =
+      std::make_shared<ThermalHistory<dim>>(grid,
+                                            scene.material.solidus,
+                                            scene.material.liquidus,
+                                            heat.temperature(),
+                                            heat.metal_fraction(),
+                                            0.);
+    typename ResultsOutput<dim>::Writer w;
+    w.temperature_step = [history, &heat](const double time) {
+      history->observe(heat.temperature(), heat.metal_fraction(), time);
+    };
+    const std::string directory = scene.output.directory;
+    w.finish = [history, directory] { history->write(directory); };
+    results.add_writer(w);
+    states.add("thermal history",
+               *history,
+               "it was written without 'Thermal history/Enable' (the "
+               "history before it is lost)");
+  }
+
+  template <int dim>
+  MeltPoolSize
+  workpiece_melt_pool(const Scene<dim>          &scene,
+                      const BackgroundGrid<dim> &grid,
+                      const HeatTransfer<dim>   &heat,
+                      MetalBodies<dim>          &bodies)
+  {
+    return measure_melt_pool(grid,
+                             heat.temperature(),
+                             heat.metal_fraction(),
+                             scene.material.liquidus,
+                             scene.points.substrate_top,
+                             scene.material.solidus,
+                             &bodies.workpiece_cells());
+  }
+
   template ResultsOutput<2>::Writer
   absorption_series(const HeatTransfer<2> &, const std::string &, MPI_Comm);
   template ResultsOutput<3>::Writer
   absorption_series(const HeatTransfer<3> &, const std::string &, MPI_Comm);
+  template MeltPoolSize
+  workpiece_melt_pool(const Scene<2> &,
+                      const BackgroundGrid<2> &,
+                      const HeatTransfer<2> &,
+                      MetalBodies<2> &);
+  template MeltPoolSize
+  workpiece_melt_pool(const Scene<3> &,
+                      const BackgroundGrid<3> &,
+                      const HeatTransfer<3> &,
+                      MetalBodies<3> &);
 #define FEMP_INSTANTIATE(D)                                     \
   template ResultsOutput<D>::Writer track_shape_files(          \
     const std::shared_ptr<TrackShape<D>> &,                     \
@@ -358,7 +432,12 @@ namespace femp
                                 const BackgroundGrid<D> &,      \
                                 const Laser<D> &,               \
                                 const MaterialPoints<D> &,      \
-                                const HeatTransfer<D> &);
+                                const HeatTransfer<D> &);       \
+  template void add_thermal_history(ResultsOutput<D> &,         \
+                                    ModuleStates<D> &,          \
+                                    const Scene<D> &,           \
+                                    const BackgroundGrid<D> &,  \
+                                    const HeatTransfer<D> &);
   FEMP_INSTANTIATE(2)
   FEMP_INSTANTIATE(3)
 #undef FEMP_INSTANTIATE

@@ -6,16 +6,37 @@
 namespace femp
 {
   template <int dim>
+  PointHeatExchange<dim>::PointHeatExchange(
+    MaterialPoints<dim>                          &points,
+    HeatTransfer<dim>                            &heat,
+    const BackgroundGrid<dim>                    &grid,
+    const Material                               &material,
+    const typename HeatTransfer<dim>::Parameters &prm,
+    const bool                                    heat_enabled)
+      : points(points)
+      , heat(heat)
+      , carried_by_points(prm.advection_by_melt_flow ==
+                          HeatTransfer<dim>::Parameters::Advection::points)
+      // Detached drops are looked for only for the heat equation's losses.
+      , metal_bodies(std::make_unique<MetalBodies<dim>>(
+          grid,
+          heat_enabled && prm.detached_drops ? prm.detached_drop_cells : 0))
+  {
+    // The free surface of the metal only for the heat equation.
+    if (heat_enabled)
+      surface = std::make_unique<MetalSurface<dim>>(grid,
+                                                    material,
+                                                    prm.reference_temperature,
+                                                    prm.detached_drops);
+  }
+
+  template <int dim>
   PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim> &points,
                                             HeatTransfer<dim>   &heat,
-                                            const bool        carried_by_points,
-                                            MetalBodies<dim> *bodies,
-                                            MetalSurface<dim> *surface)
+                                            const bool carried_by_points)
       : points(points)
       , heat(heat)
       , carried_by_points(carried_by_points)
-      , bodies(bodies)
-      , surface(surface)
   {
   }
 
@@ -23,14 +44,14 @@ namespace femp
   void
   PointHeatExchange<dim>::new_metal_fraction(const std::vector<double> &alpha)
   {
-    if (bodies)
-      bodies->update(alpha);
+    if (metal_bodies)
+      metal_bodies->update(alpha);
     if (!surface)
       {
-        heat.set_metal_fraction(alpha, bodies);
+        heat.set_metal_fraction(alpha, metal_bodies.get());
         return;
       }
-    surface->update(alpha, bodies);
+    surface->update(alpha, metal_bodies.get());
     heat.set_metal_fraction(alpha, *surface);
   }
 
@@ -38,7 +59,7 @@ namespace femp
   void
   PointHeatExchange<dim>::metal_fraction_restored()
   {
-    if (!bodies && !surface)
+    if (!metal_bodies && !surface)
       return;
     // The heat restored alpha and the surface lists it found itself; the
     // bodies and the surface follow, and the heat takes them (the rest of
@@ -93,8 +114,11 @@ namespace femp
 
   template <int dim>
   void
-  PointHeatExchange<dim>::initial_metal_fraction()
+  PointHeatExchange<dim>::start(
+    const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
+    const typename HeatTransfer<dim>::Parameters                      &heat_prm)
   {
+    initial_temperatures(bodies, heat_prm);
     new_metal_fraction(points.metal_fraction());
     alpha_moves = points.point_moves();
   }

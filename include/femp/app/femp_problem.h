@@ -34,11 +34,8 @@
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/material_points.h>
-#include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
-#include <femp/heat/metal_surface.h>
-#include <femp/heat/thermal_history.h>
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <memory>
@@ -98,15 +95,11 @@ namespace femp
     std::unique_ptr<HeatTransfer<dim>>       heat;
     std::unique_ptr<IncompressibleFlow<dim>> flow;
     std::unique_ptr<SolidSubCycle<dim>>      solid;
-    std::unique_ptr<ThermalHistory<dim>>     history; ///< null unless enabled
     // Builds of several layers and pores (doc/builds.md).
     std::unique_ptr<BuildSteps<dim>> builds;
-    // What joins them: alpha's keeper, the bodies of metal of alpha
-    // (detached drops, workpiece) that heat, solid and stop test read, and
-    // the free surface of alpha that the heat reads (null with the heat
-    // transfer off).
-    std::unique_ptr<MetalBodies<dim>>       bodies;
-    std::unique_ptr<MetalSurface<dim>>      surface;
+    // What joins them: alpha's keeper, with the bodies of metal of alpha
+    // (detached drops, workpiece) that heat, solid, stop test and melt
+    // pool read, and the free surface of alpha that the heat reads.
     std::unique_ptr<PointHeatExchange<dim>> point_heat;
     std::unique_ptr<FluidSolidForces<dim>>  fluid_solid;
     // Clock, step policy, output, report, state and its checkpoint.
@@ -153,9 +146,6 @@ namespace femp
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
-    /// The melt pool now (measure_melt_pool()).
-    MeltPoolSize
-    melt_pool() const;
   };
 } // namespace femp
 

@@ -2,21 +2,25 @@
 // once by the module that owns it, with where it goes: the probe series,
 // the probe lines, the field files), the fields computed only when output
 // is written (phase, zone, the solid's stresses), and the extra files
-// written beside them (ray-traced absorption, track shape). Each module's
-// output is registered by one call (add_heat_output(), add_flow_output(),
-// add_solid_output(), add_track_shape()); the time series and the field
-// output are written when the SimulationControl says they are due
+// written beside them (ray-traced absorption, track shape, thermal
+// history). Each module's output is registered by one call
+// (add_heat_output(), add_flow_output(), add_solid_output(),
+// add_track_shape(), add_thermal_history()); the time series, with the
+// melt pool of the workpiece (workpiece_melt_pool()), and the field output
+// are written when the SimulationControl says they are due
 // (write_when_due()); the formats are Output's.
 #ifndef femp_results_output_h
 #define femp_results_output_h
 
 #include <deal.II/base/timer.h>
 
+#include <femp/app/module_states.h>
 #include <femp/app/scene.h>
 #include <femp/app/simulation_control.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/melt_pool.h>
 #include <femp/io/output.h>
@@ -55,6 +59,10 @@ namespace femp
       std::function<void(const unsigned int n, const double time)> fields;
       /// On resume from a checkpoint at @p time: cut the files back.
       std::function<void(const double time)> resume;
+      /// After every temperature step, with the time @p time at its end.
+      std::function<void(const double time)> temperature_step;
+      /// At the end of the run.
+      std::function<void()> finish;
     };
 
     ResultsOutput(const typename Output<dim>::Parameters &prm,
@@ -96,6 +104,13 @@ namespace femp
     /// On resume from a checkpoint at @p time.
     void
     resume(const double time);
+    /// After a temperature step ending at @p time (the writers that watch
+    /// every step).
+    void
+    after_temperature_step(const double time);
+    /// At the end of the run: the writers' last files.
+    void
+    finish();
 
     /// The time series and the field output that @p control says are due
     /// after the step just taken, timed on @p timer: a series row with the
@@ -192,6 +207,30 @@ namespace femp
   void
   add_solid_output(ResultsOutput<dim>       &results,
                    const SolidSubCycle<dim> &solid);
+
+  /// The thermal history of every cell for microstructure codes
+  /// (ThermalHistory): it watches the temperature after every temperature
+  /// step from now on, writes its files at the end of the run and keeps
+  /// its state under the checkpoint section 'thermal history' of
+  /// @p states; nothing unless the @p scene asks for it.
+  template <int dim>
+  void
+  add_thermal_history(ResultsOutput<dim>        &results,
+                      ModuleStates<dim>         &states,
+                      const Scene<dim>          &scene,
+                      const BackgroundGrid<dim> &grid,
+                      const HeatTransfer<dim>   &heat);
+
+  /// The melt pool now (measure_melt_pool()) at the @p scene's liquidus,
+  /// solidus and substrate top. Only the workpiece of @p bodies (the metal
+  /// attached to the substrate) holds the pool: a detached drop, liquid or
+  /// not, is no pool. Collective.
+  template <int dim>
+  MeltPoolSize
+  workpiece_melt_pool(const Scene<dim>          &scene,
+                      const BackgroundGrid<dim> &grid,
+                      const HeatTransfer<dim>   &heat,
+                      MetalBodies<dim>          &bodies);
 
   /// The track shape (TrackShape) along the laser's first segment (the
   /// domain's centre without a path), its files registered on @p results

@@ -13,11 +13,11 @@
 //    ('upwind': the heat moves by upwind convection of T in the heat equation).
 // It is the one keeper of alpha: the only caller of
 // HeatTransfer::set_metal_fraction() in a run, which stores alpha for the
-// heat equation and its readers (cell_fields.h), and of
-// MetalBodies::update(), which finds the bodies of metal of the same alpha
-// once for the heat, the solid and the stop test, and of
-// MetalSurface::update(), which finds the free surface of the same alpha
-// once for the heat (its laser and surface losses).
+// heat equation and its readers (cell_fields.h), and the owner of the
+// MetalBodies, which find the bodies of metal of the same alpha once for
+// the heat, the solid, the stop test and the melt pool, and of the
+// MetalSurface, which finds the free surface of the same alpha once for
+// the heat (its laser and surface losses).
 // It keeps the energy account of these exchanges ('moved_points': the
 // change of the stored enthalpy of the grid they caused, zero for a
 // conservative exchange).
@@ -29,37 +29,43 @@
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/metal_surface.h>
 
+#include <memory>
+
 namespace femp
 {
   template <int dim>
   class PointHeatExchange
   {
   public:
-    /// @p carried_by_points: Heat transfer/Advection by melt flow = points.
-    /// @p bodies and @p surface: updated with each new alpha, the surface
-    /// with the bodies' detached drops, and the surface handed to the heat
-    /// (nullptr: no bodies, no detached drops; no surface: the heat finds
-    /// it itself, or needs none when its temperature is frozen).
+    /// The exchange of a run on @p grid, alpha's keeper with the bodies of
+    /// metal (MetalBodies) and, with @p heat_enabled, the free surface
+    /// (MetalSurface) it builds: detached drops are looked for with
+    /// @p heat_enabled and @p prm's 'Detached drops = sphere'; @p prm's
+    /// 'Advection by melt flow = points' makes the points carry the heat.
+    PointHeatExchange(MaterialPoints<dim>                          &points,
+                      HeatTransfer<dim>                            &heat,
+                      const BackgroundGrid<dim>                    &grid,
+                      const Material                               &material,
+                      const typename HeatTransfer<dim>::Parameters &prm,
+                      const bool heat_enabled);
+    /// An exchange without bodies of metal and surface (the heat finds
+    /// the surface itself); @p carried_by_points: 'Advection by melt flow
+    /// = points'.
     PointHeatExchange(MaterialPoints<dim> &points,
                       HeatTransfer<dim>   &heat,
-                      const bool           carried_by_points,
-                      MetalBodies<dim>    *bodies  = nullptr,
-                      MetalSurface<dim>   *surface = nullptr);
+                      const bool           carried_by_points);
 
-    /// Initial temperatures: points outside the initial @p bodies take
-    /// heat_prm's initial temperature at their position (when it is a
-    /// function), then the occupied cells of the bodies take the mean
+    /// The start of a run: the initial temperatures, then the metal
+    /// fraction of the points as they were created (no heat exchange),
+    /// its bodies and its surface. Points outside the initial @p bodies
+    /// take heat_prm's initial temperature at their position (when it is
+    /// a function), then the occupied cells of the bodies take the mean
     /// temperature of their points (and the liquid fraction of that
     /// temperature). Collective.
     void
-    initial_temperatures(
+    start(
       const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
       const typename HeatTransfer<dim>::Parameters &heat_prm);
-
-    /// The metal fraction of the points as they were created (no heat
-    /// exchange): the start of the run. Collective.
-    void
-    initial_metal_fraction();
 
     /// If points changed cells since alpha was last computed (the count
     /// MaterialPoints::point_moves() moved on, whoever moved them):
@@ -80,6 +86,15 @@ namespace femp
     void
     metal_fraction_restored();
 
+    /// The bodies of metal of alpha (detached drops, workpiece) that the
+    /// heat, the solid, the stop test and the melt pool read (run
+    /// constructor only).
+    MetalBodies<dim> &
+    bodies()
+    {
+      return *metal_bodies;
+    }
+
     /// Change of the stored enthalpy caused by points_changed_cells() over
     /// the run, J (2D: J/m).
     double
@@ -96,14 +111,19 @@ namespace femp
     }
 
   private:
-    MaterialPoints<dim> &points;
-    HeatTransfer<dim>   &heat;
-    const bool           carried_by_points;
-    MetalBodies<dim>    *bodies;
-    MetalSurface<dim>   *surface;
-    double               moved_points = 0;
+    MaterialPoints<dim>               &points;
+    HeatTransfer<dim>                 &heat;
+    const bool                         carried_by_points;
+    std::unique_ptr<MetalBodies<dim>>  metal_bodies;
+    std::unique_ptr<MetalSurface<dim>> surface; ///< null with the heat off
+    double                             moved_points = 0;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
+
+    void
+    initial_temperatures(
+      const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
+      const typename HeatTransfer<dim>::Parameters &heat_prm);
 
     /// alpha changed: the bodies, the surface, then the heat.
     void
