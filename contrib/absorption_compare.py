@@ -7,17 +7,17 @@ wrote absorption.csv ('Laser/Absorption model = ray traced'), the median and
 range of the absorbed fraction.
 
   contrib/absorption_compare.py [--after 5e-5] DIR [DIR ...]
+
+The files are read by contrib/femp_post.py (numpy).
 """
 import argparse
-import csv
 import os
-import statistics
 import sys
 
+import numpy as np
 
-def rows(path):
-    with open(path) as f:
-        return [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
 
 
 def main():
@@ -31,23 +31,23 @@ def main():
           "| absorbed fraction median [min, max] |")
     print("|---|---:|---:|---:|---|")
     for d in a.dirs:
-        pool = [r for r in rows(os.path.join(d, "melt_pool.csv"))
-                if r["time"] > a.after]
-        if not pool:
+        run = femp_post.Run(d)
+        pool = run.melt_pool()
+        late = pool["time"] > a.after
+        if not late.any():
             sys.exit(f"{d}: no melt_pool.csv rows after {a.after} s")
-        med = lambda key: statistics.median(r[key] for r in pool)
+        med = lambda key: float(np.median(pool[key][late]))
         frac = "fixed (Absorptivity)"
-        ab = os.path.join(d, "absorption.csv")
-        if os.path.exists(ab):
-            f = [r["absorbed_fraction"] for r in rows(ab)
-                 if r["time"] > a.after and r["incident"] > 0]
-            if f:
-                frac = (f"{statistics.median(f):.3f} "
-                        f"[{min(f):.3f}, {max(f):.3f}]")
+        if os.path.exists(os.path.join(d, "absorption.csv")):
+            ab = run.absorption()
+            f = ab["absorbed_fraction"][(ab["time"] > a.after)
+                                        & (ab["incident"] > 0)]
+            if len(f):
+                frac = (f"{np.median(f):.3f} "
+                        f"[{f.min():.3f}, {f.max():.3f}]")
         print(f"| {d} | {1e6 * med('width_solidus_substrate'):.1f} "
               f"| {1e6 * med('depth_solidus_substrate'):.1f} "
               f"| {med('T_max'):.0f} | {frac} |")
-
 
 if __name__ == "__main__":
     main()

@@ -14,7 +14,9 @@ of the scene, 0.05 s) or build/tests/thermocapillary_scene.mpirun=1/output/
 probe_line_mid_00001.csv (the test's coarser run). The defaults are the
 scene's parameters. Prints, per file, the largest pointwise error, the
 surface speed (quadratic through the three top cells at zeta = 1) and the
-zero crossing, as the test does."""
+zero crossing, as the test does. The probe lines are read by
+contrib/femp_post.py."""
+import os
 import sys
 
 import matplotlib
@@ -22,6 +24,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
 
 
 def option(args, name, default):
@@ -50,12 +55,9 @@ def main():
     ax.plot(3 * z**2 - 2 * z, z, "k-", label="closed form (3 zeta^2 - 2 zeta)")
     for spec, marker in zip(files, "osd^v"):
         path, _, label = spec.partition(":")
-        with open(path) as f:
-            f.readline()
-            names = f.readline().strip().split(",")
-        d = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
-        y = d[:, names.index("y")]
-        u = d[:, names.index("u_x")]
+        line = femp_post.read_csv(path)
+        y = line["y"]
+        u = line["u_x"]
         zeta = (y - floor) / depth
         keep = (zeta > 0) & (zeta < 1)
         zeta, prof = zeta[keep], u[keep] / U

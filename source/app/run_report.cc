@@ -93,7 +93,9 @@ namespace femp
         << " s  T_max(attached metal) = " << std::setw(8) << T_max << " K";
     // The pool of a scene with a laser (a thermal shock or a flow check
     // without one shows none).
-    if (with_laser)
+    if (with_laser && pool.length <= 0 && pool.width <= 0 && pool.depth <= 0)
+      out << "  melt pool none (no metal of the workpiece above the liquidus)";
+    else if (with_laser)
       {
         out << "  melt pool L";
         if (dim == 3) // in 2D the pool has a length and a depth only
@@ -237,8 +239,8 @@ namespace femp
           << std::endl;
     if (with_flow)
       out << std::setprecision(6) << "  with melt flow, energy created ("
-          << unit << ") by the upwind convection of T " << s.advection
-          << " and by points moving between cells " << s.moved_points
+          << unit << "): by the upwind convection of T " << s.advection
+          << ", by points moving between cells " << s.moved_points
           << "; with these counted as sources, "
           << error("|laser + fixed faces + created - losses - stored|",
                    std::abs(s.laser + s.boundary + s.advection +

@@ -223,7 +223,8 @@ namespace femp
     // the start, which is several times too optimistic in a heating phase.
     const double wall = wall_time();
     const double left = std::max(0., prm.end_time - t);
-    if (t <= 0)
+    // The last step (the end time, or a stop condition met before it).
+    if (t <= 0 || last)
       return 0;
     double rate = wall / t;
     if (!rate_samples.empty() && t > rate_samples.front().second &&

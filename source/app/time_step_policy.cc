@@ -138,7 +138,8 @@ namespace femp
     std::ostringstream T_peak; // to 0.01 K: it lies just below
     T_peak << std::fixed << std::setprecision(2)
            << workpiece_peak_temperature();
-    out << "Stopping at t = " << time_end
+    // (The stream keeps the precision of the last progress line: set it.)
+    out << std::setprecision(6) << "Stopping at t = " << time_end
         << " s: the laser's path has ended and the peak "
            "temperature of the metal attached to the substrate "
         << T_peak.str() << " K is below " << T_stop << " K" << std::endl;

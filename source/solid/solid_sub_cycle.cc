@@ -106,8 +106,9 @@ namespace femp
               "Factor s >= 1 on the inertial mass of points and FE "
               "nodes (gravity keeps the true mass): the stable step "
               "grows by sqrt(s). Only for quasi-static scenes: watch "
-              "the kinetic-to-internal energy ratio in the energy "
-              "file (it should stay well below 0.1). With 'Mass "
+              "the column kinetic_to_elastic (K / U_el) of the energy "
+              "file, which stays below about 1e-3 in a quasi-static "
+              "run (doc/speed_accuracy.md, section 1). With 'Mass "
               "scaling = adaptive' the starting factor, which must "
               "lie in [Minimum factor, Maximum factor]. Range [1, "
               "inf).");
