@@ -1,6 +1,6 @@
 // femp: BuildSteps (see the header): the layer schedule, the recoat in the
-// step where a layer starts, the pore detector's output and the record of
-// each track.
+// step where a layer starts, the hand-over of cooled rows to the FE zone
+// after it, the pore detector's output and the record of each track.
 #include <femp/app/build_steps.h>
 
 #include <iomanip>
@@ -36,6 +36,13 @@ namespace femp
       recoater = std::make_unique<Recoater<dim>>(scene.points,
                                                  scene.material.density,
                                                  grid);
+    if (schedule && scene.handover.enabled)
+      handover = std::make_unique<FeZoneHandover<dim>>(
+        scene.handover,
+        grid,
+        scene.material.solidus,
+        scene.points.substrate_top +
+          std::max(0., scene.points.layer_thickness));
     // Tracks and layers: tracks.csv, layers.csv, probe lines per track.
     std::vector<double> starts;
     if (schedule)
@@ -89,7 +96,8 @@ namespace femp
                           MaterialPoints<dim>      &points,
                           PointHeatExchange<dim>   &point_heat,
                           TimerOutput              &timer,
-                          const ConditionalOStream &pcout)
+                          const ConditionalOStream &pcout,
+                          SolidSubCycle<dim>       *solid)
   {
     if (!recoater)
       return;
@@ -114,7 +122,45 @@ namespace femp
               << r.surface_max << " m) and the top " << layer.top << " m; "
               << r.points << " points at " << T << " K" << std::setprecision(6)
               << std::endl;
+        if (handover && solid)
+          hand_over(t, layer.top, points, *solid, timer, pcout);
       }
+  }
+
+  template <int dim>
+  void
+  BuildSteps<dim>::hand_over(const double              t,
+                             const double              top,
+                             MaterialPoints<dim>      &points,
+                             SolidSubCycle<dim>       &solid,
+                             TimerOutput              &timer,
+                             const ConditionalOStream &pcout)
+  {
+    TimerOutput::Scope scope(timer, "FE zone hand-over");
+    const double       new_top = handover->choose_top(top,
+                                                points,
+                                                solid.fe_zone_cells(),
+                                                heat_ptr->metal_fraction());
+    const double       old_top = handover->zone_top();
+    pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
+          << handover->deepest_fusion() << " m, rows up to "
+          << handover->limit() << " m";
+    if (!handover->stop_reason().empty())
+      pcout << " (" << handover->stop_reason() << ")";
+    if (!(new_top > old_top + 0.5 * grid_ptr->h()))
+      {
+        pcout << "; the zone's top stays at " << old_top << " m" << std::endl;
+        return;
+      }
+    const double K0 = solid.energies(false).melted;
+    const auto   n  = solid.hand_over_rows(new_top);
+    // The zone's points carry temperatures only: alpha bins them once.
+    points.set_fixed_cells(solid.fe_zone_cells());
+    n_handed[0] += n[0], n_handed[1] += n[1];
+    pcout << "; the zone's top rises from " << old_top << " to " << new_top
+          << " m: " << n[0] << " elements, " << n[1]
+          << " points handed over, their kinetic energy "
+          << solid.energies(false).melted - K0 << " J removed" << std::endl;
   }
 
   template <int dim>
@@ -162,6 +208,8 @@ namespace femp
   {
     if (tracks)
       tracks->observe(heat_ptr->temperature(), heat_ptr->metal_fraction());
+    if (handover)
+      handover->observe(heat_ptr->temperature(), heat_ptr->metal_fraction());
   }
 
   template <int dim>

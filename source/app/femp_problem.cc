@@ -177,7 +177,10 @@ namespace femp
         //    of a layer starting in this step.
         builds->record_tracks(
           control->time(), dt, false, *points, timer, pcout);
-        builds->recoat(control->time(), dt, *points, *point_heat, timer, pcout);
+        //    With 'Build/Hand over cooled metal' the cooled rows below the
+        //    new layer's melt pass to the solid's finite elements.
+        builds->recoat(
+          control->time(), dt, *points, *point_heat, timer, pcout, solid.get());
 
         // 1. Tag cells, alpha, gamma, properties: alpha changes only when
         //    points change cells, and PointHeatExchange::follow_points()

@@ -45,6 +45,7 @@ namespace femp
     LayerSchedule<3>::Parameters::declare_parameters(prm);
     PoreDetector<3>::Parameters::declare_parameters(prm);
     TrackRecord<3>::Parameters::declare_parameters(prm);
+    FeZoneHandover<3>::Parameters::declare_parameters(prm);
   }
 
   template <int dim>
@@ -81,6 +82,7 @@ namespace femp
     build.parse_parameters(prm);
     porosity.parse_parameters(prm);
     track_record.parse_parameters(prm);
+    handover.parse_parameters(prm);
     // A bare plate without flow or solid carries no points (Material
     // points/Carry points = auto); a layer schedule needs them (the
     // recoated powder).
@@ -101,6 +103,14 @@ namespace femp
       }
     check_across_modules();
     checkpoint.parse_parameters(prm);
+    handover.check(material.solidus,
+                   heat_enabled,
+                   solid,
+                   solid && fem.enabled,
+                   build.enabled(),
+                   checkpoint.every_steps > 0 || checkpoint.every_time > 0 ||
+                     checkpoint.every_wall_minutes > 0 ||
+                     !checkpoint.resume_from.empty());
   }
 
   template <int dim>

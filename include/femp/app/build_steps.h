@@ -5,8 +5,10 @@
 // heat of the cells that gained powder follow, PointHeatExchange), and the
 // pores and unfused powder with every field output (PoreDetector), and the
 // record of each finished track and layer (TrackRecord: tracks.csv,
-// layers.csv, probe lines after each track). Each part exists only when the
-// scene asks for it.
+// layers.csv, probe lines after each track), and the hand-over of cooled
+// metal rows from material points to the solid's finite elements at each
+// layer start (FeZoneHandover, SolidSubCycle::hand_over_rows()). Each part
+// exists only when the scene asks for it.
 #ifndef femp_build_steps_h
 #define femp_build_steps_h
 
@@ -21,7 +23,10 @@
 #include <femp/builds/recoater.h>
 #include <femp/builds/track_record.h>
 #include <femp/coupling/point_heat_exchange.h>
+#include <femp/solid/fe_zone_handover.h>
+#include <femp/solid/solid_sub_cycle.h>
 
+#include <array>
 #include <memory>
 
 namespace femp
@@ -49,14 +54,18 @@ namespace femp
     /// Step 0 of the macro step: spread the powder of each layer whose
     /// start time lies in [@p t, @p t + @p dt) (the same steps after a
     /// resume: no state to keep); then alpha and the heat of the cells
-    /// that gained powder (@p point_heat). Collective.
+    /// that gained powder (@p point_heat); with 'Build/Hand over cooled
+    /// metal' the rows of cooled metal the new layer leaves below its melt
+    /// pass from the points to the finite elements of @p solid (null: no
+    /// solid). Collective.
     void
     recoat(const double              t,
            const double              dt,
            MaterialPoints<dim>      &points,
            PointHeatExchange<dim>   &point_heat,
            TimerOutput              &timer,
-           const ConditionalOStream &pcout);
+           const ConditionalOStream &pcout,
+           SolidSubCycle<dim>       *solid = nullptr);
 
     /// Step 0 of the macro step, before the recoat: close the track
     /// records due before @p t + @p dt (rows of tracks.csv and the probe
@@ -70,9 +79,18 @@ namespace femp
                   TimerOutput               &timer,
                   const ConditionalOStream  &pcout);
 
-    /// After the flow, each macro step: the open track's melt extent.
+    /// After the flow, each macro step: the open track's melt extent, and
+    /// with the hand-over the lowest melt of the layer.
     void
     observe_tracks() const;
+
+    /// Elements added and points handed over by the hand-over so far
+    /// (global; {0, 0} without it).
+    std::array<double, 2>
+    handed_over() const
+    {
+      return n_handed;
+    }
 
     /// The track record's state (with 'Build/Track report') as the
     /// checkpoint section "tracks" of @p states.
@@ -87,16 +105,26 @@ namespace femp
     }
 
   private:
-    const Scene<dim>                   &scene;
-    const Laser<dim>                   &laser;
-    std::unique_ptr<LayerSchedule<dim>> schedule;
-    std::unique_ptr<Recoater<dim>>      recoater;
-    std::unique_ptr<PoreDetector<dim>>  pores;
-    std::unique_ptr<TrackRecord<dim>>   tracks;
+    const Scene<dim>                    &scene;
+    const Laser<dim>                    &laser;
+    std::unique_ptr<LayerSchedule<dim>>  schedule;
+    std::unique_ptr<Recoater<dim>>       recoater;
+    std::unique_ptr<PoreDetector<dim>>   pores;
+    std::unique_ptr<TrackRecord<dim>>    tracks;
+    std::unique_ptr<FeZoneHandover<dim>> handover;
     // Set by setup(), read by the track record.
     const BackgroundGrid<dim> *grid_ptr    = nullptr;
     const HeatTransfer<dim>   *heat_ptr    = nullptr;
     ResultsOutput<dim>        *results_ptr = nullptr;
+    std::array<double, 2>      n_handed    = {{0., 0.}};
+    /// The hand-over after the recoat of the layer reaching @p top.
+    void
+    hand_over(const double              t,
+              const double              top,
+              MaterialPoints<dim>      &points,
+              SolidSubCycle<dim>       &solid,
+              TimerOutput              &timer,
+              const ConditionalOStream &pcout);
   };
 } // namespace femp
 

@@ -26,6 +26,7 @@
 #include <femp/io/checkpoint.h>
 #include <femp/io/output.h>
 #include <femp/io/track_shape.h>
+#include <femp/solid/fe_zone_handover.h>
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <functional>
@@ -80,6 +81,8 @@ namespace femp
     typename LayerSchedule<dim>::Parameters build;
     typename PoreDetector<dim>::Parameters  porosity;
     typename TrackRecord<dim>::Parameters   track_record;
+    /// The hand-over of cooled metal to the FE zone (Build subsection).
+    typename FeZoneHandover<dim>::Parameters handover;
 
     /// The cadence of field output, time series and progress line (read
     /// from the Output parameters, here only).

@@ -1,0 +1,90 @@
+#!/usr/bin/env python3
+"""Cost per layer of a build, with and without 'Build/Hand over cooled
+metal' (doc/builds.md, "Handing cooled metal to finite elements"), from
+femp's logs.
+
+    python3 contrib/plot_handover_cost.py OUT.svg LOG=label [LOG=label ...]
+
+Each LOG is the standard output of a femp run with a layer schedule and a
+progress line ('Output/Progress interval') much shorter than a layer. The
+layers start at the 'Recoat: layer k at t = ...' lines (layer 1 at t = 0)
+and end where the next one starts (the last one at the last progress
+line); the wall time of a layer is the difference of the wall times of
+the progress lines nearest to its start and its end (interpolated
+linearly in the simulated time). Prints a table (layer, start, end, wall
+per run, the FE zone's top after each hand-over) and draws the wall time
+per layer of each run against the layer (SVG, matplotlib).
+"""
+import re
+import sys
+
+PROGRESS = re.compile(r"^t =\s*([0-9.eE+-]+) s\s+step.*wall\s+([0-9.eE+-]+) s")
+RECOAT = re.compile(r"^Recoat: layer (\d+) at t = ([0-9.eE+-]+) s")
+RAISE = re.compile(r"the zone's top rises from ([0-9.eE+-]+) to ([0-9.eE+-]+) m: "
+                   r"(\d+) elements, (\d+) points")
+
+
+def read(log):
+    progress, starts, raises = [], [0.0], {}
+    with open(log) as f:
+        for line in f:
+            m = PROGRESS.search(line)
+            if m:
+                progress.append((float(m.group(1)), float(m.group(2))))
+                continue
+            m = RECOAT.search(line)
+            if m:
+                starts.append(float(m.group(2)))
+                continue
+            m = RAISE.search(line)
+            if m:
+                raises[len(starts)] = (float(m.group(2)), int(m.group(3)),
+                                       int(m.group(4)))
+    return progress, starts, raises
+
+
+def wall_at(progress, t):
+    for (t0, w0), (t1, w1) in zip(progress, progress[1:]):
+        if t0 <= t <= t1:
+            return w0 + (w1 - w0) * (t - t0) / (t1 - t0) if t1 > t0 else w1
+    return progress[-1][1] if t > progress[-1][0] else progress[0][1]
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    out = sys.argv[1]
+    runs = []
+    for arg in sys.argv[2:]:
+        log, label = arg.split("=", 1)
+        progress, starts, raises = read(log)
+        ends = starts[1:] + [progress[-1][0]]
+        walls = [wall_at(progress, e) - wall_at(progress, s)
+                 for s, e in zip(starts, ends)]
+        runs.append((label, starts, ends, walls, raises))
+        print(f"# {label} ({log}): total wall {progress[-1][1]:.1f} s")
+        print("layer, t_start (s), t_end (s), wall (s), FE zone top after "
+              "the hand-over (m), elements added, points handed over")
+        for k, (s, e, w) in enumerate(zip(starts, ends, walls), start=1):
+            r = raises.get(k)
+            extra = f", {r[0]:.6g}, {r[1]}, {r[2]}" if r else ", -, 0, 0"
+            print(f"{k}, {s:.6g}, {e:.6g}, {w:.2f}{extra}")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for label, starts, ends, walls, _ in runs:
+        ax.plot(range(1, len(walls) + 1), walls, marker="o", label=label)
+    ax.set_xlabel("layer")
+    ax.set_ylabel("wall time of the layer (s)")
+    ax.set_xticks(range(1, max(len(r[3]) for r in runs) + 1))
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,246 @@
+// femp: the choice of the cell rows a build hands from material points to
+// finite elements at each layer start (see the header and doc/builds.md,
+// "Handing cooled metal to finite elements").
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/utilities.h>
+
+#include <femp/base/input_checks.h>
+#include <femp/solid/fe_zone_handover.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace femp
+{
+  template <int dim>
+  void
+  FeZoneHandover<dim>::Parameters::add_parameters(ParameterTable &table)
+  {
+    table.enter_subsection("Build");
+    table.add(
+      "Hand over cooled metal",
+      enabled,
+      "At each layer start, after its recoat, hand the cell rows of metal "
+      "that have cooled below 'Hand-over temperature' and lie 'Hand-over "
+      "margin' below the deepest melt expected of the new layer from "
+      "material points to finite elements: the FE zone of the solid rises "
+      "behind the build, each new element taking its cell's mean stress and "
+      "plastic strain (doc/builds.md, \"Handing cooled metal to finite "
+      "elements\"). Needs the heat, the solid with its FE zone and a layer "
+      "schedule; not with checkpoints.");
+    table.add("Hand-over temperature",
+              temperature,
+              Patterns::Double(),
+              "With 'Hand over cooled metal': every material point of a "
+              "handed row is below this temperature, K; range (0, "
+              "Material/Solidus).");
+    table.add("Hand-over margin",
+              margin,
+              Patterns::Double(),
+              "With 'Hand over cooled metal': the handed rows stay this "
+              "far below the new layer's powder top less the deepest "
+              "fusion depth of the layers so far, m; range [0, inf).");
+    table.leave_subsection();
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::Parameters::declare_parameters(ParameterHandler &prm)
+  {
+    Parameters     defaults;
+    ParameterTable table(prm, ParameterTable::Mode::declare);
+    defaults.add_parameters(table);
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::Parameters::parse_parameters(ParameterHandler &prm)
+  {
+    ParameterTable table(prm, ParameterTable::Mode::parse);
+    add_parameters(table);
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::Parameters::check(const double solidus,
+                                         const bool   heat,
+                                         const bool   solid,
+                                         const bool   fe_zone,
+                                         const bool   layers,
+                                         const bool   checkpoints) const
+  {
+    // The values only matter with the hand-over on (a material whose
+    // solidus lies below the default temperature runs without it).
+    if (!enabled)
+      return;
+    require(std::isfinite(temperature) && temperature > 0 &&
+              temperature < solidus,
+            "Build/Hand-over temperature",
+            temperature,
+            "it must lie in (0, " + num(solidus) +
+              ") K: below Material/Solidus");
+    require(std::isfinite(margin) && margin >= 0,
+            "Build/Hand-over margin",
+            margin,
+            "it must be a length in [0, inf) m");
+    const std::string name = "Build/Hand over cooled metal";
+    require(heat,
+            name,
+            "true",
+            "the hand-over needs 'Physics/Heat transfer = true' (it hands "
+            "over metal that has cooled)");
+    require(solid,
+            name,
+            "true",
+            "the hand-over needs 'Physics/Solid stress = true' (it hands "
+            "material points of the solid to its finite elements)");
+    require(fe_zone,
+            name,
+            "true",
+            "the hand-over needs 'Solid FEM/Use finite elements = true' (the "
+            "zone it raises)");
+    require(layers,
+            name,
+            "true",
+            "the hand-over happens at layer starts: it needs 'Build/Layer "
+            "schedule' other than none, with more than one layer");
+    require(!checkpoints,
+            name,
+            "true",
+            "a checkpoint does not record the raised FE zone: set the "
+            "'Checkpoint' triggers to 0 and 'Checkpoint/Resume from' empty, "
+            "or 'Hand over cooled metal = false'");
+  }
+
+  template <int dim>
+  FeZoneHandover<dim>::FeZoneHandover(const Parameters          &prm,
+                                      const BackgroundGrid<dim> &grid,
+                                      const double               solidus,
+                                      const double               first_top)
+      : prm(prm)
+      , grid(grid)
+      , solidus(solidus)
+      , layer_top(first_top)
+  {
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::observe(const std::vector<double> &T,
+                               const std::vector<double> &alpha)
+  {
+    // One pass over the owned cells: the bottom of the lowest molten one.
+    const double z0 = grid.origin()[dim - 1], h = grid.h();
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      const double z = z0 + ijk[dim - 1] * h;
+      if (z < lowest && T[idx] >= solidus && alpha[idx] >= 0.5)
+        lowest = z;
+    });
+  }
+
+  template <int dim>
+  double
+  FeZoneHandover<dim>::choose_top(const double                     new_top,
+                                  const MaterialPoints<dim>       &points,
+                                  const std::vector<std::uint8_t> &zone,
+                                  const std::vector<double>       &alpha)
+  {
+    const MPI_Comm comm = grid.communicator();
+    // The layer before: its fusion depth below its powder top.
+    const double low = Utilities::MPI::min(lowest, comm);
+    if (std::isfinite(low))
+      depth = std::max(depth, layer_top - low);
+    lowest    = std::numeric_limits<double>::infinity();
+    layer_top = new_top;
+
+    // The zone's box from its cells (a box of whole cells).
+    std::array<int, dim> lo, hi;
+    lo.fill(std::numeric_limits<int>::max());
+    hi.fill(-1);
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      if (zone[idx])
+        for (int d = 0; d < dim; ++d)
+          lo[d] = std::min(lo[d], ijk[d]), hi[d] = std::max(hi[d], ijk[d]);
+    });
+    for (int d = 0; d < dim; ++d)
+      lo[d] = Utilities::MPI::min(lo[d], comm),
+      hi[d] = Utilities::MPI::max(hi[d], comm);
+    const double z0 = grid.origin()[dim - 1], h = grid.h();
+    const int    first_row = hi[dim - 1] + 1;
+    current_top            = z0 + first_row * h;
+    last_limit             = new_top - depth - prm.margin;
+    reason.clear();
+    const int last_row =
+      std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
+                    int(grid.n_cells()[dim - 1]));
+    if (hi[dim - 1] < 0 || last_row <= first_row)
+      return current_top;
+
+    // Per candidate row: 1 a cell not full of metal or without points, 2 a
+    // powder or fluid point, 4 a point at or above the hand-over
+    // temperature; and the hottest point.
+    const int           n_rows = last_row - first_row;
+    std::vector<int>    flags(n_rows, 0);
+    std::vector<double> hottest(n_rows, 0.);
+    std::vector<int>    has_points(grid.n_local(), 0);
+    using P            = typename MaterialPoints<dim>::PropertyIndex;
+    const auto &cells  = points.occupied_cells();
+    auto        in_box = [&](const std::array<int, dim> &ijk) {
+      for (int d = 0; d < dim - 1; ++d)
+        if (ijk[d] < lo[d] || ijk[d] > hi[d])
+          return false;
+      return ijk[dim - 1] >= first_row && ijk[dim - 1] < last_row;
+    };
+    for (std::size_t c = 0; c < cells.size(); ++c)
+      {
+        const auto ijk = grid.global_index(cells[c].first);
+        if (!in_box(ijk))
+          continue;
+        const int r = ijk[dim - 1] - first_row;
+        for (const double *v : points.cell_point_properties(c))
+          {
+            has_points[cells[c].first] = 1;
+            if (v[P::state] != MaterialPoints<dim>::solid)
+              flags[r] |= 2;
+            if (!(v[P::temperature] < prm.temperature))
+              flags[r] |= 4;
+            hottest[r] = std::max(hottest[r], v[P::temperature]);
+          }
+      }
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= 1. - 1e-12))
+        flags[ijk[dim - 1] - first_row] |= 1;
+    });
+    // The flags of all ranks: one maximum per bit.
+    std::vector<int> bits(3 * n_rows);
+    for (int r = 0; r < n_rows; ++r)
+      for (int b = 0; b < 3; ++b)
+        bits[3 * r + b] = (flags[r] >> b) & 1;
+    MPI_Allreduce(
+      MPI_IN_PLACE, bits.data(), 3 * n_rows, MPI_INT, MPI_MAX, comm);
+    for (int r = 0; r < n_rows; ++r)
+      flags[r] = bits[3 * r] | (bits[3 * r + 1] << 1) | (bits[3 * r + 2] << 2);
+    MPI_Allreduce(
+      MPI_IN_PLACE, hottest.data(), n_rows, MPI_DOUBLE, MPI_MAX, comm);
+    int r = 0;
+    while (r < n_rows && flags[r] == 0)
+      ++r;
+    if (r < n_rows)
+      {
+        std::ostringstream s;
+        s << "the row at z = " << z0 + (first_row + r) * h << " m holds ";
+        if (flags[r] & 1)
+          s << "a cell not full of metal";
+        else if (flags[r] & 2)
+          s << "powder or fluid points";
+        else
+          s << "points up to " << hottest[r] << " K";
+        reason = s.str();
+      }
+    return z0 + (first_row + r) * h;
+  }
+
+  template class FeZoneHandover<2>;
+  template class FeZoneHandover<3>;
+} // namespace femp
