@@ -1247,7 +1247,9 @@ def cmd_report(args):
                              c["depth"] / c["width"], ab,
                              ("%.2f" % r["hits_per_ray"]) if r.get("hits_per_ray") else "-",
                              ("%.3g" % r["normalized_enthalpy"]) if r.get("normalized_enthalpy") else "-",
-                             pct(r.get("depth_growth")), r["wall_s"], r["np"],
+                             pct(r.get("depth_growth")),
+                             # runs started by hand carry femp's own wall time
+                             r.get("wall_s") or r.get("femp_wall_s") or 0, r["np"],
                              (" (stopped at %.0f of %.0f µs)" % (
                                  r["t_reached"] * 1e6,
                                  track_geometry(c)["Ltr"] / c["v"] * 1e6))

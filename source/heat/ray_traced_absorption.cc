@@ -135,6 +135,11 @@ namespace femp
       double                     h;
       Point<dim>                 origin;
       std::array<int, dim>       n;
+      /// Flat-index strides of the window.
+      std::array<std::size_t, dim> stride;
+      /// surface_cell() of each window cell, found on first use (-1: not
+      /// yet): a trace asks for the same cells many times.
+      mutable std::vector<signed char> surface;
 
       Window(const BackgroundGrid<dim> &g,
              const std::vector<double> &alpha,
@@ -164,6 +169,10 @@ namespace femp
             total *= size[d];
           }
         a.assign(total, 0.);
+        surface.assign(total, -1);
+        stride[0] = 1;
+        for (int d = 1; d < dim; ++d)
+          stride[d] = stride[d - 1] * size[d - 1];
         // The owned cells of the window (not all owned cells).
         const auto &status = g.cell_status();
         for (std::size_t f = 0; f < total; ++f)
@@ -227,6 +236,30 @@ namespace femp
             i0[d]          = int(std::floor(u));
             f[d]           = u - i0[d];
           }
+        // All 2^dim cells inside the window and below its top: read them
+        // directly (the same values and sum as through cell()).
+        bool interior = i0[dim - 1] + 1 < n[dim - 1];
+        for (int d = 0; d < dim && interior; ++d)
+          interior = i0[d] >= lo[d] && i0[d] + 1 < lo[d] + size[d];
+        if (interior)
+          {
+            const std::size_t f0 = flat(i0);
+            double            v  = 0;
+            for (unsigned int c = 0; c < (1u << dim); ++c)
+              {
+                std::size_t ff = f0;
+                double      w  = 1;
+                for (int d = 0; d < dim; ++d)
+                  {
+                    const bool up = c & (1u << d);
+                    ff += up ? stride[d] : 0;
+                    w *= up ? f[d] : 1 - f[d];
+                  }
+                if (w != 0)
+                  v += w * a[ff];
+              }
+            return v;
+          }
         double v = 0;
         for (unsigned int c = 0; c < (1u << dim); ++c)
           {
@@ -285,6 +318,14 @@ namespace femp
           if ((ijk[d] == lo[d] && lo[d] > 0) ||
               (ijk[d] == lo[d] + size[d] - 1 && ijk[d] < n[d] - 1))
             return false;
+        const std::size_t fi = flat(ijk);
+        if (surface[fi] < 0)
+          surface[fi] = compute_surface_cell(ijk);
+        return surface[fi] > 0;
+      }
+      bool
+      compute_surface_cell(const std::array<int, dim> &ijk) const
+      {
         if (a[flat(ijk)] <= 0)
           return false;
         double g2 = 0;
@@ -351,9 +392,10 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         c[d] =
           std::clamp(int(std::floor((q[d] - w.origin[d]) / h)), 0, w.n[d] - 1);
-      long   best    = -1;
-      double best_d2 = std::numeric_limits<double>::max();
-      for (unsigned int o = 0; o < std::pow(3u, dim); ++o)
+      long                   best    = -1;
+      double                 best_d2 = std::numeric_limits<double>::max();
+      constexpr unsigned int n_round = dim == 3 ? 27 : 9;
+      for (unsigned int o = 0; o < n_round; ++o)
         {
           auto         ijk = c;
           unsigned int oo  = o;
