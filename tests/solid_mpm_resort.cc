@@ -1,4 +1,4 @@
-// Solid MPM with points that cross cells and ranks (doc/solid.md, "Cell
+// Solid MPM with points that cross cells and ranks (doc/solid_implementation.md, "Cell
 // crossing"): a 2D block of material points (2 x 2 per cell, no finite
 // elements) given a uniform velocity (1, 0.4) m/s, no forces, free faces, moves
 // rigidly by 2.5 cells in x and 1 cell in y (no point ends on a cell face) over
