@@ -12,18 +12,27 @@
     p.positions, p["temperature"]
 
 Needs Python 3 and numpy (Debian: python3-numpy); h5py (python3-h5py) only
-for runs written with Output/Format = hdf5. SI units throughout, as in the
+for runs written with Output/Format = hdf5. Without numpy the CSV files,
+the parameter files and the printed lines still load (the scripts of the
+default test suite rely on that): a column is then a Column, a list of
+floats or strings with numpy's tolist(); the field outputs need numpy. SI units throughout, as in the
 files (doc/output.md lists the fields and their units). What it reads:
 
   melt_pool.csv             Run.melt_pool()     the time series of the pool
   probe_points.csv          Run.probe_points()  the probe points' series
   absorption.csv            Run.absorption()    ray-traced laser series
+  solid_energy.csv          Run.solid_energy()  the solid's energy accounts
+  solid_probes.csv          Run.solid_probes()  the solid's probe points
+  parameters.prm            Run.parameters(), Run.parameter(name)
   probe_line_<L>_<n>.csv    Run.probe_line(L, n), Run.probe_line_names()
   track_shape_<n>.csv       Run.track_shape(n)
   track_bead.csv            Run.track_bead()
   porosity.csv, pores.csv   Run.porosity(), Run.pores(n)  builds: pores
   tracks.csv, layers.csv    Run.tracks(), Run.layers()    builds: per track
   any other femp CSV        read_csv(path)
+  a scene or parameter file read_parameters(path): "Section/Name" -> text
+  femp's printed lines      read_printed(log, pattern): the numbers of the
+                            lines of a log or test output that match
   grid.pvd / grid.xdmf      Run.outputs(): [(n, time)] of the field outputs
   grid_<n>.pvtu (VTU), grid_mesh*.h5 + grid_<n>.h5 (HDF5)   Run.grid(n)
   points_<n>.pvtu, points_<n>.h5                             Run.points(n)
@@ -31,6 +40,13 @@ files (doc/output.md lists the fields and their units). What it reads:
 Every table is a Table: a dict of column name -> 1D float array, with
 .time (the '# time = ... s' line of the file, else None) and .header (its
 '#' lines). n = None means the last output; n < 0 counts from the end.
+
+What femp prints (the progress lines, the end report, a test program's
+checks) is read by a regular expression, one row per matching line:
+
+    steps = femp_post.read_printed("run.log",
+        r"^t =\s*(?P<t>\S+) s\s+step.*wall\s+(?P<wall>\S+) s")
+    steps["t"], steps["wall"], steps.lines   # floats; line numbers
 """
 import base64
 import glob
@@ -40,7 +56,34 @@ import struct
 import xml.etree.ElementTree as ET
 import zlib
 
-import numpy as np
+try:
+    import numpy as np
+except ImportError:  # CSV, parameters and printed lines work without it
+    np = None
+
+
+class Column(list):
+    """A column of a Table when numpy is missing: a list (a slice is a
+    Column too) with numpy's tolist()."""
+
+    def tolist(self):
+        return list(self)
+
+    def __getitem__(self, i):
+        item = list.__getitem__(self, i)
+        return Column(item) if isinstance(i, slice) else item
+
+
+def _array(values, dtype=None):
+    if np is None:
+        return Column(values)
+    return np.array(values, dtype=dtype) if dtype else np.array(values)
+
+
+def _need_numpy(what):
+    if np is None:
+        raise ImportError("femp_post: %s needs numpy (Debian: python3-numpy)"
+                          % what)
 
 
 class Table(dict):
@@ -58,6 +101,74 @@ class Table(dict):
         return len(self)
 
 
+def _columns(names, rows):
+    """name -> float array where every value is a number, else strings."""
+    cols = {}
+    for i, name in enumerate(names):
+        values = [r[i] for r in rows]
+        try:
+            cols[name] = _array([float(v) for v in values])
+        except (TypeError, ValueError):
+            cols[name] = _array(values)
+    return cols
+
+
+def read_printed(source, pattern):
+    """The numbers of femp's printed lines: every line of source (a file
+    name, a text with line breaks, or a sequence of lines) that the
+    regular expression pattern matches (re.search; anchor it with '^'
+    where the line must start with it) gives one row. The columns are the
+    pattern's named groups, or "1", "2", ... for its groups when it names
+    none; a column whose values are all numbers is a float array, else an
+    array of strings (a group that did not take part: ""). The Table's
+    .lines holds the 0-based number of each row's line in the source, so
+    rows of several patterns can be put back in their order."""
+    if isinstance(source, str) and "\n" not in source:
+        with open(source) as f:
+            lines = f.read().split("\n")
+    elif isinstance(source, str):
+        lines = source.split("\n")
+    else:
+        lines = [l.rstrip("\n") for l in source]
+    regex = re.compile(pattern)
+    named = sorted(regex.groupindex.items(), key=lambda kv: kv[1])
+    names = [k for k, _ in named] or [str(i + 1)
+                                      for i in range(regex.groups)]
+    index = [i for _, i in named] or list(range(1, regex.groups + 1))
+    rows, where = [], []
+    for k, line in enumerate(lines):
+        m = regex.search(line)
+        if m:
+            rows.append([m.group(i) if m.group(i) is not None else ""
+                         for i in index])
+            where.append(k)
+    t = Table(_columns(names, rows))
+    t.lines = _array(where, int)
+    return t
+
+
+def read_parameters(path):
+    """A parameter file (a scene, or the parameters.prm femp writes into
+    its output directory): "Section/Subsection/Name" -> the value's text,
+    comments and surrounding blanks removed. An entry set twice keeps the
+    last value; 'include' lines are not followed."""
+    values, section = {}, []
+    with open(path) as f:
+        for line in f:
+            s = line.split("#")[0].strip()
+            if s.startswith("subsection "):
+                section.append(s[len("subsection "):].strip())
+            elif s == "end":
+                if section:
+                    section.pop()
+            else:
+                m = re.match(r"set\s+(.*?)\s*=\s*(.*)$", s)
+                if m:
+                    values["/".join(section + [m.group(1)])] = \
+                        m.group(2).strip()
+    return values
+
+
 def read_csv(path):
     """A femp CSV file: '#' comment lines, a header row, numeric rows.
     Non-numeric columns (e.g. 'section' of track_shape) stay strings."""
@@ -71,14 +182,7 @@ def read_csv(path):
     if not rows:
         raise ValueError("femp_post: %s has no header row" % path)
     names = [h.strip() for h in rows[0]]
-    body = rows[1:]
-    cols = {}
-    for i, name in enumerate(names):
-        values = [r[i].strip() for r in body]
-        try:
-            cols[name] = np.array([float(v) for v in values])
-        except ValueError:
-            cols[name] = np.array(values)
+    cols = _columns(names, [[v.strip() for v in r] for r in rows[1:]])
     time = None
     for h in header:
         m = re.match(r"time\s*=\s*([-+0-9.eE]+)", h)
@@ -132,6 +236,7 @@ def _decode_vtu_array(text, vtype, compressed, h="I"):
 def read_vtu(path):
     """Points (N x 3), point-data arrays (name -> array, N or N x k), and
     the cell offsets of one VTU piece."""
+    _need_numpy("reading a VTU file")
     text = open(path).read()
     compressed = "vtkZLibDataCompressor" in text[:400]
     h = "Q" if 'header_type="UInt64"' in text[:400] else "I"
@@ -202,6 +307,37 @@ class Run:
     def track_bead(self):
         return read_csv(self.path("track_bead.csv"))
 
+    # the solid (Physics/Solid stress)
+    def solid_energy(self, name="solid_energy.csv"):
+        """Solid/Energy file: per solid step (or Solid/Row interval) the
+        time, the works and energies (J) and the booked exchanges, the
+        balance, mass_scaling and kinetic_to_elastic (doc/solid.md,
+        "Energies and mass scaling")."""
+        return read_csv(self.path(name))
+
+    def solid_probes(self, name="solid_probes.csv"):
+        """Solid/Probe file: sigma_xx and T at the Solid/Probe points."""
+        return read_csv(self.path(name))
+
+    # the parameters the run was made with
+    def parameters(self):
+        """parameters.prm of the output directory (every entry femp read,
+        with its value): "Section/Name" -> text."""
+        return read_parameters(self.path("parameters.prm"))
+
+    def parameter(self, name):
+        """The text of one entry of parameters.prm: name is the full
+        "Section/Name", or the entry's name alone, which takes the first
+        entry of that name in the file's order."""
+        values = self.parameters()
+        if name in values:
+            return values[name]
+        for key, value in values.items():
+            if key.rsplit("/", 1)[-1] == name:
+                return value
+        raise KeyError("femp_post: no entry '%s' in %s"
+                       % (name, self.path("parameters.prm")))
+
     # Builds (doc/builds.md)
     def porosity(self):
         """porosity.csv: per field output the pores' count, gas and powder
@@ -218,8 +354,9 @@ class Run:
         outputs = sorted(set(int(x) for x in t["output"]))
         if n < 0:
             n = outputs[n] if -n <= len(outputs) else -1
-        keep = t["output"] == n
-        return Table({k: v[keep] for k, v in t.items()}, t.header, t.time)
+        keep = [int(x) == n for x in t["output"]]
+        return Table({k: _array([x for x, y in zip(v.tolist(), keep) if y])
+                      for k, v in t.items()}, t.header, t.time)
 
     def tracks(self):
         """tracks.csv: per measured track its layer, times, bead height,
@@ -327,6 +464,7 @@ class Run:
 
     def grid(self, n=None):
         """Grid output n: Fields with one value per cell and .centres."""
+        _need_numpy("the grid output")
         numbers = [m for m, _ in self.outputs("grid")]
         n = self._pick(numbers, n, "grid output")
         if self.format == "hdf5":
@@ -366,6 +504,7 @@ class Run:
     def points(self, n=None):
         """Points output n (where written): Fields with one value per
         point and .positions (N x dim)."""
+        _need_numpy("the points output")
         numbers = [m for m, _ in self.outputs("points")]
         n = self._pick(numbers, n, "points output")
         if self.format == "hdf5":
