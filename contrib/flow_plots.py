@@ -11,7 +11,9 @@ measure S/S0 over t/T, T the analytic period of the 2D mode-2 oscillation);
 the plot shows them with the analytic exp(-gamma t) cos(2 pi t/T).
 
 Each dam-break output is labelled with its file name, or with LABEL when
-given as PATH:LABEL. The band around the experiment is the 10 % target."""
+given as PATH:LABEL. The band around the experiment is the 10 % target.
+The printed lines and the series are read by contrib/femp_post.py."""
+import os
 import re
 import sys
 
@@ -20,26 +22,33 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
+
+
+def _rows(table, *columns):
+    return list(zip(*(table[c].tolist() for c in columns)))
+
 
 def parse_dam_break(path):
-    front, height = [], []
-    for line in open(path):
-        m = re.match(r"front Z at T = ([\d.]+) \(experiment ([\d.]+)\) = ([\d.]+)", line)
-        if m:
-            front.append(tuple(float(g) for g in m.groups()))
-        m = re.match(r"height H at t sqrt\(g/a\) = ([\d.]+) \(experiment ([\d.]+)\) = ([\d.]+)", line)
-        if m:
-            height.append(tuple(float(g) for g in m.groups()))
-    return front, height
+    """(T, experiment, femp) of the front and of the column height, from
+    the dam-break test's printed lines."""
+    front = femp_post.read_printed(
+        path, r"^front Z at T = (?P<T>[\d.]+) \(experiment (?P<exp>[\d.]+)\) "
+        r"= (?P<femp>[\d.]+)")
+    height = femp_post.read_printed(
+        path, r"^height H at t sqrt\(g/a\) = (?P<T>[\d.]+) \(experiment "
+        r"(?P<exp>[\d.]+)\) = (?P<femp>[\d.]+)")
+    return (_rows(front, "T", "exp", "femp"),
+            _rows(height, "T", "exp", "femp"))
 
 
 def parse_cavity(path):
-    rows = []
-    for line in open(path):
-        m = re.match(r"u/U_s at zeta = ([\d.]+) \(analytic ([-\d.]+)\) = ([-\d.]+)", line)
-        if m:
-            rows.append(tuple(float(g) for g in m.groups()))
-    return rows
+    """(zeta, analytic, femp) of the return-flow profile."""
+    t = femp_post.read_printed(
+        path, r"^u/U_s at zeta = (?P<zeta>[\d.]+) \(analytic (?P<exact>[-\d.]+)\) "
+        r"= (?P<femp>[-\d.]+)")
+    return _rows(t, "zeta", "exact", "femp")
 
 
 def plot_droplet(outdir, paths):
@@ -48,7 +57,8 @@ def plot_droplet(outdir, paths):
     fig, ax = plt.subplots(figsize=(7, 4))
     gamma_T = None
     for path in paths:
-        header = open(path).readline()
+        d = femp_post.read_csv(path)
+        header = d.header[0] if d.header else ""
         m = re.search(r"R/h = ([\d.]+), capillary step fraction ([\d.]+).*gamma T = ([\d.eE+-]+)", header)
         label = "femp R = %s h, step %s x capillary limit" % (m.group(1), m.group(2)) if m else path
         k = re.search(r"point shifting ([\d.]+), curvature smoothing (\d+)", header)
@@ -56,8 +66,7 @@ def plot_droplet(outdir, paths):
             label += ", A = %s, %s smoothing passes" % (k.group(1), k.group(2))
         if m:
             gamma_T = float(m.group(3))
-        d = np.loadtxt(path, delimiter=",", skiprows=2)
-        ax.plot(d[:, 0], d[:, 1], "-", label=label)
+        ax.plot(d["t/T_exact"], d["S/S0"], "-", label=label)
     t = np.linspace(0, 1.5, 301)
     g = gamma_T if gamma_T is not None else 0.0
     ax.plot(t, np.exp(-g * t) * np.cos(2 * np.pi * t), "k:", label="analytic, 2D mode 2 (damped)")

@@ -9,8 +9,9 @@ Writes danilovskaya_history.png (sigma_x and T at probe A, the paper's
 Fig. 5: closed form, all-MPM (APIC, the default, and FLIP), FEMP, all-FE) and danilovskaya_profile.png
 (spatial profiles at t = 1, the paper's Fig. 6). Quantities are
 nondimensional: S = sigma_x / (beta T0), theta = (T - T_ref) / T0.
+The CSV files are read by contrib/femp_post.py.
 """
-import csv
+import os
 import sys
 
 import matplotlib
@@ -18,11 +19,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
+
 
 def read(name):
-    with open(name) as f:
-        rows = list(csv.DictReader(f))
-    return {k: [float(r[k]) for r in rows] for k in rows[0]}
+    return femp_post.read_csv(name)
 
 
 def main():

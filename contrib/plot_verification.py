@@ -8,9 +8,9 @@ simulation against the closed forms:
   doc/img/rosenthal.png  melt-pool isotherm vs Eagar-Tsai (surface, side)
 
 Usage: /usr/bin/python3 contrib/plot_verification.py [build-dir]
-Needs Debian's python3-matplotlib and python3-numpy.
+Needs Debian's python3-matplotlib and python3-numpy; the CSV files are read
+by contrib/femp_post.py.
 """
-import csv
 import os
 import subprocess
 import sys
@@ -22,16 +22,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(root, "contrib"))
+import femp_post  # noqa: E402
+
 build = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "build"))
 out_dir = os.path.join(root, "doc", "img")
 os.makedirs(out_dir, exist_ok=True)
 
 
 def read(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) if k != "plane" else r[k] for r in rows])
-            for k in rows[0]}
+    return femp_post.read_csv(path)
 
 
 def run(test, *args):
