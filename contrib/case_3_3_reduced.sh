@@ -20,7 +20,7 @@
 #   FIGURE_DIR/case_3_3_reduced_power.svg  T and sigma_xx on CD at 40 us
 #       for the three powers (the paper's Figs 9-10);
 # and prints the table of pool size, bead size and peak stresses against
-# the power (doc/cases.md). MPIRUN overrides the MPI launcher (default:
+# the power (doc/cases.md; the files read by contrib/femp_post.py, numpy). MPIRUN overrides the MPI launcher (default:
 # mpirun; e.g. MPIRUN="mpirun --allow-run-as-root --oversubscribe");
 # NO_RUN=1 only redraws the figures and the table from existing output.
 # On a machine shared with other jobs, 1 rank can be much faster than 2
@@ -55,12 +55,11 @@ python3 contrib/plot_track_svg.py --compare "$FIG/case_3_2_reduced_femp_vs_mpm.s
 python3 contrib/plot_track_svg.py --compare "$FIG/case_3_3_reduced_power.svg" --n 2 \
   "$ROOT/50W=50 W" "$ROOT/100W=100 W" "$ROOT/200W=200 W" CD:T CD:sigma_xx
 
-python3 - "$ROOT" <<'PY'
-import csv, sys
+python3 - "$ROOT" "$(dirname "$0")" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[2])
+import femp_post  # the run's files as arrays (contrib/femp_post.py)
 root = sys.argv[1]
-def rows(path):
-    lines = [l for l in open(path) if not l.startswith("#")]
-    return list(csv.DictReader(lines))
 print("| power | pool L x W x D at 40 us (um) | largest pool L x W x D (um) "
       "| fusion zone in the substrate, largest W x D (um) "
       "| bead at 150 us: cross-section W x H, centre line L x H (um) "
@@ -68,26 +67,28 @@ print("| power | pool L x W x D at 40 us (um) | largest pool L x W x D (um) "
       "| CD at 150 us: sigma_xx min / max, von Mises max (MPa) |")
 print("|---|---|---|---|---|---|---|")
 for p in (50, 100, 200):
-    d = "%s/%dW" % (root, p)
-    pool = rows(d + "/melt_pool.csv")
-    at = min(pool, key=lambda r: abs(float(r["time"]) - 4e-5))
-    um = lambda r, k: float(r[k]) * 1e6
-    big = {k: max(um(r, k) for r in pool) for k in
-           ("length", "width", "depth", "width_solidus_substrate", "depth_solidus_substrate")}
-    beads = rows(d + "/track_bead.csv")
-    bead = beads[-1]
-    wk = [k for k in bead if k.startswith("width_")][0]
+    run = femp_post.Run("%s/%dW" % (root, p))
+    pool = run.melt_pool()
+    times = pool["time"].tolist()
+    i_at = min(range(len(times)), key=lambda i: abs(times[i] - 4e-5))
+    um = {k: [v * 1e6 for v in pool[k].tolist()] for k in
+          ("length", "width", "depth", "width_solidus_substrate", "depth_solidus_substrate")}
+    at = {k: v[i_at] for k, v in um.items()}
+    big = {k: max(v) for k, v in um.items()}
+    beads = run.track_bead()
+    bead = {k: v.tolist()[-1] * 1e6 for k, v in beads.items()}
+    wk = [k for k in beads if k.startswith("width_")][0]
     hk = "height_" + wk[len("width_"):]
-    cd = rows(d + "/probe_line_CD_00002.csv")
-    end = rows(d + "/probe_line_CD_%05d.csv" % (len(beads) - 1))
-    MPa = lambda rs, k: [float(r[k]) * 1e-6 for r in rs]
+    cd = run.probe_line("CD", 2)
+    end = run.probe_line("CD", len(beads["time"]) - 1)
+    MPa = lambda t, k: [v * 1e-6 for v in t[k].tolist()]
     print("| %d W | %.0f x %.0f x %.0f | %.0f x %.0f x %.0f | %.0f x %.0f | %.0f x %.0f, %.0f x %.0f "
           "| %.0f, %.0f, %.0f, %.1f %% | %.0f / %.0f, %.0f |"
-          % (p, um(at, "length"), um(at, "width"), um(at, "depth"),
+          % (p, at["length"], at["width"], at["depth"],
              big["length"], big["width"], big["depth"],
              big["width_solidus_substrate"], big["depth_solidus_substrate"],
-             um(bead, wk), um(bead, hk), um(bead, "centre_length"), um(bead, "centre_height"),
-             max(float(r["T"]) for r in cd), max(MPa(cd, "sigma_xx"), key=abs),
-             max(MPa(cd, "von_mises")), 100 * max(float(r["plastic_strain"]) for r in cd),
+             bead[wk], bead[hk], bead["centre_length"], bead["centre_height"],
+             max(cd["T"].tolist()), max(MPa(cd, "sigma_xx"), key=abs),
+             max(MPa(cd, "von_mises")), 100 * max(cd["plastic_strain"].tolist()),
              min(MPa(end, "sigma_xx")), max(MPa(end, "sigma_xx")), max(MPa(end, "von_mises"))))
 PY
