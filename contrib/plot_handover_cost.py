@@ -13,33 +13,39 @@ line); the wall time of a layer is the difference of the wall times of
 the progress lines nearest to its start and its end (interpolated
 linearly in the simulated time). Prints a table (layer, start, end, wall
 per run, the FE zone's top after each hand-over) and draws the wall time
-per layer of each run against the layer (SVG, matplotlib).
+per layer of each run against the layer (SVG, matplotlib). The logs are
+read by contrib/femp_post.py (read_printed).
 """
-import re
+import os
 import sys
 
-PROGRESS = re.compile(r"^t =\s*([0-9.eE+-]+) s\s+step.*wall\s+([0-9.eE+-]+) s")
-RECOAT = re.compile(r"^Recoat: layer (\d+) at t = ([0-9.eE+-]+) s")
-RAISE = re.compile(r"the zone's top rises from ([0-9.eE+-]+) to ([0-9.eE+-]+) m: "
-                   r"(\d+) elements, (\d+) points")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import femp_post  # noqa: E402
+
+PROGRESS = r"^t =\s*(?P<t>[0-9.eE+-]+) s\s+step.*wall\s+(?P<wall>[0-9.eE+-]+) s"
+RECOAT = r"^Recoat: layer (?P<layer>\d+) at t = (?P<t>[0-9.eE+-]+) s"
+RAISE = (r"the zone's top rises from (?P<from>[0-9.eE+-]+) to (?P<to>[0-9.eE+-]+) m: "
+         r"(?P<elements>\d+) elements, (?P<points>\d+) points")
 
 
 def read(log):
-    progress, starts, raises = [], [0.0], {}
+    """The progress lines (t, wall), the layers' start times (layer 1 at
+    0) and the hand-overs by layer: {layer: (new top, elements, points)}."""
     with open(log) as f:
-        for line in f:
-            m = PROGRESS.search(line)
-            if m:
-                progress.append((float(m.group(1)), float(m.group(2))))
-                continue
-            m = RECOAT.search(line)
-            if m:
-                starts.append(float(m.group(2)))
-                continue
-            m = RAISE.search(line)
-            if m:
-                raises[len(starts)] = (float(m.group(2)), int(m.group(3)),
-                                       int(m.group(4)))
+        lines = f.read().split("\n")
+    p = femp_post.read_printed(lines, PROGRESS)
+    r = femp_post.read_printed(lines, RECOAT)
+    h = femp_post.read_printed(lines, RAISE)
+    progress = list(zip(p["t"].tolist(), p["wall"].tolist()))
+    starts = [0.0] + r["t"].tolist()
+    taken = set(p.lines.tolist()) | set(r.lines.tolist())
+    raises = {}
+    for k, line in enumerate(h.lines.tolist()):
+        if line in taken:
+            continue
+        layer = 1 + sum(1 for x in r.lines.tolist() if x < line)
+        raises[layer] = (float(h["to"][k]), int(h["elements"][k]),
+                         int(h["points"][k]))
     return progress, starts, raises
 
 

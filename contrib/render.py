@@ -444,19 +444,22 @@ def draw(run, kind, t, view, args, rng):
 
 def largest_pore_x(run, t):
     """x of the centroid of the largest pore of the output at time t
-    (pores.csv of the run); None without pores."""
-    import csv
+    (pores.csv of the run, read by contrib/femp_post.py); None without
+    pores."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import femp_post
     name = os.path.join(run.dir, "pores.csv")
     if not os.path.exists(name):
         return None
+    pores = femp_post.read_csv(name)
     best = None
-    with open(name) as f:
-        for row in csv.DictReader(f):
-            if builtins.abs(float(row["time"]) - t) > 1e-3 * builtins.max(t, 1e-12):
-                continue
-            if best is None or float(row["volume"]) > float(best["volume"]):
-                best = row
-    return float(best["x"]) if best else None
+    for time, volume, x in zip(pores["time"].tolist(),
+                               pores["volume"].tolist(), pores["x"].tolist()):
+        if builtins.abs(time - t) > 1e-3 * builtins.max(t, 1e-12):
+            continue
+        if best is None or volume > best[0]:
+            best = (volume, x)
+    return best[1] if best else None
 
 
 def draw_pores(run, t, view, args):

@@ -28,11 +28,10 @@ prm/, contrib/ and doc/ and a link build -> BUILD, so the page's commands
 read as they would from the repository root. Open MPI is allowed, through
 its environment, to oversubscribe the cores and to run as root, as the
 tests do; 'python3' becomes this interpreter (it needs numpy for
-contrib/femp_post.py).
+contrib/femp_post.py, which also reads the CSV files of the checks).
 Exit status 0 when every block ran and every check passed.
 """
 import argparse
-import csv
 import filecmp
 import glob
 import os
@@ -43,6 +42,8 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "contrib"))
+import femp_post  # noqa: E402
 
 
 def parse(page):
@@ -111,16 +112,12 @@ def reduce(values, how):
 
 
 def read_column(path, column):
-    rows = [l for l in open(path, encoding="utf-8") if not l.startswith("#")]
-    reader = csv.DictReader(rows)
-    names = [n.strip() for n in reader.fieldnames]
-    values = []
-    for row in reader:
-        row = {k.strip(): v for k, v in row.items()}
-        if column not in row:
-            raise SystemExit("%s has no column '%s' (it has %s)"
-                             % (path, column, ", ".join(names)))
-        values.append(float(row[column]))
+    """The values of one column of a femp CSV file (femp_post.read_csv)."""
+    table = femp_post.read_csv(path)
+    if column not in table:
+        raise SystemExit("%s has no column '%s' (it has %s)"
+                         % (path, column, ", ".join(table)))
+    values = [float(v) for v in table[column].tolist()]
     if not values:
         raise SystemExit("%s has no rows" % path)
     return values
