@@ -7,7 +7,8 @@ directory per point of the sweep, and skips runs whose result.json exists
 CPU seconds of every run (user + system of the run and its children, from
 the operating system) and an error against a named reference, writes a CSV
 and an error-versus-cost plot (log-log, Pareto front marked) as SVG, drawn
-with the standard library only (matplotlib is not needed).
+with the standard library (matplotlib is not needed). The runs' files are
+read by contrib/femp_post.py (numpy).
 
   contrib/study.py stefan       [--build build] [--out study] [--img doc/img]
   contrib/study.py mass_scaling [--build build] [--out study] [--img doc/img]
@@ -79,6 +80,8 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "contrib"))
+import femp_post  # noqa: E402
 
 
 # ---------------------------------------------------------------- runs
@@ -140,9 +143,41 @@ def set_parameters(text, values):
     return "\n".join(out)
 
 
-def read_csv(path):
-    with open(path) as fh:
-        return list(csv.DictReader(fh))
+def column_max(table, key):
+    """The largest value of a column of a femp_post Table."""
+    return max(table[key].tolist())
+
+
+def stefan_profile_error(d):
+    """The largest |T_sim - T_exact| of stefan_profile.csv in d."""
+    prof = femp_post.read_csv(os.path.join(d, "stefan_profile.csv"))
+    return max(abs(a - b) for a, b in zip(prof["T_sim"].tolist(),
+                                          prof["T_exact"].tolist()))
+
+
+def solid_run_figures(out):
+    """The last probe row and the energy accounts of a solid run's output
+    directory (Solid/Probe file, Solid/Energy file), as a dict."""
+    run = femp_post.Run(out)
+    probes = run.solid_probes()
+    r = {"sxx": [float(v[-1]) for k, v in probes.items()
+                 if k.startswith("sigma_xx")],
+         "probe_time": float(next(iter(probes.values()))[-1])}
+    e = run.solid_energy()
+    late = len(e) // 10
+    r["stress_work"] = float(e["internal_work"][-1])
+    r["transfer"] = float(e["transfer_dissipation"][-1])
+    r["remap"] = float(e["remap_work"][-1])
+    r["max_k_over_i"] = max(e["kinetic_to_internal"][late:].tolist())
+    r["solid_steps"] = int(e["step"][-1])
+    r["balance"] = float(e["balance"][-1])
+    if "mass_scaling" in e:
+        s = e["mass_scaling"].tolist()
+        r["s_min"], r["s_max"] = min(s), max(s)
+        r["s_end"] = s[-1]
+        r["k_jump"] = float(e["mass_scaling_kinetic_jump"][-1])
+        r["max_k_over_el"] = max(e["kinetic_to_elastic"][late:].tolist())
+    return r
 
 
 # ---------------------------------------------------------------- output
@@ -268,9 +303,7 @@ def study_stefan(args):
             # T_m - 1 K at x = 3 where the half-space solution is 0.06 K
             # warmer).
             try:
-                prof = read_csv(os.path.join(d, "stefan_profile.csv"))
-                r["profile_error"] = max(
-                    abs(float(p["T_sim"]) - float(p["T_exact"])) for p in prof)
+                r["profile_error"] = stefan_profile_error(d)
             except (OSError, ValueError):
                 r["profile_error"] = None
             r.update(h=h, step_fraction=c, label="h=%g,C=%g" % (h, c))
@@ -357,10 +390,10 @@ def study_physics(args):
             r.update(run_log_figures(text))
             m = re.search(r"Solid: ([0-9]+) steps of", text)
             r["solid_steps"] = int(m.group(1)) if m else None
-            pool = read_csv(os.path.join(d, "melt_pool.csv"))
+            pool = femp_post.Run(d).melt_pool()
             for k in ("length", "width", "depth", "T_max",
                       "depth_solidus_substrate", "width_solidus_substrate"):
-                r["max_" + k] = max(float(p[k]) for p in pool)
+                r["max_" + k] = column_max(pool, k)
             return r
         d = os.path.join(args.out, "physics", name)
         r = cached(d, make)
@@ -431,20 +464,26 @@ def study_droplet(args):
 
 
 def run_log_figures(text):
-    """Figures of a femp run's final report (log.txt): temperature steps,
-    fluid steps, sub-steps per temperature step, energies."""
+    """Figures of a femp run's final report (log.txt), by
+    femp_post.read_printed: temperature steps, fluid steps, sub-steps per
+    temperature step, energies."""
+    lines = text.split("\n")
+
+    def printed(pattern):
+        return femp_post.read_printed(lines, pattern)
+
     r = {}
-    m = re.findall(r"step +([0-9]+) +dt =", text)
-    r["steps"] = int(m[-1]) if m else None
-    m = re.search(r"Melt flow: ([0-9]+) fluid steps", text)
-    r["fluid_steps"] = int(m.group(1)) if m else None
-    m = re.search(r"sub-steps per temperature step ([0-9]+) to ([0-9]+)", text)
-    r["substeps"] = "%s-%s" % m.groups() if m else ""
-    m = re.search(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
-                  r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)", text)
-    if m:
-        r.update(laser_J=float(m.group(1)), losses_J=float(m.group(2)),
-                 evaporation_J=float(m.group(3)))
+    m = printed(r"step +([0-9]+) +dt =")
+    r["steps"] = int(m["1"][-1]) if len(m) else None
+    m = printed(r"Melt flow: ([0-9]+) fluid steps")
+    r["fluid_steps"] = int(m["1"][0]) if len(m) else None
+    m = printed(r"sub-steps per temperature step ([0-9]+) to ([0-9]+)")
+    r["substeps"] = ("%d-%d" % (m["1"][0], m["2"][0])) if len(m) else ""
+    m = printed(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
+                r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)")
+    if len(m):
+        r.update(laser_J=float(m["1"][0]), losses_J=float(m["2"][0]),
+                 evaporation_J=float(m["3"][0]))
     return r
 
 
@@ -486,10 +525,10 @@ def track_run(args, exe, scene, d, h, dt, extra):
     r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
     r.update(run_log_figures(open(os.path.join(d, "log.txt")).read()))
     try:
-        pool = read_csv(os.path.join(d, "melt_pool.csv"))
+        pool = femp_post.Run(d).melt_pool()
         for k in ("depth_solidus_substrate", "width_solidus_substrate",
                   "T_max", "depth", "width", "length"):
-            r["max_" + k] = max(float(p[k]) for p in pool)
+            r["max_" + k] = column_max(pool, k)
     except (OSError, ValueError, KeyError) as ex:
         r["read_error"] = str(ex)
     return r
@@ -773,27 +812,9 @@ def study_mass_scaling(args):
             rc, cpu, wall = run_timed(cmd, d, os.path.join(d, "log.txt"))
             r = {"rc": rc, "cpu_s": cpu, "wall_s": wall}
             try:
-                probes = read_csv(os.path.join(d, "out", "solid_probes.csv"))
-                last = probes[-1]
-                r["sxx"] = [float(last[k]) for k in last
-                            if k.startswith("sigma_xx")]
-                r["probe_time"] = float(last[next(iter(last))])
-                e = read_csv(os.path.join(d, "out", "solid_energy.csv"))
-                r["stress_work"] = float(e[-1]["internal_work"])
-                r["transfer"] = float(e[-1]["transfer_dissipation"])
-                r["remap"] = float(e[-1]["remap_work"])
-                r["max_k_over_i"] = max(float(x["kinetic_to_internal"])
-                                        for x in e[len(e) // 10:])
-                r["solid_steps"] = int(e[-1]["step"])
-                r["balance"] = float(e[-1]["balance"])
-                if "mass_scaling" in e[-1]:
-                    s = [float(x["mass_scaling"]) for x in e]
-                    r["s_min"], r["s_max"] = min(s), max(s)
-                    r["s_end"] = s[-1]
-                    r["k_jump"] = float(e[-1]["mass_scaling_kinetic_jump"])
-                    r["max_k_over_el"] = max(
-                        float(x["kinetic_to_elastic"]) for x in e[len(e) // 10:])
-            except (OSError, StopIteration, KeyError, IndexError) as ex:
+                r.update(solid_run_figures(os.path.join(d, "out")))
+            except (OSError, ValueError, StopIteration, KeyError,
+                    IndexError) as ex:
                 r["read_error"] = str(ex)
             return r
         name = "f%g" % f if r_max is None else "adaptive_r%g" % r_max
@@ -828,9 +849,8 @@ def probe_line_differences(run_out, ref_out, lines=("CD", "EF", "cross"),
     """Largest |field(run) - field(ref)| / max |field(ref)| per probe line
     and field output of equal time (>= t_min), as {line: [(t, d)]}."""
     def load(path):
-        with open(path) as fh:
-            t = float(fh.readline().split("=")[1].split()[0])
-            return t, list(csv.DictReader(fh))
+        t = femp_post.read_csv(path)
+        return t.time, t[field].tolist()
     out = {}
     for ln in lines:
         for p in sorted(os.listdir(ref_out)):
@@ -843,8 +863,8 @@ def probe_line_differences(run_out, ref_out, lines=("CD", "EF", "cross"),
             t1, b = load(q)
             if t0 < t_min or abs(t0 - t1) > 1e-9 or len(a) != len(b):
                 continue
-            peak = max(abs(float(r[field])) for r in a)
-            d = max(abs(float(r[field]) - float(s[field])) for r, s in zip(a, b))
+            peak = max(abs(v) for v in a)
+            d = max(abs(v - w) for v, w in zip(a, b))
             out.setdefault(ln, []).append((t0, d / peak if peak > 0 else 0.))
     return out
 

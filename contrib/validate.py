@@ -84,6 +84,9 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "contrib"))
+import femp_post  # noqa: E402  (CSV series and logs; numpy for fields)
+
 DATA = os.path.join(ROOT, "prm", "validation", "data")
 SCENES = os.path.join(ROOT, "prm", "validation")
 
@@ -630,17 +633,20 @@ def spot_onsets(out):
     times the absorbed fraction (absorption.csv) first reaches 0.35, 0.45
     and 0.6 (the flat surface absorbs the Fresnel value, about 0.3 for
     316L; the rise is the depression's multiple reflections)."""
-    a = read_csv(os.path.join(out, "absorption.csv"))
-    m = read_csv(os.path.join(out, "melt_pool.csv"))
-    r = {"t_melt": next((float(x["time"]) for x in m
-                         if float(x["T_max"]) >= material("316L")["Ts"]), None),
-         "t_end": float(a[-1]["time"]),
-         "absorbed_end": float(a[-1]["absorbed_fraction"]),
-         "hits_end": float(a[-1]["hits_per_ray"]),
-         "depth_end": float(m[-1]["depth"])}
+    run = femp_post.Run(out)
+    a = {k: v.tolist() for k, v in run.absorption().items()}
+    m = {k: v.tolist() for k, v in run.melt_pool().items()}
+    Ts = material("316L")["Ts"]
+    r = {"t_melt": next((t for t, T in zip(m["time"], m["T_max"])
+                         if T >= Ts), None),
+         "t_end": a["time"][-1],
+         "absorbed_end": a["absorbed_fraction"][-1],
+         "hits_end": a["hits_per_ray"][-1],
+         "depth_end": m["depth"][-1]}
     for th in (0.35, 0.45, 0.6):
-        r["t_%.2f" % th] = next((float(x["time"]) for x in a
-                                 if float(x["absorbed_fraction"]) >= th), None)
+        r["t_%.2f" % th] = next((t for t, f in zip(a["time"],
+                                                    a["absorbed_fraction"])
+                                 if f >= th), None)
     return r
 
 
@@ -725,13 +731,10 @@ def run_timed(cmd, cwd, log, max_wall=None):
             ru.ru_utime + ru.ru_stime)
 
 
-def read_csv(path):
-    with open(path) as fh:
-        return list(csv.DictReader(fh))
-
-
-def window_stats(rows, key, t0, t1):
-    v = sorted(float(r[key]) for r in rows if t0 <= float(r["time"]) <= t1)
+def window_stats(table, key, t0, t1):
+    """Median and largest value of a column over t0 <= time <= t1."""
+    v = sorted(x for t, x in zip(table["time"].tolist(), table[key].tolist())
+               if t0 <= t <= t1)
     if not v:
         return None, None
     n = len(v)
@@ -739,9 +742,10 @@ def window_stats(rows, key, t0, t1):
     return med, v[-1]
 
 
-def time_mean(rows, key, t0, t1):
-    pts = [(float(r["time"]), float(r[key])) for r in rows
-           if t0 <= float(r["time"]) <= t1]
+def time_mean(table, key, t0, t1):
+    """Time mean (trapezoids) of a column over t0 <= time <= t1."""
+    pts = [(t, x) for t, x in zip(table["time"].tolist(), table[key].tolist())
+           if t0 <= t <= t1]
     if len(pts) < 2:
         return pts[0][1] if pts else None
     s = sum(0.5 * (a[1] + b[1]) * (b[0] - a[0]) for a, b in zip(pts, pts[1:]))
@@ -749,32 +753,41 @@ def time_mean(rows, key, t0, t1):
 
 
 def log_figures(text):
+    """Figures of a femp run's printed report (log.txt), by
+    femp_post.read_printed: the last step number, fluid steps, energies,
+    the absorbed fraction, the scene's normalized enthalpy, the wall time."""
+    lines = text.split("\n")
+
+    def printed(pattern):
+        return femp_post.read_printed(lines, pattern)
+
     r = {}
-    m = re.search(r"Melt flow: ([0-9]+) fluid steps", text)
-    r["fluid_steps"] = int(m.group(1)) if m else None
-    m = re.findall(r"step +([0-9]+) +dt =", text)
-    r["steps"] = int(m[-1]) if m else None
-    m = re.search(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
-                  r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)", text)
-    if m:
-        r.update(laser_J=float(m.group(1)), losses_J=float(m.group(2)),
-                 evaporation_J=float(m.group(3)))
-    m = re.search(r"incident ([-0-9.e+]+), absorbed ([-0-9.e+]+) \(fraction "
-                  r"([-0-9.e+]+)\)", text)
-    if m:
-        r["absorbed_fraction_run"] = float(m.group(3))
-    m = re.search(r"normalized enthalpy [^=]*= ([0-9.e+]+)", text)
-    r["normalized_enthalpy"] = float(m.group(1)) if m else None
-    m = re.search(r"[Ww]all (?:time|clock)[^0-9]*([0-9.]+) *s", text)
-    r["femp_wall_s"] = float(m.group(1)) if m else None
+    m = printed(r"Melt flow: ([0-9]+) fluid steps")
+    r["fluid_steps"] = int(m["1"][0]) if len(m) else None
+    m = printed(r"step +([0-9]+) +dt =")
+    r["steps"] = int(m["1"][-1]) if len(m) else None
+    m = printed(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
+                r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+)")
+    if len(m):
+        r.update(laser_J=float(m["1"][0]), losses_J=float(m["2"][0]),
+                 evaporation_J=float(m["3"][0]))
+    m = printed(r"incident ([-0-9.e+]+), absorbed ([-0-9.e+]+) \(fraction "
+                r"([-0-9.e+]+)\)")
+    if len(m):
+        r["absorbed_fraction_run"] = float(m["3"][0])
+    m = printed(r"normalized enthalpy [^=]*= ([0-9.e+]+)")
+    r["normalized_enthalpy"] = float(m["1"][0]) if len(m) else None
+    m = printed(r"[Ww]all (?:time|clock)[^0-9]*([0-9.]+) *s")
+    r["femp_wall_s"] = float(m["1"][0]) if len(m) else None
     return r
 
 
 def evaluate(out_dir, t_end, log_text=""):
     """The fusion zone and absorbed fraction of a finished run."""
     r = log_figures(log_text)
-    pool = read_csv(os.path.join(out_dir, "melt_pool.csv"))
-    t_last = max(float(p["time"]) for p in pool)
+    run = femp_post.Run(out_dir)
+    pool = run.melt_pool()
+    t_last = max(pool["time"].tolist())
     r["t_reached"] = t_last
     # a run stopped early (wall-time cap): the same window of the path it
     # reached, marked incomplete by the caller
@@ -791,7 +804,7 @@ def evaluate(out_dir, t_end, log_text=""):
     r["depth_growth"] = (b / a - 1) if a and b else None
     f = os.path.join(out_dir, "absorption.csv")
     if os.path.exists(f):
-        ab = read_csv(f)
+        ab = run.absorption()
         r["absorbed"] = time_mean(ab, "absorbed_fraction", t0, t1)
         r["hits_per_ray"] = time_mean(ab, "hits_per_ray", t0, t1)
     return r
@@ -812,8 +825,6 @@ def end_state(run_dir, alloy):
     and its two neighbours across), the surface temperature there and the
     recoil pressure zeta_p p_sat(T) it gives (Clausius-Clapeyron with the
     alloy's evaporation data, as femp computes it), the fastest melt."""
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    import femp_post
     out = os.path.join(run_dir, "output")
     try:
         g = femp_post.Run(out).grid()
@@ -870,8 +881,6 @@ def width_state(run_dir, alloy):
     cell on each side of each x slab); negative is inward, towards the
     axis, as a positive d sigma / dT drives it. Needs numpy
     (contrib/femp_post)."""
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    import femp_post
     import numpy as np
     g = femp_post.Run(os.path.join(run_dir, "output")).grid()
     scene = open(os.path.join(run_dir, "scene.prm")).read()
