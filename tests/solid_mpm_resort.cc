@@ -1,17 +1,18 @@
-// Solid MPM with points that cross cells and ranks (doc/solid_implementation.md, "Cell
-// crossing"): a 2D block of material points (2 x 2 per cell, no finite
-// elements) given a uniform velocity (1, 0.4) m/s, no forces, free faces, moves
-// rigidly by 2.5 cells in x and 1 cell in y (no point ends on a cell face) over
-// 0.25 s, in 10 calls of advance() (as after 10 temperature steps). Points that
-// leave their cell are bound to the new cell, moved in the ParticleHandler when
-// the state is written back, and re-sorted globally when they enter a cell of
-// another rank (SolidMPM::resort()). Checks, for FLIP and APIC: no point lost,
-// every point in the handler's cell that contains it, positions equal to the
-// rigid translation, zero stress (a uniform velocity has no gradient), velocity
-// unchanged. A third scene throws a block of points into the finite-element
-// zone in one step, beyond what its rank sees on two ranks: the run must
-// stop with a diagnostic (SolidSubCycle counts the solid points at every
-// gather and re-sort). Runs on 1 and 2 ranks against one output.
+// Solid MPM with points that cross cells and ranks
+// (doc/solid_implementation.md, "Cell crossing"): a 2D block of material points
+// (2 x 2 per cell, no finite elements) given a uniform velocity (1, 0.4) m/s,
+// no forces, free faces, moves rigidly by 2.5 cells in x and 1 cell in y (no
+// point ends on a cell face) over 0.25 s, in 10 calls of advance() (as after 10
+// temperature steps). Points that leave their cell are bound to the new cell,
+// moved in the ParticleHandler when the state is written back, and re-sorted
+// globally when they enter a cell of another rank (SolidMPM::resort()). Checks,
+// for FLIP and APIC: no point lost, every point in the handler's cell that
+// contains it, positions equal to the rigid translation, zero stress (a uniform
+// velocity has no gradient), velocity unchanged. A third scene throws a block
+// of points into the finite-element zone in one step, beyond what its rank sees
+// on two ranks: the run must stop with a diagnostic (SolidSubCycle counts the
+// solid points at every gather and re-sort). Runs on 1 and 2 ranks against one
+// output.
 #include <femp/grid/material_points.h>
 #include <femp/solid/solid_sub_cycle.h>
 
