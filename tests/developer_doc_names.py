@@ -3,7 +3,8 @@
 
 The pages: doc/developer.md, the implementation pages beside the
 reference pages (doc/solid_implementation.md, doc/track_measures.md) and
-the reference pages that point to them (doc/solid.md, doc/cases.md).
+the reference pages that point to them (doc/solid.md, doc/cases.md),
+and doc/flow.md.
 Checks the names in backticks and the Class::member names in the fenced
 diagrams: paths of the repository (source/..., include/...,
 tests/..., doc/..., prm/..., contrib/...) must exist; a class name (CamelCase)
@@ -21,7 +22,7 @@ import sys
 root = sys.argv[1] if len(sys.argv) > 1 else os.path.join(
     os.path.dirname(os.path.abspath(__file__)), "..")
 PAGES = ("developer.md", "solid_implementation.md", "track_measures.md",
-         "solid.md", "cases.md")
+         "solid.md", "cases.md", "flow.md")
 
 code = {}
 for top in ("include", "source", "tests"):
@@ -54,7 +55,7 @@ ident = r"[A-Za-z_][A-Za-z_0-9]*"
 # names of the libraries femp builds on, not of femp's code
 EXTERNAL = {"std", "dealii", "Utilities", "Patterns", "LinearAlgebra",
             "parallel", "Particles", "DoFHandler", "ParticleHandler",
-            "Triangulation"}
+            "Triangulation", "TrilinosWrappers", "FunctionParser"}
 
 
 def check_page(doc):
