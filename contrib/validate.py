@@ -1430,8 +1430,11 @@ def cmd_dig(args):
 
 
 def dig_compare(out, rx_c, rx_s, allc, every=20e-6):
-    """The settings of each case side by side at their common output times
-    (every @p every): e.g. 8 um cells against a 4 um window."""
+    """The settings of each case side by side (e.g. 8 um cells against a
+    4 um window): the output nearest to every @p every, and the medians of
+    every setting over the same window, the last 40 % of the shortest
+    run."""
+    import numpy as np
     runs = {}
     for setting in sorted(os.listdir(out)):
         if not rx_s.search(setting) or not os.path.isdir(os.path.join(out, setting)):
@@ -1439,24 +1442,61 @@ def dig_compare(out, rx_c, rx_s, allc, every=20e-6):
         for name in sorted(os.listdir(os.path.join(out, setting))):
             f = os.path.join(out, setting, name, "dig.csv")
             if rx_c.search(name) and os.path.exists(f):
-                runs.setdefault(name, {})[setting] = {
-                    round(float(r["time"]) * 1e7): r for r in read_csv(f)}
+                runs.setdefault(name, {})[setting] = read_csv(f)
+    keys = (("depression", 1e6, "%.1f"), ("T_surface_max", 1, "%.0f"),
+            ("melt_normal_hottest", 1e6, "%.1f"), ("front_wall_angle", 1, "%.0f"),
+            ("u_melt_max", 1, "%.1f"))
+    val = lambda r, k: float(r[k]) if r.get(k) not in ("", None) else None
+
+    def cell(rows, k, sc, fm):
+        v = [val(r, k) for r in rows if val(r, k) is not None]
+        return (fm % (float(np.median(v)) * sc)) if v else "-"
     for name, by in sorted(runs.items()):
         if len(by) < 2:
             continue
-        keys = sorted(set.intersection(*[set(v) for v in by.values()]))
-        keys = [k for k in keys if k > 0 and k % round(every * 1e7) == 0]
-        print("\n%s: the settings side by side (depression um / T_hot K / melt "
-              "under it along the normal um / front wall deg / fastest melt m/s)"
-              % name)
-        print("%7s " % "t(us)" + " ".join("%34s" % st for st in by))
-        g = lambda r, k, sc=1.0, fm="%.1f": (fm % (float(r[k]) * sc)) if r.get(k) else "-"
-        for k in keys:
-            print("%7.0f " % (k / 10.0) + " ".join("%34s" % "%s / %s / %s / %s / %s" % (
-                g(by[st][k], "depression", 1e6), g(by[st][k], "T_surface_max", 1, "%.0f"),
-                g(by[st][k], "melt_normal_hottest", 1e6),
-                g(by[st][k], "front_wall_angle", 1, "%.0f"),
-                g(by[st][k], "u_melt_max")) for st in by))
+        t_last = min(float(rows[-1]["time"]) for rows in by.values())
+        print("\n%s: the settings side by side (depression um / hottest surface "
+              "K / melt under it along the normal um / front wall deg / fastest "
+              "melt m/s)" % name)
+        print("%9s " % "t(us)" + " ".join("%30s" % st for st in by))
+        t = every
+        while t <= t_last + 1e-9:
+            line = []
+            for rows in by.values():
+                r = min(rows, key=lambda x: abs(float(x["time"]) - t))
+                line.append(" / ".join(cell([r], k, sc, fm) for k, sc, fm in keys))
+            print("%9.0f " % (t * 1e6) + " ".join("%30s" % x for x in line))
+            t += every
+        win = [r for r in by.values()]
+        line = []
+        for rows in win:
+            late = [r for r in rows if 0.6 * t_last <= float(r["time"]) <= t_last * (1 + 1e-9)]
+            line.append(" / ".join(cell(late, k, sc, fm) for k, sc, fm in keys))
+        print("%9s " % ("%.0f-%.0f" % (0.6 * t_last * 1e6, t_last * 1e6))
+              + " ".join("%30s" % x for x in line) + "  (medians)")
+        for st, rows in by.items():
+            late = [r for r in rows if 0.6 * t_last <= float(r["time"]) <= t_last * (1 + 1e-9)]
+            ds = [(float(r["time"]), val(r, "depression")) for r in rows
+                  if float(r["time"]) <= t_last * (1 + 1e-9)]
+            print("  %s, %.0f-%.0f us: drilling speed %s m/s (depression from one "
+                  "cell to the window's median, mean), evaporation %s of the absorbed "
+                  "power, recoil at the hottest cell %s MPa" % (
+                      st, 0.6 * t_last * 1e6, t_last * 1e6, drill_mean(ds, late),
+                      cell(late, "evaporation_share", 1, "%.3f"),
+                      cell(late, "recoil_hottest", 1e-6, "%.2f")))
+
+
+def drill_mean(ds, late):
+    """Mean drilling speed of the depression series @p ds [(t, depth)]: from
+    its first nonzero depth to the first that reaches 90 % of the median
+    depth of the rows @p late."""
+    import numpy as np
+    d_ss = float(np.median([float(r["depression"]) for r in late]))
+    t1 = next(((t, d) for t, d in ds if d and d > 0), None)
+    t9 = next(((t, d) for t, d in ds if d and d >= 0.9 * d_ss), None)
+    if not t1 or not t9 or t9[0] <= t1[0]:
+        return "-"
+    return "%.2f" % ((t9[1] - t1[1]) / (t9[0] - t1[0]))
 
 
 def print_dig(setting, name, c, sp, rows, s, r):
