@@ -1875,6 +1875,9 @@ def main():
     if args.out is None:
         args.out = os.path.join(args.build, "validation" if args.command != "pipeline"
                                 else "validation_pipeline")
+    # femp runs in the run directory: a relative --out must not be read
+    # from there
+    args.out = os.path.abspath(args.out)
     if args.command == "scenes":
         cmd_scenes(args)
     elif args.command == "run":
