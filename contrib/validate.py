@@ -18,6 +18,8 @@
   contrib/validate.py spots    [--cases REGEX] [--end-time T] [--np N]
   contrib/validate.py conduction3d [--cases REGEX] [--h 8,4] [--eta A]
                                [--props file,nolatent,const]
+  contrib/validate.py dig      [--out build/validation] [--cases REGEX]
+                               [--settings REGEX] [--force]
 
 scenes: writes prm/validation/<case>.prm, one scene per measured case of
   the data sets in prm/validation/data/ (each file names its publication):
@@ -59,6 +61,23 @@ spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
   melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
   (the depression's rise) against the measured melt and keyhole onsets
   (resumable: a run with a time series is only evaluated).
+dig: what digs the pool, from the field outputs of finished runs (read
+  with contrib/femp_post.py; VTU or HDF5): per output the depression depth
+  below the original surface, the surface temperature and recoil pressure
+  at its deepest point and at the hottest surface cell, the melt thickness
+  under the hottest cell (to the solidus, along the surface normal and
+  vertically), the front wall's angle from the vertical, the drilling
+  speed (d depth / dt), the fastest melt, and the evaporated power against
+  the absorbed power (absorption.csv); then the medians over the last 40 %
+  of the path, the drilling phase and the run's evaporation share from
+  femp's energy line. Writes dig.csv into each run directory and a 'dig'
+  entry into its result.json (resumable: a dig.csv newer than the outputs
+  is reread). The outputs must be at most 10 us apart: run the case with
+  '--setting dig' (fields every 5 us, HDF5), e.g.
+    contrib/validate.py run --np 2 --cases '^trapp_099W$' --setting dig
+    contrib/validate.py run --np 2 --cases '^trapp_099W$' --setting h4+dig \
+        --set 'Time stepping/End time=1.6e-4'     # a window at 4 um
+    contrib/validate.py dig --cases '^trapp_099W$'
 regime: the normalized enthalpy of every measured track (as femp's scene
   log computes it) with the flat-surface Fresnel absorptivity, the measured
   one and 0.35, beside the measured depth/width.
@@ -1019,7 +1038,8 @@ def run_case(args, exe, c, setting):
     rc, wall, cpu = run_timed(cmd, d, os.path.join(d, "log.txt"), args.max_wall)
     t_end = track_geometry(c)["Ltr"] / c["v"]
     r = dict(name=c["name"], setting=setting, rc=rc, wall_s=wall,
-             np=args.np, cpu_s=cpu)
+             np=args.np, cpu_s=cpu,
+             sets={k: v for k, v in sets.items() if k != "Output/Directory"})
     try:
         r.update(evaluate(os.path.join(d, "output"), t_end,
                           open(os.path.join(d, "log.txt")).read()))
@@ -1070,6 +1090,469 @@ def cmd_run(args):
     todo = [c for c in cases() if rx.search(c["name"]) and c["v"] > 0]
     for c in todo:
         run_case(args, exe, c, args.setting)
+
+
+# ---------------------------------------------------------------- dig
+# What digs the pool, per field output of a run (the 'dig' command). The
+# field outputs must be close enough in time for the drilling speed: at
+# most DIG_MAX_INTERVAL apart (a keyhole drills about 1 m/s, a cell of 8 um
+# in 8 us), which the 'dig' setting gives (HDF5, the fields it reads).
+DIG_MAX_INTERVAL = 10e-6
+SETTINGS["dig"] = {"Output/Output interval": "5e-06",
+                   "Output/Format": "hdf5",
+                   "Output/Grid fields": "T,gamma,alpha,u_x,u_y,u_z"}
+DIG_COLUMNS = ("time", "x_beam", "depression", "x_deepest_behind_beam",
+               "T_deepest", "recoil_deepest", "T_surface_max",
+               "x_hottest_behind_beam", "recoil_hottest", "melt_normal_hottest",
+               "melt_vertical_hottest", "front_wall_angle", "drilling_speed",
+               "u_melt_max", "u_bernoulli_hottest", "recession_hottest",
+               "evaporation_W", "absorbed_W", "evaporation_share")
+
+
+def scene_parameters(run_dir):
+    """The scene's values that 'dig' needs, with the run's --set overrides
+    (the 'sets' of result.json, else the cell size from the log)."""
+    scene = open(os.path.join(run_dir, "scene.prm")).read()
+    sets = {}
+    f = os.path.join(run_dir, "result.json")
+    if os.path.exists(f):
+        sets = json.load(open(f)).get("sets", {})
+
+    def value(section_entry, key):
+        if section_entry in sets:
+            return [float(v) for v in sets[section_entry].split(",")]
+        return scene_value(scene, key)
+    h = value("Background grid/Cell size", "Cell size")[0]
+    log = os.path.join(run_dir, "log.txt")
+    if "Background grid/Cell size" not in sets and os.path.exists(log):
+        m = re.search(r"background grid: [0-9]+ cells of ([0-9.e+-]+) m",
+                      open(log).read())
+        h = float(m.group(1)) if m else h
+    return dict(h=h, ztop=value("Material points/Substrate top", "Substrate top")[0],
+                rb=value("Laser/Beam radius", "Beam radius")[0],
+                v=value("Laser/Scan speed", "Scan speed")[0],
+                start=value("Laser/Start point", "Start point"),
+                end=value("Laser/End point", "End point"),
+                t0=(value("Laser/Start time", "Start time") or [0.0])[0],
+                zeta_p=value("Melt flow/Recoil coefficient", "Recoil coefficient")[0])
+
+
+def material_evaporation(alloy):
+    """L_v, M, T_v, p_0 and zeta_q of the material file (femp's defaults for
+    p_0 and zeta_q where the file does not set them)."""
+    text = open(os.path.join(ROOT, "prm", "materials", alloy + ".prm")).read()
+    get = lambda key, d=None: float(re.search(
+        r"set %s\s*=\s*([^#\n]*)" % re.escape(key), text).group(1)) \
+        if re.search(r"set %s\s*=" % re.escape(key), text) else d
+    return dict(Lv=get("Latent heat of evaporation"), M=get("Molar mass"),
+                Tv=get("Evaporation temperature"), p0=get("Ambient pressure", 101325.0),
+                zeta_q=get("Evaporation coefficient", 0.82))
+
+
+def dig_state(g, sp, mat, ev, t):
+    """What digs the pool in one field output @p g (femp_post Fields) at
+    time @p t: the metal surface z_s of every column (the topmost crossing
+    of alpha = 1/2, interpolated between cell centres), the depression
+    depth below the original surface (the deepest z_s within 2 r_b of the
+    track axis, from 8 r_b behind to 2 r_b ahead of the beam), the surface
+    temperature and the recoil pressure zeta_p p_0 exp(L_v M (T - T_v) /
+    (R T T_v)) there and at the hottest surface cell (the cell's own
+    temperature, femp's recoil limits it to its surface neighbours' range),
+    the melt thickness under the hottest surface cell (from the surface
+    into the metal down to the solidus, along the surface normal grad
+    alpha / |grad alpha| and vertically), the front wall's angle from the
+    vertical (a line x(z) fitted to the centre plane's surface ahead of the
+    deepest point, where the depression is 15-85 % of its depth), the
+    fastest melt (alpha, gamma >= 1/2) and the evaporated power
+    sum q_evap(T) 2 alpha |grad alpha| h^3 over the cells (femp's surface
+    loss and its weight, eq. (1), heat capacity of the gas neglected)."""
+    import numpy as np
+    h = sp["h"]
+    c = np.asarray(g.centres)
+    ijk = np.floor(c / h).astype(int)
+    n = ijk.max(axis=0) + 1
+    idx = tuple(ijk.T)
+    T = np.zeros(n)
+    A = np.zeros(n)
+    G = np.zeros(n)
+    T[idx], A[idx] = g["T"], g["alpha"]
+    if "gamma" in g:
+        G[idx] = g["gamma"]
+    U2 = np.zeros(n)
+    for k in ("u_x", "u_y", "u_z"):
+        if k in g:
+            U = np.zeros(n)
+            U[idx] = g[k]
+            U2 += U * U
+    x = (np.arange(n[0]) + 0.5) * h
+    y = (np.arange(n[1]) + 0.5) * h
+    z = (np.arange(n[2]) + 0.5) * h
+    (xs, yc), (xe, _) = sp["start"][:2], sp["end"][:2]
+    L = math.hypot(xe - xs, sp["end"][1] - sp["start"][1])
+    s = min(max(0.0, sp["v"] * (t - sp["t0"])), L)
+    xb = xs + s * (xe - xs) / L if L > 0 else xs
+    rb, ztop = sp["rb"], sp["ztop"]
+    # the metal surface of every column: the topmost cell with alpha >= 1/2
+    metal = A >= 0.5
+    has = metal.any(axis=2)
+    ktop = n[2] - 1 - np.argmax(metal[:, :, ::-1], axis=2)
+    ii, jj = np.meshgrid(np.arange(n[0]), np.arange(n[1]), indexing="ij")
+    kk = np.clip(ktop, 0, n[2] - 1)
+    a_in = A[ii, jj, kk]
+    a_up = np.where(kk + 1 < n[2], A[ii, jj, np.minimum(kk + 1, n[2] - 1)], 0.0)
+    zs = z[kk] + h * (a_in - 0.5) / np.maximum(a_in - a_up, 1e-12)
+    zs = np.where(has, zs, np.nan)
+    Tsurf = np.where(has, T[ii, jj, kk], np.nan)
+    near = ((abs(y[None, :] - yc) <= 2 * rb) & (x[:, None] >= xb - 8 * rb)
+            & (x[:, None] <= xb + 2 * rb) & has)
+    r = dict(time=t, x_beam=xb)
+    if not near.any():
+        return r
+    depth = np.where(near, ztop - zs, -np.inf)
+    i0, j0 = np.unravel_index(np.argmax(depth), depth.shape)
+    R = 8.314462618
+    recoil = lambda T_: sp["zeta_p"] * ev["p0"] * math.exp(
+        ev["Lv"] * ev["M"] * (T_ - ev["Tv"]) / (R * T_ * ev["Tv"]))
+    r.update(depression=max(0.0, float(depth[i0, j0])),
+             x_deepest_behind_beam=float(xb - x[i0]),
+             T_deepest=float(Tsurf[i0, j0]), recoil_deepest=recoil(Tsurf[i0, j0]))
+    hot = np.where(near, Tsurf, -np.inf)
+    i1, j1 = np.unravel_index(np.argmax(hot), hot.shape)
+    k1 = kk[i1, j1]
+    r.update(T_surface_max=float(Tsurf[i1, j1]), x_hottest_behind_beam=float(xb - x[i1]),
+             recoil_hottest=recoil(Tsurf[i1, j1]))
+    # what the recoil there could do: the speed of melt it pushes out
+    # (Bernoulli, sqrt(2 p_r / rho)) and the surface's recession by
+    # evaporation alone (q_evap / (rho L_v), femp removes no mass)
+    T1 = float(Tsurf[i1, j1])
+    q1 = ev["zeta_q"] * ev["Lv"] * ev["M"] * ev["p0"] / math.sqrt(
+        2 * math.pi * ev["M"] * R * T1) * math.exp(
+        ev["Lv"] * ev["M"] * (T1 - ev["Tv"]) / (R * T1 * ev["Tv"]))
+    r["u_bernoulli_hottest"] = math.sqrt(2 * r["recoil_hottest"] / mat["rho"])
+    r["recession_hottest"] = q1 / (mat["rho"] * ev["Lv"])
+
+    # melt thickness under the hottest surface cell
+    def interp(F, p):
+        q = p / h - 0.5
+        q0 = np.clip(np.floor(q).astype(int), 0, n - 2)
+        f = np.clip(q - q0, 0, 1)
+        v = 0.0
+        for dx in (0, 1):
+            for dy in (0, 1):
+                for dz in (0, 1):
+                    w = ((f[0] if dx else 1 - f[0]) * (f[1] if dy else 1 - f[1])
+                         * (f[2] if dz else 1 - f[2]))
+                    v += w * F[q0[0] + dx, q0[1] + dy, q0[2] + dz]
+        return v
+    grad = np.array([
+        (A[min(i1 + 1, n[0] - 1), j1, k1] - A[max(i1 - 1, 0), j1, k1]),
+        (A[i1, min(j1 + 1, n[1] - 1), k1] - A[i1, max(j1 - 1, 0), k1]),
+        (A[i1, j1, min(k1 + 1, n[2] - 1)] - A[i1, j1, max(k1 - 1, 0)])]) / (2 * h)
+    p_surf = np.array([x[i1], y[j1], zs[i1, j1]])
+
+    def thickness(direction):
+        """Distance from the alpha = 1/2 crossing along @p direction (unit,
+        into the metal) to where T falls below the solidus."""
+        step = h / 16
+        p = np.array([x[i1], y[j1], z[k1]]) - 2 * h * direction
+        start = None
+        for m in range(int(40 * h / step)):
+            if (p < 0.5 * h).any() or (p > (n - 0.5) * h).any():
+                return None
+            a = interp(A, p)
+            if start is None:
+                if a >= 0.5:
+                    start = p.copy()
+            elif interp(T, p) < mat["Ts"]:
+                return float(np.linalg.norm(p - start))
+            p = p + step * direction
+        return None
+    norm = np.linalg.norm(grad)
+    r["melt_normal_hottest"] = thickness(grad / norm) if norm > 0 else None
+    r["melt_vertical_hottest"] = thickness(np.array([0.0, 0.0, -1.0]))
+    del p_surf
+
+    # front wall: the centre plane's surface ahead of the deepest point
+    jc = np.nonzero(abs(y - yc) <= 0.5 * h + 1e-12)[0]
+    prof = np.nanmean(zs[:, jc], axis=1)
+    inside = (x >= xb - 8 * rb) & (x <= xb + 2 * rb)
+    dprof = np.where(inside, ztop - prof, -np.inf)
+    id_ = int(np.argmax(dprof))
+    dmax = dprof[id_]
+    pts = []
+    for i in range(id_, n[0]):
+        if not np.isfinite(dprof[i]) or dprof[i] <= 0:
+            break
+        if 0.15 * dmax <= dprof[i] <= 0.85 * dmax:
+            pts.append((x[i], prof[i]))
+    if len(pts) >= 2 and dmax > h:
+        px, pz = np.array(pts).T
+        slope = np.polyfit(pz, px, 1)[0] if np.ptp(pz) > 0 else 0.0
+        r["front_wall_angle"] = float(math.degrees(math.atan(abs(slope))))
+
+    # fastest melt, evaporated power
+    melt = (A >= 0.5) & (G >= 0.5)
+    r["u_melt_max"] = float(np.sqrt(U2[melt].max())) if melt.any() else 0.0
+    ga = np.zeros(n)
+    for ax in range(3):
+        d = np.gradient(A, h, axis=ax)
+        ga += d * d
+    ga = np.sqrt(ga)
+    surf = (A > 0) & (ga > 1e-12 / h)
+    Ts_ = T[surf]
+    expo = ev["Lv"] * ev["M"] * (Ts_ - ev["Tv"]) / (R * Ts_ * ev["Tv"])
+    q = np.where(expo > -40, ev["zeta_q"] * ev["Lv"] * ev["M"] * ev["p0"]
+                 / np.sqrt(2 * math.pi * ev["M"] * R * Ts_)
+                 * np.exp(np.minimum(expo, 700)), 0.0)
+    r["evaporation_W"] = float(np.sum(q * 2 * A[surf] * ga[surf]) * h ** 3)
+    return r
+
+
+def dig_run(run_dir, alloy, force=False):
+    """dig_state of every field output of a run, with the drilling speed
+    (central differences of the depression depth in time) and the absorbed
+    power of absorption.csv; written to run_dir/dig.csv (kept and reread
+    unless the run's outputs are newer, or @p force)."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import femp_post
+    out = os.path.join(run_dir, "output")
+    f = os.path.join(run_dir, "dig.csv")
+    run = femp_post.Run(out)
+    index = [os.path.join(out, i) for i in ("grid.xdmf", "grid.pvd")
+             if os.path.exists(os.path.join(out, i))]
+    if (not force and os.path.exists(f) and index
+            and os.path.getmtime(f) >= os.path.getmtime(index[0])):
+        rows = read_csv(f)
+        return [{k: (float(v) if v not in ("", None) else None) for k, v in r.items()}
+                for r in rows]
+    sp = scene_parameters(run_dir)
+    mat, ev = material(alloy), material_evaporation(alloy)
+    rows = []
+    for n, t in run.outputs("grid"):
+        rows.append(dig_state(run.grid(n), sp, mat, ev, t))
+        print("  %s: t = %.1f us, depression %s um" % (
+            os.path.basename(run_dir), t * 1e6, um(rows[-1].get("depression"))),
+            flush=True)
+    for i, r in enumerate(rows):
+        a, b = rows[max(0, i - 1)], rows[min(len(rows) - 1, i + 1)]
+        if (a is not b and a.get("depression") is not None
+                and b.get("depression") is not None):
+            r["drilling_speed"] = (b["depression"] - a["depression"]) / (b["time"] - a["time"])
+    ab = os.path.join(out, "absorption.csv")
+    if os.path.exists(ab):
+        series = [(float(x["time"]), float(x["absorbed"])) for x in read_csv(ab)]
+        for r in rows:
+            tt, pa = min(series, key=lambda s: abs(s[0] - r["time"]))
+            if abs(tt - r["time"]) <= 1e-5 and pa > 0:
+                r["absorbed_W"] = pa
+                r["evaporation_share"] = r.get("evaporation_W", 0) / pa
+    with open(f, "w") as fh:
+        fh.write(",".join(DIG_COLUMNS) + "\n")
+        for r in rows:
+            fh.write(",".join("" if r.get(k) is None else "%.6g" % r[k]
+                              for k in DIG_COLUMNS) + "\n")
+    return rows
+
+
+def dig_summary(rows, sp, t_path, log_text=""):
+    """A run's figures from its dig rows: the medians over the last 40 % of
+    the path it reached (the quasi-steady keyhole), the drilling phase (the
+    depression's mean speed from one cell deep to 90 % of that steady depth,
+    and the fastest drilling between outputs), and the evaporation share
+    over the run from femp's energy line beside the sum of the outputs."""
+    import numpy as np
+    rows = [r for r in rows if r.get("depression") is not None]
+    if not rows:
+        return {}
+    t_end = min(t_path, rows[-1]["time"])
+    late = [r for r in rows if 0.6 * t_end <= r["time"] <= t_end * (1 + 1e-9)]
+    med = lambda k: (float(np.median([r[k] for r in late if r.get(k) is not None]))
+                     if any(r.get(k) is not None for r in late) else None)
+    s = {k: med(k) for k in DIG_COLUMNS if k not in ("time", "x_beam")}
+    s["window_us"] = (0.6 * t_end * 1e6, t_end * 1e6)
+    d_ss = s["depression"]
+    t1 = next((r["time"] for r in rows if r["depression"] >= sp["h"]), None)
+    t9 = next((r["time"] for r in rows if d_ss and r["depression"] >= 0.9 * d_ss), None)
+    if t1 is not None and t9 is not None and t9 > t1:
+        d1 = next(r["depression"] for r in rows if r["time"] == t1)
+        d9 = next(r["depression"] for r in rows if r["time"] == t9)
+        s["drilling_mean"] = (d9 - d1) / (t9 - t1)
+        s["drilling_window_us"] = (t1 * 1e6, t9 * 1e6)
+    ds = [r["drilling_speed"] for r in rows if r.get("drilling_speed") is not None]
+    s["drilling_max"] = max(ds) if ds else None
+    s["depression_max"] = max(r["depression"] for r in rows)
+    lf = log_figures(log_text)
+    if lf.get("laser_J"):
+        s["evaporation_share_run"] = lf["evaporation_J"] / lf["laser_J"]
+        ts = [r["time"] for r in rows]
+        pe = [r.get("evaporation_W") or 0.0 for r in rows]
+        s["evaporation_J_outputs"] = float(np.trapz(pe, ts))
+        s["evaporation_J_log"] = lf["evaporation_J"]
+    return s
+
+
+def cmd_dig(args):
+    """'dig': what digs the pool in the runs under --out (settings matching
+    --setting-regex, cases --cases) from their field outputs."""
+    allc = {c["name"]: c for c in cases()}
+    rx_c = re.compile(args.cases or ".")
+    rx_s = re.compile(args.settings or ".")
+    found = False
+    for setting in sorted(os.listdir(args.out)) if os.path.isdir(args.out) else []:
+        if not rx_s.search(setting):
+            continue
+        for name in sorted(os.listdir(os.path.join(args.out, setting))):
+            d = os.path.join(args.out, setting, name)
+            if name not in allc or not rx_c.search(name) or not os.path.isdir(
+                    os.path.join(d, "output")):
+                continue
+            sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+            import femp_post
+            outs = femp_post.Run(os.path.join(d, "output")).outputs("grid")
+            c = allc[name]
+            t_path = track_geometry(c)["Ltr"] / c["v"]
+            gaps = [b[1] - a[1] for a, b in zip(outs, outs[1:])]
+            if len(outs) < 3 or max(gaps) > DIG_MAX_INTERVAL * (1 + 1e-6):
+                print("%s/%s: %d field outputs, %s us apart: too coarse for the "
+                      "drilling speed (at most %.0f us); run it with --setting "
+                      "dig (or --set 'Output/Output interval=5e-6')" % (
+                          setting, name, len(outs),
+                          ("%.0f" % (max(gaps) * 1e6)) if gaps else "-",
+                          DIG_MAX_INTERVAL * 1e6))
+                continue
+            found = True
+            rows = dig_run(d, c["alloy"], args.force)
+            sp = scene_parameters(d)
+            log = os.path.join(d, "log.txt")
+            s = dig_summary(rows, sp, t_path, open(log).read() if os.path.exists(log) else "")
+            res = os.path.join(d, "result.json")
+            r = json.load(open(res)) if os.path.exists(res) else {}
+            r["dig"] = s
+            if os.path.exists(res):
+                json.dump(r, open(res, "w"), indent=1)
+            print_dig(setting, name, c, sp, rows, s, r)
+    if not found:
+        print("validate.py dig: no run with field outputs fine enough under %s"
+              % args.out)
+        return
+    dig_compare(args.out, rx_c, rx_s, allc)
+
+
+def dig_compare(out, rx_c, rx_s, allc, every=20e-6):
+    """The settings of each case side by side (e.g. 8 um cells against a
+    4 um window): the output nearest to every @p every, and the medians of
+    every setting over the same window, the last 40 % of the shortest
+    run."""
+    import numpy as np
+    runs = {}
+    for setting in sorted(os.listdir(out)):
+        if not rx_s.search(setting) or not os.path.isdir(os.path.join(out, setting)):
+            continue
+        for name in sorted(os.listdir(os.path.join(out, setting))):
+            f = os.path.join(out, setting, name, "dig.csv")
+            if rx_c.search(name) and os.path.exists(f):
+                runs.setdefault(name, {})[setting] = read_csv(f)
+    keys = (("depression", 1e6, "%.1f"), ("T_surface_max", 1, "%.0f"),
+            ("melt_normal_hottest", 1e6, "%.1f"), ("front_wall_angle", 1, "%.0f"),
+            ("u_melt_max", 1, "%.1f"))
+    val = lambda r, k: float(r[k]) if r.get(k) not in ("", None) else None
+
+    def cell(rows, k, sc, fm):
+        v = [val(r, k) for r in rows if val(r, k) is not None]
+        return (fm % (float(np.median(v)) * sc)) if v else "-"
+    for name, by in sorted(runs.items()):
+        if len(by) < 2:
+            continue
+        t_last = min(float(rows[-1]["time"]) for rows in by.values())
+        print("\n%s: the settings side by side (depression um / hottest surface "
+              "K / melt under it along the normal um / front wall deg / fastest "
+              "melt m/s)" % name)
+        print("%9s " % "t(us)" + " ".join("%30s" % st for st in by))
+        t = every
+        while t <= t_last + 1e-9:
+            line = []
+            for rows in by.values():
+                r = min(rows, key=lambda x: abs(float(x["time"]) - t))
+                line.append(" / ".join(cell([r], k, sc, fm) for k, sc, fm in keys))
+            print("%9.0f " % (t * 1e6) + " ".join("%30s" % x for x in line))
+            t += every
+        win = [r for r in by.values()]
+        line = []
+        for rows in win:
+            late = [r for r in rows if 0.6 * t_last <= float(r["time"]) <= t_last * (1 + 1e-9)]
+            line.append(" / ".join(cell(late, k, sc, fm) for k, sc, fm in keys))
+        print("%9s " % ("%.0f-%.0f" % (0.6 * t_last * 1e6, t_last * 1e6))
+              + " ".join("%30s" % x for x in line) + "  (medians)")
+        for st, rows in by.items():
+            late = [r for r in rows if 0.6 * t_last <= float(r["time"]) <= t_last * (1 + 1e-9)]
+            ds = [(float(r["time"]), val(r, "depression")) for r in rows
+                  if float(r["time"]) <= t_last * (1 + 1e-9)]
+            print("  %s, %.0f-%.0f us: drilling speed %s m/s (depression from one "
+                  "cell to the window's median, mean), evaporation %s of the absorbed "
+                  "power, recoil at the hottest cell %s MPa" % (
+                      st, 0.6 * t_last * 1e6, t_last * 1e6, drill_mean(ds, late),
+                      cell(late, "evaporation_share", 1, "%.3f"),
+                      cell(late, "recoil_hottest", 1e-6, "%.2f")))
+
+
+def drill_mean(ds, late):
+    """Mean drilling speed of the depression series @p ds [(t, depth)]: from
+    its first nonzero depth to the first that reaches 90 % of the median
+    depth of the rows @p late."""
+    import numpy as np
+    d_ss = float(np.median([float(r["depression"]) for r in late]))
+    t1 = next(((t, d) for t, d in ds if d and d > 0), None)
+    t9 = next(((t, d) for t, d in ds if d and d >= 0.9 * d_ss), None)
+    if not t1 or not t9 or t9[0] <= t1[0]:
+        return "-"
+    return "%.2f" % ((t9[1] - t1[1]) / (t9[0] - t1[0]))
+
+
+def print_dig(setting, name, c, sp, rows, s, r):
+    f = lambda v, fmt_, scale=1.0: (fmt_ % (v * scale)) if v is not None else "-"
+    print("\n%s [%s], %g um cells: %d field outputs to %.0f us (%s)" % (
+        name, setting, sp["h"] * 1e6, len(rows), rows[-1]["time"] * 1e6 if rows else 0,
+        "wall %.0f s x %d ranks, CPU %.0f s" % (r["wall_s"], r["np"], r.get("cpu_s", 0))
+        if r.get("wall_s") else "cost unknown"))
+    print("%7s %8s %8s %7s %7s %7s %7s %7s %6s %7s %6s %7s" % (
+        "t(us)", "depr(um)", "behind", "T_deep", "p(MPa)", "T_hot", "film_n",
+        "film_z", "angle", "v_d", "u_max", "evap"))
+    for x in rows:
+        print("%7.1f %8s %8s %7s %7s %7s %7s %7s %6s %7s %6s %7s" % (
+            x["time"] * 1e6, f(x.get("depression"), "%.1f", 1e6),
+            f(x.get("x_deepest_behind_beam"), "%.1f", 1e6), f(x.get("T_deepest"), "%.0f"),
+            f(x.get("recoil_deepest"), "%.2f", 1e-6), f(x.get("T_surface_max"), "%.0f"),
+            f(x.get("melt_normal_hottest"), "%.1f", 1e6),
+            f(x.get("melt_vertical_hottest"), "%.1f", 1e6),
+            f(x.get("front_wall_angle"), "%.0f"), f(x.get("drilling_speed"), "%.2f"),
+            f(x.get("u_melt_max"), "%.1f"), f(x.get("evaporation_share"), "%.3f")))
+    if not s:
+        return
+    print("medians over %.0f-%.0f us: depression %s um (deepest ever %s um), T there "
+          "%s K, recoil there %s MPa; hottest surface %s K (recoil %s MPa), melt "
+          "under it %s um along the normal / %s um vertically; front wall %s deg "
+          "from the vertical; fastest melt %s m/s; evaporation %s of the absorbed "
+          "power" % (s["window_us"][0], s["window_us"][1],
+                     f(s.get("depression"), "%.1f", 1e6), f(s.get("depression_max"), "%.1f", 1e6),
+                     f(s.get("T_deepest"), "%.0f"), f(s.get("recoil_deepest"), "%.2f", 1e-6),
+                     f(s.get("T_surface_max"), "%.0f"), f(s.get("recoil_hottest"), "%.2f", 1e-6),
+                     f(s.get("melt_normal_hottest"), "%.1f", 1e6),
+                     f(s.get("melt_vertical_hottest"), "%.1f", 1e6),
+                     f(s.get("front_wall_angle"), "%.0f"), f(s.get("u_melt_max"), "%.1f"),
+                     f(s.get("evaporation_share"), "%.3f")))
+    print("at the hottest surface cell: the recoil's Bernoulli speed sqrt(2 p_r/rho) "
+          "%s m/s, recession by evaporation alone %s m/s" % (
+              f(s.get("u_bernoulli_hottest"), "%.1f"), f(s.get("recession_hottest"), "%.3f")))
+    if s.get("drilling_mean") is not None:
+        print("drilling: %.2f m/s mean from %.0f to %.0f us (one cell to 90 %% of the "
+              "steady depression), %.2f m/s fastest between outputs" % (
+                  s["drilling_mean"], s["drilling_window_us"][0],
+                  s["drilling_window_us"][1], s["drilling_max"]))
+    if s.get("evaporation_share_run") is not None:
+        print("evaporation over the run (femp's energy line): %.3f of the absorbed "
+              "energy; %.3g J, the outputs' evaporated power integrated: %.3g J" % (
+                  s["evaporation_share_run"], s["evaporation_J_log"],
+                  s["evaporation_J_outputs"]))
 
 
 # ---------------------------------------------------------------- report
@@ -1370,7 +1853,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
                                        "pipeline", "regime", "width", "conduction",
-                                       "conduction3d", "spots"])
+                                       "conduction3d", "spots", "dig"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
     ap.add_argument("--setting", default="default",
@@ -1390,12 +1873,20 @@ def main():
                     "keyhole onset, at least 0.4 ms)")
     ap.add_argument("--eta", type=float, default=None,
                     help="conduction3d: absorbed fraction (default: the measured one)")
+    ap.add_argument("--settings", default=None,
+                    help="dig: the settings (run directories) to read, a regex "
+                    "(default: every one with field outputs fine enough)")
+    ap.add_argument("--force", action="store_true",
+                    help="dig: evaluate again where dig.csv exists")
     ap.add_argument("--props", default=None,
                     help="conduction3d: 'file', 'nolatent', 'const' (comma-separated)")
     args = ap.parse_args()
     if args.out is None:
         args.out = os.path.join(args.build, "validation" if args.command != "pipeline"
                                 else "validation_pipeline")
+    # femp runs in the run directory: a relative --out must not be read
+    # from there
+    args.out = os.path.abspath(args.out)
     if args.command == "scenes":
         cmd_scenes(args)
     elif args.command == "run":
@@ -1410,6 +1901,8 @@ def main():
         cmd_spots(args)
     elif args.command == "width":
         cmd_width(args)
+    elif args.command == "dig":
+        cmd_dig(args)
     elif args.command == "reevaluate":
         cmd_reevaluate(args)
     elif args.command == "report":
