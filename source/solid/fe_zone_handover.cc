@@ -117,10 +117,12 @@ namespace femp
   FeZoneHandover<dim>::FeZoneHandover(const Parameters          &prm,
                                       const BackgroundGrid<dim> &grid,
                                       const double               solidus,
-                                      const double               first_top)
+                                      const double               first_top,
+                                      const double               closed_from)
       : prm(prm)
       , grid(grid)
       , solidus(solidus)
+      , closed_from(closed_from)
       , layer_top(first_top)
   {
   }
@@ -177,7 +179,7 @@ namespace femp
     if (hi[dim - 1] < 0 || last_row <= first_row)
       return current_top;
 
-    // Per candidate row: 1 a cell not full of metal or without points, 2 a
+    // Per candidate row: 1 an open cell or one without points, 2 a
     // powder or fluid point, 4 a point at or above the hand-over
     // temperature; and the hottest point.
     const int           n_rows = last_row - first_row;
@@ -208,9 +210,27 @@ namespace femp
             hottest[r] = std::max(hottest[r], v[P::temperature]);
           }
       }
+    // The open cells, per row: their count, the least metal fraction and
+    // their horizontal extent (cell indices), for the log.
+    std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.);
+    std::vector<int>    bad_lo(n_rows * (dim - 1),
+                            std::numeric_limits<int>::max()),
+      bad_hi(n_rows * (dim - 1), -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
-      if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= 1. - 1e-12))
-        flags[ijk[dim - 1] - first_row] |= 1;
+      if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= closed_from))
+        {
+          const int r = ijk[dim - 1] - first_row;
+          flags[r] |= 1;
+          n_bad[r] += 1;
+          least[r] = std::min(least[r], has_points[idx] ? alpha[idx] : 0.);
+          for (int d = 0; d < dim - 1; ++d)
+            {
+              int &l = bad_lo[r * (dim - 1) + d],
+                  &u = bad_hi[r * (dim - 1) + d];
+              l      = std::min(l, ijk[d]);
+              u      = std::max(u, ijk[d]);
+            }
+        }
     });
     // The flags of all ranks: one maximum per bit.
     std::vector<int> bits(3 * n_rows);
@@ -223,6 +243,14 @@ namespace femp
       flags[r] = bits[3 * r] | (bits[3 * r + 1] << 1) | (bits[3 * r + 2] << 2);
     MPI_Allreduce(
       MPI_IN_PLACE, hottest.data(), n_rows, MPI_DOUBLE, MPI_MAX, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, n_bad.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, least.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, bad_lo.data(), n_rows * (dim - 1), MPI_INT, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, bad_hi.data(), n_rows * (dim - 1), MPI_INT, MPI_MAX, comm);
     int r = 0;
     while (r < n_rows && flags[r] == 0)
       ++r;
@@ -231,7 +259,16 @@ namespace femp
         std::ostringstream s;
         s << "the row at z = " << z0 + (first_row + r) * h << " m holds ";
         if (flags[r] & 1)
-          s << "a cell not full of metal";
+          {
+            s << n_bad[r] << " open cells (alpha below " << closed_from
+              << ": gas, a pore or unfused powder; down to " << least[r];
+            for (int d = 0; d < dim - 1; ++d)
+              s << (d ? ", " : "; ") << (d ? "y" : "x") << " within "
+                << grid.origin()[d] + bad_lo[r * (dim - 1) + d] * h << " to "
+                << grid.origin()[d] + (bad_hi[r * (dim - 1) + d] + 1) * h
+                << " m";
+            s << ")";
+          }
         else if (flags[r] & 2)
           s << "powder or fluid points";
         else
