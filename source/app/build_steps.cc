@@ -45,8 +45,8 @@ namespace femp
         scene.handover,
         grid,
         scene.material.solidus,
-        scene.points.substrate_top + std::max(0., scene.points.layer_thickness),
-        scene.porosity.threshold);
+        scene.points.substrate_top +
+          std::max(0., scene.points.layer_thickness));
     // Tracks and layers: tracks.csv, layers.csv, probe lines per track.
     std::vector<double> starts;
     if (schedule)

@@ -117,12 +117,10 @@ namespace femp
   FeZoneHandover<dim>::FeZoneHandover(const Parameters          &prm,
                                       const BackgroundGrid<dim> &grid,
                                       const double               solidus,
-                                      const double               first_top,
-                                      const double               closed_from)
+                                      const double               first_top)
       : prm(prm)
       , grid(grid)
       , solidus(solidus)
-      , closed_from(closed_from)
       , layer_top(first_top)
   {
   }
@@ -179,7 +177,7 @@ namespace femp
     if (hi[dim - 1] < 0 || last_row <= first_row)
       return current_top;
 
-    // Per candidate row: 1 an open cell or one without points, 2 a
+    // Per candidate row: 1 a cell not full of metal or without points, 2 a
     // powder or fluid point, 4 a point at or above the hand-over
     // temperature; and the hottest point.
     const int           n_rows = last_row - first_row;
@@ -210,14 +208,14 @@ namespace femp
             hottest[r] = std::max(hottest[r], v[P::temperature]);
           }
       }
-    // The open cells, per row: their count, the least metal fraction and
-    // their horizontal extent (cell indices), for the log.
+    // The cells not full of metal, per row: their count, the least metal
+    // fraction and their horizontal extent (cell indices), for the log.
     std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.);
     std::vector<int>    bad_lo(n_rows * (dim - 1),
                             std::numeric_limits<int>::max()),
       bad_hi(n_rows * (dim - 1), -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
-      if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= closed_from))
+      if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= 1. - 1e-12))
         {
           const int r = ijk[dim - 1] - first_row;
           flags[r] |= 1;
@@ -260,8 +258,8 @@ namespace femp
         s << "the row at z = " << z0 + (first_row + r) * h << " m holds ";
         if (flags[r] & 1)
           {
-            s << n_bad[r] << " open cells (alpha below " << closed_from
-              << ": gas, a pore or unfused powder; down to " << least[r];
+            s << n_bad[r] << " cells not full of metal (alpha down to "
+              << least[r];
             for (int d = 0; d < dim - 1; ++d)
               s << (d ? ", " : "; ") << (d ? "y" : "x") << " within "
                 << grid.origin()[d] + bad_lo[r * (dim - 1) + d] * h << " to "

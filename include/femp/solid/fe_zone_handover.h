@@ -13,13 +13,9 @@
 //     powder's top), so that the new layer's melt, as deep as the deepest
 //     so far, stays a margin above them;
 //   - from the zone's top upwards, every row whose cells inside the zone's
-//     horizontal extent all hold points and are closed in the pore
-//     detector's sense (alpha at or above 'Porosity/Fused fraction
-//     threshold': no gas, no pore), and whose points are all solid (no
-//     powder, no fluid) and below the hand-over temperature is taken, up to
-//     the first row that is not. Not alpha = 1: the sub-cell occupancy of a
-//     strained solid that never melted drops to 1/2 in bands where a row of
-//     its lattice crosses a sub-cell boundary (dense metal, not a pore).
+//     horizontal extent are all full of metal (alpha = 1), hold points, and
+//     whose points are all solid (no powder, no fluid) and below the
+//     hand-over temperature is taken, up to the first row that is not.
 // Every rank takes the same decision (reductions over the ranks).
 #ifndef femp_fe_zone_handover_h
 #define femp_fe_zone_handover_h
@@ -74,14 +70,11 @@ namespace femp
             const bool   checkpoints) const;
     };
 
-    /// @p first_top: the first layer's powder top, m; @p closed_from: the
-    /// pore detector's 'Fused fraction threshold' (a cell with a smaller
-    /// metal fraction is open: gas or a pore).
+    /// @p first_top: the first layer's powder top, m.
     FeZoneHandover(const Parameters          &prm,
                    const BackgroundGrid<dim> &grid,
                    const double               solidus,
-                   const double               first_top,
-                   const double               closed_from);
+                   const double               first_top);
 
     /// After a temperature step: the lowest molten metal of the layer
     /// (cells of the local box owned by this rank; local).
@@ -130,7 +123,6 @@ namespace femp
     const Parameters           prm;
     const BackgroundGrid<dim> &grid;
     const double               solidus;
-    const double               closed_from;
     /// The powder top of the layer being observed, m.
     double layer_top;
     /// Lowest cell bottom with molten metal in the layer (local), m.
