@@ -1,8 +1,12 @@
 // femp: BuildSteps (see the header): the layer schedule, the recoat in the
 // step where a layer starts, the hand-over of cooled rows to the FE zone
 // after it, the pore detector's output and the record of each track.
+#include <deal.II/base/mpi.h>
+
 #include <femp/app/build_steps.h>
 
+#include <algorithm>
+#include <cmath>
 #include <iomanip>
 
 namespace femp
@@ -153,14 +157,49 @@ namespace femp
         return;
       }
     const double K0 = solid.energies(false).melted;
-    const auto   n  = solid.hand_over_rows(new_top);
+    // The cell fields before and after: in the handed cells the element's
+    // stress and plastic strain are the means the fields showed for the
+    // points, so sigma_ii and eps_p change by round-off; von Mises by the
+    // averaging (the mean of the points' against that of the mean stress).
+    std::vector<std::vector<double>> before, after;
+    solid.cell_fields(before);
+    const std::vector<std::uint8_t> zone_before = solid.fe_zone_cells();
+    const auto                      n           = solid.hand_over_rows(new_top);
+    solid.cell_fields(after);
+    // sigma_ii, von Mises, eps_p: the largest change and value.
+    double      change[3] = {0, 0, 0}, largest[3] = {0, 0, 0};
+    const auto &zone_after = solid.fe_zone_cells();
+    for (const auto c : grid_ptr->owned_cells())
+      if (zone_after[c] && !zone_before[c])
+        for (unsigned int k = 0; k < 5; ++k)
+          {
+            const unsigned int j = k < 3 ? 0 : k - 2;
+            change[j] =
+              std::max(change[j], std::abs(after[k][c] - before[k][c]));
+            largest[j] = std::max(largest[j], std::abs(before[k][c]));
+          }
+    Utilities::MPI::max(ArrayView<const double>(change, 3),
+                        grid_ptr->communicator(),
+                        ArrayView<double>(change, 3));
+    Utilities::MPI::max(ArrayView<const double>(largest, 3),
+                        grid_ptr->communicator(),
+                        ArrayView<double>(largest, 3));
+    auto ratio = [&](const unsigned int j) {
+      return largest[j] > 0 ? change[j] / largest[j] : 0.;
+    };
     // The zone's points carry temperatures only: alpha bins them once.
     points.set_fixed_cells(solid.fe_zone_cells());
     n_handed[0] += n[0], n_handed[1] += n[1];
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
           << " points handed over, their kinetic energy "
-          << solid.energies(false).melted - K0 << " J removed" << std::endl;
+          << solid.energies(false).melted - K0
+          << " J removed; in the handed cells sigma_ii changed by "
+          << std::setprecision(2) << ratio(0) << " of the largest |sigma_ii| ("
+          << largest[0] << " Pa), plastic strain by " << ratio(2)
+          << " of the largest (" << largest[2] << "), von Mises by " << ratio(1)
+          << " of the largest (" << largest[1] << " Pa, the averaging)"
+          << std::setprecision(6) << std::endl;
   }
 
   template <int dim>

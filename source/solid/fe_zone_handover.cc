@@ -208,9 +208,27 @@ namespace femp
             hottest[r] = std::max(hottest[r], v[P::temperature]);
           }
       }
+    // The cells not full of metal, per row: their count, the least metal
+    // fraction and their horizontal extent (cell indices), for the log.
+    std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.);
+    std::vector<int>    bad_lo(n_rows * (dim - 1),
+                            std::numeric_limits<int>::max()),
+      bad_hi(n_rows * (dim - 1), -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
       if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= 1. - 1e-12))
-        flags[ijk[dim - 1] - first_row] |= 1;
+        {
+          const int r = ijk[dim - 1] - first_row;
+          flags[r] |= 1;
+          n_bad[r] += 1;
+          least[r] = std::min(least[r], has_points[idx] ? alpha[idx] : 0.);
+          for (int d = 0; d < dim - 1; ++d)
+            {
+              int &l = bad_lo[r * (dim - 1) + d],
+                  &u = bad_hi[r * (dim - 1) + d];
+              l      = std::min(l, ijk[d]);
+              u      = std::max(u, ijk[d]);
+            }
+        }
     });
     // The flags of all ranks: one maximum per bit.
     std::vector<int> bits(3 * n_rows);
@@ -223,6 +241,14 @@ namespace femp
       flags[r] = bits[3 * r] | (bits[3 * r + 1] << 1) | (bits[3 * r + 2] << 2);
     MPI_Allreduce(
       MPI_IN_PLACE, hottest.data(), n_rows, MPI_DOUBLE, MPI_MAX, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, n_bad.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, least.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, bad_lo.data(), n_rows * (dim - 1), MPI_INT, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, bad_hi.data(), n_rows * (dim - 1), MPI_INT, MPI_MAX, comm);
     int r = 0;
     while (r < n_rows && flags[r] == 0)
       ++r;
@@ -231,7 +257,16 @@ namespace femp
         std::ostringstream s;
         s << "the row at z = " << z0 + (first_row + r) * h << " m holds ";
         if (flags[r] & 1)
-          s << "a cell not full of metal";
+          {
+            s << n_bad[r] << " cells not full of metal (alpha down to "
+              << least[r];
+            for (int d = 0; d < dim - 1; ++d)
+              s << (d ? ", " : "; ") << (d ? "y" : "x") << " within "
+                << grid.origin()[d] + bad_lo[r * (dim - 1) + d] * h << " to "
+                << grid.origin()[d] + (bad_hi[r * (dim - 1) + d] + 1) * h
+                << " m";
+            s << ")";
+          }
         else if (flags[r] & 2)
           s << "powder or fluid points";
         else
