@@ -160,7 +160,8 @@ namespace femp
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
           << " points handed over, their kinetic energy "
-          << solid.energies(false).melted - K0 << " J removed" << std::endl;
+          << solid.energies(false).melted - K0
+          << (dim == 2 ? " J/m removed" : " J removed") << std::endl;
   }
 
   template <int dim>
