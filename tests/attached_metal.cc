@@ -5,15 +5,20 @@
 // to the top rows, runs along x and comes back down to end one cell above
 // the substrate without touching it (its tip, 1500 K, is attached only
 // through the whole winding path, which crosses the ranks' boundaries).
-// A partly filled cell (alpha = 0.3, 1600 K) sits on the tongue. Detached:
+// A partly filled cell (alpha = 0.3, 1600 K) sits on the tongue, and from
+// the tongue hangs a chain of three partly filled cells (alpha = 0.12)
+// that ends in a partly filled cell (alpha = 0.25, 1700 K) with no other
+// metal neighbour: attached, through cells that conduct heat. Detached:
 // a hot blob of 2 x 2 x 2 metal cells in the gas (2800 K), a single partly
-// filled cell (alpha 0.4, 3000 K), and a metal cell (2500 K) that shares
-// only an edge with the tongue. Checks against a serial flood fill over
-// the global arrays: the number of counted cells, and the peak temperature
-// 1600 K (the blob's 3000 K is the peak over all metal). Then without the
-// partly filled cell (1500 K, the tip), and with the blob joined to the
-// substrate by a column of metal (2800 K). Runs on 1 and 2 ranks with the
-// same output.
+// filled cell (alpha 0.4, 3000 K), a drop of two partly filled cells
+// (alpha 0.2, 3100 K), and a metal cell (2500 K) that shares only an edge
+// with the tongue. Checks against a serial flood fill over the global
+// arrays: the number of attached cells, and the peak temperatures of the
+// attached metal (1700 K, the hanging cell) and of the detached metal
+// (3100 K, the drop). Then without the chain (1600 K), without the partly
+// filled cell (1500 K, the tip), and with the blob joined to the substrate
+// by a column of metal (2800 K). Runs on 1 and 2 ranks with the same
+// output.
 #include <femp/grid/metal_bodies.h>
 
 #include <deque>
@@ -44,8 +49,13 @@ namespace
     }
   };
 
+  struct Parts
+  {
+    bool partial_on_tongue, chain, blob_joined;
+  };
+
   Scene
-  make_scene(const bool partial_on_tongue, const bool blob_joined)
+  make_scene(const Parts &parts)
   {
     Scene s;
     for (int k = 0; k < 4; ++k)
@@ -63,23 +73,41 @@ namespace
     for (int i = 7; i <= 13; ++i)
       s.set(i, 2, 5, 1., 1200.);
     s.set(7, 2, 5, 1., 1500.);
-    if (partial_on_tongue)
+    if (parts.partial_on_tongue)
       s.set(6, 2, 13, 0.3, 1600.);
+    if (parts.chain)
+      {
+        // From the tongue's cell (13, 2, 9) along x, then along y, then
+        // down to the hanging cell.
+        s.set(14, 2, 9, 0.12, 1650.);
+        s.set(14, 3, 9, 0.12, 1650.);
+        s.set(14, 4, 9, 0.12, 1650.);
+        s.set(14, 4, 8, 0.25, 1700.);
+      }
     // Detached: the blob, a partly filled cell, an edge contact.
     for (int k = 8; k <= 9; ++k)
       for (int j = 5; j <= 6; ++j)
         for (int i = 8; i <= 9; ++i)
           s.set(i, j, k, 1., 2800.);
-    if (blob_joined)
+    if (parts.blob_joined)
       for (int k = 4; k <= 7; ++k)
         s.set(8, 5, k, 0.9, 1000.);
     s.set(4, 6, 10, 0.4, 3000.);
+    s.set(11, 6, 6, 0.2, 3100.); // the drop of two cells
+    s.set(11, 6, 7, 0.2, 3100.);
     s.set(3, 3, 8, 1., 2500.); // shares only an edge with the tongue
     return s;
   }
 
-  /// Serial reference: counted cells and their peak temperature.
-  std::pair<long, double>
+  struct Reference
+  {
+    long   attached_cells = 0;
+    double attached = 0, detached = 0;
+  };
+
+  /// Serial reference: the attached cells (a flood fill over the metal
+  /// cells from the bottom row) and the peak temperatures.
+  Reference
   reference(const Scene &s)
   {
     std::vector<char> attached(s.alpha.size(), 0);
@@ -88,46 +116,38 @@ namespace
               {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
-        if (s.alpha[Scene::at(i, j, 0)] > 0.5)
+        if (s.alpha[Scene::at(i, j, 0)] > 0)
           {
             attached[Scene::at(i, j, 0)] = 1;
             queue.push_back(Scene::at(i, j, 0));
           }
-    const auto neighbours = [&](int c, auto &&f) {
-      const int i = c % nx, j = (c / nx) % ny, k = c / (nx * ny);
-      for (const auto &d : di)
-        {
-          const int a = i + d[0], b = j + d[1], e = k + d[2];
-          if (a >= 0 && a < nx && b >= 0 && b < ny && e >= 0 && e < nz)
-            f(Scene::at(a, b, e));
-        }
-    };
     while (!queue.empty())
       {
         const int c = queue.front();
         queue.pop_front();
-        neighbours(c, [&](int n) {
-          if (!attached[n] && s.alpha[n] > 0.5)
-            {
-              attached[n] = 1;
-              queue.push_back(n);
-            }
-        });
-      }
-    long   count = 0;
-    double T_max = 0;
-    for (int c = 0; c < int(s.alpha.size()); ++c)
-      {
-        bool counted = attached[c];
-        if (!counted && s.alpha[c] > 0)
-          neighbours(c, [&](int n) { counted = counted || attached[n]; });
-        if (counted)
+        const int i = c % nx, j = (c / nx) % ny, k = c / (nx * ny);
+        for (const auto &d : di)
           {
-            ++count;
-            T_max = std::max(T_max, s.T[c]);
+            const int a = i + d[0], b = j + d[1], e = k + d[2];
+            if (a < 0 || a >= nx || b < 0 || b >= ny || e < 0 || e >= nz)
+              continue;
+            const int n = Scene::at(a, b, e);
+            if (!attached[n] && s.alpha[n] > 0)
+              {
+                attached[n] = 1;
+                queue.push_back(n);
+              }
           }
       }
-    return {count, T_max};
+    Reference r;
+    for (int c = 0; c < int(s.alpha.size()); ++c)
+      if (s.alpha[c] > 0)
+        {
+          double &peak = attached[c] ? r.attached : r.detached;
+          peak         = std::max(peak, s.T[c]);
+          r.attached_cells += attached[c];
+        }
+    return r;
   }
 } // namespace
 
@@ -144,13 +164,14 @@ main(int argc, char **argv)
   grid.create();
   const unsigned int n_ranks = Utilities::MPI::n_mpi_processes(comm);
 
-  const std::pair<const char *, std::pair<bool, bool>> cases[] = {
-    {"scene", {true, false}},
-    {"without the partly filled cell", {false, false}},
-    {"blob joined to the substrate", {false, true}}};
-  for (const auto &[name, flags] : cases)
+  const std::pair<const char *, Parts> cases[] = {
+    {"scene", {true, true, false}},
+    {"without the hanging chain", {true, false, false}},
+    {"without the partly filled cell", {false, false, false}},
+    {"blob joined to the substrate", {false, false, true}}};
+  for (const auto &[name, parts] : cases)
     {
-      const Scene s     = make_scene(flags.first, flags.second);
+      const Scene s     = make_scene(parts);
       auto        alpha = grid.make_field(0.), T = grid.make_field(300.);
       for (const auto idx : grid.owned_cells())
         {
@@ -158,24 +179,28 @@ main(int argc, char **argv)
           alpha[idx]   = s.alpha[Scene::at(g[0], g[1], g[2])];
           T[idx]       = s.T[Scene::at(g[0], g[1], g[2])];
         }
-      unsigned int sweeps  = 0;
-      const auto   counted = attached_metal_cells(grid, alpha, &sweeps);
-      long         n       = 0;
+      unsigned int sweeps   = 0;
+      const auto   attached = attached_metal_cells(grid, alpha, &sweeps);
+      long         n        = 0;
       for (const auto idx : grid.owned_cells())
-        n += counted[idx];
-      n                 = Utilities::MPI::sum(n, comm);
-      const auto   ref  = reference(s);
-      const double Tmax = attached_metal_max_temperature(grid, T, alpha);
-      checks.print(std::string(name) + ": counted cells", n, 6);
-      checks.at_most(std::string(name) + ": |counted - serial flood fill|",
-                     std::abs(n - ref.first),
+        n += attached[idx];
+      n                       = Utilities::MPI::sum(n, comm);
+      const auto        ref   = reference(s);
+      const auto        peaks = metal_peak_temperatures(grid, T, alpha);
+      const std::string at    = std::string(name) + ": ";
+      checks.print(at + "attached cells", n, 6);
+      checks.at_most(at + "|attached cells - serial flood fill|",
+                     std::abs(n - ref.attached_cells),
                      0);
-      checks.print(std::string(name) +
-                     ": peak temperature of attached metal (K)",
-                   Tmax,
-                   6);
-      checks.at_most(std::string(name) + ": |peak - serial| (K)",
-                     std::abs(Tmax - ref.second),
+      const double T_att = peaks.attached.value_or(-1);
+      const double T_det = peaks.detached.value_or(-1);
+      checks.print(at + "peak temperature of attached metal (K)", T_att, 6);
+      checks.at_most(at + "|attached peak - serial| (K)",
+                     std::abs(T_att - ref.attached),
+                     0);
+      checks.print(at + "peak temperature of detached metal (K)", T_det, 6);
+      checks.at_most(at + "|detached peak - serial| (K)",
+                     std::abs(T_det - ref.detached),
                      0);
       // One exchange round on one rank; on several, the tongue crosses
       // the partition and needs more (not printed: depends on the ranks).

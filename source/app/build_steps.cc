@@ -193,8 +193,8 @@ namespace femp
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
           << " points handed over, their kinetic energy "
-          << solid.energies(false).melted - K0
-          << " J removed; in the handed cells sigma_ii changed by "
+          << solid.energies(false).melted - K0 << (dim == 2 ? " J/m" : " J")
+          << " removed; in the handed cells sigma_ii changed by "
           << std::setprecision(2) << ratio(0) << " of the largest |sigma_ii| ("
           << largest[0] << " Pa), plastic strain by " << ratio(2)
           << " of the largest (" << largest[2] << "), von Mises by " << ratio(1)

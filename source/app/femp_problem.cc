@@ -324,13 +324,11 @@ namespace femp
       return workpiece_melt_pool(scene, *grid, *heat, point_heat->bodies());
     };
     results->write_when_due(*control, timer, pool, report->series_pool());
-    // The hottest metal of the workpiece, not of a drop in the gas, and
-    // the pool now (the series' pool may lie up to a 'Time series
-    // interval' back).
+    // The hottest metal of the workpiece and, apart, of the detached
+    // metal, and the pool now (the series' pool may lie up to a 'Time
+    // series interval' back).
     report->progress_when_due(
-      *control,
-      [this] { return time_steps->workpiece_peak_temperature(); },
-      pool);
+      *control, [this] { return time_steps->metal_peak_temperatures(); }, pool);
   }
 
   template <int dim>

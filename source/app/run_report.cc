@@ -65,21 +65,21 @@ namespace femp
   template <int dim>
   void
   RunReport<dim>::progress_when_due(
-    const SimulationControl             &control,
-    const std::function<double()>       &T_max,
-    const std::function<MeltPoolSize()> &pool) const
+    const SimulationControl                      &control,
+    const std::function<MetalPeakTemperatures()> &T_max,
+    const std::function<MeltPoolSize()>          &pool) const
   {
     if (!control.progress_due())
       return;
-    const double T = T_max();
+    const MetalPeakTemperatures T = T_max();
     progress(control, T, pool());
   }
 
   template <int dim>
   void
-  RunReport<dim>::progress(const SimulationControl &control,
-                           const double             T_max,
-                           const MeltPoolSize      &pool) const
+  RunReport<dim>::progress(const SimulationControl     &control,
+                           const MetalPeakTemperatures &T_max,
+                           const MeltPoolSize          &pool) const
   {
     const double time = control.time();
     const double wall = control.wall_time();
@@ -90,7 +90,17 @@ namespace femp
     out << std::setprecision(4) << "t = " << std::setw(10) << time
         << " s  step " << std::setw(7) << control.step()
         << "  dt = " << std::setw(10) << control.time_step()
-        << " s  T_max(attached metal) = " << std::setw(8) << T_max << " K";
+        << " s  T_max(attached metal) = ";
+    // (No metal attached, or none detached: 'none'.)
+    const auto temperature = [this](const std::optional<double> &T) {
+      if (T)
+        out << std::setw(8) << *T << " K";
+      else
+        out << std::setw(10) << "none";
+    };
+    temperature(T_max.attached);
+    out << "  T_max(detached metal) = ";
+    temperature(T_max.detached);
     // The pool of a scene with a laser (a thermal shock or a flow check
     // without one shows none).
     if (with_laser && pool.length <= 0 && pool.width <= 0 && pool.depth <= 0)

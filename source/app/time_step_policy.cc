@@ -37,12 +37,19 @@ namespace femp
   }
 
   template <int dim>
+  const MetalPeakTemperatures &
+  TimeStepPolicy<dim>::metal_peak_temperatures()
+  {
+    if (!metal_peaks)
+      metal_peaks = bodies.peak_temperatures(heat.temperature());
+    return *metal_peaks;
+  }
+
+  template <int dim>
   double
   TimeStepPolicy<dim>::workpiece_peak_temperature()
   {
-    if (!workpiece_peak)
-      workpiece_peak = bodies.workpiece_max_temperature(heat.temperature());
-    return *workpiece_peak;
+    return metal_peak_temperatures().workpiece();
   }
 
   template <int dim>

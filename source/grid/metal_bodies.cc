@@ -1,8 +1,9 @@
 // femp: the bodies of metal of alpha (see the header): the detached drops
 // (a search over the cells with few metal neighbours, K rounds through the
-// ghost layer) and the workpiece (a flood fill over the cells with
-// alpha > 1/2 from the bottom row of the domain, distributed over the ranks
-// through the ghost layer).
+// ghost layer) and the workpiece (a flood fill over the face-connected
+// metal cells, alpha > 0, from the bottom row of the domain, distributed
+// over the ranks through the ghost layer), and the peak temperatures of the
+// attached and the detached metal.
 #include <deal.II/base/mpi.h>
 
 #include <femp/grid/metal_bodies.h>
@@ -55,10 +56,10 @@ namespace femp
   }
 
   template <int dim>
-  double
-  MetalBodies<dim>::workpiece_max_temperature(const std::vector<double> &T)
+  MetalPeakTemperatures
+  MetalBodies<dim>::peak_temperatures(const std::vector<double> &T)
   {
-    return attached_metal_max_temperature(grid, T, alpha, workpiece_cells());
+    return metal_peak_temperatures(grid, T, alpha, workpiece_cells());
   }
 
   template <int dim>
@@ -196,10 +197,9 @@ namespace femp
     using Grid         = BackgroundGrid<dim>;
     const auto &st     = grid.strides();
     const auto &status = grid.cell_status();
-    const auto  metal  = [&](const std::size_t i) { return alpha[i] > 0.5; };
+    const auto  metal  = [&](const std::size_t i) { return alpha[i] > 0; };
 
-    // label: 1 for attached cells (alpha > 1/2); a double field for the
-    // ghost exchange.
+    // label: 1 for attached cells; a double field for the ghost exchange.
     std::vector<double>        label = grid.make_field(0.);
     std::vector<std::uint32_t> stack;
     const auto                 visit = [&](const std::size_t i) {
@@ -253,53 +253,49 @@ namespace femp
     if (sweeps)
       *sweeps = n_sweeps;
 
-    // Counted: attached, or partly filled next to an attached cell (the
-    // labels of the ghosts are current after the last exchange).
-    std::vector<std::uint8_t> counted(label.size(), 0);
+    std::vector<std::uint8_t> attached(label.size(), 0);
     for (const auto idx : grid.owned_cells())
-      {
-        bool c = label[idx] != 0;
-        if (!c && alpha[idx] > 0)
-          for (int d = 0; d < dim && !c; ++d)
-            c = label[idx + st[d]] != 0 || label[idx - st[d]] != 0;
-        counted[idx] = c;
-      }
-    return counted;
+      attached[idx] = label[idx] != 0;
+    return attached;
   }
 
   template <int dim>
-  double
-  attached_metal_max_temperature(const BackgroundGrid<dim> &grid,
-                                 const std::vector<double> &T,
-                                 const std::vector<double> &alpha)
-  {
-    return attached_metal_max_temperature(grid,
-                                          T,
-                                          alpha,
-                                          attached_metal_cells(grid, alpha));
-  }
-
-  template <int dim>
-  double
-  attached_metal_max_temperature(const BackgroundGrid<dim>       &grid,
-                                 const std::vector<double>       &T,
-                                 const std::vector<double>       &alpha,
-                                 const std::vector<std::uint8_t> &counted)
+  MetalPeakTemperatures
+  metal_peak_temperatures(const BackgroundGrid<dim>       &grid,
+                          const std::vector<double>       &T,
+                          const std::vector<double>       &alpha,
+                          const std::vector<std::uint8_t> &attached)
   {
     const double lowest   = std::numeric_limits<double>::lowest();
-    double       local[2] = {lowest, lowest}; // counted, all metal
+    double       local[2] = {lowest, lowest}; // attached, detached
     for (const auto idx : grid.owned_cells())
       if (alpha[idx] > 0)
         {
-          local[1] = std::max(local[1], T[idx]);
-          if (counted[idx])
-            local[0] = std::max(local[0], T[idx]);
+          double &m = local[attached[idx] ? 0 : 1];
+          m         = std::max(m, T[idx]);
         }
     double global[2];
     Utilities::MPI::max(ArrayView<const double>(local, 2),
                         grid.communicator(),
                         ArrayView<double>(global, 2));
-    return global[0] > lowest ? global[0] : global[1];
+    MetalPeakTemperatures p;
+    if (global[0] > lowest)
+      p.attached = global[0];
+    if (global[1] > lowest)
+      p.detached = global[1];
+    return p;
+  }
+
+  template <int dim>
+  MetalPeakTemperatures
+  metal_peak_temperatures(const BackgroundGrid<dim> &grid,
+                          const std::vector<double> &T,
+                          const std::vector<double> &alpha)
+  {
+    return metal_peak_temperatures(grid,
+                                   T,
+                                   alpha,
+                                   attached_metal_cells(grid, alpha));
   }
 
   template class MetalBodies<2>;
@@ -312,22 +308,17 @@ namespace femp
   attached_metal_cells(const BackgroundGrid<3> &,
                        const std::vector<double> &,
                        unsigned int *);
-  template double
-  attached_metal_max_temperature(const BackgroundGrid<2> &,
-                                 const std::vector<double> &,
-                                 const std::vector<double> &);
-  template double
-  attached_metal_max_temperature(const BackgroundGrid<3> &,
-                                 const std::vector<double> &,
-                                 const std::vector<double> &);
-  template double
-  attached_metal_max_temperature(const BackgroundGrid<2> &,
-                                 const std::vector<double> &,
-                                 const std::vector<double> &,
-                                 const std::vector<std::uint8_t> &);
-  template double
-  attached_metal_max_temperature(const BackgroundGrid<3> &,
-                                 const std::vector<double> &,
-                                 const std::vector<double> &,
-                                 const std::vector<std::uint8_t> &);
+#define FEMP_INSTANTIATE(D)                               \
+  template MetalPeakTemperatures metal_peak_temperatures( \
+    const BackgroundGrid<D> &,                            \
+    const std::vector<double> &,                          \
+    const std::vector<double> &);                         \
+  template MetalPeakTemperatures metal_peak_temperatures( \
+    const BackgroundGrid<D> &,                            \
+    const std::vector<double> &,                          \
+    const std::vector<double> &,                          \
+    const std::vector<std::uint8_t> &);
+  FEMP_INSTANTIATE(2)
+  FEMP_INSTANTIATE(3)
+#undef FEMP_INSTANTIATE
 } // namespace femp

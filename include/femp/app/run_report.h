@@ -15,6 +15,7 @@
 #include <femp/coupling/point_heat_exchange.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/material_points.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/heat/heat_transfer.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/melt_pool.h>
@@ -100,13 +101,13 @@ namespace femp
 
     /// The progress line of the step just taken, when @p control says it
     /// is due: @p T_max gives the hottest metal attached to the substrate
-    /// (MetalBodies), @p pool the melt pool (melt_pool.h), both at the end
-    /// of the step; the pool only in a scene whose laser has power
-    /// (watch_laser()).
+    /// and the hottest detached metal (MetalBodies), @p pool the melt pool
+    /// (melt_pool.h), both at the end of the step; the pool only in a scene
+    /// whose laser has power (watch_laser()).
     void
-    progress_when_due(const SimulationControl             &control,
-                      const std::function<double()>       &T_max,
-                      const std::function<MeltPoolSize()> &pool) const;
+    progress_when_due(const SimulationControl                      &control,
+                      const std::function<MetalPeakTemperatures()> &T_max,
+                      const std::function<MeltPoolSize()>          &pool) const;
 
     /// Fill the end-of-run numbers of the summary from the modules
     /// (@p flow and @p solid may be null; @p point_heat: the energy
@@ -130,9 +131,9 @@ namespace femp
 
     /// The progress line (progress_when_due()).
     void
-    progress(const SimulationControl &control,
-             const double             T_max,
-             const MeltPoolSize      &pool) const;
+    progress(const SimulationControl     &control,
+             const MetalPeakTemperatures &T_max,
+             const MeltPoolSize          &pool) const;
     void
     print_energy(const typename HeatTransfer<dim>::EnergyBudget &e,
                  const bool                                      heat_enabled,

@@ -62,7 +62,7 @@ namespace femp
     void
     begin_step()
     {
-      workpiece_peak.reset();
+      metal_peaks.reset();
     }
 
     /// Termination criterion 'Stop when peak temperature below': true (and
@@ -94,9 +94,14 @@ namespace femp
     std::function<bool()>
     flow_may_melt() const;
 
-    /// Peak temperature of the metal attached to the substrate
-    /// (MetalBodies::workpiece_max_temperature()), computed once per
+    /// Peak temperatures of the metal attached to the substrate and of the
+    /// detached metal (MetalBodies::peak_temperatures()), computed once per
     /// temperature step. Collective.
+    const MetalPeakTemperatures &
+    metal_peak_temperatures();
+
+    /// The temperature that the stop test and the cooling step compare,
+    /// K: metal_peak_temperatures().workpiece(). Collective.
     double
     workpiece_peak_temperature();
 
@@ -109,8 +114,8 @@ namespace femp
     ConditionalOStream            &out;
     /// 'Time step after solidification' in use at this step.
     bool cooling_step = false;
-    /// workpiece_peak_temperature() of the current step.
-    std::optional<double> workpiece_peak;
+    /// metal_peak_temperatures() of the current step.
+    std::optional<MetalPeakTemperatures> metal_peaks;
 
     /// The one stop condition: the laser's path has ended at @p time and
     /// the workpiece's peak temperature is below @p T_limit.

@@ -21,33 +21,53 @@
 //
 // The workpiece, the metal attached to the substrate, for the peak
 // temperature that ends a run after cooling ('Time stepping/Stop when peak
-// temperature below', doc/cases.md "Residual stress after cooling"). With
-// the melt flow, droplets that the flow throws off the pool (spatter) can
-// sit in the gas as single metal cells; surrounded by gas they lose heat
-// only through the surface and stay near the liquidus long after the track
-// has cooled, so the hottest metal cell would never fall below a stop
-// temperature. The workpiece is the metal connected to the bottom of the
-// domain:
-//   - attached cells: the cells with alpha > 1/2 connected to a cell of the
-//     bottom row (alpha > 1/2) through a chain of face neighbours with
-//     alpha > 1/2 (a flood fill: within each rank, then across the ghost
-//     layer, repeated until no rank finds a new cell; the set is a property
-//     of the field, so it does not depend on the partition);
-//   - counted cells: the attached cells and the cells with 0 < alpha <= 1/2
-//     that share a face with an attached cell (the partly filled cells on
-//     the surface of the pool and of the bead).
-// Metal that is not counted (a detached droplet, powder not touching the
-// workpiece) does not enter the peak temperature.
+// temperature below', doc/cases.md "Residual stress after cooling"), the
+// cooling step and the melt pool: the metal cells (alpha > 0) connected to
+// a metal cell of the bottom row of the domain through a chain of face
+// neighbours that are metal cells (a flood fill: within each rank, then
+// across the ghost layer, repeated until no rank finds a new cell; the set
+// is a property of the field, so it does not depend on the partition).
+// These are exactly the cells that the heat equation (eq. 1) joins to the
+// substrate by conduction: a cell's conductivity alpha k_m + (1 - alpha)
+// k_g is zero in gas cells, so heat passes between cells only across faces
+// of two metal cells. All other metal is detached: droplets that the flow
+// throws off the pool (spatter), surrounded by gas, lose heat only through
+// their surface and stay near the liquidus long after the track has
+// cooled; powder not touching the workpiece. Its peak temperature is
+// reported apart from the workpiece's (MetalPeakTemperatures).
 #ifndef femp_metal_bodies_h
 #define femp_metal_bodies_h
 
 #include <femp/grid/background_grid.h>
 
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <vector>
 
 namespace femp
 {
+  /// Peak temperatures of the metal (alpha > 0) of a field, K: of the cells
+  /// attached to the substrate (the workpiece) and of the other metal
+  /// cells (detached); empty where there are none.
+  struct MetalPeakTemperatures
+  {
+    std::optional<double> attached;
+    std::optional<double> detached;
+
+    /// The temperature that the stop test and the cooling step compare:
+    /// the attached metal's peak; the detached metal's when nothing is
+    /// attached (a scene without metal in the bottom row); the lowest
+    /// double without metal.
+    double
+    workpiece() const
+    {
+      return attached ?
+               *attached :
+               detached.value_or(std::numeric_limits<double>::lowest());
+    }
+  };
+
   template <int dim>
   class MetalBodies
   {
@@ -82,17 +102,16 @@ namespace femp
     std::vector<std::uint32_t>
     detached_cells() const;
 
-    /// Per cell of the local box, 1 for the counted cells of the workpiece
+    /// Per cell of the local box, 1 for the cells of the workpiece
     /// (above), 0 else; valid on owned cells. Collective at its first call
     /// after update().
     const std::vector<std::uint8_t> &
     workpiece_cells();
 
-    /// Global maximum of @p T over the counted cells of the workpiece; the
-    /// maximum over all metal cells (alpha > 0) when there is none.
-    /// Collective.
-    double
-    workpiece_max_temperature(const std::vector<double> &T);
+    /// Global peak temperatures of @p T over the workpiece and over the
+    /// detached metal. Collective.
+    MetalPeakTemperatures
+    peak_temperatures(const std::vector<double> &T);
 
   private:
     const BackgroundGrid<dim> &grid;
@@ -114,9 +133,9 @@ namespace femp
     find_detached_drops();
   };
 
-  /// The counted cells of the workpiece (MetalBodies, above) of @p alpha:
-  /// per cell of the local box, 1 for the counted cells, 0 else; valid on
-  /// owned cells. @p sweeps, if given, receives the number of exchange
+  /// The cells of the workpiece (MetalBodies, above) of @p alpha: per
+  /// cell of the local box, 1 for the attached metal cells, 0 else; valid
+  /// on owned cells. @p sweeps, if given, receives the number of exchange
   /// rounds. Collective.
   template <int dim>
   std::vector<std::uint8_t>
@@ -124,22 +143,21 @@ namespace femp
                        const std::vector<double> &alpha,
                        unsigned int              *sweeps = nullptr);
 
-  /// Global maximum of @p T over the cells @p counted of attached_metal_
-  /// cells(); the maximum over all metal cells (alpha > 0) when there is
-  /// none. Collective.
+  /// Global peak temperatures of @p T over the metal cells of @p alpha,
+  /// split by @p attached (attached_metal_cells()). Collective.
   template <int dim>
-  double
-  attached_metal_max_temperature(const BackgroundGrid<dim>       &grid,
-                                 const std::vector<double>       &T,
-                                 const std::vector<double>       &alpha,
-                                 const std::vector<std::uint8_t> &counted);
+  MetalPeakTemperatures
+  metal_peak_temperatures(const BackgroundGrid<dim>       &grid,
+                          const std::vector<double>       &T,
+                          const std::vector<double>       &alpha,
+                          const std::vector<std::uint8_t> &attached);
 
-  /// The same with the counted cells found from @p alpha. Collective.
+  /// The same with the attached cells found from @p alpha. Collective.
   template <int dim>
-  double
-  attached_metal_max_temperature(const BackgroundGrid<dim> &grid,
-                                 const std::vector<double> &T,
-                                 const std::vector<double> &alpha);
+  MetalPeakTemperatures
+  metal_peak_temperatures(const BackgroundGrid<dim> &grid,
+                          const std::vector<double> &T,
+                          const std::vector<double> &alpha);
 } // namespace femp
 
 #endif
