@@ -141,11 +141,9 @@ namespace femp
                              const ConditionalOStream &pcout)
   {
     TimerOutput::Scope scope(timer, "FE zone hand-over");
-    const double       new_top = handover->choose_top(top,
-                                                points,
-                                                solid.fe_zone_cells(),
-                                                heat_ptr->metal_fraction());
-    const double       old_top = handover->zone_top();
+    const double       new_top =
+      handover->choose_top(top, points, solid.fe_zone_cells());
+    const double old_top = handover->zone_top();
     pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
           << handover->deepest_fusion() << " m, rows up to "
           << handover->limit() << " m";

@@ -182,6 +182,14 @@ namespace femp
               << " time(s) a material point (spatter moving with the melt's "
                  "velocity) reached a face of the domain and was held there"
               << std::endl;
+        const unsigned long held_zone =
+          solid->n_points_held_at_zone(); // collective
+        if (held_zone > 0)
+          out << "Solid: " << held_zone
+              << " time(s) a material point reached the finite-element "
+                 "zone's top face (less than half a point spacing into the "
+                 "zone) and was held on it"
+              << std::endl;
         if (solid->n_points_set_aside() > 0)
           out << "Solid: " << solid->n_points_set_aside()
               << " time(s) a solid point in a detached drop (Heat "

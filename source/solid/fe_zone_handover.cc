@@ -143,8 +143,7 @@ namespace femp
   double
   FeZoneHandover<dim>::choose_top(const double                     new_top,
                                   const MaterialPoints<dim>       &points,
-                                  const std::vector<std::uint8_t> &zone,
-                                  const std::vector<double>       &alpha)
+                                  const std::vector<std::uint8_t> &zone)
   {
     const MPI_Comm comm = grid.communicator();
     // The layer before: its fusion depth below its powder top.
@@ -208,19 +207,97 @@ namespace femp
             hottest[r] = std::max(hottest[r], v[P::temperature]);
           }
       }
-    // The cells not full of metal, per row: their count, the least metal
-    // fraction and their horizontal extent (cell indices), for the log.
+    // The fill of each candidate cell: the points' volume under the hat of
+    // half-width h centred at the cell's centre, over the hat's volume
+    // inside the domain (see the header). Every rank adds its points; the
+    // sums of the candidate box are reduced over the ranks.
+    std::array<int, dim> n_box;
+    for (int d = 0; d < dim - 1; ++d)
+      n_box[d] = hi[d] - lo[d] + 1;
+    n_box[dim - 1]     = n_rows;
+    std::size_t n_fill = 1;
+    for (int d = 0; d < dim; ++d)
+      n_fill *= n_box[d];
+    std::vector<double>  fill(n_fill, 0.);
+    std::array<int, dim> first;
+    for (int d = 0; d < dim - 1; ++d)
+      first[d] = lo[d];
+    first[dim - 1] = first_row;
+    auto box_index = [&](const std::array<int, dim> &ijk) -> long {
+      long k = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        {
+          const int i = ijk[d] - first[d];
+          if (i < 0 || i >= n_box[d])
+            return -1;
+          k = k * n_box[d] + i;
+        }
+      return k;
+    };
+    for (const auto &particle : points.particle_handler())
+      {
+        const Point<dim> &x = particle.get_location();
+        const double      V = particle.get_properties()[P::volume];
+        // The two cell centres around x in each direction and the hats'
+        // values there.
+        std::array<int, dim>    i0;
+        std::array<double, dim> w1;
+        for (int d = 0; d < dim; ++d)
+          {
+            const double t = (x[d] - grid.origin()[d]) / h - 0.5;
+            i0[d]          = int(std::floor(t));
+            w1[d]          = t - i0[d];
+          }
+        for (unsigned int a = 0; a < (1u << dim); ++a)
+          {
+            std::array<int, dim> ijk;
+            double               w = V;
+            for (int d = 0; d < dim; ++d)
+              {
+                const bool up = a & (1u << d);
+                ijk[d]        = i0[d] + (up ? 1 : 0);
+                w *= up ? w1[d] : 1. - w1[d];
+              }
+            const long k = box_index(ijk);
+            if (k >= 0 && w > 0)
+              fill[k] += w;
+          }
+      }
+    Utilities::MPI::sum(fill, comm, fill);
+    // The hat's volume inside the domain: h per direction, 7/8 h at a face
+    // of the domain (an eighth of it lies beyond).
+    auto hat_volume = [&](const std::array<int, dim> &ijk) {
+      double vol = 1;
+      for (int d = 0; d < dim; ++d)
+        {
+          double share = 1;
+          if (ijk[d] == 0)
+            share -= 0.125;
+          if (ijk[d] == int(grid.n_cells()[d]) - 1)
+            share -= 0.125;
+          vol *= share * h;
+        }
+      return vol;
+    };
+    // The cells not full of metal, per row: their count, the least fill
+    // and their horizontal extent (cell indices), for the log.
     std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.);
     std::vector<int>    bad_lo(n_rows * (dim - 1),
                             std::numeric_limits<int>::max()),
       bad_hi(n_rows * (dim - 1), -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
-      if (in_box(ijk) && !(has_points[idx] && alpha[idx] >= 1. - 1e-12))
+      if (!in_box(ijk))
+        return;
+      std::array<int, dim> c;
+      for (int d = 0; d < dim; ++d)
+        c[d] = ijk[d];
+      const double f = fill[box_index(c)] / hat_volume(c);
+      if (!(has_points[idx] && f >= full_fill))
         {
           const int r = ijk[dim - 1] - first_row;
           flags[r] |= 1;
           n_bad[r] += 1;
-          least[r] = std::min(least[r], has_points[idx] ? alpha[idx] : 0.);
+          least[r] = std::min(least[r], f);
           for (int d = 0; d < dim - 1; ++d)
             {
               int &l = bad_lo[r * (dim - 1) + d],
@@ -258,7 +335,7 @@ namespace femp
         s << "the row at z = " << z0 + (first_row + r) * h << " m holds ";
         if (flags[r] & 1)
           {
-            s << n_bad[r] << " cells not full of metal (alpha down to "
+            s << n_bad[r] << " cells not full of metal (fill down to "
               << least[r];
             for (int d = 0; d < dim - 1; ++d)
               s << (d ? ", " : "; ") << (d ? "y" : "x") << " within "

@@ -21,6 +21,7 @@ namespace femp
                           const SolidMaterial       &material,
                           MaterialPoints<dim>       &points)
       : SolidPointStore<dim>(grid, material, points)
+      , zone_top_tolerance(0.5 * points.point_spacing())
   {
     const auto &s = grid.node_strides();
     for (unsigned int a = 0; a < n_corners; ++a)
@@ -434,6 +435,34 @@ namespace femp
     ++held;
   }
 
+  template <int dim>
+  void
+  SolidMPM<dim>::hold_on_zone_top(const std::size_t     p,
+                                  Point<dim>           &xp,
+                                  std::array<int, dim> &ijk)
+  {
+    // The face is the zone's top when the cell above the one entered lies
+    // outside the zone (in this rank's box: the point came from there).
+    auto above = ijk;
+    ++above[dim - 1];
+    if (above[dim - 1] >= int(grid.n_cells()[dim - 1]) || !grid.in_box(above) ||
+        excluded[grid.local_index(above)])
+      return;
+    const double h    = grid.h();
+    const double face = grid.origin()[dim - 1] + above[dim - 1] * h;
+    if (!(xp[dim - 1] >= face - zone_top_tolerance))
+      return;
+    // On the face, inside the cell above (a millionth of a cell up, so that
+    // the handler's sort finds it there too); no velocity into the zone.
+    xp[dim - 1]   = face + 1e-6 * h;
+    x[dim - 1][p] = xp[dim - 1];
+    v[dim - 1][p] = std::max(v[dim - 1][p], 0.);
+    if (!xdot[dim - 1].empty())
+      xdot[dim - 1][p] = std::max(xdot[dim - 1][p], 0.);
+    ijk = above;
+    ++held_at_zone;
+  }
+
   // The points of a block of update_stresses() of which one left its cell
   // or the rank, point by point: kinetic energy and momentum, the cell
   // crossing (see solid_mpm.h) and the APIC affine part of the kinetic
@@ -474,7 +503,12 @@ namespace femp
             // point leaving the domain stops the run.
             if (flow_owns_fluid && !grid.in_domain(xp))
               hold_in_domain(p, xp);
-            const auto ijk = grid.cell_of(xp);
+            auto ijk = grid.cell_of(xp);
+            // A point that crossed the FE zone's top face by less than half
+            // a point spacing is held on that face (see solid_mpm.h).
+            if (grid.in_domain(xp) && grid.in_box(ijk) &&
+                excluded[grid.local_index(ijk)])
+              hold_on_zone_top(p, xp, ijk);
             if (!grid.in_domain(xp) ||
                 (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
               {
@@ -495,13 +529,16 @@ namespace femp
                 ++left_rank;
                 continue;
               }
-            left_cells.push_back(cell[p]);
-            cell[p]  = idx;
-            node0[p] = grid.first_node_of_cell(idx);
-            for (int d = 0; d < dim; ++d)
-              corner[d][p] = grid.origin()[d] + ijk[d] * h;
-            moved_cell = true;
-            mark_cell_nodes(idx, node0[p]);
+            if (idx != cell[p]) // not held back in its own cell
+              {
+                left_cells.push_back(cell[p]);
+                cell[p]  = idx;
+                node0[p] = grid.first_node_of_cell(idx);
+                for (int d = 0; d < dim; ++d)
+                  corner[d][p] = grid.origin()[d] + ijk[d] * h;
+                moved_cell = true;
+                mark_cell_nodes(idx, node0[p]);
+              }
           }
         // APIC: affine part with the tents of the cell that now holds
         // the point (those of the next P2G). Points that left the rank

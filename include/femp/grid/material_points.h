@@ -363,6 +363,14 @@ namespace femp
     zone_tags(const std::vector<double> &alpha,
               const std::vector<double> &T) const;
 
+    /// The lattice spacing of the points ('Material points/Point
+    /// spacing'), m.
+    double
+    point_spacing() const
+    {
+      return prm.point_spacing;
+    }
+
     /// True if this scene carries points (Parameters::resolve_carry()).
     bool
     carried() const

@@ -74,8 +74,15 @@
 // when the state is written back). When a point enters a cell of another
 // rank, SolidSubCycle calls resort() after the step: write back, send it to
 // that rank (MaterialPoints::relocate_points()), gather again. A point that
-// enters the finite-element zone or leaves the domain stops the run with a
-// message (the FE zone has no place for it).
+// crosses the finite-element zone's top face (from the cell above, less
+// than half a point spacing into the zone) is held on the face: the zone's
+// elements are the grid's cells and its top face the grid line, which the
+// points above it share through the transition nodes; a point that lay on
+// the line (a raised zone's top, fe_zone_handover.h) and moved with those
+// nodes stays in the solid, its velocity into the zone removed (the kinetic
+// energy is booked by the next transfer, as for the domain's faces). Any
+// other point that enters the finite-element zone or leaves the domain
+// stops the run with a message (the FE zone has no place for it).
 #ifndef femp_solid_mpm_h
 #define femp_solid_mpm_h
 
@@ -262,6 +269,13 @@ namespace femp
     {
       return held;
     }
+    /// Times a point of this rank was held on the FE zone's top face so
+    /// far (see hold_on_zone_top()).
+    unsigned long
+    n_held_at_zone() const
+    {
+      return held_at_zone;
+    }
     /// Position of a point that entered the FE zone or left the domain.
     const Point<dim> &
     escaped_point() const
@@ -330,10 +344,24 @@ namespace femp
     /// (infinite without points).
     double min_volume = std::numeric_limits<double>::infinity();
     std::array<double, dim> weight_momentum{}; ///< sum m_true v
-    bool                    lost      = false;
-    unsigned int            left_rank = 0;
-    unsigned long           held      = 0; ///< see n_held()
+    bool                    lost         = false;
+    unsigned int            left_rank    = 0;
+    unsigned long           held         = 0; ///< see n_held()
+    unsigned long           held_at_zone = 0; ///< see n_held_at_zone()
     Point<dim>              escaped;
+    /// How far below the FE zone's top face a point is held on it: half
+    /// the point spacing (the gap between the face and the first points
+    /// above it on the unmoved lattice).
+    double zone_top_tolerance = 0;
+    /// Puts point @p p, found at @p xp in the FE zone's cell @p ijk less
+    /// than zone_top_tolerance below the zone's top face (the cell above
+    /// lies outside the zone), back on that face and removes its velocity
+    /// into the zone; @p ijk becomes the cell above. Any other entry into
+    /// the zone is left to the caller (it stops the run).
+    void
+    hold_on_zone_top(const std::size_t     p,
+                     Point<dim>           &xp,
+                     std::array<int, dim> &ijk);
     /// Puts point @p p (at @p xp, outside the domain) back on the domain's
     /// faces and removes its outward velocity (melt-flow scenes).
     void

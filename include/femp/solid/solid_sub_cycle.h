@@ -297,6 +297,14 @@ namespace femp
     {
       return Utilities::MPI::sum(mpm.n_held(), comm);
     }
+    /// Times a material point reached the FE zone's top face from above
+    /// and was held on it so far, all ranks (SolidMPM::hold_on_zone_top();
+    /// collective).
+    unsigned long
+    n_points_held_at_zone() const
+    {
+      return Utilities::MPI::sum(mpm.n_held_at_zone(), comm);
+    }
     /// Gathers of the MPM points at the temperature steps, summed over the
     /// ranks: those that kept the arrays of the last one (nothing melted,
     /// solidified or moved in or out of the members' cells there), those
