@@ -344,10 +344,12 @@ namespace femp
                 << " m";
             s << ")";
           }
-        else if (flags[r] & 2)
-          s << "powder or fluid points";
-        else
-          s << "points up to " << hottest[r] << " K";
+        // Every reason of the row, so that the log shows all that blocks.
+        if (flags[r] & 2)
+          s << (flags[r] & 1 ? ", " : "") << "powder or fluid points";
+        if (flags[r] & 4)
+          s << (flags[r] & 3 ? ", " : "") << "points up to " << hottest[r]
+            << " K";
         reason = s.str();
       }
     return z0 + (first_row + r) * h;
