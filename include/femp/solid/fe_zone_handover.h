@@ -39,7 +39,10 @@
 // surface in the row above) 7/8. full_fill = 0.9 takes dense metal (1, up
 // to the points' thermal volume change and the jitter of a strained
 // lattice) and leaves as points a cell with an empty sub-cell (2D; in 3D
-// two), a cell beside a pore and the row under a free surface.
+// two), a cell beside a pore and the row under a free surface. The fill is
+// taken on the grid: the points of the zone stay where the hand-over left
+// them, so a displacement u of the zone's top since then (the points above
+// follow it) reads as a gap or an overlap of about u/h in the row above.
 //
 // The points at the new top. Where the lattice has moved by about half a
 // spacing, points of the row above lie on the new top. The coupling puts
