@@ -180,6 +180,39 @@ namespace femp
       moved_points += heat.stored_enthalpy() - H_before;
   }
 
+  template <int dim>
+  void
+  PointHeatExchange<dim>::remove_evaporated_mass()
+  {
+    if (heat.is_frozen() || !heat.lists_evaporated_mass() || !points.carried())
+      return;
+    // alpha is current here (its keeper renews it after every module that
+    // moves points); if not, first the heat of the moved points.
+    if (points.point_moves() != alpha_moves)
+      points_changed_cells();
+    const auto &list = heat.evaporated_mass();
+    std::vector<typename MaterialPoints<dim>::MassToRemove> cells;
+    cells.reserve(list.size());
+    for (const auto &e : list)
+      cells.push_back({e.index, e.mass, e.outward});
+    const std::uint64_t moves_before = points.point_moves();
+    // The stored enthalpy before and after (collective): what the removed
+    // metal took out of the grid.
+    const double H_before = heat.stored_enthalpy();
+    const auto   r        = points.remove_mass(cells);
+    evaporated.removed += r.mass;
+    evaporated.not_removed += r.not_removed;
+    evaporated.deleted += r.deleted;
+    if (points.point_moves() == moves_before)
+      return;
+    // The points of each changed cell keep the cell's temperature (they
+    // took it just before), so the cells keep theirs: only alpha, its
+    // bodies and its surface are new.
+    new_metal_fraction(points.metal_fraction());
+    alpha_moves = points.point_moves();
+    evaporated.enthalpy += H_before - heat.stored_enthalpy();
+  }
+
   template class PointHeatExchange<2>;
   template class PointHeatExchange<3>;
 } // namespace femp

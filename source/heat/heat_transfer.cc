@@ -100,6 +100,22 @@ namespace femp
               Patterns::Double(0., 1.),
               "Evaporative loss coefficient zeta_q of eq. (1); 0 switches "
               "evaporative cooling off; range [0, 1].");
+    table.add("Remove evaporated mass",
+              remove_evaporated_mass,
+              "Whether the evaporated metal leaves the melt: true "
+              "(default): each step the mass m_dot(T) A dt that "
+              "evaporates from a surface cell (m_dot = q_evap/L_v, "
+              "kg/(m^2 s); A the cell's surface, the same weight "
+              "w |grad alpha| h^dim as the evaporation loss) is taken "
+              "from the fluid material points of that cell, outermost "
+              "(along the outward normal of alpha) first; a point "
+              "left with less than 1 % of a lattice point's mass is "
+              "deleted. The surface recedes by m_dot/rho_m, and the "
+              "run report books the mass and the heat it carries. "
+              "Needs carried points (a bare plate without points "
+              "loses no mass) and a non-zero 'Evaporation "
+              "coefficient'; false: the metal keeps its mass "
+              "(evaporation only cools). doc/equations.md.");
     if (table.declaring())
       prm.declare_entry(
         "Fixed temperatures",
@@ -524,6 +540,38 @@ namespace femp
       q_evap * (evap_exp * mat.evaporation_temperature / (T * T) - 0.5 / T) +
       prm.convection_coefficient + gas_h +
       4 * stefan_boltzmann * prm.emissivity * T * T * T;
+  }
+
+  template <int dim>
+  double
+  HeatTransfer<dim>::evaporative_mass_flux(const double T_surface) const
+  {
+    if (!(mat.latent_heat_evaporation > 0))
+      return 0.;
+    double qe, qc, qr, dq;
+    surface_loss(T_surface, qe, qc, qr, dq, 0.);
+    return qe / mat.latent_heat_evaporation;
+  }
+
+  template <int dim>
+  Tensor<1, dim>
+  HeatTransfer<dim>::outward_normal(const std::size_t idx) const
+  {
+    // Central differences of alpha (ghosts current; zero gradient at the
+    // box faces), as MetalSurface finds |grad alpha|.
+    const auto    &st  = grid.strides();
+    const auto    &n   = grid.n_cells();
+    const auto     ijk = grid.global_index(idx);
+    Tensor<1, dim> g;
+    for (int d = 0; d < dim; ++d)
+      {
+        const double am = ijk[d] > 0 ? alpha[idx - st[d]] : alpha[idx];
+        const double ap =
+          ijk[d] < int(n[d]) - 1 ? alpha[idx + st[d]] : alpha[idx];
+        g[d] = am - ap;
+      }
+    const double norm = g.norm();
+    return norm > 1e-12 ? g / norm : Tensor<1, dim>();
   }
 
   template <int dim>
@@ -1010,6 +1058,13 @@ namespace femp
     const bool   variable_c = !mat.specific_heat.is_constant();
     std::size_t  nphase     = 0;
     double       e_evap = 0, e_conv = 0, e_rad = 0;
+    // The evaporated mass per cell (q_evap W V dt / L_v), with the outward
+    // normal of alpha for the removal from the points.
+    evaporated.clear();
+    const bool   list_mass = lists_evaporated_mass();
+    const double mass_per_loss =
+      list_mass ? std::pow(grid.h(), dim) * dt / mat.latent_heat_evaporation :
+                  0.;
     for (const auto idx : source_cells)
       {
         const double Tc   = T[idx];
@@ -1032,6 +1087,9 @@ namespace femp
             double qe, qc, qr, dq;
             surface_loss(Tnew, qe, qc, qr, dq, hg);
             e_evap += qe * W;
+            if (list_mass && qe > 0)
+              evaporated.push_back(
+                {idx, qe * W * mass_per_loss, outward_normal(idx)});
             e_conv += qc * W;
             e_rad += qr * W;
           }
