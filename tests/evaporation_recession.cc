@@ -8,7 +8,9 @@
 // m_dot(T0)); the other constants are the material's. Each step as in a
 // run: the temperature step, the cell temperatures to the points, the
 // evaporated mass taken from the points (PointHeatExchange::
-// remove_evaporated_mass()). Closed form (Hertz-Knudsen flux of the
+// remove_evaporated_mass()), alpha renewed (follow_points()): the mass
+// evaporated from the cells that straddle the surface leaves the outermost
+// metal, so the surface stays sharp. Closed form (Hertz-Knudsen flux of the
 // saturated vapour, the pressure from Clausius-Clapeyron):
 //   m_dot(T) = zeta_q p0 exp[L_v M (T - T_v)/(R T T_v)] sqrt(M/(2 pi R T)),
 // the mass lost over the width L in the time t is m_dot L t, the surface
@@ -25,8 +27,10 @@
 //  - the recession of the metal volume against m_dot t / rho_m, the same
 //    bound over rho_m L;
 //  - the energy balance of the run: stored enthalpy change + evaporation
-//    loss + the heat carried away by the removed metal = 0 within 1e-9 of
-//    the loss;
+//    loss + the heat carried away by the removed metal = 0 within 1e-5 of
+//    the loss (the raised heat capacity makes the stored enthalpy 5,600
+//    times the loss, and the heat step's local Newton iteration stops at
+//    1e-12 of a cell's enthalpy: 600 steps x 1e-12 x 5,600 = 3e-6);
 //  - with 'Remove evaporated mass = false' no mass leaves.
 // The same on 1 and 2 ranks (per-cell removal; sums differ by round-off).
 #include <femp/coupling/point_heat_exchange.h>
@@ -102,6 +106,7 @@ namespace
     auto       p              = heat_parameters<dim>(T0, {});
     p.evaporation_coefficient = 0.82;
     p.remove_evaporated_mass  = remove;
+    p.reference_temperature   = 300; // (the ambient: evaporation cools)
     HeatTransfer<dim> heat(p, mat, laser, grid);
     heat.initialize();
 
@@ -127,6 +132,7 @@ namespace
         heat.advance(dt, i * dt);
         points.cells_to_points(heat.temperature(), &heat.metal_fraction());
         exchange.remove_evaporated_mass();
+        exchange.follow_points();
       }
     Result r;
     r.time            = n * dt;
@@ -195,7 +201,7 @@ main(int argc, char **argv)
       checks.at_most(at + "|stored change + loss + carried| / loss, next "
                           "power of ten",
                      decade(r.balance),
-                     1e-9);
+                     1e-5);
       checks.at_most(at + "temperature drift, K", r.T_drift, 0.01);
     }
   const Result off = run(4000., false, L, h, 1e-5, comm);

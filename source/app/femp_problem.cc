@@ -290,6 +290,10 @@ namespace femp
       return;
     TimerOutput::Scope t(timer, "evaporated mass");
     point_heat->remove_evaporated_mass();
+    // alpha follows: with the flow after its sub-steps (one renewal for
+    // both), else here.
+    if (!flow)
+      point_heat->follow_points();
   }
 
   template <int dim>

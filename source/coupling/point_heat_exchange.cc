@@ -186,31 +186,30 @@ namespace femp
   {
     if (heat.is_frozen() || !heat.lists_evaporated_mass() || !points.carried())
       return;
-    // alpha is current here (its keeper renews it after every module that
-    // moves points); if not, first the heat of the moved points.
-    if (points.point_moves() != alpha_moves)
-      points_changed_cells();
     const auto &list = heat.evaporated_mass();
     std::vector<typename MaterialPoints<dim>::MassToRemove> cells;
     cells.reserve(list.size());
     for (const auto &e : list)
       cells.push_back({e.index, e.mass, e.outward});
-    const std::uint64_t moves_before = points.point_moves();
-    // The stored enthalpy before and after (collective): what the removed
-    // metal took out of the grid.
-    const double H_before = heat.stored_enthalpy();
-    const auto   r        = points.remove_mass(cells);
+    // The stored enthalpy (relative to T_ref) that a kilogram of metal at
+    // T takes out of a cell whose alpha is its points' volume: its own,
+    // less that of the gas that takes its place.
+    const Material &mat   = heat.material();
+    const double    Tref  = heat.reference_temperature();
+    const double    e_ref = heat.specific_enthalpy(Tref);
+    const double    gas = mat.gas_density * mat.gas_specific_heat / mat.density;
+    const auto      r   = points.remove_mass(cells, [&](const double T) {
+      return heat.specific_enthalpy(T) - e_ref - gas * (T - Tref);
+    });
     evaporated.removed += r.mass;
     evaporated.not_removed += r.not_removed;
     evaporated.deleted += r.deleted;
-    if (points.point_moves() == moves_before)
-      return;
-    // The points of each changed cell keep the cell's temperature (they
-    // took it just before), so the cells keep theirs: only alpha, its
-    // bodies and its surface are new.
-    new_metal_fraction(points.metal_fraction());
-    alpha_moves = points.point_moves();
-    evaporated.enthalpy += H_before - heat.stored_enthalpy();
+    evaporated.enthalpy += r.weighted;
+    // alpha follows at the next follow_points(), which books the change of
+    // the stored enthalpy as that of moved points; the part the removed
+    // metal took is booked here instead (so moved_points keeps only what
+    // the exchange itself created: alpha capped in over-full cells).
+    moved_points += r.weighted;
   }
 
   template class PointHeatExchange<2>;

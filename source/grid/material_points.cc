@@ -1119,7 +1119,9 @@ namespace femp
 
   template <int dim>
   typename MaterialPoints<dim>::RemovedMass
-  MaterialPoints<dim>::remove_mass(const std::vector<MassToRemove> &cells)
+  MaterialPoints<dim>::remove_mass(
+    const std::vector<MassToRemove>     &cells,
+    const std::function<double(double)> &per_mass)
   {
     using P = PropertyIndex;
     RemovedMass r;
@@ -1178,6 +1180,7 @@ namespace femp
                 // The whole point goes.
                 need -= m;
                 r.mass += m;
+                r.weighted += m * per_mass(v[P::temperature]);
                 deleted.push_back(point_handles[k]);
                 ++r.deleted;
                 lost = true;
@@ -1189,6 +1192,7 @@ namespace femp
                 v[P::volume] *= (m - need) / m;
                 v[P::mass] = m - need;
                 r.mass += need;
+                r.weighted += need * per_mass(v[P::temperature]);
                 need = 0;
               }
           }
@@ -1226,18 +1230,20 @@ namespace femp
       }
     // One reduction: the sums over the ranks, and whether any rank changed
     // or deleted a point.
-    const double local[5] = {r.mass,
+    const double local[6] = {r.mass,
                              r.not_removed,
                              double(r.deleted),
                              touched ? 1. : 0.,
-                             changed.empty() ? 0. : 1.};
-    double       global[5];
-    Utilities::MPI::sum(ArrayView<const double>(local, 5),
+                             changed.empty() ? 0. : 1.,
+                             r.weighted};
+    double       global[6];
+    Utilities::MPI::sum(ArrayView<const double>(local, 6),
                         grid.communicator(),
-                        ArrayView<double>(global, 5));
+                        ArrayView<double>(global, 6));
     r.mass        = global[0];
     r.not_removed = global[1];
     r.deleted     = static_cast<unsigned long>(global[2]);
+    r.weighted    = global[5];
     if (global[3] > 0)
       ++moves_global; // alpha is stale (point_moves())
     if (global[4] > 0)

@@ -13,6 +13,7 @@
 #include <femp/heat/heat_transfer.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -826,6 +827,105 @@ namespace femp
     source_pass(dt, sums);       // pass C: sources, surface losses
     phase_change_pass(sums);     // pass D: enthalpy iteration
     finish_step(dt, time, sums); // budget, T_max, ghosts, next limit
+    if (lists_evaporated_mass())
+      evaporated_mass_outward(); // the mass to the outermost metal
+  }
+
+  // The loss weight w |grad alpha| spreads a surface over the cells that
+  // straddle it (a flat surface through a partly filled cell: that cell and
+  // the full one below, in proportion alpha to 1 - alpha), and so does the
+  // evaporated mass. Taken where it is booked, the full cell below would
+  // lose metal while the partly filled one above still holds its points:
+  // without a flow to close the gap the metal fraction smears downwards
+  // (measured: a layer at 4000 K, 12 um of recession over 60 us, ends with
+  // partly filled cells 16 um deep and 11 % less evaporation than the
+  // flat surface gives). Each cell therefore passes its evaporated mass to
+  // its outward face neighbour along the dominant direction of its normal
+  // when that one holds metal (a ghost cell's owner gets it), up to
+  // 1/(2 dim + 1) of that neighbour's metal mass, so that the neighbour can
+  // give it even to all its inner neighbours at once; the rest stays. One
+  // cell is as far as the ghost layer reaches, so the result does not
+  // depend on the partition. Collective.
+  template <int dim>
+  void
+  HeatTransfer<dim>::evaporated_mass_outward()
+  {
+    const auto                 &st     = grid.strides();
+    const auto                 &n      = grid.n_cells();
+    const auto                 &status = grid.cell_status();
+    const double                rho_V  = mat.density * std::pow(grid.h(), dim);
+    std::vector<EvaporatedMass> moved;
+    std::map<unsigned int, std::vector<double>> outgoing;
+    moved.reserve(evaporated.size());
+    for (const auto &e : evaporated)
+      {
+        int d = dim - 1;
+        for (int dd = 0; dd < dim; ++dd)
+          if (std::abs(e.outward[dd]) > std::abs(e.outward[d]))
+            d = dd;
+        const int  sign   = e.outward[d] < 0 ? -1 : 1;
+        auto       ijk    = grid.global_index(e.index);
+        double     share  = 0;
+        const bool inside = e.outward.norm() > 0 && ijk[d] + sign >= 0 &&
+                            ijk[d] + sign < int(n[d]);
+        const std::size_t j =
+          inside ? e.index + (sign > 0 ? st[d] : -st[d]) : e.index;
+        if (inside && alpha[j] > 0)
+          share = std::min(e.mass, rho_V * alpha[j] / (2 * dim + 1));
+        if (share > 0)
+          {
+            if (status[j] == BackgroundGrid<dim>::owned)
+              moved.push_back({std::uint32_t(j), share, e.outward});
+            else
+              {
+                ijk[d] += sign;
+                auto &buffer = outgoing[grid.cell_iterator(j)->subdomain_id()];
+                for (int k = 0; k < dim; ++k)
+                  buffer.push_back(ijk[k]);
+                buffer.push_back(share);
+                for (int k = 0; k < dim; ++k)
+                  buffer.push_back(e.outward[k]);
+              }
+          }
+        if (e.mass - share > 0)
+          moved.push_back({e.index, e.mass - share, e.outward});
+      }
+    const auto incoming =
+      Utilities::MPI::some_to_some(grid.communicator(), outgoing);
+    for (const auto &[rank, buffer] : incoming)
+      for (std::size_t k = 0; k + 2 * dim + 1 <= buffer.size();
+           k += 2 * dim + 1)
+        {
+          std::array<int, dim> ijk;
+          Tensor<1, dim>       normal;
+          for (int q = 0; q < dim; ++q)
+            {
+              ijk[q]    = static_cast<int>(buffer[k + q]);
+              normal[q] = buffer[k + dim + 1 + q];
+            }
+          moved.push_back(
+            {std::uint32_t(grid.local_index(ijk)), buffer[k + dim], normal});
+        }
+    // One entry per cell, in increasing index; the direction weighted by
+    // the masses.
+    std::sort(moved.begin(),
+              moved.end(),
+              [](const EvaporatedMass &a, const EvaporatedMass &b) {
+                return a.index < b.index ||
+                       (a.index == b.index && a.mass < b.mass);
+              });
+    evaporated.clear();
+    for (const auto &m : moved)
+      if (!evaporated.empty() && evaporated.back().index == m.index)
+        {
+          evaporated.back().outward += m.mass * m.outward;
+          evaporated.back().mass += m.mass;
+        }
+      else
+        evaporated.push_back({m.index, m.mass, m.mass * m.outward});
+    for (auto &e : evaporated)
+      if (e.outward.norm() > 0)
+        e.outward /= e.outward.norm();
   }
 
   template <int dim>

@@ -23,7 +23,7 @@
 // conservative exchange).
 // With 'Heat transfer/Remove evaporated mass' it takes the mass that
 // evaporated in the temperature step from the points of the surface cells
-// (MaterialPoints::remove_mass()), renews alpha, and keeps the account of
+// (MaterialPoints::remove_mass()) and keeps the account of
 // that mass and of the sensible and melting heat it took out of the grid
 // (the change of the stored enthalpy; its latent heat of evaporation is the
 // heat's evaporation loss).
@@ -118,11 +118,14 @@ namespace femp
 
     /// After the temperature step and the transfer of its temperatures to
     /// the points: take the mass that evaporated in the step
-    /// (HeatTransfer::evaporated_mass()) from the fluid points of each
-    /// surface cell (MaterialPoints::remove_mass()) and renew alpha, its
-    /// bodies and its surface; book the mass and the change of the stored
-    /// enthalpy. Nothing (not even a reduction) unless the heat lists the
-    /// evaporated mass and the scene carries points. Collective.
+    /// (HeatTransfer::evaporated_mass()) from the fluid points of the cells
+    /// (MaterialPoints::remove_mass()) and book it with the stored heat it
+    /// carries, m [e(T) - e(T_ref) - (rho_g c_g/rho_m)(T - T_ref)] per
+    /// piece at the point's temperature (the change of the stored enthalpy
+    /// of a cell whose alpha is its points' volume). alpha is stale then:
+    /// the next follow_points() renews it (the flow's, or the caller's
+    /// without the flow). Nothing unless the heat lists the evaporated mass
+    /// and the scene carries points. Collective.
     void
     remove_evaporated_mass();
 

@@ -214,7 +214,10 @@ namespace femp
     /// What remove_mass() did, summed over the ranks.
     struct RemovedMass
     {
-      double        mass        = 0; ///< taken from points, kg (2D: kg/m)
+      double mass = 0; ///< taken from points, kg (2D: kg/m)
+      /// Sum over the removed pieces of their mass times
+      /// @p per_mass(T) of remove_mass() at the point's temperature.
+      double        weighted    = 0;
       double        not_removed = 0; ///< asked but no fluid point had it
       unsigned long deleted     = 0; ///< points deleted
     };
@@ -230,8 +233,11 @@ namespace femp
     /// not removed. Cells that lost a point count as changed for the layout
     /// marks, and point_moves() moves on when any rank changed a point, so
     /// that alpha's keeper renews alpha. Collective.
+    /// @p per_mass (J/kg, a function of the point's temperature, K) is
+    /// summed over the removed mass into RemovedMass::weighted.
     RemovedMass
-    remove_mass(const std::vector<MassToRemove> &cells);
+    remove_mass(const std::vector<MassToRemove>     &cells,
+                const std::function<double(double)> &per_mass);
 
     /// Property arrays of the points of occupied_cells()[@p c], in the
     /// order of the handler's particles_in_cell() (valid until points are

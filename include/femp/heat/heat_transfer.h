@@ -210,12 +210,17 @@ namespace femp
     double
     evaporative_mass_flux(const double T_surface) const;
 
-    /// The mass that left an owned surface cell by evaporation in the last
-    /// advance(), kg (2D: kg/m): m_dot(T^{n+1}) W V dt with the cell's loss
-    /// weight W = w |grad alpha| (1/m), the same weight and temperature as
-    /// the evaporation loss booked (energy = L_v times this mass), and the
-    /// outward unit normal -grad alpha/|grad alpha| of the cell (zero where
-    /// alpha's central difference vanishes, in detached drops).
+    /// The mass that left the surface by evaporation in the last advance(),
+    /// per owned cell that gives it, kg (2D: kg/m). Each surface cell loses
+    /// m_dot(T^{n+1}) W V dt with its loss weight W = w |grad alpha| (1/m),
+    /// the same weight and temperature as the evaporation loss booked
+    /// (energy = L_v times this mass); it passes that mass on to its outward
+    /// face neighbour (along the dominant direction of its normal) when that
+    /// one holds metal, up to 1/(2 dim + 1) of the neighbour's metal mass,
+    /// so that the mass leaves the outermost metal. With the mass, the
+    /// mass-weighted outward unit normal -grad alpha/|grad alpha| of the
+    /// cells that gave it (zero where alpha's central difference vanishes,
+    /// in detached drops).
     struct EvaporatedMass
     {
       std::uint32_t  index;
@@ -340,6 +345,12 @@ namespace femp
     material() const
     {
       return mat;
+    }
+    /// T_ref of the stored enthalpy and the losses, K.
+    double
+    reference_temperature() const
+    {
+      return prm.reference_temperature;
     }
 
     /// Checkpoint: T (and the previous T, which gas cells keep), gamma and
@@ -511,6 +522,10 @@ namespace femp
                  double      &q_rad,
                  double      &dq_dT,
                  const double gas_h = 0) const;
+    /// Pass each cell's evaporated mass on to its outward metal neighbour
+    /// (see the source); collective.
+    void
+    evaporated_mass_outward();
     /// Outward unit normal -grad alpha/|grad alpha| of owned cell @p idx
     /// (central differences; zero where the difference vanishes).
     Tensor<1, dim>
