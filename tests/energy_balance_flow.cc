@@ -5,9 +5,9 @@
 // Advection by melt flow). femp reports, besides laser, losses, fixed faces
 // and stored enthalpy (and the heat carried away by the evaporated mass, a
 // loss like the surface losses), the energy created by the upwind convection
-// of T and
-// by points moving between cells (change of the stored enthalpy when alpha
-// and the temperatures of the cells whose points changed are updated).
+// of T and by points moving between cells (change of the stored enthalpy
+// when alpha and the temperatures of the cells whose points changed are
+// updated).
 // - 'points' (the default): the points carry the metal's enthalpy, so the
 //   plain balance must close to 1 % of the laser energy (it was 1.9 % with
 //   'upwind'; what is left is the difference between the grid's metal
