@@ -24,12 +24,6 @@ main(int argc, char **argv)
   checks.print("surface losses (J)", s.losses, 3);
   checks.print("stored enthalpy change (J)", s.stored, 3);
   checks.print("peak temperature (K)", s.T_max, 3);
-  checks.print("carried away by the evaporated mass / laser energy, next "
-               "power of ten",
-               s.removed_enthalpy > 0 ?
-                 std::pow(10.,
-                          std::ceil(std::log10(s.removed_enthalpy / s.laser))) :
-                 0.);
   const double imbalance =
     std::abs(s.laser + s.boundary - s.losses - s.removed_enthalpy - s.stored) /
     s.laser;

@@ -103,8 +103,8 @@ namespace femp
               "evaporative cooling off; range [0, 1].");
     table.add("Remove evaporated mass",
               remove_evaporated_mass,
-              "Whether the evaporated metal leaves the melt: true "
-              "(default): each step the mass m_dot(T) A dt that "
+              "Whether the evaporated metal leaves the melt: true: "
+              "each step the mass m_dot(T) A dt that "
               "evaporates from a surface cell (m_dot = q_evap/L_v, "
               "kg/(m^2 s); A the cell's surface, the same weight "
               "w |grad alpha| h^dim as the evaporation loss) is taken "
@@ -115,8 +115,8 @@ namespace femp
               "run report books the mass and the heat it carries. "
               "Needs carried points (a bare plate without points "
               "loses no mass) and a non-zero 'Evaporation "
-              "coefficient'; false: the metal keeps its mass "
-              "(evaporation only cools). doc/equations.md.");
+              "coefficient'; false (default): the metal keeps its "
+              "mass (evaporation only cools). doc/equations.md.");
     if (table.declaring())
       prm.declare_entry(
         "Fixed temperatures",

@@ -77,7 +77,7 @@ namespace femp
       /// surface cell (evaporated_mass()) is taken from the material
       /// points of that cell (PointHeatExchange::remove_evaporated_mass()),
       /// so that the surface recedes by m_dot/rho_m.
-      bool                          remove_evaporated_mass = true;
+      bool                          remove_evaporated_mass = false;
       std::map<std::string, double> fixed_temperatures;
       /// How the laser's surface flux enters the cells.
       enum class Deposition
