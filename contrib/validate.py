@@ -255,6 +255,13 @@ SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
                      "Melt flow/Surface tension temperature derivative": "0"}})
 
 
+def csv_rows(path):
+    """The rows of a CSV file ('#' comment lines skipped) as dicts of strings."""
+    with open(path) as f:
+        lines = [line for line in f if line.strip() and not line.startswith("#")]
+    return list(csv.DictReader(lines))
+
+
 def setting_parameters(setting):
     """The femp parameters of a setting; 'a+b' combines named settings
     (e.g. 'h4+fine'); a name not in SETTINGS has none (--set gives them)."""
@@ -1322,7 +1329,7 @@ def dig_run(run_dir, alloy, force=False):
              if os.path.exists(os.path.join(out, i))]
     if (not force and os.path.exists(f) and index
             and os.path.getmtime(f) >= os.path.getmtime(index[0])):
-        rows = read_csv(f)
+        rows = csv_rows(f)
         return [{k: (float(v) if v not in ("", None) else None) for k, v in r.items()}
                 for r in rows]
     sp = scene_parameters(run_dir)
@@ -1340,7 +1347,7 @@ def dig_run(run_dir, alloy, force=False):
             r["drilling_speed"] = (b["depression"] - a["depression"]) / (b["time"] - a["time"])
     ab = os.path.join(out, "absorption.csv")
     if os.path.exists(ab):
-        series = [(float(x["time"]), float(x["absorbed"])) for x in read_csv(ab)]
+        series = [(float(x["time"]), float(x["absorbed"])) for x in csv_rows(ab)]
         for r in rows:
             tt, pa = min(series, key=lambda s: abs(s[0] - r["time"]))
             if abs(tt - r["time"]) <= 1e-5 and pa > 0:
@@ -1451,7 +1458,7 @@ def dig_compare(out, rx_c, rx_s, allc, every=20e-6):
         for name in sorted(os.listdir(os.path.join(out, setting))):
             f = os.path.join(out, setting, name, "dig.csv")
             if rx_c.search(name) and os.path.exists(f):
-                runs.setdefault(name, {})[setting] = read_csv(f)
+                runs.setdefault(name, {})[setting] = csv_rows(f)
     keys = (("depression", 1e6, "%.1f"), ("T_surface_max", 1, "%.0f"),
             ("melt_normal_hottest", 1e6, "%.1f"), ("front_wall_angle", 1, "%.0f"),
             ("u_melt_max", 1, "%.1f"))

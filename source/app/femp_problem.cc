@@ -192,6 +192,9 @@ namespace femp
         //    points (eq. 2).
         temperature_step(dt);
         cells_to_points();
+        //    The mass that evaporated in the step leaves the points of the
+        //    surface cells (Heat transfer/Remove evaporated mass).
+        remove_evaporated_mass();
 
         // 3. Melt-pool flow (eqs. 3-4), sub-cycled, with the heat carried
         //    by the points that changed cells; with the solid, the fluid
@@ -276,6 +279,21 @@ namespace femp
         TimerOutput::Scope t(timer, "solid");
         solid->find_state_changes();
       }
+  }
+
+  template <int dim>
+  void
+  FempProblem<dim>::remove_evaporated_mass()
+  {
+    if (!scene.heat_enabled || !heat->lists_evaporated_mass() ||
+        !points->carried())
+      return;
+    TimerOutput::Scope t(timer, "evaporated mass");
+    point_heat->remove_evaporated_mass();
+    // alpha follows: with the flow after its sub-steps (one renewal for
+    // both), else here.
+    if (!flow)
+      point_heat->follow_points();
   }
 
   template <int dim>

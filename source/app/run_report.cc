@@ -48,6 +48,7 @@ namespace femp
       [this, &point_heat, flow](StateWriter &out) {
         out.put(H0);
         out.put(point_heat.moved_points_energy());
+        out.put(point_heat.evaporated_mass_account());
         out.put(s.pool);
         out.put(flow ? flow->subcycle_record() : s.flow_limits);
       },
@@ -55,6 +56,8 @@ namespace femp
         StateReader &in = parts[0];
         H0              = in.get<double>();
         point_heat.set_moved_points_energy(in.get<double>());
+        point_heat.set_evaporated_mass_account(
+          in.get<typename PointHeatExchange<dim>::EvaporatedMassAccount>());
         s.pool        = in.get<MeltPoolSize>();
         s.flow_limits = in.get<typename RunSummary<dim>::FlowLimits>();
         if (flow)
@@ -142,7 +145,17 @@ namespace femp
     s.boundary   = e.boundary;
     s.advection  = e.advection;
     s.stored     = heat.stored_enthalpy() - H0;
-    s.n_points   = points.n_global_points();
+    if (heat.lists_evaporated_mass() && points.carried())
+      {
+        const auto &a = point_heat.evaporated_mass_account();
+        s.evaporated_mass =
+          e.evaporation / heat.material().latent_heat_evaporation;
+        s.removed_mass     = a.removed;
+        s.removed_enthalpy = a.enthalpy;
+        removal            = true;
+        removal_account    = a;
+      }
+    s.n_points = points.n_global_points();
     {
       using P = typename MaterialPoints<dim>::PropertyIndex;
       // Cell by cell in the order of the owned cells (not the handler's,
@@ -242,10 +255,28 @@ namespace femp
         << ", surface losses " << s.losses << " (evaporation " << e.evaporation
         << ", convection " << e.convection << ", radiation " << e.radiation
         << " at the end of each step), fixed faces " << s.boundary
-        << ", stored " << s.stored << "; "
-        << error("|laser + fixed faces - losses - stored|",
-                 std::abs(s.laser + s.boundary - s.losses - s.stored))
-        << std::endl;
+        << ", stored " << s.stored << "; ";
+    if (removal)
+      out << "carried away by the evaporated mass " << s.removed_enthalpy
+          << "; "
+          << error("|laser + fixed faces - losses - carried - stored|",
+                   std::abs(s.laser + s.boundary - s.losses -
+                            s.removed_enthalpy - s.stored))
+          << std::endl;
+    else
+      out << error("|laser + fixed faces - losses - stored|",
+                   std::abs(s.laser + s.boundary - s.losses - s.stored))
+          << std::endl;
+    if (removal)
+      out << std::setprecision(6) << "  evaporated mass ("
+          << (dim == 2 ? "kg/m" : "kg") << "): " << s.evaporated_mass
+          << " (its latent heat L_v m is the evaporation loss), taken from "
+             "the points "
+          << s.removed_mass << " (" << removal_account.deleted
+          << " points deleted), where no melt held it "
+          << removal_account.not_removed
+          << "; carried away: its sensible and melting heat (above)"
+          << std::endl;
     if (e.laser_incident > 0)
       out << std::setprecision(6) << "  ray-traced laser (" << unit
           << "): incident " << e.laser_incident << ", absorbed " << e.laser
@@ -260,9 +291,13 @@ namespace femp
           << unit << "): by the upwind convection of T " << s.advection
           << ", by points moving between cells " << s.moved_points
           << "; with these counted as sources, "
-          << error("|laser + fixed faces + created - losses - stored|",
+          << error(removal ?
+                     "|laser + fixed faces + created - losses - carried - "
+                     "stored|" :
+                     "|laser + fixed faces + created - losses - stored|",
                    std::abs(s.laser + s.boundary + s.advection +
-                            s.moved_points - s.losses - s.stored))
+                            s.moved_points - s.losses - s.removed_enthalpy -
+                            s.stored))
           << std::endl;
   }
 

@@ -180,6 +180,38 @@ namespace femp
       moved_points += heat.stored_enthalpy() - H_before;
   }
 
+  template <int dim>
+  void
+  PointHeatExchange<dim>::remove_evaporated_mass()
+  {
+    if (heat.is_frozen() || !heat.lists_evaporated_mass() || !points.carried())
+      return;
+    const auto &list = heat.evaporated_mass();
+    std::vector<typename MaterialPoints<dim>::MassToRemove> cells;
+    cells.reserve(list.size());
+    for (const auto &e : list)
+      cells.push_back({e.index, e.mass, e.outward});
+    // The stored enthalpy (relative to T_ref) that a kilogram of metal at
+    // T takes out of a cell whose alpha is its points' volume: its own,
+    // less that of the gas that takes its place.
+    const Material &mat   = heat.material();
+    const double    Tref  = heat.reference_temperature();
+    const double    e_ref = heat.specific_enthalpy(Tref);
+    const double    gas = mat.gas_density * mat.gas_specific_heat / mat.density;
+    const auto      r   = points.remove_mass(cells, [&](const double T) {
+      return heat.specific_enthalpy(T) - e_ref - gas * (T - Tref);
+    });
+    evaporated.removed += r.mass;
+    evaporated.not_removed += r.not_removed;
+    evaporated.deleted += r.deleted;
+    evaporated.enthalpy += r.weighted;
+    // alpha follows at the next follow_points(), which books the change of
+    // the stored enthalpy as that of moved points; the part the removed
+    // metal took is booked here instead (so moved_points keeps only what
+    // the exchange itself created: alpha capped in over-full cells).
+    moved_points += r.weighted;
+  }
+
   template class PointHeatExchange<2>;
   template class PointHeatExchange<3>;
 } // namespace femp

@@ -1118,6 +1118,140 @@ namespace femp
   }
 
   template <int dim>
+  typename MaterialPoints<dim>::RemovedMass
+  MaterialPoints<dim>::remove_mass(
+    const std::vector<MassToRemove>     &cells,
+    const std::function<double(double)> &per_mass)
+  {
+    using P = PropertyIndex;
+    RemovedMass r;
+    // A point with less than this is deleted (its rest counts as removed).
+    const double m_min = 0.01 * mat.density * std::pow(prm.point_spacing, dim);
+    std::vector<std::uint32_t> changed; // cells that lost a point
+    std::vector<unsigned int>  deleted; // their pool handles
+    std::vector<std::uint32_t> order;
+    bool                       touched = false;
+    std::size_t                c       = 0;
+    for (const auto &cm : cells)
+      {
+        double need = cm.mass;
+        if (!(need > 0))
+          continue;
+        while (c < occupied.size() && occupied[c].first < cm.index)
+          ++c;
+        if (c == occupied.size() || occupied[c].first != cm.index)
+          {
+            r.not_removed += need;
+            continue;
+          }
+        // The cell's fluid points, outermost along the outward direction
+        // first; ties by position (the order does not depend on the
+        // handler's, nor on the rank count).
+        Tensor<1, dim> n = cm.outward;
+        if (!(n.norm() > 0))
+          n[dim - 1] = 1;
+        order.clear();
+        for (std::uint32_t k = cell_begin[c]; k < cell_begin[c + 1]; ++k)
+          if (point_properties[k][P::state] == fluid)
+            order.push_back(k);
+        std::sort(order.begin(),
+                  order.end(),
+                  [&](const std::uint32_t a, const std::uint32_t b) {
+                    const Point<dim> &pa = *point_locations[a];
+                    const Point<dim> &pb = *point_locations[b];
+                    const double      da = pa * n, db = pb * n;
+                    if (da != db)
+                      return da > db;
+                    for (int d = dim - 1; d >= 0; --d)
+                      if (pa[d] != pb[d])
+                        return pa[d] > pb[d];
+                    return a < b;
+                  });
+        bool lost = false;
+        for (const auto k : order)
+          {
+            if (!(need > 0))
+              break;
+            double *const v = point_properties[k];
+            const double  m = v[P::mass];
+            touched         = true;
+            if (m - need < m_min)
+              {
+                // The whole point goes.
+                need -= m;
+                r.mass += m;
+                r.weighted += m * per_mass(v[P::temperature]);
+                deleted.push_back(point_handles[k]);
+                ++r.deleted;
+                lost = true;
+              }
+            else
+              {
+                // Mass and volume shrink together: density, temperature
+                // and specific enthalpy stay.
+                v[P::volume] *= (m - need) / m;
+                v[P::mass] = m - need;
+                r.mass += need;
+                r.weighted += need * per_mass(v[P::temperature]);
+                need = 0;
+              }
+          }
+        if (need > 0)
+          r.not_removed += need;
+        if (lost)
+          changed.push_back(cm.index);
+      }
+    // Delete the points (cells in increasing order, each cell's points in
+    // the handler's order, removed last first as in relocate_points()).
+    if (!changed.empty())
+      {
+        std::sort(deleted.begin(), deleted.end());
+        std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+          to_remove;
+        for (const auto idx : changed)
+          {
+            auto range = handler.particles_in_cell(grid.cell_iterator(idx));
+            for (auto it = range.begin(); it != range.end(); ++it)
+              if (std::binary_search(deleted.begin(),
+                                     deleted.end(),
+                                     it->get_local_index()))
+                to_remove.push_back(it);
+          }
+        AssertThrow(to_remove.size() == deleted.size(),
+                    ExcMessage("remove_mass(): a point to delete was not "
+                               "found in its cell"));
+        for (auto it = to_remove.rbegin(); it != to_remove.rend(); ++it)
+          handler.remove_particle(*it);
+        ++relocations;
+        cell_moved_at.resize(grid.n_local(), 0);
+        for (const auto idx : changed)
+          cell_moved_at[idx] = relocations;
+        refresh_occupied_cells(changed);
+      }
+    // One reduction: the sums over the ranks, and whether any rank changed
+    // or deleted a point.
+    const double local[6] = {r.mass,
+                             r.not_removed,
+                             double(r.deleted),
+                             touched ? 1. : 0.,
+                             changed.empty() ? 0. : 1.,
+                             r.weighted};
+    double       global[6];
+    Utilities::MPI::sum(ArrayView<const double>(local, 6),
+                        grid.communicator(),
+                        ArrayView<double>(global, 6));
+    r.mass        = global[0];
+    r.not_removed = global[1];
+    r.deleted     = static_cast<unsigned long>(global[2]);
+    r.weighted    = global[5];
+    if (global[3] > 0)
+      ++moves_global; // alpha is stale (point_moves())
+    if (global[4] > 0)
+      handler.update_cached_numbers(); // the global count (collective)
+    return r;
+  }
+
+  template <int dim>
   void
   MaterialPoints<dim>::index_occupied_cells()
   {

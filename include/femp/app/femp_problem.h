@@ -133,6 +133,10 @@ namespace femp
     /// The cell temperatures to the points (eq. 2); their states follow.
     void
     cells_to_points();
+    /// The mass evaporated in the temperature step leaves the points of
+    /// the surface cells; alpha follows (PointHeatExchange).
+    void
+    remove_evaporated_mass();
     /// 3. The flow over the step of @p dt; then alpha and the heat of
     /// points that changed cells (PointHeatExchange).
     void

@@ -44,7 +44,13 @@ namespace femp
     /// conservative) and by points moving between cells (change of the
     /// stored enthalpy when alpha and the new metal cells are updated),
     /// J (2D: J/m); both are zero for a conservative scheme.
-    double                advection = 0, moved_points = 0;
+    double advection = 0, moved_points = 0;
+    /// Evaporation (with 'Heat transfer/Remove evaporated mass'): the mass
+    /// that evaporated (the evaporation loss over L_v), the part taken from
+    /// the points, and the stored heat (sensible and melting, relative to
+    /// T_ref) that the removed metal took out of the grid, kg and J (2D:
+    /// kg/m, J/m); all zero without it.
+    double evaporated_mass = 0, removed_mass = 0, removed_enthalpy = 0;
     types::particle_index n_points     = 0;
     double                point_T_mean = 0; ///< mean point temperature, K
     // Melt flow (zero when Physics/Melt flow is false).
@@ -128,6 +134,10 @@ namespace femp
     /// Whether the laser has power on some segment (the progress line
     /// shows the melt pool then).
     bool with_laser = false;
+    /// Whether the run removed evaporated mass (the energy lines book it),
+    /// and its account at the end.
+    bool                                                   removal = false;
+    typename PointHeatExchange<dim>::EvaporatedMassAccount removal_account;
 
     /// The progress line (progress_when_due()).
     void

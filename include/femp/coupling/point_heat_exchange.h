@@ -21,6 +21,12 @@
 // It keeps the energy account of these exchanges ('moved_points': the
 // change of the stored enthalpy of the grid they caused, zero for a
 // conservative exchange).
+// With 'Heat transfer/Remove evaporated mass' it takes the mass that
+// evaporated in the temperature step from the points of the surface cells
+// (MaterialPoints::remove_mass()) and keeps the account of
+// that mass and of the sensible and melting heat it took out of the grid
+// (the change of the stored enthalpy; its latent heat of evaporation is the
+// heat's evaporation loss).
 #ifndef femp_point_heat_exchange_h
 #define femp_point_heat_exchange_h
 
@@ -110,6 +116,42 @@ namespace femp
       moved_points = e;
     }
 
+    /// After the temperature step and the transfer of its temperatures to
+    /// the points: take the mass that evaporated in the step
+    /// (HeatTransfer::evaporated_mass()) from the fluid points of the cells
+    /// (MaterialPoints::remove_mass()) and book it with the stored heat it
+    /// carries, m [e(T) - e(T_ref) - (rho_g c_g/rho_m)(T - T_ref)] per
+    /// piece at the point's temperature (the change of the stored enthalpy
+    /// of a cell whose alpha is its points' volume). alpha is stale then:
+    /// the next follow_points() renews it (the flow's, or the caller's
+    /// without the flow). Nothing unless the heat lists the evaporated mass
+    /// and the scene carries points. Collective.
+    void
+    remove_evaporated_mass();
+
+    /// The evaporated mass over the run (sums over the ranks).
+    struct EvaporatedMassAccount
+    {
+      double        removed     = 0; ///< taken from the points, kg (2D: kg/m)
+      double        not_removed = 0; ///< evaporated where no fluid point had it
+      unsigned long deleted     = 0; ///< points deleted
+      /// The stored enthalpy (relative to T_ref) that left the grid with
+      /// the removed mass: its sensible and melting heat, J (2D: J/m).
+      double enthalpy = 0;
+    };
+    /// The accounts so far (the same on every rank).
+    const EvaporatedMassAccount &
+    evaporated_mass_account() const
+    {
+      return evaporated;
+    }
+    /// Resume: the accounts at the checkpoint.
+    void
+    set_evaporated_mass_account(const EvaporatedMassAccount &a)
+    {
+      evaporated = a;
+    }
+
   private:
     MaterialPoints<dim>               &points;
     HeatTransfer<dim>                 &heat;
@@ -117,6 +159,7 @@ namespace femp
     std::unique_ptr<MetalBodies<dim>>  metal_bodies;
     std::unique_ptr<MetalSurface<dim>> surface; ///< null with the heat off
     double                             moved_points = 0;
+    EvaporatedMassAccount              evaporated;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
 

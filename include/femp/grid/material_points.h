@@ -202,6 +202,43 @@ namespace femp
     bool
     relocate_points(const std::vector<std::uint32_t> *from = nullptr);
 
+    /// Mass to take from the fluid points of an owned cell, kg (2D: kg/m),
+    /// outermost along @p outward first (a unit vector; zero: the topmost,
+    /// along +x_dim, first).
+    struct MassToRemove
+    {
+      std::uint32_t  index;
+      double         mass;
+      Tensor<1, dim> outward;
+    };
+    /// What remove_mass() did, summed over the ranks.
+    struct RemovedMass
+    {
+      double mass = 0; ///< taken from points, kg (2D: kg/m)
+      /// Sum over the removed pieces of their mass times
+      /// @p per_mass(T) of remove_mass() at the point's temperature.
+      double        weighted    = 0;
+      double        not_removed = 0; ///< asked but no fluid point had it
+      unsigned long deleted     = 0; ///< points deleted
+    };
+    /// Take the listed masses (evaporation, HeatTransfer::evaporated_mass())
+    /// from the fluid points of each cell: the points ordered by their
+    /// position along the cell's outward direction, outermost first (ties by
+    /// position), each gives all its mass until the rest is taken from the
+    /// next one, whose mass and volume shrink by the same factor (its
+    /// density, temperature and specific enthalpy stay). A point left with
+    /// less than 1 % of a lattice point's mass (rho_m s^dim, s the point
+    /// spacing) is deleted; its rest counts as removed. Mass a cell cannot
+    /// give (no fluid point, or less fluid mass than asked) is returned as
+    /// not removed. Cells that lost a point count as changed for the layout
+    /// marks, and point_moves() moves on when any rank changed a point, so
+    /// that alpha's keeper renews alpha. Collective.
+    /// @p per_mass (J/kg, a function of the point's temperature, K) is
+    /// summed over the removed mass into RemovedMass::weighted.
+    RemovedMass
+    remove_mass(const std::vector<MassToRemove>     &cells,
+                const std::function<double(double)> &per_mass);
+
     /// Property arrays of the points of occupied_cells()[@p c], in the
     /// order of the handler's particles_in_cell() (valid until points are
     /// inserted, removed or re-sorted): a pointer loop instead of deal.II's

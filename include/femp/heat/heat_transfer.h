@@ -22,6 +22,7 @@
 
 #include <deal.II/base/function_parser.h>
 #include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/tensor.h>
 
 #include <femp/base/material.h>
 #include <femp/base/parameter_table.h>
@@ -71,7 +72,12 @@ namespace femp
       unsigned int detached_drop_cells = 4;
       double       emissivity          = 0.4;
       /// zeta_q of eq. (1); the evaporation data are the Material's.
-      double                        evaporation_coefficient = 0.82;
+      double evaporation_coefficient = 0.82;
+      /// 'Remove evaporated mass': the mass that evaporates from each
+      /// surface cell (evaporated_mass()) is taken from the material
+      /// points of that cell (PointHeatExchange::remove_evaporated_mass()),
+      /// so that the surface recedes by m_dot/rho_m.
+      bool                          remove_evaporated_mass = false;
       std::map<std::string, double> fixed_temperatures;
       /// How the laser's surface flux enters the cells.
       enum class Deposition
@@ -195,6 +201,48 @@ namespace femp
     set_metal_fraction(const std::vector<double> &alpha,
                        const MetalBodies<dim>    *bodies = nullptr);
 
+    /// The evaporative mass flux per unit surface at the surface
+    /// temperature @p T_surface, kg/(m^2 s):
+    ///   m_dot(T) = zeta_q p_0 sqrt(M/(2 pi R T)) exp[L_v M (T - T_v)/(R T
+    ///   T_v)],
+    /// so that the evaporation loss of eq. (1) is q_evap(T) = L_v m_dot(T)
+    /// (0 with zeta_q = 0 or L_v = 0, and where the exponent is below -40).
+    double
+    evaporative_mass_flux(const double T_surface) const;
+
+    /// The mass that left the surface by evaporation in the last advance(),
+    /// per owned cell that gives it, kg (2D: kg/m). Each surface cell loses
+    /// m_dot(T^{n+1}) W V dt with its loss weight W = w |grad alpha| (1/m),
+    /// the same weight and temperature as the evaporation loss booked
+    /// (energy = L_v times this mass); it passes that mass on to its outward
+    /// face neighbour (along the dominant direction of its normal) when that
+    /// one holds metal, up to 1/(2 dim + 1) of the neighbour's metal mass,
+    /// so that the mass leaves the outermost metal. With the mass, the
+    /// mass-weighted outward unit normal -grad alpha/|grad alpha| of the
+    /// cells that gave it (zero where alpha's central difference vanishes,
+    /// in detached drops).
+    struct EvaporatedMass
+    {
+      std::uint32_t  index;
+      double         mass;
+      Tensor<1, dim> outward;
+    };
+    /// The cells of the last advance() that lost mass by evaporation, in
+    /// increasing index; empty unless 'Remove evaporated mass' is on and
+    /// the scene evaporates (zeta_q > 0, L_v > 0).
+    const std::vector<EvaporatedMass> &
+    evaporated_mass() const
+    {
+      return evaporated;
+    }
+    /// Whether advance() lists the evaporated mass (see evaporated_mass()).
+    bool
+    lists_evaporated_mass() const
+    {
+      return prm.remove_evaporated_mass && evap_pref > 0 &&
+             mat.latent_heat_evaporation > 0;
+    }
+
     /// Specific enthalpy of the metal at @p T_cell, J/kg: C(T) + L_m
     /// gamma(T), C the antiderivative of c_m (the relation of the
     /// phase-change iteration).
@@ -298,6 +346,12 @@ namespace femp
     {
       return mat;
     }
+    /// T_ref of the stored enthalpy and the losses, K.
+    double
+    reference_temperature() const
+    {
+      return prm.reference_temperature;
+    }
 
     /// Checkpoint: T (and the previous T, which gas cells keep), gamma and
     /// alpha of the owned cells, the energy accounts, the peak temperature
@@ -329,7 +383,9 @@ namespace femp
     std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
     std::vector<std::uint8_t>  is_source;
     std::vector<std::uint32_t> source_cells;
-    std::vector<std::size_t>   flagged_rows;
+    /// See evaporated_mass().
+    std::vector<EvaporatedMass> evaporated;
+    std::vector<std::size_t>    flagged_rows;
     /// Per x-row of the local box: 1 if any cell of the row holds metal.
     std::vector<std::uint8_t> row_has_metal;
     /// Laser density of the last step, W/m^3; surface-loss weight
@@ -466,6 +522,14 @@ namespace femp
                  double      &q_rad,
                  double      &dq_dT,
                  const double gas_h = 0) const;
+    /// Pass each cell's evaporated mass on to its outward metal neighbour
+    /// (see the source); collective.
+    void
+    evaporated_mass_outward();
+    /// Outward unit normal -grad alpha/|grad alpha| of owned cell @p idx
+    /// (central differences; zero where the difference vanishes).
+    Tensor<1, dim>
+    outward_normal(const std::size_t idx) const;
     /// New temperature of a cell with metal fraction @p a that starts from
     /// @p Tc, gamma @p gc and receives the explicit enthalpy change @p dH
     /// (J/m^3) and loses dtW q(T) with the loss q at the new temperature
