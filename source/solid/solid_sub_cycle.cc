@@ -1200,6 +1200,11 @@ namespace femp
                    scaling.factor(),
                    e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
+    else
+      // No MPM cell here (all in the FE zone, e.g. a raised one): no
+      // members either; after a resume this forgets the ids of all ranks
+      // that load_state() kept, as the run that went on holds none here.
+      mpm.gather(zone_mask(), scaling.factor());
     have_pending_exchange = false;
     // Points set aside in detached drops leave the solid as melted ones
     // do: counted with them, their kinetic energy booked with theirs.
