@@ -5,7 +5,11 @@
 // series, the .pvd indices and the thermal history must be bit-identical
 // (on the number of ranks of the test); with the solid also its energy and
 // probe files and its final energies (the final checkpoints hold the point
-// and element stresses). Then rank 0 alone resumes the same checkpoint
+// and element stresses). With 'Build/Hand over cooled metal' the FE zone
+// must have risen before the checkpoint resumed, the resumed run must hand
+// nothing over again, and the largest differences of the point stresses and
+// temperatures, the solid probes and the probe lines against the straight
+// run are printed and must be 0. Then rank 0 alone resumes the same checkpoint
 // (written by all ranks): the final points, and with the solid the rows of
 // its energy and probe files after the checkpoint, must agree with the
 // straight run to round-off (argv[3]: the gate; with melt flow the
