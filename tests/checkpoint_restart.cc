@@ -5,7 +5,11 @@
 // series, the .pvd indices and the thermal history must be bit-identical
 // (on the number of ranks of the test); with the solid also its energy and
 // probe files and its final energies (the final checkpoints hold the point
-// and element stresses). Then rank 0 alone resumes the same checkpoint
+// and element stresses). With 'Build/Hand over cooled metal' the FE zone
+// must have risen before the checkpoint resumed, the resumed run must hand
+// nothing over again, and the largest differences of the point stresses and
+// temperatures, the solid probes and the probe lines against the straight
+// run are printed and must be 0. Then rank 0 alone resumes the same checkpoint
 // (written by all ranks): the final points, and with the solid the rows of
 // its energy and probe files after the checkpoint, must agree with the
 // straight run to round-off (argv[3]: the gate; with melt flow the
@@ -23,8 +27,10 @@
 
 #include <filesystem>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include "scene_driver.h"
 #include "test_tools.h"
@@ -47,7 +53,8 @@ namespace
 
   /// Largest difference between the numbers of two CSV files of the same
   /// shape, each column relative to its largest magnitude in @p a (1 if
-  /// the shapes differ); the rows with time <= @p after are skipped.
+  /// the shapes differ); the rows whose first column is <= @p after are
+  /// skipped, and so are lines starting with '#' before the header.
   double
   csv_difference(const std::string &a, const std::string &b, const double after)
   {
@@ -55,9 +62,12 @@ namespace
       std::vector<std::vector<double>> r;
       std::ifstream                    in(file);
       std::string                      line;
-      std::getline(in, line); // header
+      bool                             header = true;
       while (std::getline(in, line))
         {
+          // Comment lines ('#', probe lines), then the header.
+          if (line.rfind("#", 0) == 0 || std::exchange(header, false))
+            continue;
           std::vector<double> v;
           std::stringstream   s(line);
           std::string         x;
@@ -95,6 +105,21 @@ namespace
     std::getline(in, a);
     std::getline(in, b);
     return {a, b};
+  }
+
+  /// The lines the runs appended to scene.log since line @p seen (which
+  /// moves on to its end).
+  std::vector<std::string>
+  new_log_lines(std::size_t &seen)
+  {
+    std::ifstream            in("scene.log");
+    std::vector<std::string> lines;
+    std::string              line;
+    for (std::size_t i = 0; std::getline(in, line); ++i)
+      if (i >= seen)
+        lines.push_back(line);
+    seen += lines.size();
+    return lines;
   }
 
   /// Every point (id -> position and properties), gathered on rank 0.
@@ -182,12 +207,23 @@ namespace
         std::cout << what << " = " << std::setprecision(8) << v << std::endl;
     };
     double end_time;
+    bool   layers, fe_zone, handover;
     {
+      // The scene as femp reads it ('include' lines too).
       dealii::ParameterHandler prm;
-      femp::declare_all_parameters(prm);
-      prm.parse_input(scene);
+      parse_scene(prm, scene, {});
       prm.enter_subsection("Time stepping");
       end_time = prm.get_double("End time");
+      prm.leave_subsection();
+      prm.enter_subsection("Build");
+      layers   = prm.get("Layer schedule") != "none";
+      handover = prm.get_bool("Hand over cooled metal");
+      prm.leave_subsection();
+      prm.enter_subsection("Physics");
+      fe_zone = prm.get_bool("Solid stress");
+      prm.leave_subsection();
+      prm.enter_subsection("Solid FEM");
+      fe_zone = fe_zone && prm.get_bool("Use finite elements");
       prm.leave_subsection();
     }
     const std::vector<Override> common = {
@@ -200,10 +236,11 @@ namespace
       extra.insert(extra.begin(), common.begin(), common.end());
       return extra;
     };
-    for (const std::string d : {"out0", "out1", "out2", "bad"})
+    for (const std::string d : {"out0", "out1", "out2", "bad", "scene.log"})
       if (root)
         fs::remove_all(d);
     MPI_Barrier(comm);
+    std::size_t log_seen = 0;
 
     // Straight through, with the checkpoints.
     typename femp::FempProblem<dim>::Summary s0, s1;
@@ -213,18 +250,21 @@ namespace
     if (root)
       std::cout << "checkpoints written (index): " << last << ", " << half
                 << std::endl;
+    const auto log0 = new_log_lines(log_seen);
 
     // Resumed from the half-way checkpoint, continuing a copy of the
     // output directory (the run killed after its checkpoint).
     if (root)
       fs::copy("out0", "out1", fs::copy_options::recursive);
     MPI_Barrier(comm);
-    run<dim>(scene,
-             comm,
-             with({{"Output", "Directory", "out1"},
-                   {"Checkpoint", "Resume from", "out1/checkpoint/" + half}}),
-             &s1);
-    bool same_state = true;
+    const auto points1 =
+      run<dim>(scene,
+               comm,
+               with({{"Output", "Directory", "out1"},
+                     {"Checkpoint", "Resume from", "out1/checkpoint/" + half}}),
+               &s1);
+    const auto log1       = new_log_lines(log_seen);
+    bool       same_state = true;
     for (unsigned int r = 0; r < Utilities::MPI::n_mpi_processes(comm); ++r)
       {
         const std::string f =
@@ -241,7 +281,7 @@ namespace
                                 "thermal_history_full_0.csv"})
       identical(f, file_text("out0/" + f) == file_text("out1/" + f));
     // A build (Build/Layer schedule): its pores too (doc/builds.md).
-    if (file_text(scene).find("Layer schedule") != std::string::npos)
+    if (layers)
       for (const std::string f : {"porosity.csv", "pores.csv"})
         identical(f, file_text("out0/" + f) == file_text("out1/" + f));
     for (const std::string f : {"grid.pvd", "points.pvd"})
@@ -298,6 +338,99 @@ namespace
                 s0.losses == s1.losses && s0.point_T_mean == s1.point_T_mean &&
                 s0.moved_points == s1.moved_points &&
                 s0.pool.depth == s1.pool.depth);
+
+    // With the hand-over of cooled metal: the zone rose before the
+    // checkpoint (the straight run's log), the resumed run took the raised
+    // zone from it (no hand-over of its own), and the largest differences
+    // of the point stresses and temperatures, of the solid's probes (in
+    // the raised rows) and of the probe lines' cell fields (element
+    // stresses) between the two runs are 0.
+    if (handover && root)
+      {
+        const std::regex rise("FE zone hand-over at t = ([-0-9.e+]+) s: .*"
+                              "the zone's top rises from ([-0-9.e+]+) to "
+                              "([-0-9.e+]+) m: ([0-9]+) elements");
+        const std::regex written("Checkpoint: step [0-9]+, time ([-0-9.e+]+) "
+                                 "s -> .*" +
+                                 half);
+        std::smatch      m;
+        unsigned int     rises0 = 0, rises1 = 0;
+        double t_rise = 0, from = 0, to = 0, elements = 0, t_half = -1;
+        for (const auto &line : log0)
+          if (std::regex_search(line, m, rise))
+            {
+              ++rises0;
+              t_rise   = std::stod(m[1]);
+              from     = std::stod(m[2]);
+              to       = std::stod(m[3]);
+              elements = std::stod(m[4]);
+            }
+          else if (std::regex_search(line, m, written))
+            t_half = std::stod(m[1]);
+        for (const auto &line : log1)
+          rises1 += std::regex_search(line, m, rise);
+        std::cout << "straight run: the FE zone rises " << rises0
+                  << " time(s), from " << std::setprecision(3) << from * 1e6
+                  << " to " << to * 1e6 << " um (" << elements
+                  << " elements) at t = " << t_rise * 1e6
+                  << " us; the checkpoint resumed is of t = " << t_half * 1e6
+                  << " us" << std::endl;
+        verdict("the zone rose before the checkpoint resumed",
+                rises0 == 1 && t_half > t_rise);
+        verdict("the resumed run hands nothing over again (its zone is the "
+                "checkpoint's)",
+                rises1 == 0);
+        using P            = typename femp::MaterialPoints<dim>::PropertyIndex;
+        const unsigned n_s = dim * (dim + 1) / 2;
+        double         d_stress = points1.size() == points0.size() ? 0 : 1e300,
+               d_T = d_stress, d_any = d_stress;
+        for (const auto &[id, v] : points0)
+          {
+            const auto it = points1.find(id);
+            if (it == points1.end())
+              {
+                d_stress = d_T = d_any = 1e300;
+                continue;
+              }
+            for (std::size_t i = 0; i < v.size(); ++i)
+              {
+                const double       d = std::abs(it->second[i] - v[i]);
+                const unsigned int k = i - dim; // the property
+                d_any                = std::max(d_any, d);
+                if (i >= dim && ((k >= P::stress && k < P::stress + n_s) ||
+                                 (dim == 2 && k == P::stress_zz)))
+                  d_stress = std::max(d_stress, d);
+                if (i >= dim && k == P::temperature)
+                  d_T = std::max(d_T, d);
+              }
+          }
+        double d_lines = 0;
+        for (const auto &e : fs::directory_iterator("out0"))
+          if (e.path().filename().string().rfind("probe_line_", 0) == 0)
+            {
+              const std::string f = e.path().filename().string();
+              d_lines             = std::max(d_lines,
+                                 csv_difference("out0/" + f, "out1/" + f, -1.));
+            }
+        const double d_probes = csv_difference("out0/solid_probes.csv",
+                                               "out1/solid_probes.csv",
+                                               end_time / 2);
+        std::cout << "largest difference, resumed against straight (same "
+                     "ranks):"
+                  << std::endl;
+        std::cout << "  point stresses (Pa) = " << d_stress << std::endl;
+        std::cout << "  point temperatures (K) = " << d_T << std::endl;
+        std::cout << "  any point position or property = " << d_any
+                  << std::endl;
+        std::cout << "  solid probes after the checkpoint (sigma_xx, T; "
+                     "relative) = "
+                  << d_probes << std::endl;
+        std::cout << "  probe lines of all outputs (cell fields; relative) = "
+                  << d_lines << std::endl;
+        verdict("all these differences 0",
+                d_stress == 0 && d_T == 0 && d_any == 0 && d_probes == 0 &&
+                  d_lines == 0);
+      }
 
     // Rank 0 alone resumes the checkpoint that all ranks wrote.
     if (root)
@@ -416,15 +549,10 @@ namespace
             {{"Output", "Directory", "out1"},
              {"Checkpoint", "Resume from", "out1/checkpoint/" + half},
              {"Physics", "Heat transfer", "false"},
+             {"Build", "Hand over cooled metal", "false"},
              {"Time stepping", "Time step", "1e-7"}},
             "Physics/Heat transfer = true, the scene has false");
-    // With or without an FE zone: the entry of the scene file.
-    const std::string used  = file_text(scene);
-    const auto        entry = used.find("set Use finite elements");
-    const bool        fe_zone =
-      solid && entry != std::string::npos &&
-      used.substr(entry, used.find('\n', entry) - entry).find("true") !=
-        std::string::npos;
+    // With or without an FE zone.
     if (fe_zone)
       refused("other FE zone",
               {{"Output", "Directory", "out1"},

@@ -1,12 +1,14 @@
-# Run femp on PRM (a scene that writes checkpoints): it must succeed and
-# leave a checkpoint index in output/checkpoint. Then resume it with ARGS
+# Run femp on PRM (a scene that writes checkpoints; FIRST_ARGS, optional,
+# separated by '|', go before it): it must succeed and leave a checkpoint
+# index in output/checkpoint. Then resume it with ARGS
 # (command-line arguments separated by '|', e.g. a --set that changes the
 # scene): femp must exit non-zero with a message matching REGEX before any
 # work (no banner).
 file(REMOVE_RECURSE ${WORKDIR})
 file(MAKE_DIRECTORY ${WORKDIR})
+string(REPLACE "|" ";" first_args "${FIRST_ARGS}")
 execute_process(
-  COMMAND ${EXE} ${PRM}
+  COMMAND ${EXE} ${first_args} ${PRM}
   WORKING_DIRECTORY ${WORKDIR}
   OUTPUT_VARIABLE out
   ERROR_VARIABLE err

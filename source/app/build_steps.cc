@@ -251,16 +251,42 @@ namespace femp
 
   template <int dim>
   void
-  BuildSteps<dim>::add_state(ModuleStates<dim> &states) const
+  BuildSteps<dim>::add_state(ModuleStates<dim> &states)
   {
-    if (!tracks)
-      return;
-    TrackRecord<dim> *t = tracks.get();
-    states.add(
-      "tracks",
-      [t](StateWriter &out) { t->save_state(out); },
-      [t](std::vector<StateReader> &in) { t->load_state(in[0]); },
-      "it was written without the track record (Build/Track report)");
+    if (tracks)
+      {
+        TrackRecord<dim> *t = tracks.get();
+        states.add(
+          "tracks",
+          [t](StateWriter &out) { t->save_state(out); },
+          [t](std::vector<StateReader> &in) { t->load_state(in[0]); },
+          "it was written without the track record (Build/Track report)");
+      }
+    if (handover)
+      {
+        // The fusion depths and the counts of the hand-overs so far (the
+        // raised zone itself is the solid's: section "fe zone").
+        FeZoneHandover<dim> *h = handover.get();
+        states.add(
+          "handover",
+          [this, h](StateWriter &out) {
+            h->save_state(out);
+            out.put(n_handed);
+          },
+          [this, h](std::vector<StateReader> &in) {
+            h->load_state(in);
+            for (std::size_t f = 0; f < in.size(); ++f)
+              {
+                const auto n = in[f].get<std::array<double, 2>>();
+                if (f == 0)
+                  n_handed = n;
+              }
+          },
+          "it was written without the hand-over of cooled metal (Build/Hand "
+          "over cooled metal = false): the fusion depths of its layers are "
+          "unknown; resume it with 'Hand over cooled metal = false' or start "
+          "the run anew");
+      }
   }
 
   template class BuildSteps<2>;

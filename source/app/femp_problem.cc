@@ -107,6 +107,17 @@ namespace femp
         fluid_solid = std::make_unique<FluidSolidForces<dim>>(
           *grid, *points, scene.material.density, scene.fem);
       }
+    // The FE zone of a checkpoint, which a hand-over may have raised: built
+    // at its top from the start (checkpoints without the section hold the
+    // scene's zone).
+    if (states.resuming() && states.checkpoint_file().has_section("fe zone"))
+      {
+        auto parts = states.checkpoint_file().section("fe zone");
+        solid->resume_fe_zone(parts);
+      }
+    // The fluid's forces take the FE zone as it is at each step.
+    if (fluid_solid && solid->fe_zone())
+      fluid_solid->follow_zone(*solid->fe_zone());
     // On resume the solid's CSV files are cut back and reopened by its
     // load_state() instead.
     solid->initialize(heat->temperature(),
@@ -136,6 +147,12 @@ namespace femp
     builds->add_state(states);
     if (flow)
       states.add("flow", *flow);
+    // Read before the restore, by setup_solid().
+    if (solid)
+      states.add(
+        "fe zone",
+        [this](StateWriter &out) { solid->save_fe_zone(out); },
+        typename ModuleStates<dim>::Load());
     if (solid)
       states.add(
         "solid",

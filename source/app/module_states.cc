@@ -46,6 +46,8 @@ namespace femp
     TimerOutput::Scope t(timer, "checkpoint");
     for (const auto &e : entries)
       {
+        if (!e.load)
+          continue;
         if (!e.missing.empty())
           require(checkpoint->has_section(e.name),
                   "Checkpoint/Resume from",

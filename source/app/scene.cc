@@ -107,10 +107,7 @@ namespace femp
                    heat_enabled,
                    solid,
                    solid && fem.enabled,
-                   build.enabled(),
-                   checkpoint.every_steps > 0 || checkpoint.every_time > 0 ||
-                     checkpoint.every_wall_minutes > 0 ||
-                     !checkpoint.resume_from.empty());
+                   build.enabled());
   }
 
   template <int dim>

@@ -41,7 +41,7 @@ namespace femp
     const auto   ijk   = grid.global_index(c);
     std::array<double, n_corners> share;
     // 1 in the FE zone, else min(1, 2 m_I / m_ref).
-    if (fe_zone.contains_cell(ijk))
+    if ((followed_zone ? *followed_zone : fe_zone).contains_cell(ijk))
       {
         share.fill(1.);
         return share;

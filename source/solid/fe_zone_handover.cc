@@ -28,7 +28,8 @@ namespace femp
       "behind the build, each new element taking its cell's mean stress and "
       "plastic strain (doc/builds.md, \"Handing cooled metal to finite "
       "elements\"). Needs the heat, the solid with its FE zone and a layer "
-      "schedule; not with checkpoints.");
+      "schedule. A checkpoint records the raised zone and the fusion depths "
+      "(doc/checkpoint.md).");
     table.add("Hand-over temperature",
               temperature,
               Patterns::Double(),
@@ -67,8 +68,7 @@ namespace femp
                                          const bool   heat,
                                          const bool   solid,
                                          const bool   fe_zone,
-                                         const bool   layers,
-                                         const bool   checkpoints) const
+                                         const bool   layers) const
   {
     // The values only matter with the hand-over on (a material whose
     // solidus lies below the default temperature runs without it).
@@ -105,12 +105,6 @@ namespace femp
             "true",
             "the hand-over happens at layer starts: it needs 'Build/Layer "
             "schedule' other than none, with more than one layer");
-    require(!checkpoints,
-            name,
-            "true",
-            "a checkpoint does not record the raised FE zone: set the "
-            "'Checkpoint' triggers to 0 and 'Checkpoint/Resume from' empty, "
-            "or 'Hand over cooled metal = false'");
   }
 
   template <int dim>
@@ -353,6 +347,37 @@ namespace femp
         reason = s.str();
       }
     return z0 + (first_row + r) * h;
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::save_state(StateWriter &out) const
+  {
+    out.put(layer_top);
+    // The lowest of all ranks (what the next choice reduces to), so that
+    // the file does not depend on where each rank's lowest lies.
+    out.put(Utilities::MPI::min(lowest, grid.communicator()));
+    out.put(depth);
+    out.put(current_top);
+    out.put(last_limit);
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::load_state(std::vector<StateReader> &parts)
+  {
+    // The lowest molten cell of all ranks (every part holds it).
+    lowest = std::numeric_limits<double>::infinity();
+    for (std::size_t f = 0; f < parts.size(); ++f)
+      {
+        StateReader &in = parts[f];
+        const double t = in.get<double>(), low = in.get<double>(),
+                     d = in.get<double>(), top = in.get<double>(),
+                     limit = in.get<double>();
+        lowest             = std::min(lowest, low);
+        if (f == 0)
+          layer_top = t, depth = d, current_top = top, last_limit = limit;
+      }
   }
 
   template class FeZoneHandover<2>;

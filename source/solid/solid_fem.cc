@@ -1482,6 +1482,22 @@ namespace femp
 
   template <int dim>
   void
+  SolidFEM<dim>::set_top(const double new_top)
+  {
+    const double r      = (new_top - grid.origin()[dim - 1]) / grid.h();
+    const int    top    = static_cast<int>(std::round(r));
+    const int    bottom = static_cast<int>(std::round(
+      (prm.lower_corner[dim - 1] - grid.origin()[dim - 1]) / grid.h()));
+    AssertThrow(std::abs(r - top) < 1e-6 && top > bottom &&
+                  top <= int(grid.n_cells()[dim - 1]),
+                ExcMessage("FE zone: the top " + std::to_string(new_top) +
+                           " m must be a grid line above the zone's bottom "
+                           "and inside the domain"));
+    prm.upper_corner[dim - 1] = new_top;
+  }
+
+  template <int dim>
+  void
   SolidFEM<dim>::save_state(StateWriter &out) const
   {
     // Element state, one array per value (stress components, plastic

@@ -401,7 +401,10 @@ namespace femp
     const auto face_bits = set_boundary_flags();
     scaling.reset();
     if (fem)
-      fem->setup(scaling.factor(), face_bits, prm.gravity, T);
+      fem->setup(fe_setup_factor > 0 ? fe_setup_factor : scaling.factor(),
+                 face_bits,
+                 prm.gravity,
+                 T);
     else
       no_fe_zone.assign(grid.n_local(), 0);
     find_active_nodes();
@@ -1197,6 +1200,11 @@ namespace femp
                    scaling.factor(),
                    e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
       }
+    else
+      // No MPM cell here (all in the FE zone, e.g. a raised one): no
+      // members either; after a resume this forgets the ids of all ranks
+      // that load_state() kept, as the run that went on holds none here.
+      mpm.gather(zone_mask(), scaling.factor());
     have_pending_exchange = false;
     // Points set aside in detached drops leave the solid as melted ones
     // do: counted with them, their kinetic energy booked with theirs.
@@ -1585,6 +1593,27 @@ namespace femp
       out.put(a);
     // Added last, so that checkpoints written without it still load (as 0).
     out.put(ledger.withheld());
+  }
+
+  template <int dim>
+  void
+  SolidSubCycle<dim>::save_fe_zone(StateWriter &out) const
+  {
+    out.put(fem ? fem->top() : 0.);
+    out.put(fem ? fem->setup_mass_scaling() : 0.);
+  }
+
+  template <int dim>
+  void
+  SolidSubCycle<dim>::resume_fe_zone(std::vector<StateReader> &parts)
+  {
+    // The same on every rank: the first part's.
+    const double top    = parts[0].get<double>();
+    const double factor = parts[0].get<double>();
+    if (!fem)
+      return; // the header's check refused a checkpoint with a zone
+    fem->set_top(top);
+    fe_setup_factor = factor;
   }
 
   template <int dim>

@@ -93,9 +93,10 @@ namespace femp
     }
 
     /// The track record's state (with 'Build/Track report') as the
-    /// checkpoint section "tracks" of @p states.
+    /// checkpoint section "tracks" of @p states, the hand-over's (with
+    /// 'Build/Hand over cooled metal') as the section "handover".
     void
-    add_state(ModuleStates<dim> &states) const;
+    add_state(ModuleStates<dim> &states);
 
     /// The schedule (null with one layer).
     const LayerSchedule<dim> *

@@ -10,6 +10,7 @@
 #include <deal.II/base/conditional_ostream.h>
 #include <deal.II/base/timer.h>
 
+#include <femp/base/input_checks.h>
 #include <femp/io/checkpoint.h>
 
 #include <functional>
@@ -65,13 +66,23 @@ namespace femp
         [&module](std::vector<StateReader> &in) { module.load_state(in); },
         missing);
     }
-    /// State kept by other means than a module's two functions.
+    /// State kept by other means than a module's two functions. An empty
+    /// @p load: the section is read before the restore, by the module that
+    /// needs it at its setup (checkpoint_file().section()); restore()
+    /// passes it by.
     void
     add(const std::string &name,
         const Save        &save,
         const Load        &load,
         const std::string &missing = std::string())
     {
+      // A checkpoint without a section that @p missing explains is refused
+      // here, at the setup, before any work.
+      if (load && !missing.empty() && resuming())
+        require(checkpoint->has_section(name),
+                "Checkpoint/Resume from",
+                checkpoint->path_read(),
+                missing);
       entries.push_back({name, save, load, missing});
     }
     /// What follows a restore once every section is loaded, in the order

@@ -17,7 +17,8 @@
 // made the 3D track scene blow up). Spreading over the points with their
 // tents instead was stable but put half of the face force on the far nodes
 // of the cell (the stress under the interface 0.47 short in
-// coupled_pool_on_solid). Cells of the FE zone: equal shares. Cells with no
+// coupled_pool_on_solid). Cells of the FE zone as it stands (a hand-over
+// raises it): equal shares. Cells with no
 // solid point (powder only): no force; unmelted powder carries no stress.
 #ifndef femp_fluid_solid_forces_h
 #define femp_fluid_solid_forces_h
@@ -43,11 +44,21 @@ namespace femp
     using NodeForces = std::array<std::vector<double>, dim>;
 
     /// @p density: of the solid metal, kg/m^3; @p fe_zone: the FE zone of
-    /// the solid (equal shares inside it).
+    /// the solid (equal shares inside it; see follow_zone()).
     FluidSolidForces(const BackgroundGrid<dim>                &grid,
                      const MaterialPoints<dim>                &points,
                      const double                              density,
                      const typename SolidFEM<dim>::Parameters &fe_zone);
+
+    /// Take the FE zone from @p zone at each spread instead of the
+    /// parameters' box: the solid's zone as it is now
+    /// (SolidSubCycle::fe_zone(), which a hand-over raises). @p zone must
+    /// outlive this object.
+    void
+    follow_zone(const FeZone<dim> &zone)
+    {
+      followed_zone = &zone;
+    }
 
     /// The forces of the last fluid step of @p flow to the nodes.
     void
@@ -73,8 +84,10 @@ namespace femp
     const MaterialPoints<dim> &points;
     const double               density;
     const FeZone<dim>          fe_zone;
-    FaceForces                 face_force;
-    NodeForces                 node_force;
+    /// follow_zone(): the zone read at each spread instead of fe_zone.
+    const FeZone<dim> *followed_zone = nullptr;
+    FaceForces         face_force;
+    NodeForces         node_force;
     // The cells where face_force may be non-zero (the flow's last call),
     // and those whose corners the last spread wrote: only they are reset,
     // so a few liquid drops cost a few cells, not passes over the grid.

@@ -62,6 +62,7 @@
 #include <deal.II/base/parameter_handler.h>
 
 #include <femp/base/parameter_table.h>
+#include <femp/base/state_stream.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 
@@ -99,14 +100,13 @@ namespace femp
       parse_parameters(ParameterHandler &prm);
       /// With the hand-over on, refuse what cannot work (InputError naming
       /// the parameter): no heat, no solid, no FE zone, no layer schedule,
-      /// checkpoints, a temperature not below @p solidus.
+      /// a temperature not below @p solidus.
       void
       check(const double solidus,
             const bool   heat,
             const bool   solid,
             const bool   fe_zone,
-            const bool   layers,
-            const bool   checkpoints) const;
+            const bool   layers) const;
     };
 
     /// @p first_top: the first layer's powder top, m.
@@ -159,6 +159,17 @@ namespace femp
     {
       return reason;
     }
+
+    /// Checkpoint: the fusion depths so far (the deepest, the powder top
+    /// of the layer observed, its lowest molten cell over all ranks) and
+    /// what the last choice found (the zone's top, the limit). Collective.
+    void
+    save_state(StateWriter &out) const;
+    /// Restore it (@p parts: one per saved rank; every rank takes the
+    /// lowest molten cell of all, which is what the next choice reduces
+    /// the ranks' values to).
+    void
+    load_state(std::vector<StateReader> &parts);
 
   private:
     const Parameters           prm;

@@ -311,6 +311,26 @@ namespace femp
                                         &new_cells,
               const std::vector<double> &T);
 
+    /// The zone's top, m: 'Zone upper corner', or the grid line a
+    /// hand-over raised it to (raise_top(), set_top()).
+    double
+    top() const
+    {
+      return prm.upper_corner[dim - 1];
+    }
+    /// The mass-scaling factor the zone's lumped masses were built at (by
+    /// setup() or raise_top()); every later factor scales those masses.
+    double
+    setup_mass_scaling() const
+    {
+      return mass_scale_setup != 0 ? mass_scale_setup : mass_scale;
+    }
+    /// Before setup(): build the zone up to the grid line @p new_top (m,
+    /// above the zone's bottom, inside the domain) instead of 'Zone upper
+    /// corner' (the zone of a checkpoint that a hand-over raised).
+    void
+    set_top(const double new_top);
+
     /// Checkpoint, between two solid steps: per owned element, keyed by its
     /// zone index, the stress, plastic strain, viscous pressure,
     /// temperature of the last step, hourglass mode amplitudes and end

@@ -398,6 +398,27 @@ namespace femp
     /// directory opened none).
     void
     load_state(std::vector<StateReader> &parts, const std::string &directory);
+    /// Checkpoint section "fe zone": the FE zone's top (m) and the
+    /// mass-scaling factor its masses were built at (0 and 0 without a
+    /// zone). A hand-over raises the zone; the section lets a resumed run
+    /// build the same zone before it reads the elements.
+    void
+    save_fe_zone(StateWriter &out) const;
+    /// Before initialize(), when resuming: read that section (@p parts, one
+    /// per saved rank), so that initialize() builds the zone up to the
+    /// saved top with the masses of the saved factor, as the run that
+    /// wrote the checkpoint held it; load_state() then finds every element
+    /// and node of the checkpoint. Without this call the zone is the
+    /// scene's.
+    void
+    resume_fe_zone(std::vector<StateReader> &parts);
+    /// The FE zone as it is now (it rises with hand_over_rows()); null
+    /// without one.
+    const FeZone<dim> *
+    fe_zone() const
+    {
+      return fem ? &fem->fe_zone() : nullptr;
+    }
 
   private:
     Parameters                 prm;
@@ -460,6 +481,10 @@ namespace femp
     /// safety_factor_solidified after use_cooling_step().
     double safety       = 0.5;
     bool   cooling_step = false;
+    /// The mass-scaling factor initialize() builds the FE zone's masses
+    /// at: that of the checkpoint resumed (resume_fe_zone()), else 0 (the
+    /// factor of 'Solid/Mass scaling factor').
+    double fe_setup_factor = 0;
 
     /// One solid step of size @p dt; @p w: weight of the step's end time
     /// between the last two temperature fields; @p external_forces as in
