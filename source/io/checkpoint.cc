@@ -20,10 +20,10 @@ namespace femp
     const char magic[8] = {'F', 'E', 'M', 'P', 'C', 'K', 'P', 'T'};
     // 2: the solid's sections (Physics/Solid stress) added; 4: the FE
     // elements' volume change; 5: the section "fe zone" (the FE zone's top
-    // and the factor its masses were built at). A file of version 4 has no
-    // such section: its zone is the scene's, which a reader of version 5
-    // resumes as it is.
-    const std::uint32_t format_version = 5, oldest_version = 4;
+    // and the factor its masses were built at) and the evaporated-mass
+    // account in the section "run", so that a file of version 4 cannot be
+    // read by this version.
+    const std::uint32_t format_version = 5;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p.
     std::uint64_t
@@ -300,10 +300,9 @@ namespace femp
              "string FEMPCKPT at its start)");
     StateReader in(image.data() + 8, header_size - 8, name);
     const auto  version = in.get<std::uint32_t>();
-    if (version < oldest_version || version > format_version)
+    if (version != format_version)
       refuse("its file " + name + " has format version " +
-             std::to_string(version) + ", this femp reads versions " +
-             std::to_string(oldest_version) + " to " +
+             std::to_string(version) + ", this femp reads version " +
              std::to_string(format_version) +
              " only (written by another version of femp: resume it with "
              "that version or start the run anew)");
