@@ -141,9 +141,11 @@ namespace femp
                              const ConditionalOStream &pcout)
   {
     TimerOutput::Scope scope(timer, "FE zone hand-over");
-    const double       new_top =
-      handover->choose_top(top, points, solid.fe_zone_cells());
-    const double old_top = handover->zone_top();
+    const double       new_top = handover->choose_top(top,
+                                                points,
+                                                solid.fe_zone_cells(),
+                                                solid.zone_top_lift());
+    const double       old_top = handover->zone_top();
     pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
           << handover->deepest_fusion() << " m, rows up to "
           << handover->limit() << " m";

@@ -1396,6 +1396,37 @@ namespace femp
   }
 
   template <int dim>
+  std::vector<double>
+  SolidSubCycle<dim>::zone_top_lift() const
+  {
+    if (!fem)
+      return {};
+    const FeZone<dim> &zone = fem->fe_zone();
+    const auto         lo = zone.first_cell(), n = zone.n_cells();
+    const int          top    = lo[dim - 1] + n[dim - 1];
+    std::size_t        n_face = 1;
+    for (int d = 0; d < dim - 1; ++d)
+      n_face *= n[d] + 1;
+    std::vector<double> lift(n_face, 0.);
+    std::size_t         found = 0;
+    for (std::size_t t = 0; t < fem->n_transition(); ++t)
+      {
+        const auto &ijk = fem->transition_node(t);
+        if (ijk[dim - 1] != top)
+          continue;
+        std::size_t k = 0;
+        for (int d = dim - 2; d >= 0; --d)
+          k = k * (n[d] + 1) + (ijk[d] - lo[d]);
+        lift[k] = fem->transition_displacement(t)[dim - 1];
+        ++found;
+      }
+    // A top on the domain's top face has no transition nodes.
+    if (found != n_face)
+      return {};
+    return lift;
+  }
+
+  template <int dim>
   std::array<double, 2>
   SolidSubCycle<dim>::hand_over_rows(const double new_top)
   {

@@ -124,12 +124,15 @@ namespace femp
     /// its recoat: close the fusion depth of the layer before and return
     /// the grid line the FE zone may rise to (m), or a value at or below
     /// the zone's top when no row may be handed over. @p zone: the FE
-    /// zone's cells of the local box (SolidSubCycle::fe_zone_cells()).
+    /// zone's cells of the local box (SolidSubCycle::fe_zone_cells());
+    /// @p top_lift: the vertical displacement of the zone's top-face nodes
+    /// since its top was set (SolidSubCycle::zone_top_lift(); empty: 0).
     /// Collective.
     double
     choose_top(const double                     new_top,
                const MaterialPoints<dim>       &points,
-               const std::vector<std::uint8_t> &zone);
+               const std::vector<std::uint8_t> &zone,
+               const std::vector<double>       &top_lift);
 
     /// The least fill (see the file's comment) of a cell of a handed row.
     static constexpr double full_fill = 0.9;
@@ -160,6 +163,15 @@ namespace femp
       return reason;
     }
 
+    /// The least fill of each row the last choice looked at, from the
+    /// zone's top upwards (over the cells inside the zone's horizontal
+    /// extent; empty when no row was looked at).
+    const std::vector<double> &
+    least_fill() const
+    {
+      return row_fill;
+    }
+
     /// Checkpoint: the fusion depths so far (the deepest, the powder top
     /// of the layer observed, its lowest molten cell over all ranks) and
     /// what the last choice found (the zone's top, the limit). Collective.
@@ -178,9 +190,10 @@ namespace femp
     /// The powder top of the layer being observed, m.
     double layer_top;
     /// Lowest cell bottom with molten metal in the layer (local), m.
-    double      lowest = std::numeric_limits<double>::infinity();
-    double      depth = 0, current_top = 0, last_limit = 0;
-    std::string reason;
+    double              lowest = std::numeric_limits<double>::infinity();
+    double              depth = 0, current_top = 0, last_limit = 0;
+    std::string         reason;
+    std::vector<double> row_fill;
   };
 } // namespace femp
 
