@@ -1194,11 +1194,13 @@ namespace femp
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
-        // Nothing melted, solidified or lost here: the gather may keep
-        // the arrays of the last one (SolidMPM::gather()).
+        // Nothing melted, solidified or lost here, and no point to stop
+        // in a detached drop: the gather may keep the arrays of the last
+        // one (SolidMPM::gather()).
         mpm.gather(zone_mask(),
                    scaling.factor(),
-                   e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
+                   e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0 &&
+                     e.n_stopped == 0);
       }
     else
       // No MPM cell here (all in the FE zone, e.g. a raised one): no
