@@ -39,10 +39,18 @@
 // surface in the row above) 7/8. full_fill = 0.9 takes dense metal (1, up
 // to the points' thermal volume change and the jitter of a strained
 // lattice) and leaves as points a cell with an empty sub-cell (2D; in 3D
-// two), a cell beside a pore and the row under a free surface. The fill is
-// taken on the grid: the points of the zone stay where the hand-over left
-// them, so a displacement u of the zone's top since then (the points above
-// follow it) reads as a gap or an overlap of about u/h in the row above.
+// two), a cell beside a pore and the row under a free surface.
+// The zone's points stay where the hand-over left them, while the zone's
+// top face moves with its nodes (thermal expansion) and the points above
+// with it: a lift u of the face would read as a gap of about u/h in the
+// row above. The points of the zone's top row are therefore taken u higher
+// (u interpolated between the face's nodes, SolidSubCycle::zone_top_lift()),
+// so that zone and metal above form one lattice again: dense metal over an
+// expanded zone reads 1. The whole top row moves by the face's lift, which
+// overstates its lower points' displacement by the row's own strain times
+// their depth (below 1 % of h). A negative lift (a contracted zone) is
+// taken as 0: the points above are held on the grid line (below), where the
+// zone's unmoved points meet them.
 //
 // The points at the new top. Where the lattice has moved by about half a
 // spacing, points of the row above lie on the new top. The coupling puts
