@@ -23,7 +23,15 @@
 //     nodes across the grid line. The run goes on: the points are held on
 //     the face (at least once), none leaves the solid, and the energy
 //     balance stays within 0.05 of the stress work (the tolerance of
-//     fe_zone_handover).
+//     fe_zone_handover);
+//   - a zone that expands beneath dense metal: an elastic block (yield
+//     stress 1e30 Pa), rows to 0.4 m handed over, the zone warmed by 350 K
+//     in 0.5 s (the metal above stays at 300 K): its top face rises by
+//     more than 0.1 h (SolidSubCycle::zone_top_lift()) and the points above
+//     with it. With the zone's points where the hand-over left them the
+//     row at 0.4 m reads a gap (0.87, printed); with the zone's top row
+//     moved by the lift it reads 1 (0.97-1.03) and the zone may rise to
+//     the limit, 0.7 m.
 // Runs on 1 and 2 ranks against one output.
 #include <femp/grid/material_points.h>
 #include <femp/solid/fe_zone_handover.h>
@@ -39,12 +47,15 @@ namespace
   constexpr double h   = 0.1;
 
   /// The block with its point rows at 0.02 h and 0.48 h in each cell; with
-  /// @p pore, the points of the cell (8, 4) moved 0.5 m up, into the gas.
+  /// @p pore, the points of the cell (8, 4) moved 0.5 m up, into the gas;
+  /// @p yield: the yield stress table (Pa over K).
   struct Scene
   {
-    Scene(MPI_Comm comm, const bool pore)
+    Scene(MPI_Comm           comm,
+          const bool         pore,
+          const std::string &yield = "300:0.02, 400:0.005")
         : block(Point<dim>(1.6, 1.0), h, 0.8, unit_material(), comm)
-        , sm(block_material("300:0.02, 400:0.005", block.material))
+        , sm(block_material(yield, block.material))
     {
       sm.poisson_ratio = 0.3;
       for (auto &particle : block.points->particle_handler_for_update())
@@ -76,11 +87,20 @@ namespace
       hp.temperature = 1000;
       hp.margin      = 0.3;
       FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
-      const double        top =
-        choice.choose_top(1.0, *block.points, solid->fe_zone_cells());
-      reason = choice.stop_reason();
+      const double        top = choice.choose_top(1.0,
+                                           *block.points,
+                                           solid->fe_zone_cells(),
+                                           with_lift ? solid->zone_top_lift() :
+                                                              std::vector<double>());
+      reason                  = choice.stop_reason();
+      fill                    = choice.least_fill();
       return top;
     }
+    /// Whether choose() reads the zone's top-face displacement (false: the
+    /// zone's points where the hand-over left them).
+    bool with_lift = true;
+    /// The least fill of each row the last choose() looked at.
+    std::vector<double>                 fill;
     SolidBlock<dim>                     block;
     SolidMaterial                       sm; ///< reads block.material
     std::unique_ptr<SolidSubCycle<dim>> solid;
@@ -152,6 +172,49 @@ main(int argc, char **argv)
       checks.at_most("energy balance / stress work",
                      std::abs(e.balance() / e.internal),
                      0.05);
+
+      // A zone that expands beneath dense metal: an elastic block (yield
+      // stress 1e30 Pa), rows to 0.4 m handed over, then the zone warmed
+      // from 300 K to 650 K in 0.5 s (the metal above stays at 300 K). The
+      // zone's top moves up and the points above with it; the zone's points
+      // stay where the hand-over left them.
+      {
+        Scene       warm(comm, false, "1e30");
+        const auto &grid  = warm.block.grid;
+        const auto  moved = warm.solid->hand_over_rows(0.4);
+        checks.print("warm: elements added", moved[0], 6);
+        for (int s = 1; s <= 10; ++s)
+          {
+            for (std::size_t c = 0; c < warm.T.size(); ++c)
+              warm.T[c] = grid.cell_center(c)[1] < 0.4 ? 300. + 35. * s : 300.;
+            warm.solid->advance(0.05 * s, warm.T, s == 10);
+          }
+        const auto lift  = warm.solid->zone_top_lift();
+        double     least = 1e9, most = 0;
+        for (const double l : lift)
+          least = std::min(least, l), most = std::max(most, l);
+        checks.in_range("warm: least lift of the zone's top / h (> 0.1)",
+                        least / h,
+                        0.1,
+                        1);
+        checks.print("warm: largest lift of the zone's top / h", most / h, 2);
+        std::string reason;
+        warm.with_lift = false;
+        warm.choose(reason);
+        checks.print(
+          "warm, the zone's points unmoved: fill of the row at 0.4 m",
+          warm.fill.at(0),
+          2);
+        warm.with_lift = true;
+        checks.print("warm: the zone may rise to (m)", warm.choose(reason), 6);
+        if (root)
+          std::cout << "warm: stopped by: "
+                    << (reason.empty() ? "the limit" : reason) << std::endl;
+        checks.in_range("warm: fill of the row at 0.4 m (dense: 1)",
+                        warm.fill.at(0),
+                        0.97,
+                        1.03);
+      }
     }
   catch (const std::exception &e)
     {

@@ -141,14 +141,26 @@ namespace femp
                              const ConditionalOStream &pcout)
   {
     TimerOutput::Scope scope(timer, "FE zone hand-over");
-    const double       new_top =
-      handover->choose_top(top, points, solid.fe_zone_cells());
+    // The zone's top face has moved since it was set; the fill of the row
+    // above reads it (fe_zone_handover.h).
+    const std::vector<double> lift = solid.zone_top_lift();
+    const double              new_top =
+      handover->choose_top(top, points, solid.fe_zone_cells(), lift);
     const double old_top = handover->zone_top();
     pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
           << handover->deepest_fusion() << " m, rows up to "
           << handover->limit() << " m";
     if (!handover->stop_reason().empty())
       pcout << " (" << handover->stop_reason() << ")";
+    if (!handover->least_fill().empty())
+      {
+        const auto [lo, hi] = std::minmax_element(lift.begin(), lift.end());
+        pcout << "; the row at the zone's top reads a fill down to "
+              << std::setprecision(3) << handover->least_fill()[0]
+              << " (the top face moved by " << (lift.empty() ? 0. : *lo)
+              << " to " << (lift.empty() ? 0. : *hi) << " m)"
+              << std::setprecision(6);
+      }
     if (!(new_top > old_top + 0.5 * grid_ptr->h()))
       {
         pcout << "; the zone's top stays at " << old_top << " m" << std::endl;

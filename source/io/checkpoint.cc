@@ -21,9 +21,10 @@ namespace femp
     // 2: the solid's sections (Physics/Solid stress) added; 4: the FE
     // elements' volume change; 5: the section "fe zone" (the FE zone's top
     // and the factor its masses were built at) and the evaporated-mass
-    // account in the section "run", so that a file of version 4 cannot be
-    // read by this version.
-    const std::uint32_t format_version = 5;
+    // account in the section "run"; 6: the displacements of the FE
+    // zone's transition nodes in the section "solid" (the hand-over's fill
+    // reads them). A file of another version is refused.
+    const std::uint32_t format_version = 6;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p.
     std::uint64_t

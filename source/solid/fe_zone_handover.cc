@@ -137,7 +137,8 @@ namespace femp
   double
   FeZoneHandover<dim>::choose_top(const double                     new_top,
                                   const MaterialPoints<dim>       &points,
-                                  const std::vector<std::uint8_t> &zone)
+                                  const std::vector<std::uint8_t> &zone,
+                                  const std::vector<double>       &top_lift)
   {
     const MPI_Comm comm = grid.communicator();
     // The layer before: its fusion depth below its powder top.
@@ -164,6 +165,7 @@ namespace femp
     current_top            = z0 + first_row * h;
     last_limit             = new_top - depth - prm.margin;
     reason.clear();
+    row_fill.clear();
     const int last_row =
       std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
                     int(grid.n_cells()[dim - 1]));
@@ -228,10 +230,49 @@ namespace femp
         }
       return k;
     };
+    // The zone's top face has moved by the lift since the zone's top was
+    // set (bilinear between its nodes; 0 without one): a point of the
+    // zone's top row is taken that far up, as the metal above it has moved
+    // (see the header). A negative lift is taken as 0.
+    std::array<int, dim - 1> n_face;
+    for (int d = 0; d < dim - 1; ++d)
+      n_face[d] = hi[d] - lo[d] + 2;
+    auto lift_at = [&](const Point<dim> &x, const std::array<int, dim> &c) {
+      if (top_lift.empty())
+        return 0.;
+      double lift = 0;
+      for (unsigned int a = 0; a < (1u << (dim - 1)); ++a)
+        {
+          double      w = 1;
+          std::size_t k = 0;
+          for (int d = dim - 2; d >= 0; --d)
+            {
+              const bool   up = a & (1u << d);
+              const double xi = (x[d] - grid.origin()[d]) / h - c[d];
+              w *= up ? xi : 1. - xi;
+              k = k * n_face[d] + (c[d] - lo[d] + (up ? 1 : 0));
+            }
+          lift += w * top_lift[k];
+        }
+      return std::max(lift, 0.);
+    };
     for (const auto &particle : points.particle_handler())
       {
-        const Point<dim> &x = particle.get_location();
-        const double      V = particle.get_properties()[P::volume];
+        Point<dim>   x = particle.get_location();
+        const double V = particle.get_properties()[P::volume];
+        {
+          std::array<int, dim> c;
+          bool                 top_row = true;
+          for (int d = 0; d < dim; ++d)
+            {
+              c[d] = int(std::floor((x[d] - grid.origin()[d]) / h));
+              if (d < dim - 1 ? c[d] < lo[d] || c[d] > hi[d] :
+                                c[d] != hi[dim - 1])
+                top_row = false;
+            }
+          if (top_row)
+            x[dim - 1] += lift_at(x, c);
+        }
         // The two cell centres around x in each direction and the hats'
         // values there.
         std::array<int, dim>    i0;
@@ -276,7 +317,8 @@ namespace femp
     // The cells not full of metal, per row: their count, the least fill
     // and their horizontal extent (cell indices), for the log.
     std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.);
-    std::vector<int>    bad_lo(n_rows * (dim - 1),
+    row_fill.assign(n_rows, std::numeric_limits<double>::infinity());
+    std::vector<int> bad_lo(n_rows * (dim - 1),
                             std::numeric_limits<int>::max()),
       bad_hi(n_rows * (dim - 1), -1);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
@@ -286,6 +328,8 @@ namespace femp
       for (int d = 0; d < dim; ++d)
         c[d] = ijk[d];
       const double f = fill[box_index(c)] / hat_volume(c);
+      row_fill[ijk[dim - 1] - first_row] =
+        std::min(row_fill[ijk[dim - 1] - first_row], f);
       if (!(has_points[idx] && f >= full_fill))
         {
           const int r = ijk[dim - 1] - first_row;
@@ -316,6 +360,8 @@ namespace femp
       MPI_IN_PLACE, n_bad.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, least.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, row_fill.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, bad_lo.data(), n_rows * (dim - 1), MPI_INT, MPI_MIN, comm);
     MPI_Allreduce(

@@ -562,6 +562,7 @@ namespace femp
         }
     }
     tr_vel.assign(dim * tr_ijk.size(), 0.);
+    tr_disp.assign(dim * tr_ijk.size(), 0.);
     tr_hg.assign(dim * tr_ijk.size(), 0.);
     tr_local.clear();
     for (std::size_t ln = 0; ln < n_local; ++ln)
@@ -760,6 +761,7 @@ namespace femp
             a_grid[dim * t + d] = f / m;
             v_grid[dim * t + d] = p / m;
             v                   = p / m + dt * b[1 + 2 * dim + d] / tr_mass[t];
+            tr_disp[dim * t + d] += dt * v;
           }
       }
   }
@@ -1538,6 +1540,7 @@ namespace femp
       }
     // The same on every rank.
     out.put_vector(tr_vel);
+    out.put_vector(tr_disp);
   }
 
   template <int dim>
@@ -1619,6 +1622,14 @@ namespace femp
                                    "transition nodes"));
             tr_vel = tv;
           }
+        const auto td = in.get_vector<double>();
+        if (f == 0)
+          {
+            AssertThrow(td.size() == tr_disp.size(),
+                        ExcMessage("checkpoint: another number of FE "
+                                   "transition nodes"));
+            tr_disp = td;
+          }
       }
     AssertThrow(elements_set == n_el && nodes_set == n_local,
                 ExcMessage("checkpoint: the FE zone's elements or nodes of "
@@ -1672,6 +1683,7 @@ namespace femp
     for (int d = 0; d < dim; ++d)
       out.put_vector(std::vector<double>());
     out.put_vector(std::vector<double>()); // transition-node velocities
+    out.put_vector(std::vector<double>()); // and displacements
   }
 
   template <int dim>
@@ -1690,6 +1702,7 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           in.get_vector<double>();
         const auto tv = in.get_vector<double>();
+        in.get_vector<double>(); // transition-node displacements
         AssertThrow(f > 0 || tv.empty(),
                     ExcMessage("checkpoint: another number of FE "
                                "transition nodes"));

@@ -519,6 +519,19 @@ namespace femp
             const auto       cidx = grid.local_index(ijk);
             const bool       out  = excluded[cidx];
             const bool       away = set_aside(cidx);
+            if (!member && solid && !out && away)
+              {
+                // Set aside: at rest once a gather has seen it there.
+                bool moving = false;
+                for (int d = 0; d < dim; ++d)
+                  moving = moving || q[P::velocity + d] != 0;
+                if (apic)
+                  for (unsigned int k = 0; k < dim * dim; ++k)
+                    moving = moving || q[P::affine_velocity + k] != 0;
+                if (moving)
+                  e.n_stopped += 1;
+                continue;
+              }
             if (member == (solid && !out && !away))
               continue;
             if (member && solid && out) // now in a cell of the FE zone

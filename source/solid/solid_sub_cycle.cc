@@ -1194,11 +1194,13 @@ namespace femp
       {
         e = have_pending_exchange ? pending_exchange :
                                     mpm.exchange_since_gather();
-        // Nothing melted, solidified or lost here: the gather may keep
-        // the arrays of the last one (SolidMPM::gather()).
+        // Nothing melted, solidified or lost here, and no point to stop
+        // in a detached drop: the gather may keep the arrays of the last
+        // one (SolidMPM::gather()).
         mpm.gather(zone_mask(),
                    scaling.factor(),
-                   e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0);
+                   e.n_melted == 0 && e.n_solidified == 0 && e.n_lost == 0 &&
+                     e.n_stopped == 0);
       }
     else
       // No MPM cell here (all in the FE zone, e.g. a raised one): no
@@ -1393,6 +1395,37 @@ namespace femp
   {
     return {{Utilities::MPI::sum(double(mpm.n_points()), comm),
              Utilities::MPI::sum(fem ? double(fem->n_elements()) : 0., comm)}};
+  }
+
+  template <int dim>
+  std::vector<double>
+  SolidSubCycle<dim>::zone_top_lift() const
+  {
+    if (!fem)
+      return {};
+    const FeZone<dim> &zone = fem->fe_zone();
+    const auto         lo = zone.first_cell(), n = zone.n_cells();
+    const int          top    = lo[dim - 1] + n[dim - 1];
+    std::size_t        n_face = 1;
+    for (int d = 0; d < dim - 1; ++d)
+      n_face *= n[d] + 1;
+    std::vector<double> lift(n_face, 0.);
+    std::size_t         found = 0;
+    for (std::size_t t = 0; t < fem->n_transition(); ++t)
+      {
+        const auto &ijk = fem->transition_node(t);
+        if (ijk[dim - 1] != top)
+          continue;
+        std::size_t k = 0;
+        for (int d = dim - 2; d >= 0; --d)
+          k = k * (n[d] + 1) + (ijk[d] - lo[d]);
+        lift[k] = fem->transition_displacement(t)[dim - 1];
+        ++found;
+      }
+    // A top on the domain's top face has no transition nodes.
+    if (found != n_face)
+      return {};
+    return lift;
   }
 
   template <int dim>

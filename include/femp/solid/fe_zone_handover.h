@@ -39,10 +39,18 @@
 // surface in the row above) 7/8. full_fill = 0.9 takes dense metal (1, up
 // to the points' thermal volume change and the jitter of a strained
 // lattice) and leaves as points a cell with an empty sub-cell (2D; in 3D
-// two), a cell beside a pore and the row under a free surface. The fill is
-// taken on the grid: the points of the zone stay where the hand-over left
-// them, so a displacement u of the zone's top since then (the points above
-// follow it) reads as a gap or an overlap of about u/h in the row above.
+// two), a cell beside a pore and the row under a free surface.
+// The zone's points stay where the hand-over left them, while the zone's
+// top face moves with its nodes (thermal expansion) and the points above
+// with it: a lift u of the face would read as a gap of about u/h in the
+// row above. The points of the zone's top row are therefore taken u higher
+// (u interpolated between the face's nodes, SolidSubCycle::zone_top_lift()),
+// so that zone and metal above form one lattice again: dense metal over an
+// expanded zone reads 1. The whole top row moves by the face's lift, which
+// overstates its lower points' displacement by the row's own strain times
+// their depth (below 1 % of h). A negative lift (a contracted zone) is
+// taken as 0: the points above are held on the grid line (below), where the
+// zone's unmoved points meet them.
 //
 // The points at the new top. Where the lattice has moved by about half a
 // spacing, points of the row above lie on the new top. The coupling puts
@@ -124,12 +132,15 @@ namespace femp
     /// its recoat: close the fusion depth of the layer before and return
     /// the grid line the FE zone may rise to (m), or a value at or below
     /// the zone's top when no row may be handed over. @p zone: the FE
-    /// zone's cells of the local box (SolidSubCycle::fe_zone_cells()).
+    /// zone's cells of the local box (SolidSubCycle::fe_zone_cells());
+    /// @p top_lift: the vertical displacement of the zone's top-face nodes
+    /// since its top was set (SolidSubCycle::zone_top_lift(); empty: 0).
     /// Collective.
     double
     choose_top(const double                     new_top,
                const MaterialPoints<dim>       &points,
-               const std::vector<std::uint8_t> &zone);
+               const std::vector<std::uint8_t> &zone,
+               const std::vector<double>       &top_lift);
 
     /// The least fill (see the file's comment) of a cell of a handed row.
     static constexpr double full_fill = 0.9;
@@ -160,6 +171,15 @@ namespace femp
       return reason;
     }
 
+    /// The least fill of each row the last choice looked at, from the
+    /// zone's top upwards (over the cells inside the zone's horizontal
+    /// extent; empty when no row was looked at).
+    const std::vector<double> &
+    least_fill() const
+    {
+      return row_fill;
+    }
+
     /// Checkpoint: the fusion depths so far (the deepest, the powder top
     /// of the layer observed, its lowest molten cell over all ranks) and
     /// what the last choice found (the zone's top, the limit). Collective.
@@ -178,9 +198,10 @@ namespace femp
     /// The powder top of the layer being observed, m.
     double layer_top;
     /// Lowest cell bottom with molten metal in the layer (local), m.
-    double      lowest = std::numeric_limits<double>::infinity();
-    double      depth = 0, current_top = 0, last_limit = 0;
-    std::string reason;
+    double              lowest = std::numeric_limits<double>::infinity();
+    double              depth = 0, current_top = 0, last_limit = 0;
+    std::string         reason;
+    std::vector<double> row_fill;
   };
 } // namespace femp
 

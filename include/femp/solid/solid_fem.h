@@ -210,6 +210,15 @@ namespace femp
     {
       return tr_fix[t];
     }
+    /// Displacement of transition node @p t since setup() or the last
+    /// raise_top() (m, dim values): its velocity integrated over the solid
+    /// steps since (the zone's top face has moved this far from the grid
+    /// line; the hand-over's fill reads it, fe_zone_handover.h).
+    const double *
+    transition_displacement(const std::size_t t) const
+    {
+      return &tr_disp[dim * t];
+    }
     /// Add this rank's FE partial sums (force without hourglass, hourglass
     /// force) at the transition nodes into @p buffer (tr_width per node).
     void
@@ -297,7 +306,8 @@ namespace femp
     /// factor in use), the old elements keep their whole state (stress,
     /// plastic strain, viscous pressure, temperatures, hourglass
     /// amplitudes, volume change) and the old nodes their velocity (a node
-    /// of the old top takes its transition velocity); a new element takes
+    /// of the old top takes its transition velocity, every transition node
+    /// a displacement of 0: the new top is the grid line); a new element takes
     /// from @p new_cells (this rank's entries: the cell's lexicographic
     /// index in the grid (x fastest), stress {xx, yy, zz, xy, xz, yz},
     /// plastic strain) its stress and plastic strain and the cell
@@ -335,7 +345,8 @@ namespace femp
     /// zone index, the stress, plastic strain, viscous pressure,
     /// temperature of the last step, hourglass mode amplitudes and end
     /// temperature of the advance; per owned node, keyed by its zone node
-    /// index, the velocity; the transition-node velocities.
+    /// index, the velocity; the transition-node velocities and
+    /// displacements.
     void
     save_state(StateWriter &out) const;
     /// Restore it after setup() (any number of saved ranks; every rank
@@ -481,7 +492,9 @@ namespace femp
     // Transition nodes (global, every rank).
     std::vector<std::array<int, dim>> tr_ijk;
     std::vector<double>               tr_mass, tr_vel;
-    std::vector<std::uint8_t>         tr_fix;
+    /// Displacement since setup() or the last raise_top() (dim per node).
+    std::vector<double>       tr_disp;
+    std::vector<std::uint8_t> tr_fix;
     /// (element, corner, transition index) of this rank's elements.
     std::vector<std::array<std::uint32_t, 3>> tr_corners;
     /// (box index, transition index) of the local transition nodes.

@@ -100,7 +100,13 @@ namespace femp
       double n_melted = 0, n_solidified = 0, n_lost = 0;
       double k_melted = 0, k_solidified = 0;
       /// Members now in a cell of set_aside_cells().
-      double     n_set_aside = 0, k_set_aside = 0;
+      double n_set_aside = 0, k_set_aside = 0;
+      /// Solid points that are not members and still move in a cell of
+      /// set_aside_cells(): points that solidified in a detached drop with
+      /// the melt flow's velocity. The next gather() must look at their
+      /// cells (it stops them there), so that a later one does not count
+      /// them as members the solid carried into the drop.
+      double     n_stopped = 0;
       Point<dim> lost_at;
     };
     Exchange

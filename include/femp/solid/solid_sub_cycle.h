@@ -358,6 +358,14 @@ namespace femp
     {
       return zone_mask();
     }
+    /// The vertical displacement (m) of the FE zone's top-face nodes since
+    /// the zone's top was set (initialize() or the last hand_over_rows()),
+    /// lexicographic over the face's nodes (x fastest, from the zone's
+    /// first cell); the same on every rank; empty without a zone or when
+    /// the zone's top is the domain's. The hand-over's fill reads it
+    /// (FeZoneHandover::choose_top()).
+    std::vector<double>
+    zone_top_lift() const;
     /// FE elements whose grid cell is owned by another rank (global; the
     /// two meshes are partitioned independently).
     double
