@@ -33,9 +33,15 @@ for top in ("include", "source", "tests"):
                 code[p] = open(p, encoding="utf-8", errors="replace").read()
 
 
+# per file: its words and the names it declares, read once
+words = {p: set(re.findall(r"\w+", text)) for p, text in code.items()}
+declared = {
+    p: set(re.findall(r"(?=\b(?:class|struct|enum|using|namespace)\s+(\w+))", text))
+    for p, text in code.items()}
+
+
 def declaring_files(cls):
-    pat = re.compile(r"\b(class|struct|enum class|enum|using|namespace)\s+" + re.escape(cls) + r"\b")
-    found = [p for p, text in code.items() if pat.search(text)]
+    found = [p for p in code if cls in declared[p]]
     # the source file beside a header holds the members' definitions
     more = []
     for p in found:
@@ -47,8 +53,7 @@ def declaring_files(cls):
 
 
 def word_in(word, files):
-    pat = re.compile(r"\b" + re.escape(word) + r"\b")
-    return any(pat.search(code[p]) for p in files)
+    return any(word in words[p] for p in files)
 
 
 ident = r"[A-Za-z_][A-Za-z_0-9]*"
