@@ -552,10 +552,13 @@ namespace femp
 
   template <int dim>
   unsigned long
-  IncompressibleFlow<dim>::film_nodes() const
+  IncompressibleFlow<dim>::recoil_driven_cells() const
   {
-    return Utilities::MPI::sum<unsigned long>(film ? film->size() : 0,
-                                              grid.communicator());
+    unsigned long n = 0;
+    if (film && recoil_driven.size() == grid.n_local())
+      for (const auto c : fluid_cells)
+        n += recoil_driven[c] != 0;
+    return Utilities::MPI::sum(n, grid.communicator());
   }
 
   template <int dim>

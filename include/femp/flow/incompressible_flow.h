@@ -324,10 +324,10 @@ namespace femp
     {
       return stats;
     }
-    /// Film nodes of the last fluid step (Melt flow/Front wall film), over
-    /// all ranks; a node shared by ranks counts once per rank. Collective.
+    /// Recoil-driven surface cells of the last fluid step (Melt
+    /// flow/Front wall film; 0 when off), over all ranks. Collective.
     unsigned long
-    film_nodes() const;
+    recoil_driven_cells() const;
 
     /// Forces of the fluid on the faces of the solid cells (eq. 13, "fluid
     /// forces"; doc/solid.md "Flow and solid together") from the state of
