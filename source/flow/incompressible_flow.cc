@@ -152,7 +152,9 @@ namespace femp
               "zero (slip) and the Darcy damping is not applied; "
               "elsewhere the nodes of solid cells stay no-slip. Needs "
               "the recoil pressure (Melt flow/Recoil coefficient > 0); "
-              "see doc/flow.md, \"Front wall film\". true or false.");
+              "see doc/flow.md, \"Front wall film\". A switch: true or "
+              "false (default false: no slip on every node of a solid "
+              "cell).");
     if (table.declaring())
       FreeSurface<dim>::Parameters::declare_parameters(prm);
     if (table.declaring())
