@@ -37,7 +37,9 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
   (4 and 2 um cells instead of 8, points at half the cell size, the ray
   lattice refined with the cells); diagnostics 'thermal' (no melt flow) and
   'nomarangoni' (d sigma/dT = 0); 'evapmass' (the evaporated mass leaves
-  the melt: Heat transfer/Remove evaporated mass = true); 'a+b' combines them (e.g. 'h4+fine'). Any other setting name with --set
+  the melt: Heat transfer/Remove evaporated mass = true); 'film' (the
+  recoil-driven melt film slips along the solid: Melt flow/Front wall
+  film = true); 'a+b' combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
 report: reads every finished run, writes doc/validation.md's tables and
@@ -256,7 +258,10 @@ SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
                      "Melt flow/Surface tension temperature derivative": "0"},
                  # the evaporated metal leaves the melt (the surface recedes
                  # by the evaporated mass flux over the density)
-                 "evapmass": {"Heat transfer/Remove evaporated mass": "true"}})
+                 "evapmass": {"Heat transfer/Remove evaporated mass": "true"},
+                 # sub-cell slip of the recoil-driven melt film on the
+                 # solid (Melt flow/Front wall film, doc/flow.md)
+                 "film": {"Melt flow/Front wall film": "true"}})
 
 
 def csv_rows(path):
@@ -1664,11 +1669,13 @@ SETTING_NAMES = {"default": "default free surface, 8 um cells",
                  "thermal": "no melt flow (diagnostic)",
                  "nomarangoni": "no Marangoni stress (diagnostic)",
                  "evapmass": "default free surface, evaporated mass removed, "
-                             "8 um cells"}
+                             "8 um cells",
+                 "film": "default free surface, front-wall film slip, "
+                         "8 um cells"}
 COLOURS = {"default": "#1f5fbf", "h4": "#2b8a3e", "h2": "#0b7285",
            "fine": "#d9480f", "large": "#5c940d", "median": "#868e96",
            "cell": "#ae3ec9", "thermal": "#e67700", "nomarangoni": "#c2255c",
-           "evapmass": "#5f3dc4"}
+           "evapmass": "#5f3dc4", "film": "#087f5b"}
 # Settings drawn in the figures (the validation's own; diagnostics and the
 # domain-size check are in the tables only).
 FIGURE_SETTINGS = ("default", "h4", "h2", "fine", "median", "cell")

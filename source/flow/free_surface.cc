@@ -591,6 +591,32 @@ namespace femp
       }
   }
 
+  // Where the recoil drives the melt (Melt flow/Front wall film): the
+  // recoil part of p_s is p_s - p_capillary (the capillary part after its
+  // smoothing).
+  template <int dim>
+  void
+  FreeSurface<dim>::mark_recoil_driven(
+    const std::vector<std::uint32_t> &fluid_cells,
+    std::vector<double>              &driven) const
+  {
+    if (driven.size() != grid.n_local())
+      driven = grid.make_field(0.);
+    else
+      std::fill(driven.begin(), driven.end(), 0.);
+    const double boiling = prm.recoil_coefficient * mat.ambient_pressure;
+    if (prm.recoil_coefficient > 0)
+      for (const auto c : fluid_cells)
+        {
+          if (surface_mark[c] == 0)
+            continue;
+          const double recoil = p_surface[c] - p_capillary[c];
+          if (recoil > boiling && recoil > std::abs(p_capillary[c]))
+            driven[c] = 1;
+        }
+    grid.update_ghosts(driven);
+  }
+
   template <int dim>
   std::array<double, (1u << dim)>
   FreeSurface<dim>::corner_alpha(const std::size_t c) const

@@ -25,7 +25,10 @@
 //   faces, weighted by |n_d|, spread to the face nodes;
 // - walls: zero normal velocity on the domain boundary (free slip) and zero
 //   velocity on the nodes of solid (non-fluid metal) cells (no slip);
-//   Neumann pressure on both;
+//   Neumann pressure on both; with Melt flow/Front wall film, slip along
+//   the wall (zero wall-normal component, no Darcy damping) on the nodes
+//   where the melt between a solid cell and a recoil-driven surface cell
+//   is less than a cell thick (FrontWallFilm, front_wall_film.cc);
 // - viscosity: explicit, from the Q1 stiffness of each fluid cell with the
 //   lumped nodal volume (cell-wise, so it is independent of the partition);
 // - G2P: v_p <- beta (v_p + sum w (u_new - u_old)) + (1 - beta) sum w u_new
@@ -137,6 +140,21 @@ namespace femp
               "velocities unchanged). Keeps the fluid volume of the "
               "points (see doc/flow.md); dimensionless, 0 switches it "
               "off. Range [0, 1].");
+    table.add("Front wall film",
+              front_wall_film,
+              "Sub-cell wall condition for the melt film that the recoil "
+              "pressure drives along a solid wall: on the nodes where the "
+              "melt between a solid cell and a surface cell that boils "
+              "(recoil pressure above zeta_p p0, i.e. T above the "
+              "evaporation temperature) and whose recoil exceeds the "
+              "magnitude of its capillary pressure is less than one cell "
+              "thick, only the velocity component normal to the wall is "
+              "zero (slip) and the Darcy damping is not applied; "
+              "elsewhere the nodes of solid cells stay no-slip. Needs "
+              "the recoil pressure (Melt flow/Recoil coefficient > 0); "
+              "see doc/flow.md, \"Front wall film\". A switch: true or "
+              "false (default false: no slip on every node of a solid "
+              "cell).");
     if (table.declaring())
       FreeSurface<dim>::Parameters::declare_parameters(prm);
     if (table.declaring())
@@ -320,6 +338,8 @@ namespace femp
         occupancy = grid.make_field(0.);
         psi       = grid.make_field(0.);
       }
+    if (prm.front_wall_film)
+      film.emplace(grid);
     node_mark = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     node_fix  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     for (int d = 0; d < dim; ++d)
@@ -462,6 +482,8 @@ namespace femp
       node_mark[n] = 0;
     active.clear();
     active_cell.clear();
+    if (film)
+      film->clear();
     const auto  &nc       = grid.n_cells();
     const double node_vol = std::pow(0.5 * grid.h(), dim);
     for (const auto c : fluid_cells)
@@ -485,7 +507,8 @@ namespace femp
                 if (i == 0 || i == int(nc[d]))
                   fix |= (1u << d);
               }
-            int n_fluid = 0;
+            int                n_fluid    = 0;
+            const std::uint8_t domain_fix = fix;
             for (unsigned int j = 0; j < n_corners; ++j)
               {
                 const auto t = type[c0 - around_offset[j]];
@@ -493,6 +516,8 @@ namespace femp
                   fix = (1u << dim) - 1;
                 n_fluid += (t == fluid);
               }
+            if (film && fix != domain_fix)
+              film->add_wall_node(n, c0, domain_fix);
             node_fix[n] = fix;
             volume[n]   = n_fluid * node_vol;
           }
@@ -523,6 +548,19 @@ namespace femp
         for (int d = 0; d < dim; ++d)
           if ((node_fix[n] >> d) & 1)
             u[d][n] = 0;
+    if (film)
+      film->project(u);
+  }
+
+  template <int dim>
+  unsigned long
+  IncompressibleFlow<dim>::recoil_driven_cells() const
+  {
+    unsigned long n = 0;
+    if (film && recoil_driven.size() == grid.n_local())
+      for (const auto c : fluid_cells)
+        n += recoil_driven[c] != 0;
+    return Utilities::MPI::sum(n, grid.communicator());
   }
 
   template <int dim>
@@ -569,7 +607,10 @@ namespace femp
       {
         const std::size_t n       = active[a];
         double            damping = 1;
-        if (gamma != nullptr && prm.darcy_constant > 0)
+        // Film nodes (Melt flow/Front wall film): the film is liquid, its
+        // mushy layer lies inside the cell, under the slip condition.
+        if (gamma != nullptr && prm.darcy_constant > 0 &&
+            !(film && film->is_film(n)))
           {
             const std::size_t c0 = active_cell[a];
             double            g  = 0;
@@ -672,6 +713,11 @@ namespace femp
   {
     Section section(timer, "flow: free surface");
     surface.update(type, fluid_cells, T);
+    if (film)
+      {
+        surface.mark_recoil_driven(fluid_cells, recoil_driven);
+        film->select(type, recoil_driven, node_fix);
+      }
   }
 
   template <int dim>

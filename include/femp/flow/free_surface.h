@@ -155,6 +155,14 @@ namespace femp
     /// its cells): the mirror-wall value.
     std::array<double, (1u << dim)>
     corner_alpha(const std::size_t cell) const;
+    /// Per cell of the local box (ghosts exchanged), 1 where the surface
+    /// boils and the recoil drives the melt: a surface cell among
+    /// @p fluid_cells whose recoil pressure exceeds both zeta_p p0 (the
+    /// saturation pressure exceeds the ambient one, T_s > T_v) and the
+    /// magnitude of its capillary pressure; 0 elsewhere. Collective.
+    void
+    mark_recoil_driven(const std::vector<std::uint32_t> &fluid_cells,
+                       std::vector<double>              &driven) const;
 
     static constexpr double theta_min = 0.05;
 

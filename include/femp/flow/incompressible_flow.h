@@ -43,6 +43,7 @@
 #include <femp/base/parameter_table.h>
 #include <femp/flow/flow_cells.h>
 #include <femp/flow/free_surface.h>
+#include <femp/flow/front_wall_film.h>
 #include <femp/flow/pressure_solver.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
@@ -51,6 +52,7 @@
 #include <array>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace femp
@@ -89,7 +91,10 @@ namespace femp
       /// Relaxation c of the volume correction (0: off): the points move,
       /// besides their advection, by grad(psi) with lap(psi) = c (V_c/h^dim
       /// - 1), V_c the point volume in the cell (doc/flow.md).
-      double volume_correction        = 0;
+      double volume_correction = 0;
+      /// Sub-cell slip of the recoil-driven melt film on solid walls
+      /// (Melt flow/Front wall film; FrontWallFilm, doc/flow.md).
+      bool   front_wall_film          = false;
       double surface_tension          = 0; ///< sigma, N/m (0: off)
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
@@ -319,6 +324,10 @@ namespace femp
     {
       return stats;
     }
+    /// Recoil-driven surface cells of the last fluid step (Melt
+    /// flow/Front wall film; 0 when off), over all ranks. Collective.
+    unsigned long
+    recoil_driven_cells() const;
 
     /// Forces of the fluid on the faces of the solid cells (eq. 13, "fluid
     /// forces"; doc/solid.md "Flow and solid together") from the state of
@@ -441,7 +450,8 @@ namespace femp
                    double          *dx) const;
 
     /// Wall conditions on the active nodes: no-slip next to solid cells,
-    /// free slip (zero normal component) on the domain boundary.
+    /// free slip (zero normal component) on the domain boundary; with
+    /// Melt flow/Front wall film, slip along the wall on the film nodes.
     void
     apply_boundary_conditions(std::array<std::vector<double>, dim> &u) const;
 
@@ -479,6 +489,10 @@ namespace femp
     std::vector<double>
       cell_dissipation; // mu u^T K u per owned fluid cell, W (W/m in 2D)
     std::vector<double> volume_source; // -c e per owned fluid cell
+    /// Melt flow/Front wall film (only when on): the film nodes and the
+    /// recoil-driven surface cells of this step.
+    std::optional<FrontWallFilm<dim>> film;
+    std::vector<double>               recoil_driven;
 
     Statistics     stats;
     SubcycleRecord subcycles;
