@@ -6,6 +6,7 @@
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/material_points.h>
 
+#include <cmath>
 #include <functional>
 #include <memory>
 
@@ -13,6 +14,22 @@
 
 namespace femp_test
 {
+  /// The recoil pressure zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] of the
+  /// scenes' material (the defaults' evaporation data) at temperature @p T,
+  /// Pa: the closed form the recoil tests compare with.
+  template <int dim>
+  double
+  recoil_pressure(const typename IncompressibleFlow<dim>::Parameters &prm,
+                  const double                                        T)
+  {
+    const Material m;
+    const double   R = 8.314462618;
+    return prm.recoil_coefficient * m.ambient_pressure *
+           std::exp(m.latent_heat_evaporation * m.molar_mass *
+                    (T - m.evaporation_temperature) /
+                    (R * T * m.evaporation_temperature));
+  }
+
   template <int dim>
   struct FlowScene
   {
