@@ -79,7 +79,46 @@ namespace femp
     n_piston            = 0;
     moved_power         = 0;
     delta_min           = 0;
+    // A message: kind (0: offer to the cell below the surface, 1: deposit
+    // into the melting front, 2: accepted, back to the surface cell), the
+    // cell addressed (global ijk), the flux density F/h (W/m^3), the
+    // surface cell (global ijk) and the inward direction (d, sign).
+    constexpr unsigned int width = 2 * dim + 4;
+    using Message                = std::array<double, width>;
+    std::vector<Message>                        local;
     std::map<unsigned int, std::vector<double>> outgoing;
+    auto route = [&](const std::size_t target, const Message &m) {
+      if (status[target] == BackgroundGrid<dim>::owned)
+        local.push_back(m);
+      else
+        {
+          auto &buffer = outgoing[grid.cell_iterator(target)->subdomain_id()];
+          buffer.insert(buffer.end(), m.begin(), m.end());
+        }
+    };
+    auto exchange = [&]() {
+      const auto incoming =
+        Utilities::MPI::some_to_some(grid.communicator(), outgoing);
+      outgoing.clear();
+      std::vector<Message> inbox;
+      inbox.swap(local);
+      for (const auto &[rank, buffer] : incoming)
+        for (std::size_t k = 0; k + width <= buffer.size(); k += width)
+          {
+            Message m;
+            std::copy(buffer.begin() + k,
+                      buffer.begin() + k + width,
+                      m.begin());
+            inbox.push_back(m);
+          }
+      return inbox;
+    };
+    auto index_of = [&](const Message &m, const unsigned int first) {
+      std::array<int, dim> c;
+      for (int d = 0; d < dim; ++d)
+        c[d] = static_cast<int>(m[first + d]);
+      return grid.local_index(c);
+    };
     auto give = [&](const std::size_t j, const double s) {
       source[j] += s;
       const auto it =
@@ -87,6 +126,14 @@ namespace femp
       if (it == source_cells.end() || *it != j)
         source_cells.insert(it, std::uint32_t(j));
     };
+    // Whether a cell holds metal that is not fully liquid: the melting
+    // front.
+    auto front = [&](const std::size_t c) {
+      return status[c] != BackgroundGrid<dim>::outside && alpha[c] > 0 &&
+             gamma[c] < 1;
+    };
+
+    // Offers: each boiling surface cell to the cell below it.
     for (const auto &sc : surface)
       {
         const std::size_t i  = sc.index;
@@ -111,8 +158,8 @@ namespace femp
             ijk[dmax] + int(gsign) >= int(n[dmax]))
           continue;
         const std::size_t j = gsign > 0 ? i + st[dmax] : i - st[dmax];
-        if (alpha[j] <= 0 || !(gamma[j] < 1) || !(T[j] < Ti) ||
-            status[j] == BackgroundGrid<dim>::outside)
+        if (status[j] == BackgroundGrid<dim>::outside || alpha[j] <= 0 ||
+            !(T[j] < Ti))
           continue;
         double delta, v_d;
         film(Ti, delta, v_d);
@@ -134,31 +181,54 @@ namespace femp
         const double F = std::min(q_film, q_net) - q_grid;
         if (!(F > 0))
           continue;
-        ++n_piston;
-        moved_power += F * face;
-        delta_min = n_piston == 1 ? delta : std::min(delta_min, delta);
-        source[i] -= F * ih;
-        if (status[j] == BackgroundGrid<dim>::owned)
-          give(j, F * ih);
-        else
+        Message m{};
+        m[0] = 0;
+        for (int d = 0; d < dim; ++d)
           {
-            auto  jjk    = ijk;
-            auto &buffer = outgoing[grid.cell_iterator(j)->subdomain_id()];
-            jjk[dmax] += int(gsign);
-            for (int d = 0; d < dim; ++d)
-              buffer.push_back(jjk[d]);
-            buffer.push_back(F * ih);
+            m[1 + d]       = ijk[d] + (d == dmax ? int(gsign) : 0);
+            m[2 + dim + d] = ijk[d];
           }
+        m[1 + dim]     = F * ih;
+        m[2 + 2 * dim] = dmax;
+        m[3 + 2 * dim] = gsign;
+        route(j, m);
+        delta_min = delta_min > 0 ? std::min(delta_min, delta) : delta;
       }
-    const auto incoming =
-      Utilities::MPI::some_to_some(grid.communicator(), outgoing);
-    for (const auto &[rank, buffer] : incoming)
-      for (std::size_t k = 0; k + dim + 1 <= buffer.size(); k += dim + 1)
+    // The cell below takes the offer if it is the melting front, else
+    // (fully liquid: the grid's melt is thicker than a cell) the next cell
+    // inward does if it is; the surface cell hears back.
+    for (const auto &m : exchange())
+      {
+        const std::size_t j      = index_of(m, 1);
+        const auto        jjk    = grid.global_index(j);
+        const int         d      = static_cast<int>(m[2 + 2 * dim]);
+        const int         sign   = static_cast<int>(m[3 + 2 * dim]);
+        std::size_t       target = j;
+        if (!front(j))
+          {
+            if (jjk[d] + sign < 0 || jjk[d] + sign >= int(n[d]))
+              continue;
+            target = sign > 0 ? j + st[d] : j - st[d];
+            if (!front(target))
+              continue;
+          }
+        Message deposit = m;
+        deposit[0]      = 1;
+        for (int q = 0; q < dim; ++q)
+          deposit[1 + q] = jjk[q] + (target != j && q == d ? sign : 0);
+        route(target, deposit);
+        Message accept = m;
+        accept[0]      = 2;
+        route(index_of(m, 2 + dim), accept);
+      }
+    for (const auto &m : exchange())
+      if (m[0] == 1)
+        give(index_of(m, 1), m[1 + dim]);
+      else
         {
-          std::array<int, dim> jjk;
-          for (int d = 0; d < dim; ++d)
-            jjk[d] = static_cast<int>(buffer[k + d]);
-          give(grid.local_index(jjk), buffer[k + dim]);
+          source[index_of(m, 2 + dim)] -= m[1 + dim];
+          ++n_piston;
+          moved_power += m[1 + dim] * h * face;
         }
   }
 
