@@ -25,6 +25,9 @@
 //  - with a weaker laser (absorbed flux between the grid's conduction and
 //    the film's flux) and no evaporation, that flux is the absorbed flux
 //    (the cap), within 1e-6;
+//  - with the cell under the surface fully liquid (2000 K) and the solid
+//    one cell further in, the same for the flux into that solid cell (the
+//    grid's conduction out of the surface cell plus what was moved), 1e-6;
 //  - with the laser off, nothing moves (the film never takes more than the
 //    absorbed flux less the evaporation);
 //  - energy: the stored enthalpy change plus the losses equals the laser's
@@ -47,6 +50,8 @@ namespace
   constexpr double zeta = 0.54;
   constexpr double rb   = 100e-6;
   constexpr double dt   = 1e-9;
+  // The melt of the second case, between the surface and the front, K.
+  constexpr double T_liquid = 2000;
 
   struct Step
   {
@@ -60,7 +65,8 @@ namespace
   step(const bool   piston,
        const double power,
        const double zeta_q,
-       MPI_Comm     comm)
+       MPI_Comm     comm,
+       const bool   liquid_between = false)
   {
     const unsigned int nx = 8;
     const auto gp = box<dim>(Point<dim>(0, 0), Point<dim>(nx * h, 10 * h), h);
@@ -92,8 +98,12 @@ namespace
     heat.set_metal_fraction(alpha);
     for (const auto idx : grid.owned_cells())
       {
-        const int j = grid.global_index(idx)[1];
-        heat.set_cell_temperature(idx, j == 6 ? Ts : (j == 5 ? Tj : T0));
+        const int    j = grid.global_index(idx)[1];
+        const double Tc =
+          liquid_between ?
+            (j == 6 ? Ts : (j == 5 ? T_liquid : (j == 4 ? Tj : T0))) :
+            (j == 6 ? Ts : (j == 5 ? Tj : T0));
+        heat.set_cell_temperature(idx, Tc);
       }
     heat.update_ghosts();
     const double H0 = heat.stored_enthalpy();
@@ -104,7 +114,7 @@ namespace
     for (const auto idx : grid.owned_cells())
       {
         const auto ijk = grid.global_index(idx);
-        if (ijk[1] == 5)
+        if (ijk[1] == (liquid_between ? 4 : 5))
           s.enthalpy_j[ijk[0]] =
             mat.density * heat.specific_enthalpy(heat.temperature()[idx]);
         if (ijk[1] == 6)
@@ -222,6 +232,29 @@ main(int argc, char **argv)
                 up(on.balance / on.laser, 1e-11),
                 1e-9);
     }
+  {
+    // The cell below the surface fully liquid (2000 K), the front one cell
+    // further in: the film's flux goes there.
+    const std::string tag = "melt between, P = 1e+07 W/m: ";
+    const Step        on  = step(true, 1e7, 0.82, comm, true);
+    const Step        off = step(false, 1e7, 0.82, comm, true);
+    const double      k_l = mat.conductivity.value(T_liquid);
+    const double      q_l = 2 * k_i * k_l / (k_i + k_l) * (Ts - T_liquid) / h;
+    double            err = 0;
+    for (unsigned int x = 0; x < on.q_abs.size(); ++x)
+      err = std::max(err,
+                     std::abs(
+                       (q_l + (on.enthalpy_j[x] - off.enthalpy_j[x]) * h / dt) /
+                         (rH * v_d) -
+                       1));
+    c.at_most(tag + "|front speed / v_d - 1|, worst column" + floor,
+              up(err, 1e-9),
+              1e-6);
+    c.at_most(tag + "|stored change + losses - laser| / laser, next "
+                    "power of ten (at least 1e-11)",
+              up(on.balance / on.laser, 1e-11),
+              1e-9);
+  }
   {
     const Step on    = step(true, 0., 0.82, comm);
     const Step off   = step(false, 0., 0.82, comm);

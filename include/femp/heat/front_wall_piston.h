@@ -19,17 +19,21 @@
 //     specific enthalpy that melts the solid (e = C(T) + L_m gamma(T));
 // so that delta = sqrt(k (T_s - T_l) l / (u rho H)) and the film's flux
 // q_f = k (T_s - T_l)/delta = rho H v_d. In an owned surface cell i that
-// boils (T_i > T_v) over a metal cell j that is not fully liquid (its
-// inward face neighbour along the dominant direction of -grad alpha), the
-// flux that the film conducts beyond the grid's own,
-//   F = max(0, min(q_f, q_net) - k_ij (T_i - T_j)/h),
+// boils (T_i > T_v), with its inward face neighbour c (along the dominant
+// direction of grad alpha) holding metal, the melting front j is c if c is
+// not fully liquid, else the next cell inward if that one is not (the
+// grid's melt under a boiling surface is one to two cells thick); the flux
+// that the film conducts beyond the grid's,
+//   F = max(0, min(q_f, q_net) - k_ic (T_i - T_c)/h),
 // moves from i to j (q_net: what cell i absorbs from the laser and does
 // not lose by evaporation, per unit face area, so that the film never
 // takes more than the absorbed flux and the surface keeps its own
-// evaporation; k_ij the grid's harmonic face conductivity). It acts only where
-// delta < h. The energy leaves i and enters j in the same step: the
-// ledger is unchanged. A j owned by another rank receives F through one
-// message exchange per step (collective).
+// evaporation; k_ic the grid's harmonic face conductivity). It acts only
+// where delta < h. The energy leaves i and enters j in the same step: the
+// ledger is unchanged. The offer goes to c's owner, which finds j among
+// its cells and ghosts and tells j's owner and i's owner: two message
+// rounds per step, so that the result does not depend on the partition
+// (collective).
 #ifndef femp_front_wall_piston_h
 #define femp_front_wall_piston_h
 
@@ -65,9 +69,9 @@ namespace femp
     film(const double T_s, double &delta, double &v_d) const;
 
     /// Add the film's transfer of this step to the volumetric sources
-    /// (W/m^3): -F/h in each piston cell i, +F/h in its cell j (added to
-    /// @p source_cells, kept sorted, when not yet there; on another rank
-    /// by its owner). @p T, @p alpha, @p gamma: the heat's
+    /// (W/m^3): -F/h in each piston cell i, +F/h in its melting-front cell
+    /// j (added to @p source_cells, kept sorted, when not yet there; on
+    /// another rank by its owner). @p T, @p alpha, @p gamma: the heat's
     /// cell fields (ghosts current); @p laser_density: the laser's
     /// volumetric source of the step, @p loss_weight: the surface-loss
     /// weight w |grad alpha| (1/m) of the owned surface cells; @p q_evap:
@@ -85,7 +89,7 @@ namespace femp
       std::vector<std::uint32_t>                                 &source_cells);
 
     /// Of the last add_transfer() on this rank: piston cells, the power
-    /// moved (W, 2D: W/m), the thinnest film (m; 0 when none).
+    /// moved (W, 2D: W/m), the thinnest film offered (m; 0 when none).
     std::size_t
     n_cells() const
     {
