@@ -228,8 +228,8 @@ main(int argc, char **argv)
                     1e-6);
         }
       c.at_most(tag + "|stored change + losses - laser| / laser, next "
-                      "power of ten (at least 1e-11)",
-                up(on.balance / on.laser, 1e-11),
+                      "power of ten (at least 1e-10)",
+                up(on.balance / on.laser, 1e-10),
                 1e-9);
     }
   {
@@ -251,8 +251,8 @@ main(int argc, char **argv)
               up(err, 1e-9),
               1e-6);
     c.at_most(tag + "|stored change + losses - laser| / laser, next "
-                    "power of ten (at least 1e-11)",
-              up(on.balance / on.laser, 1e-11),
+                    "power of ten (at least 1e-10)",
+              up(on.balance / on.laser, 1e-10),
               1e-9);
   }
   {
