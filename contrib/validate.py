@@ -39,7 +39,9 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
   'nomarangoni' (d sigma/dT = 0); 'evapmass' (the evaporated mass leaves
   the melt: Heat transfer/Remove evaporated mass = true); 'film' (the
   recoil-driven melt film slips along the solid: Melt flow/Front wall
-  film = true); 'a+b' combines them (e.g. 'h4+fine'). Any other setting name with --set
+  film = true); 'piston' (the sub-cell film between the boiling surface
+  and the melting front: Heat transfer/Front wall piston = true); 'a+b'
+  combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
 report: reads every finished run, writes doc/validation.md's tables and
@@ -261,7 +263,11 @@ SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
                  "evapmass": {"Heat transfer/Remove evaporated mass": "true"},
                  # sub-cell slip of the recoil-driven melt film on the
                  # solid (Melt flow/Front wall film, doc/flow.md)
-                 "film": {"Melt flow/Front wall film": "true"}})
+                 "film": {"Melt flow/Front wall film": "true"},
+                 # sub-cell film between the boiling surface and the
+                 # melting front (Heat transfer/Front wall piston,
+                 # doc/equations.md)
+                 "piston": {"Heat transfer/Front wall piston": "true"}})
 
 
 def csv_rows(path):
@@ -1671,11 +1677,14 @@ SETTING_NAMES = {"default": "default free surface, 8 um cells",
                  "evapmass": "default free surface, evaporated mass removed, "
                              "8 um cells",
                  "film": "default free surface, front-wall film slip, "
-                         "8 um cells"}
+                         "8 um cells",
+                 "piston": "default free surface, front-wall piston, "
+                           "8 um cells"}
 COLOURS = {"default": "#1f5fbf", "h4": "#2b8a3e", "h2": "#0b7285",
            "fine": "#d9480f", "large": "#5c940d", "median": "#868e96",
            "cell": "#ae3ec9", "thermal": "#e67700", "nomarangoni": "#c2255c",
-           "evapmass": "#5f3dc4", "film": "#087f5b"}
+           "evapmass": "#5f3dc4", "film": "#087f5b",
+           "piston": "#e8590c"}
 # Settings drawn in the figures (the validation's own; diagnostics and the
 # domain-size check are in the tables only).
 FIGURE_SETTINGS = ("default", "h4", "h2", "fine", "median", "cell")

@@ -51,6 +51,9 @@ namespace femp
                                                *grid);
     heat->initialize();
     heat->set_absorption_model(scene.absorption);
+    if (scene.heat_enabled)
+      heat->enable_front_wall_piston(
+        scene.melt_flow ? scene.flow.recoil_coefficient : 0.);
     if (!scene.heat_enabled)
       heat->freeze();
     // alpha's keeper, with the bodies of metal and the free surface of

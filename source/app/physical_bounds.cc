@@ -134,6 +134,16 @@ namespace femp
               "act on solid metal and run away; without evaporation set "
               "'Heat transfer/Evaporation coefficient = 0' and 'Melt "
               "flow/Recoil coefficient = 0')");
+    // The front-wall piston's film is expelled by the recoil pressure.
+    if (physics.heat_transfer &&
+        parameter_bool(prm, "Heat transfer", "Front wall piston") &&
+        !(physics.melt_flow &&
+          parameter_double(prm, "Melt flow", "Recoil coefficient") > 0))
+      throw InputError("Heat transfer/Front wall piston",
+                       "true",
+                       "it needs the recoil pressure that expels the film: "
+                       "Physics/Melt flow = true and Melt flow/Recoil "
+                       "coefficient > 0; or false");
     const double Tref =
       parameter_double(prm, "Heat transfer", "Reference temperature");
     require(!evaporates || Tref < Tv,

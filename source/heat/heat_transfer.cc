@@ -117,6 +117,24 @@ namespace femp
               "loses no mass) and a non-zero 'Evaporation "
               "coefficient'; false (default): the metal keeps its "
               "mass (evaporation only cools). doc/equations.md.");
+    table.add("Front wall piston",
+              front_wall_piston,
+              "Sub-cell model of the melt film between a boiling surface "
+              "and the melting front below it (the piston of Semak and "
+              "Matsunawa 1997; doc/equations.md, \"Front wall piston\"): "
+              "in a surface cell above the evaporation temperature that "
+              "absorbs laser power, the film's thickness follows from "
+              "the melt made at the drilling speed and expelled at the "
+              "Bernoulli speed of the recoil pressure through the rim "
+              "of the beam's spot, and the flux that film conducts "
+              "beyond the grid's, at most the absorbed minus the "
+              "evaporated flux, moves from the surface cell to the "
+              "melting front: the cell below if it is not fully liquid, "
+              "else the next one inward if that one is not (only where "
+              "the film is thinner than a cell; energy conserved). "
+              "Needs Physics/Melt flow with Melt flow/Recoil "
+              "coefficient > 0. A switch: true or false "
+              "(default false: the grid's conduction only).");
     if (table.declaring())
       prm.declare_entry(
         "Fixed temperatures",
@@ -646,6 +664,26 @@ namespace femp
 
   template <int dim>
   void
+  HeatTransfer<dim>::enable_front_wall_piston(const double recoil_coefficient)
+  {
+    piston.reset();
+    if (!prm.front_wall_piston)
+      return;
+    if (!(recoil_coefficient > 0))
+      throw InputError("Heat transfer/Front wall piston",
+                       "true",
+                       "needs the recoil pressure: Physics/Melt flow = true "
+                       "and Melt flow/Recoil coefficient > 0 (got " +
+                         num(recoil_coefficient) + ")");
+    piston = std::make_unique<FrontWallPiston<dim>>(grid,
+                                                    mat,
+                                                    recoil_coefficient,
+                                                    laser.beam_radius(),
+                                                    prm.initial_temperature);
+  }
+
+  template <int dim>
+  void
   HeatTransfer<dim>::trace_laser(const double time)
   {
     Assert(tracer, ExcMessage("trace_laser() needs 'ray traced'"));
@@ -819,6 +857,21 @@ namespace femp
     else
       properties_of_rows(0, row_has_metal.size());
     compute_surface_sources(dt, time);
+    if (piston)
+      piston->add_transfer(
+        T,
+        alpha,
+        gamma,
+        laser_density,
+        loss_weight,
+        [this](const double Tc) {
+          double qe, qc, qr, dq;
+          surface_loss(Tc, qe, qc, qr, dq, 0.);
+          return qe;
+        },
+        surface,
+        source,
+        source_cells);
 
     StepSums sums;
     conduction_pass(dt, sums); // pass B: T_new by conduction

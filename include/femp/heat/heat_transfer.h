@@ -29,6 +29,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/metal_bodies.h>
+#include <femp/heat/front_wall_piston.h>
 #include <femp/heat/laser.h>
 #include <femp/heat/metal_surface.h>
 #include <femp/heat/ray_traced_absorption.h>
@@ -77,7 +78,11 @@ namespace femp
       /// surface cell (evaporated_mass()) is taken from the material
       /// points of that cell (PointHeatExchange::remove_evaporated_mass()),
       /// so that the surface recedes by m_dot/rho_m.
-      bool                          remove_evaporated_mass = false;
+      bool remove_evaporated_mass = false;
+      /// 'Front wall piston': the sub-cell film between a boiling surface
+      /// and the melting front (FrontWallPiston); needs the recoil
+      /// pressure, see enable_front_wall_piston().
+      bool                          front_wall_piston = false;
       std::map<std::string, double> fixed_temperatures;
       /// How the laser's surface flux enters the cells.
       enum class Deposition
@@ -265,6 +270,20 @@ namespace femp
     void
     set_absorption_model(
       const typename RayTracedAbsorption<dim>::Parameters &absorption);
+    /// 'Front wall piston = true': the film between a boiling surface and
+    /// the melting front conducts with its own thickness
+    /// (FrontWallPiston), with the recoil coefficient zeta_p of the melt
+    /// flow (> 0, else an InputError naming Heat transfer/Front wall
+    /// piston) and the laser's beam radius. Call after initialize(); does
+    /// nothing when the option is off.
+    void
+    enable_front_wall_piston(const double recoil_coefficient);
+    /// The piston model (nullptr when off).
+    const FrontWallPiston<dim> *
+    front_wall_piston() const
+    {
+      return piston.get();
+    }
     /// True with 'Laser/Absorption model = ray traced'.
     bool
     ray_traced() const
@@ -426,6 +445,9 @@ namespace femp
     /// of this step; returns their sum over the owned cells, W/m^3 summed.
     double
     deposit_traced_laser(const double time, const double dt);
+
+    /// Front wall piston (nullptr: off).
+    std::unique_ptr<FrontWallPiston<dim>> piston;
 
     bool         frozen = false;
     EnergyBudget budget;
