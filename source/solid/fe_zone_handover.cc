@@ -377,8 +377,9 @@ namespace femp
     // The cells not dense, per row: their count, the least fill and their
     // horizontal extent (cell indices), for the log; bit 8: a pore cell in
     // or next to one of them.
-    std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.),
-      least_alpha(n_rows, 1.);
+    std::vector<double> n_bad(n_rows, 0.),
+      least(n_rows, std::numeric_limits<double>::infinity()),
+      least_alpha(n_rows, std::numeric_limits<double>::infinity());
     row_fill.assign(n_rows, std::numeric_limits<double>::infinity());
     std::vector<int> bad_lo(n_rows * (dim - 1),
                             std::numeric_limits<int>::max()),
