@@ -28,7 +28,7 @@
 // melted and re-solidified keeps every sub-cell occupied (alpha = 1), but
 // the melt flow has moved its points apart in some cells and together in
 // others, so that its fill scatters from a sixth to twice the lattice's
-// (doc/studies/2026-12-03-fe-zone-behind-every-layer.md): the fill cannot
+// (doc/builds.md, "Dense metal"): the fill cannot
 // tell it from a pore, alpha can. Metal that never melted keeps its
 // lattice, which thermal strain may move rigidly by about half a spacing
 // so that alpha reads 1/2 (two point rows in one sub-cell row) while its
