@@ -91,7 +91,9 @@ namespace
                                            *block.points,
                                            solid->fe_zone_cells(),
                                            with_lift ? solid->zone_top_lift() :
-                                                              std::vector<double>());
+                                                              std::vector<double>(),
+                                           block.points->metal_fraction(),
+                                           std::vector<double>());
       reason                  = choice.stop_reason();
       fill                    = choice.least_fill();
       return top;

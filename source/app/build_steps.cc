@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 
 namespace femp
 {
@@ -142,10 +143,18 @@ namespace femp
   {
     TimerOutput::Scope scope(timer, "FE zone hand-over");
     // The zone's top face has moved since it was set; the fill of the row
-    // above reads it (fe_zone_handover.h).
-    const std::vector<double> lift = solid.zone_top_lift();
-    const double              new_top =
-      handover->choose_top(top, points, solid.fe_zone_cells(), lift);
+    // above reads it (fe_zone_handover.h). The pores of the metal as the
+    // detector finds them (its parameters; with or without its output).
+    const std::vector<double> lift   = solid.zone_top_lift();
+    const auto               &alpha  = heat_ptr->metal_fraction();
+    const auto                shares = PoreDetector<dim>::powder_shares(
+      *grid_ptr, points, scene.material.solidus, scene.material.liquidus);
+    const PoreDetector<dim> detector(scene.porosity,
+                                     *grid_ptr,
+                                     scene.points.substrate_top);
+    const auto              found   = detector.find(alpha, &shares.first);
+    const double            new_top = handover->choose_top(
+      top, points, solid.fe_zone_cells(), lift, alpha, found.pore_number);
     const double old_top = handover->zone_top();
     pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
           << handover->deepest_fusion() << " m, rows up to "
@@ -200,10 +209,32 @@ namespace femp
     // The zone's points carry temperatures only: alpha bins them once.
     points.set_fixed_cells(solid.fe_zone_cells());
     n_handed[0] += n[0], n_handed[1] += n[1];
+    // The points' mass of the handed rows against the elements', which
+    // carry the full density over their cells.
+    const double h      = grid_ptr->h();
+    double       m_pts  = 0;
+    const auto  &m_rows = handover->row_point_mass();
+    std::size_t  n_rows = 0;
+    for (; n_rows < m_rows.size() && old_top + (n_rows + 0.5) * h < new_top;
+         ++n_rows)
+      m_pts += m_rows[n_rows];
+    const double m_el = n[0] * scene.material.density * std::pow(h, dim);
+    // Per row: the least and the largest share.
+    double row_lo = std::numeric_limits<double>::infinity(), row_hi = 0;
+    for (std::size_t r = 0; r < n_rows; ++r)
+      {
+        const double share = m_rows[r] * n_rows / std::max(m_el, 1e-300);
+        row_lo             = std::min(row_lo, share);
+        row_hi             = std::max(row_hi, share);
+      }
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
-          << " points handed over, their kinetic energy "
-          << solid.energies(false).melted - K0 << (dim == 2 ? " J/m" : " J")
+          << " points handed over (their mass " << std::setprecision(4)
+          << (m_el > 0 ? m_pts / m_el : 0.)
+          << " of the elements' at the full density, per row " << row_lo
+          << " to " << row_hi << ")" << std::setprecision(6)
+          << ", their kinetic energy " << solid.energies(false).melted - K0
+          << (dim == 2 ? " J/m" : " J")
           << " removed; in the handed cells sigma_ii changed by "
           << std::setprecision(2) << ratio(0) << " of the largest |sigma_ii| ("
           << largest[0] << " Pa), plastic strain by " << ratio(2)

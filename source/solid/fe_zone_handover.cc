@@ -138,7 +138,9 @@ namespace femp
   FeZoneHandover<dim>::choose_top(const double                     new_top,
                                   const MaterialPoints<dim>       &points,
                                   const std::vector<std::uint8_t> &zone,
-                                  const std::vector<double>       &top_lift)
+                                  const std::vector<double>       &top_lift,
+                                  const std::vector<double>       &alpha,
+                                  const std::vector<double>       &pore)
   {
     const MPI_Comm comm = grid.communicator();
     // The layer before: its fusion depth below its powder top.
@@ -166,6 +168,7 @@ namespace femp
     last_limit             = new_top - depth - prm.margin;
     reason.clear();
     row_fill.clear();
+    row_mass.clear();
     const int last_row =
       std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
                     int(grid.n_cells()[dim - 1]));
@@ -179,6 +182,7 @@ namespace femp
     std::vector<int>    flags(n_rows, 0);
     std::vector<double> hottest(n_rows, 0.);
     std::vector<int>    has_points(grid.n_local(), 0);
+    row_mass.assign(n_rows, 0.);
     using P            = typename MaterialPoints<dim>::PropertyIndex;
     const auto &cells  = points.occupied_cells();
     auto        in_box = [&](const std::array<int, dim> &ijk) {
@@ -196,6 +200,7 @@ namespace femp
         for (const double *v : points.cell_point_properties(c))
           {
             has_points[cells[c].first] = 1;
+            row_mass[r] += v[P::mass];
             if (v[P::state] != MaterialPoints<dim>::solid)
               flags[r] |= 2;
             if (!(v[P::temperature] < prm.temperature))
@@ -314,9 +319,67 @@ namespace femp
         }
       return vol;
     };
-    // The cells not full of metal, per row: their count, the least fill
-    // and their horizontal extent (cell indices), for the log.
-    std::vector<double> n_bad(n_rows, 0.), least(n_rows, 1.);
+    // The metal fraction and the pore cells of the candidate box widened
+    // by one cell in each direction (a candidate's 3^dim neighbours), as
+    // global arrays: every cell is owned by one rank, the sums gather them.
+    std::array<int, dim> first_x, n_x;
+    std::size_t          n_ext = 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        first_x[d] = first[d] - 1;
+        n_x[d]     = n_box[d] + 2;
+        n_ext *= n_x[d];
+      }
+    auto ext_index = [&](const std::array<int, dim> &ijk) -> long {
+      long k = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        {
+          const int i = ijk[d] - first_x[d];
+          if (i < 0 || i >= n_x[d])
+            return -1;
+          k = k * n_x[d] + i;
+        }
+      return k;
+    };
+    // Per widened cell: alpha, 1 where it lies in the grid, 1 on a pore.
+    std::vector<double> ext(3 * n_ext, 0.);
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      std::array<int, dim> c;
+      for (int d = 0; d < dim; ++d)
+        c[d] = ijk[d];
+      const long k = ext_index(c);
+      if (k < 0)
+        return;
+      ext[3 * k]     = alpha[idx];
+      ext[3 * k + 1] = 1;
+      ext[3 * k + 2] = !pore.empty() && pore[idx] > 0 ? 1 : 0;
+    });
+    Utilities::MPI::sum(ext, comm, ext);
+    // Over the 3^dim neighbours of a candidate cell (itself included, those
+    // inside the grid): the least alpha and whether one is a pore cell.
+    auto neighbourhood = [&](const std::array<int, dim> &c) {
+      double least_alpha = std::numeric_limits<double>::infinity();
+      bool   near_pore   = false;
+      for (unsigned int a = 0; a < Utilities::pow(3u, dim); ++a)
+        {
+          std::array<int, dim> n;
+          unsigned int         b = a;
+          for (int d = 0; d < dim; ++d, b /= 3)
+            n[d] = c[d] + int(b % 3) - 1;
+          const long k = ext_index(n);
+          if (k < 0 || ext[3 * k + 1] == 0)
+            continue;
+          least_alpha = std::min(least_alpha, ext[3 * k]);
+          near_pore   = near_pore || ext[3 * k + 2] > 0;
+        }
+      return std::make_pair(least_alpha, near_pore);
+    };
+    // The cells not dense, per row: their count, the least fill and their
+    // horizontal extent (cell indices), for the log; bit 8: a pore cell in
+    // or next to one of them.
+    std::vector<double> n_bad(n_rows, 0.),
+      least(n_rows, std::numeric_limits<double>::infinity()),
+      least_alpha(n_rows, std::numeric_limits<double>::infinity());
     row_fill.assign(n_rows, std::numeric_limits<double>::infinity());
     std::vector<int> bad_lo(n_rows * (dim - 1),
                             std::numeric_limits<int>::max()),
@@ -327,15 +390,19 @@ namespace femp
       std::array<int, dim> c;
       for (int d = 0; d < dim; ++d)
         c[d] = ijk[d];
-      const double f = fill[box_index(c)] / hat_volume(c);
-      row_fill[ijk[dim - 1] - first_row] =
-        std::min(row_fill[ijk[dim - 1] - first_row], f);
-      if (!(has_points[idx] && f >= full_fill))
+      const int    r            = ijk[dim - 1] - first_row;
+      const double f            = fill[box_index(c)] / hat_volume(c);
+      row_fill[r]               = std::min(row_fill[r], f);
+      const auto [a, near_pore] = neighbourhood(c);
+      if (near_pore)
+        flags[r] |= 8;
+      if (!(has_points[idx] && !near_pore &&
+            (a >= dense_alpha || f >= full_fill)))
         {
-          const int r = ijk[dim - 1] - first_row;
           flags[r] |= 1;
           n_bad[r] += 1;
-          least[r] = std::min(least[r], f);
+          least[r]       = std::min(least[r], f);
+          least_alpha[r] = std::min(least_alpha[r], a);
           for (int d = 0; d < dim - 1; ++d)
             {
               int &l = bad_lo[r * (dim - 1) + d],
@@ -346,20 +413,25 @@ namespace femp
         }
     });
     // The flags of all ranks: one maximum per bit.
-    std::vector<int> bits(3 * n_rows);
+    std::vector<int> bits(4 * n_rows);
     for (int r = 0; r < n_rows; ++r)
-      for (int b = 0; b < 3; ++b)
-        bits[3 * r + b] = (flags[r] >> b) & 1;
+      for (int b = 0; b < 4; ++b)
+        bits[4 * r + b] = (flags[r] >> b) & 1;
     MPI_Allreduce(
-      MPI_IN_PLACE, bits.data(), 3 * n_rows, MPI_INT, MPI_MAX, comm);
+      MPI_IN_PLACE, bits.data(), 4 * n_rows, MPI_INT, MPI_MAX, comm);
     for (int r = 0; r < n_rows; ++r)
-      flags[r] = bits[3 * r] | (bits[3 * r + 1] << 1) | (bits[3 * r + 2] << 2);
+      flags[r] = bits[4 * r] | (bits[4 * r + 1] << 1) | (bits[4 * r + 2] << 2) |
+                 (bits[4 * r + 3] << 3);
     MPI_Allreduce(
       MPI_IN_PLACE, hottest.data(), n_rows, MPI_DOUBLE, MPI_MAX, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, n_bad.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, least.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, least_alpha.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, row_mass.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, row_fill.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
     MPI_Allreduce(
@@ -375,8 +447,8 @@ namespace femp
         s << "the row at z = " << z0 + (first_row + r) * h << " m holds ";
         if (flags[r] & 1)
           {
-            s << n_bad[r] << " cells not full of metal (fill down to "
-              << least[r];
+            s << n_bad[r] << " cells not dense (fill down to " << least[r]
+              << ", alpha around them down to " << least_alpha[r];
             for (int d = 0; d < dim - 1; ++d)
               s << (d ? ", " : "; ") << (d ? "y" : "x") << " within "
                 << grid.origin()[d] + bad_lo[r * (dim - 1) + d] * h << " to "
@@ -385,6 +457,8 @@ namespace femp
             s << ")";
           }
         // Every reason of the row, so that the log shows all that blocks.
+        if (flags[r] & 8)
+          s << ", a pore cell in or next to the row";
         if (flags[r] & 2)
           s << (flags[r] & 1 ? ", " : "") << "powder or fluid points";
         if (flags[r] & 4)

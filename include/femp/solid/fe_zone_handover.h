@@ -13,10 +13,32 @@
 //     powder's top), so that the new layer's melt, as deep as the deepest
 //     so far, stays a margin above them;
 //   - from the zone's top upwards, every row whose cells inside the zone's
-//     horizontal extent are all full of metal (fill >= full_fill), hold
-//     points, and whose points are all solid (no powder, no fluid) and below
-//     the hand-over temperature is taken, up to the first row that is not.
+//     horizontal extent are all dense, and whose points are all solid (no
+//     powder, no fluid) and below the hand-over temperature, is taken, up
+//     to the first row that is not.
 // Every rank takes the same decision (reductions over the ranks).
+//
+// A cell is dense when it holds points, no cell of a pore (PoreDetector:
+// gas enclosed in the fused metal) lies in its 3^dim neighbourhood (the
+// cell and its face, edge and corner neighbours inside the grid), and
+//   - the metal fraction alpha (sub-cell occupancy) is at least
+//     dense_alpha = 0.99 on every cell of that neighbourhood, or
+//   - its fill (below) is at least full_fill = 0.9.
+// The two read dense metal in different states of its points. Metal that
+// melted and re-solidified keeps every sub-cell occupied (alpha = 1), but
+// the melt flow has moved its points apart in some cells and together in
+// others, so that its fill scatters from a sixth to twice the lattice's
+// (doc/builds.md, "Dense metal"): the fill cannot
+// tell it from a pore, alpha can. Metal that never melted keeps its
+// lattice, which thermal strain may move rigidly by about half a spacing
+// so that alpha reads 1/2 (two point rows in one sub-cell row) while its
+// fill reads 1: alpha cannot tell it from a void, the fill can. Gas of a
+// sub-cell's size or more lowers alpha below 0.99 in the cells around it
+// and the fill below 0.9 (a missing point costs its cell 9/64 in 2D); a
+// pore of the detector (alpha below its threshold, enclosed) keeps its
+// neighbours as points whatever their alpha and fill; a cell of unfused
+// powder holds powder points. A dense cell directly under a free surface
+// has a neighbour of alpha < 0.99 above it and a fill of about 7/8.
 //
 // The fill of a cell is the volume fraction of the points under a linear
 // hat centred at the cell's centre, of half-width h in each direction:
@@ -135,15 +157,24 @@ namespace femp
     /// zone's cells of the local box (SolidSubCycle::fe_zone_cells());
     /// @p top_lift: the vertical displacement of the zone's top-face nodes
     /// since its top was set (SolidSubCycle::zone_top_lift(); empty: 0).
+    /// @p alpha: the metal fraction per cell of the local box (owned values
+    /// used); @p pore: per cell of the local box, > 0 on the open cells of
+    /// a pore (PoreDetector::Result::pore_number; empty: no pores).
     /// Collective.
     double
     choose_top(const double                     new_top,
                const MaterialPoints<dim>       &points,
                const std::vector<std::uint8_t> &zone,
-               const std::vector<double>       &top_lift);
+               const std::vector<double>       &top_lift,
+               const std::vector<double>       &alpha,
+               const std::vector<double>       &pore);
 
-    /// The least fill (see the file's comment) of a cell of a handed row.
+    /// The least fill (see the file's comment) of a dense cell whose
+    /// neighbourhood's alpha is below dense_alpha.
     static constexpr double full_fill = 0.9;
+    /// The least metal fraction on a dense cell's neighbourhood (see the
+    /// file's comment) that makes it dense whatever its fill.
+    static constexpr double dense_alpha = 0.99;
 
     /// The FE zone's top found by the last choose_top(), m.
     double
@@ -191,6 +222,15 @@ namespace femp
     void
     load_state(std::vector<StateReader> &parts);
 
+    /// The mass of the points of each row the last choice looked at, from
+    /// the zone's top upwards, inside the zone's horizontal extent (kg;
+    /// 2D: kg/m; summed over the ranks).
+    const std::vector<double> &
+    row_point_mass() const
+    {
+      return row_mass;
+    }
+
   private:
     const Parameters           prm;
     const BackgroundGrid<dim> &grid;
@@ -201,7 +241,7 @@ namespace femp
     double              lowest = std::numeric_limits<double>::infinity();
     double              depth = 0, current_top = 0, last_limit = 0;
     std::string         reason;
-    std::vector<double> row_fill;
+    std::vector<double> row_fill, row_mass;
   };
 } // namespace femp
 

@@ -1,0 +1,222 @@
+// The hand-over's test of dense metal on re-solidified metal, a pore and
+// unfused powder (FeZoneHandover, fe_zone_handover.h; doc/builds.md
+// "Handing cooled metal to finite elements"). A 2D block, 1.6 m x 1.0 m,
+// cells of 0.1 m, solid points (2 x 2 per cell) up to y = 0.8 m, finite
+// elements below y = 0.2 m; the rows may reach y = 0.7 m (a new layer's
+// top at 1.0 m less a margin of 0.3 m).
+// Above the zone the points are moved as a melt flow leaves them: in every
+// second column of cells the two points of each row lie 0.02 h and 0.98 h
+// from the cell's left face (spread apart), in the others 0.26 h and
+// 0.74 h (close together), and the same in y by rows. Each point stays in
+// its sub-cell, so alpha reads 1 everywhere, while the fill (the points'
+// volume under the hat of each cell's centre) alternates between about
+// 0.58 and 1.54.
+// Checks:
+//   - irregular: alpha = 1 in every candidate cell (count), cells with a
+//     fill below 0.9 (count, least fill): the fill alone would stop at the
+//     zone's top; the choice takes them dense and the zone may rise to the
+//     limit, 0.7 m; the points' mass of the handed rows is that of the
+//     elements at the full density (1: every point keeps its mass);
+//   - a pore: the 4 points of the cell at x 0.8-0.9 m, y 0.4-0.5 m moved
+//     into the gas above the block; the pore detector finds one pore of
+//     one cell there; the zone may rise to 0.3 m (the row below the pore
+//     is next to it), and the reason names the pore; the same choice
+//     without the detector's pores is printed (its cells next to the pore
+//     may read a fill above 0.9);
+//   - unfused powder: the points of the cell at x 0.5-0.6 m, y 0.5-0.6 m
+//     made powder: the detector takes the cell, enclosed unfused powder
+//     (fused fraction 0), for a pore, so the zone may rise to 0.4 m (the
+//     row below it is next to it; its own row holds powder points).
+// Runs on 1 and 2 ranks against one output.
+#include <femp/builds/pore_detector.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/fe_zone_handover.h>
+#include <femp/solid/solid_sub_cycle.h>
+
+#include "solid_tools.h"
+
+using namespace femp_test;
+
+namespace
+{
+  constexpr int    dim = 2;
+  constexpr double h   = 0.1;
+
+  /// Offset of a cell's two point rows from its lower face, in h: spread
+  /// apart in even cells, close together in odd ones.
+  double
+  moved(const double x)
+  {
+    const double cell = std::floor(x / h);
+    const double o    = x / h - cell;
+    const bool   even = int(cell) % 2 == 0;
+    return (cell + (o < 0.5 ? (even ? 0.02 : 0.26) : (even ? 0.98 : 0.74))) * h;
+  }
+
+  enum class Defect
+  {
+    none,
+    pore,
+    powder
+  };
+
+  struct Scene
+  {
+    Scene(MPI_Comm comm, const Defect defect)
+        : block(Point<dim>(1.6, 1.0), h, 0.8, unit_material(), comm)
+        , sm(block_material("300:0.02, 400:0.005", block.material))
+    {
+      sm.poisson_ratio = 0.3;
+      using P          = typename MaterialPoints<dim>::PropertyIndex;
+      for (auto &particle : block.points->particle_handler_for_update())
+        {
+          Point<dim> x = particle.get_location();
+          if (x[1] < 0.2)
+            continue;
+          const bool pore_cell =
+            x[0] > 0.8 && x[0] < 0.9 && x[1] > 0.4 && x[1] < 0.5;
+          const bool powder_cell =
+            x[0] > 0.5 && x[0] < 0.6 && x[1] > 0.5 && x[1] < 0.6;
+          x[0] = moved(x[0]);
+          x[1] = moved(x[1]);
+          if (defect == Defect::pore && pore_cell)
+            x[1] += 0.5;
+          particle.set_location(x);
+          if (defect == Defect::powder && powder_cell)
+            particle.get_properties()[P::state] = MaterialPoints<dim>::powder;
+        }
+      block.points->points_moved();
+      auto sp       = block_supports<dim>();
+      sp.gravity[1] = -0.01;
+      const auto fp = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2));
+      solid         = std::make_unique<SolidSubCycle<dim>>(
+        sp, fp, sm, block.grid, *block.points);
+      T = block.grid.make_field(300.);
+      solid->initialize(T, "");
+      alpha = block.points->metal_fraction();
+      typename PoreDetector<dim>::Parameters pp;
+      PoreDetector<dim>                      detector(pp, block.grid, 0.2);
+      const auto                             shares =
+        PoreDetector<dim>::powder_shares(block.grid,
+                                         *block.points,
+                                         block.material.solidus,
+                                         block.material.liquidus);
+      found = detector.find(alpha, &shares.first);
+    }
+    /// The new top the hand-over may rise to under a layer top of 1.0 m,
+    /// margin 0.3 m, with or without the detector's pores; @p reason: why
+    /// the choice stopped below the limit.
+    double
+    choose(std::string &reason, const bool pores = true)
+    {
+      typename FeZoneHandover<dim>::Parameters hp;
+      hp.enabled     = true;
+      hp.temperature = 1000;
+      hp.margin      = 0.3;
+      FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
+      const double        top =
+        choice.choose_top(1.0,
+                          *block.points,
+                          solid->fe_zone_cells(),
+                          std::vector<double>(),
+                          alpha,
+                          pores ? found.pore_number : std::vector<double>());
+      reason = choice.stop_reason();
+      fill   = choice.least_fill();
+      mass   = choice.row_point_mass();
+      return top;
+    }
+    SolidBlock<dim>                     block;
+    SolidMaterial                       sm; ///< reads block.material
+    std::unique_ptr<SolidSubCycle<dim>> solid;
+    std::vector<double>                 T, alpha;
+    typename PoreDetector<dim>::Result  found;
+    /// The least fill and the points' mass of each row the last choose()
+    /// looked at.
+    std::vector<double> fill, mass;
+  };
+} // namespace
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
+  auto       say  = [&](const std::string &what, const std::string &reason) {
+    if (root)
+      std::cout << what
+                << ": stopped by: " << (reason.empty() ? "the limit" : reason)
+                << std::endl;
+  };
+  try
+    {
+      Scene       dense(comm, Defect::none);
+      const auto &grid  = dense.block.grid;
+      double      cells = 0, one = 0;
+      for (const auto c : grid.owned_cells())
+        {
+          const double y = grid.cell_center(c)[1];
+          if (y > 0.2 && y < 0.7)
+            cells += 1, one += std::abs(dense.alpha[c] - 1) < 1e-12;
+        }
+      checks.print("irregular: cells of the rows 0.2-0.7 m",
+                   Utilities::MPI::sum(cells, comm),
+                   6);
+      checks.print("  of them with alpha = 1",
+                   Utilities::MPI::sum(one, comm),
+                   6);
+      std::string  reason;
+      const double top   = dense.choose(reason);
+      double       least = 1e9;
+      for (const double f : dense.fill)
+        least = std::min(least, f);
+      checks.in_range("irregular: least fill of the rows 0.2-0.7 m (< 0.9)",
+                      least,
+                      0.3,
+                      0.89);
+      checks.print("irregular: the zone may rise to (m)", top, 6);
+      say("irregular", reason);
+      // The points' mass of the rows 0.2-0.7 m against the elements' at
+      // the full density (the unit material: density 1).
+      double m_points = 0;
+      for (std::size_t r = 0; r < 5 && r < dense.mass.size(); ++r)
+        m_points += dense.mass[r];
+      const auto n = dense.solid->hand_over_rows(top);
+      checks.print("irregular: elements added", n[0], 6);
+      checks.print("irregular: points handed over", n[1], 6);
+      checks.in_range("irregular: points' mass / elements' mass",
+                      m_points / (n[0] * dense.block.material.density * h * h),
+                      1 - 1e-12,
+                      1 + 1e-12);
+
+      {
+        Scene pore(comm, Defect::pore);
+        checks.print("pore: pores found", pore.found.pores.size(), 6);
+        checks.print("pore: its cells",
+                     pore.found.pores.empty() ? 0 : pore.found.pores[0].n_cells,
+                     6);
+        checks.print("pore: the zone may rise to (m)", pore.choose(reason), 6);
+        say("pore", reason);
+        checks.print("pore, the detector's pores not read: the zone may rise "
+                     "to (m)",
+                     pore.choose(reason, false),
+                     6);
+        say("pore, the detector's pores not read", reason);
+      }
+      {
+        Scene powder(comm, Defect::powder);
+        checks.print("powder: the zone may rise to (m)",
+                     powder.choose(reason),
+                     6);
+        say("powder", reason);
+      }
+    }
+  catch (const std::exception &e)
+    {
+      std::cerr << e.what() << std::endl;
+      return 1;
+    }
+  return checks.exit_code();
+}
