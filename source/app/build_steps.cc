@@ -9,6 +9,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <sstream>
 
 namespace femp
 {
@@ -157,7 +158,9 @@ namespace femp
       top, points, solid.fe_zone_cells(), lift, alpha, found.pore_number);
     const double old_top = handover->zone_top();
     pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
-          << handover->deepest_fusion() << " m, rows up to "
+          << handover->deepest_fusion()
+          << " m (the layer before melted down to "
+          << handover->last_lowest_molten() << " m), rows up to "
           << handover->limit() << " m";
     if (!handover->stop_reason().empty())
       pcout << " (" << handover->stop_reason() << ")";
@@ -227,14 +230,22 @@ namespace femp
         row_lo             = std::min(row_lo, share);
         row_hi             = std::max(row_hi, share);
       }
+    // Per row from the old top up: the mass share and the points.
+    std::ostringstream rows;
+    rows << std::setprecision(3);
+    const auto &n_pts = handover->row_point_count();
+    for (std::size_t r = 0; r < n_rows; ++r)
+      rows << (r ? ", " : "") << m_rows[r] * n_rows / std::max(m_el, 1e-300)
+           << " (" << n_pts[r] << ")";
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
           << " points handed over (their mass " << std::setprecision(4)
           << (m_el > 0 ? m_pts / m_el : 0.)
           << " of the elements' at the full density, per row " << row_lo
-          << " to " << row_hi << ")" << std::setprecision(6)
-          << ", their kinetic energy " << solid.energies(false).melted - K0
-          << (dim == 2 ? " J/m" : " J")
+          << " to " << row_hi
+          << "; from the old top up, with the points: " << rows.str() << ")"
+          << std::setprecision(6) << ", their kinetic energy "
+          << solid.energies(false).melted - K0 << (dim == 2 ? " J/m" : " J")
           << " removed; in the handed cells sigma_ii changed by "
           << std::setprecision(2) << ratio(0) << " of the largest |sigma_ii| ("
           << largest[0] << " Pa), plastic strain by " << ratio(2)

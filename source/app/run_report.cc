@@ -118,8 +118,8 @@ namespace femp
           out << " x " << pool.width * 1e6;
         out << " um, depth into the substrate " << pool.depth * 1e6 << " um";
       }
-    out << "  wall " << std::setprecision(3) << wall << " s, ~" << left
-        << " s left" << std::endl;
+    out << "  wall " << std::setprecision(4) << wall << " s, ~"
+        << std::setprecision(3) << left << " s left" << std::endl;
   }
 
   template <int dim>

@@ -145,6 +145,7 @@ namespace femp
     const MPI_Comm comm = grid.communicator();
     // The layer before: its fusion depth below its powder top.
     const double low = Utilities::MPI::min(lowest, comm);
+    closed_lowest    = low;
     if (std::isfinite(low))
       depth = std::max(depth, layer_top - low);
     lowest    = std::numeric_limits<double>::infinity();
@@ -169,6 +170,7 @@ namespace femp
     reason.clear();
     row_fill.clear();
     row_mass.clear();
+    row_points.clear();
     const int last_row =
       std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
                     int(grid.n_cells()[dim - 1]));
@@ -183,6 +185,7 @@ namespace femp
     std::vector<double> hottest(n_rows, 0.);
     std::vector<int>    has_points(grid.n_local(), 0);
     row_mass.assign(n_rows, 0.);
+    row_points.assign(n_rows, 0.);
     using P            = typename MaterialPoints<dim>::PropertyIndex;
     const auto &cells  = points.occupied_cells();
     auto        in_box = [&](const std::array<int, dim> &ijk) {
@@ -201,6 +204,7 @@ namespace femp
           {
             has_points[cells[c].first] = 1;
             row_mass[r] += v[P::mass];
+            row_points[r] += 1;
             if (v[P::state] != MaterialPoints<dim>::solid)
               flags[r] |= 2;
             if (!(v[P::temperature] < prm.temperature))
@@ -432,6 +436,8 @@ namespace femp
       MPI_IN_PLACE, least_alpha.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, row_mass.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
+    MPI_Allreduce(
+      MPI_IN_PLACE, row_points.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, row_fill.data(), n_rows, MPI_DOUBLE, MPI_MIN, comm);
     MPI_Allreduce(

@@ -188,6 +188,13 @@ namespace femp
     {
       return depth;
     }
+    /// The bottom of the lowest cell that held molten metal in the layer
+    /// closed by the last choice, m (over all ranks; +inf: none melted).
+    double
+    last_lowest_molten() const
+    {
+      return closed_lowest;
+    }
     /// The limit of the last choice, top_n - D - margin, m.
     double
     limit() const
@@ -230,6 +237,12 @@ namespace femp
     {
       return row_mass;
     }
+    /// The number of points of each of those rows (summed over the ranks).
+    const std::vector<double> &
+    row_point_count() const
+    {
+      return row_points;
+    }
 
   private:
     const Parameters           prm;
@@ -238,10 +251,12 @@ namespace femp
     /// The powder top of the layer being observed, m.
     double layer_top;
     /// Lowest cell bottom with molten metal in the layer (local), m.
-    double              lowest = std::numeric_limits<double>::infinity();
-    double              depth = 0, current_top = 0, last_limit = 0;
+    double lowest = std::numeric_limits<double>::infinity();
+    double depth = 0, current_top = 0, last_limit = 0;
+    /// The lowest molten cell of the layer the last choice closed (log).
+    double              closed_lowest = std::numeric_limits<double>::infinity();
     std::string         reason;
-    std::vector<double> row_fill, row_mass;
+    std::vector<double> row_fill, row_mass, row_points;
   };
 } // namespace femp
 
