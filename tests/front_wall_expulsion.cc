@@ -129,8 +129,7 @@ main(int argc, char **argv)
       double             u_mean  = 0;
       for (unsigned int i = 0; i < n_cells; ++i)
         u_mean += std::sqrt(
-          2 * recoil_pressure<dim>(prm, film_temperature((i + 0.5) * h)) /
-          rho);
+          2 * recoil_pressure<dim>(prm, film_temperature((i + 0.5) * h)) / rho);
       u_mean /= n_cells;
       const double expected = 0.5 * u_mean * n_steps * dt;
       checks.print("mean Bernoulli speed of the film's cells, m/s", u_mean);
@@ -160,8 +159,7 @@ main(int argc, char **argv)
       const Result cold_off = run(false, false, comm);
       checks.in_range("cold film: expelling cells", cold_on.expelling, 0, 0);
       checks.at_most("cold film: |sum x (with) / sum x (without) - 1|",
-                     std::abs(cold_on.sum_position / cold_off.sum_position -
-                              1),
+                     std::abs(cold_on.sum_position / cold_off.sum_position - 1),
                      1e-12);
     }
   catch (const std::exception &e)

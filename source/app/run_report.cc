@@ -315,8 +315,8 @@ namespace femp
     if (flow.expels())
       out << "Melt flow front wall expulsion: " << st.expelling_cell_steps
           << " expelling cells over " << st.expelling_steps
-          << " fluid steps, fastest Bernoulli speed "
-          << st.max_expulsion_speed << " m/s" << std::endl;
+          << " fluid steps, fastest Bernoulli speed " << st.max_expulsion_speed
+          << " m/s" << std::endl;
     if (st.volume_skipped > 0)
       out << "Melt flow volume correction: " << st.volume_skipped
           << " solves not converged (no correction in those steps)"

@@ -12,12 +12,11 @@
 namespace femp
 {
   template <int dim>
-  FrontWallExpulsion<dim>::FrontWallExpulsion(
-    const BackgroundGrid<dim> &grid,
-    const Material            &material,
-    const double               recoil_coefficient,
-    const double               spot_radius,
-    const double               T_far)
+  FrontWallExpulsion<dim>::FrontWallExpulsion(const BackgroundGrid<dim> &grid,
+                                              const Material &material,
+                                              const double recoil_coefficient,
+                                              const double spot_radius,
+                                              const double T_far)
       : grid(grid)
       , rho(material.density)
       , piston(grid, material, recoil_coefficient, spot_radius, T_far)
@@ -64,7 +63,7 @@ namespace femp
           direction[d][c] = 0;
       }
     expelling.clear();
-    fastest = 0;
+    fastest    = 0;
     auto metal = [&](const std::size_t c) {
       return type[c] == flow_cells::fluid || type[c] == flow_cells::solid;
     };

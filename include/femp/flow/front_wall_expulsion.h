@@ -81,9 +81,9 @@ namespace femp
     /// fastest one where several meet), leaving the directions fixed by
     /// @p node_fix alone.
     void
-    apply(const std::vector<std::uint32_t> &active,
-          const std::vector<std::uint32_t> &active_cell,
-          const std::vector<std::uint8_t>  &node_fix,
+    apply(const std::vector<std::uint32_t>     &active,
+          const std::vector<std::uint32_t>     &active_cell,
+          const std::vector<std::uint8_t>      &node_fix,
           std::array<std::vector<double>, dim> &u) const;
 
     /// Expelling cells of the last select() on this rank, and their

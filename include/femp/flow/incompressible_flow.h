@@ -96,12 +96,12 @@ namespace femp
       double volume_correction = 0;
       /// Sub-cell slip of the recoil-driven melt film on solid walls
       /// (Melt flow/Front wall film; FrontWallFilm, doc/flow.md).
-      bool   front_wall_film          = false;
+      bool front_wall_film = false;
       /// Sub-cell expulsion of the melt from boiling surface cells at the
       /// Bernoulli speed of their recoil (Melt flow/Front wall expulsion;
       /// FrontWallExpulsion, doc/flow.md); needs
       /// enable_front_wall_expulsion().
-      bool front_wall_expulsion = false;
+      bool   front_wall_expulsion     = false;
       double surface_tension          = 0; ///< sigma, N/m (0: off)
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
