@@ -40,7 +40,9 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
   the melt: Heat transfer/Remove evaporated mass = true); 'film' (the
   recoil-driven melt film slips along the solid: Melt flow/Front wall
   film = true); 'piston' (the sub-cell film between the boiling surface
-  and the melting front: Heat transfer/Front wall piston = true); 'a+b'
+  and the melting front: Heat transfer/Front wall piston = true); 'expel'
+  (the melt of boiling surface cells leaves at the Bernoulli speed of
+  their recoil: Melt flow/Front wall expulsion = true); 'a+b'
   combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
@@ -267,7 +269,11 @@ SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
                  # sub-cell film between the boiling surface and the
                  # melting front (Heat transfer/Front wall piston,
                  # doc/equations.md)
-                 "piston": {"Heat transfer/Front wall piston": "true"}})
+                 "piston": {"Heat transfer/Front wall piston": "true"},
+                 # sub-cell expulsion of the melt of boiling surface cells
+                 # at the recoil's Bernoulli speed (Melt flow/Front wall
+                 # expulsion, doc/flow.md)
+                 "expel": {"Melt flow/Front wall expulsion": "true"}})
 
 
 def csv_rows(path):
@@ -1679,12 +1685,14 @@ SETTING_NAMES = {"default": "default free surface, 8 um cells",
                  "film": "default free surface, front-wall film slip, "
                          "8 um cells",
                  "piston": "default free surface, front-wall piston, "
-                           "8 um cells"}
+                           "8 um cells",
+                 "expel": "default free surface, front-wall expulsion, "
+                          "8 um cells"}
 COLOURS = {"default": "#1f5fbf", "h4": "#2b8a3e", "h2": "#0b7285",
            "fine": "#d9480f", "large": "#5c940d", "median": "#868e96",
            "cell": "#ae3ec9", "thermal": "#e67700", "nomarangoni": "#c2255c",
            "evapmass": "#5f3dc4", "film": "#087f5b",
-           "piston": "#e8590c"}
+           "piston": "#e8590c", "expel": "#495057"}
 # Settings drawn in the figures (the validation's own; diagnostics and the
 # domain-size check are in the tables only).
 FIGURE_SETTINGS = ("default", "h4", "h2", "fine", "median", "cell")

@@ -90,6 +90,8 @@ namespace femp
   {
     flow = std::make_unique<IncompressibleFlow<dim>>(
       scene.flow, scene.material, *grid, *points, &timer);
+    flow->enable_front_wall_expulsion(laser->beam_radius(),
+                                      scene.heat.initial_temperature);
     // The flow reads T and gamma, the heat (with 'Advection by melt flow =
     // upwind') the flow's cell velocity, from cell_fields() at each call.
     add_flow_output(*results, *flow);

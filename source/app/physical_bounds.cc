@@ -144,6 +144,17 @@ namespace femp
                        "it needs the recoil pressure that expels the film: "
                        "Physics/Melt flow = true and Melt flow/Recoil "
                        "coefficient > 0; or false");
+    // The front-wall expulsion moves the melt at the Bernoulli speed of
+    // the recoil pressure of the cells' temperature.
+    if (physics.melt_flow &&
+        parameter_bool(prm, "Melt flow", "Front wall expulsion") &&
+        !(physics.heat_transfer &&
+          parameter_double(prm, "Melt flow", "Recoil coefficient") > 0))
+      throw InputError("Melt flow/Front wall expulsion",
+                       "true",
+                       "it needs the recoil pressure that expels the melt: "
+                       "Physics/Heat transfer = true and Melt flow/Recoil "
+                       "coefficient > 0; or false");
     const double Tref =
       parameter_double(prm, "Heat transfer", "Reference temperature");
     require(!evaporates || Tref < Tv,

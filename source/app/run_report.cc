@@ -312,6 +312,11 @@ namespace femp
         << " iterations per solve (at most " << st.max_iterations << "), "
         << st.n_fluid_cells << " fluid cells and largest point speed "
         << st.max_point_speed << " m/s at the end" << std::endl;
+    if (flow.expels())
+      out << "Melt flow front wall expulsion: " << st.expelling_cell_steps
+          << " expelling cells over " << st.expelling_steps
+          << " fluid steps, fastest Bernoulli speed " << st.max_expulsion_speed
+          << " m/s" << std::endl;
     if (st.volume_skipped > 0)
       out << "Melt flow volume correction: " << st.volume_skipped
           << " solves not converged (no correction in those steps)"

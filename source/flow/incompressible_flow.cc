@@ -155,6 +155,21 @@ namespace femp
               "see doc/flow.md, \"Front wall film\". A switch: true or "
               "false (default false: no slip on every node of a solid "
               "cell).");
+    table.add("Front wall expulsion",
+              front_wall_expulsion,
+              "Sub-cell expulsion of the melt from a boiling surface (the "
+              "piston of Semak and Matsunawa 1997): on the nodes of a "
+              "surface cell that boils (recoil pressure p_r above zeta_p "
+              "p0, i.e. T above the evaporation temperature, and above the "
+              "magnitude of its capillary pressure) and holds more melt "
+              "(alpha h) than the piston's film (Heat transfer/Front wall "
+              "piston, doc/equations.md), the velocity along the surface "
+              "away from the hot spot (down the surface gradient of T) is "
+              "raised to at least the Bernoulli speed sqrt(2 p_r/rho) after "
+              "the pressure correction; nodes of solid cells stay fixed. "
+              "Needs the recoil pressure (Melt flow/Recoil coefficient > "
+              "0) and the laser; see doc/flow.md, \"Front wall "
+              "expulsion\". A switch: true or false (default false).");
     if (table.declaring())
       FreeSurface<dim>::Parameters::declare_parameters(prm);
     if (table.declaring())
@@ -290,6 +305,7 @@ namespace femp
                                               MaterialPoints<dim>       &points,
                                               TimerOutput               *timer)
       : prm(prm)
+      , mat(material)
       , rho(material.density)
       , grid(grid)
       , points(points)
@@ -553,11 +569,29 @@ namespace femp
   }
 
   template <int dim>
+  void
+  IncompressibleFlow<dim>::enable_front_wall_expulsion(const double spot_radius,
+                                                       const double T_far)
+  {
+    expulsion.reset();
+    if (!prm.front_wall_expulsion)
+      return;
+    if (!(prm.recoil_coefficient > 0))
+      throw InputError("Melt flow/Front wall expulsion",
+                       "true",
+                       "needs the recoil pressure that expels the melt: "
+                       "Melt flow/Recoil coefficient > 0 (got " +
+                         num(prm.recoil_coefficient) + ")");
+    expulsion = std::make_unique<FrontWallExpulsion<dim>>(
+      grid, mat, prm.recoil_coefficient, spot_radius, T_far);
+  }
+
+  template <int dim>
   unsigned long
   IncompressibleFlow<dim>::recoil_driven_cells() const
   {
     unsigned long n = 0;
-    if (film && recoil_driven.size() == grid.n_local())
+    if ((film || expulsion) && recoil_driven.size() == grid.n_local())
       for (const auto c : fluid_cells)
         n += recoil_driven[c] != 0;
     return Utilities::MPI::sum(n, grid.communicator());
@@ -713,10 +747,28 @@ namespace femp
   {
     Section section(timer, "flow: free surface");
     surface.update(type, fluid_cells, T);
+    if (film || expulsion)
+      surface.mark_recoil_driven(fluid_cells, recoil_driven);
     if (film)
+      film->select(type, recoil_driven, node_fix);
+    if (expulsion)
       {
-        surface.mark_recoil_driven(fluid_cells, recoil_driven);
-        film->select(type, recoil_driven, node_fix);
+        Assert(T, ExcMessage("Front wall expulsion needs the temperature"));
+        expulsion->select(fluid_cells,
+                          recoil_driven,
+                          type,
+                          surface.surface_pressure(),
+                          surface.capillary_pressure(),
+                          surface.alpha_at_cells(),
+                          *T);
+        const unsigned long n =
+          Utilities::MPI::sum(expulsion->n_cells(), grid.communicator());
+        stats.expelling_cell_steps += n;
+        stats.expelling_steps += n > 0;
+        stats.max_expulsion_speed =
+          std::max(stats.max_expulsion_speed,
+                   Utilities::MPI::max(expulsion->max_speed(),
+                                       grid.communicator()));
       }
   }
 
@@ -825,6 +877,8 @@ namespace femp
           }
       }
     apply_boundary_conditions(u_new);
+    if (expulsion)
+      expulsion->apply(active, active_cell, node_fix, u_new);
   }
 
   template <int dim>

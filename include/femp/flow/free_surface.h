@@ -143,6 +143,14 @@ namespace femp
     {
       return p_surface;
     }
+    /// The capillary part sigma div(n) of surface_pressure() (after its
+    /// smoothing; owned surface cells), Pa: the recoil pressure of a
+    /// surface cell is surface_pressure() minus this.
+    const std::vector<double> &
+    capillary_pressure() const
+    {
+      return p_capillary;
+    }
     /// Marangoni force per node, N (2D: N/m), summed over ranks; zero when
     /// dsigma/dT = 0.
     const std::array<std::vector<double>, dim> &

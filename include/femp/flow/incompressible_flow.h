@@ -43,6 +43,7 @@
 #include <femp/base/parameter_table.h>
 #include <femp/flow/flow_cells.h>
 #include <femp/flow/free_surface.h>
+#include <femp/flow/front_wall_expulsion.h>
 #include <femp/flow/front_wall_film.h>
 #include <femp/flow/pressure_solver.h>
 #include <femp/grid/background_grid.h>
@@ -52,6 +53,7 @@
 #include <array>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -94,7 +96,12 @@ namespace femp
       double volume_correction = 0;
       /// Sub-cell slip of the recoil-driven melt film on solid walls
       /// (Melt flow/Front wall film; FrontWallFilm, doc/flow.md).
-      bool   front_wall_film          = false;
+      bool front_wall_film = false;
+      /// Sub-cell expulsion of the melt from boiling surface cells at the
+      /// Bernoulli speed of their recoil (Melt flow/Front wall expulsion;
+      /// FrontWallExpulsion, doc/flow.md); needs
+      /// enable_front_wall_expulsion().
+      bool   front_wall_expulsion     = false;
       double surface_tension          = 0; ///< sigma, N/m (0: off)
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
@@ -184,6 +191,12 @@ namespace femp
       unsigned long n_fluid_cells     = 0; ///< global, last step
       unsigned long volume_iterations = 0; ///< CG, volume correction, total
       unsigned int  volume_skipped    = 0; ///< volume solves not converged
+      /// Melt flow/Front wall expulsion: expelling cells summed over the
+      /// fluid steps (global), fluid steps with at least one, and the
+      /// largest Bernoulli speed imposed, m/s.
+      unsigned long expelling_cell_steps = 0;
+      unsigned int  expelling_steps      = 0;
+      double        max_expulsion_speed  = 0;
     };
 
     /// The fluid step limits over the run: the smallest of each, how
@@ -325,9 +338,22 @@ namespace femp
       return stats;
     }
     /// Recoil-driven surface cells of the last fluid step (Melt
-    /// flow/Front wall film; 0 when off), over all ranks. Collective.
+    /// flow/Front wall film or Front wall expulsion; 0 when both are off),
+    /// over all ranks. Collective.
     unsigned long
     recoil_driven_cells() const;
+    /// 'Front wall expulsion = true': set up FrontWallExpulsion with the
+    /// laser's beam radius @p spot_radius (m) and the temperature of the
+    /// solid far ahead @p T_far (K), which its film thickness needs. Does
+    /// nothing when the option is off; refuses a zero recoil coefficient.
+    void
+    enable_front_wall_expulsion(const double spot_radius, const double T_far);
+    /// Whether Front wall expulsion is set up.
+    bool
+    expels() const
+    {
+      return expulsion != nullptr;
+    }
 
     /// Forces of the fluid on the faces of the solid cells (eq. 13, "fluid
     /// forces"; doc/solid.md "Flow and solid together") from the state of
@@ -456,6 +482,7 @@ namespace femp
     apply_boundary_conditions(std::array<std::vector<double>, dim> &u) const;
 
     Parameters                 prm;
+    const Material            &mat;
     const double               rho;
     const BackgroundGrid<dim> &grid;
     MaterialPoints<dim>       &points;
@@ -493,6 +520,8 @@ namespace femp
     /// recoil-driven surface cells of this step.
     std::optional<FrontWallFilm<dim>> film;
     std::vector<double>               recoil_driven;
+    /// Melt flow/Front wall expulsion (only when enabled).
+    std::unique_ptr<FrontWallExpulsion<dim>> expulsion;
 
     Statistics     stats;
     SubcycleRecord subcycles;
