@@ -1,0 +1,177 @@
+// The hand-over's test of dense metal in 3D, where a cell has 8 sub-cells
+// (FeZoneHandover, fe_zone_handover.h; doc/builds.md "Handing cooled metal
+// to finite elements", "Limits"). A 3D block, 0.6 m x 0.6 m x 1.0 m, cells
+// of 0.1 m, solid points (2 x 2 x 2 per cell, on the unmoved lattice) up to
+// z = 0.8 m, finite elements below z = 0.2 m; the rows may reach z = 0.7 m
+// (a new layer's top at 1.0 m less a margin of 0.3 m).
+// Checks, with 0, 1 and 2 points of the cell at x, y 0.3-0.4 m, z 0.4-0.5 m
+// moved into the gas above the block (each leaves its sub-cell empty):
+//   - the cell's metal fraction alpha (1, 0.875, 0.75) and its fill;
+//   - the pore detector finds no pore (fused fraction above one half);
+//   - none: the zone may rise to the limit, 0.7 m, and the handed points'
+//     mass is the elements' at the full density;
+//   - one empty sub-cell: alpha refuses the cells around it, but its
+//     cell's fill (0.95) and theirs pass the 0.9 threshold, so the zone
+//     still rises to the limit: the hand-over takes a void of an eighth of
+//     a cell into the elements, and the handed points' mass falls short of
+//     the elements' by that point's share (1 - 1/(8 x 180));
+//   - two empty sub-cells: the cell's fill (0.89) fails, and the zone stops
+//     at the row below it, 0.4 m, naming the cell.
+// Runs on 1 and 2 ranks against one output.
+#include <femp/builds/pore_detector.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/fe_zone_handover.h>
+#include <femp/solid/solid_sub_cycle.h>
+
+#include "solid_tools.h"
+
+using namespace femp_test;
+
+namespace
+{
+  constexpr int    dim = 3;
+  constexpr double h   = 0.1;
+
+  struct Scene
+  {
+    /// @p n_empty: how many sub-cells of the defect cell are emptied (their
+    /// points moved 0.5 m up, into the gas above the block).
+    Scene(MPI_Comm comm, const unsigned n_empty)
+        : block(Point<dim>(0.6, 0.6, 1.0), h, 0.8, unit_material(), comm)
+        , sm(block_material("300:0.02, 400:0.005", block.material))
+    {
+      sm.poisson_ratio = 0.3;
+      for (auto &particle : block.points->particle_handler_for_update())
+        {
+          Point<dim> x = particle.get_location();
+          if (!(x[0] > 0.3 && x[0] < 0.4 && x[1] > 0.3 && x[1] < 0.4 &&
+                x[2] > 0.4 && x[2] < 0.5))
+            continue;
+          // The sub-cells of the defect cell, numbered by their lower
+          // halves: (x, y, z) lower = 0, upper = 1; empty sub-cells 0 and 1.
+          const unsigned sub = (x[0] > 0.35 ? 1 : 0) +
+                               2 * (x[1] > 0.35 ? 1 : 0) +
+                               4 * (x[2] > 0.45 ? 1 : 0);
+          if (sub < n_empty)
+            {
+              x[2] += 0.5;
+              particle.set_location(x);
+            }
+        }
+      block.points->points_moved();
+      auto sp         = block_supports<dim>();
+      sp.fixed_faces  = {"z-"};
+      sp.roller_faces = {"x-", "x+", "y-", "y+"};
+      sp.gravity[2]   = -0.01;
+      const auto fp   = fe_zone(Point<dim>(0, 0, 0), Point<dim>(0.6, 0.6, 0.2));
+      solid           = std::make_unique<SolidSubCycle<dim>>(
+        sp, fp, sm, block.grid, *block.points);
+      T = block.grid.make_field(300.);
+      solid->initialize(T, "");
+      alpha = block.points->metal_fraction();
+      typename PoreDetector<dim>::Parameters pp;
+      PoreDetector<dim>                      detector(pp, block.grid, 0.2);
+      const auto                             shares =
+        PoreDetector<dim>::powder_shares(block.grid,
+                                         *block.points,
+                                         block.material.solidus,
+                                         block.material.liquidus);
+      found = detector.find(alpha, &shares.first);
+    }
+    /// The new top the hand-over may rise to under a layer top of 1.0 m,
+    /// margin 0.3 m; @p reason: why the choice stopped below the limit.
+    double
+    choose(std::string &reason)
+    {
+      typename FeZoneHandover<dim>::Parameters hp;
+      hp.enabled     = true;
+      hp.temperature = 1000;
+      hp.margin      = 0.3;
+      FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
+      const double        top = choice.choose_top(1.0,
+                                           *block.points,
+                                           solid->fe_zone_cells(),
+                                           std::vector<double>(),
+                                           alpha,
+                                           found.pore_number);
+      reason                  = choice.stop_reason();
+      fill                    = choice.least_fill();
+      mass                    = choice.row_point_mass();
+      return top;
+    }
+    SolidBlock<dim>                     block;
+    SolidMaterial                       sm; ///< reads block.material
+    std::unique_ptr<SolidSubCycle<dim>> solid;
+    std::vector<double>                 T, alpha;
+    typename PoreDetector<dim>::Result  found;
+    /// The least fill and the points' mass of each row the last choose()
+    /// looked at.
+    std::vector<double> fill, mass;
+  };
+} // namespace
+
+int
+main(int argc, char **argv)
+{
+  Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  MPI_Comm                         comm = MPI_COMM_WORLD;
+  Checks                           checks(comm);
+  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
+  try
+    {
+      for (const unsigned n_empty : {0u, 1u, 2u})
+        {
+          const std::string name = std::to_string(n_empty) + " empty";
+          Scene             s(comm, n_empty);
+          const auto       &grid = s.block.grid;
+          // alpha of the defect cell, on its owner.
+          double a = -1;
+          for (const auto c : grid.owned_cells())
+            {
+              const auto x = grid.cell_center(c);
+              if (std::abs(x[0] - 0.35) < 1e-9 &&
+                  std::abs(x[1] - 0.35) < 1e-9 && std::abs(x[2] - 0.45) < 1e-9)
+                a = s.alpha[c];
+            }
+          a = Utilities::MPI::max(a, comm);
+          checks.print(name + ": alpha of the cell", a, 6);
+          checks.print(name + ": pores found", s.found.pores.size(), 6);
+          std::string  reason;
+          const double top = s.choose(reason);
+          // Least fill of the row of the defect cell (z 0.4-0.5 m: the
+          // third row the choice looked at, from 0.2 m).
+          if (s.fill.size() > 2)
+            checks.print(name + ": least fill of the row 0.4-0.5 m",
+                         s.fill[2],
+                         3);
+          checks.print(name + ": the zone may rise to (m)", top, 6);
+          if (root)
+            std::cout << name << ": stopped by: "
+                      << (reason.empty() ? "the limit" : reason) << std::endl;
+          double         m_points = 0;
+          const unsigned rows     = unsigned(std::round((top - 0.2) / h));
+          for (std::size_t r = 0; r < rows && r < s.mass.size(); ++r)
+            m_points += s.mass[r];
+          const auto n = s.solid->hand_over_rows(top);
+          checks.print(name + ": elements added", n[0], 6);
+          checks.print(name + ": points handed over", n[1], 6);
+          const double expected = 1 - (top > 0.45 ? n_empty / (8. * n[0]) : 0.);
+          checks.print(name + ": points' mass / elements' mass",
+                       m_points / (n[0] * s.block.material.density * h * h * h),
+                       6);
+          checks.in_range(name + ": ... over 1 - (empty sub-cells)/(8 "
+                                 "elements)",
+                          m_points /
+                            (n[0] * s.block.material.density * h * h * h) /
+                            expected,
+                          1 - 1e-12,
+                          1 + 1e-12);
+        }
+    }
+  catch (const std::exception &e)
+    {
+      std::cerr << e.what() << std::endl;
+      return 1;
+    }
+  return checks.exit_code();
+}
