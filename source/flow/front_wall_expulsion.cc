@@ -2,7 +2,7 @@
 // Bernoulli speed of its recoil (Melt flow/Front wall expulsion;
 // doc/flow.md, "Front wall expulsion"; the piston of Semak and Matsunawa,
 // J. Phys. D 30 (1997) 2541: melt velocity u = sqrt(2 p_r / rho), film
-// thickness from the mass and energy balances of FrontWallPiston::film()).
+// thickness from the mass and energy balances of PistonFilm::film()).
 #include <femp/flow/flow_cells.h>
 #include <femp/flow/front_wall_expulsion.h>
 
@@ -19,7 +19,7 @@ namespace femp
                                               const double T_far)
       : grid(grid)
       , rho(material.density)
-      , piston(grid, material, recoil_coefficient, spot_radius, T_far)
+      , piston(material, recoil_coefficient, spot_radius, T_far)
       , around_offset(flow_cells::corner_offsets(grid, false))
       , speed(grid.make_field(0.))
   {

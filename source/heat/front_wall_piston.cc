@@ -15,11 +15,6 @@
 
 namespace femp
 {
-  namespace
-  {
-    constexpr double gas_constant = 8.314462618; // J/(mol K)
-  }
-
   template <int dim>
   FrontWallPiston<dim>::FrontWallPiston(const BackgroundGrid<dim> &grid,
                                         const Material            &material,
@@ -28,12 +23,7 @@ namespace femp
                                         const double T_far)
       : grid(grid)
       , mat(material)
-      , zeta_p(recoil_coefficient)
-      , rim_length(spot_radius / 2)
-      , H_melt(material.specific_heat.antiderivative(material.liquidus) -
-               material.specific_heat.antiderivative(
-                 std::min(T_far, material.liquidus)) +
-               material.latent_heat_fusion)
+      , balance(material, recoil_coefficient, spot_radius, T_far)
   {
   }
 
@@ -41,19 +31,7 @@ namespace femp
   void
   FrontWallPiston<dim>::film(const double T_s, double &delta, double &v_d) const
   {
-    delta = v_d     = 0;
-    const double dT = T_s - mat.liquidus;
-    if (!(dT > 0) || !(zeta_p > 0) || !(H_melt > 0))
-      return;
-    const double Tv  = mat.evaporation_temperature;
-    const double p_r = zeta_p * mat.ambient_pressure *
-                       std::exp(mat.latent_heat_evaporation * mat.molar_mass *
-                                (T_s - Tv) / (gas_constant * T_s * Tv));
-    const double u  = std::sqrt(2 * p_r / mat.density);
-    const double k  = mat.conductivity.value(0.5 * (T_s + mat.liquidus));
-    const double rH = mat.density * H_melt;
-    delta           = std::sqrt(k * dT * rim_length / (u * rH));
-    v_d             = k * dT / (delta * rH);
+    balance.film(T_s, delta, v_d);
   }
 
   template <int dim>

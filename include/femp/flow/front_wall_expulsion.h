@@ -6,7 +6,7 @@
 // Bernoulli speed u = sqrt(2 p_r / rho) (Semak and Matsunawa, J. Phys. D 30
 // (1997) 2541, eq. for the melt velocity at the spot's rim); only a film of
 // thickness delta stays between the boiling surface and the melting front
-// (the piston's film, FrontWallPiston::film(), a few micrometres). With
+// (the piston's film, PistonFilm::film(), a few micrometres). With
 // cells of several micrometres the grid's pressure gradient across the spot
 // is smeared over cells, and the grid's melt moves at a fraction of u.
 // This model lets the melt that a boiling surface cell holds beyond the
@@ -34,8 +34,8 @@
 #define femp_front_wall_expulsion_h
 
 #include <femp/base/material.h>
+#include <femp/base/piston_film.h>
 #include <femp/grid/background_grid.h>
-#include <femp/heat/front_wall_piston.h>
 
 #include <array>
 #include <cstdint>
@@ -111,7 +111,7 @@ namespace femp
     static constexpr unsigned int         n_corners = 1u << dim;
     const BackgroundGrid<dim>            &grid;
     const double                          rho;
-    const FrontWallPiston<dim>            piston;
+    const PistonFilm                      piston;
     std::array<std::ptrdiff_t, n_corners> around_offset; // cells round a node
     std::vector<double>                   speed;         // m/s, 0: none
     std::array<std::vector<double>, dim>  direction;     // unit

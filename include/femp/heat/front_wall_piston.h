@@ -38,6 +38,7 @@
 #define femp_front_wall_piston_h
 
 #include <femp/base/material.h>
+#include <femp/base/piston_film.h>
 #include <femp/grid/background_grid.h>
 #include <femp/heat/metal_surface.h>
 
@@ -109,7 +110,7 @@ namespace femp
   private:
     const BackgroundGrid<dim> &grid;
     const Material            &mat;
-    const double               zeta_p, rim_length, H_melt;
+    const PistonFilm           balance;
     std::size_t                n_piston    = 0;
     double                     moved_power = 0, delta_min = 0;
   };
