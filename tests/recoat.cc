@@ -17,10 +17,25 @@
 //      (one expected output). Its mass per nominal layer volume (40 um x
 //      the area) is printed: above the packing fraction, since the new
 //      grains also fill the hollows between the first layer's grains.
+//   3. the blade, on the bare substrate with three detached drops (balls
+//      of solid points, 16-20 um across, two cells or more from any other
+//      metal): one across the layer's top, one at the box's lid, one
+//      floating below the top. The two that reach above the top are swept:
+//      the bodies, points and mass reported against those the test placed
+//      (exact), none of their points left; the one below stays whole. The
+//      surface is the substrate's top in every column (the attached metal
+//      only), grains come down to it under the swept drops, the volume
+//      between the resting height and the top is the box's less the
+//      shadow of the drop that stayed (from the drop's lattice points), the
+//      packing reached is within 3 % of the one asked (the bed stops within
+//      one of its ~150 grains) and the new powder's mass within 8 % of
+//      rho phi V (as in 1.); no new point on a site a point holds. The
+//      counts and a hash of the new points agree between 1 and 2 ranks.
 // Also the layer schedule: listed times, and the refusal of a layer above
 // the domain.
 #include <femp/base/input_checks.h>
 #include <femp/builds/recoater.h>
+#include <femp/grid/metal_bodies.h>
 
 #include <algorithm>
 #include <cstring>
@@ -50,6 +65,37 @@ namespace
       out.insert(out.end(), a.begin(), a.end());
     std::sort(out.begin(), out.end());
     return out;
+  }
+
+  /// FNV hash of the positions of @p pts, reduced for printing.
+  std::uint64_t
+  position_hash(const std::vector<std::array<double, 4>> &pts)
+  {
+    std::uint64_t hash = 1469598103934665603ull;
+    for (const auto &a : pts)
+      for (int d = 0; d < 3; ++d)
+        {
+          std::uint64_t bits;
+          std::memcpy(&bits, &a[d], 8);
+          hash = (hash ^ bits) * 1099511628211ull;
+        }
+    return hash % 1000000007ull;
+  }
+
+  /// The recoat with the workpiece of the points' own alpha.
+  Recoater<dim>::Report
+  recoat(const Recoater<dim>             &recoater,
+         MaterialPoints<dim>             &points,
+         const BackgroundGrid<dim>       &grid,
+         const LayerSchedule<dim>::Layer &layer,
+         const double                     T,
+         std::vector<std::uint8_t>       *attached_out = nullptr)
+  {
+    const auto alpha    = points.metal_fraction();
+    const auto attached = attached_metal_cells(grid, alpha);
+    if (attached_out)
+      *attached_out = attached;
+    return recoater.recoat(points, layer, T, alpha, attached);
   }
 } // namespace
 
@@ -123,7 +169,7 @@ main(int argc, char **argv)
       300.,
       MaterialPoints<dim>::solid);
     Recoater<dim> recoater(pp, mat.density, grid);
-    const auto    r    = recoater.recoat(points, layer, 320.);
+    const auto    r    = recoat(recoater, points, grid, layer, 320.);
     const double  V    = Lx * Ly * (layer.top - z_c) - Lx * M_PI * R * R / 2;
     const double  mass = mat.density * r.point_volume;
     const double  mass_expected = mat.density * pp.packing_fraction * V;
@@ -191,8 +237,11 @@ main(int argc, char **argv)
   const auto before = gather_points(points, comm);
 
   Recoater<dim> recoater(pp, mat.density, grid);
-  const auto    surf = recoater.surface(points);
-  const auto    r    = recoater.recoat(points, layer, 320.);
+  const auto    surf =
+    recoater
+      .surface(points, attached_metal_cells(grid, points.metal_fraction()))
+      .rest;
+  const auto r = recoat(recoater, points, grid, layer, 320.);
   checks.print("beside powder: grains", r.grains);
   checks.print("beside powder: mass / (rho phi x nominal layer volume)",
                r.point_volume / (pp.packing_fraction * Lx * Ly * 40e-6),
@@ -208,14 +257,7 @@ main(int argc, char **argv)
                           before.begin(),
                           before.end(),
                           std::back_inserter(added));
-      std::uint64_t hash = 1469598103934665603ull;
-      for (const auto &a : added)
-        for (int d = 0; d < 3; ++d)
-          {
-            std::uint64_t bits;
-            std::memcpy(&bits, &a[d], 8);
-            hash = (hash ^ bits) * 1099511628211ull;
-          }
+      const std::uint64_t hash = position_hash(added);
       // Shared lattice sites: equal positions among all points.
       unsigned int shared = 0, below = 0, not_powder = 0;
       for (std::size_t k = 1; k < after.size(); ++k)
@@ -231,8 +273,8 @@ main(int argc, char **argv)
         }
       std::cout << "beside powder: new points = " << added.size()
                 << " (reported " << r.points << ")" << std::endl;
-      std::cout << "beside powder: hash of their positions = "
-                << hash % 1000000007ull << std::endl;
+      std::cout << "beside powder: hash of their positions = " << hash
+                << std::endl;
       std::cout << "beside powder: points sharing a lattice site = " << shared
                 << std::endl;
       std::cout << "beside powder: new points below the surface = " << below
@@ -242,5 +284,162 @@ main(int argc, char **argv)
       if (shared + below + not_powder > 0 || added.size() != r.points)
         checks.at_most("recoat faults", 1, 0);
     }
+
+  // 3. The blade: drops above the top are swept, the one below stays.
+  {
+    struct Ball
+    {
+      Point<dim> c;
+      double     r;
+      bool
+      inside(const Point<dim> &x) const
+      {
+        return x.distance(c) < r;
+      }
+    };
+    // Across the top (134 um), at the lid (192 um), below the top.
+    const Ball above{Point<dim>(60e-6, 40e-6, layer.top + 2e-6), 10e-6};
+    const Ball lid{Point<dim>(180e-6, 120e-6, 182e-6), 8e-6};
+    const Ball below{Point<dim>(160e-6, 80e-6, 100e-6), 10e-6};
+    MaterialPoints<dim> points(pp, mat, grid);
+    points.create_region(
+      [&](const Point<dim> &x) {
+        return x[2] < z_c || above.inside(x) || lid.inside(x) ||
+               below.inside(x);
+      },
+      300.,
+      MaterialPoints<dim>::solid);
+    // The lattice points of each drop, and per lattice column the top of
+    // the drop below the blade (its shadow).
+    const unsigned int  nx = Lx / s + 0.5, ny = Ly / s + 0.5, nz = Lz / s + 0.5;
+    unsigned int        n_above = 0, n_lid = 0, n_below = 0;
+    std::vector<double> shadow(nx * ny, z_c);
+    for (unsigned int k = 0; k < nz; ++k)
+      for (unsigned int j = 0; j < ny; ++j)
+        for (unsigned int i = 0; i < nx; ++i)
+          {
+            const Point<dim> x((i + 0.5) * s, (j + 0.5) * s, (k + 0.5) * s);
+            if (x[2] < z_c)
+              continue;
+            n_above += above.inside(x);
+            n_lid += lid.inside(x);
+            if (below.inside(x))
+              {
+                ++n_below;
+                shadow[i + nx * j] =
+                  std::max(shadow[i + nx * j], x[2] + 0.5 * s);
+              }
+          }
+    double       V        = 0;
+    unsigned int on_drops = 0;
+    for (const double z : shadow)
+      {
+        V += (layer.top - z) * s * s;
+        on_drops += z > z_c;
+      }
+    const auto before = gather_points(points, comm);
+
+    Recoater<dim> recoater(pp, mat.density, grid);
+    const auto    r = recoat(recoater, points, grid, layer, 320.);
+    checks.print("blade: points of the two drops reaching above the top",
+                 n_above + n_lid);
+    checks.print("blade: drop placed below the top (points)", n_below);
+    checks.at_most("blade: |detached bodies swept - 2|",
+                   std::abs(double(r.swept_bodies) - 2),
+                   0);
+    checks.at_most("blade: |points swept - points of the drops above|",
+                   std::abs(double(r.swept_points) - (n_above + n_lid)),
+                   0);
+    const double m_drops = mat.density * std::pow(s, 3) * (n_above + n_lid);
+    checks.at_most("blade: |mass swept - their mass| / their mass",
+                   std::abs(r.swept_mass - m_drops) / m_drops,
+                   1e-12);
+    checks.at_most("blade: |highest column of the surface - substrate top| "
+                   "(um)",
+                   std::abs(r.surface_max - z_c) * 1e6,
+                   1e-9);
+    checks.at_most("blade: |lowest column of the surface - substrate top| "
+                   "(um)",
+                   std::abs(r.surface_min - z_c) * 1e6,
+                   1e-9);
+    checks.at_most("blade: |columns resting on the drop below - its "
+                   "footprint|",
+                   std::abs(double(r.columns_on_drops) - on_drops),
+                   0);
+    checks.at_most("blade: |volume between resting height and top - box "
+                   "less the drop's shadow| / volume",
+                   std::abs(r.fill_volume - V) / V,
+                   1e-9);
+    checks.print("blade: grains", r.grains);
+    checks.at_most("blade: |packing reached - asked| / asked",
+                   std::abs(r.packing - pp.packing_fraction) /
+                     pp.packing_fraction,
+                   0.03);
+    const double mass_expected = mat.density * pp.packing_fraction * V;
+    checks.at_most("blade: |powder mass - rho phi V| / (rho phi V)",
+                   std::abs(mat.density * r.point_volume - mass_expected) /
+                     mass_expected,
+                   0.08);
+
+    const auto after = gather_points(points, comm);
+    if (root)
+      {
+        // Solid points now: the substrate and the drop below, exactly; the
+        // new ones: powder, none on a site a point held, some under each
+        // swept drop within a grain of the substrate's top.
+        unsigned int n_substrate = 0, n_below_left = 0, n_other_solid = 0;
+        unsigned int under_above = 0, under_lid = 0, shared = 0;
+        for (std::size_t k = 0; k < after.size(); ++k)
+          {
+            const auto      &a = after[k];
+            const Point<dim> x(a[0], a[1], a[2]);
+            if (k > 0 && a[0] == after[k - 1][0] && a[1] == after[k - 1][1] &&
+                a[2] == after[k - 1][2])
+              ++shared;
+            if (a[3] == MaterialPoints<dim>::solid)
+              {
+                if (x[2] < z_c)
+                  ++n_substrate;
+                else if (below.inside(x))
+                  ++n_below_left;
+                else
+                  ++n_other_solid;
+                continue;
+              }
+            const auto under = [&](const Ball &b) {
+              return std::hypot(x[0] - b.c[0], x[1] - b.c[1]) < b.r &&
+                     x[2] < z_c + pp.max_diameter;
+            };
+            under_above += under(above);
+            under_lid += under(lid);
+          }
+        std::vector<std::array<double, 4>> added;
+        std::set_difference(after.begin(),
+                            after.end(),
+                            before.begin(),
+                            before.end(),
+                            std::back_inserter(added));
+        std::cout << "blade: new points = " << added.size() << " (reported "
+                  << r.points
+                  << "), hash of their positions = " << position_hash(added)
+                  << std::endl;
+        std::cout << "blade: solid points left: substrate " << n_substrate
+                  << ", drop below the top " << n_below_left << ", elsewhere "
+                  << n_other_solid << std::endl;
+        std::cout << "blade: new points within a grain of the substrate "
+                     "under the swept drops: "
+                  << under_above << ", " << under_lid << std::endl;
+        const unsigned int n_sub =
+          nx * ny * static_cast<unsigned int>(z_c / s + 0.5);
+        checks.at_most("blade: faults (drop below not whole, a swept "
+                       "drop's point left, a shared site, no grain under a "
+                       "swept drop, count)",
+                       (n_below_left != n_below) + (n_other_solid != 0) +
+                         (n_substrate != n_sub) + (shared != 0) +
+                         (under_above == 0) + (under_lid == 0) +
+                         (added.size() != r.points),
+                       0);
+      }
+  }
   return checks.exit_code();
 }

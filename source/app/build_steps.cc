@@ -117,16 +117,38 @@ namespace femp
         const double       T = scene.build.powder_temperature > 0 ?
                                  scene.build.powder_temperature :
                                  scene.heat.reference_temperature;
-        const auto         r = recoater->recoat(points, layer, T);
+        // The surface: the metal attached to the build (the workpiece of
+        // the current alpha); the blade sweeps the detached metal above
+        // the layer's top, and the stored heat it takes is booked. (alpha
+        // follows every module that moves points: renewed here only if
+        // one did not.)
+        point_heat.follow_points();
+        const auto &alpha    = heat_ptr->metal_fraction();
+        const auto &attached = point_heat.bodies().workpiece_cells();
+        const auto  r        = recoater->recoat(
+          points, layer, T, alpha, attached, [&](const double T_point) {
+            return point_heat.removed_enthalpy_per_mass(T_point);
+          });
+        if (r.swept_points > 0)
+          point_heat.book_swept(
+            {r.swept_mass, r.swept_points, r.swept_bodies, r.swept_enthalpy});
         // The new points: alpha and the heat of the cells they entered.
         point_heat.follow_points();
         pcout << "Recoat: layer " << r.layer << " at t = " << t
-              << " s: " << r.grains << " grains, packing fraction "
-              << std::setprecision(3) << r.packing << " of the "
-              << r.fill_volume << (dim == 3 ? " m^3" : " m^2")
-              << " between the surface (z " << r.surface_min << " to "
-              << r.surface_max << " m) and the top " << layer.top << " m; "
-              << r.points << " points at " << T << " K" << std::setprecision(6)
+              << " s: the blade swept " << r.swept_bodies
+              << " detached bodies above the top (" << r.swept_points
+              << " points, " << std::setprecision(4) << r.swept_mass
+              << (dim == 3 ? " kg" : " kg/m") << "); " << r.grains
+              << " grains, packing fraction " << std::setprecision(3)
+              << r.packing << " of the " << r.fill_volume
+              << (dim == 3 ? " m^3" : " m^2")
+              << " between the surface (attached metal, z " << r.surface_min
+              << " to " << r.surface_max << " m";
+        if (r.columns_on_drops > 0)
+          pcout << "; " << r.columns_on_drops
+                << " columns rest on detached drops below the top";
+        pcout << ") and the top " << layer.top << " m; " << r.points
+              << " points at " << T << " K" << std::setprecision(6)
               << std::endl;
         if (handover && solid)
           hand_over(t, layer.top, points, *solid, timer, pcout);

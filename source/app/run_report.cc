@@ -51,6 +51,7 @@ namespace femp
         out.put(point_heat.evaporated_mass_account());
         out.put(s.pool);
         out.put(flow ? flow->subcycle_record() : s.flow_limits);
+        out.put(point_heat.swept_account());
       },
       [this, &point_heat, flow](std::vector<StateReader> &parts) {
         StateReader &in = parts[0];
@@ -62,6 +63,11 @@ namespace femp
         s.flow_limits = in.get<typename RunSummary<dim>::FlowLimits>();
         if (flow)
           flow->set_subcycle_record(s.flow_limits);
+        // Not in checkpoints written before the blade swept: none.
+        point_heat.set_swept_account(
+          in.at_end() ?
+            typename PointHeatExchange<dim>::SweptAccount() :
+            in.get<typename PointHeatExchange<dim>::SweptAccount>());
       });
   }
 
@@ -155,6 +161,13 @@ namespace femp
         removal            = true;
         removal_account    = a;
       }
+    {
+      const auto &a    = point_heat.swept_account();
+      s.swept_mass     = a.mass;
+      s.swept_enthalpy = a.enthalpy;
+      s.swept_points   = a.points;
+      s.swept_bodies   = a.bodies;
+    }
     s.n_points = points.n_global_points();
     {
       using P = typename MaterialPoints<dim>::PropertyIndex;
@@ -256,13 +269,23 @@ namespace femp
         << ", convection " << e.convection << ", radiation " << e.radiation
         << " at the end of each step), fixed faces " << s.boundary
         << ", stored " << s.stored << "; ";
-    if (removal)
-      out << "carried away by the evaporated mass " << s.removed_enthalpy
-          << "; "
-          << error("|laser + fixed faces - losses - carried - stored|",
-                   std::abs(s.laser + s.boundary - s.losses -
-                            s.removed_enthalpy - s.stored))
-          << std::endl;
+    // Carried away: by the evaporated mass, by the recoater's blade.
+    const bool swept   = s.swept_points > 0;
+    const bool carried = removal || swept;
+    if (carried)
+      {
+        out << "carried away";
+        if (removal)
+          out << " by the evaporated mass " << s.removed_enthalpy;
+        if (swept)
+          out << (removal ? "," : "") << " by the recoater's blade "
+              << s.swept_enthalpy;
+        out << "; "
+            << error("|laser + fixed faces - losses - carried - stored|",
+                     std::abs(s.laser + s.boundary - s.losses -
+                              s.removed_enthalpy - s.swept_enthalpy - s.stored))
+            << std::endl;
+      }
     else
       out << error("|laser + fixed faces - losses - stored|",
                    std::abs(s.laser + s.boundary - s.losses - s.stored))
@@ -276,6 +299,13 @@ namespace femp
           << " points deleted), where no melt held it "
           << removal_account.not_removed
           << "; carried away: its sensible and melting heat (above)"
+          << std::endl;
+    if (swept)
+      out << std::setprecision(6) << "  swept by the recoater's blade ("
+          << (dim == 2 ? "kg/m" : "kg") << "): " << s.swept_mass << " in "
+          << s.swept_points << " points of " << s.swept_bodies
+          << " detached bodies above the layers' tops; carried away: their "
+             "sensible and melting heat (above)"
           << std::endl;
     if (e.laser_incident > 0)
       out << std::setprecision(6) << "  ray-traced laser (" << unit
@@ -291,13 +321,13 @@ namespace femp
           << unit << "): by the upwind convection of T " << s.advection
           << ", by points moving between cells " << s.moved_points
           << "; with these counted as sources, "
-          << error(removal ?
+          << error(carried ?
                      "|laser + fixed faces + created - losses - carried - "
                      "stored|" :
                      "|laser + fixed faces + created - losses - stored|",
                    std::abs(s.laser + s.boundary + s.advection +
                             s.moved_points - s.losses - s.removed_enthalpy -
-                            s.stored))
+                            s.swept_enthalpy - s.stored))
           << std::endl;
   }
 

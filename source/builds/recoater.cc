@@ -7,6 +7,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_table.h>
 #include <femp/builds/recoater.h>
+#include <femp/grid/metal_bodies.h>
 #include <femp/grid/powder_bed.h>
 
 #include <algorithm>
@@ -189,54 +190,187 @@ namespace femp
   }
 
   template <int dim>
-  std::vector<double>
-  Recoater<dim>::surface(const MaterialPoints<dim> &points) const
+  std::size_t
+  Recoater<dim>::column_of(const Point<dim> &x) const
   {
-    const double        s  = powder.point_spacing;
-    const auto         &x0 = grid.origin();
-    std::vector<double> top(static_cast<std::size_t>(n_columns[0]) *
-                              n_columns[1],
-                            x0[dim - 1]);
-    for (const auto &p : points.particle_handler())
+    const double s  = powder.point_spacing;
+    const auto  &x0 = grid.origin();
+    std::size_t  c  = 0;
+    for (int d = dim - 2; d >= 0; --d)
       {
-        const Point<dim> &x = p.get_location();
-        std::size_t       c = 0;
-        for (int d = dim - 2; d >= 0; --d)
-          {
-            const long i = static_cast<long>(std::floor((x[d] - x0[d]) / s));
-            c =
-              c * n_columns[d] + std::clamp<long>(i, 0, long(n_columns[d]) - 1);
-          }
-        top[c] = std::max(top[c], x[dim - 1] + 0.5 * s);
+        const long i = static_cast<long>(std::floor((x[d] - x0[d]) / s));
+        c = c * n_columns[d] + std::clamp<long>(i, 0, long(n_columns[d]) - 1);
       }
-    std::vector<double> global(top.size());
-    Utilities::MPI::max(ArrayView<const double>(top),
-                        grid.communicator(),
-                        ArrayView<double>(global));
-    return global;
+    return c;
+  }
+
+  template <int dim>
+  std::array<std::vector<double>, 2>
+  Recoater<dim>::column_tops(const MaterialPoints<dim>       &points,
+                             const std::vector<std::uint8_t> &attached,
+                             const std::vector<double>       *skip) const
+  {
+    const double      s  = powder.point_spacing;
+    const double      z0 = grid.origin()[dim - 1];
+    const std::size_t n  = std::size_t(n_columns[0]) * n_columns[1];
+    std::array<std::vector<double>, 2> top{
+      {std::vector<double>(n, z0), std::vector<double>(n, z0)}};
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        if (skip && (*skip)[idx] > 0)
+          continue;
+        auto &t = top[attached[idx] ? 0 : 1];
+        for (const auto &p : points.particle_handler().particles_in_cell(cell))
+          {
+            const Point<dim> &x = p.get_location();
+            double           &z = t[column_of(x)];
+            z                   = std::max(z, x[dim - 1] + 0.5 * s);
+          }
+      }
+    return top;
+  }
+
+  template <int dim>
+  typename Recoater<dim>::Surface
+  Recoater<dim>::surface(const MaterialPoints<dim>       &points,
+                         const std::vector<std::uint8_t> &attached) const
+  {
+    auto    top = column_tops(points, attached, nullptr);
+    Surface surf;
+    for (auto &t : top)
+      Utilities::MPI::max(ArrayView<const double>(t),
+                          grid.communicator(),
+                          ArrayView<double>(t));
+    surf.attached = top[0];
+    surf.rest     = top[0];
+    for (std::size_t c = 0; c < surf.rest.size(); ++c)
+      surf.rest[c] = std::max(top[0][c], top[1][c]);
+    return surf;
   }
 
   template <int dim>
   typename Recoater<dim>::Report
   Recoater<dim>::recoat(MaterialPoints<dim>                      &points,
                         const typename LayerSchedule<dim>::Layer &layer,
-                        const double                              T) const
+                        const double                              T,
+                        const std::vector<double>                &alpha,
+                        const std::vector<std::uint8_t>          &attached,
+                        const std::function<double(double)> &per_mass) const
   {
+    using P              = typename MaterialPoints<dim>::PropertyIndex;
     const int    v       = dim - 1;
     const double s       = powder.point_spacing;
     const auto  &x0      = grid.origin();
     const double h       = grid.h();
-    const auto   floor_z = surface(points);
     const double area    = dim == 3 ? s * s : s;
+    auto        &handler = points.particle_handler_for_update();
 
     Report r;
-    r.layer       = layer.number;
-    r.surface_min = *std::min_element(floor_z.begin(), floor_z.end());
-    r.surface_max = *std::max_element(floor_z.begin(), floor_z.end());
+    r.layer = layer.number;
+
+    // 1. The blade. Seeds: the detached metal cells holding a point whose
+    // top lies above the blade (round-off of the lattice's positions
+    // allowed), labelled by their global index + 1; the fill over the
+    // detached metal (attached cells masked) names each body swept by its
+    // least seed.
+    const double        blade  = layer.top + 1e-6 * s;
+    std::vector<double> seeds  = grid.make_field(0.);
+    std::vector<double> metal  = alpha;
+    const auto         &n_cell = grid.n_cells();
+    for (const auto &[idx, cell] : points.occupied_cells())
+      {
+        if (attached[idx])
+          continue;
+        for (const auto &p : handler.particles_in_cell(cell))
+          if (p.get_location()[v] + 0.5 * s > blade)
+            {
+              const auto ijk = grid.global_index(idx);
+              double     id  = 0;
+              for (int d = dim - 1; d >= 0; --d)
+                id = id * n_cell[d] + ijk[d];
+              seeds[idx] = id + 1;
+              break;
+            }
+      }
+    for (const auto idx : grid.owned_cells())
+      if (attached[idx])
+        metal[idx] = 0;
+    const std::vector<double> swept = label_metal_bodies(grid, metal, seeds);
+    // The swept points (each cell's, in the handler's order), their mass
+    // and heat; the bodies: the distinct labels over all ranks.
+    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+                        gone;
+    std::vector<double> labels;
+    double              local[2] = {0, 0}; // mass, heat
+    for (const auto &[idx, cell] : points.occupied_cells())
+      if (swept[idx] > 0)
+        {
+          labels.push_back(swept[idx]);
+          auto range = handler.particles_in_cell(cell);
+          for (auto it = range.begin(); it != range.end(); ++it)
+            {
+              const double m = it->get_properties()[P::mass];
+              local[0] += m;
+              if (per_mass)
+                local[1] += m * per_mass(it->get_properties()[P::temperature]);
+              gone.push_back(it);
+            }
+        }
+    std::sort(labels.begin(), labels.end());
+    labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+    std::vector<double> all_labels;
+    for (const auto &part :
+         Utilities::MPI::all_gather(grid.communicator(), labels))
+      all_labels.insert(all_labels.end(), part.begin(), part.end());
+    std::sort(all_labels.begin(), all_labels.end());
+    all_labels.erase(std::unique(all_labels.begin(), all_labels.end()),
+                     all_labels.end());
+    r.swept_bodies = all_labels.size();
+    r.swept_points =
+      Utilities::MPI::sum<std::uint64_t>(gone.size(), grid.communicator());
+    {
+      double global[2];
+      Utilities::MPI::sum(ArrayView<const double>(local, 2),
+                          grid.communicator(),
+                          ArrayView<double>(global, 2));
+      r.swept_mass     = global[0];
+      r.swept_enthalpy = global[1];
+    }
+
+    // 2. The surface of what is left: the attached metal's tops, and the
+    // resting height with the detached metal below the blade.
+    auto top = column_tops(points, attached, &swept);
+    for (auto &t : top)
+      Utilities::MPI::max(ArrayView<const double>(t),
+                          grid.communicator(),
+                          ArrayView<double>(t));
+    const std::vector<double> &surface_z = top[0];
+    std::vector<double>        floor_z   = top[0];
+    for (std::size_t c = 0; c < floor_z.size(); ++c)
+      if (top[1][c] > top[0][c])
+        {
+          floor_z[c] = top[1][c];
+          ++r.columns_on_drops;
+        }
+    // Delete the swept points; the handler is re-indexed with the new
+    // powder below (insert_powder()).
+    handler.remove_particles(gone);
+
+    r.surface_min = *std::min_element(surface_z.begin(), surface_z.end());
+    r.surface_max = *std::max_element(surface_z.begin(), surface_z.end());
+    const double rest_min = *std::min_element(floor_z.begin(), floor_z.end());
     for (const double z : floor_z)
       r.fill_volume += std::max(0., layer.top - z) * area;
-    if (r.fill_volume <= 0 || r.surface_min >= layer.top)
-      return r;
+    if (r.fill_volume <= 0 || rest_min >= layer.top)
+      {
+        // Nothing to spread; the swept points leave all the same.
+        if (r.swept_points > 0)
+          {
+            std::vector<std::pair<std::uint32_t, Point<dim>>> none;
+            insert_powder(points, none, T);
+          }
+        return r;
+      }
 
     // The bed is periodic across the lateral faces (the bed goes on beyond
     // them): grains that cross a face come back through the opposite one,
@@ -251,7 +385,7 @@ namespace femp
         spec.lower[d] = x0[d];
         spec.upper[d] = x0[d] + grid.n_cells()[d] * h;
       }
-    spec.lower[v]         = r.surface_min;
+    spec.lower[v]         = rest_min;
     spec.upper[v]         = layer.top;
     spec.mean_diameter    = powder.mean_diameter;
     spec.std_diameter     = powder.std_diameter;

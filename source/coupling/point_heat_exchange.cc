@@ -191,15 +191,8 @@ namespace femp
     cells.reserve(list.size());
     for (const auto &e : list)
       cells.push_back({e.index, e.mass, e.outward});
-    // The stored enthalpy (relative to T_ref) that a kilogram of metal at
-    // T takes out of a cell whose alpha is its points' volume: its own,
-    // less that of the gas that takes its place.
-    const Material &mat   = heat.material();
-    const double    Tref  = heat.reference_temperature();
-    const double    e_ref = heat.specific_enthalpy(Tref);
-    const double    gas = mat.gas_density * mat.gas_specific_heat / mat.density;
-    const auto      r   = points.remove_mass(cells, [&](const double T) {
-      return heat.specific_enthalpy(T) - e_ref - gas * (T - Tref);
+    const auto r = points.remove_mass(cells, [this](const double T) {
+      return removed_enthalpy_per_mass(T);
     });
     evaporated.removed += r.mass;
     evaporated.not_removed += r.not_removed;
@@ -210,6 +203,31 @@ namespace femp
     // metal took is booked here instead (so moved_points keeps only what
     // the exchange itself created: alpha capped in over-full cells).
     moved_points += r.weighted;
+  }
+
+  template <int dim>
+  double
+  PointHeatExchange<dim>::removed_enthalpy_per_mass(const double T) const
+  {
+    // Its own, less that of the gas that takes its place.
+    const Material &mat  = heat.material();
+    const double    Tref = heat.reference_temperature();
+    const double    gas = mat.gas_density * mat.gas_specific_heat / mat.density;
+    return heat.specific_enthalpy(T) - heat.specific_enthalpy(Tref) -
+           gas * (T - Tref);
+  }
+
+  template <int dim>
+  void
+  PointHeatExchange<dim>::book_swept(const SweptAccount &a)
+  {
+    swept.mass += a.mass;
+    swept.points += a.points;
+    swept.bodies += a.bodies;
+    swept.enthalpy += a.enthalpy;
+    // The next follow_points() books the change of the stored enthalpy as
+    // that of moved points; the part the swept metal took is booked here.
+    moved_points += a.enthalpy;
   }
 
   template class PointHeatExchange<2>;

@@ -189,29 +189,33 @@ namespace femp
   }
 
   template <int dim>
-  std::vector<std::uint8_t>
-  attached_metal_cells(const BackgroundGrid<dim> &grid,
-                       const std::vector<double> &alpha,
-                       unsigned int              *sweeps)
+  std::vector<double>
+  label_metal_bodies(const BackgroundGrid<dim> &grid,
+                     const std::vector<double> &alpha,
+                     const std::vector<double> &seeds,
+                     unsigned int              *sweeps)
   {
     using Grid         = BackgroundGrid<dim>;
     const auto &st     = grid.strides();
     const auto &status = grid.cell_status();
     const auto  metal  = [&](const std::size_t i) { return alpha[i] > 0; };
 
-    // label: 1 for attached cells; a double field for the ghost exchange.
+    // label: the least seed label that reached the cell so far (0: none);
+    // a double field for the ghost exchange. Labels only fall, so a cell
+    // whose label changed passes it on.
     std::vector<double>        label = grid.make_field(0.);
     std::vector<std::uint32_t> stack;
-    const auto                 visit = [&](const std::size_t i) {
-      if (status[i] == Grid::owned && label[i] == 0 && metal(i))
+    const auto visit = [&](const std::size_t i, const double lab) {
+      if (status[i] == Grid::owned && metal(i) &&
+          (label[i] == 0 || lab < label[i]))
         {
-          label[i] = 1;
+          label[i] = lab;
           stack.push_back(i);
         }
     };
     for (const auto idx : grid.owned_cells())
-      if (grid.global_index(idx)[dim - 1] == 0)
-        visit(idx);
+      if (seeds[idx] > 0)
+        visit(idx, seeds[idx]);
 
     // Owned cells always have a neighbour entry (ghost or padding) in the
     // box, so idx +- stride stays inside it.
@@ -223,18 +227,20 @@ namespace femp
           {
             const std::size_t idx = stack.back();
             stack.pop_back();
+            const double lab = label[idx];
             for (int d = 0; d < dim; ++d)
               {
-                visit(idx + st[d]);
-                visit(idx - st[d]);
+                visit(idx + st[d], lab);
+                visit(idx - st[d], lab);
               }
           }
         ++n_sweeps;
         before = label;
         grid.update_ghosts(label);
-        // Ghost cells that became attached seed their owned neighbours.
+        // Ghost cells whose label changed pass it to their owned
+        // neighbours.
         for (std::size_t i = 0; i < label.size(); ++i)
-          if (status[i] == Grid::ghost && label[i] != 0 && before[i] == 0)
+          if (status[i] == Grid::ghost && label[i] != before[i])
             {
               const auto ijk = grid.global_index(i);
               for (int d = 0; d < dim; ++d)
@@ -243,7 +249,7 @@ namespace femp
                     auto nb = ijk;
                     nb[d] += s;
                     if (grid.in_box(nb))
-                      visit(grid.local_index(nb));
+                      visit(grid.local_index(nb), label[i]);
                   }
             }
         const unsigned long long n_new = stack.size();
@@ -252,7 +258,25 @@ namespace femp
       }
     if (sweeps)
       *sweeps = n_sweeps;
+    for (std::size_t i = 0; i < label.size(); ++i)
+      if (status[i] != Grid::owned)
+        label[i] = 0;
+    return label;
+  }
 
+  template <int dim>
+  std::vector<std::uint8_t>
+  attached_metal_cells(const BackgroundGrid<dim> &grid,
+                       const std::vector<double> &alpha,
+                       unsigned int              *sweeps)
+  {
+    // One label, 1, from the metal cells of the bottom row: a flood fill.
+    std::vector<double> seeds = grid.make_field(0.);
+    for (const auto idx : grid.owned_cells())
+      if (grid.global_index(idx)[dim - 1] == 0)
+        seeds[idx] = 1;
+    const std::vector<double> label =
+      label_metal_bodies(grid, alpha, seeds, sweeps);
     std::vector<std::uint8_t> attached(label.size(), 0);
     for (const auto idx : grid.owned_cells())
       attached[idx] = label[idx] != 0;
@@ -308,6 +332,16 @@ namespace femp
   attached_metal_cells(const BackgroundGrid<3> &,
                        const std::vector<double> &,
                        unsigned int *);
+  template std::vector<double>
+  label_metal_bodies(const BackgroundGrid<2> &,
+                     const std::vector<double> &,
+                     const std::vector<double> &,
+                     unsigned int *);
+  template std::vector<double>
+  label_metal_bodies(const BackgroundGrid<3> &,
+                     const std::vector<double> &,
+                     const std::vector<double> &,
+                     unsigned int *);
 #define FEMP_INSTANTIATE(D)                               \
   template MetalPeakTemperatures metal_peak_temperatures( \
     const BackgroundGrid<D> &,                            \

@@ -51,6 +51,12 @@ namespace femp
     /// T_ref) that the removed metal took out of the grid, kg and J (2D:
     /// kg/m, J/m); all zero without it.
     double evaporated_mass = 0, removed_mass = 0, removed_enthalpy = 0;
+    /// The recoater's blade (builds/recoater.h): the detached metal it
+    /// swept over the run, its mass and the stored heat it took out of the
+    /// grid, kg and J (2D: kg/m, J/m), its points and bodies; all zero
+    /// when it swept none.
+    double                swept_mass = 0, swept_enthalpy = 0;
+    unsigned long         swept_points = 0, swept_bodies = 0;
     types::particle_index n_points     = 0;
     double                point_T_mean = 0; ///< mean point temperature, K
     // Melt flow (zero when Physics/Melt flow is false).

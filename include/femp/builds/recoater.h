@@ -12,17 +12,32 @@
 // (z_k: its height in the scan path; with listed times z_k - z_1 = (k - 1)
 // x thickness).
 //
-// Recoating a layer: the surface is the top of the highest point in each
-// lattice column (spacing: Material points/Point spacing) of the domain,
-// collected over the ranks; grains of the first layer's size distribution
-// are dropped by the same ballistic packing (grid/powder_bed.h) onto it,
-// each resting on the surface (the re-solidified track and the unfused
-// powder beside it) or on a grain already placed, the blade at top_k
-// rejecting those that would stick out; the packing fraction refers to the
-// volume between the surface and top_k. The lattice points inside each grain
-// and above the surface become powder points at 'Build/Powder temperature'.
-// The bed depends only on the points' positions and the seed (the first
-// layer's seed + the layer number), so every rank builds the same bed.
+// Recoating a layer (the blade passes at top_k):
+//  1. the blade: the metal not attached to the build (MetalBodies: the
+//     metal cells that no chain of face-connected metal cells joins to the
+//     bottom row, attached_metal_cells()) that reaches above top_k (a
+//     point whose top, position + half the spacing, lies above it) is
+//     swept away with the whole detached body it belongs to
+//     (label_metal_bodies() from the cells holding such points): its
+//     points are deleted, their number, mass and stored heat reported.
+//     Attached metal above top_k stays (the blade passes over the part),
+//     and so does detached metal below it (drops lying on the bed);
+//  2. the surface: per lattice column (spacing: Material points/Point
+//     spacing) of the domain, the top of the highest attached point; the
+//     height a grain rests on: the higher of that and the top of the
+//     detached metal left in the column (a grain falling on a drop that
+//     stayed rests on it; the space under a drop that does not touch the
+//     surface stays gas), collected over the ranks;
+//  3. grains of the first layer's size distribution are dropped by the
+//     same ballistic packing (grid/powder_bed.h), each resting on that
+//     height or on a grain already placed, the blade at top_k rejecting
+//     those that would stick out; the packing fraction refers to the
+//     volume between the resting height and top_k. The lattice points
+//     inside each grain and above the resting height of their column
+//     become powder points at 'Build/Powder temperature'.
+// Everything depends only on the points' positions, alpha and the seed
+// (the first layer's seed + 7919 x the layer number), so every rank sweeps
+// the same drops and builds the same bed.
 #ifndef femp_recoater_h
 #define femp_recoater_h
 
@@ -33,6 +48,9 @@
 #include <femp/grid/material_points.h>
 #include <femp/heat/laser.h>
 
+#include <array>
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -133,10 +151,31 @@ namespace femp
       unsigned int  layer        = 0;
       unsigned int  grains       = 0;
       std::uint64_t points       = 0; ///< points added
-      double        fill_volume  = 0; ///< between surface and blade, m^3
+      double        fill_volume  = 0; ///< between rest height and blade, m^3
       double        packing      = 0; ///< grains' volume / fill volume
       double        point_volume = 0; ///< of the points added, m^3
-      double        surface_min = 0, surface_max = 0; ///< m
+      /// The attached surface's lowest and highest column top, m.
+      double surface_min = 0, surface_max = 0;
+      /// Columns whose resting height is a detached drop's top (above the
+      /// attached surface, below the blade).
+      unsigned int columns_on_drops = 0;
+      /// The blade: detached bodies swept, their points, their mass, kg
+      /// (2D: kg/m), and the sum over their points of mass x
+      /// per_mass(T) of recoat() (their stored heat, J; 2D: J/m).
+      unsigned int  swept_bodies   = 0;
+      std::uint64_t swept_points   = 0;
+      double        swept_mass     = 0;
+      double        swept_enthalpy = 0;
+    };
+
+    /// Per lattice column (spacing: the point spacing; x fastest): the top
+    /// of the highest attached point (position + half the spacing), and
+    /// the height a grain rests on (the higher of that and the top of the
+    /// detached metal); the domain's bottom where there is none.
+    struct Surface
+    {
+      std::vector<double> attached;
+      std::vector<double> rest;
     };
 
     /// @p powder: the first layer's grain sizes, packing fraction and seed
@@ -145,18 +184,27 @@ namespace femp
              const double                                    density,
              const BackgroundGrid<dim>                      &grid);
 
-    /// Per lattice column (spacing: the point spacing; x fastest), the top
-    /// of the highest point in it (position + half the spacing), the
-    /// domain's bottom where it holds none. Collective.
-    std::vector<double>
-    surface(const MaterialPoints<dim> &points) const;
+    /// The surface of the points now (see Surface), with @p attached the
+    /// workpiece's cells (attached_metal_cells() of the points' alpha; 1
+    /// per attached metal cell of the local box, valid on owned cells).
+    /// Collective.
+    Surface
+    surface(const MaterialPoints<dim>       &points,
+            const std::vector<std::uint8_t> &attached) const;
 
-    /// Spread layer @p layer (its number and top) at temperature @p T over
-    /// the points' surface: new powder points in @p points. Collective.
+    /// Spread layer @p layer (its number and top) at temperature @p T:
+    /// sweep the detached metal above the blade, then new powder points in
+    /// @p points on the surface left. @p alpha: the points' metal fraction
+    /// (ghosts exchanged), @p attached: its workpiece cells (as above);
+    /// @p per_mass: the stored heat per kilogram of a swept point at its
+    /// temperature, J/kg (empty: 0). Collective.
     Report
     recoat(MaterialPoints<dim>                      &points,
            const typename LayerSchedule<dim>::Layer &layer,
-           const double                              T) const;
+           const double                              T,
+           const std::vector<double>                &alpha,
+           const std::vector<std::uint8_t>          &attached,
+           const std::function<double(double)>      &per_mass = {}) const;
 
   private:
     const typename MaterialPoints<dim>::Parameters powder;
@@ -168,6 +216,16 @@ namespace femp
     insert_powder(MaterialPoints<dim>                               &points,
                   std::vector<std::pair<std::uint32_t, Point<dim>>> &added,
                   const double                                       T) const;
+    /// The lattice column of position @p x (clamped to the domain).
+    std::size_t
+    column_of(const Point<dim> &x) const;
+    /// Per column the attached and the detached metal's tops (not
+    /// gathered), skipping the points of the owned cells marked in
+    /// @p skip (may be null).
+    std::array<std::vector<double>, 2>
+    column_tops(const MaterialPoints<dim>       &points,
+                const std::vector<std::uint8_t> &attached,
+                const std::vector<double>       *skip) const;
     /// Lattice columns per horizontal direction (1 in 2D for y).
     std::array<unsigned int, 2> n_columns{{1, 1}};
   };

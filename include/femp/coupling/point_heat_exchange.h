@@ -26,7 +26,8 @@
 // (MaterialPoints::remove_mass()) and keeps the account of
 // that mass and of the sensible and melting heat it took out of the grid
 // (the change of the stored enthalpy; its latent heat of evaporation is the
-// heat's evaporation loss).
+// heat's evaporation loss). It books in the same way the points that the
+// recoater's blade sweeps (builds/recoater.h).
 #ifndef femp_point_heat_exchange_h
 #define femp_point_heat_exchange_h
 
@@ -152,6 +153,41 @@ namespace femp
       evaporated = a;
     }
 
+    /// The stored enthalpy (relative to T_ref) that a kilogram of metal
+    /// at @p T (K) takes out of a cell whose alpha is its points' volume:
+    /// e(T) - e(T_ref) - (rho_g c_g/rho_m)(T - T_ref), J/kg.
+    double
+    removed_enthalpy_per_mass(const double T) const;
+
+    /// What the recoater's blade swept over the run (builds/recoater.h),
+    /// sums over the ranks.
+    struct SweptAccount
+    {
+      double        mass   = 0; ///< kg (2D: kg/m)
+      unsigned long points = 0; ///< points deleted
+      unsigned long bodies = 0; ///< detached bodies swept
+      /// Their stored heat (relative to T_ref): the sum over their points
+      /// of m removed_enthalpy_per_mass(T), J (2D: J/m).
+      double enthalpy = 0;
+    };
+    /// The recoater deleted the points of @p a (alpha is stale: the next
+    /// follow_points() renews it): book them. As with the evaporated mass,
+    /// the stored heat they took is booked here, not as moved points.
+    void
+    book_swept(const SweptAccount &a);
+    /// The account so far (the same on every rank).
+    const SweptAccount &
+    swept_account() const
+    {
+      return swept;
+    }
+    /// Resume: the account at the checkpoint.
+    void
+    set_swept_account(const SweptAccount &a)
+    {
+      swept = a;
+    }
+
   private:
     MaterialPoints<dim>               &points;
     HeatTransfer<dim>                 &heat;
@@ -160,6 +196,7 @@ namespace femp
     std::unique_ptr<MetalSurface<dim>> surface; ///< null with the heat off
     double                             moved_points = 0;
     EvaporatedMassAccount              evaporated;
+    SweptAccount                       swept;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
 

@@ -22,7 +22,10 @@
 // The workpiece, the metal attached to the substrate, for the peak
 // temperature that ends a run after cooling ('Time stepping/Stop when peak
 // temperature below', doc/cases.md "Residual stress after cooling"), the
-// cooling step and the melt pool: the metal cells (alpha > 0) connected to
+// cooling step, the melt pool and the recoater (builds/recoater.h: the
+// surface the new powder rests on, and the detached metal its blade
+// sweeps, whose bodies label_metal_bodies() finds by the same fill): the
+// metal cells (alpha > 0) connected to
 // a metal cell of the bottom row of the domain through a chain of face
 // neighbours that are metal cells (a flood fill: within each rank, then
 // across the ghost layer, repeated until no rank finds a new cell; the set
@@ -142,6 +145,24 @@ namespace femp
   attached_metal_cells(const BackgroundGrid<dim> &grid,
                        const std::vector<double> &alpha,
                        unsigned int              *sweeps = nullptr);
+
+  /// The bodies of metal (face-connected metal cells, alpha > 0) that
+  /// hold the seeds: @p seeds holds a label > 0 at the owned cells that
+  /// start a body, 0 elsewhere (a field of the local box); per cell of the
+  /// local box, the least seed label that reaches the cell through a chain
+  /// of face neighbours that are metal cells, 0 where none does (and at
+  /// the cells that are not owned). The same flood fill as the workpiece's
+  /// (attached_metal_cells(): one label, the bottom row's metal cells),
+  /// with labels that only fall: with distinct labels (a global cell index
+  /// + 1) each body is named by its least seed. A property of the field,
+  /// independent of the partition. @p sweeps, if given, receives the
+  /// number of exchange rounds. Collective.
+  template <int dim>
+  std::vector<double>
+  label_metal_bodies(const BackgroundGrid<dim> &grid,
+                     const std::vector<double> &alpha,
+                     const std::vector<double> &seeds,
+                     unsigned int              *sweeps = nullptr);
 
   /// Global peak temperatures of @p T over the metal cells of @p alpha,
   /// split by @p attached (attached_metal_cells()). Collective.
