@@ -174,6 +174,7 @@ main(int argc, char **argv)
     const double  mass = mat.density * r.point_volume;
     const double  mass_expected = mat.density * pp.packing_fraction * V;
     checks.print("bare track: grains", r.grains);
+    checks.print("bare track: packing reached", r.packing, 3);
     checks.at_most("bare track: |volume between surface and top - box less "
                    "half cylinder| / volume",
                    std::abs(r.fill_volume - V) / V,
@@ -371,6 +372,7 @@ main(int argc, char **argv)
                    std::abs(r.fill_volume - V) / V,
                    1e-9);
     checks.print("blade: grains", r.grains);
+    checks.print("blade: packing reached", r.packing, 3);
     checks.at_most("blade: |packing reached - asked| / asked",
                    std::abs(r.packing - pp.packing_fraction) /
                      pp.packing_fraction,
