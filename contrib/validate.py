@@ -68,7 +68,9 @@ spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
   first part of the pulse on a plate cut to 0.64 x 0.64 x 0.30 mm: the
   melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
   (the depression's rise) against the measured melt and keyhole onsets
-  (resumable: a run with a time series is only evaluated).
+  (resumable: a run with a time series is only evaluated); the figure
+  validation_simonds_absorption.svg (--img) of every finished spot: the
+  absorbed fraction against time with the measured keyhole onsets.
 dig: what digs the pool, from the field outputs of finished runs (read
   with contrib/femp_post.py; VTU or HDF5): per output the depression depth
   below the original surface, the surface temperature and recoil pressure
@@ -740,6 +742,37 @@ def cmd_spots(args):
                   f(r["t_0.45"]), f(r["t_0.60"]), ms(c.get("t_keyhole_ms")),
                   r["t_end"] * 1e3, r["absorbed_end"], r["hits_end"],
                   r["depth_end"] * 1e6), flush=True)
+    spots_figure(args.out, args.img)
+
+
+def spots_figure(out, img):
+    """The absorbed fraction against time of every finished spot run under
+    out/spots, with the measured keyhole onsets (on the flat-surface
+    value's level, 0.3) for comparison."""
+    colours = ["#c92a2a", "#e67700", "#2b8a3e", "#1f5fbf", "#862e9c"]
+    allc = {c["name"]: c for c in cases()}
+    series, onsets = [], []
+    d = os.path.join(out, "spots")
+    names = sorted((n for n in (os.listdir(d) if os.path.isdir(d) else [])
+                    if n in allc and os.path.exists(
+                        os.path.join(d, n, "output", "absorption.csv"))),
+                   key=lambda n: -allc[n]["P"])
+    for k, n in enumerate(names):
+        a = femp_post.Run(os.path.join(d, n, "output")).absorption()
+        series.append(("femp, %s" % allc[n]["label"], colours[k % len(colours)],
+                       [(t * 1e3, f, 0, 0, "") for t, f in
+                        list(zip(a["time"].tolist(),
+                                 a["absorbed_fraction"].tolist()))[::4]]))
+        if allc[n].get("t_keyhole_ms"):
+            onsets.append((allc[n]["t_keyhole_ms"], 0.3, 0, 0, allc[n]["label"]))
+    if not series:
+        return
+    series.append(("measured keyhole onset", "#000000", onsets))
+    os.makedirs(img, exist_ok=True)
+    svg_scatter(os.path.join(img, "validation_simonds_absorption.svg"), series,
+                "Stationary spots (Simonds 2018, 316L): absorbed fraction",
+                "time (ms)", "absorbed fraction", diag=False, ylim=(0, 1),
+                pad=False, lines=tuple(sr[0] for sr in series[:-1]))
 
 
 def cmd_scenes(args):
@@ -1616,7 +1649,8 @@ def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
     """Predicted against measured (or any x-y) with horizontal error bars
     (the measurement's spread) and the line y = x (diag). series: list of
     (label, colour, [(x, y, xerr, yerr, text)]). pad: widen the axes by 8 %;
-    lines: join each series' points in the order given."""
+    lines: join each series' points in the order given (True), or only
+    those of the series whose labels it holds (a tuple)."""
     W, Hh, L, R, T, B = 560, 460, 70, 150, 40, 55
     xs = [p[0] for s in series for p in s[2]] or [0, 1]
     ys = [p[1] for s in series for p in s[2]] or [0, 1]
@@ -1655,7 +1689,7 @@ def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
     o.append('<text x="16" y="%d" text-anchor="middle" transform="rotate(-90 '
              '16 %d)">%s</text>' % ((T + Hh - B) // 2, (T + Hh - B) // 2, ylabel))
     for k, (label, colour, pts) in enumerate(series):
-        if lines and len(pts) > 1:
+        if (lines is True or (lines and label in lines)) and len(pts) > 1:
             o.append('<polyline fill="none" stroke="%s" points="%s"/>' % (
                 colour, " ".join("%.1f,%.1f" % (X(p[0]), Y(p[1])) for p in pts)))
         for (x, y, xe, ye, text) in pts:
