@@ -199,9 +199,9 @@ namespace femp
           solid->n_points_held_at_zone(); // collective
         if (held_zone > 0)
           out << "Solid: " << held_zone
-              << " time(s) a material point reached the finite-element "
-                 "zone's top face (less than half a point spacing into the "
-                 "zone) and was held on it"
+              << " time(s) a material point crossed a face of the "
+                 "finite-element zone (its top or a lateral face, less than "
+                 "half a point spacing into the zone) and was held on it"
               << std::endl;
         if (solid->n_points_set_aside() > 0)
           out << "Solid: " << solid->n_points_set_aside()

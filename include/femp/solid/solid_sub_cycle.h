@@ -297,9 +297,9 @@ namespace femp
     {
       return Utilities::MPI::sum(mpm.n_held(), comm);
     }
-    /// Times a material point reached the FE zone's top face from above
-    /// and was held on it so far, all ranks (SolidMPM::hold_on_zone_top();
-    /// collective).
+    /// Times a material point crossed a face of the FE zone (its top or a
+    /// lateral face) from outside and was held on it so far, all ranks
+    /// (SolidMPM::hold_on_zone_face(); collective).
     unsigned long
     n_points_held_at_zone() const
     {
