@@ -19,9 +19,10 @@
 // projection, a millionth of a cell outside, with the velocity components
 // into the zone across each face it was moved through removed and the
 // others unchanged; any other point at x0 + u dt with velocity u. Checks
-// per scene: the holds counted, the largest position error (/ h), velocity
-// error (/ |u|), the largest change of stress (/ its largest value), of
-// the plastic strain and of the mass (exactly zero), no point lost.
+// per scene: the holds counted, the kinetic energy they removed (the mass
+// times the velocity components removed), the largest position error
+// (/ h), velocity error (/ |u|), the largest change of stress (/ its largest
+// value), of the plastic strain and of the mass (exactly zero), no point lost.
 // Scenes: the zone's right lateral face (points moving left and up; the
 // top row of them near the zone's corner, nearer to the lateral face than
 // to the top), its left lateral face (moving right and down), its top face
@@ -220,12 +221,13 @@ namespace
     // The expected ends; the points expected lost.
     std::map<types::particle_index, Expected> expected;
     double                                    n_held = 0, n_lost = 0;
-    double                                    depth_lost = 0;
+    double                                    depth_lost = 0, k_held = 0;
     for (const auto &[id, s] : start)
       {
         const auto e = expected_end(zone, s.x + dt * u, u);
         expected[id] = e;
         n_held += e.held;
+        k_held += 0.5 * s.mass * (u.norm_square() - e.v.norm_square());
         n_lost += e.lost;
         if (e.lost)
           depth_lost = e.depth;
@@ -306,6 +308,11 @@ namespace
                      Utilities::MPI::sum(double(mpm.n_held_at_zone()), comm) -
                      n_held),
                    0);
+    checks.at_most(
+      name + ": |kinetic energy removed - expected| / expected",
+      std::abs(Utilities::MPI::sum(mpm.held_at_zone_kinetic(), comm) - k_held) /
+        k_held,
+      1e-12);
     checks.at_most(name + ": points lost",
                    std::abs(n0 - points.n_global_points()),
                    0);

@@ -498,10 +498,12 @@ namespace femp
     // On each face crossed, inside the cell outside the zone (a millionth
     // of a cell beyond the face, so that the handler's sort finds it there
     // too); no velocity into the zone across it.
-    const double h = grid.h();
+    const double h  = grid.h();
+    double       v2 = 0; // of the components removed
     for (int d = 0; d < dim; ++d)
       if (e.faces & (1u << d))
         {
+          v2 += v[d][p] * v[d][p];
           const double face =
             grid.origin()[d] + (ijk[d] + (e.side[d] > 0 ? 1 : 0)) * h;
           xp[d]   = face + e.side[d] * 1e-6 * h;
@@ -518,7 +520,9 @@ namespace femp
               if (!xdot[d].empty())
                 xdot[d][p] = std::min(xdot[d][p], 0.);
             }
+          v2 -= v[d][p] * v[d][p];
         }
+    held_kinetic += 0.5 * (true_mass[p] * scaling) * v2;
     ijk = e.cell;
     ++held_at_zone;
     return true;

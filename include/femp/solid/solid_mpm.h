@@ -282,6 +282,14 @@ namespace femp
     {
       return held_at_zone;
     }
+    /// Kinetic energy the holds on the FE zone's faces removed from this
+    /// rank's points so far (the velocity components into the zone), J
+    /// (2D: J/m, inertial mass); booked by the next transfer.
+    double
+    held_at_zone_kinetic() const
+    {
+      return held_kinetic;
+    }
     /// How far inside the FE zone a point that crossed one of its faces is
     /// still held on it (m): half the point spacing.
     double
@@ -371,6 +379,7 @@ namespace femp
     unsigned int            left_rank    = 0;
     unsigned long           held         = 0; ///< see n_held()
     unsigned long           held_at_zone = 0; ///< see n_held_at_zone()
+    double                  held_kinetic = 0; ///< see held_at_zone_kinetic()
     Point<dim>              escaped;
     double                  escaped_at = -1; ///< see escaped_depth()
     /// How far inside the FE zone a point is held on its faces: half the

@@ -305,6 +305,13 @@ namespace femp
     {
       return Utilities::MPI::sum(mpm.n_held_at_zone(), comm);
     }
+    /// Kinetic energy those holds removed, all ranks, J (2D: J/m;
+    /// SolidMPM::held_at_zone_kinetic(); collective).
+    double
+    kinetic_held_at_zone() const
+    {
+      return Utilities::MPI::sum(mpm.held_at_zone_kinetic(), comm);
+    }
     /// Gathers of the MPM points at the temperature steps, summed over the
     /// ranks: those that kept the arrays of the last one (nothing melted,
     /// solidified or moved in or out of the members' cells there), those
