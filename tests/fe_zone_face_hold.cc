@@ -371,6 +371,9 @@ namespace
     fp.enabled      = true;
     fp.lower_corner = Point<dim>(0.6, 0);
     fp.upper_corner = Point<dim>(1.0, 0.4);
+    // The points push the zone's nodes far in this one step; only the
+    // entry is looked at here.
+    fp.hourglass_distortion_limit = 1e9;
     SolidSubCycle<dim>  solid(sp, fp, sm, grid, points);
     std::vector<double> T = grid.make_field(300.);
     solid.initialize(T, "");
