@@ -27,12 +27,12 @@ scenes: writes prm/validation/<case>.prm, one scene per measured case of
   1/e^2 radius of a Gaussian), ray-traced absorption with the alloy's
   optical constants from its material file, melt flow with recoil, 8 um
   cells. --check: fail if a written scene differs from the committed one.
-run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
-  Trapp subset, see DEFAULT_CASES) with femp's default free surface
-  ('default') or the fine-surface setting ('fine': height-function
-  curvature, 2 smoothing passes, point shifting 2), one run directory per
-  case and setting under --out; a run whose result.json exists is skipped
-  (resumable). Variants for the domain-size check: setting 'large' (the
+run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
+  NIST spot sweep and the Trapp subset, see DEFAULT_CASES) with femp's
+  default free surface ('default') or the fine-surface setting ('fine':
+  height-function curvature, 2 smoothing passes, point shifting 2), one
+  run directory per case and setting under --out; a run whose result.json
+  exists is skipped (resumable). Variants for the domain-size check: setting 'large' (the
   domain 1.5 x wider and deeper); for the resolution study: 'h4' and 'h2'
   (4 and 2 um cells instead of 8, points at half the cell size, the ray
   lattice refined with the cells); diagnostics 'thermal' (no melt flow) and
@@ -47,7 +47,8 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks and the
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
 report: reads every finished run, writes doc/validation.md's tables and
-  figures (SVG, standard library only).
+  figures (SVG, standard library only); the NIST spot sweep has its own
+  two figures (femp against measured; width and depth against the spot).
 width: what sets each finished run's fusion width (its last field
   output): the widest section's distance behind the beam, the temperature
   on the axis there, the melt's surface flow across the track, and the
@@ -67,7 +68,9 @@ spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
   first part of the pulse on a plate cut to 0.64 x 0.64 x 0.30 mm: the
   melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
   (the depression's rise) against the measured melt and keyhole onsets
-  (resumable: a run with a time series is only evaluated).
+  (resumable: a run with a time series is only evaluated); the figure
+  validation_simonds_absorption.svg (--img) of every finished spot: the
+  absorbed fraction against time with the measured keyhole onsets.
 dig: what digs the pool, from the field outputs of finished runs (read
   with contrib/femp_post.py; VTU or HDF5): per output the depression depth
   below the original surface, the surface temperature and recoil pressure
@@ -117,8 +120,9 @@ DATA = os.path.join(ROOT, "prm", "validation", "data")
 SCENES = os.path.join(ROOT, "prm", "validation")
 
 # Cases run by 'run' without --cases (the cost budget of the validation):
-# all seven AM-Bench tracks and five of the Trapp series.
-DEFAULT_CASES = r"^(amb_.*|trapp_(048|065|099|134|178)W)$"
+# all seven AM-Bench tracks, the six tracks of the NIST spot sweep and five
+# of the Trapp series.
+DEFAULT_CASES = r"^(amb_.*|nist_spot_.*|trapp_(048|065|099|134|178)W)$"
 
 FINE = {"Melt flow/Curvature": "height function",
         "Melt flow/Curvature smoothing": "2",
@@ -202,7 +206,7 @@ def cases():
             rb=num(r["spot_um"]) * 0.5e-6, T0=296.65,
             width=num(r["width_um"]) * 1e-6, width_sd=num(r["width_u_k2_um"]) * 1e-6,
             depth=num(r["depth_um"]) * 1e-6, depth_sd=num(r["depth_u_k2_um"]) * 1e-6,
-            label="%s %s um" % (r["machine"], r["spot_um"]),
+            label="%s, spot %s µm" % (r["machine"], r["spot_um"]),
             note="NIST spot sweep, %s, spot %s um (D4sigma taken), 285 W, "
                  "960 mm/s" % (r["machine"], r["spot_um"])))
     for r in read_table("trapp2017_316l.csv"):
@@ -724,8 +728,10 @@ def cmd_spots(args):
                     "Output/Time series interval": "5e-06",
                     "Output/Directory": out}
             print("run %s to %.2f ms ..." % (c["name"], t_end * 1e3), flush=True)
-            run_timed(femp_cmd(args, exe, sets, scene), d,
-                      os.path.join(d, "log.txt"), args.max_wall)
+            rc, wall, cpu = run_timed(femp_cmd(args, exe, sets, scene), d,
+                                      os.path.join(d, "log.txt"), args.max_wall)
+            print("  rc %s, %.0f s wall x %d ranks, %.0f CPU s" % (
+                rc, wall, args.np, cpu), flush=True)
         r = spot_onsets(out)
         f = lambda t: ("%.3f" % (t * 1e3)) if t else "-"
         ms = lambda t: ("%.3f" % t) if t else "-"
@@ -736,6 +742,37 @@ def cmd_spots(args):
                   f(r["t_0.45"]), f(r["t_0.60"]), ms(c.get("t_keyhole_ms")),
                   r["t_end"] * 1e3, r["absorbed_end"], r["hits_end"],
                   r["depth_end"] * 1e6), flush=True)
+    spots_figure(args.out, args.img)
+
+
+def spots_figure(out, img):
+    """The absorbed fraction against time of every finished spot run under
+    out/spots, with the measured keyhole onsets (on the flat-surface
+    value's level, 0.3) for comparison."""
+    colours = ["#c92a2a", "#e67700", "#2b8a3e", "#1f5fbf", "#862e9c"]
+    allc = {c["name"]: c for c in cases()}
+    series, onsets = [], []
+    d = os.path.join(out, "spots")
+    names = sorted((n for n in (os.listdir(d) if os.path.isdir(d) else [])
+                    if n in allc and os.path.exists(
+                        os.path.join(d, n, "output", "absorption.csv"))),
+                   key=lambda n: -allc[n]["P"])
+    for k, n in enumerate(names):
+        a = femp_post.Run(os.path.join(d, n, "output")).absorption()
+        series.append(("femp, %s" % allc[n]["label"], colours[k % len(colours)],
+                       [(t * 1e3, f, 0, 0, "") for t, f in
+                        list(zip(a["time"].tolist(),
+                                 a["absorbed_fraction"].tolist()))[::4]]))
+        if allc[n].get("t_keyhole_ms"):
+            onsets.append((allc[n]["t_keyhole_ms"], 0.3, 0, 0, allc[n]["label"]))
+    if not series:
+        return
+    series.append(("measured keyhole onset", "#000000", onsets))
+    os.makedirs(img, exist_ok=True)
+    svg_scatter(os.path.join(img, "validation_simonds_absorption.svg"), series,
+                "Stationary spots (Simonds 2018, 316L): absorbed fraction",
+                "time (ms)", "absorbed fraction", diag=False, ylim=(0, 1),
+                pad=False, lines=tuple(sr[0] for sr in series[:-1]))
 
 
 def cmd_scenes(args):
@@ -1608,10 +1645,12 @@ def pct(x):
 
 
 def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
-                xlim=None, ylim=None):
+                xlim=None, ylim=None, pad=True, lines=False):
     """Predicted against measured (or any x-y) with horizontal error bars
     (the measurement's spread) and the line y = x (diag). series: list of
-    (label, colour, [(x, y, xerr, yerr, text)])."""
+    (label, colour, [(x, y, xerr, yerr, text)]). pad: widen the axes by 8 %;
+    lines: join each series' points in the order given (True), or only
+    those of the series whose labels it holds (a tuple)."""
     W, Hh, L, R, T, B = 560, 460, 70, 150, 40, 55
     xs = [p[0] for s in series for p in s[2]] or [0, 1]
     ys = [p[1] for s in series for p in s[2]] or [0, 1]
@@ -1619,7 +1658,8 @@ def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
     hi = max(xs + ys) if diag else None
     x0, x1 = xlim or ((lo, hi) if diag else (min(xs), max(xs)))
     y0, y1 = ylim or ((lo, hi) if diag else (min(ys), max(ys)))
-    padx, pady = 0.08 * (x1 - x0 or 1), 0.08 * (y1 - y0 or 1)
+    padx, pady = ((0.08 * (x1 - x0 or 1), 0.08 * (y1 - y0 or 1)) if pad
+                  else (0.0, 0.0))
     x0, x1, y0, y1 = x0 - padx, x1 + padx, y0 - pady, y1 + pady
     X = lambda v: L + (v - x0) / (x1 - x0) * (W - L - R)
     Y = lambda v: Hh - B - (v - y0) / (y1 - y0) * (Hh - T - B)
@@ -1649,6 +1689,9 @@ def svg_scatter(path, series, title, xlabel, ylabel, diag=True,
     o.append('<text x="16" y="%d" text-anchor="middle" transform="rotate(-90 '
              '16 %d)">%s</text>' % ((T + Hh - B) // 2, (T + Hh - B) // 2, ylabel))
     for k, (label, colour, pts) in enumerate(series):
+        if (lines is True or (lines and label in lines)) and len(pts) > 1:
+            o.append('<polyline fill="none" stroke="%s" points="%s"/>' % (
+                colour, " ".join("%.1f,%.1f" % (X(p[0]), Y(p[1])) for p in pts)))
         for (x, y, xe, ye, text) in pts:
             if xe:
                 o.append('<line x1="%.1f" y1="%.1f" x2="%.1f" y2="%.1f" '
@@ -1720,7 +1763,9 @@ def cmd_report(args):
             pts = []
             for (st, name), r in sorted(res.items()):
                 c = allc.get(name)
-                if st != s or not c or r.get(what) is None:
+                # the spot sweep has its own figures (nist_spot_figures)
+                if (st != s or not c or r.get(what) is None
+                        or c["dataset"] == "NIST spot sweep"):
                     continue
                 pts.append((c[what] * 1e6, r[what] * 1e6, c[what + "_sd"] * 1e6,
                             0, c["label"] if s == "default" else ""))
@@ -1749,6 +1794,7 @@ def cmd_report(args):
                 "Absorbed fraction at 500 mm/s, 316L, against power",
                 "laser power (W)", "absorbed fraction", diag=False,
                 ylim=(0, 1))
+    nist_spot_figures(res, allc, settings, args.img)
     # tables
     lines = []
     for ds in ("AM-Bench 2022", "NIST spot sweep", "Trapp 2017"):
@@ -1790,6 +1836,56 @@ def cmd_report(args):
     open(f, "w").write(table)
     print(table)
     print("wrote", f, "and the figures in", args.img)
+
+
+def nist_spot_figures(res, allc, settings, img):
+    """The NIST spot-size sweep (285 W, 960 mm/s, IN718): femp's width and
+    depth against the measured ones (bar: the expanded uncertainty), and
+    both against the spot diameter (the trend), measured and femp's."""
+    figs = [s for s in settings if s in FIGURE_SETTINGS + ("expel",)]
+    runs = {s: sorted((allc[n]["rb"], allc[n], r) for (st, n), r in res.items()
+                      if st == s and n in allc
+                      and allc[n]["dataset"] == "NIST spot sweep"
+                      and r.get("width") is not None and not r.get("incomplete"))
+            for s in figs}
+    runs = {s: v for s, v in runs.items() if v}
+    if not runs:
+        return
+    name = lambda s: "femp" if s == "default" else "femp, " + s
+    spot = lambda c: "%.0f um" % (2e6 * c["rb"])
+    # default: depth orange, width blue; a second setting in lighter tones
+    colour = lambda what, s: {("depth", True): "#d9480f", ("width", True): "#1f5fbf",
+                              ("depth", False): "#f59f00",
+                              ("width", False): "#15aabf"}[(what, s == "default")]
+    series = []
+    for what in ("width", "depth"):
+        for s, v in runs.items():
+            series.append(("%s, %s" % (what, name(s)) if len(runs) > 1 else what,
+                           colour(what, s),
+                           [(c[what] * 1e6, r[what] * 1e6, c[what + "_sd"] * 1e6,
+                             0, spot(c) if s == "default" else "")
+                            for _, c, r in v]))
+    svg_scatter(os.path.join(img, "validation_nist_spot.svg"), series,
+                "NIST spot sweep (IN718, 285 W, 960 mm/s): femp against measured",
+                "measured width, depth (um), bar: expanded uncertainty",
+                "femp (um)")
+    meas = sorted({c["name"]: c for v in runs.values() for _, c, _ in v}.values(),
+                  key=lambda c: c["rb"])
+    series = [("measured depth", "#000000",
+               [(2e6 * c["rb"], c["depth"] * 1e6, 0, c["depth_sd"] * 1e6, "")
+                for c in meas]),
+              ("measured width", "#868e96",
+               [(2e6 * c["rb"], c["width"] * 1e6, 0, c["width_sd"] * 1e6, "")
+                for c in meas])]
+    for s, v in runs.items():
+        for what in ("depth", "width"):
+            series.append(("%s, %s" % (what, name(s)), colour(what, s),
+                           [(2e6 * c["rb"], r[what] * 1e6, 0, 0, "")
+                            for _, c, r in v]))
+    svg_scatter(os.path.join(img, "validation_nist_spot_trend.svg"), series,
+                "NIST spot sweep: fusion zone against spot diameter",
+                "spot diameter D4sigma (um)", "width, depth (um)", diag=False,
+                xlim=(40, 90), ylim=(0, 300), pad=False, lines=True)
 
 
 def dig_table(res, allc, settings):

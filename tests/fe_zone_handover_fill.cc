@@ -1,6 +1,6 @@
 // The row choice of the hand-over to finite elements on a point lattice
 // moved against the grid, and the points left on the new top
-// (FeZoneHandover, fe_zone_handover.h; SolidMPM::hold_on_zone_top();
+// (FeZoneHandover, fe_zone_handover.h; SolidMPM::hold_on_zone_face();
 // doc/builds.md "Handing cooled metal to finite elements"). A 2D block,
 // 1.6 m x 1.0 m, cells of 0.1 m, solid points (2 x 2 per cell) up to
 // y = 0.8 m, finite elements below y = 0.2 m. Every point is moved within

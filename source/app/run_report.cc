@@ -209,12 +209,17 @@ namespace femp
                  "velocity) reached a face of the domain and was held there"
               << std::endl;
         const unsigned long held_zone =
-          solid->n_points_held_at_zone(); // collective
+          solid->n_points_held_at_zone();                          // collective
+        const double held_kinetic = solid->kinetic_held_at_zone(); // collective
         if (held_zone > 0)
           out << "Solid: " << held_zone
-              << " time(s) a material point reached the finite-element "
-                 "zone's top face (less than half a point spacing into the "
-                 "zone) and was held on it"
+              << " time(s) a material point crossed a face of the "
+                 "finite-element zone (its top or a lateral face, less than "
+                 "half a point spacing into the zone) and was held on it; "
+                 "the velocities into the zone removed carried "
+              << std::setprecision(3) << held_kinetic << std::setprecision(6)
+              << (dim == 2 ? " J/m" : " J")
+              << " of kinetic energy (booked by the next transfer)"
               << std::endl;
         if (solid->n_points_set_aside() > 0)
           out << "Solid: " << solid->n_points_set_aside()

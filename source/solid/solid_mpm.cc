@@ -21,7 +21,7 @@ namespace femp
                           const SolidMaterial       &material,
                           MaterialPoints<dim>       &points)
       : SolidPointStore<dim>(grid, material, points)
-      , zone_top_tolerance(0.5 * points.point_spacing())
+      , zone_face_tolerance(0.5 * points.point_spacing())
   {
     const auto &s = grid.node_strides();
     for (unsigned int a = 0; a < n_corners; ++a)
@@ -436,31 +436,96 @@ namespace femp
   }
 
   template <int dim>
-  void
-  SolidMPM<dim>::hold_on_zone_top(const std::size_t     p,
-                                  Point<dim>           &xp,
-                                  std::array<int, dim> &ijk)
+  typename SolidMPM<dim>::ZoneExit
+  SolidMPM<dim>::nearest_zone_exit(const Point<dim>           &xp,
+                                   const std::array<int, dim> &ijk,
+                                   const double                limit) const
   {
-    // The face is the zone's top when the cell above the one entered lies
-    // outside the zone (in this rank's box: the point came from there).
-    auto above = ijk;
-    ++above[dim - 1];
-    if (above[dim - 1] >= int(grid.n_cells()[dim - 1]) || !grid.in_box(above) ||
-        excluded[grid.local_index(above)])
-      return;
-    const double h    = grid.h();
-    const double face = grid.origin()[dim - 1] + above[dim - 1] * h;
-    if (!(xp[dim - 1] >= face - zone_top_tolerance))
-      return;
-    // On the face, inside the cell above (a millionth of a cell up, so that
-    // the handler's sort finds it there too); no velocity into the zone.
-    xp[dim - 1]   = face + 1e-6 * h;
-    x[dim - 1][p] = xp[dim - 1];
-    v[dim - 1][p] = std::max(v[dim - 1][p], 0.);
-    if (!xdot[dim - 1].empty())
-      xdot[dim - 1][p] = std::max(xdot[dim - 1][p], 0.);
-    ijk = above;
+    // Per direction the nearer face of the cell and the point's depth
+    // below it (the farther face is more than half a cell away, farther
+    // than any limit used here).
+    const double            h = grid.h();
+    std::array<int, dim>    side;
+    std::array<double, dim> depth;
+    for (int d = 0; d < dim; ++d)
+      {
+        const double lower = grid.origin()[d] + ijk[d] * h;
+        const double a = xp[d] - lower, b = lower + h - xp[d];
+        side[d]  = a <= b ? -1 : 1;
+        depth[d] = std::max(0., std::min(a, b));
+      }
+    // Across one face, or an edge or corner (two or three faces): the
+    // nearest that ends in a cell outside the zone. With the zone a box
+    // of cells that is the face crossed, or at the box's edges and
+    // corners the nearer of the faces crossed; a cell outside the zone
+    // behind an edge only (a zone with a step) is reached across both
+    // faces.
+    ZoneExit best;
+    for (unsigned int f = 1; f < (1u << dim); ++f)
+      {
+        double               r2     = 0;
+        bool                 usable = true;
+        std::array<int, dim> target = ijk;
+        for (int d = 0; d < dim; ++d)
+          if (f & (1u << d))
+            {
+              usable = usable && depth[d] <= limit;
+              r2 += depth[d] * depth[d];
+              target[d] += side[d];
+              usable =
+                usable && target[d] >= 0 && target[d] < int(grid.n_cells()[d]);
+            }
+        if (!usable || !(r2 < best.distance2) || !grid.in_box(target) ||
+            excluded[grid.local_index(target)])
+          continue;
+        best.faces     = f;
+        best.side      = side;
+        best.cell      = target;
+        best.distance2 = r2;
+      }
+    return best;
+  }
+
+  template <int dim>
+  bool
+  SolidMPM<dim>::hold_on_zone_face(const std::size_t     p,
+                                   Point<dim>           &xp,
+                                   std::array<int, dim> &ijk)
+  {
+    const auto e = nearest_zone_exit(xp, ijk, zone_face_tolerance);
+    if (e.faces == 0)
+      return false;
+    // On each face crossed, inside the cell outside the zone (a millionth
+    // of a cell beyond the face, so that the handler's sort finds it there
+    // too); no velocity into the zone across it.
+    const double h  = grid.h();
+    double       v2 = 0; // of the components removed
+    for (int d = 0; d < dim; ++d)
+      if (e.faces & (1u << d))
+        {
+          v2 += v[d][p] * v[d][p];
+          const double face =
+            grid.origin()[d] + (ijk[d] + (e.side[d] > 0 ? 1 : 0)) * h;
+          xp[d]   = face + e.side[d] * 1e-6 * h;
+          x[d][p] = xp[d];
+          if (e.side[d] > 0)
+            {
+              v[d][p] = std::max(v[d][p], 0.);
+              if (!xdot[d].empty())
+                xdot[d][p] = std::max(xdot[d][p], 0.);
+            }
+          else
+            {
+              v[d][p] = std::min(v[d][p], 0.);
+              if (!xdot[d].empty())
+                xdot[d][p] = std::min(xdot[d][p], 0.);
+            }
+          v2 -= v[d][p] * v[d][p];
+        }
+    held_kinetic += 0.5 * (true_mass[p] * scaling) * v2;
+    ijk = e.cell;
     ++held_at_zone;
+    return true;
   }
 
   // The points of a block of update_stresses() of which one left its cell
@@ -504,16 +569,30 @@ namespace femp
             if (flow_owns_fluid && !grid.in_domain(xp))
               hold_in_domain(p, xp);
             auto ijk = grid.cell_of(xp);
-            // A point that crossed the FE zone's top face by less than half
+            // A point that crossed a face of the FE zone by less than half
             // a point spacing is held on that face (see solid_mpm.h).
-            if (grid.in_domain(xp) && grid.in_box(ijk) &&
-                excluded[grid.local_index(ijk)])
-              hold_on_zone_top(p, xp, ijk);
-            if (!grid.in_domain(xp) ||
-                (grid.in_box(ijk) && excluded[grid.local_index(ijk)]))
+            const bool in_domain = grid.in_domain(xp);
+            if (in_domain && grid.in_box(ijk) &&
+                excluded[grid.local_index(ijk)] &&
+                !hold_on_zone_face(p, xp, ijk))
               {
                 if (!lost)
-                  escaped = xp;
+                  {
+                    // How deep: the nearest way out at any distance.
+                    const auto e = nearest_zone_exit(
+                      xp, ijk, std::numeric_limits<double>::infinity());
+                    escaped    = xp;
+                    escaped_at = e.faces != 0 ?
+                                   std::sqrt(e.distance2) :
+                                   std::numeric_limits<double>::quiet_NaN();
+                  }
+                lost = true;
+                continue;
+              }
+            if (!in_domain)
+              {
+                if (!lost)
+                  escaped = xp, escaped_at = -1;
                 lost = true;
                 continue;
               }

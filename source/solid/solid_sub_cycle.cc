@@ -993,20 +993,38 @@ namespace femp
     if (blown || sums[3] > 0)
       {
         Point<dim> where;
+        Point<1>   depth(-1.);
         bool       found = false;
         if (blown)
           found =
             mpm.find_non_finite(where) || (fem && fem->find_non_finite(where));
         else if (mpm.point_lost())
-          where = mpm.escaped_point(), found = true;
+          where = mpm.escaped_point(), depth[0] = mpm.escaped_depth(),
+          found = true;
         share_location(found, where, comm);
+        share_location(found, depth, comm);
         std::ostringstream s;
-        s << "solid: "
-          << (blown ? "the solution became non-finite (unstable: check "
-                      "'Solid/Time step' and 'Solid/Hourglass coefficient')" :
-                      "a material point entered the finite-element zone or "
-                      "left the domain")
-          << " at solid step " << steps << ", time " << t_solid + dt
+        s << "solid: ";
+        if (blown)
+          s << "the solution became non-finite (unstable: check "
+               "'Solid/Time step' and 'Solid/Hourglass coefficient')";
+        else if (depth[0] < 0)
+          s << "a material point left the domain";
+        else
+          {
+            // Deeper than a point that crossed a face of the zone and is
+            // held on it (SolidMPM::hold_on_zone_face()).
+            s << "a material point entered the finite-element zone ";
+            if (std::isnan(depth[0]))
+              s << "deeper than its cell (no face of that cell borders a "
+                   "cell outside the zone)";
+            else
+              s << depth[0] << " m deep (its distance to the nearest cell "
+                << "outside the zone; a point less than half a point "
+                << "spacing, " << mpm.zone_hold_distance()
+                << " m, inside is held on the zone's face)";
+          }
+        s << " at solid step " << steps << ", time " << t_solid + dt
           << " s, near x = " << where;
         throw CollectiveError(s.str()); // the sums are global
       }

@@ -80,12 +80,14 @@
 // cells, their top nodes the transition nodes that the points above share
 // with the zone), and those points move with the transition nodes, so
 // thermal contraction carries them across the line by a fraction of a
-// spacing. They stay in the solid: SolidMPM holds a point that crosses the
-// zone's top face by less than half a point spacing on the face (the face
-// is a wall for the points, as the domain's faces are for spatter), its
-// velocity into the zone removed; mass, stress and plastic strain stay
-// with the point, the kinetic energy removed is booked by the next
-// transfer. A deeper entry still stops the run.
+// spacing. They stay in the solid: SolidMPM holds a point that crosses a
+// face of the zone (its top, or a lateral face of a zone narrower than the
+// domain, beside which the plate and the build stand) by less than half a
+// point spacing on the face (the face is a wall for the points, as the
+// domain's faces are for spatter), its velocity into the zone removed;
+// mass, stress and plastic strain stay with the point, the kinetic energy
+// removed is booked by the next transfer. A deeper entry still stops the
+// run.
 #ifndef femp_fe_zone_handover_h
 #define femp_fe_zone_handover_h
 

@@ -74,15 +74,21 @@
 // when the state is written back). When a point enters a cell of another
 // rank, SolidSubCycle calls resort() after the step: write back, send it to
 // that rank (MaterialPoints::relocate_points()), gather again. A point that
-// crosses the finite-element zone's top face (from the cell above, less
-// than half a point spacing into the zone) is held on the face: the zone's
-// elements are the grid's cells and its top face the grid line, which the
-// points above it share through the transition nodes; a point that lay on
-// the line (a raised zone's top, fe_zone_handover.h) and moved with those
-// nodes stays in the solid, its velocity into the zone removed (the kinetic
-// energy is booked by the next transfer, as for the domain's faces). Any
-// other point that enters the finite-element zone or leaves the domain
-// stops the run with a message (the FE zone has no place for it).
+// crosses a face of the finite-element zone from outside by less than half
+// a point spacing is held on that face (hold_on_zone_face()): the zone's
+// elements are the grid's cells and its faces grid lines, whose nodes the
+// points beside the zone share through the transition nodes (every face of
+// the zone that is not a domain face: the top, and the lateral faces of a
+// zone narrower than the domain); a point that lay on such a line (a
+// raised zone's top, fe_zone_handover.h; the plate's lattice beside a
+// lateral face) and moved with those nodes stays in the solid. It is put
+// back on the face nearest to it that borders a cell outside the zone (at
+// a corner, on the two or three faces it crossed if that is nearer), its
+// velocity into the zone removed (the kinetic energy is booked by the next
+// transfer, as for the domain's faces). Any other point that enters the
+// finite-element zone, or one that leaves the domain, stops the run with a
+// message that gives its position and how deep it lies in the zone (the
+// FE zone has no place for it).
 #ifndef femp_solid_mpm_h
 #define femp_solid_mpm_h
 
@@ -269,18 +275,43 @@ namespace femp
     {
       return held;
     }
-    /// Times a point of this rank was held on the FE zone's top face so
-    /// far (see hold_on_zone_top()).
+    /// Times a point of this rank was held on a face of the FE zone so far
+    /// (see hold_on_zone_face()).
     unsigned long
     n_held_at_zone() const
     {
       return held_at_zone;
+    }
+    /// Kinetic energy the holds on the FE zone's faces removed from this
+    /// rank's points so far (the velocity components into the zone), J
+    /// (2D: J/m, inertial mass); booked by the next transfer.
+    double
+    held_at_zone_kinetic() const
+    {
+      return held_kinetic;
+    }
+    /// How far inside the FE zone a point that crossed one of its faces is
+    /// still held on it (m): half the point spacing.
+    double
+    zone_hold_distance() const
+    {
+      return zone_face_tolerance;
     }
     /// Position of a point that entered the FE zone or left the domain.
     const Point<dim> &
     escaped_point() const
     {
       return escaped;
+    }
+    /// For escaped_point(): how far it lies inside the FE zone (m), its
+    /// distance to the nearest cell outside the zone across the faces of
+    /// its cell (more than half a point spacing: it was not held); -1 when
+    /// it left the domain instead; NaN when no face of its cell borders a
+    /// cell outside the zone.
+    double
+    escaped_depth() const
+    {
+      return escaped_at;
     }
     /// The grid nodes that a transfer of this rank may have written since
     /// the last gather(): the corners of every cell that held one of its
@@ -348,20 +379,42 @@ namespace femp
     unsigned int            left_rank    = 0;
     unsigned long           held         = 0; ///< see n_held()
     unsigned long           held_at_zone = 0; ///< see n_held_at_zone()
+    double                  held_kinetic = 0; ///< see held_at_zone_kinetic()
     Point<dim>              escaped;
-    /// How far below the FE zone's top face a point is held on it: half
-    /// the point spacing (the gap between the face and the first points
-    /// above it on the unmoved lattice).
-    double zone_top_tolerance = 0;
-    /// Puts point @p p, found at @p xp in the FE zone's cell @p ijk less
-    /// than zone_top_tolerance below the zone's top face (the cell above
-    /// lies outside the zone), back on that face and removes its velocity
-    /// into the zone; @p ijk becomes the cell above. Any other entry into
-    /// the zone is left to the caller (it stops the run).
-    void
-    hold_on_zone_top(const std::size_t     p,
-                     Point<dim>           &xp,
-                     std::array<int, dim> &ijk);
+    double                  escaped_at = -1; ///< see escaped_depth()
+    /// How far inside the FE zone a point is held on its faces: half the
+    /// point spacing (the gap between a face and the first points beside
+    /// it on the unmoved lattice).
+    double zone_face_tolerance = 0;
+    /// The way out of the FE zone nearest to a point in the zone's cell
+    /// ijk: the faces of that cell it crosses (bit d: direction d; 0 when
+    /// none qualifies), the side of each (-1 lower, +1 upper face), the
+    /// cell outside the zone it leads to and the squared distance.
+    struct ZoneExit
+    {
+      unsigned int         faces = 0;
+      std::array<int, dim> side{}, cell{};
+      double               distance2 = std::numeric_limits<double>::infinity();
+    };
+    /// The nearest way out of the FE zone for a point at @p xp in the
+    /// zone's cell @p ijk: across one face of the cell, or two or three at
+    /// an edge or corner, the nearer face of each direction, each at most
+    /// @p limit away, into a cell of the domain and of this rank's box
+    /// outside the zone (the point came from there).
+    ZoneExit
+    nearest_zone_exit(const Point<dim>           &xp,
+                      const std::array<int, dim> &ijk,
+                      const double                limit) const;
+    /// Puts point @p p, found at @p xp in the FE zone's cell @p ijk at most
+    /// zone_face_tolerance inside the zone (nearest_zone_exit()), back on
+    /// the face(s) it crossed, a millionth of a cell outside, and removes
+    /// its velocity into the zone (the normal component of each face);
+    /// @p ijk becomes the cell outside. Returns false, changing nothing,
+    /// when the point lies deeper: the caller stops the run.
+    bool
+    hold_on_zone_face(const std::size_t     p,
+                      Point<dim>           &xp,
+                      std::array<int, dim> &ijk);
     /// Puts point @p p (at @p xp, outside the domain) back on the domain's
     /// faces and removes its outward velocity (melt-flow scenes).
     void

@@ -297,13 +297,20 @@ namespace femp
     {
       return Utilities::MPI::sum(mpm.n_held(), comm);
     }
-    /// Times a material point reached the FE zone's top face from above
-    /// and was held on it so far, all ranks (SolidMPM::hold_on_zone_top();
-    /// collective).
+    /// Times a material point crossed a face of the FE zone (its top or a
+    /// lateral face) from outside and was held on it so far, all ranks
+    /// (SolidMPM::hold_on_zone_face(); collective).
     unsigned long
     n_points_held_at_zone() const
     {
       return Utilities::MPI::sum(mpm.n_held_at_zone(), comm);
+    }
+    /// Kinetic energy those holds removed, all ranks, J (2D: J/m;
+    /// SolidMPM::held_at_zone_kinetic(); collective).
+    double
+    kinetic_held_at_zone() const
+    {
+      return Utilities::MPI::sum(mpm.held_at_zone_kinetic(), comm);
     }
     /// Gathers of the MPM points at the temperature steps, summed over the
     /// ranks: those that kept the arrays of the last one (nothing melted,
