@@ -125,10 +125,25 @@ namespace femp
         point_heat.follow_points();
         const auto &alpha    = heat_ptr->metal_fraction();
         const auto &attached = point_heat.bodies().workpiece_cells();
-        const auto  r        = recoater->recoat(
-          points, layer, T, alpha, attached, [&](const double T_point) {
+        // The solid counts its points: it learns of the swept ones before
+        // they go and checks its count after (their kinetic energy leaves
+        // it as melted points' does).
+        typename Recoater<dim>::RemovalHook tell_solid;
+        if (solid)
+          tell_solid = [&](const std::vector<types::particle_index> &ids) {
+            solid->before_points_removed(ids);
+          };
+        const auto r = recoater->recoat(
+          points,
+          layer,
+          T,
+          alpha,
+          attached,
+          [&](const double T_point) {
             return point_heat.removed_enthalpy_per_mass(T_point);
-          });
+          },
+          tell_solid);
+        const double swept_solid = solid ? solid->points_removed() : 0.;
         if (r.swept_points > 0)
           point_heat.book_swept(
             {r.swept_mass, r.swept_points, r.swept_bodies, r.swept_enthalpy});
@@ -137,7 +152,10 @@ namespace femp
         pcout << "Recoat: layer " << r.layer << " at t = " << t
               << " s: the blade swept " << r.swept_bodies
               << " detached bodies above the top (" << r.swept_points
-              << " points, " << std::setprecision(4) << r.swept_mass
+              << " points";
+        if (solid)
+          pcout << ", " << swept_solid << " of them in the solid";
+        pcout << ", " << std::setprecision(4) << r.swept_mass
               << (dim == 3 ? " kg" : " kg/m") << "); " << r.grains
               << " grains, packing fraction " << std::setprecision(3)
               << r.packing << " of the " << r.fill_volume

@@ -255,7 +255,8 @@ namespace femp
                         const double                              T,
                         const std::vector<double>                &alpha,
                         const std::vector<std::uint8_t>          &attached,
-                        const std::function<double(double)> &per_mass) const
+                        const std::function<double(double)> &per_mass,
+                        const RemovalHook &before_removal) const
   {
     using P              = typename MaterialPoints<dim>::PropertyIndex;
     const int    v       = dim - 1;
@@ -298,22 +299,20 @@ namespace femp
     const std::vector<double> swept = label_metal_bodies(grid, metal, seeds);
     // The swept points (each cell's, in the handler's order), their mass
     // and heat; the bodies: the distinct labels over all ranks.
-    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
-                        gone;
-    std::vector<double> labels;
-    double              local[2] = {0, 0}; // mass, heat
+    std::vector<types::particle_index> gone_ids;
+    std::vector<double>                labels;
+    double                             local[2] = {0, 0}; // mass, heat
     for (const auto &[idx, cell] : points.occupied_cells())
       if (swept[idx] > 0)
         {
           labels.push_back(swept[idx]);
-          auto range = handler.particles_in_cell(cell);
-          for (auto it = range.begin(); it != range.end(); ++it)
+          for (const auto &p : handler.particles_in_cell(cell))
             {
-              const double m = it->get_properties()[P::mass];
+              const double m = p.get_properties()[P::mass];
               local[0] += m;
               if (per_mass)
-                local[1] += m * per_mass(it->get_properties()[P::temperature]);
-              gone.push_back(it);
+                local[1] += m * per_mass(p.get_properties()[P::temperature]);
+              gone_ids.push_back(p.get_id());
             }
         }
     std::sort(labels.begin(), labels.end());
@@ -327,7 +326,21 @@ namespace femp
                      all_labels.end());
     r.swept_bodies = all_labels.size();
     r.swept_points =
-      Utilities::MPI::sum<std::uint64_t>(gone.size(), grid.communicator());
+      Utilities::MPI::sum<std::uint64_t>(gone_ids.size(), grid.communicator());
+    // Whoever counts points (the solid) learns of them before they go
+    // (every rank, when any rank sweeps); then the iterators to delete
+    // (the call may have rewritten the points' properties, not moved them).
+    if (r.swept_points > 0 && before_removal)
+      before_removal(gone_ids);
+    std::vector<typename Particles::ParticleHandler<dim>::particle_iterator>
+      gone;
+    for (const auto &[idx, cell] : points.occupied_cells())
+      if (swept[idx] > 0)
+        {
+          auto range = handler.particles_in_cell(cell);
+          for (auto it = range.begin(); it != range.end(); ++it)
+            gone.push_back(it);
+        }
     {
       double global[2];
       Utilities::MPI::sum(ArrayView<const double>(local, 2),
@@ -353,7 +366,13 @@ namespace femp
           ++r.columns_on_drops;
         }
     // Delete the swept points; the handler is re-indexed with the new
-    // powder below (insert_powder()).
+    // powder below (insert_powder()). The new ids follow the largest one
+    // before the sweep: deleting the points of the highest ids lowers the
+    // handler's next free id, and an id of a swept point given to a new
+    // one would make it the swept point for whoever tracks points by id
+    // (the solid's members).
+    const types::particle_index first_free =
+      handler.get_next_free_particle_index();
     handler.remove_particles(gone);
 
     r.surface_min = *std::min_element(surface_z.begin(), surface_z.end());
@@ -367,7 +386,7 @@ namespace femp
         if (r.swept_points > 0)
           {
             std::vector<std::pair<std::uint32_t, Point<dim>>> none;
-            insert_powder(points, none, T);
+            insert_powder(points, none, T, first_free);
           }
         return r;
       }
@@ -522,7 +541,7 @@ namespace femp
     r.points =
       Utilities::MPI::sum<std::uint64_t>(added.size(), grid.communicator());
     r.point_volume = r.points * std::pow(s, dim);
-    insert_powder(points, added, T);
+    insert_powder(points, added, T, first_free);
     return r;
   }
 
@@ -531,7 +550,8 @@ namespace femp
   Recoater<dim>::insert_powder(
     MaterialPoints<dim>                               &points,
     std::vector<std::pair<std::uint32_t, Point<dim>>> &added,
-    const double                                       T) const
+    const double                                       T,
+    const types::particle_index                        first_free) const
   {
     // Ids after the largest one in use, numbered across the ranks in rank
     // order; then the handler sorts them into its cells and the points'
@@ -544,7 +564,7 @@ namespace femp
     if (Utilities::MPI::this_mpi_process(grid.communicator()) == 0)
       offset64 = 0;
     const types::particle_index first =
-      handler.get_next_free_particle_index() + offset64;
+      std::max(first_free, handler.get_next_free_particle_index()) + offset64;
     const double        s      = powder.point_spacing;
     const double        volume = std::pow(s, dim);
     std::vector<double> props(points.n_properties(), 0.);

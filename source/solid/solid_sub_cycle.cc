@@ -1265,6 +1265,43 @@ namespace femp
   }
 
   template <int dim>
+  void
+  SolidSubCycle<dim>::before_points_removed(
+    const std::vector<types::particle_index> &ids)
+  {
+    // The members as they are now: a member that melted since the last
+    // gather is booked as melted here, before it goes (the next gather
+    // could no longer find it), and the count is that of the solid points.
+    gather_points();
+    double a[2] = {double(mpm.count_members(ids)), mpm.kinetic_energy()};
+    Utilities::MPI::sum(ArrayView<const double>(a, 2),
+                        comm,
+                        ArrayView<double>(a, 2));
+    removing    = a[0];
+    removing_K0 = a[1];
+  }
+
+  template <int dim>
+  double
+  SolidSubCycle<dim>::points_removed()
+  {
+    if (removing < 0)
+      return 0;
+    const double n = removing;
+    removing       = -1;
+    // Nothing moved or changed state since the gather in
+    // before_points_removed(): the gather finds the members less the
+    // removed ones (check_point_count()), and the kinetic energy falls by
+    // theirs, which leaves the solid as a melted point's does.
+    n_points_global -= n;
+    gather_points();
+    const double K1 = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
+    ledger.book_exchange(removing_K0 - K1, 0., K1);
+    n_removed += n;
+    return n;
+  }
+
+  template <int dim>
   typename SolidSubCycle<dim>::Energies
   SolidSubCycle<dim>::energies(const bool with_hourglass_mode) const
   {

@@ -172,6 +172,10 @@ namespace femp
     /// of the highest attached point (position + half the spacing), and
     /// the height a grain rests on (the higher of that and the top of the
     /// detached metal); the domain's bottom where there is none.
+    /// See recoat(): told the ids of this rank's swept points.
+    using RemovalHook =
+      std::function<void(const std::vector<types::particle_index> &)>;
+
     struct Surface
     {
       std::vector<double> attached;
@@ -197,25 +201,34 @@ namespace femp
     /// @p points on the surface left. @p alpha: the points' metal fraction
     /// (ghosts exchanged), @p attached: its workpiece cells (as above);
     /// @p per_mass: the stored heat per kilogram of a swept point at its
-    /// temperature, J/kg (empty: 0). Collective.
+    /// temperature, J/kg (empty: 0). @p before_removal (may be empty):
+    /// called on every rank when the blade sweeps any point, before the
+    /// swept points are deleted, with the particle ids of this rank's
+    /// swept points, so that a module that counts points (the solid,
+    /// SolidSubCycle::before_points_removed()) can account for them.
+    /// Collective.
     Report
     recoat(MaterialPoints<dim>                      &points,
            const typename LayerSchedule<dim>::Layer &layer,
            const double                              T,
            const std::vector<double>                &alpha,
            const std::vector<std::uint8_t>          &attached,
-           const std::function<double(double)>      &per_mass = {}) const;
+           const std::function<double(double)>      &per_mass       = {},
+           const RemovalHook                        &before_removal = {}) const;
 
   private:
     const typename MaterialPoints<dim>::Parameters powder;
     const double                                   density;
     const BackgroundGrid<dim>                     &grid;
     /// Insert the (owned cell, position) pairs @p added as powder points
-    /// at @p T, with ids after every existing one. Collective.
+    /// at @p T, with ids after every existing one and from @p first_free
+    /// on (the next free id before the blade deleted points: no id is
+    /// used twice). Collective.
     void
     insert_powder(MaterialPoints<dim>                               &points,
                   std::vector<std::pair<std::uint32_t, Point<dim>>> &added,
-                  const double                                       T) const;
+                  const double                                       T,
+                  const types::particle_index first_free) const;
     /// The lattice column of position @p x (clamped to the domain).
     std::size_t
     column_of(const Point<dim> &x) const;

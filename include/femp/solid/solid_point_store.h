@@ -112,6 +112,17 @@ namespace femp
     Exchange
     exchange_since_gather() const;
 
+    /// How many of the particle ids @p ids took part in the last gather()
+    /// (members; this rank's ids, local count).
+    std::size_t
+    count_members(const std::vector<types::particle_index> &ids) const
+    {
+      std::size_t n = 0;
+      for (const auto id : ids)
+        n += is_member(id);
+      return n;
+    }
+
     /// Number of points taking part (this rank).
     std::size_t
     n_points() const

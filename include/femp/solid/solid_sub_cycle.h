@@ -237,6 +237,28 @@ namespace femp
       if (!region.mpm_cells().empty())
         mpm.set_aside_cells(cells);
     }
+    /// Points that leave the run outside the solid (the recoater's blade
+    /// deletes the detached metal it sweeps, builds/recoater.h): call
+    /// before_points_removed() with this rank's ids of the points about to
+    /// be deleted, then, once they are, points_removed(). The first
+    /// gathers the points (books what melted or solidified since, as the
+    /// next advance would) and counts the members among the ids; the
+    /// second gathers again and checks that the solid lost exactly those
+    /// members (else stops as a lost point does), and books their kinetic
+    /// energy with what melting removes (Energies::melted). Returns the
+    /// members removed (all ranks). Both collective; points_removed()
+    /// without a before_points_removed() returns 0.
+    void
+    before_points_removed(const std::vector<types::particle_index> &ids);
+    double
+    points_removed();
+    /// Solid points that left with points_removed() so far (global; not
+    /// saved in checkpoints).
+    double
+    n_points_removed() const
+    {
+      return n_removed;
+    }
     /// Solid points set aside in detached drops so far (global count of
     /// the set-aside events; a point that rejoins and leaves again counts
     /// twice).
@@ -477,6 +499,10 @@ namespace femp
     /// Points set aside in detached drops (n_points_set_aside()); not
     /// saved in checkpoints (a resumed run counts from there).
     double n_set_aside     = 0;
+    /// points_removed(): the total, and between before_points_removed()
+    /// and points_removed() the members to remove (-1: none announced)
+    /// and the points' kinetic energy before, J (2D: J/m).
+    double n_removed = 0, removing = -1, removing_K0 = 0;
     double n_points_global = 0;     ///< solid points after the last step
     bool   regathered      = false; ///< a re-sort gathered the points
     double last_w          = -1;    ///< w of the last step of an advance
