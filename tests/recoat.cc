@@ -393,15 +393,14 @@ main(int argc, char **argv)
       MaterialPoints<dim> plate(pq, mat, grid);
       plate.create_region(
         [&](const Point<dim> &x) {
-          return x[2] < z_c ||
-                 (drops &&
-                  (above.inside(x) || lid.inside(x) || below.inside(x)));
+          return x[2] < z_c || (drops && (above.inside(x) || lid.inside(x) ||
+                                          below.inside(x)));
         },
         300.,
         MaterialPoints<dim>::solid);
       return recoat(rq, plate, grid, layer, 320.);
     };
-    const unsigned int n_seeds = 10;
+    const unsigned int n_seeds    = 10;
     double             mean[2][2] = {{0, 0}, {0, 0}}; // [plain, drops][phi, m]
     for (unsigned int seed = 1; seed <= n_seeds; ++seed)
       {

@@ -40,7 +40,7 @@ namespace
   {
     double n_start = 0, n_before = 0, n_after = 0, n_end = 0;
     double removed = 0, swept_points = 0, swept_bodies = 0, grains = 0;
-    double melted  = 0, balance = 0;
+    double melted = 0, balance = 0;
     bool   stopped = false;
   };
 
@@ -57,8 +57,8 @@ namespace
       if (p.get_location()[1] > 0.45)
         p.get_properties()[P::velocity] = 0.2;
 
-    const SolidMaterial sm = elastic_block_material(block.material);
-    SolidSubCycle<dim>  solid(block_supports<dim>(),
+    const SolidMaterial       sm = elastic_block_material(block.material);
+    SolidSubCycle<dim>        solid(block_supports<dim>(),
                              fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2)),
                              sm,
                              grid,
@@ -86,12 +86,12 @@ namespace
     pp.max_diameter     = 0.2;
     pp.packing_fraction = 0.35;
     pp.seed             = 3;
-    const Recoater<dim>             recoater(pp, 1., grid);
+    const Recoater<dim>                recoater(pp, 1., grid);
     typename LayerSchedule<dim>::Layer layer;
-    layer.number     = 2;
-    layer.start_time = 0.06;
-    layer.top        = 0.45;
-    layer.thickness  = 0.15;
+    layer.number        = 2;
+    layer.start_time    = 0.06;
+    layer.top           = 0.45;
+    layer.thickness     = 0.15;
     const auto alpha    = points.metal_fraction();
     const auto attached = attached_metal_cells(grid, alpha);
     typename Recoater<dim>::RemovalHook hook;

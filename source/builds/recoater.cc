@@ -255,7 +255,7 @@ namespace femp
                         const double                              T,
                         const std::vector<double>                &alpha,
                         const std::vector<std::uint8_t>          &attached,
-                        const std::function<double(double)> &per_mass,
+                        const std::function<double(double)>      &per_mass,
                         const RemovalHook &before_removal) const
   {
     using P              = typename MaterialPoints<dim>::PropertyIndex;

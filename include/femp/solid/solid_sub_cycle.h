@@ -498,7 +498,7 @@ namespace femp
     SolidEnergyLedger ledger;
     /// Points set aside in detached drops (n_points_set_aside()); not
     /// saved in checkpoints (a resumed run counts from there).
-    double n_set_aside     = 0;
+    double n_set_aside = 0;
     /// points_removed(): the total, and between before_points_removed()
     /// and points_removed() the members to remove (-1: none announced)
     /// and the points' kinetic energy before, J (2D: J/m).
