@@ -226,6 +226,11 @@ namespace femp
               << " time(s) a solid point in a detached drop (Heat "
                  "transfer/Detached drops) was set aside, out of the solid"
               << std::endl;
+        if (solid->n_points_removed() > 0)
+          out << "Solid: " << solid->n_points_removed()
+              << " of its points were swept by the recoater's blade (their "
+                 "kinetic energy booked with the melted points')"
+              << std::endl;
       }
     print_energy(e, heat_enabled, flow != nullptr);
     if (flow)
