@@ -19,10 +19,12 @@
 // projection, a millionth of a cell outside, with the velocity components
 // into the zone across each face it was moved through removed and the
 // others unchanged; any other point at x0 + u dt with velocity u. Checks
-// per scene: the holds counted, the kinetic energy they removed (the mass
-// times the velocity components removed), the largest position error
-// (/ h), velocity error (/ |u|), the largest change of stress (/ its largest
-// value), of the plastic strain and of the mass (exactly zero), no point lost.
+// per scene: the holds counted on the top face and on a lateral face (a
+// point held on both at the concave edge counts on each), the kinetic
+// energy they removed (the mass times the velocity components removed),
+// the largest position error (/ h), velocity error (/ |u|), the largest
+// change of stress (/ its largest value), of the plastic strain and of the
+// mass (exactly zero), no point lost.
 // Scenes: the zone's right lateral face (points moving left and up; the
 // top row of them near the zone's corner, nearer to the lateral face than
 // to the top), its left lateral face (moving right and down), its top face
@@ -84,6 +86,7 @@ namespace
     Point<dim>     x;
     Tensor<1, dim> v;
     bool           held = false, lost = false;
+    bool           top = false, lateral = false; ///< the faces held on
     double         depth = 0;
   };
 
@@ -123,10 +126,14 @@ namespace
       }
     e.held = true;
     for (int d = 0; d < dim; ++d)
-      if (q_best[d] > x1[d])
-        e.x[d] = q_best[d] + 1e-6 * h, e.v[d] = std::max(u[d], 0.);
-      else if (q_best[d] < x1[d])
-        e.x[d] = q_best[d] - 1e-6 * h, e.v[d] = std::min(u[d], 0.);
+      if (q_best[d] != x1[d])
+        {
+          if (q_best[d] > x1[d])
+            e.x[d] = q_best[d] + 1e-6 * h, e.v[d] = std::max(u[d], 0.);
+          else
+            e.x[d] = q_best[d] - 1e-6 * h, e.v[d] = std::min(u[d], 0.);
+          (d == dim - 1 ? e.top : e.lateral) = true;
+        }
     return e;
   }
 
@@ -221,12 +228,15 @@ namespace
     // The expected ends; the points expected lost.
     std::map<types::particle_index, Expected> expected;
     double                                    n_held = 0, n_lost = 0;
+    double                                    n_top = 0, n_lateral = 0;
     double                                    depth_lost = 0, k_held = 0;
     for (const auto &[id, s] : start)
       {
         const auto e = expected_end(zone, s.x + dt * u, u);
         expected[id] = e;
         n_held += e.held;
+        n_top += e.top;
+        n_lateral += e.lateral;
         k_held += 0.5 * s.mass * (u.norm_square() - e.v.norm_square());
         n_lost += e.lost;
         if (e.lost)
@@ -234,6 +244,11 @@ namespace
       }
     const bool lost = Utilities::MPI::max(mpm.point_lost() ? 1 : 0, comm) > 0;
     checks.print(name + ": points held on a face expected", n_held, 6);
+    if (n_held > 0)
+      {
+        checks.print(name + ":   on the top face", n_top, 6);
+        checks.print(name + ":   on a lateral face", n_lateral, 6);
+      }
     if (n_lost > 0)
       {
         // Deeper than half a point spacing: the step reports it lost, at
@@ -303,11 +318,16 @@ namespace
           err_e = std::max(err_e, std::abs(q[P::plastic_strain] - s.eps_p));
           err_m = std::max(err_m, std::abs(q[P::mass] - s.mass));
         }
-    checks.at_most(name + ": |holds counted - expected|",
-                   std::abs(
-                     Utilities::MPI::sum(double(mpm.n_held_at_zone()), comm) -
-                     n_held),
-                   0);
+    checks.at_most(
+      name + ": |top-face holds counted - expected|",
+      std::abs(Utilities::MPI::sum(double(mpm.n_held_at_zone_top()), comm) -
+               n_top),
+      0);
+    checks.at_most(
+      name + ": |lateral-face holds counted - expected|",
+      std::abs(Utilities::MPI::sum(double(mpm.n_held_at_zone_lateral()), comm) -
+               n_lateral),
+      0);
     checks.at_most(
       name + ": |kinetic energy removed - expected| / expected",
       std::abs(Utilities::MPI::sum(mpm.held_at_zone_kinetic(), comm) - k_held) /

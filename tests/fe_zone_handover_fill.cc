@@ -21,9 +21,9 @@
 //     cooled from 300 K to 200 K in 0.5 s (alpha = 1e-4 1/K): the zone
 //     contracts, and the points 0.02 h above its new top follow its top
 //     nodes across the grid line. The run goes on: the points are held on
-//     the face (at least once), none leaves the solid, and the energy
-//     balance stays within 0.05 of the stress work (the tolerance of
-//     fe_zone_handover);
+//     the top face (at least once; on no lateral face, the zone spans the
+//     block's width), none leaves the solid, and the energy balance stays
+//     within 0.05 of the stress work (the tolerance of fe_zone_handover);
 //   - a zone that expands beneath dense metal: an elastic block (yield
 //     stress 1e30 Pa), rows to 0.4 m handed over, the zone warmed by 350 K
 //     in 0.5 s (the metal above stays at 300 K): its top face rises by
@@ -166,10 +166,14 @@ main(int argc, char **argv)
                      std::abs(n1 - n0),
                      0);
       checks.in_range("points held on the zone's top face (times, >= 1)",
-                      std::min<double>(dense.solid->n_points_held_at_zone(),
+                      std::min<double>(dense.solid->n_points_held_at_zone_top(),
                                        1.),
                       1,
                       1);
+      checks.at_most("points held on a lateral face (the zone spans the "
+                     "block's width: none)",
+                     dense.solid->n_points_held_at_zone_lateral(),
+                     0);
       const auto e = dense.solid->energies();
       checks.at_most("energy balance / stress work",
                      std::abs(e.balance() / e.internal),

@@ -208,15 +208,18 @@ namespace femp
               << " time(s) a material point (spatter moving with the melt's "
                  "velocity) reached a face of the domain and was held there"
               << std::endl;
-        const unsigned long held_zone =
-          solid->n_points_held_at_zone();                          // collective
+        const unsigned long held_top =
+          solid->n_points_held_at_zone_top(); // collective
+        const unsigned long held_lateral =
+          solid->n_points_held_at_zone_lateral();                  // collective
         const double held_kinetic = solid->kinetic_held_at_zone(); // collective
-        if (held_zone > 0)
-          out << "Solid: " << held_zone
-              << " time(s) a material point crossed a face of the "
-                 "finite-element zone (its top or a lateral face, less than "
-                 "half a point spacing into the zone) and was held on it; "
-                 "the velocities into the zone removed carried "
+        if (held_top + held_lateral > 0)
+          out << "Solid: a material point crossed a face of the "
+                 "finite-element zone (less than half a point spacing into "
+                 "the zone) and was held on it: "
+              << held_top << " time(s) on its top face, " << held_lateral
+              << " time(s) on a lateral face; the velocities into the zone "
+                 "removed carried "
               << std::setprecision(3) << held_kinetic << std::setprecision(6)
               << (dim == 2 ? " J/m" : " J")
               << " of kinetic energy (booked by the next transfer)"

@@ -492,6 +492,8 @@ namespace femp
                                    Point<dim>           &xp,
                                    std::array<int, dim> &ijk)
   {
+    if (!hold_at_zone)
+      return false;
     const auto e = nearest_zone_exit(xp, ijk, zone_face_tolerance);
     if (e.faces == 0)
       return false;
@@ -524,7 +526,12 @@ namespace femp
         }
     held_kinetic += 0.5 * (true_mass[p] * scaling) * v2;
     ijk = e.cell;
-    ++held_at_zone;
+    // Top: across a face normal to the last direction; lateral: across one
+    // normal to another (both at a concave edge of a zone with a step).
+    if (e.faces & (1u << (dim - 1)))
+      ++held_at_top;
+    if (e.faces & ((1u << (dim - 1)) - 1))
+      ++held_at_lateral;
     return true;
   }
 

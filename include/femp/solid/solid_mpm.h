@@ -275,12 +275,30 @@ namespace femp
     {
       return held;
     }
-    /// Times a point of this rank was held on a face of the FE zone so far
-    /// (see hold_on_zone_face()).
+    /// Times a point of this rank was held on the FE zone's top face so far
+    /// (a face normal to the last direction: the top, or the bottom of a
+    /// zone above the domain's bottom; see hold_on_zone_face()). A hold on
+    /// a top and a lateral face at once (at a concave edge of a zone with a
+    /// step) counts here and in n_held_at_zone_lateral().
     unsigned long
-    n_held_at_zone() const
+    n_held_at_zone_top() const
     {
-      return held_at_zone;
+      return held_at_top;
+    }
+    /// Times a point of this rank was held on a lateral face of the FE zone
+    /// so far (a face normal to x, or in 3D y; see hold_on_zone_face()).
+    unsigned long
+    n_held_at_zone_lateral() const
+    {
+      return held_at_lateral;
+    }
+    /// When false, a point that enters the FE zone stops the run however
+    /// shallow (no hold on its faces; tests compare runs with and without
+    /// the holds). Default true.
+    void
+    set_hold_on_zone_faces(const bool hold)
+    {
+      hold_at_zone = hold;
     }
     /// Kinetic energy the holds on the FE zone's faces removed from this
     /// rank's points so far (the velocity components into the zone), J
@@ -375,13 +393,15 @@ namespace femp
     /// (infinite without points).
     double min_volume = std::numeric_limits<double>::infinity();
     std::array<double, dim> weight_momentum{}; ///< sum m_true v
-    bool                    lost         = false;
-    unsigned int            left_rank    = 0;
-    unsigned long           held         = 0; ///< see n_held()
-    unsigned long           held_at_zone = 0; ///< see n_held_at_zone()
-    double                  held_kinetic = 0; ///< see held_at_zone_kinetic()
-    Point<dim>              escaped;
-    double                  escaped_at = -1; ///< see escaped_depth()
+    bool                    lost        = false;
+    unsigned int            left_rank   = 0;
+    unsigned long           held        = 0; ///< see n_held()
+    unsigned long           held_at_top = 0; ///< see n_held_at_zone_top()
+    unsigned long held_at_lateral       = 0; ///< see n_held_at_zone_lateral()
+    bool          hold_at_zone = true;       ///< see set_hold_on_zone_faces()
+    double        held_kinetic = 0;          ///< see held_at_zone_kinetic()
+    Point<dim>    escaped;
+    double        escaped_at = -1; ///< see escaped_depth()
     /// How far inside the FE zone a point is held on its faces: half the
     /// point spacing (the gap between a face and the first points beside
     /// it on the unmoved lattice).

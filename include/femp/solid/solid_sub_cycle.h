@@ -319,13 +319,29 @@ namespace femp
     {
       return Utilities::MPI::sum(mpm.n_held(), comm);
     }
-    /// Times a material point crossed a face of the FE zone (its top or a
-    /// lateral face) from outside and was held on it so far, all ranks
-    /// (SolidMPM::hold_on_zone_face(); collective).
+    /// Times a material point crossed the FE zone's top face from outside
+    /// and was held on it since the setup or the resume, all ranks
+    /// (SolidMPM::n_held_at_zone_top(); collective).
     unsigned long
-    n_points_held_at_zone() const
+    n_points_held_at_zone_top() const
     {
-      return Utilities::MPI::sum(mpm.n_held_at_zone(), comm);
+      return Utilities::MPI::sum(mpm.n_held_at_zone_top(), comm);
+    }
+    /// Times a material point crossed a lateral face of the FE zone (of a
+    /// zone narrower than the domain) from outside and was held on it since
+    /// the setup or the resume, all ranks
+    /// (SolidMPM::n_held_at_zone_lateral(); collective).
+    unsigned long
+    n_points_held_at_zone_lateral() const
+    {
+      return Utilities::MPI::sum(mpm.n_held_at_zone_lateral(), comm);
+    }
+    /// When false, a material point that enters the FE zone stops the run
+    /// however shallow (SolidMPM::set_hold_on_zone_faces(); tests).
+    void
+    set_hold_on_zone_faces(const bool hold)
+    {
+      mpm.set_hold_on_zone_faces(hold);
     }
     /// Kinetic energy those holds removed, all ranks, J (2D: J/m;
     /// SolidMPM::held_at_zone_kinetic(); collective).
