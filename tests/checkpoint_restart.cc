@@ -374,9 +374,9 @@ namespace
     // from the checkpoint on. Only the counts are printed, no wall time.
     if (layers && root)
       {
-        unsigned int n_layers = 1;
-        double       t_half   = -1;
-        std::smatch  m;
+        unsigned int     n_layers = 1;
+        double           t_half   = -1;
+        std::smatch      m;
         const std::regex written("Checkpoint: step [0-9]+, time ([-0-9.e+]+) "
                                  "s -> .*" +
                                  half);
@@ -385,11 +385,11 @@ namespace
             ++n_layers;
           else if (std::regex_search(line, m, written))
             t_half = std::stod(m[1]);
-        const auto   c0 = csv_rows("out0/layer_cost.csv");
-        const auto   c1 = csv_rows("out1/layer_cost.csv");
-        bool         joined = !c0.empty() && c0[0].at("t_start") == 0;
-        bool         walls  = true;
-        double       steps  = 0;
+        const auto c0     = csv_rows("out0/layer_cost.csv");
+        const auto c1     = csv_rows("out1/layer_cost.csv");
+        bool       joined = !c0.empty() && c0[0].at("t_start") == 0;
+        bool       walls  = true;
+        double     steps  = 0;
         for (std::size_t k = 0; k < c0.size(); ++k)
           {
             const auto &r = c0[k];
@@ -404,8 +404,8 @@ namespace
             walls = walls && r.at("wall_total") >= 0 &&
                     parts <= r.at("wall_total") + n * 1e-6;
             std::cout << "layer_cost.csv, layer " << r.at("layer") << ": t "
-                      << std::setprecision(6) << r.at("t_start") * 1e6
-                      << " to " << r.at("t_end") * 1e6 << " us, "
+                      << std::setprecision(6) << r.at("t_start") * 1e6 << " to "
+                      << r.at("t_end") * 1e6 << " us, "
                       << r.at("temperature_steps") << " temperature steps, "
                       << r.at("solid_steps") << " solid steps, "
                       << r.at("points") << " points, " << r.at("mpm_points")
@@ -434,11 +434,11 @@ namespace
                                       "fe_elements"})
             if (k + 1 < c1.size() || c == "layer" || c == "t_end")
               resumed = resumed && c1[k].at(c) == c0[k].at(c);
-        resumed = resumed && std::abs(c1.back().at("t_start") - t_half) <=
-                               1e-5 * t_half &&
+        resumed = resumed &&
+                  std::abs(c1.back().at("t_start") - t_half) <= 1e-5 * t_half &&
                   c1.back().at("temperature_steps") == s0.steps - step_half;
-        std::cout << "resumed at step " << step_half << ", t = "
-                  << std::setprecision(6) << t_half * 1e6
+        std::cout << "resumed at step " << step_half
+                  << ", t = " << std::setprecision(6) << t_half * 1e6
                   << " us: its last row from t = "
                   << (c1.empty() ? -1. : c1.back().at("t_start") * 1e6)
                   << " us, "

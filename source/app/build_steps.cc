@@ -371,23 +371,17 @@ namespace femp
 
   template <int dim>
   void
-  BuildSteps<dim>::open_cost(const unsigned int         layer,
-                             const double               t,
-                             const unsigned int         step,
-                             const TimerOutput         &timer,
-                             const MaterialPoints<dim> &points,
-                             const SolidSubCycle<dim>  *solid)
+  BuildSteps<dim>::open_cost(const unsigned int        layer,
+                             const double              t,
+                             const unsigned int        step,
+                             const TimerOutput        &timer,
+                             const SolidSubCycle<dim> *solid)
   {
     cost_open         = CostRow();
     cost_open.layer   = layer;
     cost_open.t_start = t;
-    cost_open.points  = points.n_global_points();
-    if (solid)
-      {
-        const auto n         = solid->sizes();
-        cost_open.mpm_points = n[0];
-        cost_open.elements   = n[1];
-      }
+    // The counts after the layer's recoat and hand-over: at the next step.
+    cost_counted    = false;
     cost_step       = step;
     cost_solid_step = solid ? solid->n_steps() : 0;
     cost_sections   = cost_parts(timer);
@@ -396,12 +390,11 @@ namespace femp
 
   template <int dim>
   void
-  BuildSteps<dim>::start_cost(const double               t,
-                              const unsigned int         step,
-                              const bool                 resuming,
-                              const TimerOutput         &timer,
-                              const MaterialPoints<dim> &points,
-                              const SolidSubCycle<dim>  *solid)
+  BuildSteps<dim>::start_cost(const double              t,
+                              const unsigned int        step,
+                              const bool                resuming,
+                              const TimerOutput        &timer,
+                              const SolidSubCycle<dim> *solid)
   {
     if (!schedule)
       return;
@@ -417,8 +410,8 @@ namespace femp
       {
         // The rows of the layers that ended before the checkpoint, as the
         // run that wrote it left them.
-        std::ifstream f(scene.output.directory + "/layer_cost.csv");
-        std::string   line;
+        std::ifstream            f(scene.output.directory + "/layer_cost.csv");
+        std::string              line;
         std::vector<std::string> names;
         if (std::getline(f, line))
           {
@@ -428,9 +421,9 @@ namespace femp
           }
         while (std::getline(f, line))
           {
-            std::istringstream  in(line);
-            CostRow             r;
-            std::size_t         k = 0;
+            std::istringstream in(line);
+            CostRow            r;
+            std::size_t        k = 0;
             for (std::string c; std::getline(in, c, ',') && k < names.size();
                  ++k)
               {
@@ -461,7 +454,7 @@ namespace femp
               cost_rows.push_back(r);
           }
       }
-    open_cost(layer, t, step, timer, points, solid);
+    open_cost(layer, t, step, timer, solid);
     cost_started = true;
   }
 
@@ -477,6 +470,17 @@ namespace femp
   {
     if (!cost_started)
       return;
+    if (!cost_counted)
+      {
+        cost_open.points = points.n_global_points();
+        if (solid)
+          {
+            const auto n         = solid->sizes();
+            cost_open.mpm_points = n[0];
+            cost_open.elements   = n[1];
+          }
+        cost_counted = true;
+      }
     const typename LayerSchedule<dim>::Layer *next = nullptr;
     if (!last)
       for (const auto &l : schedule->layers())
@@ -501,7 +505,7 @@ namespace femp
     cost_rows.push_back(r);
     write_cost();
     if (next)
-      open_cost(next->number, t, step, timer, points, solid);
+      open_cost(next->number, t, step, timer, solid);
   }
 
   template <int dim>
@@ -525,8 +529,7 @@ namespace femp
         f << r.layer << "," << std::setprecision(10) << r.t_start << ","
           << r.t_end << "," << std::setprecision(15) << r.steps << ","
           << r.solid_steps << "," << r.points << "," << r.mpm_points << ","
-          << r.elements << std::fixed << std::setprecision(6) << ","
-          << r.wall;
+          << r.elements << std::fixed << std::setprecision(6) << "," << r.wall;
         for (const auto &c : parts)
           {
             const auto it = r.parts.find(c);

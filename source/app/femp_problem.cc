@@ -189,12 +189,8 @@ namespace femp
         report->start(*heat);
         results->write_fields(*control, timer, false);
       }
-    builds->start_cost(control->time(),
-                       control->step(),
-                       states.resuming(),
-                       timer,
-                       *points,
-                       solid.get());
+    builds->start_cost(
+      control->time(), control->step(), states.resuming(), timer, solid.get());
 
     while (control->running())
       {

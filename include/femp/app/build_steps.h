@@ -91,12 +91,11 @@ namespace femp
     /// ended before it are read back from the file and the row of the
     /// layer in progress counts from the resume). Collective.
     void
-    start_cost(const double               t,
-               const unsigned int         step,
-               const bool                 resuming,
-               const TimerOutput         &timer,
-               const MaterialPoints<dim> &points,
-               const SolidSubCycle<dim>  *solid);
+    start_cost(const double              t,
+               const unsigned int        step,
+               const bool                resuming,
+               const TimerOutput        &timer,
+               const SolidSubCycle<dim> *solid);
 
     /// Step 0 of the macro step, before the recoat: when a layer starts in
     /// [@p t, @p t + @p dt) (or at the end of the run, @p last), the row of
@@ -104,7 +103,8 @@ namespace femp
     /// (in total and per part of the step, as the cost report sums the
     /// timer sections), the macro (temperature) steps and solid steps in
     /// it, the points and the solid's MPM points and finite elements at
-    /// its start; then the next layer's window opens. Collective.
+    /// its start (read at the window's first call, after its recoat and
+    /// hand-over); then the next layer's window opens. Collective.
     void
     record_cost(const double               t,
                 const double               dt,
@@ -157,7 +157,7 @@ namespace femp
     /// their column: wall_<part>).
     struct CostRow
     {
-      unsigned int                  layer = 1;
+      unsigned int                  layer   = 1;
       double                        t_start = 0, t_end = 0, wall = 0;
       double                        steps = 0, solid_steps = 0;
       double                        points = 0, mpm_points = 0, elements = 0;
@@ -168,16 +168,16 @@ namespace femp
     /// clock, the timer's sums and the step counts at its start.
     CostRow                               cost_open;
     bool                                  cost_started = false;
+    bool                                  cost_counted = false;
     std::chrono::steady_clock::time_point cost_clock;
     std::map<std::string, double>         cost_sections;
     unsigned int                          cost_step = 0, cost_solid_step = 0;
     void
-    open_cost(const unsigned int         layer,
-              const double               t,
-              const unsigned int         step,
-              const TimerOutput         &timer,
-              const MaterialPoints<dim> &points,
-              const SolidSubCycle<dim>  *solid);
+    open_cost(const unsigned int        layer,
+              const double              t,
+              const unsigned int        step,
+              const TimerOutput        &timer,
+              const SolidSubCycle<dim> *solid);
     void
     write_cost() const;
     /// The hand-over after the recoat of the layer reaching @p top.
