@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -427,7 +428,8 @@ namespace femp
             for (std::string c; std::getline(in, c, ',') && k < names.size();
                  ++k)
               {
-                const double v = std::stod(c);
+                // A cell that is no number (a file cut short): 0.
+                const double v = std::strtod(c.c_str(), nullptr);
                 const auto  &n = names[k];
                 if (n == "layer")
                   r.layer = static_cast<unsigned int>(v);
