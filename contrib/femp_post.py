@@ -29,6 +29,7 @@ files (doc/output.md lists the fields and their units). What it reads:
   track_bead.csv            Run.track_bead()
   porosity.csv, pores.csv   Run.porosity(), Run.pores(n)  builds: pores
   tracks.csv, layers.csv    Run.tracks(), Run.layers()    builds: per track
+  layer_cost.csv            Run.layer_cost()    builds: wall and size per layer
   any other femp CSV        read_csv(path)
   a scene or parameter file read_parameters(path): "Section/Name" -> text
   femp's printed lines      read_printed(log, pattern): the numbers of the
@@ -366,6 +367,12 @@ class Run:
     def layers(self):
         """layers.csv: per finished layer the means over its tracks."""
         return read_csv(self.path("layers.csv"))
+
+    def layer_cost(self):
+        """layer_cost.csv: per finished layer its window (s), steps, points
+        and finite elements, and rank 0's wall time (s) in total and per
+        part of the step (wall_solid, wall_melt_flow, ...)."""
+        return read_csv(self.path("layer_cost.csv"))
 
     def _numbers(self, pattern):
         out = []

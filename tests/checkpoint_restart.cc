@@ -107,6 +107,32 @@ namespace
     return {a, b};
   }
 
+  /// The rows of a CSV file with a header line, as column -> value.
+  std::vector<std::map<std::string, double>>
+  csv_rows(const std::string &name)
+  {
+    std::ifstream                              in(name);
+    std::string                                line;
+    std::vector<std::string>                   names;
+    std::vector<std::map<std::string, double>> rows;
+    if (std::getline(in, line))
+      {
+        std::istringstream h(line);
+        for (std::string c; std::getline(h, c, ',');)
+          names.push_back(c);
+      }
+    while (std::getline(in, line))
+      {
+        std::istringstream            r(line);
+        std::map<std::string, double> row;
+        std::size_t                   k = 0;
+        for (std::string c; std::getline(r, c, ',') && k < names.size(); ++k)
+          row[names[k]] = std::stod(c);
+        rows.push_back(row);
+      }
+    return rows;
+  }
+
   /// The lines the runs appended to scene.log since line @p seen (which
   /// moves on to its end).
   std::vector<std::string>
@@ -338,6 +364,90 @@ namespace
                 s0.losses == s1.losses && s0.point_T_mean == s1.point_T_mean &&
                 s0.moved_points == s1.moved_points &&
                 s0.pool.depth == s1.pool.depth);
+
+    // A build: layer_cost.csv (doc/builds.md "Cost and memory"). The
+    // straight run: one row per layer (1 + the recoats of its log), the
+    // windows joined from 0 to the end, the temperature steps summing to
+    // the run's, the walls >= 0 and their parts (each rounded to 1e-6 s)
+    // summing to no more than the total. The resumed run: the first
+    // layer's row read back as the straight run wrote it, the second's
+    // from the checkpoint on. Only the counts are printed, no wall time.
+    if (layers && root)
+      {
+        unsigned int     n_layers = 1;
+        double           t_half   = -1;
+        std::smatch      m;
+        const std::regex written("Checkpoint: step [0-9]+, time ([-0-9.e+]+) "
+                                 "s -> .*" +
+                                 half);
+        for (const auto &line : log0)
+          if (line.rfind("Recoat: layer", 0) == 0)
+            ++n_layers;
+          else if (std::regex_search(line, m, written))
+            t_half = std::stod(m[1]);
+        const auto c0     = csv_rows("out0/layer_cost.csv");
+        const auto c1     = csv_rows("out1/layer_cost.csv");
+        bool       joined = !c0.empty() && c0[0].at("t_start") == 0;
+        bool       walls  = true;
+        double     steps  = 0;
+        for (std::size_t k = 0; k < c0.size(); ++k)
+          {
+            const auto &r = c0[k];
+            joined        = joined && r.at("layer") == k + 1 &&
+                     (k == 0 || r.at("t_start") == c0[k - 1].at("t_end"));
+            steps += r.at("temperature_steps");
+            double       parts = 0;
+            unsigned int n     = 0;
+            for (const auto &[c, w] : r)
+              if (c.rfind("wall_", 0) == 0 && c != "wall_total")
+                parts += w, ++n, walls = walls && w >= 0;
+            walls = walls && r.at("wall_total") >= 0 &&
+                    parts <= r.at("wall_total") + n * 1e-6;
+            std::cout << "layer_cost.csv, layer " << r.at("layer") << ": t "
+                      << std::setprecision(6) << r.at("t_start") * 1e6 << " to "
+                      << r.at("t_end") * 1e6 << " us, "
+                      << r.at("temperature_steps") << " temperature steps, "
+                      << r.at("solid_steps") << " solid steps, "
+                      << r.at("points") << " points, " << r.at("mpm_points")
+                      << " MPM points, " << r.at("fe_elements")
+                      << " FE elements" << std::endl;
+          }
+        joined = joined &&
+                 std::abs(c0.back().at("t_end") - end_time) <= 1e-9 * end_time;
+        verdict("layer_cost.csv: one row per layer (" +
+                  std::to_string(n_layers) + "), joined from 0 to the end",
+                c0.size() == n_layers && joined);
+        verdict("layer_cost.csv: the temperature steps sum to the run's",
+                steps == s0.steps);
+        verdict("layer_cost.csv: walls >= 0, their parts within the total",
+                walls);
+        const unsigned int step_half = std::stoul(half.substr(5));
+        bool               resumed   = c1.size() == c0.size() && c1.size() > 1;
+        for (std::size_t k = 0; resumed && k < c1.size(); ++k)
+          for (const std::string c : {"layer",
+                                      "t_start",
+                                      "t_end",
+                                      "temperature_steps",
+                                      "solid_steps",
+                                      "points",
+                                      "mpm_points",
+                                      "fe_elements"})
+            if (k + 1 < c1.size() || c == "layer" || c == "t_end")
+              resumed = resumed && c1[k].at(c) == c0[k].at(c);
+        resumed = resumed &&
+                  std::abs(c1.back().at("t_start") - t_half) <= 1e-5 * t_half &&
+                  c1.back().at("temperature_steps") == s0.steps - step_half;
+        std::cout << "resumed at step " << step_half
+                  << ", t = " << std::setprecision(6) << t_half * 1e6
+                  << " us: its last row from t = "
+                  << (c1.empty() ? -1. : c1.back().at("t_start") * 1e6)
+                  << " us, "
+                  << (c1.empty() ? -1. : c1.back().at("temperature_steps"))
+                  << " temperature steps" << std::endl;
+        verdict("layer_cost.csv resumed: the earlier rows as written, the "
+                "last from the checkpoint on",
+                resumed);
+      }
 
     // With the hand-over of cooled metal: the zone rose before the
     // checkpoint (the straight run's log), the resumed run took the raised

@@ -4,11 +4,16 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/app/build_steps.h>
+#include <femp/app/run_checks.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <iomanip>
 #include <limits>
+#include <set>
 #include <sstream>
 
 namespace femp
@@ -168,6 +173,8 @@ namespace femp
         pcout << ") and the top " << layer.top << " m; " << r.points
               << " points at " << T << " K" << std::setprecision(6)
               << std::endl;
+        // The hand-over is a section of its own, not inside the recoat's.
+        scope.stop();
         if (handover && solid)
           hand_over(t, layer.top, points, *solid, timer, pcout);
       }
@@ -331,6 +338,207 @@ namespace femp
       }
     if (last)
       results_ptr->write_probe_lines("end", t);
+  }
+
+  namespace
+  {
+    /// The column of a part of the step: wall_<part>, lower case, every
+    /// run of other characters than letters and digits as one '_'.
+    std::string
+    cost_column(const std::string &part)
+    {
+      std::string c = "wall_";
+      for (const char x : part)
+        if (std::isalnum(static_cast<unsigned char>(x)))
+          c += static_cast<char>(std::tolower(static_cast<unsigned char>(x)));
+        else if (c.back() != '_')
+          c += '_';
+      while (c.back() == '_')
+        c.pop_back();
+      return c;
+    }
+
+    /// The timer's wall time so far per column (part of the step), s.
+    std::map<std::string, double>
+    cost_parts(const TimerOutput &timer)
+    {
+      std::map<std::string, double> p;
+      for (const auto &[name, t] :
+           timer.get_summary_data(TimerOutput::total_wall_time))
+        p[cost_column(part_of(name))] += t;
+      return p;
+    }
+  } // namespace
+
+  template <int dim>
+  void
+  BuildSteps<dim>::open_cost(const unsigned int        layer,
+                             const double              t,
+                             const unsigned int        step,
+                             const TimerOutput        &timer,
+                             const SolidSubCycle<dim> *solid)
+  {
+    cost_open         = CostRow();
+    cost_open.layer   = layer;
+    cost_open.t_start = t;
+    // The counts after the layer's recoat and hand-over: at the next step.
+    cost_counted    = false;
+    cost_step       = step;
+    cost_solid_step = solid ? solid->n_steps() : 0;
+    cost_sections   = cost_parts(timer);
+    cost_clock      = std::chrono::steady_clock::now();
+  }
+
+  template <int dim>
+  void
+  BuildSteps<dim>::start_cost(const double              t,
+                              const unsigned int        step,
+                              const bool                resuming,
+                              const TimerOutput        &timer,
+                              const SolidSubCycle<dim> *solid)
+  {
+    if (!schedule)
+      return;
+    // The layer in progress: 1 + the layers that started before t (a
+    // layer starting at t itself closes this row in the next step).
+    unsigned int layer = 1;
+    for (const auto &l : schedule->layers())
+      if (l.start_time < t)
+        layer = std::max(layer, l.number);
+    cost_rows.clear();
+    if (resuming &&
+        Utilities::MPI::this_mpi_process(grid_ptr->communicator()) == 0)
+      {
+        // The rows of the layers that ended before the checkpoint, as the
+        // run that wrote it left them.
+        std::ifstream            f(scene.output.directory + "/layer_cost.csv");
+        std::string              line;
+        std::vector<std::string> names;
+        if (std::getline(f, line))
+          {
+            std::istringstream h(line);
+            for (std::string c; std::getline(h, c, ',');)
+              names.push_back(c);
+          }
+        while (std::getline(f, line))
+          {
+            std::istringstream in(line);
+            CostRow            r;
+            std::size_t        k = 0;
+            for (std::string c; std::getline(in, c, ',') && k < names.size();
+                 ++k)
+              {
+                // A cell that is no number (a file cut short): 0.
+                const double v = std::strtod(c.c_str(), nullptr);
+                const auto  &n = names[k];
+                if (n == "layer")
+                  r.layer = static_cast<unsigned int>(v);
+                else if (n == "t_start")
+                  r.t_start = v;
+                else if (n == "t_end")
+                  r.t_end = v;
+                else if (n == "wall_total")
+                  r.wall = v;
+                else if (n == "temperature_steps")
+                  r.steps = v;
+                else if (n == "solid_steps")
+                  r.solid_steps = v;
+                else if (n == "points")
+                  r.points = v;
+                else if (n == "mpm_points")
+                  r.mpm_points = v;
+                else if (n == "fe_elements")
+                  r.elements = v;
+                else if (v > 0)
+                  r.parts[n] = v;
+              }
+            if (r.layer < layer)
+              cost_rows.push_back(r);
+          }
+      }
+    open_cost(layer, t, step, timer, solid);
+    cost_started = true;
+  }
+
+  template <int dim>
+  void
+  BuildSteps<dim>::record_cost(const double               t,
+                               const double               dt,
+                               const bool                 last,
+                               const unsigned int         step,
+                               const TimerOutput         &timer,
+                               const MaterialPoints<dim> &points,
+                               const SolidSubCycle<dim>  *solid)
+  {
+    if (!cost_started)
+      return;
+    if (!cost_counted)
+      {
+        cost_open.points = points.n_global_points();
+        if (solid)
+          {
+            const auto n         = solid->sizes();
+            cost_open.mpm_points = n[0];
+            cost_open.elements   = n[1];
+          }
+        cost_counted = true;
+      }
+    const typename LayerSchedule<dim>::Layer *next = nullptr;
+    if (!last)
+      for (const auto &l : schedule->layers())
+        if (l.start_time >= t && l.start_time < t + dt)
+          next = &l;
+    if (!last && !next)
+      return;
+    CostRow r = cost_open;
+    r.t_end   = t;
+    r.wall    = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                           cost_clock)
+               .count();
+    for (const auto &[c, w] : cost_parts(timer))
+      {
+        const auto   it = cost_sections.find(c);
+        const double d  = w - (it == cost_sections.end() ? 0. : it->second);
+        if (d > 0)
+          r.parts[c] = d;
+      }
+    r.steps       = step - cost_step;
+    r.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
+    cost_rows.push_back(r);
+    write_cost();
+    if (next)
+      open_cost(next->number, t, step, timer, solid);
+  }
+
+  template <int dim>
+  void
+  BuildSteps<dim>::write_cost() const
+  {
+    if (Utilities::MPI::this_mpi_process(grid_ptr->communicator()) != 0)
+      return;
+    std::set<std::string> parts;
+    for (const auto &r : cost_rows)
+      for (const auto &[c, w] : r.parts)
+        parts.insert(c);
+    std::ofstream f(scene.output.directory + "/layer_cost.csv");
+    f << "layer,t_start,t_end,temperature_steps,solid_steps,points,mpm_"
+         "points,fe_elements,wall_total";
+    for (const auto &c : parts)
+      f << "," << c;
+    f << "\n";
+    for (const auto &r : cost_rows)
+      {
+        f << r.layer << "," << std::setprecision(10) << r.t_start << ","
+          << r.t_end << "," << std::setprecision(15) << r.steps << ","
+          << r.solid_steps << "," << r.points << "," << r.mpm_points << ","
+          << r.elements << std::fixed << std::setprecision(6) << "," << r.wall;
+        for (const auto &c : parts)
+          {
+            const auto it = r.parts.find(c);
+            f << "," << (it == r.parts.end() ? 0. : it->second);
+          }
+        f << std::defaultfloat << "\n";
+      }
   }
 
   template <int dim>

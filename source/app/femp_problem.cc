@@ -189,14 +189,24 @@ namespace femp
         report->start(*heat);
         results->write_fields(*control, timer, false);
       }
+    builds->start_cost(
+      control->time(), control->step(), states.resuming(), timer, solid.get());
 
     while (control->running())
       {
         const double dt = control->next_time_step();
         time_steps->begin_step();
 
-        // 0. The record of a track that ended, then the recoat: the powder
-        //    of a layer starting in this step.
+        // 0. The cost of the layer that ends when one starts in this step
+        //    (layer_cost.csv), the record of a track that ended, then the
+        //    recoat: the powder of a layer starting in this step.
+        builds->record_cost(control->time(),
+                            dt,
+                            false,
+                            control->step(),
+                            timer,
+                            *points,
+                            solid.get());
         builds->record_tracks(
           control->time(), dt, false, *points, timer, pcout);
         //    With 'Build/Hand over cooled metal' the cooled rows below the
@@ -243,6 +253,8 @@ namespace femp
       }
 
     builds->record_tracks(control->time(), 0., true, *points, timer, pcout);
+    builds->record_cost(
+      control->time(), 0., true, control->step(), timer, *points, solid.get());
     points->flush_point_temperatures();
     report->finish(
       *control, *heat, *points, flow.get(), solid.get(), *point_heat);

@@ -643,18 +643,17 @@ namespace femp
     /// report.
     const auto program_start = std::chrono::steady_clock::now();
 
-    /// The part of the step a timer section belongs to: 'flow: ...' and
-    /// 'setup: ...' sections are summed as 'melt flow' and 'setup'.
-    std::string
-    part_of(const std::string &section)
-    {
-      if (section.rfind("flow: ", 0) == 0)
-        return "melt flow";
-      if (section.rfind("setup: ", 0) == 0)
-        return "setup";
-      return section;
-    }
   } // namespace
+
+  std::string
+  part_of(const std::string &section)
+  {
+    if (section.rfind("flow: ", 0) == 0)
+      return "melt flow";
+    if (section.rfind("setup: ", 0) == 0)
+      return "setup";
+    return section;
+  }
 
   void
   print_cost_report(const dealii::TimerOutput &timer,

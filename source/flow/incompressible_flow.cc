@@ -1123,6 +1123,9 @@ namespace femp
       std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
     if (Utilities::MPI::logical_or(moved, grid.communicator()))
       {
+        // Its own section, not inside the advection's (no time counted
+        // twice in the cost report and layer_cost.csv).
+        section.scope.reset();
         Section s(timer, "flow: re-sort points");
         // Points are moved cell by cell, to a neighbour rank where their new
         // cell is a ghost cell; only a point beyond the ghost layer (not

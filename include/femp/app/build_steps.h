@@ -7,8 +7,9 @@
 // record of each finished track and layer (TrackRecord: tracks.csv,
 // layers.csv, probe lines after each track), and the hand-over of cooled
 // metal rows from material points to the solid's finite elements at each
-// layer start (FeZoneHandover, SolidSubCycle::hand_over_rows()). Each part
-// exists only when the scene asks for it.
+// layer start (FeZoneHandover, SolidSubCycle::hand_over_rows()), and the
+// cost of each layer (layer_cost.csv). Each part exists only when the scene
+// asks for it.
 #ifndef femp_build_steps_h
 #define femp_build_steps_h
 
@@ -27,7 +28,11 @@
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <array>
+#include <chrono>
+#include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace femp
 {
@@ -79,6 +84,36 @@ namespace femp
                   TimerOutput               &timer,
                   const ConditionalOStream  &pcout);
 
+    /// The cost of each layer (with a layer schedule; layer_cost.csv in
+    /// 'Output/Directory', doc/builds.md "Cost and memory"): open the
+    /// window of the layer in progress at @p t, macro step @p step (the
+    /// start of the run, or the resume: then the rows of the layers that
+    /// ended before it are read back from the file and the row of the
+    /// layer in progress counts from the resume). Collective.
+    void
+    start_cost(const double              t,
+               const unsigned int        step,
+               const bool                resuming,
+               const TimerOutput        &timer,
+               const SolidSubCycle<dim> *solid);
+
+    /// Step 0 of the macro step, before the recoat: when a layer starts in
+    /// [@p t, @p t + @p dt) (or at the end of the run, @p last), the row of
+    /// the layer that ends: its simulated window, the wall time on rank 0
+    /// (in total and per part of the step, as the cost report sums the
+    /// timer sections), the macro (temperature) steps and solid steps in
+    /// it, the points and the solid's MPM points and finite elements at
+    /// its start (read at the window's first call, after its recoat and
+    /// hand-over); then the next layer's window opens. Collective.
+    void
+    record_cost(const double               t,
+                const double               dt,
+                const bool                 last,
+                const unsigned int         step,
+                const TimerOutput         &timer,
+                const MaterialPoints<dim> &points,
+                const SolidSubCycle<dim>  *solid);
+
     /// After the flow, each macro step: the open track's melt extent, and
     /// with the hand-over the lowest melt of the layer.
     void
@@ -118,6 +153,33 @@ namespace femp
     const HeatTransfer<dim>   *heat_ptr    = nullptr;
     ResultsOutput<dim>        *results_ptr = nullptr;
     std::array<double, 2>      n_handed    = {{0., 0.}};
+    /// One row of layer_cost.csv (the wall times of rank 0, s, keyed by
+    /// their column: wall_<part>).
+    struct CostRow
+    {
+      unsigned int                  layer   = 1;
+      double                        t_start = 0, t_end = 0, wall = 0;
+      double                        steps = 0, solid_steps = 0;
+      double                        points = 0, mpm_points = 0, elements = 0;
+      std::map<std::string, double> parts;
+    };
+    std::vector<CostRow> cost_rows;
+    /// The open window: its row (t_end, walls and steps yet to come), the
+    /// clock, the timer's sums and the step counts at its start.
+    CostRow                               cost_open;
+    bool                                  cost_started = false;
+    bool                                  cost_counted = false;
+    std::chrono::steady_clock::time_point cost_clock;
+    std::map<std::string, double>         cost_sections;
+    unsigned int                          cost_step = 0, cost_solid_step = 0;
+    void
+    open_cost(const unsigned int        layer,
+              const double              t,
+              const unsigned int        step,
+              const TimerOutput        &timer,
+              const SolidSubCycle<dim> *solid);
+    void
+    write_cost() const;
     /// The hand-over after the recoat of the layer reaching @p top.
     void
     hand_over(const double              t,

@@ -89,6 +89,12 @@ namespace femp
   prepare_output_directory(const dealii::ParameterHandler &prm,
                            const MPI_Comm                  comm);
 
+  /// The part of the step a timer section belongs to: 'flow: ...' and
+  /// 'setup: ...' sections are summed as 'melt flow' and 'setup' (the
+  /// cost report, layer_cost.csv).
+  std::string
+  part_of(const std::string &section);
+
   /// The end-of-run cost (collective): on the screen (rank 0) the wall
   /// time since femp started and, per part of the step (the sections of
   /// @p timer, those named 'flow: ...' or 'setup: ...' summed as one
