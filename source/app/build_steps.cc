@@ -18,6 +18,18 @@
 
 namespace femp
 {
+  namespace
+  {
+    /// Whether @p layer starts in the step [t, t + dt): the one step that
+    /// recoats it and closes the cost row of the layer before it.
+    template <typename Layer>
+    bool
+    starts_in_step(const Layer &layer, const double t, const double dt)
+    {
+      return layer.start_time >= t && layer.start_time < t + dt;
+    }
+  } // namespace
+
   template <int dim>
   BuildSteps<dim>::BuildSteps(const Scene<dim> &scene, const Laser<dim> &laser)
       : scene(scene)
@@ -116,7 +128,7 @@ namespace femp
       {
         // Each layer in the one step whose [t, t + dt) holds its start
         // (the same steps after a resume: no state to save).
-        if (!(layer.start_time >= t && layer.start_time < t + dt))
+        if (!starts_in_step(layer, t, dt))
           continue;
         TimerOutput::Scope scope(timer, "recoat");
         const double       T = scene.build.powder_temperature > 0 ?
@@ -486,7 +498,7 @@ namespace femp
     const typename LayerSchedule<dim>::Layer *next = nullptr;
     if (!last)
       for (const auto &l : schedule->layers())
-        if (l.start_time >= t && l.start_time < t + dt)
+        if (starts_in_step(l, t, dt))
           next = &l;
     if (!last && !next)
       return;
