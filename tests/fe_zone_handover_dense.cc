@@ -19,14 +19,24 @@
 //     elements at the full density (1: every point keeps its mass);
 //   - a pore: the 4 points of the cell at x 0.8-0.9 m, y 0.4-0.5 m moved
 //     into the gas above the block; the pore detector finds one pore of
-//     one cell there; the zone may rise to 0.3 m (the row below the pore
-//     is next to it), and the reason names the pore; the same choice
-//     without the detector's pores is printed (its cells next to the pore
-//     may read a fill above 0.9);
+//     one cell there; the pore and its eight neighbours (x 0.7-1.0 m,
+//     y 0.3-0.6 m) stay points, the reason names the pore's row (the
+//     lowest row above the zone's top with cells left), and the other
+//     cells of the rows up to the limit are taken, the cells above the
+//     island included (reached from the columns beside it): 71 of 80, the
+//     zone's top rises to the limit, 0.7 m. Handed over, they leave an
+//     island of 9 cells of points inside the zone (the zone is no longer
+//     a box); the solid then runs on (0.25 s, the block under gravity)
+//     with its points and elements unchanged in number (the island's
+//     coupling against a closed form: fe_zone_mask_thermal). The same
+//     choice without the
+//     detector's pores is printed (its cells next to the pore may read a
+//     fill above 0.9);
 //   - unfused powder: the points of the cell at x 0.5-0.6 m, y 0.5-0.6 m
 //     made powder: the detector takes the cell, enclosed unfused powder
-//     (fused fraction 0), for a pore, so the zone may rise to 0.4 m (the
-//     row below it is next to it; its own row holds powder points).
+//     (fused fraction 0), for a pore, so it and its eight neighbours stay
+//     points (71 of 80 cells taken, the zone may rise to 0.7 m; the reason
+//     names the row below it, next to it).
 // Runs on 1 and 2 ranks against one output.
 #include <femp/builds/pore_detector.h>
 #include <femp/grid/material_points.h>
@@ -124,6 +134,7 @@ namespace
       reason = choice.stop_reason();
       fill   = choice.least_fill();
       mass   = choice.row_point_mass();
+      cells  = choice.chosen_cells();
       return top;
     }
     SolidBlock<dim>                     block;
@@ -134,7 +145,23 @@ namespace
     /// The least fill and the points' mass of each row the last choose()
     /// looked at.
     std::vector<double> fill, mass;
+    /// The cells the last choose() took.
+    std::vector<std::array<int, dim>> cells;
   };
+
+  /// Of @p cells, those inside the cells [@p i0, @p i1) x [@p j0, @p j1).
+  double
+  count_in(const std::vector<std::array<int, dim>> &cells,
+           const int                                i0,
+           const int                                i1,
+           const int                                j0,
+           const int                                j1)
+  {
+    double n = 0;
+    for (const auto &c : cells)
+      n += c[0] >= i0 && c[0] < i1 && c[1] >= j0 && c[1] < j1;
+    return n;
+  }
 } // namespace
 
 int
@@ -197,13 +224,66 @@ main(int argc, char **argv)
         checks.print("pore: its cells",
                      pore.found.pores.empty() ? 0 : pore.found.pores[0].n_cells,
                      6);
-        checks.print("pore: the zone may rise to (m)", pore.choose(reason), 6);
-        say("pore", reason);
         checks.print("pore, the detector's pores not read: the zone may rise "
                      "to (m)",
                      pore.choose(reason, false),
                      6);
         say("pore, the detector's pores not read", reason);
+        checks.print("pore, the detector's pores not read: cells taken",
+                     pore.cells.size(),
+                     6);
+        checks.print("pore: the zone may rise to (m)", pore.choose(reason), 6);
+        say("pore", reason);
+        checks.in_range("pore: cells taken", pore.cells.size(), 71, 71);
+        checks.in_range("pore: of them in the pore's neighbourhood (x "
+                        "0.7-1.0 m, y 0.3-0.6 m)",
+                        count_in(pore.cells, 7, 10, 3, 6),
+                        0,
+                        0);
+        checks.in_range("pore: of them above it (x 0.7-1.0 m, y 0.6-0.7 m)",
+                        count_in(pore.cells, 7, 10, 6, 7),
+                        3,
+                        3);
+        const double n0 = pore.solid->sizes()[0];
+        const auto   m  = pore.solid->hand_over_cells(pore.cells);
+        checks.print("pore: elements added", m[0], 6);
+        checks.print("pore: points handed over", m[1], 6);
+        checks.in_range("pore: the zone is a box (1 = yes)",
+                        pore.solid->fe_zone()->is_box(),
+                        0,
+                        0);
+        checks.in_range(
+          "pore: the island's cells in the zone",
+          [&] {
+            double n = 0;
+            for (int i = 7; i < 10; ++i)
+              for (int j = 3; j < 6; ++j)
+                n += pore.solid->fe_zone()->contains_cell({{i, j}});
+            return n;
+          }(),
+          0,
+          0);
+        std::string error;
+        try
+          {
+            for (int s = 1; s <= 5; ++s)
+              pore.solid->advance(0.05 * s, pore.T, s == 5);
+          }
+        catch (const std::exception &e)
+          {
+            error = e.what();
+            if (root)
+              std::cerr << error << std::endl;
+          }
+        checks.at_most("pore: the run after the hand-over stopped (1 = yes)",
+                       !error.empty(),
+                       0);
+        const auto sizes = pore.solid->sizes();
+        checks.at_most("pore: |points after the run - before the hand-over "
+                       "less those handed over|",
+                       std::abs(sizes[0] - (n0 - m[1])),
+                       0);
+        checks.print("pore: elements after the run", sizes[1], 6);
       }
       {
         Scene powder(comm, Defect::powder);
@@ -211,6 +291,12 @@ main(int argc, char **argv)
                      powder.choose(reason),
                      6);
         say("powder", reason);
+        checks.in_range("powder: cells taken", powder.cells.size(), 71, 71);
+        checks.in_range("powder: of them around the powder cell (x "
+                        "0.4-0.7 m, y 0.4-0.7 m)",
+                        count_in(powder.cells, 4, 7, 4, 7),
+                        0,
+                        0);
       }
     }
   catch (const std::exception &e)

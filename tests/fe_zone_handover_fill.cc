@@ -16,7 +16,9 @@
 //   - the same with a pore: the 4 points of the cell at x 0.8-0.9 m,
 //     y 0.4-0.5 m moved into the gas above the block. The pore's lower
 //     points lay on the face to the cell below, so that cell loses too
-//     (fill 13/16); the zone may rise to 0.3 m, the reason names that row;
+//     (fill 13/16); the reason names that row (at 0.3 m), and the cells
+//     around the two are taken up to the limit: the zone's top may rise
+//     to 0.7 m, the two cells left as points inside it;
 //   - the dense scene handed over to 0.7 m (80 elements, 320 points), then
 //     cooled from 300 K to 200 K in 0.5 s (alpha = 1e-4 1/K): the zone
 //     contracts, and the points 0.02 h above its new top follow its top

@@ -15,8 +15,10 @@
 //     still rises to the limit: the hand-over takes a void of an eighth of
 //     a cell into the elements, and the handed points' mass falls short of
 //     the elements' by that point's share (1 - 1/(8 x 180));
-//   - two empty sub-cells: the cell's fill (0.89) fails, and the zone stops
-//     at the row below it, 0.4 m, naming the cell.
+//   - two empty sub-cells: the cell's fill (0.89) fails: it stays points
+//     (the reason names its row), the 179 cells around it are taken up
+//     to the limit, and the handed points' mass is the elements' at the
+//     full density.
 // Runs on 1 and 2 ranks against one output.
 #include <femp/builds/pore_detector.h>
 #include <femp/grid/material_points.h>
@@ -97,6 +99,8 @@ namespace
       reason                  = choice.stop_reason();
       fill                    = choice.least_fill();
       mass                    = choice.row_point_mass();
+      cells                   = choice.chosen_cells();
+      cells_mass              = choice.chosen_point_mass();
       return top;
     }
     SolidBlock<dim>                     block;
@@ -107,6 +111,9 @@ namespace
     /// The least fill and the points' mass of each row the last choose()
     /// looked at.
     std::vector<double> fill, mass;
+    /// The cells the last choose() took and their points' mass.
+    std::vector<std::array<int, dim>> cells;
+    double                            cells_mass = 0;
   };
 } // namespace
 
@@ -148,14 +155,15 @@ main(int argc, char **argv)
           if (root)
             std::cout << name << ": stopped by: "
                       << (reason.empty() ? "the limit" : reason) << std::endl;
-          double         m_points = 0;
-          const unsigned rows     = unsigned(std::round((top - 0.2) / h));
-          for (std::size_t r = 0; r < rows && r < s.mass.size(); ++r)
-            m_points += s.mass[r];
-          const auto n = s.solid->hand_over_rows(top);
+          const double m_points = s.cells_mass;
+          bool         taken    = false; // the defect cell
+          for (const auto &c : s.cells)
+            taken = taken || (c[0] == 3 && c[1] == 3 && c[2] == 4);
+          checks.print(name + ": the defect cell taken (1 = yes)", taken, 6);
+          const auto n = s.solid->hand_over_cells(s.cells);
           checks.print(name + ": elements added", n[0], 6);
           checks.print(name + ": points handed over", n[1], 6);
-          const double expected = 1 - (top > 0.45 ? n_empty / (8. * n[0]) : 0.);
+          const double expected = 1 - (taken ? n_empty / (8. * n[0]) : 0.);
           checks.print(name + ": points' mass / elements' mass",
                        m_points / (n[0] * s.block.material.density * h * h * h),
                        6);

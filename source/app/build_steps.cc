@@ -232,7 +232,8 @@ namespace femp
               << " to " << (lift.empty() ? 0. : *hi) << " m)"
               << std::setprecision(6);
       }
-    if (!(new_top > old_top + 0.5 * grid_ptr->h()))
+    const auto &cells = handover->chosen_cells();
+    if (cells.empty())
       {
         pcout << "; the zone's top stays at " << old_top << " m" << std::endl;
         return;
@@ -245,7 +246,7 @@ namespace femp
     std::vector<std::vector<double>> before, after;
     solid.cell_fields(before);
     const std::vector<std::uint8_t> zone_before = solid.fe_zone_cells();
-    const auto                      n           = solid.hand_over_rows(new_top);
+    const auto                      n           = solid.hand_over_cells(cells);
     solid.cell_fields(after);
     // sigma_ii, von Mises, eps_p: the largest change and value.
     double      change[3] = {0, 0, 0}, largest[3] = {0, 0, 0};
@@ -271,40 +272,17 @@ namespace femp
     // The zone's points carry temperatures only: alpha bins them once.
     points.set_fixed_cells(solid.fe_zone_cells());
     n_handed[0] += n[0], n_handed[1] += n[1];
-    // The points' mass of the handed rows against the elements', which
+    // The points' mass of the handed cells against the elements', which
     // carry the full density over their cells.
-    const double h      = grid_ptr->h();
-    double       m_pts  = 0;
-    const auto  &m_rows = handover->row_point_mass();
-    std::size_t  n_rows = 0;
-    for (; n_rows < m_rows.size() && old_top + (n_rows + 0.5) * h < new_top;
-         ++n_rows)
-      m_pts += m_rows[n_rows];
-    const double m_el = n[0] * scene.material.density * std::pow(h, dim);
-    // Per row: the least and the largest share.
-    double row_lo = std::numeric_limits<double>::infinity(), row_hi = 0;
-    for (std::size_t r = 0; r < n_rows; ++r)
-      {
-        const double share = m_rows[r] * n_rows / std::max(m_el, 1e-300);
-        row_lo             = std::min(row_lo, share);
-        row_hi             = std::max(row_hi, share);
-      }
-    // Per row from the old top up: the mass share and the points.
-    std::ostringstream rows;
-    rows << std::setprecision(3);
-    const auto &n_pts = handover->row_point_count();
-    for (std::size_t r = 0; r < n_rows; ++r)
-      rows << (r ? ", " : "") << m_rows[r] * n_rows / std::max(m_el, 1e-300)
-           << " (" << n_pts[r] << ")";
+    const double m_el =
+      n[0] * scene.material.density * std::pow(grid_ptr->h(), dim);
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
           << " points handed over (their mass " << std::setprecision(4)
-          << (m_el > 0 ? m_pts / m_el : 0.)
-          << " of the elements' at the full density, per row " << row_lo
-          << " to " << row_hi
-          << "; from the old top up, with the points: " << rows.str() << ")"
-          << std::setprecision(6) << ", their kinetic energy "
-          << solid.energies(false).melted - K0 << (dim == 2 ? " J/m" : " J")
+          << (m_el > 0 ? handover->chosen_point_mass() / m_el : 0.)
+          << " of the elements' at the full density)" << std::setprecision(6)
+          << ", their kinetic energy " << solid.energies(false).melted - K0
+          << (dim == 2 ? " J/m" : " J")
           << " removed; in the handed cells sigma_ii changed by "
           << std::setprecision(2) << ratio(0) << " of the largest |sigma_ii| ("
           << largest[0] << " Pa), plastic strain by " << ratio(2)

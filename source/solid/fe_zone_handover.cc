@@ -151,7 +151,7 @@ namespace femp
     lowest    = std::numeric_limits<double>::infinity();
     layer_top = new_top;
 
-    // The zone's box from its cells (a box of whole cells).
+    // The zone's bounding box from its cells.
     std::array<int, dim> lo, hi;
     lo.fill(std::numeric_limits<int>::max());
     hi.fill(-1);
@@ -171,16 +171,74 @@ namespace femp
     row_fill.clear();
     row_mass.clear();
     row_points.clear();
+    chosen.clear();
+    chosen_mass = 0;
     const int last_row =
       std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
                     int(grid.n_cells()[dim - 1]));
-    if (hi[dim - 1] < 0 || last_row <= first_row)
+    if (hi[dim - 1] < 0 || last_row <= lo[dim - 1])
       return current_top;
 
-    // Per candidate row: 1 a cell not full of metal or without points, 2 a
-    // powder or fluid point, 4 a point at or above the hand-over
-    // temperature; and the hottest point.
-    const int           n_rows = last_row - first_row;
+    // The zone's cells over its bounding box (every rank: the owners' sum)
+    // and the top of each column (one above its highest zone cell; -1:
+    // none). Columns: the cells across the last direction, lexicographic
+    // (x fastest).
+    std::array<int, dim> n_zone;
+    std::size_t          n_col = 1, n_zone_all = 1;
+    for (int d = 0; d < dim; ++d)
+      {
+        n_zone[d] = hi[d] - lo[d] + 1;
+        n_zone_all *= n_zone[d];
+        if (d < dim - 1)
+          n_col *= n_zone[d];
+      }
+    auto zone_index = [&](const std::array<int, dim> &ijk) -> long {
+      long k = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        {
+          const int i = ijk[d] - lo[d];
+          if (i < 0 || i >= n_zone[d])
+            return -1;
+          k = k * n_zone[d] + i;
+        }
+      return k;
+    };
+    std::vector<int> in_zone(n_zone_all, 0);
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      std::array<int, dim> c;
+      for (int d = 0; d < dim; ++d)
+        c[d] = ijk[d];
+      const long k = zone_index(c);
+      if (k >= 0 && zone[idx])
+        in_zone[k] = 1;
+    });
+    MPI_Allreduce(
+      MPI_IN_PLACE, in_zone.data(), int(n_zone_all), MPI_INT, MPI_MAX, comm);
+    std::vector<int> col_top(n_col, -1);
+    // The lowest row with a cell of the extent outside the zone: the
+    // candidates start there (the zone's top for a box).
+    int cand_row = first_row;
+    for (std::size_t k = 0; k < n_zone_all; ++k)
+      {
+        const int row = lo[dim - 1] + int(k / n_col);
+        if (in_zone[k])
+          col_top[k % n_col] = std::max(col_top[k % n_col], row + 1);
+        else
+          cand_row = std::min(cand_row, row);
+      }
+    if (last_row <= cand_row)
+      return current_top;
+    auto zone_cell = [&](const std::array<int, dim> &ijk) {
+      const long k = zone_index(ijk);
+      return k >= 0 && in_zone[k] != 0;
+    };
+
+    // Per candidate row from the zone's top (the log): 1 a cell not full
+    // of metal or without points, 2 a powder or fluid point, 4 a point at
+    // or above the hand-over temperature; and the hottest point. Per cell
+    // of the candidate box (rows cand_row to last_row): the same bits, and
+    // the mass of its points.
+    const int           n_rows = std::max(0, last_row - first_row);
     std::vector<int>    flags(n_rows, 0);
     std::vector<double> hottest(n_rows, 0.);
     std::vector<int>    has_points(grid.n_local(), 0);
@@ -192,42 +250,19 @@ namespace femp
       for (int d = 0; d < dim - 1; ++d)
         if (ijk[d] < lo[d] || ijk[d] > hi[d])
           return false;
-      return ijk[dim - 1] >= first_row && ijk[dim - 1] < last_row;
+      return ijk[dim - 1] >= cand_row && ijk[dim - 1] < last_row;
     };
-    for (std::size_t c = 0; c < cells.size(); ++c)
-      {
-        const auto ijk = grid.global_index(cells[c].first);
-        if (!in_box(ijk))
-          continue;
-        const int r = ijk[dim - 1] - first_row;
-        for (const double *v : points.cell_point_properties(c))
-          {
-            has_points[cells[c].first] = 1;
-            row_mass[r] += v[P::mass];
-            row_points[r] += 1;
-            if (v[P::state] != MaterialPoints<dim>::solid)
-              flags[r] |= 2;
-            if (!(v[P::temperature] < prm.temperature))
-              flags[r] |= 4;
-            hottest[r] = std::max(hottest[r], v[P::temperature]);
-          }
-      }
-    // The fill of each candidate cell: the points' volume under the hat of
-    // half-width h centred at the cell's centre, over the hat's volume
-    // inside the domain (see the header). Every rank adds its points; the
-    // sums of the candidate box are reduced over the ranks.
     std::array<int, dim> n_box;
     for (int d = 0; d < dim - 1; ++d)
       n_box[d] = hi[d] - lo[d] + 1;
-    n_box[dim - 1]     = n_rows;
+    n_box[dim - 1]     = last_row - cand_row;
     std::size_t n_fill = 1;
     for (int d = 0; d < dim; ++d)
       n_fill *= n_box[d];
-    std::vector<double>  fill(n_fill, 0.);
     std::array<int, dim> first;
     for (int d = 0; d < dim - 1; ++d)
       first[d] = lo[d];
-    first[dim - 1] = first_row;
+    first[dim - 1] = cand_row;
     auto box_index = [&](const std::array<int, dim> &ijk) -> long {
       long k = 0;
       for (int d = dim - 1; d >= 0; --d)
@@ -239,29 +274,68 @@ namespace femp
         }
       return k;
     };
-    // The zone's top face has moved by the lift since the zone's top was
-    // set (bilinear between its nodes; 0 without one): a point of the
-    // zone's top row is taken that far up, as the metal above it has moved
-    // (see the header). A negative lift is taken as 0.
-    std::array<int, dim - 1> n_face;
-    for (int d = 0; d < dim - 1; ++d)
-      n_face[d] = hi[d] - lo[d] + 2;
+    std::vector<int>    cell_flags(n_fill, 0);
+    std::vector<double> cell_mass(n_fill, 0.);
+    for (std::size_t c = 0; c < cells.size(); ++c)
+      {
+        const auto gijk = grid.global_index(cells[c].first);
+        if (!in_box(gijk))
+          continue;
+        std::array<int, dim> ijk;
+        for (int d = 0; d < dim; ++d)
+          ijk[d] = gijk[d];
+        const long k = box_index(ijk);
+        const int  r = ijk[dim - 1] - first_row;
+        for (const double *v : points.cell_point_properties(c))
+          {
+            has_points[cells[c].first] = 1;
+            cell_mass[k] += v[P::mass];
+            int bits = 0;
+            if (v[P::state] != MaterialPoints<dim>::solid)
+              bits |= 2;
+            if (!(v[P::temperature] < prm.temperature))
+              bits |= 4;
+            cell_flags[k] |= bits;
+            if (r >= 0)
+              {
+                row_mass[r] += v[P::mass];
+                row_points[r] += 1;
+                flags[r] |= bits;
+                hottest[r] = std::max(hottest[r], v[P::temperature]);
+              }
+          }
+      }
+    // The fill of each candidate cell: the points' volume under the hat of
+    // half-width h centred at the cell's centre, over the hat's volume
+    // inside the domain (see the header). Every rank adds its points; the
+    // sums of the candidate box are reduced over the ranks.
+    std::vector<double> fill(n_fill, 0.);
+    // The zone's top face has moved by the lift since the zone was set
+    // (multilinear between the nodes of a column's top face; 0 without
+    // one): a point of a column's top zone cell is taken that far up, as
+    // the metal above it has moved (see the header). A negative lift is
+    // taken as 0.
+    constexpr unsigned int nf = 1u << (dim - 1);
+    AssertThrow(top_lift.empty() || top_lift.size() == nf * n_col,
+                ExcMessage("FE zone hand-over: the zone's top lift does not "
+                           "match the zone's columns"));
     auto lift_at = [&](const Point<dim> &x, const std::array<int, dim> &c) {
       if (top_lift.empty())
         return 0.;
+      std::size_t col = 0;
+      for (int d = dim - 2; d >= 0; --d)
+        col = col * n_zone[d] + (c[d] - lo[d]);
       double lift = 0;
-      for (unsigned int a = 0; a < (1u << (dim - 1)); ++a)
+      for (unsigned int a = 0; a < nf; ++a)
         {
-          double      w = 1;
-          std::size_t k = 0;
-          for (int d = dim - 2; d >= 0; --d)
+          double w = 1;
+          for (int d = 0; d < dim - 1; ++d)
             {
               const bool   up = a & (1u << d);
               const double xi = (x[d] - grid.origin()[d]) / h - c[d];
               w *= up ? xi : 1. - xi;
-              k = k * n_face[d] + (c[d] - lo[d] + (up ? 1 : 0));
             }
-          lift += w * top_lift[k];
+          lift += w * top_lift[nf * col + a];
         }
       return std::max(lift, 0.);
     };
@@ -271,15 +345,11 @@ namespace femp
         const double V = particle.get_properties()[P::volume];
         {
           std::array<int, dim> c;
-          bool                 top_row = true;
           for (int d = 0; d < dim; ++d)
-            {
-              c[d] = int(std::floor((x[d] - grid.origin()[d]) / h));
-              if (d < dim - 1 ? c[d] < lo[d] || c[d] > hi[d] :
-                                c[d] != hi[dim - 1])
-                top_row = false;
-            }
-          if (top_row)
+            c[d] = int(std::floor((x[d] - grid.origin()[d]) / h));
+          const long k = zone_index(c);
+          if (k >= 0 && in_zone[k] &&
+              c[dim - 1] + 1 == col_top[std::size_t(k) % n_col])
             x[dim - 1] += lift_at(x, c);
         }
         // The two cell centres around x in each direction and the hats'
@@ -378,9 +448,10 @@ namespace femp
         }
       return std::make_pair(least_alpha, near_pore);
     };
-    // The cells not dense, per row: their count, the least fill and their
-    // horizontal extent (cell indices), for the log; bit 8: a pore cell in
-    // or next to one of them.
+    // Per candidate cell (outside the zone): bit 1 not dense, 8 a pore
+    // cell in or next to it. Per row from the zone's top, for the log: the
+    // cells not dense, their count, the least fill and their horizontal
+    // extent (cell indices).
     std::vector<double> n_bad(n_rows, 0.),
       least(n_rows, std::numeric_limits<double>::infinity()),
       least_alpha(n_rows, std::numeric_limits<double>::infinity());
@@ -394,14 +465,24 @@ namespace femp
       std::array<int, dim> c;
       for (int d = 0; d < dim; ++d)
         c[d] = ijk[d];
-      const int    r            = ijk[dim - 1] - first_row;
-      const double f            = fill[box_index(c)] / hat_volume(c);
-      row_fill[r]               = std::min(row_fill[r], f);
+      if (zone_cell(c))
+        return;
+      const long   k            = box_index(c);
+      const double f            = fill[k] / hat_volume(c);
       const auto [a, near_pore] = neighbourhood(c);
+      const bool dense =
+        has_points[idx] && !near_pore && (a >= dense_alpha || f >= full_fill);
+      if (!dense)
+        cell_flags[k] |= 1;
+      if (near_pore)
+        cell_flags[k] |= 8;
+      const int r = ijk[dim - 1] - first_row;
+      if (r < 0)
+        return;
+      row_fill[r] = std::min(row_fill[r], f);
       if (near_pore)
         flags[r] |= 8;
-      if (!(has_points[idx] && !near_pore &&
-            (a >= dense_alpha || f >= full_fill)))
+      if (!dense)
         {
           flags[r] |= 1;
           n_bad[r] += 1;
@@ -416,7 +497,11 @@ namespace femp
             }
         }
     });
-    // The flags of all ranks: one maximum per bit.
+    // The cells' flags and masses of all ranks.
+    MPI_Allreduce(
+      MPI_IN_PLACE, cell_flags.data(), int(n_fill), MPI_INT, MPI_BOR, comm);
+    Utilities::MPI::sum(cell_mass, comm, cell_mass);
+    // The rows' flags of all ranks: one maximum per bit.
     std::vector<int> bits(4 * n_rows);
     for (int r = 0; r < n_rows; ++r)
       for (int b = 0; b < 4; ++b)
@@ -444,6 +529,57 @@ namespace femp
       MPI_IN_PLACE, bad_lo.data(), n_rows * (dim - 1), MPI_INT, MPI_MIN, comm);
     MPI_Allreduce(
       MPI_IN_PLACE, bad_hi.data(), n_rows * (dim - 1), MPI_INT, MPI_MAX, comm);
+
+    // The cells taken: the candidates (no flag) reached from the zone over
+    // faces of candidates (the same on every rank: all hold the flags).
+    auto cell_of = [&](std::size_t k) {
+      std::array<int, dim> c;
+      for (int d = 0; d < dim; ++d)
+        c[d] = first[d] + int(k % n_box[d]), k /= n_box[d];
+      return c;
+    };
+    auto candidate = [&](const long k, const std::array<int, dim> &c) {
+      return k >= 0 && cell_flags[k] == 0 && !zone_cell(c);
+    };
+    std::vector<std::uint8_t> taken(n_fill, 0);
+    std::vector<std::size_t>  front;
+    for (std::size_t k = 0; k < n_fill; ++k)
+      {
+        const auto c = cell_of(k);
+        if (!candidate(k, c))
+          continue;
+        for (unsigned int f = 0; f < 2 * dim && !taken[k]; ++f)
+          {
+            auto nb = c;
+            nb[f / 2] += f % 2 ? 1 : -1;
+            if (zone_cell(nb))
+              taken[k] = 1, front.push_back(k);
+          }
+      }
+    for (std::size_t i = 0; i < front.size(); ++i)
+      {
+        const auto c = cell_of(front[i]);
+        for (unsigned int f = 0; f < 2 * dim; ++f)
+          {
+            auto nb = c;
+            nb[f / 2] += f % 2 ? 1 : -1;
+            const long k = box_index(nb);
+            if (candidate(k, nb) && !taken[k])
+              taken[k] = 1, front.push_back(k);
+          }
+      }
+    int top_row = first_row;
+    for (std::size_t k = 0; k < n_fill; ++k)
+      if (taken[k])
+        {
+          const auto c = cell_of(k);
+          chosen.push_back(c);
+          chosen_mass += cell_mass[k];
+          top_row = std::max(top_row, c[dim - 1] + 1);
+        }
+
+    // The lowest row above the zone's top that keeps cells as points, and
+    // why (the log).
     int r = 0;
     while (r < n_rows && flags[r] == 0)
       ++r;
@@ -472,7 +608,7 @@ namespace femp
             << " K";
         reason = s.str();
       }
-    return z0 + (first_row + r) * h;
+    return z0 + top_row * h;
   }
 
   template <int dim>

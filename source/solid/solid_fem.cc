@@ -287,16 +287,37 @@ namespace femp
   }
 
   template <int dim>
+  std::array<unsigned int, 2>
+  SolidFEM<dim>::cells_around(const std::array<int, dim> &ijk) const
+  {
+    // The 2^dim cells that share the node, those inside the domain: in the
+    // zone, and not.
+    const auto                 &N = grid.n_cells();
+    std::array<unsigned int, 2> count{{0, 0}};
+    for (unsigned int a = 0; a < n_corners; ++a)
+      {
+        std::array<int, dim> c;
+        bool                 inside = true;
+        for (int d = 0; d < dim; ++d)
+          {
+            c[d]   = ijk[d] - 1 + int((a >> d) & 1u);
+            inside = inside && c[d] >= 0 && c[d] < int(N[d]);
+          }
+        if (inside)
+          ++count[zone.contains_cell(c) ? 0 : 1];
+      }
+    return count;
+  }
+
+  template <int dim>
   bool
   SolidFEM<dim>::is_transition(const std::array<int, dim> &ijk) const
   {
-    // A zone node on a zone face that is not a domain face.
-    const auto &N = grid.n_cells();
-    for (int d = 0; d < dim; ++d)
-      if ((ijk[d] == zlo[d] && zlo[d] > 0) ||
-          (ijk[d] == zlo[d] + zn[d] && zlo[d] + zn[d] < int(N[d])))
-        return true;
-    return false;
+    // A node of an element that touches a cell of the domain outside the
+    // zone (for a box: a zone node on a zone face that is not a domain
+    // face).
+    const auto n = cells_around(ijk);
+    return n[0] > 0 && n[1] > 0;
   }
 
   template <int dim>
@@ -321,8 +342,9 @@ namespace femp
   void
   SolidFEM<dim>::set_zone()
   {
-    zone = FeZone<dim>(
-      true, prm.lower_corner, prm.upper_corner, grid.origin(), grid.h());
+    if (!zone_given)
+      zone = FeZone<dim>(
+        true, prm.lower_corner, prm.upper_corner, grid.origin(), grid.h());
     zlo = zone.first_cell();
     zn  = zone.n_cells();
     for (std::size_t idx = 0; idx < grid.n_local(); ++idx)
@@ -390,9 +412,6 @@ namespace femp
       if (cell->is_locally_owned())
         {
           const auto ijk = grid.cell_of(cell->center());
-          if (!grid.in_box(ijk) || grid.cell_status()[grid.local_index(ijk)] !=
-                                     BackgroundGrid<dim>::owned)
-            ++off_rank;
           cell->get_dof_indices(dofs);
           std::array<std::uint32_t, n_corners> c;
           for (unsigned int a = 0; a < n_corners; ++a)
@@ -401,6 +420,14 @@ namespace femp
               for (int d = 0; d < dim; ++d)
                 node_ijk[c[a]][d] = ijk[d] + ((a >> d) & 1u);
             }
+          // A cell of the bounding box outside the zone is no element (its
+          // nodes stay in the node box; without an element they carry no
+          // mass and no velocity).
+          if (!zone.contains_cell(ijk))
+            continue;
+          if (!grid.in_box(ijk) || grid.cell_status()[grid.local_index(ijk)] !=
+                                     BackgroundGrid<dim>::owned)
+            ++off_rank;
           cells.emplace_back(zone_cell_id(ijk), c);
         }
     std::sort(cells.begin(), cells.end(), [](const auto &a, const auto &b) {
@@ -555,10 +582,7 @@ namespace femp
           tr_id.push_back(id);
           tr_ijk.push_back(ijk);
           tr_fix.push_back(fix_bits(ijk, face_bits));
-          unsigned int n_adj = 1; // adjacent zone elements
-          for (int d = 0; d < dim; ++d)
-            n_adj *= (ijk[d] > zlo[d]) + (ijk[d] < zlo[d] + zn[d]);
-          tr_mass.push_back(n_adj * m_el);
+          tr_mass.push_back(cells_around(ijk)[0] * m_el); // its elements
         }
     }
     tr_vel.assign(dim * tr_ijk.size(), 0.);
@@ -578,8 +602,11 @@ namespace femp
           owned_mass[n] = mass[n];
         // Transition nodes take their velocity from update_transition():
         // zero inverse mass, all components free (fixed ones are zero there).
-        inv_mass[n] = tr ? 0. : 1. / mass[n];
-        fix[n]      = tr ? 0 : fix_bits(node_ijk[ln], face_bits);
+        // A node of no element (cells of the bounding box outside the zone
+        // only) has no mass: zero inverse mass, all components fixed.
+        const bool massless = !tr && !(mass[n] > 0);
+        inv_mass[n]         = tr || massless ? 0. : 1. / mass[n];
+        fix[n] = tr ? 0 : massless ? 0xff : fix_bits(node_ijk[ln], face_bits);
       }
     std::sort(tr_local.begin(), tr_local.end());
     std::vector<int> box_tr(n_box, -1);
@@ -669,12 +696,8 @@ namespace femp
           nonzero = nonzero || (*f)[d][n] != 0;
         if (!in || !nonzero)
           continue;
-        bool tr = false;
-        for (int d = 0; d < dim; ++d)
-          tr = tr || (ijk[d] == zlo[d] && zlo[d] > 0) ||
-               (ijk[d] == zlo[d] + zn[d] &&
-                zlo[d] + zn[d] < int(grid.n_cells()[d]));
-        if (tr)
+        const auto around = cells_around(ijk);
+        if (around[0] == 0 || around[1] > 0) // no element, or transition
           continue;
         mine.push_back(double(id));
         for (int d = 0; d < dim; ++d)
@@ -1304,25 +1327,46 @@ namespace femp
 
   template <int dim>
   std::uint64_t
-  SolidFEM<dim>::raise_top(
-    const double new_top,
+  SolidFEM<dim>::add_cells(
+    const std::vector<std::array<int, dim>> &cells,
+    const std::vector<std::pair<std::uint64_t, std::array<double, 7>>>
+                              &new_cells,
+    const std::vector<double> &T)
+  {
+    const auto &N = grid.n_cells();
+    for (const auto &c : cells)
+      {
+        for (int d = 0; d < dim; ++d)
+          AssertThrow(c[d] >= 0 && c[d] < int(N[d]),
+                      ExcMessage("FE zone hand-over: a new cell lies outside "
+                                 "the grid"));
+        AssertThrow(!zone.contains_cell(c),
+                    ExcMessage("FE zone hand-over: a new cell lies in the "
+                               "zone"));
+      }
+    const FeZone<dim> larger = zone.with_cells(cells);
+    // The mesh's corners follow the bounding box where it grew.
+    const Point<dim> a = larger.lower_corner(), b = larger.upper_corner();
+    for (int d = 0; d < dim; ++d)
+      {
+        if (larger.first_cell()[d] != zlo[d])
+          prm.lower_corner[d] = a[d];
+        if (larger.first_cell()[d] + larger.n_cells()[d] != zlo[d] + zn[d])
+          prm.upper_corner[d] = b[d];
+      }
+    return grow(larger, new_cells, T);
+  }
+
+  template <int dim>
+  std::uint64_t
+  SolidFEM<dim>::grow(
+    const FeZone<dim> &larger,
     const std::vector<std::pair<std::uint64_t, std::array<double, 7>>>
                               &new_cells,
     const std::vector<double> &T)
   {
     constexpr unsigned int n_values = 6 + 3 + n_hg * dim + 2;
     const auto            &N        = grid.n_cells();
-    const double           h        = grid.h();
-    {
-      const double r   = (new_top - grid.origin()[dim - 1]) / h;
-      const int    top = static_cast<int>(std::round(r));
-      AssertThrow(std::abs(r - top) < 1e-6 &&
-                    top > zlo[dim - 1] + zn[dim - 1] && top <= int(N[dim - 1]),
-                  ExcMessage("FE zone hand-over: the new top " +
-                             std::to_string(new_top) +
-                             " m must be a grid line above the zone's top and "
-                             "inside the domain"));
-    }
     // Keys independent of the zone's size: lexicographic indices of cells
     // and nodes in the whole grid.
     auto cell_key = [&](const std::array<int, dim> &ijk) {
@@ -1405,10 +1449,11 @@ namespace femp
           seed[all_new_keys[r][i]] = &all_new_vals[r][7 * i];
       }
 
-    // The taller zone, built as by setup() at the factor in use (the
+    // The larger zone, built as by setup() at the factor in use (the
     // factor's later changes scale these masses).
-    prm.upper_corner[dim - 1] = new_top;
-    mass_scale_setup          = 0;
+    zone             = larger;
+    zone_given       = true;
+    mass_scale_setup = 0;
     inv_mass_setup.clear(), owned_mass_setup.clear(), tr_mass_setup.clear();
     setup(mass_scale, face_fix, g, T);
 
@@ -1496,6 +1541,35 @@ namespace femp
                            " m must be a grid line above the zone's bottom "
                            "and inside the domain"));
     prm.upper_corner[dim - 1] = new_top;
+    zone_given                = false;
+  }
+
+  template <int dim>
+  void
+  SolidFEM<dim>::set_cells(const FeZone<dim> &z)
+  {
+    AssertThrow(z.enabled(), ExcMessage("FE zone: no cell in the zone"));
+    const auto &N = grid.n_cells();
+    for (int d = 0; d < dim; ++d)
+      AssertThrow(z.first_cell()[d] >= 0 &&
+                    z.first_cell()[d] + z.n_cells()[d] <= int(N[d]),
+                  ExcMessage("FE zone: the zone's cells must lie in the grid"));
+    // The mesh's corners: the parameters' where the bounding box keeps
+    // their grid lines (the same mesh, bit for bit, as the run that wrote
+    // a checkpoint), else the box's.
+    const FeZone<dim> box(
+      true, prm.lower_corner, prm.upper_corner, grid.origin(), grid.h());
+    const Point<dim> a = z.lower_corner(), b = z.upper_corner();
+    for (int d = 0; d < dim; ++d)
+      {
+        if (z.first_cell()[d] != box.first_cell()[d])
+          prm.lower_corner[d] = a[d];
+        if (z.first_cell()[d] + z.n_cells()[d] !=
+            box.first_cell()[d] + box.n_cells()[d])
+          prm.upper_corner[d] = b[d];
+      }
+    zone       = z;
+    zone_given = true;
   }
 
   template <int dim>

@@ -20,6 +20,7 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 
 namespace femp
 {
@@ -1459,27 +1460,53 @@ namespace femp
     if (!fem)
       return {};
     const FeZone<dim> &zone = fem->fe_zone();
-    const auto         lo = zone.first_cell(), n = zone.n_cells();
-    const int          top    = lo[dim - 1] + n[dim - 1];
-    std::size_t        n_face = 1;
+    const auto        &lo = zone.first_cell(), &n = zone.n_cells();
+    const auto        &N = grid.n_cells();
+    // The top of each column of the bounding box: one above its highest
+    // zone cell (-1: none).
+    std::size_t n_col = 1;
     for (int d = 0; d < dim - 1; ++d)
-      n_face *= n[d] + 1;
-    std::vector<double> lift(n_face, 0.);
-    std::size_t         found = 0;
+      n_col *= n[d];
+    std::vector<int> col_top(n_col, -1);
+    const auto      &mask = zone.mask();
+    for (std::size_t k = 0; k < mask.size(); ++k)
+      if (mask[k])
+        col_top[k % n_col] =
+          std::max(col_top[k % n_col], lo[dim - 1] + int(k / n_col) + 1);
+    // The transition nodes by their lexicographic index in the grid.
+    auto node_key = [&](const std::array<int, dim> &ijk) {
+      std::uint64_t id = 0;
+      for (int d = dim - 1; d >= 0; --d)
+        id = id * (N[d] + 1) + ijk[d];
+      return id;
+    };
+    std::unordered_map<std::uint64_t, std::size_t> tr;
     for (std::size_t t = 0; t < fem->n_transition(); ++t)
+      tr[node_key(fem->transition_node(t))] = t;
+    constexpr unsigned int nf = 1u << (dim - 1);
+    std::vector<double>    lift(nf * n_col, 0.);
+    for (std::size_t c = 0; c < n_col; ++c)
       {
-        const auto &ijk = fem->transition_node(t);
-        if (ijk[dim - 1] != top)
+        if (col_top[c] < 0)
           continue;
-        std::size_t k = 0;
-        for (int d = dim - 2; d >= 0; --d)
-          k = k * (n[d] + 1) + (ijk[d] - lo[d]);
-        lift[k] = fem->transition_displacement(t)[dim - 1];
-        ++found;
+        for (unsigned int a = 0; a < nf; ++a)
+          {
+            std::array<int, dim> ijk;
+            std::size_t          r = c;
+            for (int d = 0; d < dim - 1; ++d)
+              {
+                ijk[d] = lo[d] + int(r % n[d]) + int((a >> d) & 1u);
+                r /= n[d];
+              }
+            ijk[dim - 1]  = col_top[c];
+            const auto it = tr.find(node_key(ijk));
+            // A top on the domain's top face has no transition nodes.
+            if (it == tr.end())
+              return {};
+            lift[nf * c + a] =
+              fem->transition_displacement(it->second)[dim - 1];
+          }
       }
-    // A top on the domain's top face has no transition nodes.
-    if (found != n_face)
-      return {};
     return lift;
   }
 
@@ -1490,39 +1517,77 @@ namespace femp
     AssertThrow(fem,
                 ExcMessage("the hand-over to finite elements needs an FE "
                            "zone ('Solid FEM/Use finite elements = true')"));
-    // The points' state as the particles hold it after the last advance,
-    // with what melted or solidified since booked.
-    gather_points();
+    // The cells between the zone's top and the new one, inside the zone's
+    // horizontal extent.
     const auto &z   = fem->fe_zone();
     const int   top = static_cast<int>(
       std::round((new_top - grid.origin()[dim - 1]) / grid.h()));
-    // The owned cells of the new rows: inside the zone's horizontal
-    // extent, between its top and the new one.
-    std::vector<std::uint8_t>  rows(grid.n_local(), 0);
-    std::vector<std::uint32_t> cells;
-    for (const auto c : grid.owned_cells())
+    const auto &lo = z.first_cell(), &n = z.n_cells();
+    AssertThrow(top > lo[dim - 1] + n[dim - 1] &&
+                  top <= int(grid.n_cells()[dim - 1]),
+                ExcMessage("FE zone hand-over: the new top " +
+                           std::to_string(new_top) +
+                           " m must be a grid line above the zone's top and "
+                           "inside the domain"));
+    std::size_t n_row = 1;
+    for (int d = 0; d < dim - 1; ++d)
+      n_row *= n[d];
+    std::vector<std::array<int, dim>> cells;
+    for (int k = lo[dim - 1] + n[dim - 1]; k < top; ++k)
+      for (std::size_t i = 0; i < n_row; ++i)
+        {
+          std::array<int, dim> c;
+          std::size_t          r = i;
+          for (int d = 0; d < dim - 1; ++d)
+            c[d] = lo[d] + int(r % n[d]), r /= n[d];
+          c[dim - 1] = k;
+          cells.push_back(c);
+        }
+    return hand_over_cells(cells);
+  }
+
+  template <int dim>
+  std::array<double, 2>
+  SolidSubCycle<dim>::hand_over_cells(
+    const std::vector<std::array<int, dim>> &cells)
+  {
+    AssertThrow(fem,
+                ExcMessage("the hand-over to finite elements needs an FE "
+                           "zone ('Solid FEM/Use finite elements = true')"));
+    // The points' state as the particles hold it after the last advance,
+    // with what melted or solidified since booked.
+    gather_points();
+    const auto &z = fem->fe_zone();
+    const auto &N = grid.n_cells();
+    // The owned cells among the new ones.
+    std::vector<std::uint8_t>  mark(grid.n_local(), 0);
+    std::vector<std::uint32_t> owned;
+    for (const auto &ijk : cells)
       {
-        const auto ijk = grid.global_index(c);
-        bool       in =
-          ijk[dim - 1] >= z.first_cell()[dim - 1] + z.n_cells()[dim - 1] &&
-          ijk[dim - 1] < top;
-        for (int d = 0; d < dim - 1; ++d)
-          in = in && ijk[d] >= z.first_cell()[d] &&
-               ijk[d] < z.first_cell()[d] + z.n_cells()[d];
-        if (in)
-          rows[c] = 1, cells.push_back(c);
+        for (int d = 0; d < dim; ++d)
+          AssertThrow(ijk[d] >= 0 && ijk[d] < int(N[d]),
+                      ExcMessage("FE zone hand-over: a cell outside the grid"));
+        AssertThrow(!z.contains_cell(ijk),
+                    ExcMessage("FE zone hand-over: a cell of the zone is "
+                               "handed over again"));
+        if (!grid.in_box(ijk))
+          continue;
+        const auto c = grid.local_index(ijk);
+        if (grid.cell_status()[c] != BackgroundGrid<dim>::owned || mark[c])
+          continue;
+        mark[c] = 1;
+        owned.push_back(c);
       }
     // Each new element: the mean over its cell's solid points (the
     // arithmetic of cell_fields()).
     std::vector<std::array<double, 8>> sums(grid.n_local());
     for (auto &a : sums)
       a.fill(0.);
-    mpm.add_cell_state(rows, sums);
-    const auto &N = grid.n_cells();
+    mpm.add_cell_state(mark, sums);
     std::vector<std::pair<std::uint64_t, std::array<double, 7>>> seeds;
     bool                                                         empty = false;
     Point<dim>                                                   where;
-    for (const auto c : cells)
+    for (const auto c : owned)
       {
         const auto &a   = sums[c];
         const auto  ijk = grid.global_index(c);
@@ -1546,13 +1611,14 @@ namespace femp
     if (Utilities::MPI::max(empty ? 1 : 0, comm) > 0)
       {
         std::ostringstream s;
-        s << "solid: the hand-over to finite elements up to z = " << new_top
-          << " m finds a cell without solid material points at x = " << where
-          << " m: only rows of solid metal can become finite elements";
+        s << "solid: the hand-over to finite elements finds a cell without "
+             "solid material points at x = "
+          << where << " m: only cells of solid metal can become finite "
+          << "elements";
         throw CollectiveError(s.str());
       }
     const double K0    = Utilities::MPI::sum(mpm.kinetic_energy(), comm);
-    const double added = fem->raise_top(new_top, seeds, T_solid);
+    const double added = fem->add_cells(cells, seeds, T_solid);
     find_active_nodes();
     mpm.gather(zone_mask(), scaling.factor());
     rebuild_live(nullptr, 0.);
@@ -1689,6 +1755,20 @@ namespace femp
   {
     out.put(fem ? fem->top() : 0.);
     out.put(fem ? fem->setup_mass_scaling() : 0.);
+    // The zone's cells: the bounding box and its mask.
+    std::vector<std::int32_t> box;
+    std::vector<std::uint8_t> mask;
+    if (fem)
+      {
+        const auto &z = fem->fe_zone();
+        for (int d = 0; d < dim; ++d)
+          box.push_back(z.first_cell()[d]);
+        for (int d = 0; d < dim; ++d)
+          box.push_back(z.n_cells()[d]);
+        mask = z.mask();
+      }
+    out.put_vector(box);
+    out.put_vector(mask);
   }
 
   template <int dim>
@@ -1698,10 +1778,40 @@ namespace femp
     // The same on every rank: the first part's.
     const double top    = parts[0].get<double>();
     const double factor = parts[0].get<double>();
+    // The zone's cells (a checkpoint written without them holds a box up
+    // to the top).
+    std::vector<std::int32_t> box;
+    std::vector<std::uint8_t> mask;
+    if (!parts[0].at_end())
+      {
+        box  = parts[0].get_vector<std::int32_t>();
+        mask = parts[0].get_vector<std::uint8_t>();
+      }
     if (!fem)
       return; // the header's check refused a checkpoint with a zone
-    fem->set_top(top);
+    if (box.size() == 2 * dim)
+      {
+        std::array<int, dim> first, n;
+        std::size_t          n_all = 1;
+        for (int d = 0; d < dim; ++d)
+          first[d] = box[d], n[d] = box[dim + d], n_all *= n[d];
+        AssertThrow(mask.size() == n_all,
+                    ExcMessage("checkpoint: the FE zone's cells are damaged"));
+        fem->set_cells(FeZone<dim>(first, n, mask, grid.origin(), grid.h()));
+      }
+    else
+      fem->set_top(top);
     fe_setup_factor = factor;
+  }
+
+  template <int dim>
+  void
+  SolidSubCycle<dim>::set_fe_zone(const FeZone<dim> &zone)
+  {
+    AssertThrow(fem,
+                ExcMessage("an FE zone of cells needs the FE zone on "
+                           "('Solid FEM/Use finite elements = true')"));
+    fem->set_cells(zone);
   }
 
   template <int dim>

@@ -1,22 +1,29 @@
-// femp: FeZoneHandover<dim>, which cell rows of cooled metal a build hands
-// from material points to finite elements at each layer start (doc/builds.md,
+// femp: FeZoneHandover<dim>, which cells of cooled metal a build hands from
+// material points to finite elements at each layer start (doc/builds.md,
 // "Handing cooled metal to finite elements"). The hand-over itself is
-// SolidSubCycle::hand_over_rows(); this class chooses the new top of the FE
-// zone and keeps what the choice needs.
+// SolidSubCycle::hand_over_cells(); this class chooses the cells and keeps
+// what the choice needs.
 //
 //   - the fusion depth of a layer: its powder top less the bottom of the
 //     lowest cell that held molten metal (alpha >= 1/2 at or above the
 //     solidus) between its start and the next layer's start (observed after
 //     every temperature step); D: the deepest over the finished layers;
-//   - at the start of layer n, after its recoat: the rows may reach up to
+//   - at the start of layer n, after its recoat: the cells may reach up to
 //     the grid line at or below top_n - D - margin (top_n: the new
 //     powder's top), so that the new layer's melt, as deep as the deepest
 //     so far, stays a margin above them;
-//   - from the zone's top upwards, every row whose cells inside the zone's
-//     horizontal extent are all dense, and whose points are all solid (no
-//     powder, no fluid) and below the hand-over temperature, is taken, up
-//     to the first row that is not.
-// Every rank takes the same decision (reductions over the ranks).
+//   - a cell inside the zone's horizontal extent, below that line and
+//     outside the zone is a candidate when it is dense and its points are
+//     all solid (no powder, no fluid) and below the hand-over temperature;
+//     the candidates connected to the zone through faces of candidates
+//     (a flood fill from the zone's cells over face neighbours) are
+//     taken. A cell that is not dense (a lack-of-fusion pore, its
+//     neighbours) stays material points, an island inside the zone once
+//     the columns around it rise past it; a row of candidates only is
+//     taken whole, as a row of cells.
+// Every rank takes the same decision (reductions over the ranks: every
+// rank holds the candidates' flags and the zone's cells over the
+// candidate box).
 //
 // A cell is dense when it holds points, no cell of a pore (PoreDetector:
 // gas enclosed in the fused metal) lies in its 3^dim neighbourhood (the
@@ -65,10 +72,11 @@
 // The zone's points stay where the hand-over left them, while the zone's
 // top face moves with its nodes (thermal expansion) and the points above
 // with it: a lift u of the face would read as a gap of about u/h in the
-// row above. The points of the zone's top row are therefore taken u higher
-// (u interpolated between the face's nodes, SolidSubCycle::zone_top_lift()),
-// so that zone and metal above form one lattice again: dense metal over an
-// expanded zone reads 1. The whole top row moves by the face's lift, which
+// row above. The points of each column's top zone cell are therefore taken
+// u higher (u interpolated between the nodes of the cell's top face,
+// SolidSubCycle::zone_top_lift()), so that zone and metal above form one
+// lattice again: dense metal over an expanded zone reads 1. The whole top
+// cell moves by the face's lift, which
 // overstates its lower points' displacement by the row's own strain times
 // their depth (below 1 % of h). A negative lift (a contracted zone) is
 // taken as 0: the points above are held on the grid line (below), where the
@@ -98,6 +106,7 @@
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -153,10 +162,11 @@ namespace femp
     observe(const std::vector<double> &T, const std::vector<double> &alpha);
 
     /// At the start of a layer whose powder reaches @p new_top (m), after
-    /// its recoat: close the fusion depth of the layer before and return
-    /// the grid line the FE zone may rise to (m), or a value at or below
-    /// the zone's top when no row may be handed over. @p zone: the FE
-    /// zone's cells of the local box (SolidSubCycle::fe_zone_cells());
+    /// its recoat: close the fusion depth of the layer before, choose the
+    /// cells to hand over (chosen_cells()) and return the top of the zone's
+    /// bounding box with them (m; the zone's top when none is taken).
+    /// @p zone: the FE zone's cells of the local box
+    /// (SolidSubCycle::fe_zone_cells());
     /// @p top_lift: the vertical displacement of the zone's top-face nodes
     /// since its top was set (SolidSubCycle::zone_top_lift(); empty: 0).
     /// @p alpha: the metal fraction per cell of the local box (owned values
@@ -211,6 +221,21 @@ namespace femp
       return reason;
     }
 
+    /// The cells the last choice took (structured indices, lexicographic
+    /// order, x fastest; the same on every rank; empty: none).
+    const std::vector<std::array<int, dim>> &
+    chosen_cells() const
+    {
+      return chosen;
+    }
+    /// The mass of the points of the cells the last choice took (kg; 2D:
+    /// kg/m; over the ranks).
+    double
+    chosen_point_mass() const
+    {
+      return chosen_mass;
+    }
+
     /// The least fill of each row the last choice looked at, from the
     /// zone's top upwards (over the cells inside the zone's horizontal
     /// extent; empty when no row was looked at).
@@ -259,6 +284,8 @@ namespace femp
     double              closed_lowest = std::numeric_limits<double>::infinity();
     std::string         reason;
     std::vector<double> row_fill, row_mass, row_points;
+    std::vector<std::array<int, dim>> chosen;
+    double                            chosen_mass = 0;
   };
 } // namespace femp
 

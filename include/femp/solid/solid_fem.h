@@ -4,27 +4,31 @@
 // Flanagan-Belytschko hourglass control, lumped mass, central difference;
 // transition nodes (eqs. 14-17).
 //
-// Mesh: its own parallel::distributed::Triangulation of the FE zone (a box
-// on grid lines), cells of the grid's size h, so that every element covers
-// one background-grid cell and every FE node coincides with a grid node
-// (N_Ii = 1 at transition nodes). p4est partitions it independently of the
-// background grid. A DoFHandler with FE_Q<dim>(1) defines the owned and
-// ghost nodes of a rank (the Utilities::MPI::Partitioner); the hot loops use
-// their own numbering: the local nodes are numbered lexicographically in
-// the bounding box of their structured indices (x fastest), node data
-// (velocity, force, inverse mass, fixed components) are one flat array per
-// component over that box, and the elements are processed in lexicographic
-// order, so that a block of simd_lanes elements of one x-row has its
-// corners at simd_lanes consecutive nodes (vector loads; the forces of the
-// block added as vectors, no two lanes on the same node). Nodal force sums
-// over ranks copy the shared nodes (ghosts and owned nodes that are ghosts
-// elsewhere) through a LinearAlgebra::distributed::Vector (compress(add),
-// update_ghost_values); nothing is copied on one rank.
-// Element data (corner box indices, stress state, temperatures) are flat
-// arrays. The temperature of an element is that of its grid cell (eq. 2):
-// the grid rank that owns the cell sends it, once per advance() (not per
-// solid step), through a Utilities::MPI::NoncontiguousPartitioner keyed by
-// the cell's lexicographic index in the zone.
+// Mesh: its own parallel::distributed::Triangulation of the FE zone's
+// bounding box (a box on grid lines), cells of the grid's size h, so that
+// every element covers one background-grid cell and every FE node
+// coincides with a grid node (N_Ii = 1 at transition nodes). The zone is a
+// set of grid cells (fe_zone.h): a cell of the box outside it (an island
+// of material points inside the zone, or beside a lower column) is no
+// element; a node of no element carries no mass and stays at rest (its
+// velocity is never read: the grid's nodes there are the MPM's). p4est
+// partitions it independently of the background grid. A DoFHandler with
+// FE_Q<dim>(1) defines the owned and ghost nodes of a rank (the
+// Utilities::MPI::Partitioner); the hot loops use their own numbering: the
+// local nodes are numbered lexicographically in the bounding box of their
+// structured indices (x fastest), node data (velocity, force, inverse mass,
+// fixed components) are one flat array per component over that box, and the
+// elements are processed in lexicographic order, so that a block of simd_lanes
+// elements of one x-row has its corners at simd_lanes consecutive nodes (vector
+// loads; the forces of the block added as vectors, no two lanes on the same
+// node). Nodal force sums over ranks copy the shared nodes (ghosts and owned
+// nodes that are ghosts elsewhere) through a LinearAlgebra::distributed::Vector
+// (compress(add), update_ghost_values); nothing is copied on one rank. Element
+// data (corner box indices, stress state, temperatures) are flat arrays. The
+// temperature of an element is that of its grid cell (eq. 2): the grid rank
+// that owns the cell sends it, once per advance() (not per solid step), through
+// a Utilities::MPI::NoncontiguousPartitioner keyed by the cell's lexicographic
+// index in the zone.
 //
 // Element (undeformed cube of side h, small-displacement geometry; the
 // Jaumann spin is still taken from the velocity gradient):
@@ -46,8 +50,9 @@
 // SIMD blocks of simd_lanes elements (one per lane of simd_double, element
 // state stored per block, update_stress_block of constitutive.h).
 //
-// Transition nodes (doc/method.md, "Solid"): FE nodes on a face of the zone
-// that is not a domain face (they touch grid cells outside the zone). They are
+// Transition nodes (doc/method.md, "Solid"): nodes of elements that touch
+// a grid cell of the domain outside the zone (for a box zone: the nodes on
+// its faces that are not domain faces). They are
 // numbered globally from geometry (every rank knows all of them); see
 // solid_sub_cycle.h for the exchange of their sums.
 #ifndef femp_solid_fem_h
@@ -153,7 +158,7 @@ namespace femp
     {
       return in_zone_cell;
     }
-    /// The FE zone as a box of grid cells.
+    /// The FE zone: a set of grid cells, a mask over its bounding box.
     const FeZone<dim> &
     fe_zone() const
     {
@@ -211,7 +216,7 @@ namespace femp
       return tr_fix[t];
     }
     /// Displacement of transition node @p t since setup() or the last
-    /// raise_top() (m, dim values): its velocity integrated over the solid
+    /// add_cells() (m, dim values): its velocity integrated over the solid
     /// steps since (the zone's top face has moved this far from the grid
     /// line; the hand-over's fill reads it, fe_zone_handover.h).
     const double *
@@ -299,37 +304,38 @@ namespace femp
     double
     largest_distortion() const;
 
-    /// Raise the zone's top to the grid line @p new_top (m, above the
-    /// current top, below the domain's top), between two solid steps: the
-    /// FE triangulation, nodes, masses and transition nodes are built anew
-    /// for the taller box (the setup's arithmetic, at the mass-scaling
-    /// factor in use), the old elements keep their whole state (stress,
-    /// plastic strain, viscous pressure, temperatures, hourglass
-    /// amplitudes, volume change) and the old nodes their velocity (a node
-    /// of the old top takes its transition velocity, every transition node
-    /// a displacement of 0: the new top is the grid line); a new element takes
-    /// from @p new_cells (this rank's entries: the cell's lexicographic
-    /// index in the grid (x fastest), stress {xx, yy, zz, xy, xz, yz},
-    /// plastic strain) its stress and plastic strain and the cell
-    /// temperature of @p T, at rest and without hourglass amplitudes; the
-    /// new nodes start at rest. Every new element must be in @p new_cells
-    /// of some rank. Collective (all-gathers the zone's state: once per
-    /// hand-over). Returns the elements added (global).
+    /// Add the grid cells @p cells (structured indices inside the grid,
+    /// none in the zone, the same list on every rank) to the zone, between
+    /// two solid steps: the FE triangulation of the new bounding box, its
+    /// nodes, masses and transition nodes are built anew (the setup's
+    /// arithmetic, at the mass-scaling factor in use), the old elements
+    /// keep their whole state (stress, plastic strain, viscous pressure,
+    /// temperatures, hourglass amplitudes, volume change) and the old
+    /// nodes their velocity (an old transition node takes its transition
+    /// velocity, every transition node a displacement of 0: the zone's
+    /// faces are the grid lines); a new element takes from @p new_cells
+    /// (this rank's entries: the cell's lexicographic index in the grid
+    /// (x fastest), stress {xx, yy, zz, xy, xz, yz}, plastic strain) its
+    /// stress and plastic strain and the cell temperature of @p T, at rest
+    /// and without hourglass amplitudes; the new nodes start at rest.
+    /// Every new element must be in @p new_cells of some rank. Collective
+    /// (all-gathers the zone's state: once per hand-over). Returns the
+    /// elements added (global).
     std::uint64_t
-    raise_top(const double new_top,
+    add_cells(const std::vector<std::array<int, dim>> &cells,
               const std::vector<std::pair<std::uint64_t, std::array<double, 7>>>
                                         &new_cells,
               const std::vector<double> &T);
 
-    /// The zone's top, m: 'Zone upper corner', or the grid line a
-    /// hand-over raised it to (raise_top(), set_top()).
+    /// The top of the zone's bounding box, m: 'Zone upper corner', or the
+    /// grid line a hand-over raised it to (add_cells(), set_top()).
     double
     top() const
     {
       return prm.upper_corner[dim - 1];
     }
     /// The mass-scaling factor the zone's lumped masses were built at (by
-    /// setup() or raise_top()); every later factor scales those masses.
+    /// setup() or add_cells()); every later factor scales those masses.
     double
     setup_mass_scaling() const
     {
@@ -340,6 +346,12 @@ namespace femp
     /// corner' (the zone of a checkpoint that a hand-over raised).
     void
     set_top(const double new_top);
+    /// Before setup(): build the zone @p zone (cells of the grid, the same
+    /// on every rank; e.g. a checkpoint's zone, or a zone that is not a
+    /// box) instead of the box of 'Zone lower corner' and 'Zone upper
+    /// corner'.
+    void
+    set_cells(const FeZone<dim> &zone);
 
     /// Checkpoint, between two solid steps: per owned element, keyed by its
     /// zone index, the stress, plastic strain, viscous pressure,
@@ -374,15 +386,19 @@ namespace femp
 
     parallel::distributed::Triangulation<dim> tria;
     FE_Q<dim>                                 fe;
-    /// Made anew with the mesh (raise_top() clears the triangulation,
+    /// Made anew with the mesh (add_cells() clears the triangulation,
     /// which no DoFHandler may then hold).
     std::unique_ptr<DoFHandler<dim>>                   dof_handler;
     std::shared_ptr<const Utilities::MPI::Partitioner> node_partitioner;
     LinearAlgebra::distributed::Vector<double>         force; ///< dim per node
 
-    /// The zone (fe_zone.h); zlo, zn: its first cell index and cells per
-    /// direction, for the index arithmetic of the mesh.
+    /// The zone (fe_zone.h); zlo, zn: the first cell index and cells per
+    /// direction of its bounding box, for the index arithmetic of the mesh
+    /// (the mesh covers the bounding box; its cells outside the zone are
+    /// no elements). zone_given: the zone was set by set_cells() or grown
+    /// by a hand-over (else setup() takes the parameters' box).
     FeZone<dim>          zone;
+    bool                 zone_given = false;
     std::array<int, dim> zlo, zn;
     double               V = 0, bb = 0, mass_scale = 1;
     Tensor<1, dim>       g;
@@ -477,7 +493,7 @@ namespace femp
     /// Largest hourglass_distortion() after the last update_elements(), and
     /// since setup (this rank's elements).
     double max_distortion = 0, max_distortion_seen = 0;
-    /// After load_state() or raise_top() set the elements and nodes: the
+    /// After load_state() or add_cells() set the elements and nodes: the
     /// spare lanes of the last block repeat the last element, the end
     /// temperatures become the start ones, and the element forces of the
     /// next step are computed from the state (the arithmetic of the end of
@@ -492,7 +508,7 @@ namespace femp
     // Transition nodes (global, every rank).
     std::vector<std::array<int, dim>> tr_ijk;
     std::vector<double>               tr_mass, tr_vel;
-    /// Displacement since setup() or the last raise_top() (dim per node).
+    /// Displacement since setup() or the last add_cells() (dim per node).
     std::vector<double>       tr_disp;
     std::vector<std::uint8_t> tr_fix;
     /// (element, corner, transition index) of this rank's elements.
@@ -543,6 +559,17 @@ namespace femp
     zone_node_id(const std::array<int, dim> &ijk) const;
     bool
     is_transition(const std::array<int, dim> &ijk) const;
+    /// Of the 2^dim cells around the node @p ijk inside the domain: how
+    /// many lie in the zone (entry 0) and how many do not (entry 1).
+    std::array<unsigned int, 2>
+    cells_around(const std::array<int, dim> &ijk) const;
+    /// The zone becomes @p larger (which holds it): add_cells() after its
+    /// checks.
+    std::uint64_t
+    grow(const FeZone<dim> &larger,
+         const std::vector<std::pair<std::uint64_t, std::array<double, 7>>>
+                                   &new_cells,
+         const std::vector<double> &T);
     std::uint8_t
     fix_bits(const std::array<int, dim>              &ijk,
              const std::array<std::uint8_t, 2 * dim> &face_bits) const;

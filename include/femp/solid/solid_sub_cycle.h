@@ -404,10 +404,13 @@ namespace femp
       return zone_mask();
     }
     /// The vertical displacement (m) of the FE zone's top-face nodes since
-    /// the zone's top was set (initialize() or the last hand_over_rows()),
-    /// lexicographic over the face's nodes (x fastest, from the zone's
-    /// first cell); the same on every rank; empty without a zone or when
-    /// the zone's top is the domain's. The hand-over's fill reads it
+    /// the zone was last set (initialize() or the last hand-over): per
+    /// column of the zone's bounding box (its cells across the last
+    /// direction, lexicographic, x fastest, from the box's first cell) the
+    /// 2^(dim-1) nodes of the top face of the column's highest zone cell
+    /// (bit d of the node: upper side in direction d); 0 for a column
+    /// without zone cells; the same on every rank; empty without a zone or
+    /// when a column's top is the domain's. The hand-over's fill reads it
     /// (FeZoneHandover::choose_top()).
     std::vector<double>
     zone_top_lift() const;
@@ -436,6 +439,11 @@ namespace femp
     /// the points handed over (global).
     std::array<double, 2>
     hand_over_rows(const double new_top);
+    /// The same for the grid cells @p cells (structured indices, the same
+    /// list on every rank, none in the zone; FeZoneHandover::
+    /// chosen_cells()): the zone becomes any set of cells.
+    std::array<double, 2>
+    hand_over_cells(const std::vector<std::array<int, dim>> &cells);
 
     /// Checkpoint (doc/checkpoint.md), after an advance(): the sub-step
     /// clock, the temperatures it interpolates between, the energy
@@ -451,20 +459,28 @@ namespace femp
     /// directory opened none).
     void
     load_state(std::vector<StateReader> &parts, const std::string &directory);
-    /// Checkpoint section "fe zone": the FE zone's top (m) and the
+    /// Checkpoint section "fe zone": the FE zone's top (m), the
     /// mass-scaling factor its masses were built at (0 and 0 without a
-    /// zone). A hand-over raises the zone; the section lets a resumed run
-    /// build the same zone before it reads the elements.
+    /// zone), and its cells (the bounding box's first cell and cells per
+    /// direction, the mask; none without a zone). A hand-over adds cells;
+    /// the section lets a resumed run build the same zone before it reads
+    /// the elements.
     void
     save_fe_zone(StateWriter &out) const;
     /// Before initialize(), when resuming: read that section (@p parts, one
     /// per saved rank), so that initialize() builds the zone up to the
     /// saved top with the masses of the saved factor, as the run that
-    /// wrote the checkpoint held it; load_state() then finds every element
+    /// wrote the checkpoint held it (its cells, where the section has
+    /// them); load_state() then finds every element
     /// and node of the checkpoint. Without this call the zone is the
     /// scene's.
     void
     resume_fe_zone(std::vector<StateReader> &parts);
+    /// Before initialize(): the FE zone is the set of grid cells @p zone
+    /// (the same on every rank; it need not be a box: SolidFEM::
+    /// set_cells()) instead of the parameters' box. Needs the FE zone on.
+    void
+    set_fe_zone(const FeZone<dim> &zone);
     /// The FE zone as it is now (it rises with hand_over_rows()); null
     /// without one.
     const FeZone<dim> *
