@@ -21,25 +21,26 @@ namespace femp
     table.add(
       "Hand over cooled metal",
       enabled,
-      "At each layer start, after its recoat, hand the cell rows of metal "
-      "that have cooled below 'Hand-over temperature' and lie 'Hand-over "
-      "margin' below the deepest melt expected of the new layer from "
-      "material points to finite elements: the FE zone of the solid rises "
-      "behind the build, each new element taking its cell's mean stress and "
-      "plastic strain (doc/builds.md, \"Handing cooled metal to finite "
-      "elements\"). Needs the heat, the solid with its FE zone and a layer "
-      "schedule. A checkpoint records the raised zone and the fusion depths "
-      "(doc/checkpoint.md).");
+      "At each layer start, after its recoat, hand the cells of dense metal "
+      "that have cooled below 'Hand-over temperature', lie 'Hand-over "
+      "margin' below the deepest melt expected of the new layer and are "
+      "connected to the FE zone from material points to finite elements: "
+      "the FE zone of the solid rises behind the build (a pore and its "
+      "neighbours stay points inside it), each new element taking its "
+      "cell's mean stress and plastic strain (doc/builds.md, \"Handing "
+      "cooled metal to finite elements\"). Needs the heat, the solid with "
+      "its FE zone and a layer schedule. A checkpoint records the zone's "
+      "cells and the fusion depths (doc/checkpoint.md).");
     table.add("Hand-over temperature",
               temperature,
               Patterns::Double(),
               "With 'Hand over cooled metal': every material point of a "
-              "handed row is below this temperature, K; range (0, "
+              "handed cell is below this temperature, K; range (0, "
               "Material/Solidus).");
     table.add("Hand-over margin",
               margin,
               Patterns::Double(),
-              "With 'Hand over cooled metal': the handed rows stay this "
+              "With 'Hand over cooled metal': the handed cells stay this "
               "far below the new layer's powder top less the deepest "
               "fusion depth of the layers so far, m; range [0, inf).");
     table.leave_subsection();
