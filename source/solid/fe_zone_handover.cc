@@ -1,4 +1,4 @@
-// femp: the choice of the cell rows a build hands from material points to
+// femp: the choice of the cells a build hands from material points to
 // finite elements at each layer start (see the header and doc/builds.md,
 // "Handing cooled metal to finite elements").
 #include <deal.II/base/mpi.h>
