@@ -42,7 +42,10 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   film = true); 'piston' (the sub-cell film between the boiling surface
   and the melting front: Heat transfer/Front wall piston = true); 'expel'
   (the melt of boiling surface cells leaves at the Bernoulli speed of
-  their recoil: Melt flow/Front wall expulsion = true); 'a+b'
+  their recoil: Melt flow/Front wall expulsion = true); 'surfactant'
+  (316L only: dsigma/dT from the surfactant model with the sulphur
+  activity from Pichler et al.'s slope, Melt flow/Surface tension model =
+  surfactant) and 'linear' (the constant dsigma/dT); 'a+b'
   combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
@@ -277,7 +280,16 @@ SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
                  # sub-cell expulsion of the melt of boiling surface cells
                  # at the recoil's Bernoulli speed (Melt flow/Front wall
                  # expulsion, doc/flow.md)
-                 "expel": {"Melt flow/Front wall expulsion": "true"}})
+                 "expel": {"Melt flow/Front wall expulsion": "true"},
+                 # dsigma/dT of 316L from the surfactant model (Sahoo et
+                 # al. 1988, Fe-S constants) with the sulphur activity that
+                 # reproduces Pichler et al.'s slope over 1700-2200 K
+                 # (doc/flow.md "Surface tension model"; 316L cases only),
+                 # and the linear model explicitly
+                 "surfactant": {
+                     "Melt flow/Surface tension model": "surfactant",
+                     "Melt flow/Surfactant/Activity": "0.02313"},
+                 "linear": {"Melt flow/Surface tension model": "linear"}})
 
 
 def csv_rows(path):

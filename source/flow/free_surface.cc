@@ -57,9 +57,11 @@ namespace femp
     table.add("Surface tension temperature derivative",
               surface_tension_gradient,
               Patterns::Double(),
-              "dsigma/dT of the Marangoni stress, N/(m K) (negative "
-              "for most metals; 0: no Marangoni stress). Range any "
-              "real number.");
+              "dsigma/dT of the Marangoni stress with the linear Surface "
+              "tension model, N/(m K) (negative for most metals; 0: no "
+              "Marangoni stress). Range any real number.");
+    SurfaceTension::add_model_parameter(table, surface_tension_model);
+    surfactant.add_parameters(table);
     table.add("Recoil coefficient",
               recoil_coefficient,
               Patterns::Double(0., 1.),
@@ -101,6 +103,7 @@ namespace femp
             "Melt flow/Surface tension",
             surface_tension,
             "it must be non-negative (N/m)");
+    surfactant.check();
     // One pass maps the curvature's cell-to-cell alternation on a chain of
     // surface cells to -1/3 of itself (the mean of a cell and its two
     // neighbours): an odd number of passes turns the restoring capillary
@@ -120,6 +123,7 @@ namespace femp
                                 const BackgroundGrid<dim> &grid,
                                 const MaterialPoints<dim> &points)
       : prm(prm)
+      , tension(prm.surface_tension_law())
       , mat(material)
       , grid(grid)
       , points(points)
@@ -146,8 +150,7 @@ namespace femp
                            const std::vector<std::uint32_t> &fluid_cells,
                            const std::vector<double>        *temperature)
   {
-    const bool thermal =
-      prm.surface_tension_gradient != 0 || prm.recoil_coefficient > 0;
+    const bool thermal = tension.marangoni() || prm.recoil_coefficient > 0;
     AssertThrow(!thermal || temperature != nullptr,
                 ExcMessage("Melt flow: Marangoni stress and recoil pressure "
                            "need the cell temperature (CellFields)."));
@@ -388,7 +391,8 @@ namespace femp
     std::fill(p_surface.begin(), p_surface.end(), 0.);
     std::fill(p_capillary.begin(), p_capillary.end(), 0.);
     std::fill(surface_mark.begin(), surface_mark.end(), 0.);
-    if (prm.surface_tension_gradient != 0)
+    const bool marangoni = tension.marangoni();
+    if (marangoni)
       for (int d = 0; d < dim; ++d)
         std::fill(surface_force[d].begin(), surface_force[d].end(), 0.);
     for (const auto c : fluid_cells)
@@ -439,9 +443,11 @@ namespace femp
         p_capillary[c]  = ps;
         surface_mark[c] = 1;
         p_surface[c]    = ps; // the recoil is added by add_recoil_pressure()
-        if (prm.surface_tension_gradient == 0)
+        if (!marangoni)
           continue;
         const double T = (*temperature)[c];
+        // dsigma/dT at the cell's temperature (constant: linear model).
+        const double dsdT = tension.gradient(T);
         // Unit normal of the cell; grad T from metal neighbours.
         double nn = 0;
         for (int d = 0; d < dim; ++d)
@@ -467,8 +473,7 @@ namespace femp
               const std::ptrdiff_t o = side ? cs[d] : -cs[d];
               if (type[c + o] != gas)
                 continue;
-              const double w =
-                prm.surface_tension_gradient * face * std::abs(nc[d]);
+              const double      w  = dsdT * face * std::abs(nc[d]);
               const std::size_t n0 = grid.first_node_of_cell(c);
               for (unsigned int k = 0; k < n_corners; ++k)
                 if ((int((k >> d) & 1)) == side)
@@ -477,7 +482,7 @@ namespace femp
                       w * (gT[e] - ndotg * nc[e]);
             }
       }
-    if (prm.surface_tension_gradient != 0)
+    if (marangoni)
       for (int d = 0; d < dim; ++d)
         grid.sum_shared_nodes(surface_force[d]);
   }

@@ -197,6 +197,8 @@ namespace femp
     surface.parse_parameters(prm);
     surface_tension          = surface.surface_tension;
     surface_tension_gradient = surface.surface_tension_gradient;
+    surface_tension_model    = surface.surface_tension_model;
+    surfactant               = surface.surfactant;
     recoil_coefficient       = surface.recoil_coefficient;
     recoil_temperature       = surface.recoil_temperature;
     curvature_smoothing      = surface.curvature_smoothing;
@@ -248,6 +250,8 @@ namespace femp
     typename FreeSurface<dim>::Parameters s;
     s.surface_tension          = surface_tension;
     s.surface_tension_gradient = surface_tension_gradient;
+    s.surface_tension_model    = surface_tension_model;
+    s.surfactant               = surfactant;
     s.recoil_coefficient       = recoil_coefficient;
     s.recoil_temperature       = recoil_temperature;
     s.curvature_smoothing      = curvature_smoothing;
@@ -604,6 +608,7 @@ namespace femp
   {
     Section     section(timer, "flow: predictor");
     const auto &surface_force = surface.marangoni_force();
+    const bool  marangoni     = prm.surface_parameters().marangoni();
     // Viscous force -mu K u per fluid cell, summed over ranks; per cell
     // also its dissipation mu u^T K u, for check_viscous_energy().
     const bool viscous = prm.viscosity > 0;
@@ -661,7 +666,7 @@ namespace femp
             double acc = prm.gravity[d];
             if (viscous && volume[n] > 0)
               acc += force[d][n] / (rho * volume[n]);
-            if (prm.surface_tension_gradient != 0 && volume[n] > 0)
+            if (marangoni && volume[n] > 0)
               acc += surface_force[d][n] / (rho * volume[n]);
             u_new[d][n] = (u_old[d][n] + dt * acc) / damping;
           }

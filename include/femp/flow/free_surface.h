@@ -15,7 +15,9 @@
 //    p_s, from the cell's temperature limited to its surface neighbours'
 //    (or the cell's own, or their median: Melt flow/Recoil temperature);
 //  - the Marangoni traction dsigma/dT (grad T - (n.grad T) n) on the
-//    fluid-gas faces, weighted by |n_d|, spread to the face nodes.
+//    fluid-gas faces, weighted by |n_d|, spread to the face nodes, with
+//    dsigma/dT constant or, with the surfactant model, at the surface
+//    cell's temperature (SurfaceTension).
 // IncompressibleFlow imposes p_s as the Dirichlet pressure at the interface
 // (ghost-fluid method, see PressureSolver) and adds the nodal Marangoni
 // forces in its predictor.
@@ -27,6 +29,7 @@
 #include <femp/base/material.h>
 #include <femp/base/parameter_table.h>
 #include <femp/flow/flow_cells.h>
+#include <femp/flow/surface_tension.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/material_points.h>
 
@@ -46,7 +49,13 @@ namespace femp
     {
       double surface_tension          = 0; ///< sigma, N/m (0: off)
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
-      double recoil_coefficient       = 0; ///< zeta_p (0: no recoil)
+      /// The law of dsigma/dT (Melt flow/Surface tension model): the
+      /// constant surface_tension_gradient, or the surfactant model with
+      /// the constants of Melt flow/Surfactant.
+      SurfaceTension::Model surface_tension_model =
+        SurfaceTension::Model::linear;
+      SurfaceTension::Surfactant surfactant;
+      double recoil_coefficient = 0; ///< zeta_p (0: no recoil)
       /// Which surface temperature the recoil pressure of a surface cell
       /// takes (Melt flow/Recoil temperature).
       enum class RecoilTemperature
@@ -70,8 +79,8 @@ namespace femp
 
       /// The free-surface entries of the subsection Melt flow (the caller
       /// has entered it): Curvature, Curvature smoothing, Surface tension,
-      /// Surface tension temperature derivative, Recoil coefficient, Recoil
-      /// temperature.
+      /// Surface tension temperature derivative, Surface tension model (and
+      /// the subsection Surfactant), Recoil coefficient, Recoil temperature.
       static void
       declare_parameters(ParameterHandler &prm);
       /// Declare or read these entries, each from its member.
@@ -85,8 +94,21 @@ namespace femp
       bool
       any() const
       {
-        return surface_tension > 0 || surface_tension_gradient != 0 ||
-               recoil_coefficient > 0;
+        return surface_tension > 0 || marangoni() || recoil_coefficient > 0;
+      }
+      /// The law of dsigma/dT of the Marangoni stress.
+      SurfaceTension
+      surface_tension_law() const
+      {
+        return SurfaceTension(surface_tension_model,
+                              surface_tension_gradient,
+                              surfactant);
+      }
+      /// Whether the Marangoni stress is on.
+      bool
+      marangoni() const
+      {
+        return surface_tension_law().marangoni();
       }
     };
 
@@ -152,7 +174,7 @@ namespace femp
       return p_capillary;
     }
     /// Marangoni force per node, N (2D: N/m), summed over ranks; zero when
-    /// dsigma/dT = 0.
+    /// the Marangoni stress is off.
     const std::array<std::vector<double>, dim> &
     marangoni_force() const
     {
@@ -218,6 +240,7 @@ namespace femp
     smooth_capillary_pressure(const std::vector<std::uint32_t> &fluid_cells);
 
     const Parameters           prm;
+    const SurfaceTension       tension; // dsigma/dT of the Marangoni stress
     const Material            &mat;
     const BackgroundGrid<dim> &grid;
     const MaterialPoints<dim> &points;

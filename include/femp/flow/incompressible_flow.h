@@ -46,6 +46,7 @@
 #include <femp/flow/front_wall_expulsion.h>
 #include <femp/flow/front_wall_film.h>
 #include <femp/flow/pressure_solver.h>
+#include <femp/flow/surface_tension.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/material_points.h>
@@ -104,6 +105,11 @@ namespace femp
       bool   front_wall_expulsion     = false;
       double surface_tension          = 0; ///< sigma, N/m (0: off)
       double surface_tension_gradient = 0; ///< dsigma/dT, N/(m K)
+      /// The law of dsigma/dT (Melt flow/Surface tension model) and the
+      /// constants of its surfactant model (Melt flow/Surfactant).
+      SurfaceTension::Model surface_tension_model =
+        SurfaceTension::Model::linear;
+      SurfaceTension::Surfactant surfactant;
       /// zeta_p (0: no recoil); the evaporation data are the Material's.
       double recoil_coefficient = 0;
       /// The surface temperature of the recoil (Melt flow/Recoil
