@@ -40,48 +40,22 @@ namespace
 {
   constexpr int dim = 2;
 
-  /// Prescribed cell temperatures at time @p t: a hot spot at (0.8, 0.3)
-  /// rising to 100 K above 300 K at t = 1 s and back to 300 K at t = 2 s.
-  void
-  temperatures(const BackgroundGrid<dim> &grid,
-               const double               t,
-               std::vector<double>       &T)
+  /// The hot spot's rise above 300 K at time @p t: 100 K at t = 1 s, back
+  /// to 0 at t = 2 s.
+  double
+  rise(const double t)
   {
     const double a = t <= 1 ? t : std::max(0., 2 - t);
-    hot_spot(grid, Point<dim>(0.8, 0.3), 100 * a, 0.05, T);
+    return 100 * a;
   }
 
-  struct Scene
+  struct Scene : HandoverBlock
   {
     Scene(MPI_Comm comm)
-        : block(Point<dim>(1.6, 0.8), h, 0.8, unit_material(), comm)
-        , sm(block_material("300:0.02, 400:0.005", block.material))
+        : HandoverBlock(comm, rise)
     {
-      sm.poisson_ratio = 0.3;
-      auto sp          = block_supports<dim>();
-      sp.gravity[1]    = -0.01;
-      const auto fp    = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2));
-      solid            = std::make_unique<SolidSubCycle<dim>>(
-        sp, fp, sm, block.grid, *block.points);
-      T = block.grid.make_field(300.);
       solid->initialize(T, "");
     }
-    /// Advance through the temperature steps s0 + 1 ... s1 (0.05 s each).
-    void
-    run(const int s0, const int s1)
-    {
-      for (int s = s0 + 1; s <= s1; ++s)
-        {
-          const double t = 0.05 * s;
-          temperatures(block.grid, t, T);
-          solid->advance(t, T, s == s1);
-        }
-    }
-    static constexpr double             h = 0.1;
-    SolidBlock<dim>                     block;
-    SolidMaterial                       sm; ///< reads block.material
-    std::unique_ptr<SolidSubCycle<dim>> solid;
-    std::vector<double>                 T;
   };
 } // namespace
 

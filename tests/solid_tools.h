@@ -9,6 +9,7 @@
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -170,6 +171,46 @@ namespace femp_test
     sp.energy_file  = "";
     return sp;
   }
+
+  /// The hand-over block of the FE-zone tests: a 1.6 m x 0.8 m block of
+  /// 0.1 m cells (2D), its FE zone below y = 0.2 m, gravity 0.01 m/s^2, an
+  /// elastic-plastic material (yield 0.02 Pa at 300 K, 0.005 Pa at 400 K,
+  /// Poisson 0.3) and a hot spot at (0.8, 0.3) whose rise above 300 K
+  /// (K) at time t (s) is @p rise(t). Not initialized: the caller calls
+  /// solid->initialize() (or resumes a checkpoint first).
+  struct HandoverBlock
+  {
+    HandoverBlock(MPI_Comm comm, std::function<double(double)> rise)
+        : block(Point<2>(1.6, 0.8), h, 0.8, unit_material(), comm)
+        , sm(block_material("300:0.02, 400:0.005", block.material))
+        , spot_rise(std::move(rise))
+    {
+      sm.poisson_ratio = 0.3;
+      auto sp          = block_supports<2>();
+      sp.gravity[1]    = -0.01;
+      const auto fp    = fe_zone(Point<2>(0, 0), Point<2>(1.6, 0.2));
+      solid            = std::make_unique<SolidSubCycle<2>>(
+        sp, fp, sm, block.grid, *block.points);
+      T = block.grid.make_field(300.);
+    }
+    /// Advance through the temperature steps s0 + 1 ... s1 (0.05 s each).
+    void
+    run(const int s0, const int s1)
+    {
+      for (int s = s0 + 1; s <= s1; ++s)
+        {
+          const double t = 0.05 * s;
+          hot_spot(block.grid, Point<2>(0.8, 0.3), spot_rise(t), 0.05, T);
+          solid->advance(t, T, s == s1);
+        }
+    }
+    static constexpr double           h = 0.1;
+    SolidBlock<2>                     block;
+    SolidMaterial                     sm; ///< reads block.material
+    std::function<double(double)>     spot_rise;
+    std::unique_ptr<SolidSubCycle<2>> solid;
+    std::vector<double>               T;
+  };
 } // namespace femp_test
 
 #endif
