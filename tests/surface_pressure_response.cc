@@ -82,6 +82,10 @@ namespace
     unsigned int steps = 0;
   };
 
+  /// The layer with cells of @p h until @p t_end, FLIP fraction @p flip:
+  /// @p linear: @p nsteps equal steps (part 1 and 3), else steps of the
+  /// convective limit at the Bernoulli speed (part 2); @p film > 0: only
+  /// the top @p film of the layer is liquid, the rest solid points.
   Result
   run(const double h,
       const double t_end,
