@@ -15,13 +15,13 @@
 //     2 t_1 p_1 tanh(kD)/k. Checks: the error at 2 um, the observed order
 //     from 8 to 2 um, the momentum at 2 um.
 //  2. Energy (nonlinear), the same layer until t_2 = 2 us (the melt at
-//     11-13 m/s, the surface at x = 0 about 10 um down), steps of the
-//     convective limit at the Bernoulli speed sqrt(2 (p_max - p_min)/rho):
-//     the recoil does the work W = sum over the columns of p(x) times the
-//     volume the column lost (exact for a surface pressure that depends on
-//     x only: its power is -int p dEta/dt dx); the melt's kinetic energy
-//     must be W less the viscous dissipation (a few per cent here). Check:
-//     kinetic energy / W in [0.9, 1] at every cell size.
+//     11-13 m/s, the surface at x = 0 about 10 um down by the linear estimate),
+//     steps of the convective limit at the Bernoulli speed sqrt(2 (p_max -
+//     p_min)/rho): the recoil does the work W = sum over the columns of p(x)
+//     times the volume the column lost (exact for a surface pressure that
+//     depends on x only: its power is -int p dEta/dt dx); the melt's kinetic
+//     energy must be W less the viscous dissipation (a few per cent here).
+//     Check: kinetic energy / W in [0.9, 1] at every cell size.
 //  3. A film delta = 16 um thick on a solid substrate (no-slip nodes), the
 //     impulsive start of part 1 with 20 and 80 steps, FLIP fraction 0.95
 //     (femp's default) and 1: its momentum against the inviscid plug
