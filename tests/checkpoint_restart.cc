@@ -371,7 +371,9 @@ namespace
     // the run's, the walls >= 0 and their parts (each rounded to 1e-6 s)
     // summing to no more than the total. The resumed run: the first
     // layer's row read back as the straight run wrote it, the second's
-    // from the checkpoint on. Only the counts are printed, no wall time.
+    // from the checkpoint on (with the hand-over, the classes of the
+    // cells it kept as points as the straight run's in every row). Only
+    // the counts are printed, no wall time.
     if (layers && root)
       {
         unsigned int     n_layers = 1;
@@ -434,6 +436,13 @@ namespace
                                       "fe_elements"})
             if (k + 1 < c1.size() || c == "layer" || c == "t_end")
               resumed = resumed && c1[k].at(c) == c0[k].at(c);
+        // With the hand-over, the classes of the cells it kept as points
+        // (doc/builds.md "What stays material points"), also in the row of
+        // the layer resumed: the checkpoint holds them.
+        for (std::size_t k = 0; resumed && handover && k < c1.size(); ++k)
+          for (const auto &[c, v] : c0[k])
+            if (c.rfind("kept_", 0) == 0)
+              resumed = resumed && c1[k].count(c) && c1[k].at(c) == v;
         resumed = resumed &&
                   std::abs(c1.back().at("t_start") - t_half) <= 1e-5 * t_half &&
                   c1.back().at("temperature_steps") == s0.steps - step_half;

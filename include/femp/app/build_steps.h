@@ -104,7 +104,9 @@ namespace femp
     /// timer sections), the macro (temperature) steps and solid steps in
     /// it, the points and the solid's MPM points and finite elements at
     /// its start (read at the window's first call, after its recoat and
-    /// hand-over); then the next layer's window opens. Collective.
+    /// hand-over), with the hand-over the cells and points its choice kept
+    /// as points per class (FeZoneHandover::Kept); then the next layer's
+    /// window opens. Collective.
     void
     record_cost(const double               t,
                 const double               dt,
@@ -162,6 +164,10 @@ namespace femp
       double                        steps = 0, solid_steps = 0;
       double                        points = 0, mpm_points = 0, elements = 0;
       std::map<std::string, double> parts;
+      /// With the hand-over: the cells and points kept as points at the
+      /// layer's start per class (kept_cells_<class>, kept_points_<class>;
+      /// FeZoneHandover::Kept).
+      std::map<std::string, double> kept;
     };
     std::vector<CostRow> cost_rows;
     /// The open window: its row (t_end, walls and steps yet to come), the
@@ -180,14 +186,16 @@ namespace femp
               const SolidSubCycle<dim> *solid);
     void
     write_cost() const;
-    /// The hand-over after the recoat of the layer reaching @p top.
+    /// The hand-over after the recoat of the layer reaching @p top
+    /// (@p layer_start), or within that layer.
     void
     hand_over(const double              t,
               const double              top,
               MaterialPoints<dim>      &points,
               SolidSubCycle<dim>       &solid,
               TimerOutput              &timer,
-              const ConditionalOStream &pcout);
+              const ConditionalOStream &pcout,
+              const bool                layer_start);
   };
 } // namespace femp
 
