@@ -369,7 +369,8 @@ namespace
     // straight run: one row per layer (1 + the recoats of its log), the
     // windows joined from 0 to the end, the temperature steps summing to
     // the run's, the walls >= 0 and their parts (each rounded to 1e-6 s)
-    // summing to no more than the total. The resumed run: the first
+    // summing to no more than the total, their largest over the ranks
+    // (max_wall_*) at least rank 0's. The resumed run: the first
     // layer's row read back as the straight run wrote it, the second's
     // from the checkpoint on (with the hand-over, the classes of the
     // cells it kept as points as the straight run's in every row). Only
@@ -405,6 +406,11 @@ namespace
                 parts += w, ++n, walls = walls && w >= 0;
             walls = walls && r.at("wall_total") >= 0 &&
                     parts <= r.at("wall_total") + n * 1e-6;
+            // The largest over the ranks: at least rank 0's, part by part.
+            for (const auto &[c, w] : r)
+              if (c.rfind("wall_", 0) == 0)
+                walls =
+                  walls && r.count("max_" + c) && r.at("max_" + c) >= w - 1e-6;
             std::cout << "layer_cost.csv, layer " << r.at("layer") << ": t "
                       << std::setprecision(6) << r.at("t_start") * 1e6 << " to "
                       << r.at("t_end") * 1e6 << " us, "
@@ -419,8 +425,19 @@ namespace
         verdict("layer_cost.csv: one row per layer (" +
                   std::to_string(n_layers) + "), joined from 0 to the end",
                 c0.size() == n_layers && joined);
-        verdict("layer_cost.csv: the temperature steps sum to the run's",
-                steps == s0.steps);
+        // The melt flow's sub-steps: the run's fluid steps of its report
+        // (0 without the flow).
+        double           fluid = 0, flow_steps = 0;
+        const std::regex fluid_steps("^Melt flow: ([0-9]+) fluid steps");
+        for (const auto &line : log0)
+          if (std::regex_search(line, m, fluid_steps))
+            fluid = std::stod(m[1]);
+        for (const auto &r : c0)
+          flow_steps += r.at("flow_steps");
+        verdict("layer_cost.csv: the temperature steps and the melt flow's "
+                "sub-steps (" +
+                  std::to_string(std::lround(fluid)) + ") sum to the run's",
+                steps == s0.steps && flow_steps == fluid);
         verdict("layer_cost.csv: walls >= 0, their parts within the total",
                 walls);
         const unsigned int step_half = std::stoul(half.substr(5));
@@ -431,6 +448,7 @@ namespace
                                       "t_end",
                                       "temperature_steps",
                                       "solid_steps",
+                                      "flow_steps",
                                       "points",
                                       "mpm_points",
                                       "fe_elements"})

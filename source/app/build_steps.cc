@@ -7,6 +7,8 @@
 #include <femp/app/run_checks.h>
 
 #include <algorithm>
+#include <boost/serialization/map.hpp>
+#include <boost/serialization/string.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -417,6 +419,7 @@ namespace femp
     cost_counted    = false;
     cost_step       = step;
     cost_solid_step = solid ? solid->n_steps() : 0;
+    cost_flow_step  = flow_substeps();
     cost_sections   = cost_parts(timer);
     cost_clock      = std::chrono::steady_clock::now();
   }
@@ -475,6 +478,12 @@ namespace femp
                   r.steps = v;
                 else if (n == "solid_steps")
                   r.solid_steps = v;
+                else if (n == "flow_steps")
+                  r.flow_steps = v;
+                else if (n == "max_wall_total")
+                  r.max_wall = v;
+                else if (n.rfind("max_wall_", 0) == 0)
+                  r.max_parts[n.substr(4)] = v;
                 else if (n == "points")
                   r.points = v;
                 else if (n == "mpm_points")
@@ -545,6 +554,14 @@ namespace femp
       }
     r.steps       = step - cost_step;
     r.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
+    r.flow_steps  = flow_substeps() - cost_flow_step;
+    // The largest wall over the ranks, in total and per part (the parts of
+    // every rank).
+    const MPI_Comm comm = grid_ptr->communicator();
+    r.max_wall          = Utilities::MPI::max(r.wall, comm);
+    for (const auto &parts : Utilities::MPI::all_gather(comm, r.parts))
+      for (const auto &[c, w] : parts)
+        r.max_parts[c] = std::max(r.max_parts[c], w);
     cost_rows.push_back(r);
     write_cost();
     if (next)
@@ -557,10 +574,14 @@ namespace femp
   {
     if (Utilities::MPI::this_mpi_process(grid_ptr->communicator()) != 0)
       return;
-    std::set<std::string> parts;
+    std::set<std::string> parts, max_parts;
     for (const auto &r : cost_rows)
-      for (const auto &[c, w] : r.parts)
-        parts.insert(c);
+      {
+        for (const auto &[c, w] : r.parts)
+          parts.insert(c);
+        for (const auto &[c, w] : r.max_parts)
+          max_parts.insert(c);
+      }
     // With the hand-over: its classes, cells then points.
     std::vector<std::string> kept;
     if (handover)
@@ -568,20 +589,23 @@ namespace femp
         for (unsigned int k = 0; k < FeZoneHandover<dim>::n_kept; ++k)
           kept.push_back(what + std::string(FeZoneHandover<dim>::kept_name(k)));
     std::ofstream f(scene.output.directory + "/layer_cost.csv");
-    f << "layer,t_start,t_end,temperature_steps,solid_steps,points,mpm_"
-         "points,fe_elements";
+    f << "layer,t_start,t_end,temperature_steps,solid_steps,flow_steps,"
+         "points,mpm_points,fe_elements";
     for (const auto &c : kept)
       f << "," << c;
     f << ",wall_total";
     for (const auto &c : parts)
       f << "," << c;
+    f << ",max_wall_total";
+    for (const auto &c : max_parts)
+      f << ",max_" << c;
     f << "\n";
     for (const auto &r : cost_rows)
       {
         f << r.layer << "," << std::setprecision(10) << r.t_start << ","
           << r.t_end << "," << std::setprecision(15) << r.steps << ","
-          << r.solid_steps << "," << r.points << "," << r.mpm_points << ","
-          << r.elements;
+          << r.solid_steps << "," << r.flow_steps << "," << r.points << ","
+          << r.mpm_points << "," << r.elements;
         for (const auto &c : kept)
           {
             const auto it = r.kept.find(c);
@@ -593,8 +617,21 @@ namespace femp
             const auto it = r.parts.find(c);
             f << "," << (it == r.parts.end() ? 0. : it->second);
           }
+        f << "," << r.max_wall;
+        for (const auto &c : max_parts)
+          {
+            const auto it = r.max_parts.find(c);
+            f << "," << (it == r.max_parts.end() ? 0. : it->second);
+          }
         f << std::defaultfloat << "\n";
       }
+  }
+
+  template <int dim>
+  double
+  BuildSteps<dim>::flow_substeps() const
+  {
+    return flow_ptr ? flow_ptr->statistics().steps : 0.;
   }
 
   template <int dim>
