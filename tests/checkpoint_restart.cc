@@ -369,9 +369,12 @@ namespace
     // straight run: one row per layer (1 + the recoats of its log), the
     // windows joined from 0 to the end, the temperature steps summing to
     // the run's, the walls >= 0 and their parts (each rounded to 1e-6 s)
-    // summing to no more than the total. The resumed run: the first
+    // summing to no more than the total, their largest over the ranks
+    // (max_wall_*) at least rank 0's. The resumed run: the first
     // layer's row read back as the straight run wrote it, the second's
-    // from the checkpoint on. Only the counts are printed, no wall time.
+    // from the checkpoint on (with the hand-over, the classes of the
+    // cells it kept as points as the straight run's in every row). Only
+    // the counts are printed, no wall time.
     if (layers && root)
       {
         unsigned int     n_layers = 1;
@@ -403,6 +406,11 @@ namespace
                 parts += w, ++n, walls = walls && w >= 0;
             walls = walls && r.at("wall_total") >= 0 &&
                     parts <= r.at("wall_total") + n * 1e-6;
+            // The largest over the ranks: at least rank 0's, part by part.
+            for (const auto &[c, w] : r)
+              if (c.rfind("wall_", 0) == 0)
+                walls =
+                  walls && r.count("max_" + c) && r.at("max_" + c) >= w - 1e-6;
             std::cout << "layer_cost.csv, layer " << r.at("layer") << ": t "
                       << std::setprecision(6) << r.at("t_start") * 1e6 << " to "
                       << r.at("t_end") * 1e6 << " us, "
@@ -417,8 +425,19 @@ namespace
         verdict("layer_cost.csv: one row per layer (" +
                   std::to_string(n_layers) + "), joined from 0 to the end",
                 c0.size() == n_layers && joined);
-        verdict("layer_cost.csv: the temperature steps sum to the run's",
-                steps == s0.steps);
+        // The melt flow's sub-steps: the run's fluid steps of its report
+        // (0 without the flow).
+        double           fluid = 0, flow_steps = 0;
+        const std::regex fluid_steps("^Melt flow: ([0-9]+) fluid steps");
+        for (const auto &line : log0)
+          if (std::regex_search(line, m, fluid_steps))
+            fluid = std::stod(m[1]);
+        for (const auto &r : c0)
+          flow_steps += r.at("flow_steps");
+        verdict("layer_cost.csv: the temperature steps and the melt flow's "
+                "sub-steps (" +
+                  std::to_string(std::lround(fluid)) + ") sum to the run's",
+                steps == s0.steps && flow_steps == fluid);
         verdict("layer_cost.csv: walls >= 0, their parts within the total",
                 walls);
         const unsigned int step_half = std::stoul(half.substr(5));
@@ -429,11 +448,19 @@ namespace
                                       "t_end",
                                       "temperature_steps",
                                       "solid_steps",
+                                      "flow_steps",
                                       "points",
                                       "mpm_points",
                                       "fe_elements"})
             if (k + 1 < c1.size() || c == "layer" || c == "t_end")
               resumed = resumed && c1[k].at(c) == c0[k].at(c);
+        // With the hand-over, the classes of the cells it kept as points
+        // (doc/builds.md "What stays material points"), also in the row of
+        // the layer resumed: the checkpoint holds them.
+        for (std::size_t k = 0; resumed && handover && k < c1.size(); ++k)
+          for (const auto &[c, v] : c0[k])
+            if (c.rfind("kept_", 0) == 0)
+              resumed = resumed && c1[k].count(c) && c1[k].at(c) == v;
         resumed = resumed &&
                   std::abs(c1.back().at("t_start") - t_half) <= 1e-5 * t_half &&
                   c1.back().at("temperature_steps") == s0.steps - step_half;

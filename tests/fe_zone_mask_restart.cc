@@ -29,7 +29,9 @@
 //   - the stresses, plastic strain and velocities are not 0 (printed
 //     magnitudes, checked above a floor) so the comparison compares state;
 //   - negative check: the same checkpoint loaded into fresh objects whose
-//     zone is the scene's box (no "fe zone" section read) is refused.
+//     zone is the scene's box (no "fe zone" section read) is refused, the
+//     refusal naming the checkpoint's elements that are none of the box
+//     zone's (those of the handed cells).
 // Runs on 1 and 2 ranks against one output.
 #include <femp/base/state_stream.h>
 #include <femp/grid/material_points.h>
@@ -302,7 +304,8 @@ main(int argc, char **argv)
       // Negative check: the checkpoint into objects with the scene's box.
       Scene d(comm);
       d.solid->initialize(d.T, "");
-      bool refused = false;
+      bool        refused = false;
+      std::string why;
       try
         {
           auto points = in.section("points");
@@ -312,12 +315,25 @@ main(int argc, char **argv)
         }
       catch (const std::exception &e)
         {
-          refused =
-            std::string(e.what()).find("checkpoint") != std::string::npos;
+          why     = e.what();
+          refused = why.find("checkpoint") != std::string::npos;
         }
       checks.in_range("negative check: loaded into the scene's box zone, "
                       "refused (1 = yes)",
                       Utilities::MPI::min(refused ? 1 : 0, comm),
+                      1,
+                      1);
+      // The box zone's elements are all in the checkpoint; the
+      // checkpoint's elements of the handed cells are none of the box's.
+      const double      n_box_zone = d.solid->sizes()[1];
+      const std::string unused =
+        std::to_string(std::lround(sa[1] - n_box_zone)) + " of the " +
+        std::to_string(std::lround(sa[1])) + " FE elements it holds";
+      checks.in_range("negative check: the refusal names the checkpoint's " +
+                        std::to_string(std::lround(sa[1] - n_box_zone)) +
+                        " elements outside the box zone (1 = yes)",
+                      Utilities::MPI::min(
+                        why.find(unused) != std::string::npos ? 1 : 0, comm),
                       1,
                       1);
     }

@@ -7,6 +7,8 @@
 #include <femp/app/run_checks.h>
 
 #include <algorithm>
+#include <boost/serialization/map.hpp>
+#include <boost/serialization/string.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -188,7 +190,23 @@ namespace femp
         // The hand-over is a section of its own, not inside the recoat's.
         scope.stop();
         if (handover && solid)
-          hand_over(t, layer.top, points, *solid, timer, pcout);
+          hand_over(t, layer.top, points, *solid, timer, pcout, true);
+      }
+    // With 'Hand-over checks per layer' n > 1: the choices within each
+    // layer from the second on, at its start + j/n of its window (a
+    // function of the time: the same steps after a resume).
+    const int n = scene.handover.checks;
+    if (!(handover && solid && n > 1))
+      return;
+    const auto &layers = schedule->layers();
+    for (std::size_t i = 0; i < layers.size(); ++i)
+      {
+        const double a = layers[i].start_time;
+        const double b = i + 1 < layers.size() ? layers[i + 1].start_time :
+                                                 scene.time.end_time;
+        for (int j = 1; j < n; ++j)
+          if (const double tc = a + j * (b - a) / n; tc >= t && tc < t + dt)
+            hand_over(t, layers[i].top, points, *solid, timer, pcout, false);
       }
   }
 
@@ -199,7 +217,8 @@ namespace femp
                              MaterialPoints<dim>      &points,
                              SolidSubCycle<dim>       &solid,
                              TimerOutput              &timer,
-                             const ConditionalOStream &pcout)
+                             const ConditionalOStream &pcout,
+                             const bool                layer_start)
   {
     TimerOutput::Scope scope(timer, "FE zone hand-over");
     // The zone's top face has moved since it was set; the fill of the row
@@ -212,13 +231,19 @@ namespace femp
     const PoreDetector<dim> detector(scene.porosity,
                                      *grid_ptr,
                                      scene.points.substrate_top);
-    const auto              found   = detector.find(alpha, &shares.first);
-    const double            new_top = handover->choose_top(
-      top, points, solid.fe_zone_cells(), lift, alpha, found.pore_number);
+    const auto              found = detector.find(alpha, &shares.first);
+    const double            new_top =
+      layer_start ?
+                   handover->choose_top(
+          top, points, solid.fe_zone_cells(), lift, alpha, found.pore_number) :
+                   handover->choose_in_layer(
+          points, solid.fe_zone_cells(), lift, alpha, found.pore_number);
+    // The top of the zone's bounding box before the cells chosen.
     const double old_top = handover->zone_top();
-    pcout << "FE zone hand-over at t = " << t << " s: deepest fusion "
-          << handover->deepest_fusion()
-          << " m (the layer before melted down to "
+    pcout << "FE zone hand-over at t = " << t << " s"
+          << (layer_start ? "" : " (within the layer)") << ": deepest fusion "
+          << handover->kept_depth() << " m (the layer "
+          << (layer_start ? "before" : "so far") << " melted down to "
           << handover->last_lowest_molten() << " m), rows up to "
           << handover->limit() << " m";
     if (!handover->stop_reason().empty())
@@ -233,9 +258,27 @@ namespace femp
               << std::setprecision(6);
       }
     const auto &cells = handover->chosen_cells();
+    // Why the solid points of the zone's columns stay points (the classes
+    // of FeZoneHandover::Kept), against the solid's MPM points.
+    auto print_kept = [&]() {
+      double n = 0;
+      for (const double p : handover->kept_points())
+        n += p;
+      const double n_mpm = solid.sizes()[0];
+      pcout << "FE zone hand-over at t = " << t
+            << " s, cells (solid points) kept as points in the zone's "
+               "columns:";
+      for (unsigned int k = 0; k < FeZoneHandover<dim>::n_kept; ++k)
+        pcout << (k ? ", " : " ") << FeZoneHandover<dim>::kept_name(k) << " "
+              << handover->kept_cells()[k] << " (" << handover->kept_points()[k]
+              << ")";
+      pcout << "; " << n << " of the solid's " << n_mpm << " MPM points"
+            << std::endl;
+    };
     if (cells.empty())
       {
         pcout << "; the zone's top stays at " << old_top << " m" << std::endl;
+        print_kept();
         return;
       }
     const double K0 = solid.energies(false).melted;
@@ -289,6 +332,7 @@ namespace femp
           << " of the largest (" << largest[2] << "), von Mises by " << ratio(1)
           << " of the largest (" << largest[1] << " Pa, the averaging)"
           << std::setprecision(6) << std::endl;
+    print_kept();
   }
 
   template <int dim>
@@ -375,6 +419,7 @@ namespace femp
     cost_counted    = false;
     cost_step       = step;
     cost_solid_step = solid ? solid->n_steps() : 0;
+    cost_flow_step  = flow_substeps();
     cost_sections   = cost_parts(timer);
     cost_clock      = std::chrono::steady_clock::now();
   }
@@ -433,12 +478,20 @@ namespace femp
                   r.steps = v;
                 else if (n == "solid_steps")
                   r.solid_steps = v;
+                else if (n == "flow_steps")
+                  r.flow_steps = v;
+                else if (n == "max_wall_total")
+                  r.max_wall = v;
+                else if (n.rfind("max_wall_", 0) == 0)
+                  r.max_parts[n.substr(4)] = v;
                 else if (n == "points")
                   r.points = v;
                 else if (n == "mpm_points")
                   r.mpm_points = v;
                 else if (n == "fe_elements")
                   r.elements = v;
+                else if (n.rfind("kept_", 0) == 0)
+                  r.kept[n] = v;
                 else if (v > 0)
                   r.parts[n] = v;
               }
@@ -471,6 +524,13 @@ namespace femp
             cost_open.mpm_points = n[0];
             cost_open.elements   = n[1];
           }
+        if (handover)
+          for (unsigned int k = 0; k < FeZoneHandover<dim>::n_kept; ++k)
+            {
+              const std::string c = FeZoneHandover<dim>::kept_name(k);
+              cost_open.kept["kept_cells_" + c]  = handover->kept_cells()[k];
+              cost_open.kept["kept_points_" + c] = handover->kept_points()[k];
+            }
         cost_counted = true;
       }
     const typename LayerSchedule<dim>::Layer *next = nullptr;
@@ -494,6 +554,14 @@ namespace femp
       }
     r.steps       = step - cost_step;
     r.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
+    r.flow_steps  = flow_substeps() - cost_flow_step;
+    // The largest wall over the ranks, in total and per part (the parts of
+    // every rank).
+    const MPI_Comm comm = grid_ptr->communicator();
+    r.max_wall          = Utilities::MPI::max(r.wall, comm);
+    for (const auto &parts : Utilities::MPI::all_gather(comm, r.parts))
+      for (const auto &[c, w] : parts)
+        r.max_parts[c] = std::max(r.max_parts[c], w);
     cost_rows.push_back(r);
     write_cost();
     if (next)
@@ -506,29 +574,64 @@ namespace femp
   {
     if (Utilities::MPI::this_mpi_process(grid_ptr->communicator()) != 0)
       return;
-    std::set<std::string> parts;
+    std::set<std::string> parts, max_parts;
     for (const auto &r : cost_rows)
-      for (const auto &[c, w] : r.parts)
-        parts.insert(c);
+      {
+        for (const auto &[c, w] : r.parts)
+          parts.insert(c);
+        for (const auto &[c, w] : r.max_parts)
+          max_parts.insert(c);
+      }
+    // With the hand-over: its classes, cells then points.
+    std::vector<std::string> kept;
+    if (handover)
+      for (const char *what : {"kept_cells_", "kept_points_"})
+        for (unsigned int k = 0; k < FeZoneHandover<dim>::n_kept; ++k)
+          kept.push_back(what + std::string(FeZoneHandover<dim>::kept_name(k)));
     std::ofstream f(scene.output.directory + "/layer_cost.csv");
-    f << "layer,t_start,t_end,temperature_steps,solid_steps,points,mpm_"
-         "points,fe_elements,wall_total";
+    f << "layer,t_start,t_end,temperature_steps,solid_steps,flow_steps,"
+         "points,mpm_points,fe_elements";
+    for (const auto &c : kept)
+      f << "," << c;
+    f << ",wall_total";
     for (const auto &c : parts)
       f << "," << c;
+    f << ",max_wall_total";
+    for (const auto &c : max_parts)
+      f << ",max_" << c;
     f << "\n";
     for (const auto &r : cost_rows)
       {
         f << r.layer << "," << std::setprecision(10) << r.t_start << ","
           << r.t_end << "," << std::setprecision(15) << r.steps << ","
-          << r.solid_steps << "," << r.points << "," << r.mpm_points << ","
-          << r.elements << std::fixed << std::setprecision(6) << "," << r.wall;
+          << r.solid_steps << "," << r.flow_steps << "," << r.points << ","
+          << r.mpm_points << "," << r.elements;
+        for (const auto &c : kept)
+          {
+            const auto it = r.kept.find(c);
+            f << "," << (it == r.kept.end() ? 0. : it->second);
+          }
+        f << std::fixed << std::setprecision(6) << "," << r.wall;
         for (const auto &c : parts)
           {
             const auto it = r.parts.find(c);
             f << "," << (it == r.parts.end() ? 0. : it->second);
           }
+        f << "," << r.max_wall;
+        for (const auto &c : max_parts)
+          {
+            const auto it = r.max_parts.find(c);
+            f << "," << (it == r.max_parts.end() ? 0. : it->second);
+          }
         f << std::defaultfloat << "\n";
       }
+  }
+
+  template <int dim>
+  double
+  BuildSteps<dim>::flow_substeps() const
+  {
+    return flow_ptr ? flow_ptr->statistics().steps : 0.;
   }
 
   template <int dim>

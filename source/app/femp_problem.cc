@@ -70,6 +70,7 @@ namespace femp
     if (scene.melt_flow)
       setup_flow();
     builds->setup(*grid, *points, *heat, *control, *results);
+    builds->watch_flow(flow.get());
     add_track_shape(*results, scene, *grid, *laser, *points, *heat);
     results->initialize(states.resuming());
     if (scene.solid)

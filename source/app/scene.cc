@@ -243,7 +243,10 @@ namespace femp
     // temperatures to the points, relocation) and 40 more per point that
     // the solid steps by MPM (the substrate outside the FE zone: its point
     // loops run at every solid step, 7 to 17 times per temperature step).
-    // Without points every cell costs the same: no function.
+    // The zone is the one the run starts with (the user's box: the grid is
+    // partitioned once, the cells a hand-over adds keep their cost; a
+    // resumed run gets the same partition), asked cell by cell through its
+    // mask. Without points every cell costs the same: no function.
     if (!points.carry_points)
       return {};
     const double      h          = grid.cell_size;
@@ -253,10 +256,14 @@ namespace femp
     const double      packing    = points.packing_fraction;
     const FeZone<dim> fe_zone    = fem.zone(grid.lower_corner, h);
     const bool        with_solid = solid;
+    const Point<dim>  x0         = grid.lower_corner;
     return [=](const Point<dim> &c) {
-      const double z     = c[dim - 1];
-      const bool   in_fe = fe_zone.contains(c);
-      double       n = 0, n_mpm = 0;
+      const double         z = c[dim - 1];
+      std::array<int, dim> ijk;
+      for (int d = 0; d < dim; ++d)
+        ijk[d] = static_cast<int>(std::floor((c[d] - x0[d]) / h));
+      const bool in_fe = fe_zone.contains_cell(ijk);
+      double     n = 0, n_mpm = 0;
       if (z < top)
         n = full, n_mpm = with_solid && !in_fe ? full : 0.;
       else if (z < powder_top)

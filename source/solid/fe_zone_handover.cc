@@ -37,6 +37,17 @@ namespace femp
               "With 'Hand over cooled metal': every material point of a "
               "handed cell is below this temperature, K; range (0, "
               "Material/Solidus).");
+    table.add("Hand-over checks per layer",
+              checks,
+              Patterns::Integer(),
+              "With 'Hand over cooled metal': how many times per layer the "
+              "cells are chosen and handed over: at the layer's start (after "
+              "its recoat) and, for n > 1, at n - 1 more times equally spaced "
+              "over the layer's window (from its start to the next layer's, "
+              "the last layer's to the end time), the limit kept clear of "
+              "the layer's own melt so far where it reaches deeper than the "
+              "deepest fusion of the finished layers; the first layer is "
+              "checked at the second's start only. Count, range [1, 100].");
     table.add("Hand-over margin",
               margin,
               Patterns::Double(),
@@ -81,6 +92,10 @@ namespace femp
             temperature,
             "it must lie in (0, " + num(solidus) +
               ") K: below Material/Solidus");
+    require(checks >= 1 && checks <= 100,
+            "Build/Hand-over checks per layer",
+            checks,
+            "it must be a count in [1, 100]");
     require(std::isfinite(margin) && margin >= 0,
             "Build/Hand-over margin",
             margin,
@@ -143,15 +158,45 @@ namespace femp
                                   const std::vector<double>       &alpha,
                                   const std::vector<double>       &pore)
   {
-    const MPI_Comm comm = grid.communicator();
     // The layer before: its fusion depth below its powder top.
-    const double low = Utilities::MPI::min(lowest, comm);
+    const double low = Utilities::MPI::min(lowest, grid.communicator());
     closed_lowest    = low;
     if (std::isfinite(low))
       depth = std::max(depth, layer_top - low);
-    lowest    = std::numeric_limits<double>::infinity();
-    layer_top = new_top;
+    lowest     = std::numeric_limits<double>::infinity();
+    layer_top  = new_top;
+    used_depth = depth;
+    return choose(
+      new_top - depth - prm.margin, points, zone, top_lift, alpha, pore);
+  }
 
+  template <int dim>
+  double
+  FeZoneHandover<dim>::choose_in_layer(const MaterialPoints<dim>       &points,
+                                       const std::vector<std::uint8_t> &zone,
+                                       const std::vector<double> &top_lift,
+                                       const std::vector<double> &alpha,
+                                       const std::vector<double> &pore)
+  {
+    // The layer in progress stays open: its melt so far deepens the
+    // depth the limit keeps clear, if it reaches deeper than D.
+    const double low = Utilities::MPI::min(lowest, grid.communicator());
+    closed_lowest    = low;
+    used_depth = std::isfinite(low) ? std::max(depth, layer_top - low) : depth;
+    return choose(
+      layer_top - used_depth - prm.margin, points, zone, top_lift, alpha, pore);
+  }
+
+  template <int dim>
+  double
+  FeZoneHandover<dim>::choose(const double                     limit,
+                              const MaterialPoints<dim>       &points,
+                              const std::vector<std::uint8_t> &zone,
+                              const std::vector<double>       &top_lift,
+                              const std::vector<double>       &alpha,
+                              const std::vector<double>       &pore)
+  {
+    const MPI_Comm comm = grid.communicator();
     // The zone's bounding box from its cells.
     std::array<int, dim> lo, hi;
     lo.fill(std::numeric_limits<int>::max());
@@ -167,7 +212,7 @@ namespace femp
     const double z0 = grid.origin()[dim - 1], h = grid.h();
     const int    first_row = hi[dim - 1] + 1;
     current_top            = z0 + first_row * h;
-    last_limit             = new_top - depth - prm.margin;
+    last_limit             = limit;
     reason.clear();
     row_fill.clear();
     row_mass.clear();
@@ -177,8 +222,51 @@ namespace femp
     const int last_row =
       std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
                     int(grid.n_cells()[dim - 1]));
-    if (hi[dim - 1] < 0 || last_row <= lo[dim - 1])
+    kept_n_cells.fill(0);
+    kept_n_points.fill(0);
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    if (hi[dim - 1] < 0)
       return current_top;
+    // The cells outside the zone at or above the limit line inside the
+    // zone's horizontal extent that hold points: their cells and points
+    // (over the ranks). @p in_zone tells the zone's cells.
+    auto count_above = [&](const auto &in_zone) {
+      const auto &occupied = points.occupied_cells();
+      for (std::size_t c = 0; c < occupied.size(); ++c)
+        {
+          const auto           gijk = grid.global_index(occupied[c].first);
+          std::array<int, dim> ijk;
+          bool                 inside = gijk[dim - 1] >= last_row;
+          for (int d = 0; d < dim; ++d)
+            {
+              ijk[d] = gijk[d];
+              if (d < dim - 1)
+                inside = inside && ijk[d] >= lo[d] && ijk[d] <= hi[d];
+            }
+          if (!inside || in_zone(ijk))
+            continue;
+          double n = 0;
+          for (const double *v : points.cell_point_properties(c))
+            n += v[P::state] == MaterialPoints<dim>::solid;
+          if (n > 0)
+            {
+              kept_n_cells[above_limit] += 1;
+              kept_n_points[above_limit] += n;
+            }
+        }
+      Utilities::MPI::sum(ArrayView<const double>(kept_n_cells.data(), n_kept),
+                          comm,
+                          ArrayView<double>(kept_n_cells.data(), n_kept));
+      Utilities::MPI::sum(ArrayView<const double>(kept_n_points.data(), n_kept),
+                          comm,
+                          ArrayView<double>(kept_n_points.data(), n_kept));
+    };
+    // Below the zone's bounding box nothing is the zone's.
+    if (last_row <= lo[dim - 1])
+      {
+        count_above([](const auto &) { return false; });
+        return current_top;
+      }
 
     // The zone's cells over its bounding box (every rank: the owners' sum)
     // and the top of each column (one above its highest zone cell; -1:
@@ -227,12 +315,15 @@ namespace femp
         else
           cand_row = std::min(cand_row, row);
       }
-    if (last_row <= cand_row)
-      return current_top;
     auto zone_cell = [&](const std::array<int, dim> &ijk) {
       const long k = zone_index(ijk);
       return k >= 0 && in_zone[k] != 0;
     };
+    if (last_row <= cand_row)
+      {
+        count_above(zone_cell);
+        return current_top;
+      }
 
     // Per candidate row from the zone's top (the log): 1 a cell not full
     // of metal or without points, 2 a powder or fluid point, 4 a point at
@@ -245,7 +336,6 @@ namespace femp
     std::vector<int>    has_points(grid.n_local(), 0);
     row_mass.assign(n_rows, 0.);
     row_points.assign(n_rows, 0.);
-    using P            = typename MaterialPoints<dim>::PropertyIndex;
     const auto &cells  = points.occupied_cells();
     auto        in_box = [&](const std::array<int, dim> &ijk) {
       for (int d = 0; d < dim - 1; ++d)
@@ -276,7 +366,7 @@ namespace femp
       return k;
     };
     std::vector<int>    cell_flags(n_fill, 0);
-    std::vector<double> cell_mass(n_fill, 0.);
+    std::vector<double> cell_mass(n_fill, 0.), cell_points(n_fill, 0.);
     for (std::size_t c = 0; c < cells.size(); ++c)
       {
         const auto gijk = grid.global_index(cells[c].first);
@@ -291,6 +381,7 @@ namespace femp
           {
             has_points[cells[c].first] = 1;
             cell_mass[k] += v[P::mass];
+            cell_points[k] += v[P::state] == MaterialPoints<dim>::solid;
             int bits = 0;
             if (v[P::state] != MaterialPoints<dim>::solid)
               bits |= 2;
@@ -502,6 +593,7 @@ namespace femp
     MPI_Allreduce(
       MPI_IN_PLACE, cell_flags.data(), int(n_fill), MPI_INT, MPI_BOR, comm);
     Utilities::MPI::sum(cell_mass, comm, cell_mass);
+    Utilities::MPI::sum(cell_points, comm, cell_points);
     // The rows' flags of all ranks: one maximum per bit.
     std::vector<int> bits(4 * n_rows);
     for (int r = 0; r < n_rows; ++r)
@@ -579,6 +671,24 @@ namespace femp
           top_row = std::max(top_row, c[dim - 1] + 1);
         }
 
+    // Why the other cells with solid points stay points: above the limit
+    // (the points of every rank, then summed), else by their flags (the
+    // same on every rank: added after the sum).
+    count_above(zone_cell);
+    for (std::size_t k = 0; k < n_fill; ++k)
+      {
+        if (taken[k] || cell_points[k] == 0 || zone_cell(cell_of(k)))
+          continue;
+        const int  f   = cell_flags[k];
+        const Kept why = f & 2 ? powder :
+                         f & 8 ? Kept::pore :
+                         f & 1 ? not_dense :
+                         f & 4 ? too_hot :
+                                 not_connected;
+        kept_n_cells[why] += 1;
+        kept_n_points[why] += cell_points[k];
+      }
+
     // The lowest row above the zone's top that keeps cells as points, and
     // why (the log).
     int r = 0;
@@ -623,6 +733,18 @@ namespace femp
     out.put(depth);
     out.put(current_top);
     out.put(last_limit);
+    out.put(kept_n_cells);
+    out.put(kept_n_points);
+  }
+
+  template <int dim>
+  const char *
+  FeZoneHandover<dim>::kept_name(const unsigned int k)
+  {
+    static const char *names[n_kept] = {
+      "above_limit", "powder", "pore", "not_dense", "too_hot", "not_connected"};
+    AssertIndexRange(k, n_kept);
+    return names[k];
   }
 
   template <int dim>
@@ -637,9 +759,12 @@ namespace femp
         const double t = in.get<double>(), low = in.get<double>(),
                      d = in.get<double>(), top = in.get<double>(),
                      limit = in.get<double>();
+        const auto cells   = in.get<std::array<double, n_kept>>();
+        const auto pts     = in.get<std::array<double, n_kept>>();
         lowest             = std::min(lowest, low);
         if (f == 0)
-          layer_top = t, depth = d, current_top = top, last_limit = limit;
+          layer_top = t, depth = d, current_top = top, last_limit = limit,
+          kept_n_cells = cells, kept_n_points = pts;
       }
   }
 

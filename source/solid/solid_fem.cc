@@ -1628,11 +1628,15 @@ namespace femp
     for (std::size_t ln = 0; ln < n_local; ++ln)
       node_by_id.emplace_back(node_zone_id[box_of[ln]], box_of[ln]);
     std::sort(node_by_id.begin(), node_by_id.end());
-    std::size_t elements_set = 0, nodes_set = 0;
+    // Elements and nodes of this rank found in the checkpoint, and the
+    // elements it holds (every rank reads every part).
+    std::size_t         elements_set = 0, nodes_set = 0, elements_saved = 0;
+    std::vector<double> tv, td;
     for (std::size_t f = 0; f < parts.size(); ++f)
       {
-        StateReader              &in  = parts[f];
-        const auto                ids = in.get_vector<std::uint64_t>();
+        StateReader &in  = parts[f];
+        const auto   ids = in.get_vector<std::uint64_t>();
+        elements_saved += ids.size();
         std::vector<std::int64_t> local(ids.size(), -1);
         for (std::size_t i = 0; i < ids.size(); ++i)
           {
@@ -1688,26 +1692,33 @@ namespace femp
               if (box[i] >= 0)
                 vel[d][box[i]] = v[i];
           }
-        const auto tv = in.get_vector<double>();
+        // The transition nodes' values: the same in every part.
+        auto v = in.get_vector<double>();
+        auto d = in.get_vector<double>();
         if (f == 0)
-          {
-            AssertThrow(tv.size() == tr_vel.size(),
-                        ExcMessage("checkpoint: another number of FE "
-                                   "transition nodes"));
-            tr_vel = tv;
-          }
-        const auto td = in.get_vector<double>();
-        if (f == 0)
-          {
-            AssertThrow(td.size() == tr_disp.size(),
-                        ExcMessage("checkpoint: another number of FE "
-                                   "transition nodes"));
-            tr_disp = td;
-          }
+          tv = std::move(v), td = std::move(d);
       }
-    AssertThrow(elements_set == n_el && nodes_set == n_local,
+    // Every element of the checkpoint is one of this zone's (on some
+    // rank), and every element and node of this zone is in the checkpoint
+    // (the same answer on every rank).
+    const std::size_t used = Utilities::MPI::sum(elements_set, comm);
+    AssertThrow(used == elements_saved,
+                ExcMessage(
+                  "checkpoint: " + std::to_string(elements_saved - used) +
+                  " of the " + std::to_string(elements_saved) +
+                  " FE elements it holds are not elements of this "
+                  "run's FE zone (the checkpoint's zone holds other "
+                  "cells)"));
+    const unsigned int missing = Utilities::MPI::max(
+      elements_set == n_el && nodes_set == n_local ? 0u : 1u, comm);
+    AssertThrow(missing == 0,
                 ExcMessage("checkpoint: the FE zone's elements or nodes of "
-                           "this rank are not all in the checkpoint"));
+                           "this run are not all in the checkpoint"));
+    AssertThrow(tv.size() == tr_vel.size() && td.size() == tr_disp.size(),
+                ExcMessage("checkpoint: another number of FE "
+                           "transition nodes"));
+    tr_vel  = std::move(tv);
+    tr_disp = std::move(td);
     forces_of_restored_state();
   }
 

@@ -24,6 +24,7 @@
 #include <femp/builds/recoater.h>
 #include <femp/builds/track_record.h>
 #include <femp/coupling/point_heat_exchange.h>
+#include <femp/flow/incompressible_flow.h>
 #include <femp/solid/fe_zone_handover.h>
 #include <femp/solid/solid_sub_cycle.h>
 
@@ -100,11 +101,13 @@ namespace femp
     /// Step 0 of the macro step, before the recoat: when a layer starts in
     /// [@p t, @p t + @p dt) (or at the end of the run, @p last), the row of
     /// the layer that ends: its simulated window, the wall time on rank 0
-    /// (in total and per part of the step, as the cost report sums the
-    /// timer sections), the macro (temperature) steps and solid steps in
-    /// it, the points and the solid's MPM points and finite elements at
-    /// its start (read at the window's first call, after its recoat and
-    /// hand-over); then the next layer's window opens. Collective.
+    /// and its largest over the ranks (in total and per part of the step,
+    /// as the cost report sums the timer sections), the macro
+    /// (temperature) steps, solid steps and melt-flow sub-steps in it, the
+    /// points and the solid's MPM points and finite elements at its start (read
+    /// at the window's first call, after its recoat and hand-over), with the
+    /// hand-over the cells and points its choice kept as points per class
+    /// (FeZoneHandover::Kept); then the next layer's window opens. Collective.
     void
     record_cost(const double               t,
                 const double               dt,
@@ -133,6 +136,13 @@ namespace femp
     void
     add_state(ModuleStates<dim> &states);
 
+    /// The melt flow whose sub-steps layer_cost.csv counts (null: none).
+    void
+    watch_flow(const IncompressibleFlow<dim> *flow)
+    {
+      flow_ptr = flow;
+    }
+
     /// The schedule (null with one layer).
     const LayerSchedule<dim> *
     layers() const
@@ -149,19 +159,25 @@ namespace femp
     std::unique_ptr<TrackRecord<dim>>    tracks;
     std::unique_ptr<FeZoneHandover<dim>> handover;
     // Set by setup(), read by the track record.
-    const BackgroundGrid<dim> *grid_ptr    = nullptr;
-    const HeatTransfer<dim>   *heat_ptr    = nullptr;
-    ResultsOutput<dim>        *results_ptr = nullptr;
-    std::array<double, 2>      n_handed    = {{0., 0.}};
+    const BackgroundGrid<dim>     *grid_ptr    = nullptr;
+    const HeatTransfer<dim>       *heat_ptr    = nullptr;
+    ResultsOutput<dim>            *results_ptr = nullptr;
+    const IncompressibleFlow<dim> *flow_ptr    = nullptr;
+    std::array<double, 2>          n_handed    = {{0., 0.}};
     /// One row of layer_cost.csv (the wall times of rank 0, s, keyed by
-    /// their column: wall_<part>).
+    /// their column: wall_<part>; their largest over the ranks:
+    /// max_wall_total and max_parts, keyed by wall_<part>).
     struct CostRow
     {
-      unsigned int                  layer   = 1;
-      double                        t_start = 0, t_end = 0, wall = 0;
-      double                        steps = 0, solid_steps = 0;
-      double                        points = 0, mpm_points = 0, elements = 0;
-      std::map<std::string, double> parts;
+      unsigned int layer   = 1;
+      double       t_start = 0, t_end = 0, wall = 0;
+      double       steps = 0, solid_steps = 0, flow_steps = 0, max_wall = 0;
+      double       points = 0, mpm_points = 0, elements = 0;
+      std::map<std::string, double> parts, max_parts;
+      /// With the hand-over: the cells and points kept as points at the
+      /// layer's start per class (kept_cells_<class>, kept_points_<class>;
+      /// FeZoneHandover::Kept).
+      std::map<std::string, double> kept;
     };
     std::vector<CostRow> cost_rows;
     /// The open window: its row (t_end, walls and steps yet to come), the
@@ -172,6 +188,10 @@ namespace femp
     std::chrono::steady_clock::time_point cost_clock;
     std::map<std::string, double>         cost_sections;
     unsigned int                          cost_step = 0, cost_solid_step = 0;
+    double                                cost_flow_step = 0;
+    /// The flow's sub-steps so far (0 without the flow).
+    double
+    flow_substeps() const;
     void
     open_cost(const unsigned int        layer,
               const double              t,
@@ -180,14 +200,16 @@ namespace femp
               const SolidSubCycle<dim> *solid);
     void
     write_cost() const;
-    /// The hand-over after the recoat of the layer reaching @p top.
+    /// The hand-over after the recoat of the layer reaching @p top
+    /// (@p layer_start), or within that layer.
     void
     hand_over(const double              t,
               const double              top,
               MaterialPoints<dim>      &points,
               SolidSubCycle<dim>       &solid,
               TimerOutput              &timer,
-              const ConditionalOStream &pcout);
+              const ConditionalOStream &pcout,
+              const bool                layer_start);
   };
 } // namespace femp
 

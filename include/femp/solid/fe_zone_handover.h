@@ -17,7 +17,10 @@
 //     all solid (no powder, no fluid) and below the hand-over temperature;
 //     the candidates connected to the zone through faces of candidates
 //     (a flood fill from the zone's cells over face neighbours) are
-//     taken. A cell that is not dense (a lack-of-fusion pore, its
+//     taken (with 'Hand-over checks per layer' n > 1 also at n - 1
+//     times within each layer from the second on, the limit then
+//     top_n - max(D, the layer's own depth so far) - margin). A cell
+//     that is not dense (a lack-of-fusion pore, its
 //     neighbours) stays material points, an island inside the zone once
 //     the columns around it rise past it; a row of candidates only is
 //     taken whole, as a row of cells.
@@ -130,6 +133,10 @@ namespace femp
       /// 'Hand-over margin', m: the rows stay this far below the deepest
       /// melt expected of the new layer; range [0, inf).
       double margin = 1e-5;
+      /// 'Hand-over checks per layer': the choices per layer, the first at
+      /// its start, the others equally spaced over its window
+      /// (choose_in_layer()); range [1, 100].
+      int checks = 1;
 
       /// Declare (the members' values are the defaults) or read the
       /// entries, each listed once.
@@ -180,6 +187,26 @@ namespace femp
                const std::vector<double>       &top_lift,
                const std::vector<double>       &alpha,
                const std::vector<double>       &pore);
+
+    /// Within a layer (Parameters::checks > 1), after choose_top() closed
+    /// the layer before: choose the cells as choose_top() does, the layer
+    /// staying open and the limit top_n - max(D, the layer's own fusion
+    /// depth so far) - margin. Returns the top of the zone's bounding box
+    /// with them. Collective.
+    double
+    choose_in_layer(const MaterialPoints<dim>       &points,
+                    const std::vector<std::uint8_t> &zone,
+                    const std::vector<double>       &top_lift,
+                    const std::vector<double>       &alpha,
+                    const std::vector<double>       &pore);
+
+    /// The fusion depth the last choice kept clear, m (D at a layer
+    /// start; within a layer the larger of D and the layer's own so far).
+    double
+    kept_depth() const
+    {
+      return used_depth;
+    }
 
     /// The least fill (see the file's comment) of a dense cell whose
     /// neighbourhood's alpha is below dense_alpha.
@@ -236,6 +263,51 @@ namespace femp
       return chosen_mass;
     }
 
+    /// Why the solid's points of the zone's columns stay material points
+    /// after the last choice (doc/builds.md, "What stays material
+    /// points"): each cell outside the zone, inside the zone's horizontal
+    /// extent, that holds solid points is counted once, with its solid
+    /// points, in the first class that holds:
+    enum Kept : unsigned int
+    {
+      /// at or above the limit line (limit());
+      above_limit,
+      /// below it, with a point of powder or fluid as well (unfused
+      /// powder, metal still molten);
+      powder,
+      /// below it, all points solid, a pore cell in it or among its 3^dim
+      /// neighbours;
+      pore,
+      /// below it, all points solid, no pore near, not dense (alpha below
+      /// dense_alpha around it and a fill below full_fill: porous
+      /// re-solidified metal, spatter, the row under a free surface);
+      not_dense,
+      /// below it, dense and solid, a point at or above the hand-over
+      /// temperature;
+      too_hot,
+      /// a candidate (dense, solid, cool, below it) that the flood fill
+      /// does not reach from the zone;
+      not_connected,
+      n_kept
+    };
+    /// The name of class @p k (a word for the log and layer_cost.csv).
+    static const char *
+    kept_name(const unsigned int k);
+    /// The cells of each class after the last choice (over the ranks).
+    const std::array<double, n_kept> &
+    kept_cells() const
+    {
+      return kept_n_cells;
+    }
+    /// The solid points of those cells per class (over the ranks; their
+    /// sum is the solid's MPM points inside the zone's horizontal
+    /// extent).
+    const std::array<double, n_kept> &
+    kept_points() const
+    {
+      return kept_n_points;
+    }
+
     /// The least fill of each row the last choice looked at, from the
     /// zone's top upwards (over the cells inside the zone's horizontal
     /// extent; empty when no row was looked at).
@@ -247,7 +319,8 @@ namespace femp
 
     /// Checkpoint: the fusion depths so far (the deepest, the powder top
     /// of the layer observed, its lowest molten cell over all ranks) and
-    /// what the last choice found (the zone's top, the limit). Collective.
+    /// what the last choice found (the zone's top, the limit, the cells
+    /// and points of each class kept as points). Collective.
     void
     save_state(StateWriter &out) const;
     /// Restore it (@p parts: one per saved rank; every rank takes the
@@ -279,13 +352,23 @@ namespace femp
     double layer_top;
     /// Lowest cell bottom with molten metal in the layer (local), m.
     double lowest = std::numeric_limits<double>::infinity();
-    double depth = 0, current_top = 0, last_limit = 0;
+    double depth = 0, current_top = 0, last_limit = 0, used_depth = 0;
+    /// The choice below the line @p limit (m) of choose_top() and
+    /// choose_in_layer().
+    double
+    choose(const double                     limit,
+           const MaterialPoints<dim>       &points,
+           const std::vector<std::uint8_t> &zone,
+           const std::vector<double>       &top_lift,
+           const std::vector<double>       &alpha,
+           const std::vector<double>       &pore);
     /// The lowest molten cell of the layer the last choice closed (log).
     double              closed_lowest = std::numeric_limits<double>::infinity();
     std::string         reason;
     std::vector<double> row_fill, row_mass, row_points;
     std::vector<std::array<int, dim>> chosen;
     double                            chosen_mass = 0;
+    std::array<double, n_kept>        kept_n_cells{}, kept_n_points{};
   };
 } // namespace femp
 

@@ -364,7 +364,10 @@ namespace femp
     /// Restore it after setup() (any number of saved ranks; every rank
     /// takes its owned elements and local nodes) and recompute the element
     /// forces of the next step from the restored elements (the same
-    /// arithmetic as at the end of update_elements()).
+    /// arithmetic as at the end of update_elements()). Refuses (collective)
+    /// a checkpoint with an element that is none of this zone's, one that
+    /// lacks an element or node of this zone, or another number of
+    /// transition nodes.
     void
     load_state(std::vector<StateReader> &parts);
     /// The checkpoint section of an FE zone that is off (SolidSubCycle then
