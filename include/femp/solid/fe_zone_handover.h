@@ -228,7 +228,8 @@ namespace femp
       return depth;
     }
     /// The bottom of the lowest cell that held molten metal in the layer
-    /// closed by the last choice, m (over all ranks; +inf: none melted).
+    /// closed by the last choice (within a layer: in that layer so far),
+    /// m (over all ranks; +inf: none melted).
     double
     last_lowest_molten() const
     {
@@ -300,8 +301,9 @@ namespace femp
       return kept_n_cells;
     }
     /// The solid points of those cells per class (over the ranks; their
-    /// sum is the solid's MPM points inside the zone's horizontal
-    /// extent).
+    /// sum is about the solid's MPM points inside the zone's horizontal
+    /// extent: solid-state points that the solid does not step count
+    /// too).
     const std::array<double, n_kept> &
     kept_points() const
     {
