@@ -9,6 +9,10 @@
 // the runs differ by the discretisation of those rows and the mass-scaled
 // dynamics, not by round-off). Prints the elements added, the points
 // handed over, the new top and the largest probe difference rounded.
+// A third run with 'Build/Hand-over checks per layer' = 3 must choose twice
+// within the second layer (none within the first) and, since a layer's own
+// melt only deepens the depth it keeps clear, each choice within the layer
+// must keep its limit at or below the layer start's.
 // One argument: the scene.
 #include <regex>
 #include <sstream>
@@ -34,6 +38,24 @@ namespace
         s.push_back(c->second.back());
       }
     return s;
+  }
+
+  /// The limits ("rows up to ... m") of the hand-over choices in scene.log:
+  /// the layer starts' and those within a layer, in the order of the log.
+  std::pair<std::vector<double>, std::vector<double>>
+  handover_limits()
+  {
+    std::pair<std::vector<double>, std::vector<double>> limits;
+    std::ifstream                                       log("scene.log");
+    std::string                                         line;
+    const std::regex re("FE zone hand-over at t = [-0-9.e+]+ s( \\(within "
+                        "the layer\\))?: .* rows up to ([-0-9.e+]+) m");
+    std::smatch      m;
+    while (std::getline(log, line))
+      if (std::regex_search(line, m, re))
+        (m[1].matched ? limits.second : limits.first)
+          .push_back(std::stod(m[2]));
+    return limits;
   }
 } // namespace
 
@@ -109,6 +131,37 @@ main(int argc, char **argv)
                      "the probes at the end",
                      std::round(diff / largest * 1000) / 1000,
                      0.1);
+
+      // The choices within a layer: 3 per layer, the start and two more.
+      run_scene<2>(argv[1],
+                   comm,
+                   {{"Output", "Directory", "within"},
+                    {"Build", "Hand over cooled metal", "true"},
+                    {"Build", "Hand-over checks per layer", "3"}});
+      MPI_Barrier(comm);
+      double n_start = 0, n_within = 0, rise = 0;
+      if (Utilities::MPI::this_mpi_process(comm) == 0)
+        {
+          const auto [starts, within] = handover_limits();
+          n_start                     = starts.size();
+          n_within                    = within.size();
+          for (const double l : within)
+            if (!starts.empty())
+              rise = std::max(rise, l - starts.back());
+        }
+      n_start  = Utilities::MPI::max(n_start, comm);
+      n_within = Utilities::MPI::max(n_within, comm);
+      rise     = Utilities::MPI::max(rise, comm);
+      checks.at_most("3 checks per layer: |choices at a layer start - 1|",
+                     std::abs(n_start - 1),
+                     0.);
+      checks.at_most("3 checks per layer: |choices within the layers - 2|",
+                     std::abs(n_within - 2),
+                     0.);
+      checks.at_most("3 checks per layer: largest rise of a limit within "
+                     "the layer above the start's (um)",
+                     std::round(rise * 1e7) / 10,
+                     0.);
     }
   catch (const std::exception &e)
     {
