@@ -13,6 +13,31 @@
 
 namespace femp
 {
+  namespace
+  {
+    /// A box of grid cells, first[d] <= ijk[d] < first[d] + n[d], and the
+    /// lexicographic index of a cell in it (x fastest; -1 outside).
+    template <int dim>
+    struct CellBox
+    {
+      std::array<int, dim> first, n;
+
+      long
+      index(const std::array<int, dim> &ijk) const
+      {
+        long k = 0;
+        for (int d = dim - 1; d >= 0; --d)
+          {
+            const int i = ijk[d] - first[d];
+            if (i < 0 || i >= n[d])
+              return -1;
+            k = k * n[d] + i;
+          }
+        return k;
+      }
+    };
+  } // namespace
+
   template <int dim>
   void
   FeZoneHandover<dim>::Parameters::add_parameters(ParameterTable &table)
@@ -281,23 +306,13 @@ namespace femp
         if (d < dim - 1)
           n_col *= n_zone[d];
       }
-    auto zone_index = [&](const std::array<int, dim> &ijk) -> long {
-      long k = 0;
-      for (int d = dim - 1; d >= 0; --d)
-        {
-          const int i = ijk[d] - lo[d];
-          if (i < 0 || i >= n_zone[d])
-            return -1;
-          k = k * n_zone[d] + i;
-        }
-      return k;
-    };
-    std::vector<int> in_zone(n_zone_all, 0);
+    const CellBox<dim> zone_box{lo, n_zone};
+    std::vector<int>   in_zone(n_zone_all, 0);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
       std::array<int, dim> c;
       for (int d = 0; d < dim; ++d)
         c[d] = ijk[d];
-      const long k = zone_index(c);
+      const long k = zone_box.index(c);
       if (k >= 0 && zone[idx])
         in_zone[k] = 1;
     });
@@ -316,7 +331,7 @@ namespace femp
           cand_row = std::min(cand_row, row);
       }
     auto zone_cell = [&](const std::array<int, dim> &ijk) {
-      const long k = zone_index(ijk);
+      const long k = zone_box.index(ijk);
       return k >= 0 && in_zone[k] != 0;
     };
     if (last_row <= cand_row)
@@ -354,17 +369,7 @@ namespace femp
     for (int d = 0; d < dim - 1; ++d)
       first[d] = lo[d];
     first[dim - 1] = cand_row;
-    auto box_index = [&](const std::array<int, dim> &ijk) -> long {
-      long k = 0;
-      for (int d = dim - 1; d >= 0; --d)
-        {
-          const int i = ijk[d] - first[d];
-          if (i < 0 || i >= n_box[d])
-            return -1;
-          k = k * n_box[d] + i;
-        }
-      return k;
-    };
+    const CellBox<dim>  cand_box{first, n_box};
     std::vector<int>    cell_flags(n_fill, 0);
     std::vector<double> cell_mass(n_fill, 0.), cell_points(n_fill, 0.);
     for (std::size_t c = 0; c < cells.size(); ++c)
@@ -375,7 +380,7 @@ namespace femp
         std::array<int, dim> ijk;
         for (int d = 0; d < dim; ++d)
           ijk[d] = gijk[d];
-        const long k = box_index(ijk);
+        const long k = cand_box.index(ijk);
         const int  r = ijk[dim - 1] - first_row;
         for (const double *v : points.cell_point_properties(c))
           {
@@ -439,7 +444,7 @@ namespace femp
           std::array<int, dim> c;
           for (int d = 0; d < dim; ++d)
             c[d] = int(std::floor((x[d] - grid.origin()[d]) / h));
-          const long k = zone_index(c);
+          const long k = zone_box.index(c);
           if (k >= 0 && in_zone[k] &&
               c[dim - 1] + 1 == col_top[std::size_t(k) % n_col])
             x[dim - 1] += lift_at(x, c);
@@ -464,7 +469,7 @@ namespace femp
                 ijk[d]        = i0[d] + (up ? 1 : 0);
                 w *= up ? w1[d] : 1. - w1[d];
               }
-            const long k = box_index(ijk);
+            const long k = cand_box.index(ijk);
             if (k >= 0 && w > 0)
               fill[k] += w;
           }
@@ -496,24 +501,14 @@ namespace femp
         n_x[d]     = n_box[d] + 2;
         n_ext *= n_x[d];
       }
-    auto ext_index = [&](const std::array<int, dim> &ijk) -> long {
-      long k = 0;
-      for (int d = dim - 1; d >= 0; --d)
-        {
-          const int i = ijk[d] - first_x[d];
-          if (i < 0 || i >= n_x[d])
-            return -1;
-          k = k * n_x[d] + i;
-        }
-      return k;
-    };
+    const CellBox<dim> ext_box{first_x, n_x};
     // Per widened cell: alpha, 1 where it lies in the grid, 1 on a pore.
     std::vector<double> ext(3 * n_ext, 0.);
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
       std::array<int, dim> c;
       for (int d = 0; d < dim; ++d)
         c[d] = ijk[d];
-      const long k = ext_index(c);
+      const long k = ext_box.index(c);
       if (k < 0)
         return;
       ext[3 * k]     = alpha[idx];
@@ -532,7 +527,7 @@ namespace femp
           unsigned int         b = a;
           for (int d = 0; d < dim; ++d, b /= 3)
             n[d] = c[d] + int(b % 3) - 1;
-          const long k = ext_index(n);
+          const long k = ext_box.index(n);
           if (k < 0 || ext[3 * k + 1] == 0)
             continue;
           least_alpha = std::min(least_alpha, ext[3 * k]);
@@ -559,7 +554,7 @@ namespace femp
         c[d] = ijk[d];
       if (zone_cell(c))
         return;
-      const long   k            = box_index(c);
+      const long   k            = cand_box.index(c);
       const double f            = fill[k] / hat_volume(c);
       const auto [a, near_pore] = neighbourhood(c);
       const bool dense =
@@ -656,7 +651,7 @@ namespace femp
           {
             auto nb = c;
             nb[f / 2] += f % 2 ? 1 : -1;
-            const long k = box_index(nb);
+            const long k = cand_box.index(nb);
             if (candidate(k, nb) && !taken[k])
               taken[k] = 1, front.push_back(k);
           }
