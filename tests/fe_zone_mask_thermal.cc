@@ -7,7 +7,7 @@
 // (2 x 2 per cell). The FE zone: the cells below y = 0.6 m for x < 0.6 m
 // and below y = 0.4 m for x >= 0.6 m (a step), less the four cells
 // x = 0.2-0.4 m, y = 0.2-0.4 m (an island of material points inside the
-// zone, as a pore and its neighbours left behind by a hand-over); the
+// zone, as a pore and the metal around it left behind by a hand-over); the
 // points above the step and in the island are the MPM's. Elastic
 // (E = 100 Pa, nu = 0.3, no yield), alpha = 1e-4 1/K; rollers at x = 0 and
 // y = 0, the other faces free. All cells heat by dT = 10 K, smoothly

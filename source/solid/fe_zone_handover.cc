@@ -50,8 +50,9 @@ namespace femp
       "that have cooled below 'Hand-over temperature', lie 'Hand-over "
       "margin' below the deepest melt expected of the new layer and are "
       "connected to the FE zone from material points to finite elements: "
-      "the FE zone of the solid rises behind the build (a pore and its "
-      "neighbours stay points inside it), each new element taking its "
+      "the FE zone of the solid rises behind the build (the cells of a "
+      "pore and the porous metal around them stay points inside it), each "
+      "new element taking its "
       "cell's mean stress and plastic strain (doc/builds.md, \"Handing "
       "cooled metal to finite elements\"). Needs the heat, the solid with "
       "its FE zone and a layer schedule. A checkpoint records the zone's "
@@ -517,7 +518,9 @@ namespace femp
     });
     Utilities::MPI::sum(ext, comm, ext);
     // Over the 3^dim neighbours of a candidate cell (itself included, those
-    // inside the grid): the least alpha and whether one is a pore cell.
+    // inside the grid): the least alpha of those that are no pore cells
+    // (a pore cell stays points and its gas is the pore's: it does not
+    // make the metal beside it porous) and whether one is a pore cell.
     auto neighbourhood = [&](const std::array<int, dim> &c) {
       double least_alpha = std::numeric_limits<double>::infinity();
       bool   near_pore   = false;
@@ -530,15 +533,17 @@ namespace femp
           const long k = ext_box.index(n);
           if (k < 0 || ext[3 * k + 1] == 0)
             continue;
-          least_alpha = std::min(least_alpha, ext[3 * k]);
-          near_pore   = near_pore || ext[3 * k + 2] > 0;
+          if (ext[3 * k + 2] > 0)
+            near_pore = true;
+          else
+            least_alpha = std::min(least_alpha, ext[3 * k]);
         }
       return std::make_pair(least_alpha, near_pore);
     };
-    // Per candidate cell (outside the zone): bit 1 not dense, 8 a pore
-    // cell in or next to it. Per row from the zone's top, for the log: the
-    // cells not dense, their count, the least fill and their horizontal
-    // extent (cell indices).
+    // Per candidate cell (outside the zone): bit 1 not dense, 8 kept for a
+    // pore (a pore cell, or a cell next to one that is not dense). Per row
+    // from the zone's top, for the log: the cells not dense, their count,
+    // the least fill and their horizontal extent (cell indices).
     std::vector<double> n_bad(n_rows, 0.),
       least(n_rows, std::numeric_limits<double>::infinity()),
       least_alpha(n_rows, std::numeric_limits<double>::infinity());
@@ -557,17 +562,19 @@ namespace femp
       const long   k            = cand_box.index(c);
       const double f            = fill[k] / hat_volume(c);
       const auto [a, near_pore] = neighbourhood(c);
+      const bool pore_cell      = !pore.empty() && pore[idx] > 0;
       const bool dense =
-        has_points[idx] && !near_pore && (a >= dense_alpha || f >= full_fill);
+        has_points[idx] && !pore_cell && (a >= dense_alpha || f >= full_fill);
+      const bool for_pore = pore_cell || (near_pore && !dense);
       if (!dense)
         cell_flags[k] |= 1;
-      if (near_pore)
+      if (for_pore)
         cell_flags[k] |= 8;
       const int r = ijk[dim - 1] - first_row;
       if (r < 0)
         return;
       row_fill[r] = std::min(row_fill[r], f);
-      if (near_pore)
+      if (for_pore)
         flags[r] |= 8;
       if (!dense)
         {

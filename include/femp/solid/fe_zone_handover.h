@@ -20,20 +20,28 @@
 //     taken (with 'Hand-over checks per layer' n > 1 also at n - 1
 //     times within each layer from the second on, the limit then
 //     top_n - max(D, the layer's own depth so far) - margin). A cell
-//     that is not dense (a lack-of-fusion pore, its
-//     neighbours) stays material points, an island inside the zone once
-//     the columns around it rise past it; a row of candidates only is
-//     taken whole, as a row of cells.
+//     that is not dense (the open cells of a lack-of-fusion pore, the
+//     porous metal around them) stays material points, an island inside
+//     the zone once the columns around it rise past it; a row of
+//     candidates only is taken whole, as a row of cells.
 // Every rank takes the same decision (reductions over the ranks: every
 // rank holds the candidates' flags and the zone's cells over the
 // candidate box).
 //
-// A cell is dense when it holds points, no cell of a pore (PoreDetector:
-// gas enclosed in the fused metal) lies in its 3^dim neighbourhood (the
-// cell and its face, edge and corner neighbours inside the grid), and
+// A cell is dense when it holds points, is no open cell of a pore
+// (PoreDetector: gas enclosed in the fused metal), and
 //   - the metal fraction alpha (sub-cell occupancy) is at least
-//     dense_alpha = 0.99 on every cell of that neighbourhood, or
+//     dense_alpha = 0.99 on every cell of its 3^dim neighbourhood (the
+//     cell and its face, edge and corner neighbours inside the grid)
+//     that is no pore cell, or
 //   - its fill (below) is at least full_fill = 0.9.
+// The pore's own cells are left out of the neighbourhood: they stay
+// points (an island inside the zone), the detector counts their gas as
+// the pore's, and a neighbour whose own sub-cells are all occupied holds
+// at least a full cell of points (2 x 2 points and sub-cells per cell:
+// one point per sub-cell at least), which the element carries as the
+// full density. A neighbour into which the pore's gas reaches by a
+// sub-cell reads alpha below 0.99 itself and stays points.
 // The two read dense metal in different states of its points. Metal that
 // melted and re-solidified keeps every sub-cell occupied (alpha = 1), but
 // the melt flow has moved its points apart in some cells and together in
@@ -44,9 +52,9 @@
 // so that alpha reads 1/2 (two point rows in one sub-cell row) while its
 // fill reads 1: alpha cannot tell it from a void, the fill can. Gas of a
 // sub-cell's size or more lowers alpha below 0.99 in the cells around it
-// and the fill below 0.9 (a missing point costs its cell 9/64 in 2D); a
-// pore of the detector (alpha below its threshold, enclosed) keeps its
-// neighbours as points whatever their alpha and fill; a cell of unfused
+// and the fill below 0.9 (a missing point costs its cell 9/64 in 2D); the
+// open cells of a pore of the detector (alpha below its threshold,
+// enclosed) stay points whatever their alpha and fill; a cell of unfused
 // powder holds powder points. A dense cell directly under a free surface
 // has a neighbour of alpha < 0.99 above it and a fill of about 7/8.
 //
@@ -71,7 +79,8 @@
 // surface in the row above) 7/8. full_fill = 0.9 takes dense metal (1, up
 // to the points' thermal volume change and the jitter of a strained
 // lattice) and leaves as points a cell with an empty sub-cell (2D; in 3D
-// two), a cell beside a pore and the row under a free surface.
+// two), a cell into which a pore's gas reaches and the row under a free
+// surface.
 // The zone's points stay where the hand-over left them, while the zone's
 // top face moves with its nodes (thermal expansion) and the points above
 // with it: a lift u of the face would read as a gap of about u/h in the
@@ -276,8 +285,8 @@ namespace femp
       /// below it, with a point of powder or fluid as well (unfused
       /// powder, metal still molten);
       powder,
-      /// below it, all points solid, a pore cell in it or among its 3^dim
-      /// neighbours;
+      /// below it, all points solid, an open cell of a pore, or a cell
+      /// next to one (among its 3^dim neighbours) that is not dense;
       pore,
       /// below it, all points solid, no pore near, not dense (alpha below
       /// dense_alpha around it and a fill below full_fill: porous
