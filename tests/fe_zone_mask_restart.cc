@@ -10,8 +10,8 @@
 // temperature). A hot spot at (0.8, 0.3) heats by 100 K in 1 s and cools
 // back in the next (prescribed cell temperatures, no heat solver). At
 // t = 2 s SolidSubCycle::hand_over_cells() hands the cells of the row
-// 0.2-0.3 m but two (x = 0.5-0.7 m: an island of material-point cells, a
-// pore and its neighbours) and those of the row 0.3-0.4 m for x < 1 m (a
+// 0.2-0.3 m but two (x = 0.5-0.7 m: an island of material-point cells, as
+// a pore leaves) and those of the row 0.3-0.4 m for x < 1 m (a
 // step) to finite elements; then the spot heats again by 50 K/s.
 // Run A goes straight through to step N = 60 (t = 3 s). Run B stops at
 // step k = 50 and writes the checkpoint sections "points", "fe zone" and
