@@ -7,13 +7,13 @@
 // rank. The user's zone ('Solid FEM/Zone lower corner', 'Zone upper
 // corner', on cell faces: SolidFEM::Parameters::check()) is a full box; a
 // build's hand-over adds cells (with_cells()), so that the zone may hold
-// islands of material-point cells (the cells of a pore and the porous
-// metal around them) and columns of different heights. SolidFEM meshes it and
-// FluidSolidForces gives its nodes full shares, both asking this object. The
-// partition cost of the grid (Scene::partition_cost()) asks contains_cell() of
-// the zone the run starts with, the user's box: the grid is partitioned once,
-// before the points exist, so the cells a hand-over adds keep the cost of MPM
-// cells (doc/performance.md, "Balancing the ranks"). No equation of the paper.
+// islands of material-point cells (a pore, porous metal) and columns
+// of different heights. SolidFEM meshes it and FluidSolidForces gives its
+// nodes full shares, both asking this object. The partition cost of the
+// grid (Scene::partition_cost()) asks contains_cell() of the zone the run
+// starts with, the user's box: the grid is partitioned once, before the
+// points exist, so the cells a hand-over adds keep the cost of MPM cells
+// (doc/performance.md, "Balancing the ranks"). No equation of the paper.
 #ifndef femp_fe_zone_h
 #define femp_fe_zone_h
 
