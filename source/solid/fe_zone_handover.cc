@@ -580,8 +580,10 @@ namespace femp
         {
           flags[r] |= 1;
           n_bad[r] += 1;
-          least[r]       = std::min(least[r], f);
-          least_alpha[r] = std::min(least_alpha[r], a);
+          least[r] = std::min(least[r], f);
+          // Inside a pore (every neighbour a pore cell): its own alpha.
+          least_alpha[r] =
+            std::min(least_alpha[r], std::isfinite(a) ? a : alpha[idx]);
           for (int d = 0; d < dim - 1; ++d)
             {
               int &l = bad_lo[r * (dim - 1) + d],
