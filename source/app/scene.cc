@@ -221,8 +221,9 @@ namespace femp
   bool
   Scene<dim>::affine_points() const
   {
-    return solid && solid_material.velocity_transfer ==
-                      SolidMaterial::VelocityTransfer::apic;
+    return (solid && solid_material.velocity_transfer ==
+                       SolidMaterial::VelocityTransfer::apic) ||
+           (melt_flow && flow.affine());
   }
 
   template <int dim>

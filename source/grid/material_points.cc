@@ -980,6 +980,9 @@ namespace femp
               {
                 v[P::state] = solid;
                 changed     = true;
+                if (drop_affine)
+                  for (unsigned int e = 0; e < dim * dim; ++e)
+                    v[P::affine_velocity + e] = 0;
               }
           }
         if (!changed)

@@ -162,6 +162,20 @@ namespace femp
       return n_props;
     }
 
+    /// Melt flow/Velocity transfer = APIC: a fluid point that solidifies in
+    /// cells_to_points() drops its affine velocity C_p (the flow's velocity
+    /// gradient), so that the solid starts it at C_p = 0 (as after a FLIP
+    /// flow) and a point that melts again without the solid's APIC enters
+    /// the flow with C_p = 0. Needs the affine block of the layout.
+    void
+    set_solidification_drops_affine(const bool b)
+    {
+      AssertThrow(!b || n_props >= PropertyIndex::n_properties,
+                  ExcMessage("MaterialPoints: the points do not carry the "
+                             "affine velocity"));
+      drop_affine = b;
+    }
+
     /// Fill the substrate block and the powder layer with points at the
     /// initial temperature @p T0, then the initial bodies: lattice points
     /// inside a body (added above the substrate top, re-stated below it)
@@ -466,8 +480,10 @@ namespace femp
     }
 
   private:
-    Parameters                      prm;
-    unsigned int                    n_props;
+    Parameters   prm;
+    unsigned int n_props;
+    // See set_solidification_drops_affine().
+    bool                            drop_affine = false;
     const Material                 &mat;
     const BackgroundGrid<dim>      &grid;
     MappingQ1<dim>                  mapping;
