@@ -109,7 +109,7 @@ namespace femp
       {
         // Flow and solid together (doc/solid.md): the fluid forces on the
         // solid enter through the solid's external nodal forces.
-        solid->share_points_with_flow();
+        solid->share_points_with_flow(scene.flow.affine());
         fluid_solid = std::make_unique<FluidSolidForces<dim>>(
           *grid, *points, scene.material.density, scene.fem);
       }

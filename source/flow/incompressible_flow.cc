@@ -33,6 +33,10 @@
 //   lumped nodal volume (cell-wise, so it is independent of the partition);
 // - G2P: v_p <- beta (v_p + sum w (u_new - u_old)) + (1 - beta) sum w u_new
 //   (FLIP fraction beta, default 0.95); points move with sum w u_new;
+// - or APIC (Melt flow/Velocity transfer; Jiang et al. 2015): P2G
+//   scatters m_p w (v_p + C_p (x_i - x_p)), G2P sets v_p = sum w u_new and
+//   C_p = sum u_new (grad w)^T (= B_p D_p^-1 for tent weights, D_p =
+//   diag(h^2 xi_d (1 - xi_d))); C_p is a point property only then;
 // - optional point shifting (SPH-type, -A h |u| dt grad alpha) and volume
 //   correction (positions moved by grad psi, lap psi = c (V_c/h^dim - 1),
 //   psi = 0 at the free surface; Melt flow/Volume correction), both off by
@@ -93,8 +97,27 @@ namespace femp
     table.add("FLIP fraction",
               flip_fraction,
               Patterns::Double(0., 1.),
-              "beta of the grid-to-point update: 1 pure FLIP, 0 pure "
-              "PIC; range [0, 1].");
+              "beta of the grid-to-point update of the FLIP-PIC "
+              "transfer: 1 pure FLIP, 0 pure PIC (not used by APIC); "
+              "dimensionless, range [0, 1].");
+    table.add("Velocity transfer",
+              velocity_transfer,
+              {{VelocityTransfer::flip_pic, "FLIP-PIC"},
+               {VelocityTransfer::apic, "APIC"}},
+              "How the fluid points exchange velocities with the grid "
+              "nodes. FLIP-PIC: a point brings m_p v_p to the nodes and "
+              "takes back beta (v_p + the interpolated change of the "
+              "nodal velocity) + (1 - beta) (the interpolated nodal "
+              "velocity), beta the FLIP fraction; the PIC part damps by "
+              "a fixed fraction per step. APIC (affine particle-in-cell, "
+              "Jiang et al. 2015): each fluid point also carries the "
+              "affine velocity C_p (1/s, dim x dim, the point properties "
+              "affine_velocity_xx ...), brings m_p (v_p + C_p (x_i - x_p)) "
+              "to node i and takes back v_p = sum w u_i and C_p = sum u_i "
+              "(grad w_ip)^T, so that rotation and shear survive the round "
+              "trip; the FLIP fraction is not used. See doc/flow.md, "
+              "\"Velocity transfer\". One of FLIP-PIC, APIC (default "
+              "FLIP-PIC).");
     table.add("Courant number",
               cfl,
               Patterns::Double(0.),
@@ -360,6 +383,15 @@ namespace femp
       }
     if (prm.front_wall_film)
       film.emplace(grid);
+    if (prm.affine())
+      {
+        using P = typename MaterialPoints<dim>::PropertyIndex;
+        AssertThrow(points.n_properties() >= P::n_properties,
+                    ExcMessage("Melt flow/Velocity transfer = APIC: the "
+                               "material points do not carry the affine "
+                               "velocity"));
+        points.set_solidification_drops_affine(true);
+      }
     node_mark = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     node_fix  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     for (int d = 0; d < dim; ++d)
@@ -417,7 +449,8 @@ namespace femp
     // particles_in_cell() range per cell is the dominant cost of a pass).
     using P             = typename MaterialPoints<dim>::PropertyIndex;
     const auto  &status = grid.cell_status();
-    const double ih     = 1. / grid.h();
+    const double h      = grid.h();
+    const double ih     = 1. / h;
     const auto  &x0     = grid.origin();
     std::swap(type, type_old);
     for (std::size_t i = 0; i < type.size(); ++i)
@@ -473,25 +506,67 @@ namespace femp
             for (int d = 0; d < dim; ++d)
               nu[d][k] = &mom[d][n0 + corner_offset[k]];
           }
-        for (const auto &particle : handler.particles_in_cell(cell))
-          {
-            const auto v = particle.get_properties();
-            if (v[P::state] != MaterialPoints<dim>::fluid)
-              continue;
-            const Point<dim> &x = particle.get_location();
-            // Tent weights of the 2^dim corners (product over directions).
-            double w[n_corners];
-            tent_weights<dim>(x, x0, ih, ijk, v[P::mass], w);
-            double vel[dim];
-            for (int d = 0; d < dim; ++d)
-              vel[d] = v[P::velocity + d];
-            for (unsigned int k = 0; k < n_corners; ++k)
-              {
-                *nm[k] += w[k];
-                for (int d = 0; d < dim; ++d)
-                  *nu[d][k] += w[k] * vel[d];
-              }
-          }
+        // The point loop is compiled twice (with and without the affine
+        // velocity), so that APIC costs nothing when it is off.
+        const auto scatter = [&](auto affine_tag) {
+          constexpr bool affine = decltype(affine_tag)::value;
+          for (const auto &particle : handler.particles_in_cell(cell))
+            {
+              const auto v = particle.get_properties();
+              if (v[P::state] != MaterialPoints<dim>::fluid)
+                continue;
+              const Point<dim> &x = particle.get_location();
+              // Tent weights of the 2^dim corners (product over
+              // directions).
+              double w[n_corners];
+              tent_weights<dim>(x, x0, ih, ijk, v[P::mass], w);
+              double vel[dim];
+              for (int d = 0; d < dim; ++d)
+                vel[d] = v[P::velocity + d];
+              if constexpr (affine)
+                {
+                  // APIC: corner k receives v_p + C_p (x_k - x_p), with
+                  // x_k - x_p = h (k_e - xi_e): the velocity at corner 0
+                  // plus h C_de for each upper direction e of k.
+                  const double *C = &v[P::affine_velocity];
+                  double        hC[dim * dim], v0[dim];
+                  for (int d = 0; d < dim; ++d)
+                    v0[d] = vel[d];
+                  for (int e = 0; e < dim; ++e)
+                    {
+                      const double xi = (x[e] - x0[e]) * ih - ijk[e];
+                      for (int d = 0; d < dim; ++d)
+                        {
+                          hC[d * dim + e] = h * C[d * dim + e];
+                          v0[d] -= hC[d * dim + e] * xi;
+                        }
+                    }
+                  for (unsigned int k = 0; k < n_corners; ++k)
+                    {
+                      *nm[k] += w[k];
+                      for (int d = 0; d < dim; ++d)
+                        {
+                          double u = v0[d];
+                          for (int e = 0; e < dim; ++e)
+                            if ((k >> e) & 1)
+                              u += hC[d * dim + e];
+                          *nu[d][k] += w[k] * u;
+                        }
+                    }
+                }
+              else
+                for (unsigned int k = 0; k < n_corners; ++k)
+                  {
+                    *nm[k] += w[k];
+                    for (int d = 0; d < dim; ++d)
+                      *nu[d][k] += w[k] * vel[d];
+                  }
+            }
+        };
+        if (prm.affine())
+          scatter(std::true_type());
+        else
+          scatter(std::false_type());
       }
     classified_at = points.layout_mark();
     classified    = true;
@@ -1008,13 +1083,14 @@ namespace femp
     // Cells where a point left (increasing): only their points are checked
     // by the re-sort, not every point of the powder and the substrate.
     std::vector<std::uint32_t> left_cells;
-    // The point loop is compiled four times (with and without the point
-    // shifting and the volume correction), so that either costs nothing
-    // when it is off.
+    // The point loop is compiled eight times (with and without the point
+    // shifting, the volume correction and the APIC transfer), so that each
+    // costs nothing when it is off.
     const auto loop = [&](auto mode_tag) {
       constexpr int  mode     = decltype(mode_tag)::value;
       constexpr bool shifting = mode & 1;
       constexpr bool volume_c = mode & 2;
+      constexpr bool affine   = mode & 4;
       bool           moved    = false;
       double         umax     = 0;
       for (const auto &[idx, cell] : points.occupied_cells())
@@ -1040,18 +1116,42 @@ namespace femp
               for (int d = 0; d < dim; ++d)
                 xi[d] = (x[d] - x0[d]) * ih - ijk[d];
               double vg[dim] = {}, dv[dim] = {};
+              // APIC: C_p = sum u_k (grad w_k)^T, times h (row-major).
+              double Ch[dim * dim] = {};
               for (unsigned int k = 0; k < n_corners; ++k)
                 {
                   double w = 1;
                   for (int d = 0; d < dim; ++d)
                     w *= ((k >> d) & 1) ? xi[d] : 1. - xi[d];
                   const std::size_t n = n0 + corner_offset[k];
-                  for (int d = 0; d < dim; ++d)
+                  if constexpr (affine)
                     {
-                      vg[d] += w * u_new[d][n];
-                      dv[d] += w * (u_new[d][n] - u_old[d][n]);
+                      // h dw_k/dx_e = (+-1) prod_{f != e} (xi_f or 1 - xi_f).
+                      double gw[dim];
+                      for (int e = 0; e < dim; ++e)
+                        {
+                          gw[e] = ((k >> e) & 1) ? 1. : -1.;
+                          for (int f = 0; f < dim; ++f)
+                            if (f != e)
+                              gw[e] *= ((k >> f) & 1) ? xi[f] : 1. - xi[f];
+                        }
+                      for (int d = 0; d < dim; ++d)
+                        {
+                          vg[d] += w * u_new[d][n];
+                          for (int e = 0; e < dim; ++e)
+                            Ch[d * dim + e] += u_new[d][n] * gw[e];
+                        }
                     }
+                  else
+                    for (int d = 0; d < dim; ++d)
+                      {
+                        vg[d] += w * u_new[d][n];
+                        dv[d] += w * (u_new[d][n] - u_old[d][n]);
+                      }
                 }
+              if constexpr (affine)
+                for (int c = 0; c < dim * dim; ++c)
+                  v[P::affine_velocity + c] = Ch[c] * ih;
               double     speed2 = 0, step2 = 0;
               bool       left = false;
               Point<dim> ref;
@@ -1079,8 +1179,11 @@ namespace femp
                 }
               for (int d = 0; d < dim; ++d)
                 {
-                  v[P::velocity + d] =
-                    beta * (v[P::velocity + d] + dv[d]) + (1 - beta) * vg[d];
+                  if constexpr (affine)
+                    v[P::velocity + d] = vg[d];
+                  else
+                    v[P::velocity + d] =
+                      beta * (v[P::velocity + d] + dv[d]) + (1 - beta) * vg[d];
                   speed2 += v[P::velocity + d] * v[P::velocity + d];
                   const double dx = dt * vg[d];
                   step2 += dx * dx;
@@ -1117,13 +1220,18 @@ namespace femp
         }
       return std::make_pair(moved, umax);
     };
-    const int mode =
-      (prm.point_shifting > 0 ? 1 : 0) + (prm.volume_correction > 0 ? 2 : 0);
+    const int mode = (prm.point_shifting > 0 ? 1 : 0) +
+                     (prm.volume_correction > 0 ? 2 : 0) +
+                     (prm.affine() ? 4 : 0);
     const auto [moved, umax] =
       mode == 0 ? loop(std::integral_constant<int, 0>()) :
       mode == 1 ? loop(std::integral_constant<int, 1>()) :
       mode == 2 ? loop(std::integral_constant<int, 2>()) :
-                  loop(std::integral_constant<int, 3>());
+      mode == 3 ? loop(std::integral_constant<int, 3>()) :
+      mode == 4 ? loop(std::integral_constant<int, 4>()) :
+      mode == 5 ? loop(std::integral_constant<int, 5>()) :
+      mode == 6 ? loop(std::integral_constant<int, 6>()) :
+                  loop(std::integral_constant<int, 7>());
     stats.max_point_speed =
       std::sqrt(Utilities::MPI::max(umax, grid.communicator()));
     if (Utilities::MPI::logical_or(moved, grid.communicator()))

@@ -973,6 +973,9 @@ namespace femp
               v[P::peak_temperature] = Tc;
             if (Tc > Ts)
               {
+                if (drop_affine && v[P::state] != fluid)
+                  for (unsigned int e = 0; e < dim * dim; ++e)
+                    v[P::affine_velocity + e] = 0;
                 changed     = changed || v[P::state] != fluid;
                 v[P::state] = fluid;
               }
@@ -980,6 +983,9 @@ namespace femp
               {
                 v[P::state] = solid;
                 changed     = true;
+                if (drop_affine)
+                  for (unsigned int e = 0; e < dim * dim; ++e)
+                    v[P::affine_velocity + e] = 0;
               }
           }
         if (!changed)

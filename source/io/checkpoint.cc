@@ -390,7 +390,7 @@ namespace femp
               triple(scene.fe_upper, dim));
     if (s.n_point_properties != scene.n_point_properties)
       differs("the point properties (Material points/Carry points, "
-              "Solid/Velocity transfer)",
+              "Solid/Velocity transfer, Melt flow/Velocity transfer)",
               std::to_string(s.n_point_properties) + " per point",
               std::to_string(scene.n_point_properties));
     if (image.size() - header_size != size)

@@ -117,7 +117,7 @@ namespace femp
       q[P::viscous_pressure] = 0;
       if constexpr (dim == 2)
         q[P::stress_zz] = 0;
-      if (apic)
+      if (apic && (velocity || !flow_affine))
         for (unsigned int k = 0; k < dim * dim; ++k)
           q[P::affine_velocity + k] = 0;
     };

@@ -1150,9 +1150,9 @@ namespace femp
 
   template <int dim>
   void
-  SolidSubCycle<dim>::share_points_with_flow()
+  SolidSubCycle<dim>::share_points_with_flow(const bool flow_affine)
   {
-    set_flow_owns_fluid_points(true);
+    set_flow_owns_fluid_points(true, flow_affine);
     if (prm.light_nodes == Parameters::LightNodes::mass_floor)
       set_mass_floor(true);
     else

@@ -88,7 +88,9 @@ namespace femp
     /// from the Output parameters, here only).
     SimulationControl::Cadence
     cadence() const;
-    /// The solid transfers velocities by APIC (the points carry C_p).
+    /// The solid or the melt flow transfers velocities by APIC (the points
+    /// carry C_p; the layout block of C_p follows the solid block, so
+    /// the points then carry the solid block too).
     bool
     affine_points() const;
     /// Properties a material point carries in this scene.

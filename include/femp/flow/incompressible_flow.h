@@ -12,6 +12,11 @@
 // hierarchy are reused while the fluid stays inside the band), corrects the
 // nodal velocity u = u* - dt/rho grad p, and updates the points with a FLIP/PIC
 // blend before moving them with the nodal velocity (explicit advection).
+// With Melt flow/Velocity transfer = APIC (affine particle-in-cell, Jiang et
+// al. 2015, with the D_p of multilinear weights) each fluid point
+// carries the affine velocity C_p instead: P2G scatters
+// m_p (v_p + C_p (x_i - x_p)), G2P sets v_p = sum w u_i and
+// C_p = sum u_i (grad w_ip)^T, which equals B_p D_p^-1 for tent weights.
 // Optionally (Melt flow/Volume correction) the points are also moved by
 // grad(psi), lap(psi) = c (V_c/h^dim - 1) with psi = 0 at the free surface, so
 // that bunched points spread again and the fluid volume of the cells is kept
@@ -77,7 +82,21 @@ namespace femp
       double         darcy_constant = 1e8;  ///< K_c, kg/(m^3 s)
       double         darcy_epsilon  = 1e-3; ///< eps0, -
       double         flip_fraction  = 0.95; ///< beta of the FLIP/PIC blend
-      double         cfl            = 0.25; ///< convective Courant number
+      /// How the fluid points exchange velocities with the grid nodes
+      /// (Melt flow/Velocity transfer).
+      enum class VelocityTransfer
+      {
+        flip_pic, ///< v_p <- beta (v_p + sum w du) + (1 - beta) sum w u
+        apic      ///< affine particle-in-cell: v_p and C_p from the nodes
+      };
+      VelocityTransfer velocity_transfer = VelocityTransfer::flip_pic;
+      /// Whether the points carry the affine velocity C_p (APIC).
+      bool
+      affine() const
+      {
+        return velocity_transfer == VelocityTransfer::apic;
+      }
+      double cfl = 0.25; ///< convective Courant number
       /// Fraction of the capillary limit used by the automatic step (the
       /// surface tension is explicit; see doc/flow.md, oscillating droplet).
       double capillary_fraction = 0.5;
@@ -457,7 +476,8 @@ namespace femp
     /// gas faces.
     void
     volume_faces(const std::size_t cell, double *G) const;
-    /// G2P: FLIP/PIC update of the point velocities and advection.
+    /// G2P: FLIP/PIC (or APIC) update of the point velocities and
+    /// advection.
     void
     grid_to_points(const double dt);
 

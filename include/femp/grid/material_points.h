@@ -19,8 +19,9 @@
 //   then the equivalent plastic strain (-)
 //   2D only: then the out-of-plane stress sigma_zz (Pa; plane strain)
 //   then the solid's artificial viscous pressure q (Pa; see SolidMPM)
-//   then the dim x dim affine velocity matrix C_p of the solid's APIC
-//   transfer (1/s, row-major: C_xx, C_xy, [C_xz,] C_yx, ...; see SolidMPM)
+//   then the dim x dim affine velocity matrix C_p of the APIC transfer of
+//   the solid or of the melt flow (1/s, row-major: C_xx, C_xy, [C_xz,]
+//   C_yx, ...; see SolidMPM and IncompressibleFlow)
 #ifndef femp_material_points_h
 #define femp_material_points_h
 
@@ -68,8 +69,9 @@ namespace femp
       /// Artificial bulk-viscosity pressure of the solid (SolidMPM).
       static constexpr unsigned int viscous_pressure =
         plastic_strain + 1 + (dim == 2 ? 1 : 0);
-      /// APIC affine velocity matrix C_p of the solid, dim x dim row-major
-      /// (SolidMPM; zero with the FLIP transfer).
+      /// APIC affine velocity matrix C_p, dim x dim row-major (SolidMPM, or
+      /// IncompressibleFlow with Melt flow/Velocity transfer = APIC; zero
+      /// with the FLIP transfers).
       static constexpr unsigned int affine_velocity = viscous_pressure + 1;
       static constexpr unsigned int n_properties = affine_velocity + dim * dim;
       /// Number of properties of the layout blocks a scene uses: the base
@@ -160,6 +162,19 @@ namespace femp
     n_properties() const
     {
       return n_props;
+    }
+
+    /// Melt flow/Velocity transfer = APIC: a point that melts or solidifies
+    /// in cells_to_points() drops its affine velocity C_p, so that it
+    /// enters the flow (or leaves it) with C_p = 0. Needs the affine block
+    /// of the layout.
+    void
+    set_solidification_drops_affine(const bool b)
+    {
+      AssertThrow(!b || n_props >= PropertyIndex::n_properties,
+                  ExcMessage("MaterialPoints: the points do not carry the "
+                             "affine velocity"));
+      drop_affine = b;
     }
 
     /// Fill the substrate block and the powder layer with points at the
@@ -466,8 +481,10 @@ namespace femp
     }
 
   private:
-    Parameters                      prm;
-    unsigned int                    n_props;
+    Parameters   prm;
+    unsigned int n_props;
+    // See set_solidification_drops_affine().
+    bool                            drop_affine = false;
     const Material                 &mat;
     const BackgroundGrid<dim>      &grid;
     MappingQ1<dim>                  mapping;

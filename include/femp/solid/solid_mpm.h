@@ -148,7 +148,8 @@ namespace femp
     /// multiplied by @p mass_scaling (gravity uses the true mass). Points in
     /// state fluid get zero stress, plastic strain, viscous pressure and
     /// affine velocity, and, unless the melt flow owns them
-    /// (set_flow_owns_fluid_points()), zero velocity.
+    /// (set_flow_owns_fluid_points()), zero velocity; with a flow that
+    /// carries C_p itself their affine velocity is the flow's.
     /// With @p same_members (exchange_since_gather() found no point melted,
     /// solidified or lost on this rank) and the same mask: when the handler
     /// has not moved a point into or out of a cell of the members since the

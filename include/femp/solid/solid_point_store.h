@@ -78,11 +78,14 @@ namespace femp
       return {{gathers_kept, gathers_merged, gathers}};
     }
     /// With the melt flow running beside the solid: gather() leaves the
-    /// velocity of fluid points alone (the flow owns it).
+    /// velocity of fluid points alone (the flow owns it), and with
+    /// @p affine (Melt flow/Velocity transfer = APIC) their affine
+    /// velocity too.
     void
-    set_flow_owns_fluid_points(const bool b)
+    set_flow_owns_fluid_points(const bool b, const bool affine = false)
     {
       flow_owns_fluid = b;
+      flow_affine     = b && affine;
     }
     /// Write positions, velocities, stresses, plastic strains, volumes,
     /// viscous pressures and affine velocities back to the particles, and
@@ -158,7 +161,8 @@ namespace femp
     /// multiplied by @p mass_scaling (gravity uses the true mass). Points in
     /// state fluid get zero stress, plastic strain, viscous pressure and
     /// affine velocity, and, unless the melt flow owns them
-    /// (set_flow_owns_fluid_points()), zero velocity.
+    /// (set_flow_owns_fluid_points()), zero velocity; with a flow that
+    /// carries C_p itself their affine velocity is the flow's.
     /// With @p same_members (exchange_since_gather() found no point melted,
     /// solidified or lost on this rank) and the same mask: when the handler
     /// has not moved a point into or out of a cell of the members since the
@@ -264,6 +268,8 @@ namespace femp
     bool moved_cell = false;
     /// With the melt flow: see set_flow_owns_fluid_points().
     bool flow_owns_fluid = false;
+    /// The flow owns the fluid points' affine velocity too.
+    bool flow_affine = false;
 
     /// Particle ids of the points of the last gather(): bit id % 64 of
     /// word id / 64 is set (a membership test without a search).

@@ -186,16 +186,18 @@ namespace femp
     /// (set_flow_owns_fluid_points()), and fragments that solidify where
     /// the flow left them meet the light-node rule of the parameters
     /// ('Light nodes': set_mass_floor() or set_small_mass_cutoff() with
-    /// 'Small mass cutoff'). Call before initialize().
+    /// 'Small mass cutoff'). @p flow_affine: the flow carries the fluid
+    /// points' affine velocity (Melt flow/Velocity transfer = APIC). Call
+    /// before initialize().
     void
-    share_points_with_flow();
+    share_points_with_flow(const bool flow_affine);
 
     /// The melt flow runs beside the solid: fluid points keep their
     /// velocity at the gather (SolidMPM::set_flow_owns_fluid_points()).
     void
-    set_flow_owns_fluid_points(const bool b)
+    set_flow_owns_fluid_points(const bool b, const bool affine = false)
     {
-      mpm.set_flow_owns_fluid_points(b);
+      mpm.set_flow_owns_fluid_points(b, affine);
     }
     /// With the melt flow: grid nodes whose (inertial) mass is below
     /// @p fraction of that of a node of a full cell, s rho h^dim / 2^dim,
