@@ -547,12 +547,12 @@ namespace femp
     /// and points_removed() the members to remove (-1: none announced)
     /// and the points' kinetic energy before, J (2D: J/m).
     double n_removed = 0, removing = -1, removing_K0 = 0;
-    double n_points_global = 0;     ///< solid points after the last step
+    double n_points_global = 0; ///< solid points after the last step
     /// Largest speed of a point that solidified, this rank, m/s
     /// (solidification_speed()).
     double fastest_solidified = 0;
-    bool   regathered      = false; ///< a re-sort gathered the points
-    double last_w          = -1;    ///< w of the last step of an advance
+    bool   regathered         = false; ///< a re-sort gathered the points
+    double last_w             = -1;    ///< w of the last step of an advance
     std::unique_ptr<std::ofstream> energy_out, probe_out;
     std::string                    csv_directory; ///< of energy_out, probe_out
     /// State changes found by find_state_changes() for the next gather.
