@@ -156,14 +156,6 @@ namespace femp
             time.time_step,
             "with 'Physics/Heat transfer = false' and no melt flow nothing "
             "sets the step: prescribe it (s, > 0)");
-    // APIC in the melt flow beside the solid is not verified: in the coupled
-    // checkpoint scene (tests/checkpoint_flow_solid.prm) a solid point
-    // collapses at the tenth solid step.
-    if (melt_flow && solid && flow.affine())
-      throw InputError("Melt flow/Velocity transfer",
-                       "APIC",
-                       "APIC in the melt flow is not available with the "
-                       "solid (Physics/Solid stress = true); use FLIP-PIC");
     require(time.time_step_solidified == 0 || heat_enabled,
             "Time stepping/Time step after solidification",
             time.time_step_solidified,

@@ -547,6 +547,7 @@ namespace femp
             double v2 = 0;
             for (int d = 0; d < dim; ++d)
               v2 += q[P::velocity + d] * q[P::velocity + d];
+            const double speed = std::sqrt(v2);
             if (apic)
               for (int j = 0; j < dim; ++j)
                 {
@@ -562,7 +563,10 @@ namespace femp
             else if (member)
               e.n_melted += 1, e.k_melted += k;
             else
-              e.n_solidified += 1, e.k_solidified += k;
+              {
+                e.n_solidified += 1, e.k_solidified += k;
+                e.v_solidified = std::max(e.v_solidified, speed);
+              }
           }
       }
     return e;

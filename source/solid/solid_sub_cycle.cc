@@ -1101,6 +1101,17 @@ namespace femp
          "hourglass modes grew: use a smaller 'Solid/Safety factor' (or "
          "'Solid/Time step'), more 'Solid/Bulk viscosity', or a larger "
          "'Solid FEM/Hourglass coefficient'";
+    // A point that solidified faster than the mass-scaled solid's P-wave
+    // crosses cells in a solid step: the likelier cause.
+    const auto [v_in, c] = solidification_speed();
+    if (v_in > c)
+      s << ". But first: a point entered the solid by solidifying at " << v_in
+        << " m/s (the melt flow's velocity), " << v_in / c
+        << " times the P-wave speed of the mass-scaled solid, sqrt(M / (s "
+           "rho)) = "
+        << c << " m/s, and moves " << v_in * dt_solid / grid.h()
+        << " cells in a solid step; use a smaller 'Solid/Mass scaling "
+           "factor' (s)";
     throw CollectiveError(s.str()); // the flag was reduced over all ranks
   }
 
@@ -1227,6 +1238,7 @@ namespace femp
       // that load_state() kept, as the run that went on holds none here.
       mpm.gather(zone_mask(), scaling.factor());
     have_pending_exchange = false;
+    fastest_solidified    = std::max(fastest_solidified, e.v_solidified);
     // Points set aside in detached drops leave the solid as melted ones
     // do: counted with them, their kinetic energy booked with theirs.
     double sums[8] = {e.n_melted + e.n_set_aside,
@@ -1263,6 +1275,15 @@ namespace femp
     // out and the solidified ones brought (booked; any other change shows
     // in the balance).
     ledger.book_exchange(sums[3], sums[4], sums[6]);
+  }
+
+  template <int dim>
+  std::array<double, 2>
+  SolidSubCycle<dim>::solidification_speed() const
+  {
+    return {{Utilities::MPI::max(fastest_solidified, comm),
+             std::sqrt(mat.max_p_wave_modulus() /
+                       (scaling.factor() * mat.density()))}};
   }
 
   template <int dim>

@@ -109,7 +109,10 @@ namespace femp
       /// the melt flow's velocity. The next gather() must look at their
       /// cells (it stops them there), so that a later one does not count
       /// them as members the solid carried into the drop.
-      double     n_stopped = 0;
+      double n_stopped = 0;
+      /// The largest speed among the points that solidified, m/s (the
+      /// velocity the flow last gave them).
+      double     v_solidified = 0;
       Point<dim> lost_at;
     };
     Exchange

@@ -261,6 +261,16 @@ namespace femp
     {
       return n_removed;
     }
+    /// The largest speed with which a point entered the solid by
+    /// solidifying (the velocity the melt flow last gave it) since the
+    /// setup or the resume, and the P-wave speed of the mass-scaled solid,
+    /// sqrt(M_max / (s rho)) with the factor s in use, m/s (all ranks;
+    /// collective). A point faster than that wave moves C / sqrt(dim) cells
+    /// or more in one automatic solid step (C the safety factor): far more
+    /// than the explicit update follows (doc/solid.md "Flow and solid
+    /// together").
+    std::array<double, 2>
+    solidification_speed() const;
     /// Solid points set aside in detached drops so far (global count of
     /// the set-aside events; a point that rejoins and leaves again counts
     /// twice).
@@ -537,9 +547,12 @@ namespace femp
     /// and points_removed() the members to remove (-1: none announced)
     /// and the points' kinetic energy before, J (2D: J/m).
     double n_removed = 0, removing = -1, removing_K0 = 0;
-    double n_points_global = 0;     ///< solid points after the last step
-    bool   regathered      = false; ///< a re-sort gathered the points
-    double last_w          = -1;    ///< w of the last step of an advance
+    double n_points_global = 0; ///< solid points after the last step
+    /// Largest speed of a point that solidified, this rank, m/s
+    /// (solidification_speed()).
+    double fastest_solidified = 0;
+    bool   regathered         = false; ///< a re-sort gathered the points
+    double last_w             = -1;    ///< w of the last step of an advance
     std::unique_ptr<std::ofstream> energy_out, probe_out;
     std::string                    csv_directory; ///< of energy_out, probe_out
     /// State changes found by find_state_changes() for the next gather.
