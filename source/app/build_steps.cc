@@ -257,7 +257,8 @@ namespace femp
           std::clamp(std::floor((top - handover->limit()) / grid_ptr->h()),
                      0.,
                      double(env.size() - 1)));
-        pcout << "; the predicted peaks of the new layer reach "
+        pcout << std::setprecision(6)
+              << "; the predicted peaks of the new layer reach "
               << handover->handed_peak_prediction() << " K in the cells taken, "
               << handover->hottest_prediction()
               << " K in those kept for it (the rise at the limit's depth "
