@@ -97,7 +97,9 @@ namespace femp
               "With 'Hand-over rule = re-heating': the rise at a depth is "
               "the largest of the latest this many finished layers (the "
               "part's state changes from layer to layer: the first layer "
-              "heats a cold plate). Count, range [1, 1000].");
+              "heats a cold plate). Count, range [1, 1000]; the "
+              "default takes every finished layer (doc/builds.md: fewer "
+              "let a deeper melt reach handed cells).");
     table.add("Hand-over checks per layer",
               checks,
               Patterns::Integer(),

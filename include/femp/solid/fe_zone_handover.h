@@ -13,8 +13,17 @@
 //     powder's top), so that the new layer's melt, as deep as the deepest
 //     so far, stays a margin above them;
 //   - a cell inside the zone's horizontal extent, below that line and
-//     outside the zone is a candidate when it is dense and its points are
-//     all solid (no powder, no fluid) and below the hand-over temperature;
+//     outside the zone is a candidate when it is dense, its points are
+//     all solid (no powder, no fluid) and it is cool enough by the
+//     'Hand-over rule': with 'temperature' its points are below the
+//     hand-over temperature; with 're-heating' its predicted peak in the
+//     new layer, its hottest point plus R(k), is below the solidus less
+//     'Re-heating margin', R(k) being the largest rise of a metal cell's
+//     temperature (alpha >= 1/2) over its temperature at its layer's first
+//     step, among the cells k whole cells below their layer's powder top
+//     (to the cell's centre), over the latest 'Re-heating layers'
+//     finished layers (observed after every temperature step with the
+//     lowest molten cell);
 //     the candidates connected to the zone through faces of candidates
 //     (a flood fill from the zone's cells over face neighbours) are
 //     taken (with 'Hand-over checks per layer' n > 1 also at n - 1
@@ -163,8 +172,9 @@ namespace femp
       /// [0, Material/Solidus).
       double reheat_margin = 100;
       /// 'Re-heating layers': the envelope of the rises is taken over
-      /// this many finished layers, the latest; range [1, 1000].
-      int reheat_layers = 2;
+      /// this many finished layers, the latest; range [1, 1000] (1000:
+      /// all of a build's layers in practice).
+      int reheat_layers = 1000;
       /// The input names of the rules.
       static const Choices<Rule> &
       rule_names();
