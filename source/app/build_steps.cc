@@ -248,6 +248,26 @@ namespace femp
           << handover->limit() << " m";
     if (!handover->stop_reason().empty())
       pcout << " (" << handover->stop_reason() << ")";
+    if (scene.handover.rule == FeZoneHandover<dim>::Parameters::Rule::reheating)
+      {
+        // The rise at the limit's depth below the top: the envelope's and
+        // the layer before's (the log).
+        const auto       &env = handover->rise_envelope();
+        const std::size_t k   = std::size_t(
+          std::clamp(std::floor((top - handover->limit()) / grid_ptr->h()),
+                     0.,
+                     double(env.size() - 1)));
+        pcout << std::setprecision(6)
+              << "; the predicted peaks of the new layer reach "
+              << handover->handed_peak_prediction() << " K in the cells taken, "
+              << handover->hottest_prediction()
+              << " K in those kept for it (the rise at the limit's depth "
+              << env[k] << " K";
+        if (!handover->layer_rises().empty())
+          pcout << ", in the layer before " << handover->layer_rises().back()[k]
+                << " K";
+        pcout << ")";
+      }
     if (!handover->least_fill().empty())
       {
         const auto [lo, hi] = std::minmax_element(lift.begin(), lift.end());

@@ -5,6 +5,7 @@
 #include <deal.II/base/utilities.h>
 
 #include <femp/base/input_checks.h>
+#include <femp/grid/cell_state.h>
 #include <femp/solid/fe_zone_handover.h>
 
 #include <algorithm>
@@ -39,6 +40,15 @@ namespace femp
   } // namespace
 
   template <int dim>
+  const Choices<typename FeZoneHandover<dim>::Parameters::Rule> &
+  FeZoneHandover<dim>::Parameters::rule_names()
+  {
+    static const Choices<Rule> names = {{Rule::temperature, "temperature"},
+                                        {Rule::reheating, "re-heating"}};
+    return names;
+  }
+
+  template <int dim>
   void
   FeZoneHandover<dim>::Parameters::add_parameters(ParameterTable &table)
   {
@@ -63,6 +73,33 @@ namespace femp
               "With 'Hand over cooled metal': every material point of a "
               "handed cell is below this temperature, K; range (0, "
               "Material/Solidus).");
+    table.add(
+      "Hand-over rule",
+      rule,
+      rule_names(),
+      "With 'Hand over cooled metal': what keeps a dense, solid cell below "
+      "the limit line as material points. 'temperature': a point at or "
+      "above 'Hand-over temperature'. 're-heating': a predicted peak of the "
+      "new layer at or above Material/Solidus less 'Re-heating margin', "
+      "the prediction being the cell's hottest point plus the largest "
+      "temperature rise over a layer that a metal cell at the same depth "
+      "below its layer's powder top saw in the finished layers "
+      "(doc/builds.md, \"Handing cooled metal to finite elements\").");
+    table.add("Re-heating margin",
+              reheat_margin,
+              Patterns::Double(),
+              "With 'Hand-over rule = re-heating': a handed cell's predicted "
+              "peak stays this far below Material/Solidus, K; range [0, "
+              "Material/Solidus).");
+    table.add("Re-heating layers",
+              reheat_layers,
+              Patterns::Integer(),
+              "With 'Hand-over rule = re-heating': the rise at a depth is "
+              "the largest of the latest this many finished layers (the "
+              "part's state changes from layer to layer: the first layer "
+              "heats a cold plate). Count, range [1, 1000]; the "
+              "default takes every finished layer (doc/builds.md: fewer "
+              "let a deeper melt reach handed cells).");
     table.add("Hand-over checks per layer",
               checks,
               Patterns::Integer(),
@@ -118,6 +155,16 @@ namespace femp
             temperature,
             "it must lie in (0, " + num(solidus) +
               ") K: below Material/Solidus");
+    require(std::isfinite(reheat_margin) && reheat_margin >= 0 &&
+              reheat_margin < solidus,
+            "Build/Re-heating margin",
+            reheat_margin,
+            "it must lie in [0, " + num(solidus) +
+              ") K: below Material/Solidus");
+    require(reheat_layers >= 1 && reheat_layers <= 1000,
+            "Build/Re-heating layers",
+            reheat_layers,
+            "it must be a count in [1, 1000]");
     require(checks >= 1 && checks <= 100,
             "Build/Hand-over checks per layer",
             checks,
@@ -158,6 +205,9 @@ namespace femp
       , grid(grid)
       , solidus(solidus)
       , layer_top(first_top)
+      , T_start(grid.make_field(0.))
+      , rise(grid.n_cells()[dim - 1], 0.)
+      , envelope(grid.n_cells()[dim - 1], 0.)
   {
   }
 
@@ -166,12 +216,28 @@ namespace femp
   FeZoneHandover<dim>::observe(const std::vector<double> &T,
                                const std::vector<double> &alpha)
   {
-    // One pass over the owned cells: the bottom of the lowest molten one.
+    // The layer's first step: the temperatures its rises start from.
+    if (start_pending)
+      {
+        for (const auto idx : grid.owned_cells())
+          T_start[idx] = T[idx];
+        start_pending = false;
+      }
+    // One pass over the owned cells: the bottom of the lowest molten one
+    // and the largest rise of metal per depth row below the top.
     const double z0 = grid.origin()[dim - 1], h = grid.h();
+    const int    n_depth = int(rise.size());
     grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
       const double z = z0 + ijk[dim - 1] * h;
-      if (z < lowest && T[idx] >= solidus && alpha[idx] >= 0.5)
+      if (alpha[idx] < 0.5)
+        return;
+      if (z < lowest && T[idx] >= solidus)
         lowest = z;
+      const double below = (layer_top - z) / h - 0.5;
+      if (below < 0)
+        return;
+      const int k = std::min(int(below), n_depth - 1);
+      rise[k]     = std::max(rise[k], T[idx] - T_start[idx]);
     });
   }
 
@@ -189,9 +255,27 @@ namespace femp
     closed_lowest    = low;
     if (std::isfinite(low))
       depth = std::max(depth, layer_top - low);
-    lowest     = std::numeric_limits<double>::infinity();
-    layer_top  = new_top;
-    used_depth = depth;
+    lowest = std::numeric_limits<double>::infinity();
+    // Its rises per depth join the envelope; the new layer's start anew.
+    MPI_Allreduce(MPI_IN_PLACE,
+                  rise.data(),
+                  int(rise.size()),
+                  MPI_DOUBLE,
+                  MPI_MAX,
+                  grid.communicator());
+    history.push_back(rise);
+    std::fill(envelope.begin(), envelope.end(), 0.);
+    for (std::size_t l =
+           history.size() -
+           std::min<std::size_t>(history.size(), prm.reheat_layers);
+         l < history.size();
+         ++l)
+      for (std::size_t k = 0; k < rise.size(); ++k)
+        envelope[k] = std::max(envelope[k], history[l][k]);
+    std::fill(rise.begin(), rise.end(), 0.);
+    start_pending = true;
+    layer_top     = new_top;
+    used_depth    = depth;
     return choose(
       new_top - depth - prm.margin, points, zone, top_lift, alpha, pore);
   }
@@ -373,6 +457,11 @@ namespace femp
     const CellBox<dim>  cand_box{first, n_box};
     std::vector<int>    cell_flags(n_fill, 0);
     std::vector<double> cell_mass(n_fill, 0.), cell_points(n_fill, 0.);
+    // The hottest point of each cell (the re-heating rule's prediction
+    // starts there).
+    const bool          reheat = prm.rule == Parameters::Rule::reheating;
+    std::vector<double> cell_hot(n_fill,
+                                 -std::numeric_limits<double>::infinity());
     for (std::size_t c = 0; c < cells.size(); ++c)
       {
         const auto gijk = grid.global_index(cells[c].first);
@@ -391,9 +480,10 @@ namespace femp
             int bits = 0;
             if (v[P::state] != MaterialPoints<dim>::solid)
               bits |= 2;
-            if (!(v[P::temperature] < prm.temperature))
+            if (!reheat && !(v[P::temperature] < prm.temperature))
               bits |= 4;
             cell_flags[k] |= bits;
+            cell_hot[k] = std::max(cell_hot[k], v[P::temperature]);
             if (r >= 0)
               {
                 row_mass[r] += v[P::mass];
@@ -598,6 +688,8 @@ namespace femp
       MPI_IN_PLACE, cell_flags.data(), int(n_fill), MPI_INT, MPI_BOR, comm);
     Utilities::MPI::sum(cell_mass, comm, cell_mass);
     Utilities::MPI::sum(cell_points, comm, cell_points);
+    MPI_Allreduce(
+      MPI_IN_PLACE, cell_hot.data(), int(n_fill), MPI_DOUBLE, MPI_MAX, comm);
     // The rows' flags of all ranks: one maximum per bit.
     std::vector<int> bits(4 * n_rows);
     for (int r = 0; r < n_rows; ++r)
@@ -610,6 +702,34 @@ namespace femp
                  (bits[4 * r + 3] << 3);
     MPI_Allreduce(
       MPI_IN_PLACE, hottest.data(), n_rows, MPI_DOUBLE, MPI_MAX, comm);
+    // The re-heating rule: a cell's predicted peak in the new layer is its
+    // hottest point plus the envelope's rise at its depth below the top
+    // (the same arrays on every rank: the same flags).
+    std::vector<double> predicted(n_rows,
+                                  -std::numeric_limits<double>::infinity());
+    kept_prediction   = -std::numeric_limits<double>::infinity();
+    handed_prediction = -std::numeric_limits<double>::infinity();
+    std::vector<double> cell_peak(n_fill,
+                                  -std::numeric_limits<double>::infinity());
+    if (reheat)
+      for (std::size_t k = 0; k < n_fill; ++k)
+        {
+          if (!std::isfinite(cell_hot[k]))
+            continue;
+          const int    j = first[dim - 1] + int(k / (n_fill / n_box[dim - 1]));
+          const double below = (layer_top - z0) / h - j - 0.5;
+          const int    kd =
+            std::clamp(int(std::floor(below)), 0, int(envelope.size()) - 1);
+          cell_peak[k] = cell_hot[k] + envelope[kd];
+          if (cell_peak[k] >= solidus - prm.reheat_margin)
+            cell_flags[k] |= 4;
+          const int r = j - first_row;
+          if (r >= 0 && (cell_flags[k] & 4))
+            {
+              flags[r] |= 4;
+              predicted[r] = std::max(predicted[r], cell_peak[k]);
+            }
+        }
     MPI_Allreduce(
       MPI_IN_PLACE, n_bad.data(), n_rows, MPI_DOUBLE, MPI_SUM, comm);
     MPI_Allreduce(
@@ -672,7 +792,8 @@ namespace femp
           const auto c = cell_of(k);
           chosen.push_back(c);
           chosen_mass += cell_mass[k];
-          top_row = std::max(top_row, c[dim - 1] + 1);
+          handed_prediction = std::max(handed_prediction, cell_peak[k]);
+          top_row           = std::max(top_row, c[dim - 1] + 1);
         }
 
     // Why the other cells with solid points stay points: above the limit
@@ -691,6 +812,8 @@ namespace femp
                                  not_connected;
         kept_n_cells[why] += 1;
         kept_n_points[why] += cell_points[k];
+        if (why == too_hot)
+          kept_prediction = std::max(kept_prediction, cell_peak[k]);
       }
 
     // The lowest row above the zone's top that keeps cells as points, and
@@ -719,8 +842,12 @@ namespace femp
         if (flags[r] & 2)
           s << (flags[r] & 1 ? ", " : "") << "powder or fluid points";
         if (flags[r] & 4)
-          s << (flags[r] & 3 ? ", " : "") << "points up to " << hottest[r]
-            << " K";
+          {
+            s << (flags[r] & 3 ? ", " : "") << "points up to " << hottest[r]
+              << " K";
+            if (reheat)
+              s << " (a predicted peak up to " << predicted[r] << " K)";
+          }
         reason = s.str();
       }
     return z0 + top_row * h;
@@ -739,6 +866,22 @@ namespace femp
     out.put(last_limit);
     out.put(kept_n_cells);
     out.put(kept_n_points);
+    // The layer's rises of all ranks (what the next choice reduces to),
+    // the envelope and the temperatures the rises start from.
+    std::vector<double> all(rise);
+    MPI_Allreduce(MPI_IN_PLACE,
+                  all.data(),
+                  int(all.size()),
+                  MPI_DOUBLE,
+                  MPI_MAX,
+                  grid.communicator());
+    out.put_vector(all);
+    out.put_vector(envelope);
+    out.put<std::uint64_t>(history.size());
+    for (const auto &h : history)
+      out.put_vector(h);
+    out.put<std::uint8_t>(start_pending);
+    save_cell_fields(out, grid, {&T_start});
   }
 
   template <int dim>
@@ -766,10 +909,21 @@ namespace femp
         const auto cells   = in.get<std::array<double, n_kept>>();
         const auto pts     = in.get<std::array<double, n_kept>>();
         lowest             = std::min(lowest, low);
+        const auto                       r = in.get_vector<double>();
+        const auto                       e = in.get_vector<double>();
+        std::vector<std::vector<double>> hist(in.get<std::uint64_t>());
+        for (auto &h : hist)
+          h = in.get_vector<double>();
+        const bool pending = in.get<std::uint8_t>();
+        AssertThrow(r.size() == rise.size() && e.size() == envelope.size(),
+                    ExcMessage("checkpoint: the hand-over's rises per depth "
+                               "do not match the grid's rows"));
         if (f == 0)
           layer_top = t, depth = d, current_top = top, last_limit = limit,
-          kept_n_cells = cells, kept_n_points = pts;
+          kept_n_cells = cells, kept_n_points = pts, rise = r, envelope = e,
+          history = hist, start_pending = pending;
       }
+    load_cell_fields(parts, grid, {&T_start});
   }
 
   template class FeZoneHandover<2>;

@@ -13,8 +13,17 @@
 //     powder's top), so that the new layer's melt, as deep as the deepest
 //     so far, stays a margin above them;
 //   - a cell inside the zone's horizontal extent, below that line and
-//     outside the zone is a candidate when it is dense and its points are
-//     all solid (no powder, no fluid) and below the hand-over temperature;
+//     outside the zone is a candidate when it is dense, its points are
+//     all solid (no powder, no fluid) and it is cool enough by the
+//     'Hand-over rule': with 'temperature' its points are below the
+//     hand-over temperature; with 're-heating' its predicted peak in the
+//     new layer, its hottest point plus R(k), is below the solidus less
+//     'Re-heating margin', R(k) being the largest rise of a metal cell's
+//     temperature (alpha >= 1/2) over its temperature at its layer's first
+//     step, among the cells k whole cells below their layer's powder top
+//     (to the cell's centre), over the latest 'Re-heating layers'
+//     finished layers (observed after every temperature step with the
+//     lowest molten cell);
 //     the candidates connected to the zone through faces of candidates
 //     (a flood fill from the zone's cells over face neighbours) are
 //     taken (with 'Hand-over checks per layer' n > 1 also at n - 1
@@ -146,6 +155,29 @@ namespace femp
       /// its start, the others equally spaced over its window
       /// (choose_in_layer()); range [1, 100].
       int checks = 1;
+      /// 'Hand-over rule': what keeps a dense, solid cell below the limit
+      /// line as points.
+      enum class Rule
+      {
+        /// a point at or above 'Hand-over temperature';
+        temperature,
+        /// a predicted peak of the new layer at or above the solidus less
+        /// 'Re-heating margin' (the cell's hottest point plus the largest
+        /// rise seen at its depth below the top in the finished layers).
+        reheating
+      };
+      Rule rule = Rule::temperature;
+      /// 'Re-heating margin', K: with the re-heating rule a handed cell's
+      /// predicted peak stays this far below the solidus; range
+      /// [0, Material/Solidus).
+      double reheat_margin = 100;
+      /// 'Re-heating layers': the envelope of the rises is taken over
+      /// this many finished layers, the latest; range [1, 1000] (1000:
+      /// all of a build's layers in practice).
+      int reheat_layers = 1000;
+      /// The input names of the rules.
+      static const Choices<Rule> &
+      rule_names();
 
       /// Declare (the members' values are the defaults) or read the
       /// entries, each listed once.
@@ -173,7 +205,10 @@ namespace femp
                    const double               first_top);
 
     /// After a temperature step: the lowest molten metal of the layer
-    /// (cells of the local box owned by this rank; local).
+    /// (cells of the local box owned by this rank; local) and, per depth
+    /// below the layer's top, the largest rise of a metal cell's
+    /// temperature (alpha >= 1/2) over its temperature at the layer's
+    /// first step (layer_rise()).
     void
     observe(const std::vector<double> &T, const std::vector<double> &alpha);
 
@@ -215,6 +250,38 @@ namespace femp
     kept_depth() const
     {
       return used_depth;
+    }
+
+    /// The largest temperature rise per depth below the top over the
+    /// latest 'Re-heating layers' finished layers, K (entry k: the cells
+    /// whose centre lies k to k + 1 cells below the layer's powder top; 0
+    /// where none rose), as the last choose_top() closed them (the same on
+    /// every rank).
+    const std::vector<double> &
+    rise_envelope() const
+    {
+      return envelope;
+    }
+    /// The rises per depth of each finished layer, K (the same on every
+    /// rank; the last: the layer the last choose_top() closed).
+    const std::vector<std::vector<double>> &
+    layer_rises() const
+    {
+      return history;
+    }
+    /// The predicted peak of the hottest candidate cell the re-heating rule
+    /// kept as points in the last choice, K (-inf: none).
+    double
+    hottest_prediction() const
+    {
+      return kept_prediction;
+    }
+    /// The largest predicted peak of the cells the last choice took, K
+    /// (re-heating rule; -inf: none taken or the temperature rule).
+    double
+    handed_peak_prediction() const
+    {
+      return handed_prediction;
     }
 
     /// The least fill (see the file's comment) of a dense cell whose
@@ -293,7 +360,8 @@ namespace femp
       /// re-solidified metal, spatter, the row under a free surface);
       not_dense,
       /// below it, dense and solid, a point at or above the hand-over
-      /// temperature;
+      /// temperature (temperature rule) or a predicted peak at or above the
+      /// solidus less the re-heating margin (re-heating rule);
       too_hot,
       /// a candidate (dense, solid, cool, below it) that the flood fill
       /// does not reach from the zone;
@@ -329,7 +397,9 @@ namespace femp
     }
 
     /// Checkpoint: the fusion depths so far (the deepest, the powder top
-    /// of the layer observed, its lowest molten cell over all ranks) and
+    /// of the layer observed, its lowest molten cell over all ranks), the
+    /// temperature rises per depth (the layer's over all ranks, the
+    /// envelope) with the cells' temperatures at the layer's start, and
     /// what the last choice found (the zone's top, the limit, the cells
     /// and points of each class kept as points). Collective.
     void
@@ -363,6 +433,16 @@ namespace femp
     double layer_top;
     /// Lowest cell bottom with molten metal in the layer (local), m.
     double lowest = std::numeric_limits<double>::infinity();
+    /// The temperature of each cell of the local box at the layer's first
+    /// observe() (owned values), K; whether the next observe() takes it.
+    std::vector<double> T_start;
+    bool                start_pending = true;
+    /// The largest rise per depth row in the layer being observed (local)
+    /// and over the finished layers (all ranks), K.
+    std::vector<double>              rise, envelope;
+    std::vector<std::vector<double>> history;
+    double kept_prediction   = -std::numeric_limits<double>::infinity();
+    double handed_prediction = -std::numeric_limits<double>::infinity();
     double depth = 0, current_top = 0, last_limit = 0, used_depth = 0;
     /// The choice below the line @p limit (m) of choose_top() and
     /// choose_in_layer().
