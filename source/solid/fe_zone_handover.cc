@@ -216,8 +216,11 @@ namespace femp
   FeZoneHandover<dim>::observe(const std::vector<double> &T,
                                const std::vector<double> &alpha)
   {
+    // The re-heating rule alone reads the rises: the temperature rule's
+    // pass finds the lowest molten cell only.
+    const bool track_rise = prm.rule == Parameters::Rule::reheating;
     // The layer's first step: the temperatures its rises start from.
-    if (start_pending)
+    if (track_rise && start_pending)
       {
         for (const auto idx : grid.owned_cells())
           T_start[idx] = T[idx];
@@ -233,6 +236,8 @@ namespace femp
         return;
       if (z < lowest && T[idx] >= solidus)
         lowest = z;
+      if (!track_rise)
+        return;
       const double below = (layer_top - z) / h - 0.5;
       if (below < 0)
         return;
