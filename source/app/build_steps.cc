@@ -309,6 +309,7 @@ namespace femp
     std::vector<std::vector<double>> before, after;
     solid.cell_fields(before);
     const std::vector<std::uint8_t> zone_before = solid.fe_zone_cells();
+    const double                    m_zone      = solid.fe_zone_mass();
     const auto                      n           = solid.hand_over_cells(cells);
     solid.cell_fields(after);
     // sigma_ii, von Mises, eps_p: the largest change and value.
@@ -335,10 +336,9 @@ namespace femp
     // The zone's points carry temperatures only: alpha bins them once.
     points.set_fixed_cells(solid.fe_zone_cells());
     n_handed[0] += n[0], n_handed[1] += n[1];
-    // The points' mass of the handed cells against the elements', which
-    // carry the full density over their cells.
-    const double m_el =
-      n[0] * scene.material.density * std::pow(grid_ptr->h(), dim);
+    // The points' mass of the handed cells against the elements' (the
+    // zone's mass added), which carry the full density over their cells.
+    const double m_el = solid.fe_zone_mass() - m_zone;
     pcout << "; the zone's top rises from " << old_top << " to " << new_top
           << " m: " << n[0] << " elements, " << n[1]
           << " points handed over (their mass " << std::setprecision(4)

@@ -1256,6 +1256,16 @@ namespace femp
 
   template <int dim>
   double
+  SolidFEM<dim>::mass() const
+  {
+    double m = 0;
+    for (const double x : owned_mass)
+      m += x;
+    return Utilities::MPI::sum(m, comm) / mass_scale;
+  }
+
+  template <int dim>
+  double
   SolidFEM<dim>::elastic_energy() const
   {
     double u = 0;

@@ -1655,6 +1655,13 @@ namespace femp
 
   template <int dim>
   double
+  SolidSubCycle<dim>::fe_zone_mass() const
+  {
+    return fem ? fem->mass() : 0.;
+  }
+
+  template <int dim>
+  double
   SolidSubCycle<dim>::largest_rank_points() const
   {
     return Utilities::MPI::max(double(mpm.n_points()), comm);

@@ -257,6 +257,13 @@ namespace femp
     {
       return kinetic;
     }
+    /// The zone's mass, kg (2D: kg/m): the lumped masses of the owned
+    /// nodes over the mass-scaling factor in use, summed over the ranks.
+    /// Each element carries the material's density over its cell, also
+    /// one that a hand-over gave points of more or less mass (doc/builds.md,
+    /// "Mass"). Collective.
+    double
+    mass() const;
     /// New mass-scaling factor @p s (adaptive mass scaling, between two
     /// solid steps): lumped and transition-node masses follow, velocities
     /// are kept (the kinetic energy follows the mass).

@@ -433,6 +433,10 @@ namespace femp
     /// Number of material points and finite elements in the solid (global).
     std::array<double, 2>
     sizes() const;
+    /// The FE zone's mass, kg (2D: kg/m; SolidFEM::mass()), 0 without a
+    /// zone. Collective.
+    double
+    fe_zone_mass() const;
     /// The most material points of the solid on one rank (collective).
     double
     largest_rank_points() const;
