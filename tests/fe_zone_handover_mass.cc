@@ -35,15 +35,16 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  constexpr int                    dim  = 2;
-  constexpr double                 h    = 0.1;
+  constexpr int                    dim = 2;
+  constexpr double                 h   = 0.1;
   const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
   try
     {
-      SolidBlock<dim> block(Point<dim>(1.6, 1.0), h, 0.8, unit_material(), comm);
-      SolidMaterial   sm = block_material("300:0.02, 400:0.005", block.material);
-      sm.poisson_ratio   = 0.3;
-      using P            = typename MaterialPoints<dim>::PropertyIndex;
+      SolidBlock<dim> block(
+        Point<dim>(1.6, 1.0), h, 0.8, unit_material(), comm);
+      SolidMaterial sm = block_material("300:0.02, 400:0.005", block.material);
+      sm.poisson_ratio = 0.3;
+      using P          = typename MaterialPoints<dim>::PropertyIndex;
       for (auto &particle : block.points->particle_handler_for_update())
         {
           Point<dim>   x    = particle.get_location();
@@ -60,14 +61,14 @@ main(int argc, char **argv)
           particle.set_location(x);
         }
       block.points->points_moved();
-      auto sp         = block_supports<dim>();
-      sp.gravity[1]   = -0.01;
-      const auto fp   = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2));
-      SolidSubCycle<dim> solid(sp, fp, sm, block.grid, *block.points);
+      auto sp                = block_supports<dim>();
+      sp.gravity[1]          = -0.01;
+      const auto          fp = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2));
+      SolidSubCycle<dim>  solid(sp, fp, sm, block.grid, *block.points);
       std::vector<double> T = block.grid.make_field(300.);
       solid.initialize(T, "");
 
-      const double rho_h = block.material.density * h * h;
+      const double                      rho_h = block.material.density * h * h;
       std::vector<std::array<int, dim>> cells;
       for (int j = 2; j < 4; ++j)
         for (int i = 0; i < 16; ++i)
