@@ -8,8 +8,7 @@
                                [--build build] [--out build/validation]
                                [--max-wall SECONDS]
   contrib/validate.py reevaluate [--out build/validation]
-  contrib/validate.py report   [--out build/validation] [--doc doc/validation.md]
-                               [--img doc/img]
+  contrib/validate.py report   [--out build/validation] [--img doc/img]
   contrib/validate.py all      (run, then report; the ctest 'validation')
   contrib/validate.py pipeline --expected FILE [--build build]
   contrib/validate.py regime
@@ -49,9 +48,12 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
-report: reads every finished run, writes doc/validation.md's tables and
-  figures (SVG, standard library only); the NIST spot sweep has its own
-  two figures (femp against measured; width and depth against the spot).
+report: reads every finished run under --out and writes their tables to
+  <out>/tables.md (printed too; doc/validation.md takes them by hand) and
+  the figures to --img (SVG, standard library only); the NIST spot sweep
+  has its own two figures (femp against measured; width and depth against
+  the spot). Only the runs under --out appear: the figures hold no run
+  from elsewhere, and doc/validation.md is not written.
 width: what sets each finished run's fusion width (its last field
   output): the widest section's distance behind the beam, the temperature
   on the axis there, the melt's surface flow across the track, and the
@@ -123,9 +125,9 @@ DATA = os.path.join(ROOT, "prm", "validation", "data")
 SCENES = os.path.join(ROOT, "prm", "validation")
 
 # Cases run by 'run' without --cases (the cost budget of the validation):
-# all seven AM-Bench tracks, the six tracks of the NIST spot sweep and five
-# of the Trapp series.
-DEFAULT_CASES = r"^(amb_.*|nist_spot_.*|trapp_(048|065|099|134|178)W)$"
+# all seven AM-Bench tracks, the six tracks of the NIST spot sweep and the
+# Trapp series from 32 to 178 W (conduction, transition and keyhole).
+DEFAULT_CASES = r"^(amb_.*|nist_spot_.*|trapp_(032|048|065|083|099|134|178)W)$"
 
 FINE = {"Melt flow/Curvature": "height function",
         "Melt flow/Curvature smoothing": "2",
