@@ -701,6 +701,18 @@ namespace femp
           "over cooled metal = false): the fusion depths of its layers are "
           "unknown; resume it with 'Hand over cooled metal = false' or start "
           "the run anew");
+        // The layer-start temperatures: the re-heating rule alone keeps
+        // them.
+        if (scene.handover.rule ==
+            FeZoneHandover<dim>::Parameters::Rule::reheating)
+          states.add(
+            "handover layer start",
+            [h](StateWriter &out) { h->save_layer_start(out); },
+            [h](std::vector<StateReader> &in) { h->load_layer_start(in); },
+            "it was written without the re-heating rule's layer-start "
+            "temperatures (Build/Hand-over rule = temperature): the rises of "
+            "the layer it was written in are unknown; resume it with "
+            "'Hand-over rule = temperature' or start the run anew");
       }
   }
 

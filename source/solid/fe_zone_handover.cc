@@ -205,7 +205,8 @@ namespace femp
       , grid(grid)
       , solidus(solidus)
       , layer_top(first_top)
-      , T_start(grid.make_field(0.))
+      , T_start(prm.rule == Parameters::Rule::reheating ? grid.make_field(0.) :
+                                                          std::vector<double>())
       , rise(grid.n_cells()[dim - 1], 0.)
       , envelope(grid.n_cells()[dim - 1], 0.)
   {
@@ -886,7 +887,20 @@ namespace femp
     for (const auto &h : history)
       out.put_vector(h);
     out.put<std::uint8_t>(start_pending);
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::save_layer_start(StateWriter &out) const
+  {
     save_cell_fields(out, grid, {&T_start});
+  }
+
+  template <int dim>
+  void
+  FeZoneHandover<dim>::load_layer_start(std::vector<StateReader> &parts)
+  {
+    load_cell_fields(parts, grid, {&T_start});
   }
 
   template <int dim>
@@ -928,7 +942,6 @@ namespace femp
           kept_n_cells = cells, kept_n_points = pts, rise = r, envelope = e,
           history = hist, start_pending = pending;
       }
-    load_cell_fields(parts, grid, {&T_start});
   }
 
   template class FeZoneHandover<2>;

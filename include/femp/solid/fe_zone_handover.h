@@ -409,6 +409,13 @@ namespace femp
     /// the ranks' values to).
     void
     load_state(std::vector<StateReader> &parts);
+    /// Checkpoint, re-heating rule only (its own section): each owned
+    /// cell's temperature at the layer's first step, from which the
+    /// layer's rises count. Collective.
+    void
+    save_layer_start(StateWriter &out) const;
+    void
+    load_layer_start(std::vector<StateReader> &parts);
 
     /// The mass of the points of each row the last choice looked at, from
     /// the zone's top upwards, inside the zone's horizontal extent (kg;
@@ -434,7 +441,8 @@ namespace femp
     /// Lowest cell bottom with molten metal in the layer (local), m.
     double lowest = std::numeric_limits<double>::infinity();
     /// The temperature of each cell of the local box at the layer's first
-    /// observe() (owned values), K; whether the next observe() takes it.
+    /// observe() (owned values), K, under the re-heating rule (empty under
+    /// the temperature rule); whether the next observe() takes it.
     std::vector<double> T_start;
     bool                start_pending = true;
     /// The largest rise per depth row in the layer being observed (local)
