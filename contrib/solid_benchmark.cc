@@ -12,7 +12,9 @@
 //                                 [fe | mpm | apic | flip | mpmcheck |
 //                                  constitutive:
 //                                  only that part]
-//   (mpmcheck: the final energies and stress sums of the sub-cycled MPM
+//                                 [centre]
+//   (centre: the MPM with Solid/Volumetric strain rate = cell centre;
+//   mpmcheck: the final energies and stress sums of the sub-cycled MPM
 //   runs, FLIP and APIC, not timed, to compare code versions;
 //   constitutive: the scalar update_stress and the SIMD update_stress_block
 //   on the same states; fe also prints the final energies and
@@ -38,6 +40,9 @@ using namespace femp;
 namespace
 {
   constexpr int dim = 3;
+  /// Solid/Volumetric strain rate of the MPM runs (argument 4).
+  SolidMaterial::VolumetricStrainRate volumetric =
+    SolidMaterial::VolumetricStrainRate::point;
 
   double
   run(const unsigned int                    n,
@@ -68,7 +73,8 @@ namespace
 
     SolidMaterial sm(mat); // defaults: steel, E 193 GPa, sigma_y 250 MPa
     sm.yield_stress = PiecewiseLinear::parse("300:2.5e8, 1500:2e7", "yield");
-    sm.velocity_transfer = transfer;
+    sm.velocity_transfer      = transfer;
+    sm.volumetric_strain_rate = volumetric;
     typename SolidSubCycle<dim>::Parameters sp;
     sp.fixed_faces = {"z-"};
     sp.energy_file = "";
@@ -232,6 +238,8 @@ main(int argc, char **argv)
   const unsigned int               steps = argc > 2 ? std::atoi(argv[2]) : 50;
   double                           n_points = 0, n_elements = 0;
   const std::string                only = argc > 3 ? argv[3] : "";
+  if (argc > 4 && std::string(argv[4]) == "centre")
+    volumetric = SolidMaterial::VolumetricStrainRate::centroid;
   if (only == "constitutive")
     {
       std::cout << "update_stress alone: "

@@ -37,6 +37,30 @@ namespace femp
               "transfer term is unreliable where nodes carry little "
               "point mass; see doc/solid.md). "
               "One of FLIP, APIC.");
+    table.add("Volumetric strain rate",
+              volumetric_strain_rate,
+              {{VolumetricStrainRate::point, "point"},
+               {VolumetricStrainRate::centroid, "centroid"}},
+              "Where material points of the solid MPM take the "
+              "volumetric part (the trace, 1/s) of their velocity "
+              "gradient: point (the divergence of the cell's "
+              "multilinear nodal velocity field at each point's "
+              "position) or centroid (every point of a cell takes the "
+              "divergence at the volume centroid of the cell's points, "
+              "in 2D the volume-weighted mean of the points' "
+              "divergences; the deviatoric part stays the point's, and "
+              "the points' pressure enters the nodal forces through "
+              "the tent gradients at the centroid: a B-bar "
+              "treatment). With point the divergence varies across a "
+              "cell with the nodal velocities' hourglass mode, and on "
+              "irregular point sets the pressure of neighbouring "
+              "points drifts apart by up to GPa in plastic metal; "
+              "centroid gives the points of a cell one volumetric "
+              "strain rate; it costs a pass over the points per step, "
+              "and the P2G runs as a pass of its own instead of with "
+              "the stress update (doc/solid.md \"Volumetric strain "
+              "rate\"). "
+              "One of point, centroid.");
     table.enter_subsection("Material");
     if (table.declaring())
       prm.declare_entry(

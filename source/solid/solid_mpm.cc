@@ -156,6 +156,8 @@ namespace femp
     next_ready   = false;
     have_gravity = true;
     p2g_gravity  = gravity;
+    if (centroid_volumetric())
+      compute_centroids();
 
     const std::size_t   n = true_mass.size();
     const P2GInput<dim> in{x,
@@ -169,24 +171,68 @@ namespace femp
                            node0,
                            scaling,
                            grid.h(),
-                           gravity};
-    // The transfer and the floor are compile-time constants inside the
-    // loop (measured: 7-20 % faster than a run-time branch per point).
-    auto run = [&](auto transfer, auto floor) {
+                           gravity,
+                           cell,
+                           cell_centroid};
+    // The transfer, the floor and the volumetric strain rate are
+    // compile-time constants inside the loop (measured: 7-20 % faster than
+    // a run-time branch per point).
+    auto run = [&](auto transfer, auto floor, auto bbar) {
       constexpr bool A = decltype(transfer)::value;
       constexpr bool G = decltype(floor)::value;
+      constexpr bool B = decltype(bbar)::value;
       CellScatter<n_corners, 1 + 2 * dim + G, point_lanes<dim>> out(
         corner_offset, nodes_out);
-      p2g_blocks<A, G>(in, 0, n, n, out);
+      p2g_blocks<A, G, B>(in, 0, n, n, out);
+    };
+    auto run_b = [&](auto transfer, auto floor) {
+      if (centroid_volumetric())
+        run(transfer, floor, std::true_type());
+      else
+        run(transfer, floor, std::false_type());
     };
     if (apic && stiffness_rows)
-      run(std::true_type(), std::true_type());
+      run_b(std::true_type(), std::true_type());
     else if (apic)
-      run(std::true_type(), std::false_type());
+      run_b(std::true_type(), std::false_type());
     else if (stiffness_rows)
-      run(std::false_type(), std::true_type());
+      run_b(std::false_type(), std::true_type());
     else
-      run(std::false_type(), std::false_type());
+      run_b(std::false_type(), std::false_type());
+  }
+
+  template <int dim>
+  void
+  SolidMPM<dim>::compute_centroids()
+  {
+    const std::size_t nc = grid.n_local();
+    cell_volume.resize(nc, 0.);
+    for (int d = 0; d < dim; ++d)
+      cell_centroid[d].resize(nc, 0.);
+    // Every point's cell is among the reached cells (gather(),
+    // finish_points()).
+    for (const auto c : reached_cells)
+      {
+        cell_volume[c] = 0;
+        for (int d = 0; d < dim; ++d)
+          cell_centroid[d][c] = 0;
+      }
+    const double ih = 1. / grid.h();
+    for (std::size_t p = 0; p < true_mass.size(); ++p)
+      {
+        const auto   c = cell[p];
+        const double V = volume[p];
+        cell_volume[c] += V;
+        for (int d = 0; d < dim; ++d)
+          cell_centroid[d][c] += V * ((x[d][p] - corner[d][p]) * ih);
+      }
+    for (const auto c : reached_cells)
+      if (cell_volume[c] > 0)
+        {
+          const double iV = 1. / cell_volume[c];
+          for (int d = 0; d < dim; ++d)
+            cell_centroid[d][c] *= iV;
+        }
   }
 
   template <int dim>
@@ -286,15 +332,18 @@ namespace femp
     kinetic                = 0;
     min_volume             = std::numeric_limits<double>::infinity();
     weight_momentum.fill(0.);
-    const StressStep<dim> st =
-      stress_step<dim>(mat, vel, corner_offset, T_old, T_new, dt, h, scaling);
+    const StressStep<dim> st = stress_step<dim>(
+      mat, vel, corner_offset, T_old, T_new, dt, h, scaling, cell_centroid);
     CellModuli moduli = first_cell_moduli(mat, cell, n, T_old, T_new);
     // Fused P2G of the next step (see solid_mpm.h), into the buffer next:
     // from the second step after a gather on (the benchmark's and a coupled
     // run's sub-cycling), so that a run of one step per gather pays nothing
     // for it, nor a rank without points (no buffer). The buffer is zero
-    // here (p2g() consumed or cleared it).
-    const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity;
+    // here (p2g() consumed or cleared it). Not with the centroid's
+    // volumetric strain rate: its P2G needs the centroids of the moved
+    // points of whole cells (p2g(), compute_centroids()).
+    const bool fuse =
+      n > 0 && steps_since_gather > 0 && have_gravity && !centroid_volumetric();
     ++steps_since_gather;
     const unsigned int nf = 1 + 2 * dim + (stiffness_rows ? 1 : 0);
     double            *next_out[2 + 2 * dim] = {};
@@ -328,10 +377,11 @@ namespace femp
                         eps_p,
                         cell,
                         node0};
-    auto             loop = [&](auto transfer, auto fused, auto floor) {
+    auto loop = [&](auto transfer, auto fused, auto floor, auto bbar) {
       constexpr bool                             A = decltype(transfer)::value;
       constexpr bool                             F = decltype(fused)::value;
       constexpr bool                             G = decltype(floor)::value;
+      constexpr bool                             B = decltype(bbar)::value;
       CellScatter<n_corners, 1 + 2 * dim + G, W> out(corner_offset, next_out);
       const P2GInput<dim>                        in{x,
                              corner,
@@ -344,7 +394,9 @@ namespace femp
                              node0,
                              scaling,
                              h,
-                             p2g_gravity};
+                             p2g_gravity,
+                             cell,
+                             cell_centroid};
       // Chunks of points: stress update and move, then (fused) the P2G of
       // the chunk's points, whose data are still in the L1 cache.
       constexpr std::size_t chunk = 16 * W;
@@ -365,24 +417,24 @@ namespace femp
               const PointBlock<W> blk(p0, n);
               prefetch_stress_block<dim, A>(pa, p0, n);
               VD use, m, mg;
-              stress_block(st,
-                           pa,
-                           blk,
-                           p0,
-                           coef_cell,
-                           cv,
-                           moduli,
-                           work_v,
-                           vmin,
-                           use,
-                           m,
-                           mg);
+              stress_block<dim, B>(st,
+                                   pa,
+                                   blk,
+                                   p0,
+                                   coef_cell,
+                                   cv,
+                                   moduli,
+                                   work_v,
+                                   vmin,
+                                   use,
+                                   m,
+                                   mg);
               if (!move_block<dim, A>(
                     st, pa, blk, p0, use, m, mg, kinetic_v, momentum_v))
                 finish_points<A>(p0, blk.nl);
             }
           if constexpr (F)
-            p2g_blocks<A, G>(in, c0, c1, n, out);
+            p2g_blocks<A, G, B>(in, c0, c1, n, out);
         }
       work += lane_total(work_v);
       kinetic += lane_total(kinetic_v);
@@ -393,18 +445,25 @@ namespace femp
     };
     const std::true_type  yes;
     const std::false_type no;
+    // The volumetric strain rate, a compile-time constant as the others.
+    auto loop_b = [&](auto transfer, auto fused, auto floor) {
+      if (centroid_volumetric())
+        loop(transfer, fused, floor, yes);
+      else
+        loop(transfer, fused, floor, no);
+    };
     if (apic && fuse && stiffness_rows)
-      loop(yes, yes, yes);
+      loop_b(yes, yes, yes);
     else if (apic && fuse)
-      loop(yes, yes, no);
+      loop_b(yes, yes, no);
     else if (apic)
-      loop(yes, no, no);
+      loop_b(yes, no, no);
     else if (fuse && stiffness_rows)
-      loop(no, yes, yes);
+      loop_b(no, yes, yes);
     else if (fuse)
-      loop(no, yes, no);
+      loop_b(no, yes, no);
     else
-      loop(no, no, no);
+      loop_b(no, no, no);
     next_ready = fuse && !lost && left_rank == 0;
     return work;
   }

@@ -84,6 +84,21 @@ namespace femp
       apic
     };
     VelocityTransfer velocity_transfer = VelocityTransfer::apic;
+    /// Where the material points of the solid (SolidMPM, numerical) take
+    /// the volumetric part of their velocity gradient (parameter
+    /// "Solid/Volumetric strain rate"): point (each point the divergence of
+    /// the multilinear nodal velocity field at its own position) or
+    /// centroid (every point of a cell the divergence at the volume
+    /// centroid of the cell's points; the deviatoric part stays the
+    /// point's; the pressure's nodal forces then use the tent gradients at
+    /// the centroid, the transpose of that rate: a B-bar treatment, Hughes
+    /// 1980).
+    enum class VolumetricStrainRate
+    {
+      point,
+      centroid
+    };
+    VolumetricStrainRate volumetric_strain_rate = VolumetricStrainRate::point;
 
     /// Declares the entries of subsection "Solid/Material".
     /// Declare (the members' values are the defaults) or read the

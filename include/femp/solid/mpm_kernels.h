@@ -458,11 +458,27 @@ namespace femp
     /// x_I - x_p = h (b - xi), FLIP: v_p. G (the light-node mass floor):
     /// also c[a][1 + 2 dim] = m h |grad N_a| sum_b h |grad N_b|, the
     /// point's part of the row sum of the corner's stiffness over c^2.
-    template <bool A, bool G, int dim, unsigned int n_corners, typename VD>
+    /// B (Solid/Volumetric strain rate = centroid): the in-plane mean
+    /// normal stress p = tr(sigma + q I) / dim (the dim in-plane normal
+    /// components) acts through the tent gradients @p dNc at the volume
+    /// centroid of the cell's points, the deviator sigma + q I - p I
+    /// through those at the point: the transpose of the strain rate of
+    /// stress_block() (B-bar), so that the nodal forces' power is the
+    /// stress power of the points. With G the stiffness row of a corner
+    /// then also holds the pressure's part, m h |dNc_a| sum_b h |dNc_b|
+    /// (a bound: each part with the P-wave modulus). Without B @p dNc is
+    /// not read.
+    template <bool         A,
+              bool         G,
+              bool         B,
+              int          dim,
+              unsigned int n_corners,
+              typename VD>
     [[gnu::always_inline]] inline void
     p2g_block(const VD (&xi)[dim],
               const VD (&N)[n_corners],
               const VD (&dN)[n_corners][dim],
+              const VD (&dNc)[n_corners][dim],
               const VD m,
               const VD mg,
               const VD V,
@@ -485,6 +501,16 @@ namespace femp
           for (int j = 0; j < dim; ++j)
             Ch[i][j] = VD{};
         }
+      // B-bar: V p at the centroid, V (sigma + q I - p I) at the point.
+      VD Vp = {};
+      if constexpr (B)
+        {
+          for (int i = 0; i < dim; ++i)
+            Vp += Vs[i][i];
+          Vp *= 1. / dim;
+          for (int i = 0; i < dim; ++i)
+            Vs[i][i] -= Vp;
+        }
       if constexpr (A)
         for (int i = 0; i < dim; ++i)
           for (int j = 0; j < dim; ++j)
@@ -505,6 +531,8 @@ namespace femp
               VD f = g[i] * N[a];
               for (int j = 0; j < dim; ++j)
                 f -= Vs[i][j] * dN[a][j];
+              if constexpr (B)
+                f -= Vp * dNc[a][i];
               c[a][1 + i]       = mN * va;
               c[a][1 + dim + i] = f;
             }
@@ -523,6 +551,21 @@ namespace femp
           const VD ms = m * sum;
           for (unsigned int a = 0; a < n_corners; ++a)
             c[a][1 + 2 * dim] = ms * g_norm[a];
+          if constexpr (B)
+            {
+              VD gc_norm[n_corners], sum_c = {};
+              for (unsigned int a = 0; a < n_corners; ++a)
+                {
+                  VD g2 = {};
+                  for (int j = 0; j < dim; ++j)
+                    g2 += dNc[a][j] * dNc[a][j];
+                  gc_norm[a] = h * simd_sqrt(g2);
+                  sum_c += gc_norm[a];
+                }
+              const VD ms_c = m * sum_c;
+              for (unsigned int a = 0; a < n_corners; ++a)
+                c[a][1 + 2 * dim] += ms_c * gc_norm[a];
+            }
         }
     }
 
@@ -537,7 +580,37 @@ namespace femp
       const std::vector<std::uint32_t>         &node0;
       const double                              scaling, h;
       const Tensor<1, dim>                     &gravity;
+      /// B only: the points' cells and the local coordinates of the
+      /// volume centroid of each cell's points (SolidMPM::cell_centroid).
+      const std::vector<std::uint32_t>           &cell;
+      const std::array<std::vector<double>, dim> &centroid;
     };
+
+    /// The local coordinates @p xc of the volume centroid of the cells of
+    /// the points of block @p b (first nodes @p n0): one cell's broadcast
+    /// when the points share it, else lane by lane.
+    template <int dim, unsigned int W, typename VD>
+    [[gnu::always_inline]] inline void
+    block_centroid(const std::array<std::vector<double>, dim> &centroid,
+                   const std::vector<std::uint32_t>           &cell,
+                   const PointBlock<W>                        &b,
+                   const std::size_t (&n0)[W],
+                   VD (&xc)[dim])
+    {
+      if (one_cell(n0))
+        {
+          const auto c = cell[b.pl[0]];
+          for (int d = 0; d < dim; ++d)
+            xc[d] = VD{} + centroid[d][c];
+        }
+      else
+        for (unsigned int l = 0; l < W; ++l)
+          {
+            const auto c = cell[b.pl[l]];
+            for (int d = 0; d < dim; ++d)
+              xc[d][l] = centroid[d][c];
+          }
+    }
 
     /// P2G (eqs. 11-13) of the blocks of points starting at p0 = b, b +
     /// W, ... < e (of n points) into @p out: the contributions of
@@ -545,7 +618,7 @@ namespace femp
     /// Not inlined: update_stresses() calls it for chunks of points that it
     /// just updated (still in the L1 cache), and the two loop bodies
     /// compiled apart keep their values in registers.
-    template <bool A, bool G, int dim, std::size_t n_corners>
+    template <bool A, bool G, bool B, int dim, std::size_t n_corners>
     [[gnu::noinline]] void
     p2g_blocks(const P2GInput<dim>                                       &in,
                const std::size_t                                          b,
@@ -563,6 +636,17 @@ namespace femp
           const auto         &pl   = blk.pl;
           VD                  xi[dim], N[n_corners], dN[n_corners][dim];
           block_tents<dim>(in.x, in.corner, blk, ih, xi, N, dN);
+          std::size_t n0[W];
+          for (unsigned int l = 0; l < W; ++l)
+            n0[l] = in.node0[pl[l]];
+          // B: the tent gradients at the cell's centroid (else unused).
+          VD dNc[n_corners][dim];
+          if constexpr (B)
+            {
+              VD xc[dim], Nc[n_corners];
+              block_centroid<dim>(in.centroid, in.cell, blk, n0, xc);
+              tents<dim>(xc, ih, Nc, dNc);
+            }
           const VD mg = simd_load(in.true_mass, pl, full), m = mg * in.scaling;
           VD       sp[6], vp[dim], Cp[dim * dim];
           for (unsigned int c = 0; c < 6; ++c)
@@ -574,22 +658,20 @@ namespace femp
               Cp[c] = simd_load(in.C[c], pl, full);
           // Per corner: mass, momentum (dim), force (dim) (, stiffness).
           VD c[n_corners][1 + 2 * dim + G];
-          p2g_block<A, G>(xi,
-                          N,
-                          dN,
-                          m,
-                          mg,
-                          simd_load(in.volume, pl, full),
-                          simd_load(in.visc, pl, full),
-                          sp,
-                          vp,
-                          Cp,
-                          in.h,
-                          in.gravity,
-                          c);
-          std::size_t n0[W];
-          for (unsigned int l = 0; l < W; ++l)
-            n0[l] = in.node0[pl[l]];
+          p2g_block<A, G, B>(xi,
+                             N,
+                             dN,
+                             B ? dNc : dN,
+                             m,
+                             mg,
+                             simd_load(in.volume, pl, full),
+                             simd_load(in.visc, pl, full),
+                             sp,
+                             vp,
+                             Cp,
+                             in.h,
+                             in.gravity,
+                             c);
           out.add(c, n0, blk.nl);
         }
     }
@@ -772,6 +854,9 @@ namespace femp
       const std::array<std::ptrdiff_t, (1u << dim)> &corner_offset;
       const std::vector<double>                     &T_old, &T_new;
       const double dt, h, ih, dt_ih, b1, b1h, M_per_E, idt, scaling;
+      /// B only: the local coordinates of the volume centroid of each
+      /// cell's points (SolidMPM::cell_centroid).
+      const std::array<std::vector<double>, dim> &centroid;
     };
 
     /// The constants of an update_stresses() step of @p dt with cell size
@@ -786,7 +871,8 @@ namespace femp
                 const std::vector<double>                     &T_new,
                 const double                                   dt,
                 const double                                   h,
-                const double                                   scaling)
+                const double                                   scaling,
+                const std::array<std::vector<double>, dim>    &centroid)
     {
       const double b1 = mat.bulk_viscosity, ih = 1. / h;
       const double nu      = mat.poisson_ratio;
@@ -805,7 +891,8 @@ namespace femp
               b1h,
               M_per_E,
               idt,
-              scaling};
+              scaling,
+              centroid};
     }
 
     /// The moduli of the cell of the first of @p n points (none: zero), to
@@ -855,8 +942,12 @@ namespace femp
     /// viscous pressure of the step added to @p work_v, the new viscous
     /// pressure and volume stored, the smallest new volume of the lanes
     /// into @p vmin. Returns in @p use the mask of the lanes in use and in
-    /// @p m, @p mg the inertial and true masses.
-    template <int dim, unsigned int W, typename VD>
+    /// @p m, @p mg the inertial and true masses. B (Solid/Volumetric
+    /// strain rate = centroid): the trace of L dt is that at the volume
+    /// centroid of the cell's points, the difference to the point's added
+    /// in equal parts to the dim in-plane normal components (the
+    /// deviatoric part stays the point's; plane strain keeps L_zz = 0).
+    template <int dim, bool B, unsigned int W, typename VD>
     [[gnu::always_inline]] inline void
     stress_block(const StressStep<dim> &st,
                  PointArrays<dim>      &pa,
@@ -887,6 +978,22 @@ namespace femp
         n0[l] = pa.node0[pl[l]];
       block_velocity_gradient<dim>(
         st.vel, st.corner_offset, n0, xi, st.dt_ih, cv, coef_cell, L);
+      if constexpr (B)
+        {
+          VD centre[dim];
+          block_centroid<dim>(st.centroid, pa.cell, blk, n0, centre);
+          VD div_c = {}, div_p = {};
+          for (int i = 0; i < dim; ++i)
+            {
+              VD val, g[dim];
+              multilinear<dim>(cv[i], centre, val, g);
+              div_c += g[i];
+              div_p += L[i][i];
+            }
+          const VD shift = (st.dt_ih * div_c - div_p) * (1. / dim);
+          for (int i = 0; i < dim; ++i)
+            L[i][i] += shift;
+        }
       VD s_old[n_stress];
       for (unsigned int c = 0; c < n_stress; ++c)
         sb.s[c] = s_old[c] = simd_load(pa.sigma[c], pl, full);

@@ -387,6 +387,27 @@ namespace femp
     using Store::volume;
     using Store::x;
 
+    /// Solid/Volumetric strain rate = centroid: the points' volumetric
+    /// strain rate at the volume centroid of their cell's points and the
+    /// pressure's nodal forces with the tent gradients there (B-bar;
+    /// stress_block(), p2g_block()).
+    bool
+    centroid_volumetric() const
+    {
+      return mat.volumetric_strain_rate ==
+             SolidMaterial::VolumetricStrainRate::centroid;
+    }
+    /// For centroid_volumetric(): per cell of the grid (local index), the
+    /// local coordinates of the volume centroid of its points,
+    /// sum V_p xi_p / sum V_p, of the last p2g() (its points' positions
+    /// and volumes at the start of the step), and the points' volume.
+    std::array<std::vector<double>, dim> cell_centroid;
+    std::vector<double>                  cell_volume;
+    /// Fills cell_centroid for the cells that hold points (a pass over the
+    /// points: position, corner, volume).
+    void
+    compute_centroids();
+
     /// Grid velocity at x_p (FLIP; with APIC it is v).
     std::array<std::vector<double>, dim> xdot;
     double                               kinetic = 0;
