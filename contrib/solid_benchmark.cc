@@ -12,8 +12,8 @@
 //                                 [fe | mpm | apic | flip | mpmcheck |
 //                                  constitutive:
 //                                  only that part]
-//                                 [centre]
-//   (centre: the MPM with Solid/Volumetric strain rate = cell centre;
+//                                 [centroid]
+//   (centroid: the MPM with Solid/Volumetric strain rate = centroid;
 //   mpmcheck: the final energies and stress sums of the sub-cycled MPM
 //   runs, FLIP and APIC, not timed, to compare code versions;
 //   constitutive: the scalar update_stress and the SIMD update_stress_block
@@ -238,7 +238,7 @@ main(int argc, char **argv)
   const unsigned int               steps = argc > 2 ? std::atoi(argv[2]) : 50;
   double                           n_points = 0, n_elements = 0;
   const std::string                only = argc > 3 ? argv[3] : "";
-  if (argc > 4 && std::string(argv[4]) == "centre")
+  if (argc > 4 && std::string(argv[4]) == "centroid")
     volumetric = SolidMaterial::VolumetricStrainRate::centroid;
   if (only == "constitutive")
     {
