@@ -167,7 +167,7 @@ namespace
         checks.in_range(name + ": mean spread of p within a cell / s",
                         mean_spread,
                         0.05,
-                        1e30);
+                        1.);
         checks.print(name + ": largest spread of p within a cell / s",
                      spread_max / s_exact,
                      2);

@@ -445,9 +445,13 @@ namespace femp
     };
     const std::true_type  yes;
     const std::false_type no;
-    // The volumetric strain rate, a compile-time constant as the others.
+    // The volumetric strain rate, a compile-time constant as the others;
+    // the fused loops are never run with the centroid (fuse above), so
+    // they are not compiled with it.
     auto loop_b = [&](auto transfer, auto fused, auto floor) {
-      if (centroid_volumetric())
+      if constexpr (decltype(fused)::value)
+        loop(transfer, fused, floor, no);
+      else if (centroid_volumetric())
         loop(transfer, fused, floor, yes);
       else
         loop(transfer, fused, floor, no);
