@@ -790,7 +790,7 @@ namespace femp
   }
 
   template <int dim>
-  std::array<double, 2>
+  std::array<double, 4>
   SolidFEM<dim>::update_nodes(const double dt)
   {
     // Element forces summed over ranks; velocities of the transition
@@ -804,11 +804,13 @@ namespace femp
 
   /// The node update over the box in SIMD: v <- v + dt (f + f_ext) / m
   /// masked to zero in fixed components (eq. 10), the force zeroed for the
-  /// next element loop, kinetic energy and external power (gravity on the
-  /// unscaled mass, external forces) of the owned nodes.
+  /// next element loop, kinetic energy, external power (gravity on the
+  /// unscaled mass, external forces) of the owned nodes, and their sums
+  /// m v_old . dv and m dv . dv (dv = v_new - v_old) for the leapfrog's
+  /// half-step term (SolidEnergies::half_step).
   template <int dim>
   template <bool with_ext>
-  std::array<double, 2>
+  std::array<double, 4>
   SolidFEM<dim>::node_loop(const double dt)
   {
     using VD = simd_double;
@@ -823,7 +825,7 @@ namespace femp
       std::memcpy(&v, p, sizeof v);
       return v;
     };
-    VD       k = {}, p = {};
+    VD       k = {}, p = {}, hx = {}, hy = {};
     const VD zero = {};
     for (std::size_t n = 0; n < n_box; n += W)
       {
@@ -831,14 +833,17 @@ namespace femp
         VB       fb;
         std::memcpy(&fb, &fix[n], sizeof fb);
         const VI fi = __builtin_convertvector(fb, VI);
-        VD       v[dim];
+        VD       v[dim], xv = {}, yv = {};
         for (int d = 0; d < dim; ++d)
           {
             VD f = load(&frc[d][n]);
             if constexpr (with_ext)
               f += load(&ext[d][n]);
             const VI free = (fi & (1 << d)) == 0;
-            v[d]          = VD(VI(load(&vel[d][n]) + im * f) & free);
+            const VD vo   = load(&vel[d][n]);
+            v[d]          = VD(VI(vo + im * f) & free);
+            xv += vo * (v[d] - vo);
+            yv += (v[d] - vo) * (v[d] - vo);
             std::memcpy(&vel[d][n], &v[d], sizeof(VD));
             std::memcpy(&frc[d][n], &zero, sizeof(VD));
           }
@@ -852,16 +857,18 @@ namespace femp
           }
         const VD m = load(&owned_mass[n]);
         k += 0.5 * m * v2;
+        hx += m * xv;
+        hy += m * yv;
         if constexpr (with_ext)
           p += m / mass_scale * gv + (m > 0 ? fv : zero);
         else
           p += m / mass_scale * gv;
       }
-    double ks = 0, ps = 0;
+    double ks = 0, ps = 0, xs = 0, ys = 0;
     for (unsigned int l = 0; l < W; ++l)
-      ks += k[l], ps += p[l];
+      ks += k[l], ps += p[l], xs += hx[l], ys += hy[l];
     kinetic = ks;
-    return {{ks, ps}};
+    return {{ks, ps, xs, ys}};
   }
 
   template <int dim>

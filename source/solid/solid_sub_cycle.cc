@@ -672,9 +672,9 @@ namespace femp
     // after the update (nodes.mass is still the point mass here).
     transfer += grid_point_kinetic(true);
     set_transition_velocities();
-    const double ext_power  = external_power(external_forces);
-    const auto   fe_energy  = grid_to_points(dt); // 3., 4. G2P, FE nodes
-    const double remap_work = remap_work_of_step(dt);
+    const double ext_power = external_power(external_forces);
+    const auto   fe_energy = grid_to_points(dt); // 3., 4. G2P, FE nodes
+    const auto   remap     = remap_work_of_step(dt);
     set_grid_velocities();
 
     // 5. Stresses (eq. 5).
@@ -682,8 +682,14 @@ namespace femp
     if (fem)
       work += fem->update_elements(dt, w);
     ++steps;
-    book_energies(
-      dt, ext_power, fe_energy, transfer, work, remap_work, withheld);
+    book_energies(dt,
+                  ext_power,
+                  fe_energy,
+                  transfer,
+                  work,
+                  remap[0],
+                  withheld,
+                  {{remap[1] + fe_energy[2], remap[2] + fe_energy[3]}});
   }
 
   template <int dim>
@@ -877,7 +883,7 @@ namespace femp
   }
 
   template <int dim>
-  std::array<double, 2>
+  std::array<double, 4>
   SolidSubCycle<dim>::grid_to_points(const double dt)
   {
     // 3. and 4. Points and FE nodes (eqs. 15-17), MUSL re-map of the point
@@ -886,8 +892,8 @@ namespace femp
       for (const auto n : region.live_nodes())
         nodes.momentum[d][n] = 0;
     mpm.g2p(nodes, dt);
-    const std::array<double, 2> fe_energy =
-      fem ? fem->update_nodes(dt) : std::array<double, 2>{{0., 0.}};
+    const std::array<double, 4> fe_energy =
+      fem ? fem->update_nodes(dt) : std::array<double, 4>{{0., 0., 0., 0.}};
     for (int d = 0; d < dim; ++d)
       grid.sum_shared_nodes(nodes.momentum[d]);
     for (const auto &[t, n] : grid_transition)
@@ -898,7 +904,7 @@ namespace femp
   }
 
   template <int dim>
-  double
+  std::array<double, 3>
   SolidSubCycle<dim>::remap_work_of_step(const double dt) const
   {
     constexpr unsigned int W = SolidFEM<dim>::tr_width;
@@ -919,7 +925,12 @@ namespace femp
     // dt/2 (f_FE + f_HG) . (v_I - v_i + v_m - u), is booked here too (the
     // grid force f_g keeps the re-map jump); without it the balance of the
     // elastic shock test was 0.12 (doc/solid.md).
-    double remap_work = 0;
+    // In the same loop the sums for the leapfrog's half-step term
+    // (SolidEnergies::half_step) of the grid nodes: f_I . v_I and
+    // f_I . a_I, a_I = f_I / m_I the acceleration of the update, so that
+    // dv_I = dt a_I and v_old = v_I - dv_I (transition nodes with their
+    // merged mass, velocity and acceleration).
+    double remap_work = 0, fv = 0, fa = 0;
     for (const auto &[n, t] : region.live_counted()) // no mass at the others
       if (nodes.mass[n] > 0)
         for (int d = 0; d < dim; ++d)
@@ -928,6 +939,8 @@ namespace femp
               const double f  = nodes.mass[n] * nodes.force[d][n];
               const double vI = nodes.velocity[d][n];
               const double vr = nodes.momentum[d][n] / nodes.mass[n];
+              fv += f * vI;
+              fa += f * nodes.force[d][n];
               if (t < 0)
                 {
                   remap_work += 0.5 * dt * f * (vI - vr);
@@ -943,7 +956,8 @@ namespace femp
                              (f - fg + b[1 + 2 * dim + d]) *
                                (vI - fem->transition_velocity(t)[d] + vm - u));
             }
-    return remap_work;
+    // sum m v_old . dv and sum m dv . dv (SolidFEM::update_nodes()).
+    return {{remap_work, dt * (fv - dt * fa), dt * dt * fa}};
   }
 
   template <int dim>
@@ -962,17 +976,18 @@ namespace femp
   void
   SolidSubCycle<dim>::book_energies(const double                 dt,
                                     const double                 ext_power,
-                                    const std::array<double, 2> &fe_energy,
+                                    const std::array<double, 4> &fe_energy,
                                     const double                 transfer,
                                     const double                 work,
                                     const double                 remap_work,
-                                    const double                 withheld)
+                                    const double                 withheld,
+                                    const std::array<double, 2> &half_step)
   {
     // Energies and the blow-up check (one reduction per step).
     const double local_ext =
       ext_power + mpm.gravity_power(prm.gravity) + fe_energy[1];
     // sums[8]: a point volume or element Jacobian <= 0 on this rank.
-    double sums[10] = {
+    double sums[12] = {
       mpm.kinetic_energy(),
       work,
       dt * local_ext,
@@ -982,12 +997,22 @@ namespace femp
       fe_energy[0],
       remap_work,
       mpm.volume_collapsed() || (fem && fem->element_failed()) ? 1. : 0.,
-      withheld};
-    Utilities::MPI::sum(ArrayView<const double>(sums, 10),
+      withheld,
+      half_step[0],
+      half_step[1]};
+    Utilities::MPI::sum(ArrayView<const double>(sums, 12),
                         comm,
-                        ArrayView<double>(sums, 10));
-    ledger.book_step(
-      sums[0], sums[6], sums[1], sums[2], sums[5], sums[7], sums[9]);
+                        ArrayView<double>(sums, 12));
+    ledger.book_step(sums[0],
+                     sums[6],
+                     sums[1],
+                     sums[2],
+                     sums[5],
+                     sums[7],
+                     sums[9],
+                     dt,
+                     sums[10],
+                     sums[11]);
     const bool blown = !ledger.finite();
     if (!blown && sums[8] > 0)
       stop_inverted(dt);
@@ -1864,7 +1889,7 @@ namespace femp
 
   template <int dim>
   void
-  SolidSubCycle<dim>::check_energy_created(const double elastic_energy) const
+  SolidSubCycle<dim>::check_energy_created(const double elastic_energy)
   {
     // A solid step above the stable limit can grow a mode that stays
     // finite (no point collapses, no element inverts: the material points
@@ -1878,13 +1903,25 @@ namespace femp
     // energies, the external work and the booked exchanges (transfer,
     // melting, solidification, re-map, scaling jumps) together is taken
     // as the sign of an instability.
+    // The balance is taken with the kinetic energy at the whole step
+    // (SolidEnergies::whole_step_balance()): the central-difference update
+    // books the works over a step against the kinetic energy at the whole
+    // step, 1/2 m v_{n-1/2} . v_{n+1/2}, not at the half-step velocity the
+    // energy file keeps. With the half-step kinetic energy a body starting
+    // from rest under a constant load shows half the work of its first
+    // step as created (1/2 m (g dt)^2 of m g^2 dt^2, a third of the scale
+    // after one step, a fifth after two): a false stop where an advance
+    // holds one or two solid steps. With the whole-step kinetic energy
+    // that balance is round-off at every step, and a linear elastic body
+    // leaves -dt^2/2 v . K v <= 0 (K its stiffness).
     // Global sums: every rank decides the same.
     const auto   e       = energies(false);
-    const double created = e.balance();
+    const double created = e.whole_step_balance();
     const double scale   = elastic_energy + e.kinetic + std::abs(e.external) +
                          std::abs(e.transfer) + e.melted + e.solidified +
                          std::abs(e.remap) + std::abs(e.scaling_jump) +
                          std::abs(e.withheld);
+    last_check = {{created, scale}};
     if (!(scale > 0) || !(created > energy_created_limit * scale))
       return;
     std::ostringstream s;

@@ -7,8 +7,10 @@
 // balance
 //   W_ext - (K - K_0) - W_int - E_HG - D_transfer - K_melted + K_solidified
 //   + W_remap + (mass-scaling jumps) - W_withheld
-// closes to round-off for a stable solid; SolidSubCycle books into it
-// after every step, gather and re-sort, and writes it to the energy file.
+// closes to round-off for a stable solid up to the leapfrog's half-step
+// term (SolidEnergies::half_step, which the energy check takes off);
+// SolidSubCycle books into it after every step, gather and re-sort, and
+// writes it to the energy file.
 // No equation of the paper: a check of eqs. 5-17.
 #ifndef femp_solid_energy_ledger_h
 #define femp_solid_energy_ledger_h
@@ -51,12 +53,42 @@ namespace femp
     /// kinetic energy does not (< 0 when the withheld forces oppose the
     /// motion: energy the cutoff leaves in it).
     double withheld = 0;
+    /// The leapfrog's half-step term, J: `kinetic` is taken at the
+    /// velocities v_k after each step k (half-step velocities: the
+    /// positions move by dt_k v_k), while the booked works (external work
+    /// dt_k f_ext . v_k, stress work with the mean of the old and new
+    /// stresses) match a kinetic energy at the whole step. Summed over the
+    /// nodes (grid and FE), with P_k = v_k . f_{k+1} (f_{k+1} the force of
+    /// the step after k, at the positions of step k), the balance of a
+    /// linear system over steps 1..n is exactly
+    ///   sum_k dt_k / 2 (P_k - P_{k-1}),
+    /// the half-step term: dt/2 (P_n - P_0) at a constant step, the
+    /// product form 1/2 m v_n . v_{n+1} of the whole-step kinetic energy
+    /// less 1/2 m v_n^2. Each P_{k-1} is measured in step k (its old
+    /// velocities and its force); for the last step, whose next force is
+    /// not known yet, P_n is taken with the step's own force. Under a
+    /// constant load (a body starting from rest under gravity: balance()
+    /// shows 1/2 m (g dt)^2 created after the first step, a third of the
+    /// check's scale) this is the balance exactly, whatever the steps; for
+    /// a linear elastic body of stiffness K the balance less this term is
+    /// -dt^2/2 v_n . K v_n <= 0 at a constant step. Not in balance() (the
+    /// energy file keeps the half-step kinetic energy); the energy check
+    /// reads whole_step_balance().
+    double half_step = 0;
     double
     balance() const
     {
       return external + remap - (kinetic - initial_kinetic) - internal -
              hourglass - transfer - melted + solidified + scaling_jump -
              withheld;
+    }
+    /// The balance with the kinetic energy at the whole step (kinetic +
+    /// half_step): round-off for a body under a constant load from rest,
+    /// whatever the number of steps (doc/stability.md, "Energy check").
+    double
+    whole_step_balance() const
+    {
+      return balance() - half_step;
     }
   };
 
@@ -69,7 +101,7 @@ namespace femp
     start(const double K_total, const double K_points)
     {
       K0 = K = K_total;
-      W_ext = W_int = 0;
+      W_ext = W_int = H = H_sum = H_P = H_dt = 0;
       D_transfer = K_melted = K_solidified = W_remap = W_withheld = 0;
       K_p                                                         = K_points;
     }
@@ -77,8 +109,12 @@ namespace femp
     /// @p k_points and of the FE nodes @p k_fe after it, stress work
     /// @p work, external work @p external, the points' kinetic energy after
     /// P2G minus the grid's after the update, and so on (@p transfer: the
-    /// grid side of the transfer loss), re-map work @p remap and withheld
-    /// work @p withheld.
+    /// grid side of the transfer loss), re-map work @p remap, withheld
+    /// work @p withheld; for the half-step term (SolidEnergies::half_step)
+    /// the step @p dt and the node sums @p x = sum m v_old . dv and
+    /// @p y = sum m dv . dv (dv = v_new - v_old, the step's velocity
+    /// change; m dv / dt is the node's force, so x / dt = P_{k-1} and
+    /// y / (2 dt) = dt/2 (P~_k - P_{k-1}), P~_k with the step's own force).
     void
     book_step(const double k_points,
               const double k_fe,
@@ -86,9 +122,18 @@ namespace femp
               const double external,
               const double transfer,
               const double remap,
-              const double withheld)
+              const double withheld,
+              const double dt,
+              const double x,
+              const double y)
     {
-      K = k_points + k_fe;
+      const double P = x / dt;
+      if (H_dt > 0)
+        H_sum += 0.5 * H_dt * (P - H_P);
+      H_P  = P;
+      H_dt = dt;
+      H    = H_sum + 0.5 * y;
+      K    = k_points + k_fe;
       W_int += work;
       W_ext += external;
       D_transfer += transfer - k_points; // k_points: point kinetic energy now
@@ -163,6 +208,7 @@ namespace femp
       e.melted          = K_melted;
       e.solidified      = K_solidified;
       e.scaling_jump    = scaling_jump;
+      e.half_step       = H;
       return e;
     }
     /// Checkpoint: the accounts in a fixed order (W_ext, W_int, K_0, K,
@@ -209,6 +255,11 @@ namespace femp
     /// SolidEnergies::withheld, summed over the steps, J.
     double W_withheld = 0;
     double K_p        = 0; ///< kinetic energy of the points
+    /// SolidEnergies::half_step after the last step, J; H_sum: its part
+    /// up to the step before, H_P and H_dt: P_{k-1} and dt_k of the last
+    /// step (book_step()). Not in checkpoints: a resumed run sums the term
+    /// from its resume on.
+    double H = 0, H_sum = 0, H_P = 0, H_dt = 0;
   };
 } // namespace femp
 

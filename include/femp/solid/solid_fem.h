@@ -241,8 +241,11 @@ namespace femp
     /// Central-difference node update (eq. 10): sums of the element forces
     /// over ranks, new velocities of all local FE nodes
     /// (transition nodes from update_transition()). Returns {kinetic
-    /// energy, external power} of the owned nodes.
-    std::array<double, 2>
+    /// energy, external power, sum m v_old . dv, sum m dv . dv} of the
+    /// owned nodes, dv = v_new - v_old (0 at the transition nodes, counted
+    /// with the grid's), the last two for the leapfrog's half-step term
+    /// (SolidEnergies::half_step).
+    std::array<double, 4>
     update_nodes(const double dt);
     /// Fused element loop: stress update over the step @p dt with the
     /// temperature interpolated at weight @p w between the start and end
@@ -649,7 +652,7 @@ namespace femp
     double
     element_loop(const double dt, const double w);
     template <bool with_ext>
-    std::array<double, 2>
+    std::array<double, 4>
     node_loop(const double dt);
     double
     hourglass_stiffness(const double T, const double kappa) const;

@@ -388,6 +388,17 @@ namespace femp
     /// balance) is left 0: one pass over the elements less.
     Energies
     energies(const bool with_hourglass_mode = true) const;
+    /// What the energy check read at the end of the last solid advance
+    /// (doc/stability.md, "Energy check"): {the energy created, the stored
+    /// elastic, kinetic and external energies and the booked exchanges it
+    /// is measured against}, J (2D: J/m); the run stops where the first
+    /// exceeds energy_created_limit times the second. {0, 0} before the
+    /// first advance. The same on every rank.
+    std::array<double, 2>
+    energy_check_balance() const
+    {
+      return last_check;
+    }
     /// sigma_xx (Pa) and temperature (K) at the cell holding each probe
     /// point (element stress, or the mean over the cell's points; collective).
     std::vector<std::array<double, 2>>
@@ -628,20 +639,26 @@ namespace femp
     set_transition_velocities();
     double
     external_power(const NodalForces *external_forces) const;
-    std::array<double, 2>
+    /// Returns the FE nodes' {kinetic energy, external power, sums for
+    /// the half-step term} (SolidFEM::update_nodes()).
+    std::array<double, 4>
     grid_to_points(const double dt);
-    double
+    /// Returns {the re-map work, sum m v_old . dv, sum m dv . dv} of the
+    /// step over this rank's counted grid nodes (the last two for the
+    /// half-step term, SolidEnergies::half_step).
+    std::array<double, 3>
     remap_work_of_step(const double dt) const;
     void
     set_grid_velocities();
     void
     book_energies(const double                 dt,
                   const double                 ext_power,
-                  const std::array<double, 2> &fe_energy,
+                  const std::array<double, 4> &fe_energy,
                   const double                 transfer,
                   const double                 work,
                   const double                 remap_work,
-                  const double                 withheld);
+                  const double                 withheld,
+                  const std::array<double, 2> &half_step);
     /// Whether the step from @p t_old to @p t_new ends with a row of the
     /// energy and probe files ('Row interval').
     bool
@@ -659,7 +676,11 @@ namespace femp
     /// energy, the external work and the booked exchanges together: an
     /// unstable solid step that stayed finite (doc/stability.md).
     void
-    check_energy_created(const double elastic_energy) const;
+    check_energy_created(const double elastic_energy);
+    /// What the last check_energy_created() compared: {the balance with
+    /// the kinetic energy at the whole step, the energy it is measured
+    /// against}, J (global).
+    std::array<double, 2> last_check{{0., 0.}};
     /// Fraction of that energy that a positive balance may reach before
     /// check_energy_created() stops the run, -.
     static constexpr double energy_created_limit = 0.25;
