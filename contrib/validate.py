@@ -7,6 +7,7 @@
                                [--set 'SECTION/ENTRY=VALUE' ...]
                                [--build build] [--out build/validation]
                                [--max-wall SECONDS] [--checkpoint-minutes M]
+                               [--restart-after-checkpoint]
   contrib/validate.py resume-check [--cases REGEX] [--build build]
                                [--out build/validation_resume]
   contrib/validate.py reevaluate [--out build/validation]
@@ -59,17 +60,22 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   checkpoint it resumed from, wall and CPU time, exit code, the simulated
   time reached; a killed segment keeps its last record, written every
   minute), log.txt holds the logs of all segments; result.json's wall and
-  CPU times are their sums, e.g. the 2 um track in segments of a working
-  session each:
+  CPU times are their sums. --restart-after-checkpoint ends femp after each
+  checkpoint it writes before the end and resumes in a new process (a
+  checkpoint write leaves femp's resident memory higher: by 4.6 GB at
+  2 um, where a checkpoint is 3.09 GB), e.g. the 2 um track, in segments
+  of a working session each:
     contrib/validate.py run --np 1 --cases '^trapp_048W$' --setting h2 \
-        --checkpoint-minutes 20
+        --checkpoint-minutes 20 --restart-after-checkpoint
 resume-check: a run in segments against the same run straight through
-  (default Trapp 32 W, 8 um, about 40 s): 'straight' (no checkpoints),
-  'checkpointed' (a checkpoint every third of the path, straight through)
-  and 'segmented' (the same checkpoints, its first segment stopped at the
-  first one and resumed). femp's restart is bit-identical, so 'segmented'
-  must give the numbers of result.json and the time series of
-  'checkpointed' exactly (exit 1 on a difference); 'straight' differs from
+  (default Trapp 32 W, 8 um, about a minute): 'straight' (no checkpoints),
+  'checkpointed' (a checkpoint every third of the path, straight through),
+  'segmented' (the same checkpoints, its first segment stopped at the
+  first one and resumed) and 'restarted' (the same with
+  --restart-after-checkpoint: three segments). femp's restart is
+  bit-identical, so 'segmented' and 'restarted' must give the numbers of
+  result.json and the time series of 'checkpointed' exactly (exit 1 on a
+  difference); 'straight' differs from
   them within the pressure solver's tolerance (a checkpoint restarts its
   preconditioner), printed.
 report: reads every finished run under --out and writes their tables to
@@ -1282,20 +1288,47 @@ def run_case(args, exe, c, setting, stop=None):
     print("run %s [%s]%s ..." % (c["name"], setting,
                                  (" segment %d, from %s" % (n, resume[0]))
                                  if resume else ""), flush=True)
+    t_end = track_geometry(c)["Ltr"] / c["v"]
+    log_start = os.path.getsize(log) if resume else 0
+    seen = checkpoints(d)[:1]
+    renew = []
+
+    def segment_stop():
+        """stop(), or with --restart-after-checkpoint a new checkpoint
+        before the end (its time from femp's line in this segment's log)."""
+        if stop and stop():
+            return True
+        now = checkpoints(d)[:1]
+        if not getattr(args, "restart_after_checkpoint", False) or now == seen:
+            return False
+        seen[:] = now
+        with open(log) as f:
+            f.seek(log_start)
+            m = re.findall(r"^Checkpoint: step [0-9]+, time ([-0-9.e+]+) s",
+                           f.read(), re.M)
+        if m and float(m[-1]) < t_end * (1 - 1e-6):
+            renew.append(now[0])
+            return True
+        return False
+
     try:
         rc, wall, cpu = run_timed(cmd, d, log, args.max_wall,
-                                  append=bool(resume), stop=stop,
+                                  append=bool(resume), stop=segment_stop,
                                   progress=record)
     except Stopped as ex:
         seg.update(rc=ex.rc, ended="stopped by SIGTERM")
         json.dump(segments, open(seg_file, "w"), indent=1)
         raise
-    t_end = track_geometry(c)["Ltr"] / c["v"]
     seg.update(rc=rc)
     record(wall, cpu)
     reached = (seg.get("t_reached") or 0) >= t_end * (1 - 1e-6)
-    seg["ended"] = "finished" if reached else "stopped"
+    seg["ended"] = ("finished" if reached else
+                    "stopped after checkpoint %s" % renew[0] if renew else
+                    "stopped")
     json.dump(segments, open(seg_file, "w"), indent=1)
+    if renew and not reached:
+        # a fresh process goes on from the checkpoint just written
+        return run_case(args, exe, c, setting, stop)
     if not reached and checkpoints(d):
         print("  segment %d stopped (rc %s) at t = %s s after %.0f s wall; "
               "the same command resumes from %s" % (
@@ -1395,9 +1428,11 @@ def cmd_resume_check(args):
     base = list(args.set or [])
     out, res = args.out, {}
     for name, sets in (("straight", base), ("checkpointed", base + [every]),
-                       ("segmented", base + [every])):
+                       ("segmented", base + [every]),
+                       ("restarted", base + [every])):
         shutil.rmtree(os.path.join(out, name), ignore_errors=True)
         args.out, args.set = os.path.join(out, name), sets
+        args.restart_after_checkpoint = name == "restarted"
         d = os.path.join(args.out, args.setting, c["name"])
         if name == "segmented":
             r = run_case(args, exe, c, args.setting,
@@ -1408,41 +1443,46 @@ def cmd_resume_check(args):
         res[name] = run_case(args, exe, c, args.setting)
         res[name]["dir"] = d
     args.out = out
-    seg = json.load(open(os.path.join(res["segmented"]["dir"], "segments.json")))
-    for g in seg:
-        print("segment %d: from %s, to t = %s s, %.1f s wall, %.1f s CPU, rc %s" % (
-            g["segment"], g["resumed_from"] or "the start", g["t_reached"],
-            g["wall_s"], g["cpu_s"], g["rc"]))
     bad = []
-    print("%-22s %14s %14s %14s %10s" % ("", "straight", "checkpointed",
-                                         "segmented", "rel.diff"))
+    for name, n_seg in (("segmented", 2), ("restarted", 3)):
+        seg = json.load(open(os.path.join(res[name]["dir"], "segments.json")))
+        for g in seg:
+            print("%s, segment %d: from %s, to t = %s s, %.1f s wall, %.1f s "
+                  "CPU, rc %s, %s" % (name, g["segment"], g["resumed_from"] or
+                                      "the start", g["t_reached"], g["wall_s"],
+                                      g["cpu_s"], g["rc"], g["ended"]))
+        if len(seg) != n_seg or not all(g["resumed_from"] for g in seg[1:]):
+            bad.append("%s: %d segments, expected %d" % (name, len(seg), n_seg))
+    runs = ("straight", "checkpointed", "segmented", "restarted")
+    print("%-22s %14s %14s %14s %14s %10s" % (("",) + runs + ("rel.diff",)))
     for k in RESUME_KEYS:
-        a, b, x = (res[n].get(k) for n in ("straight", "checkpointed", "segmented"))
-        if a is None and b is None and x is None:
+        a, b, x, y = (res[n].get(k) for n in runs)
+        if a is None and b is None and x is None and y is None:
             continue
-        if b != x:
+        if b != x or b != y:
             bad.append(k)
         diff = (abs(a - b) / max(abs(b), 1e-300)) if None not in (a, b) else None
-        print("%-22s %14.8g %14.8g %14.8g %10s%s" % (
-            k, a if a is not None else float("nan"), b if b is not None else
-            float("nan"), x if x is not None else float("nan"),
+        nan = float("nan")
+        print("%-22s %14.8g %14.8g %14.8g %14.8g %10s%s" % (
+            k, a if a is not None else nan, b if b is not None else nan,
+            x if x is not None else nan, y if y is not None else nan,
             "%.1e" % diff if diff is not None else "-",
-            "   DIFFERS (checkpointed/segmented)" if b != x else ""))
+            "   DIFFERS" if b != x or b != y else ""))
     for f in RESUME_FILES:
-        fa, fb = (os.path.join(res[n]["dir"], "output", f)
-                  for n in ("checkpointed", "segmented"))
-        if os.path.exists(fa) or os.path.exists(fb):
-            same = (os.path.exists(fa) and os.path.exists(fb) and
-                    open(fa, "rb").read() == open(fb, "rb").read())
-            print("%s: %s" % (f, "identical" if same else "DIFFERS"))
-            if not same:
-                bad.append(f)
-    if len(seg) != 2 or not seg[1]["resumed_from"]:
-        bad.append("segments")
+        for other in ("segmented", "restarted"):
+            fa, fb = (os.path.join(res[n]["dir"], "output", f)
+                      for n in ("checkpointed", other))
+            if os.path.exists(fa) or os.path.exists(fb):
+                same = (os.path.exists(fa) and os.path.exists(fb) and
+                        open(fa, "rb").read() == open(fb, "rb").read())
+                print("%s, %s: %s" % (f, other, "identical" if same else
+                                      "DIFFERS"))
+                if not same:
+                    bad.append("%s (%s)" % (f, other))
     if bad:
-        raise SystemExit("validate.py resume-check: the segmented run differs "
-                         "from the checkpointed one: " + ", ".join(bad))
-    print("resume check: the segmented run equals the checkpointed run")
+        raise SystemExit("validate.py resume-check: the runs in segments "
+                         "differ from the checkpointed one: " + ", ".join(bad))
+    print("resume check: the runs in segments equal the checkpointed run")
 
 
 # ---------------------------------------------------------------- dig
@@ -2292,6 +2332,10 @@ def main():
                     help="run: stop each femp run after this many seconds of "
                     "wall time (with checkpoints: the segment's end; the same "
                     "command resumes it)")
+    ap.add_argument("--restart-after-checkpoint", action="store_true",
+                    help="run: end femp after each checkpoint it writes before "
+                    "the end and resume in a new process (a checkpoint write "
+                    "leaves femp's resident memory higher)")
     ap.add_argument("--checkpoint-minutes", type=float, default=None,
                     help="run: femp writes a checkpoint every this many minutes "
                     "of wall time into <run>/checkpoint (the last two kept); a "
