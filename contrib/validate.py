@@ -6,7 +6,10 @@
   contrib/validate.py run      [--cases REGEX] [--setting S] [--np N]
                                [--set 'SECTION/ENTRY=VALUE' ...]
                                [--build build] [--out build/validation]
-                               [--max-wall SECONDS]
+                               [--max-wall SECONDS] [--checkpoint-minutes M]
+                               [--restart-after-checkpoint]
+  contrib/validate.py resume-check [--cases REGEX] [--build build]
+                               [--out build/validation_resume]
   contrib/validate.py reevaluate [--out build/validation]
   contrib/validate.py report   [--out build/validation] [--img doc/img]
   contrib/validate.py all      (run, then report; the ctest 'validation')
@@ -48,6 +51,33 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
+  A long run goes in segments: with --checkpoint-minutes M femp writes a
+  checkpoint every M minutes of wall time into <run>/checkpoint (femp keeps
+  the last two); a run stopped before its end (--max-wall, a kill) leaves
+  no result.json, and the same command resumes it from its latest
+  checkpoint (it refuses a checkpoint of another scene or other
+  parameters). segments.json records each segment (its start, the
+  checkpoint it resumed from, wall and CPU time, exit code, the simulated
+  time reached; a killed segment keeps its last record, written every
+  minute), log.txt holds the logs of all segments; result.json's wall and
+  CPU times are their sums. --restart-after-checkpoint ends femp after each
+  checkpoint it writes before the end and resumes in a new process (a
+  checkpoint write leaves femp's resident memory higher: by 4.6 GB at
+  2 um, where a checkpoint is 3.09 GB), e.g. the 2 um track, in segments
+  of a working session each:
+    contrib/validate.py run --np 1 --cases '^trapp_048W$' --setting h2 \
+        --checkpoint-minutes 20 --restart-after-checkpoint
+resume-check: a run in segments against the same run straight through
+  (default Trapp 32 W, 8 um, about a minute): 'straight' (no checkpoints),
+  'checkpointed' (a checkpoint every third of the path, straight through),
+  'segmented' (the same checkpoints, its first segment stopped at the
+  first one and resumed) and 'restarted' (the same with
+  --restart-after-checkpoint: three segments). femp's restart is
+  bit-identical, so 'segmented' and 'restarted' must give the numbers of
+  result.json and the time series of 'checkpointed' exactly (exit 1 on a
+  difference); 'straight' differs from
+  them within the pressure solver's tolerance (a checkpoint restarts its
+  preconditioner), printed.
 report: reads every finished run under --out and writes their tables to
   <out>/tables.md (printed too; doc/validation.md takes them by hand) and
   the figures to --img (SVG, standard library only); the NIST spot sweep
@@ -809,24 +839,80 @@ def cmd_scenes(args):
 
 
 # ---------------------------------------------------------------- runs
-def run_timed(cmd, cwd, log, max_wall=None):
-    """Run cmd in cwd, stdout+stderr to log; (exit code, wall s, CPU s of
-    the run and its children). After max_wall seconds the run is stopped
-    (exit code -15) and what it wrote is kept."""
+def process_cpu(pid):
+    """CPU seconds (user + system) used so far by process pid and its
+    descendants (the ranks under mpirun), from /proc; 0 where unreadable."""
+    tick = os.sysconf("SC_CLK_TCK")
+    parent, used = {}, {}
+    for e in os.listdir("/proc"):
+        if not e.isdigit():
+            continue
+        try:
+            f = open("/proc/%s/stat" % e).read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parent[int(e)] = int(f[1])
+        used[int(e)] = (int(f[11]) + int(f[12])) / tick
+    total, todo = 0.0, [pid]
+    while todo:
+        p = todo.pop()
+        total += used.get(p, 0.0)
+        todo += [c for c, pp in parent.items() if pp == p]
+    return total
+
+
+def run_timed(cmd, cwd, log, max_wall=None, append=False, stop=None,
+              progress=None):
+    """Run cmd in cwd, stdout+stderr to log (appended to with @p append);
+    (exit code, wall s, CPU s of the run and its children). After max_wall
+    seconds, or when stop() returns true (polled), the run is stopped
+    (exit code -15) and what it wrote is kept. progress(wall, cpu) is
+    called every PROGRESS_S seconds while the run goes on. A SIGTERM to
+    this script stops the run too (and is raised again after)."""
+    import signal
     t0 = time.time()
-    with open(log, "w") as out:
-        p = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=subprocess.STDOUT)
-        while True:
-            pid, status, ru = os.wait4(p.pid, os.WNOHANG)
-            if pid:
-                break
-            if max_wall and time.time() - t0 > max_wall:
-                p.terminate()
-                pid, status, ru = os.wait4(p.pid, 0)
-                break
-            time.sleep(0.2)
-    return (os.waitstatus_to_exitcode(status), time.time() - t0,
-            ru.ru_utime + ru.ru_stime)
+    term = []
+    old = signal.signal(signal.SIGTERM, lambda *a: term.append(1))
+    try:
+        with open(log, "a" if append else "w") as out:
+            p = subprocess.Popen(cmd, cwd=cwd, stdout=out,
+                                 stderr=subprocess.STDOUT)
+            t_progress = t0
+            while True:
+                pid, status, ru = os.wait4(p.pid, os.WNOHANG)
+                if pid:
+                    break
+                if (term or (max_wall and time.time() - t0 > max_wall)
+                        or (stop and stop())):
+                    cpu = process_cpu(p.pid)
+                    p.terminate()
+                    pid, status, ru = os.wait4(p.pid, 0)
+                    break
+                if progress and time.time() - t_progress > PROGRESS_S:
+                    t_progress = time.time()
+                    progress(t_progress - t0, process_cpu(p.pid))
+                time.sleep(0.2)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    result = (os.waitstatus_to_exitcode(status), time.time() - t0,
+              ru.ru_utime + ru.ru_stime)
+    if term:
+        if progress:
+            progress(result[1], max(result[2], cpu))
+        raise Stopped(result[0])
+    return result
+
+
+PROGRESS_S = 60
+
+
+class Stopped(SystemExit):
+    """This script got a SIGTERM while a run went on; the run was stopped
+    (its exit code: rc)."""
+
+    def __init__(self, rc):
+        SystemExit.__init__(self, "validate.py: stopped by SIGTERM")
+        self.rc = rc
 
 
 def window_stats(table, key, t0, t1):
@@ -869,9 +955,12 @@ def log_figures(text):
     if len(m):
         r.update(laser_J=float(m["1"][0]), losses_J=float(m["2"][0]),
                  evaporation_J=float(m["3"][0]))
+    # the ray-traced laser's account; its fraction is kept only where the
+    # account closes (absorbed + escaping = incident to round-off)
     m = printed(r"incident ([-0-9.e+]+), absorbed ([-0-9.e+]+) \(fraction "
-                r"([-0-9.e+]+)\)")
-    if len(m):
+                r"([-0-9.e+]+)\), escaping ([-0-9.e+]+); relative error "
+                r"[^0-9]*([-0-9.e+]+)")
+    if len(m) and float(m["5"][0]) < 1e-9:
         r["absorbed_fraction_run"] = float(m["3"][0])
     m = printed(r"normalized enthalpy [^=]*= ([0-9.e+]+)")
     r["normalized_enthalpy"] = float(m["1"][0]) if len(m) else None
@@ -1095,7 +1184,43 @@ def femp_cmd(args, exe, sets, scene):
     return cmd + [scene]
 
 
-def run_case(args, exe, c, setting):
+def last_time(out_dir):
+    """The last time of a run's melt_pool.csv (None if it has no row)."""
+    try:
+        t = femp_post.Run(out_dir).melt_pool()["time"].tolist()
+    except (OSError, ValueError, KeyError, IndexError):
+        return None
+    return max(t) if t else None
+
+
+def checkpoints(d):
+    """The checkpoints of run directory d that femp's index names (newest
+    first; femp keeps the last two, doc/checkpoint.md)."""
+    try:
+        return [x.strip() for x in open(os.path.join(d, CHECKPOINT_DIR, "index"))
+                if x.strip()]
+    except OSError:
+        return []
+
+
+def segment_controls(k):
+    """Parameters that steer a segment (where and when femp checkpoints,
+    where it resumes), not the run's physics: they may differ between the
+    segments of one run and are not part of its 'sets'."""
+    return k == "Output/Directory" or k.startswith("Checkpoint/")
+
+
+CHECKPOINT_DIR = "checkpoint"
+
+
+def run_case(args, exe, c, setting, stop=None):
+    """Run case c with setting in <out>/<setting>/<name> and evaluate it
+    into result.json; a directory with result.json is skipped. With
+    checkpoints (--checkpoint-minutes, or any 'Checkpoint/Every ...' by
+    --set) femp writes them into <run>/checkpoint; a segment that stops
+    before the end (--max-wall, a kill, stop() returning true) leaves no
+    result.json, and the next call resumes from the latest checkpoint
+    (segments.json: one record per segment; log.txt: all segments)."""
     d = os.path.join(args.out, setting, c["name"])
     f = os.path.join(d, "result.json")
     if os.path.exists(f):
@@ -1105,25 +1230,123 @@ def run_case(args, exe, c, setting):
     scale = 1.5 if "large" in setting.split("+") else 1.0
     text = scene_text(c, scale).replace("include ../materials/",
                                         "include %s/prm/materials/" % ROOT)
-    open(scene, "w").write(text)
     sets = {"Output/Directory": os.path.join(d, "output")}
     sets.update(setting_parameters(setting))
     for kv in args.set or []:
         k, v = kv.split("=", 1)
         sets[k] = v
+    if args.checkpoint_minutes:
+        sets["Checkpoint/Every wall minutes"] = fmt(args.checkpoint_minutes)
+    ckpt = os.path.join(d, CHECKPOINT_DIR)
+    if any(k.startswith("Checkpoint/Every") and float(v) > 0
+           for k, v in sets.items()):
+        sets["Checkpoint/Directory"] = ckpt
+    physics = {k: v for k, v in sets.items() if not segment_controls(k)}
+    seg_file = os.path.join(d, "segments.json")
+    segments = json.load(open(seg_file)) if os.path.exists(seg_file) else []
+    resume = checkpoints(d)
+    if resume:
+        # the checkpoint must be of this run: same scene, same parameters
+        same = (os.path.exists(scene) and open(scene).read() == text and
+                segments and segments[0].get("sets") == physics)
+        if not same:
+            raise SystemExit(
+                "validate.py: %s holds a checkpoint of a run with another scene "
+                "or other parameters (segments.json: %s; now: %s); run it with "
+                "the same --setting and --set, or remove the directory to start "
+                "anew" % (d, segments[0].get("sets") if segments else "missing",
+                          physics))
+        sets["Checkpoint/Resume from"] = ckpt
+        for g in segments:
+            if g.get("ended") == "running":
+                g["ended"] = "killed (wall and CPU up to its last record)"
+    else:
+        segments = []
+        open(scene, "w").write(text)
     cmd = femp_cmd(args, exe, sets, scene)
-    print("run %s [%s] ..." % (c["name"], setting), flush=True)
-    t0 = time.time()
-    rc, wall, cpu = run_timed(cmd, d, os.path.join(d, "log.txt"), args.max_wall)
+    n = len(segments) + 1
+    log = os.path.join(d, "log.txt")
+    seg = dict(segment=n, started=time.strftime("%Y-%m-%d %H:%M:%S UTC",
+                                                time.gmtime()),
+               resumed_from=(os.path.join(CHECKPOINT_DIR, resume[0])
+                             if resume else None),
+               wall_s=0.0, cpu_s=0.0, rc=None, ended="running")
+    if n == 1:
+        seg["sets"] = physics
+    segments.append(seg)
+
+    def record(wall, cpu):
+        seg.update(wall_s=wall, cpu_s=cpu, t_reached=last_time(
+            os.path.join(d, "output")), checkpoints=checkpoints(d))
+        json.dump(segments, open(seg_file, "w"), indent=1)
+
+    record(0.0, 0.0)
+    if resume:
+        with open(log, "a") as out:
+            out.write("\n# validate.py: segment %d, %s, resumed from %s\n" % (
+                n, seg["started"], seg["resumed_from"]))
+    print("run %s [%s]%s ..." % (c["name"], setting,
+                                 (" segment %d, from %s" % (n, resume[0]))
+                                 if resume else ""), flush=True)
     t_end = track_geometry(c)["Ltr"] / c["v"]
-    r = dict(name=c["name"], setting=setting, rc=rc, wall_s=wall,
-             np=args.np, cpu_s=cpu,
-             sets={k: v for k, v in sets.items() if k != "Output/Directory"})
+    log_start = os.path.getsize(log) if resume else 0
+    seen = checkpoints(d)[:1]
+    renew = []
+
+    def segment_stop():
+        """stop(), or with --restart-after-checkpoint a new checkpoint
+        before the end (its time from femp's line in this segment's log)."""
+        if stop and stop():
+            return True
+        now = checkpoints(d)[:1]
+        if not getattr(args, "restart_after_checkpoint", False) or now == seen:
+            return False
+        seen[:] = now
+        with open(log) as f:
+            f.seek(log_start)
+            m = re.findall(r"^Checkpoint: step [0-9]+, time ([-0-9.e+]+) s",
+                           f.read(), re.M)
+        if m and float(m[-1]) < t_end * (1 - 1e-6):
+            renew.append(now[0])
+            return True
+        return False
+
     try:
-        r.update(evaluate(os.path.join(d, "output"), t_end,
-                          open(os.path.join(d, "log.txt")).read()))
+        rc, wall, cpu = run_timed(cmd, d, log, args.max_wall,
+                                  append=bool(resume), stop=segment_stop,
+                                  progress=record)
+    except Stopped as ex:
+        seg.update(rc=ex.rc, ended="stopped by SIGTERM")
+        json.dump(segments, open(seg_file, "w"), indent=1)
+        raise
+    seg.update(rc=rc)
+    record(wall, cpu)
+    reached = (seg.get("t_reached") or 0) >= t_end * (1 - 1e-6)
+    seg["ended"] = ("finished" if reached else
+                    "stopped after checkpoint %s" % renew[0] if renew else
+                    "stopped")
+    json.dump(segments, open(seg_file, "w"), indent=1)
+    if renew and not reached:
+        # a fresh process goes on from the checkpoint just written
+        return run_case(args, exe, c, setting, stop)
+    if not reached and checkpoints(d):
+        print("  segment %d stopped (rc %s) at t = %s s after %.0f s wall; "
+              "the same command resumes from %s" % (
+                  n, rc, seg.get("t_reached"), wall, checkpoints(d)[0]),
+              flush=True)
+        return None
+    r = dict(name=c["name"], setting=setting, rc=rc,
+             wall_s=sum(g["wall_s"] for g in segments),
+             np=args.np, cpu_s=sum(g["cpu_s"] for g in segments),
+             sets=physics)
+    try:
+        r.update(evaluate(os.path.join(d, "output"), t_end, open(log).read()))
     except (OSError, ValueError, KeyError) as ex:
         r["read_error"] = str(ex)
+    if len(segments) > 1:
+        # femp's printed wall time is the last segment's; wall_s is the sum
+        r["segments"] = len(segments)
+        r.pop("femp_wall_s", None)
     if r.get("t_reached", 0) >= t_end * (1 - 1e-6):
         try:
             r.update(end_state(d, c["alloy"]))
@@ -1133,7 +1356,7 @@ def run_case(args, exe, c, setting):
         r["incomplete"] = True
     json.dump(r, open(f, "w"), indent=1)
     print("  rc %s, %.0f s wall, width %s um, depth %s um, absorbed %s" % (
-        rc, wall, um(r.get("width")), um(r.get("depth")),
+        rc, r["wall_s"], um(r.get("width")), um(r.get("depth")),
         ("%.3f" % r["absorbed"]) if r.get("absorbed") is not None else "-"),
         flush=True)
     return r
@@ -1169,6 +1392,97 @@ def cmd_run(args):
     todo = [c for c in cases() if rx.search(c["name"]) and c["v"] > 0]
     for c in todo:
         run_case(args, exe, c, args.setting)
+
+
+RESUME_KEYS = ("t_reached", "width", "width_max", "depth", "depth_max",
+               "T_max", "length", "absorbed", "hits_per_ray", "steps",
+               "fluid_steps", "laser_J", "losses_J", "evaporation_J",
+               "absorbed_fraction_run", "u_max", "depression")
+RESUME_FILES = ("melt_pool.csv", "absorption.csv", "track_bead.csv")
+
+
+def cmd_resume_check(args):
+    """A run in segments gives the numbers of a run straight through: the
+    case (default Trapp 32 W, 8 um) run three times under --out: 'straight'
+    without checkpoints; 'checkpointed' straight through with a checkpoint
+    every third of its path (simulated time); 'segmented' with the same
+    checkpoints, its first segment stopped as soon as the first checkpoint
+    is written, then resumed by a second call of run_case. femp's restart
+    is bit-identical to the run that wrote the checkpoints and went on
+    (doc/checkpoint.md), so 'segmented' must equal 'checkpointed' exactly
+    (result.json numbers and the time series); 'straight' differs from
+    them within the pressure solver's tolerance (a checkpoint restarts the
+    solver's preconditioner), printed, not checked."""
+    import shutil
+    exe = os.path.abspath(os.path.join(args.build, "femp"))
+    if not os.path.exists(exe):
+        raise SystemExit("validate.py: build femp first (%s)" % exe)
+    rx = re.compile(args.cases or r"^trapp_032W$")
+    todo = [c for c in cases() if rx.search(c["name"]) and c["v"] > 0]
+    if len(todo) != 1:
+        raise SystemExit("validate.py resume-check: --cases must match one "
+                         "track, it matches %d" % len(todo))
+    c = todo[0]
+    t_end = track_geometry(c)["Ltr"] / c["v"]
+    every = "Checkpoint/Every simulated time=%s" % fmt(t_end / 3)
+    base = list(args.set or [])
+    out, res = args.out, {}
+    for name, sets in (("straight", base), ("checkpointed", base + [every]),
+                       ("segmented", base + [every]),
+                       ("restarted", base + [every])):
+        shutil.rmtree(os.path.join(out, name), ignore_errors=True)
+        args.out, args.set = os.path.join(out, name), sets
+        args.restart_after_checkpoint = name == "restarted"
+        d = os.path.join(args.out, args.setting, c["name"])
+        if name == "segmented":
+            r = run_case(args, exe, c, args.setting,
+                         stop=lambda: bool(checkpoints(d)))
+            if r is not None:
+                raise SystemExit("validate.py resume-check: the first segment "
+                                 "was not stopped at its first checkpoint")
+        res[name] = run_case(args, exe, c, args.setting)
+        res[name]["dir"] = d
+    args.out = out
+    bad = []
+    for name, n_seg in (("segmented", 2), ("restarted", 3)):
+        seg = json.load(open(os.path.join(res[name]["dir"], "segments.json")))
+        for g in seg:
+            print("%s, segment %d: from %s, to t = %s s, %.1f s wall, %.1f s "
+                  "CPU, rc %s, %s" % (name, g["segment"], g["resumed_from"] or
+                                      "the start", g["t_reached"], g["wall_s"],
+                                      g["cpu_s"], g["rc"], g["ended"]))
+        if len(seg) != n_seg or not all(g["resumed_from"] for g in seg[1:]):
+            bad.append("%s: %d segments, expected %d" % (name, len(seg), n_seg))
+    runs = ("straight", "checkpointed", "segmented", "restarted")
+    print("%-22s %14s %14s %14s %14s %10s" % (("",) + runs + ("rel.diff",)))
+    for k in RESUME_KEYS:
+        a, b, x, y = (res[n].get(k) for n in runs)
+        if a is None and b is None and x is None and y is None:
+            continue
+        if b != x or b != y:
+            bad.append(k)
+        diff = (abs(a - b) / max(abs(b), 1e-300)) if None not in (a, b) else None
+        nan = float("nan")
+        print("%-22s %14.8g %14.8g %14.8g %14.8g %10s%s" % (
+            k, a if a is not None else nan, b if b is not None else nan,
+            x if x is not None else nan, y if y is not None else nan,
+            "%.1e" % diff if diff is not None else "-",
+            "   DIFFERS" if b != x or b != y else ""))
+    for f in RESUME_FILES:
+        for other in ("segmented", "restarted"):
+            fa, fb = (os.path.join(res[n]["dir"], "output", f)
+                      for n in ("checkpointed", other))
+            if os.path.exists(fa) or os.path.exists(fb):
+                same = (os.path.exists(fa) and os.path.exists(fb) and
+                        open(fa, "rb").read() == open(fb, "rb").read())
+                print("%s, %s: %s" % (f, other, "identical" if same else
+                                      "DIFFERS"))
+                if not same:
+                    bad.append("%s (%s)" % (f, other))
+    if bad:
+        raise SystemExit("validate.py resume-check: the runs in segments "
+                         "differ from the checkpointed one: " + ", ".join(bad))
+    print("resume check: the runs in segments equal the checkpointed run")
 
 
 # ---------------------------------------------------------------- dig
@@ -2001,7 +2315,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
                                        "pipeline", "regime", "width", "conduction",
-                                       "conduction3d", "spots", "dig"])
+                                       "conduction3d", "spots", "dig",
+                                       "resume-check"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
     ap.add_argument("--setting", default="default",
@@ -2013,7 +2328,19 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=None)
     ap.add_argument("--img", default=os.path.join(ROOT, "doc", "img"))
-    ap.add_argument("--max-wall", type=float, default=None)
+    ap.add_argument("--max-wall", type=float, default=None,
+                    help="run: stop each femp run after this many seconds of "
+                    "wall time (with checkpoints: the segment's end; the same "
+                    "command resumes it)")
+    ap.add_argument("--restart-after-checkpoint", action="store_true",
+                    help="run: end femp after each checkpoint it writes before "
+                    "the end and resume in a new process (a checkpoint write "
+                    "leaves femp's resident memory higher)")
+    ap.add_argument("--checkpoint-minutes", type=float, default=None,
+                    help="run: femp writes a checkpoint every this many minutes "
+                    "of wall time into <run>/checkpoint (the last two kept); a "
+                    "run stopped before its end is resumed from there by the "
+                    "same command")
     ap.add_argument("--expected", default=None)
     ap.add_argument("--h", default=None, help="conduction3d: cell sizes, um, e.g. '8,4'")
     ap.add_argument("--end-time", type=float, default=None,
@@ -2030,8 +2357,9 @@ def main():
                     help="conduction3d: 'file', 'nolatent', 'const' (comma-separated)")
     args = ap.parse_args()
     if args.out is None:
-        args.out = os.path.join(args.build, "validation" if args.command != "pipeline"
-                                else "validation_pipeline")
+        args.out = os.path.join(args.build, {"pipeline": "validation_pipeline",
+                                             "resume-check": "validation_resume"}
+                                .get(args.command, "validation"))
     # femp runs in the run directory: a relative --out must not be read
     # from there
     args.out = os.path.abspath(args.out)
@@ -2058,6 +2386,8 @@ def main():
     elif args.command == "all":
         cmd_run(args)
         cmd_report(args)
+    elif args.command == "resume-check":
+        cmd_resume_check(args)
     else:
         cmd_pipeline(args)
 

@@ -1587,6 +1587,8 @@ namespace femp
             budget.radiation += b.radiation;
             budget.boundary += b.boundary;
             budget.advection += b.advection;
+            budget.laser_incident += b.laser_incident;
+            budget.laser_escaped += b.laser_escaped;
           }
         const double Tmax = parts[r].get<double>();
         const double dts  = parts[r].get<double>();
