@@ -1913,7 +1913,7 @@ namespace femp
     // after one step, a fifth after two): a false stop where an advance
     // holds one or two solid steps. With the whole-step kinetic energy
     // that balance is round-off at every step, and a linear elastic body
-    // leaves -dt^2/2 v . K v <= 0 (K its stiffness).
+    // leaves -dt^2/2 v . K v <= 0 at a constant step (K its stiffness).
     // Global sums: every rank decides the same.
     const auto   e       = energies(false);
     const double created = e.whole_step_balance();
