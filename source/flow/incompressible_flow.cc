@@ -390,7 +390,7 @@ namespace femp
                     ExcMessage("Melt flow/Velocity transfer = APIC: the "
                                "material points do not carry the affine "
                                "velocity"));
-        points.set_solidification_drops_affine(true);
+        points.set_phase_change_drops_affine(true);
       }
     node_mark = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);
     node_fix  = std::vector<std::uint8_t>(grid.n_local_nodes(), 0);

@@ -169,7 +169,7 @@ namespace femp
     /// enters the flow (or leaves it) with C_p = 0. Needs the affine block
     /// of the layout.
     void
-    set_solidification_drops_affine(const bool b)
+    set_phase_change_drops_affine(const bool b)
     {
       AssertThrow(!b || n_props >= PropertyIndex::n_properties,
                   ExcMessage("MaterialPoints: the points do not carry the "
@@ -483,7 +483,7 @@ namespace femp
   private:
     Parameters   prm;
     unsigned int n_props;
-    // See set_solidification_drops_affine().
+    // See set_phase_change_drops_affine().
     bool                            drop_affine = false;
     const Material                 &mat;
     const BackgroundGrid<dim>      &grid;
