@@ -156,6 +156,14 @@ namespace femp
             time.time_step,
             "with 'Physics/Heat transfer = false' and no melt flow nothing "
             "sets the step: prescribe it (s, > 0)");
+    require(!solid || !solid_stress.adaptive_after_solidification ||
+              (melt_flow && heat_enabled),
+            "Solid/Mass scaling after solidification",
+            "adaptive",
+            "it switches when the melt has solidified after the laser's "
+            "path: it needs 'Physics/Melt flow = true' and 'Physics/Heat "
+            "transfer = true' (without the melt flow set 'Solid/Mass "
+            "scaling = adaptive')");
     require(time.time_step_solidified == 0 || heat_enabled,
             "Time stepping/Time step after solidification",
             time.time_step_solidified,

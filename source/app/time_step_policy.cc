@@ -163,7 +163,7 @@ namespace femp
     // the gas may stay liquid): the larger cooling step of the same
     // accuracy.
     const auto &s = scene.solid_stress;
-    return scene.melt_flow && s.safety_factor_solidified > s.safety_factor &&
+    return scene.melt_flow && s.cools_after_solidification() &&
            !solid_uses_cooling_step &&
            after_path_and_below(time, scene.material.solidus);
   }

@@ -16,6 +16,8 @@ namespace femp
       , max_ratio(max_kinetic_ratio)
       , min_s(min_factor)
       , max_s(max_factor)
+      , start_min_s(min_factor)
+      , start_max_s(max_factor)
   {
     s.factor = factor;
   }
@@ -25,6 +27,8 @@ namespace femp
   {
     s          = State();
     s.factor   = start;
+    min_s      = start_min_s;
+    max_s      = start_max_s;
     phase_K_dt = phase_time = 0;
   }
 

@@ -128,6 +128,23 @@ namespace femp
               "solid step follows sqrt(s) and the kinetic energy "
               "jump is booked in the energy file (doc/speed_accuracy.md, "
               "section 3). Needs 'Time step = 0'.");
+    table.add("Mass scaling after solidification",
+              adaptive_after_solidification,
+              {{false, "fixed"}, {true, "adaptive"}},
+              "With the melt flow only. fixed: the factor stays as it is "
+              "(or as 'Safety factor after solidification' sets it). "
+              "adaptive: quasi-static cooling. Once the laser's path has "
+              "ended and the workpiece has solidified (the moment of "
+              "'Safety factor after solidification', after its switch if "
+              "set), the adaptive controller of 'Mass scaling = adaptive' "
+              "takes over from the factor in use: after every temperature "
+              "step in which the solid stepped the factor follows K / U_el "
+              "to 'Adaptive mass scaling/Maximum kinetic energy ratio', at "
+              "most doubling per step, within [the factor at the switch, "
+              "'Adaptive mass scaling/Maximum factor after "
+              "solidification'], and the solid step grows with its square "
+              "root as the cooling slows. Needs 'Time step = 0' and 'Mass "
+              "scaling = fixed' (doc/solid.md \"Quasi-static cooling\").");
     table.enter_subsection("Adaptive mass scaling");
     table.add("Maximum kinetic energy ratio",
               max_kinetic_ratio,
@@ -147,6 +164,15 @@ namespace femp
               "Largest mass-scaling factor of the adaptive "
               "controller (dimensionless); range [Minimum factor, "
               "1e12].");
+    table.add("Maximum factor after solidification",
+              max_factor_solidified,
+              Patterns::Double(),
+              "Largest mass-scaling factor of the controller with 'Mass "
+              "scaling after solidification = adaptive' "
+              "(dimensionless); range [the factor at the switch, 1e12]: "
+              "at least 'Mass scaling factor' times ('Safety factor "
+              "after solidification' / 'Safety factor')^2 when that is "
+              "set.");
     table.leave_subsection();
     table.add("Light nodes",
               light_nodes,
@@ -311,6 +337,34 @@ namespace femp
             max_factor,
             "it must lie in [Minimum factor, 1e12] (Minimum factor = " +
               num(min_factor) + ")");
+    if (adaptive_after_solidification)
+      {
+        const std::string name = "Solid/Mass scaling after solidification";
+        require(!adaptive_scaling,
+                name,
+                "adaptive",
+                "with 'Solid/Mass scaling = adaptive' the controller runs "
+                "from the start: it needs 'Solid/Mass scaling = fixed'");
+        require(time_step == 0,
+                name,
+                "adaptive",
+                "the step follows the factor: it needs 'Solid/Time step = 0' "
+                "(now " +
+                  num(time_step) + " s)");
+        const double c        = safety_factor_solidified > safety_factor ?
+                                  safety_factor_solidified / safety_factor :
+                                  1.;
+        const double s_switch = mass_scaling * c * c;
+        require(max_factor_solidified >= s_switch * (1 - 1e-12) &&
+                  max_factor_solidified <= 1e12,
+                ams + "Maximum factor after solidification",
+                max_factor_solidified,
+                "it must lie in [the factor at the switch, 1e12] = [" +
+                  num(s_switch) +
+                  ", 1e12] ('Mass scaling factor' times ('Safety factor "
+                  "after solidification' / 'Safety factor')^2 when that "
+                  "is set)");
+      }
     if (adaptive_scaling)
       {
         require(mass_scaling >= min_factor && mass_scaling <= max_factor,
@@ -397,6 +451,7 @@ namespace femp
       nodes.stiffness.assign(grid.n_local_nodes(), 0.);
     safety               = prm.safety_factor;
     cooling_step         = false;
+    adaptive_from        = 0;
     dt_solid             = prm.time_step > 0 ? prm.time_step :
                                                safety * prm.stable_limit(mat, grid.h());
     const auto face_bits = set_boundary_flags();
@@ -640,7 +695,8 @@ namespace femp
       }
     if (gathered) // collective
       {
-        measure_and_adapt_scaling(prm.adaptive_scaling && !final);
+        measure_and_adapt_scaling((prm.adaptive_scaling || adaptive_from > 0) &&
+                                  !final);
         mpm.scatter();
       }
     // The temperature of the last step at the cells without points (as if
@@ -1800,6 +1856,9 @@ namespace femp
       out.put(a);
     // Added last, so that checkpoints written without it still load (as 0).
     out.put(ledger.withheld());
+    // After it, likewise: the factor the quasi-static cooling took over
+    // from (0: not switched).
+    out.put(adaptive_from);
   }
 
   template <int dim>
@@ -2007,19 +2066,39 @@ namespace femp
       // taken with (it may be the one after solidification).
       if (prm.time_step == 0)
         safety = dt_solid / prm.stable_limit(mat, grid.h(), scaling.factor());
-      cooling_step = prm.safety_factor_solidified > prm.safety_factor &&
-                     safety > prm.safety_factor * (1 + 1e-6);
       set_small_mass_cutoff(small_mass_fraction);
     }
-    // Not in checkpoints written before it was booked: 0.
+    // Not in checkpoints written before they were kept: 0.
     ledger.restore_withheld(0);
+    adaptive_from = 0;
     for (std::size_t f = 0; f < parts.size(); ++f)
-      if (!parts[f].at_end())
-        {
-          const double x = parts[f].get<double>();
-          if (f == 0)
-            ledger.restore_withheld(x);
-        }
+      {
+        if (!parts[f].at_end())
+          {
+            const double x = parts[f].get<double>();
+            if (f == 0)
+              ledger.restore_withheld(x);
+          }
+        if (!parts[f].at_end())
+          {
+            const double x = parts[f].get<double>();
+            if (f == 0)
+              adaptive_from = x;
+          }
+      }
+    // A checkpoint written without the quasi-static cooling, resumed with
+    // it: the controller takes over at the next switch test.
+    if (!prm.adaptive_after_solidification)
+      adaptive_from = 0;
+    if (adaptive_from > 0)
+      scaling.set_range(adaptive_from,
+                        std::max(adaptive_from, prm.max_factor_solidified));
+    // Switched once each part of the switch that is set has been done.
+    const bool c2_done = !(prm.safety_factor_solidified > prm.safety_factor) ||
+                         safety > prm.safety_factor * (1 + 1e-6);
+    const bool adaptive_done =
+      !prm.adaptive_after_solidification || adaptive_from > 0;
+    cooling_step = prm.cools_after_solidification() && c2_done && adaptive_done;
     have_pending_exchange = false;
 
     // The CSV files: drop the rows after the checkpoint, then append.
@@ -2063,26 +2142,44 @@ namespace femp
   SolidSubCycle<dim>::use_cooling_step()
   {
     const double c2 = prm.safety_factor_solidified;
-    if (cooling_step || !(c2 > safety))
+    if (cooling_step)
       return "";
-    // The stresses depend on s and C through sqrt(s) / C
-    // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
-    // (C2 / C)^2, and the step, C sqrt(s), by (C2 / C)^2 as well.
-    const double s_old = scaling.factor(), c_old = safety, dt_old = dt_solid;
-    const double r = c2 / c_old;
-    safety         = c2;
-    set_mass_scaling(s_old * r * r);
-    cooling_step = true;
     std::ostringstream m;
-    m << "safety factor " << c_old << " -> " << c2 << ", mass scaling " << s_old
-      << " -> " << scaling.factor() << " (sqrt(s)/C kept at "
-      << std::sqrt(scaling.factor()) / safety << "), solid step " << dt_old
-      << " -> " << dt_solid << " s";
-    if (mass_floor)
-      m << ", light-node mass floor x " << r * r;
-    else
-      m << ", small-mass cutoff " << small_mass_fraction << " -> "
-        << small_mass_fraction * r * r;
+    if (c2 > safety)
+      {
+        // The stresses depend on s and C through sqrt(s) / C
+        // (doc/speed_accuracy.md, "The solid's safety factor"): s grows by
+        // (C2 / C)^2, and the step, C sqrt(s), by (C2 / C)^2 as well.
+        const double s_old = scaling.factor(), c_old = safety,
+                     dt_old = dt_solid;
+        const double r      = c2 / c_old;
+        safety              = c2;
+        set_mass_scaling(s_old * r * r);
+        m << "safety factor " << c_old << " -> " << c2 << ", mass scaling "
+          << s_old << " -> " << scaling.factor() << " (sqrt(s)/C kept at "
+          << std::sqrt(scaling.factor()) / safety << "), solid step " << dt_old
+          << " -> " << dt_solid << " s";
+        if (mass_floor)
+          m << ", light-node mass floor x " << r * r;
+        else
+          m << ", small-mass cutoff " << small_mass_fraction << " -> "
+            << small_mass_fraction * r * r;
+      }
+    if (prm.adaptive_after_solidification && !(adaptive_from > 0))
+      {
+        // Quasi-static cooling (doc/solid.md): the controller takes over
+        // from the factor in use, which is also its lower bound (the
+        // accuracy of the fixed setting is the floor).
+        adaptive_from = scaling.factor();
+        scaling.set_range(adaptive_from,
+                          std::max(adaptive_from, prm.max_factor_solidified));
+        m << (m.tellp() > 0 ? "; " : "") << "mass scaling adaptive from "
+          << adaptive_from << " to at most "
+          << std::max(adaptive_from, prm.max_factor_solidified)
+          << " (K / U_el at most " << prm.max_kinetic_ratio << "), solid step "
+          << dt_solid << " s";
+      }
+    cooling_step = true;
     return m.str();
   }
 

@@ -38,9 +38,17 @@ namespace femp
                           const double min_factor        = 1,
                           const double max_factor        = 1e4);
 
-    /// Back to the starting factor, nothing measured or booked.
+    /// Back to the starting factor and range, nothing measured or booked.
     void
     reset();
+    /// Limit the adaptive rule to [@p min_factor, @p max_factor] from now
+    /// on (the factor itself is not changed).
+    void
+    set_range(const double min_factor, const double max_factor)
+    {
+      min_s = min_factor;
+      max_s = max_factor;
+    }
     double
     factor() const
     {
@@ -80,7 +88,7 @@ namespace femp
 
   private:
     State  s;
-    double start, max_ratio, min_s, max_s;
+    double start, max_ratio, min_s, max_s, start_min_s, start_max_s;
     /// Integral of K over the solid steps of the current advance and its
     /// length, J s and s.
     double phase_K_dt = 0, phase_time = 0;

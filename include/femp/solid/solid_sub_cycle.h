@@ -101,6 +101,19 @@ namespace femp
       /// Target ratio K / U_el, and the factor's range.
       double max_kinetic_ratio = 1e-3;
       double min_factor = 1, max_factor = 1e4;
+      /// With the melt flow: once the workpiece has solidified after the
+      /// laser's path, the adaptive controller takes over from the factor
+      /// in use (quasi-static cooling, doc/solid.md "Quasi-static cooling"),
+      /// within [that factor, max_factor_solidified].
+      bool   adaptive_after_solidification = false;
+      double max_factor_solidified         = 1e8;
+      /// The switch after solidification does something.
+      bool
+      cools_after_solidification() const
+      {
+        return safety_factor_solidified > safety_factor ||
+               adaptive_after_solidification;
+      }
       /// With the melt flow only: nodes whose inertial mass is below this
       /// fraction of a full cell's node take no force (doc/solid.md "Small
       /// node masses"), -.
@@ -285,9 +298,11 @@ namespace femp
     /// with the mass-scaling factor times (C_after / C)^2, so that
     /// sqrt(s) / C, and with it the stresses, stay as they were, and the
     /// step (C sqrt(s)) grows by (C_after / C)^2 (velocities kept, the kinetic
-    /// energy jump booked). Once per run (a resumed run knows it from its
-    /// step). Returns what changed, for the log, or "" if nothing did (no such
-    /// factor set, or switched before). Local: every rank takes the same
+    /// energy jump booked); with 'Mass scaling after solidification =
+    /// adaptive' the adaptive controller then takes over from the factor in
+    /// use. Once per run (a resumed run knows it from its checkpoint).
+    /// Returns what changed, for the log, or "" if nothing did (no such
+    /// switch set, or switched before). Local: every rank takes the same
     /// decision.
     std::string
     use_cooling_step();
@@ -584,6 +599,10 @@ namespace femp
     /// safety_factor_solidified after use_cooling_step().
     double safety       = 0.5;
     bool   cooling_step = false;
+    /// With 'Mass scaling after solidification = adaptive', after the
+    /// switch: the factor the controller took over from (its lower bound);
+    /// 0 before.
+    double adaptive_from = 0;
     /// The mass-scaling factor initialize() builds the FE zone's masses
     /// at: that of the checkpoint resumed (resume_fe_zone()), else 0 (the
     /// factor of 'Solid/Mass scaling factor').
