@@ -2,18 +2,21 @@
 // "Quasi-static cooling") on the short coupled track of
 // tests/cooling_step.prm (melt flow and solid, s = 1000 at C = 0.5, the
 // laser off after 20 us, the workpiece below the solidus near 135 us),
+// without hourglass control (with the scene's 0.1 the fixed factor's own
+// stresses drift with the number of solid steps, see the study below),
 // cooled to 400 us with 1 us temperature steps after solidification.
 //   1. A common run to 140 us writes a checkpoint after solidification;
 //      both runs below resume from a copy of it, so that the melt flow
 //      before it plays no part in their difference.
 //   2. The reference keeps s = 1000 to the end; the quasi-static run must
-//      switch to the adaptive controller at its first step, raise the
-//      factor (at least 4x by the end) and take fewer solid steps (at
-//      most half of the reference's over 140-400 us), and end with the
+//      switch to the adaptive controller at its first step (141 us), raise
+//      the factor (more than 4x by the end), take fewer solid steps (less
+//      than half of the reference's over 140-400 us), and end with the
 //      reference's stresses: the largest |sigma_xx| and von Mises
 //      differences on the probe lines CD (material points) and EF (finite
-//      elements) over the reference's peak there, gate 2 % each (measured
-//      when the test was written: doc/studies/2026-12-05-quasi-static-
+//      elements) over the reference's peak there, rounded up to 0.01, gate
+//      3 % each (measured when the test was written: 0.3 % and 0.5 %,
+//      with 12x fewer solid steps; doc/studies/2026-12-05-quasi-static-
 //      cooling.md).
 //   3. The quasi-static run resumed from its checkpoint at 300 us (after
 //      the switch, with a raised factor) must end with the same probe
@@ -27,17 +30,6 @@ using namespace femp_test;
 
 namespace
 {
-  /// Rounded up to one significant digit (the flow's pressure solver
-  /// agrees across partitions to its tolerance only).
-  double
-  one_digit_up(const double x)
-  {
-    if (!(x > 0))
-      return x;
-    const double e = std::pow(10., std::floor(std::log10(x)));
-    return std::ceil(x / e - 1e-9) * e;
-  }
-
   /// Copy the output directory @p from to @p to and return its newest
   /// checkpoint (collective).
   std::string
@@ -63,59 +55,82 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string scene    = argv[1];
-      const std::string mode     = "Mass scaling after solidification";
-      const std::string t_common = "1.4e-4", t_end = "4e-4";
-      const Override    cool_dt = {"Time stepping",
-                                   "Time step after solidification",
-                                   "1e-6"};
+      const std::string scene = argv[1];
+      const std::string end   = "4e-4";
+      const Override    dt    = {"Time stepping",
+                                 "Time step after solidification",
+                                 "1e-6"};
+      const Override    no_hg = {"Solid FEM", "Hourglass coefficient", "0"};
+      const Override    quasi = {"Solid",
+                                 "Mass scaling after solidification",
+                                 "adaptive"};
       // 1. The common state after solidification.
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "common"},
-                    {"Time stepping", "End time", t_common},
-                    cool_dt,
-                    {"Checkpoint", "Every simulated time", t_common}});
-      const auto   e_common = read_csv_columns("common/solid_energy.csv");
-      const double steps_0  = e_common.at("step").back();
+                    {"Time stepping", "End time", "1.4e-4"},
+                    dt,
+                    no_hg,
+                    {"Checkpoint", "Every simulated time", "1.4e-4"}});
+      const double steps_0 =
+        read_csv_columns("common/solid_energy.csv").at("step").back();
 
       // 2. Fixed factor and quasi-static from there.
       const auto from_fixed = copy_newest("common", "fixed", comm);
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "fixed"},
-                    {"Time stepping", "End time", t_end},
-                    cool_dt,
+                    {"Time stepping", "End time", end},
+                    dt,
+                    no_hg,
                     {"Checkpoint", "Resume from", from_fixed}});
       const auto from_quasi = copy_newest("common", "quasi", comm);
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "quasi"},
-                    {"Time stepping", "End time", t_end},
-                    cool_dt,
-                    {"Solid", mode, "adaptive"},
+                    {"Time stepping", "End time", end},
+                    dt,
+                    no_hg,
+                    quasi,
                     {"Checkpoint", "Every simulated time", "3e-4"},
                     {"Checkpoint", "Resume from", from_quasi}});
-      const auto  e_fixed = read_csv_columns("fixed/solid_energy.csv");
-      const auto  e_quasi = read_csv_columns("quasi/solid_energy.csv");
-      const auto &s       = e_quasi.at("mass_scaling");
-      checks.in_range("mass scaling at the checkpoint", s.front(), 1000, 1000);
-      checks.in_range("mass scaling at the end / at the checkpoint",
-                      std::min(s.back() / s.front(), 1e6) >= 4 ? 1. : 0.,
-                      1,
-                      1);
+      // The switch, from the log of the quasi-static run (rank 0's).
+      double t_switch = 0;
+      {
+        std::ifstream     log("scene.log");
+        const std::string key = "Solid: the melt has solidified after the "
+                                "laser's path (t = ";
+        for (std::string line; std::getline(log, line);)
+          if (line.rfind(key, 0) == 0 &&
+              line.find("mass scaling adaptive from 1000") != std::string::npos)
+            t_switch = std::stod(line.substr(key.size()));
+      }
+      t_switch = Utilities::MPI::max(t_switch, comm);
+      checks.in_range("switch to the controller (us)",
+                      std::round(t_switch * 1e6),
+                      141,
+                      141);
+      const auto   e_fixed = read_csv_columns("fixed/solid_energy.csv");
+      const auto   e_quasi = read_csv_columns("quasi/solid_energy.csv");
+      const auto  &s       = e_quasi.at("mass_scaling");
       const double n_fixed = e_fixed.at("step").back() - steps_0;
       const double n_quasi = e_quasi.at("step").back() - steps_0;
-      checks.at_most("solid steps after the checkpoint, quasi-static / fixed",
-                     n_quasi / n_fixed <= 0.5 ? 0.5 : n_quasi / n_fixed,
-                     0.5);
+      checks.in_range("factor at the end / at the switch above 4 (1: yes)",
+                      s.back() / s.front() > 4 ? 1 : 0,
+                      1,
+                      1);
+      checks.in_range("solid steps after the checkpoint, quasi-static / "
+                      "fixed below 0.5 (1: yes)",
+                      n_quasi / n_fixed < 0.5 ? 1 : 0,
+                      1,
+                      1);
       for (const std::string col : {"sigma_xx", "von_mises"})
         {
           const auto [d, peak] =
-            probe_line_difference("fixed", "quasi", {"CD", "EF"}, col);
+            probe_line_difference("fixed", "quasi", {"CD", "EF"}, col, 0, 2);
           checks.at_most(col + " quasi-static against fixed, / peak",
-                         one_digit_up(d / peak),
-                         0.02);
+                         std::ceil(100 * d / peak - 1e-9) / 100,
+                         0.03);
         }
 
       // 3. Resumed after the switch.
@@ -123,9 +138,10 @@ main(int argc, char **argv)
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "resumed"},
-                    {"Time stepping", "End time", t_end},
-                    cool_dt,
-                    {"Solid", mode, "adaptive"},
+                    {"Time stepping", "End time", end},
+                    dt,
+                    no_hg,
+                    quasi,
                     {"Checkpoint", "Resume from", from_res}});
       const auto e_res = read_csv_columns("resumed/solid_energy.csv");
       double     d_rows =
@@ -143,7 +159,8 @@ main(int argc, char **argv)
       for (const std::string col : {"T", "sigma_xx", "von_mises"})
         d_lines = std::max(
           d_lines,
-          probe_line_difference("quasi", "resumed", {"CD", "EF"}, col).first);
+          probe_line_difference("quasi", "resumed", {"CD", "EF"}, col, 0, 2)
+            .first);
       checks.at_most("resumed against straight: T and stresses on the lines",
                      d_lines,
                      1e-12);

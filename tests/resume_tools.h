@@ -37,7 +37,8 @@ namespace femp_test
     return to + "/checkpoint/" + (steps.size() > 1 ? steps[1] : steps[0]);
   }
   /// Largest |a - b| of column @p col over the probe lines @p lines (at
-  /// output 1: the end, with 'Output interval = 0') of the output
+  /// output @p output, 1: the end of a run with 'Output interval = 0'; 2:
+  /// the end of a run resumed from such a run's end) of the output
   /// directories @p a and @p b, and the largest |a - offset| there (the
   /// reference's peak; T: its rise above @p offset).
   inline std::pair<double, double>
@@ -45,14 +46,16 @@ namespace femp_test
                         const std::string              &b,
                         const std::vector<std::string> &lines,
                         const std::string              &col,
-                        const double                    offset = 0)
+                        const double                    offset = 0,
+                        const unsigned int              output = 1)
   {
     double diff = 0, peak = 0;
     for (const auto &line : lines)
       {
-        const std::string file = "/probe_line_" + line + "_00001.csv";
-        const auto        x    = read_csv_columns(a + file);
-        const auto        y    = read_csv_columns(b + file);
+        const std::string file =
+          "/probe_line_" + line + "_0000" + std::to_string(output) + ".csv";
+        const auto x = read_csv_columns(a + file);
+        const auto y = read_csv_columns(b + file);
         AssertThrow(x.count(col) && y.count(col) &&
                       x.at(col).size() == y.at(col).size() &&
                       !x.at(col).empty(),
