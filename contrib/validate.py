@@ -61,10 +61,9 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   time reached; a killed segment keeps its last record, written every
   minute), log.txt holds the logs of all segments; result.json's wall and
   CPU times are their sums. --restart-after-checkpoint ends femp after each
-  checkpoint it writes before the end and resumes in a new process (a
-  checkpoint write leaves femp's resident memory higher: by 4.6 GB at
-  2 um, where a checkpoint is 3.09 GB), e.g. the 2 um track, in segments
-  of a working session each:
+  checkpoint it writes before the end and resumes in a new process
+  (each segment a fresh process), e.g. the 2 um track, in segments of a
+  working session each:
     contrib/validate.py run --np 1 --cases '^trapp_048W$' --setting h2 \
         --checkpoint-minutes 20 --restart-after-checkpoint
 resume-check: a run in segments against the same run straight through
@@ -2334,8 +2333,7 @@ def main():
                     "command resumes it)")
     ap.add_argument("--restart-after-checkpoint", action="store_true",
                     help="run: end femp after each checkpoint it writes before "
-                    "the end and resume in a new process (a checkpoint write "
-                    "leaves femp's resident memory higher)")
+                    "the end and resume in a new process")
     ap.add_argument("--checkpoint-minutes", type=float, default=None,
                     help="run: femp writes a checkpoint every this many minutes "
                     "of wall time into <run>/checkpoint (the last two kept); a "

@@ -6,6 +6,7 @@
 
 #include <femp/app/femp_problem.h>
 #include <femp/app/run_checks.h>
+#include <femp/base/free_heap.h>
 #include <femp/base/input_checks.h>
 
 namespace femp
@@ -180,6 +181,8 @@ namespace femp
   {
     control->start_clock();
     setup();
+    // The setup's temporary lists (points, powder, the FE zone) are freed.
+    release_free_heap();
     if (states.resuming())
       states.restore(pcout, timer);
     else

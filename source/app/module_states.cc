@@ -1,6 +1,7 @@
 // femp: checkpoint write and restore as loops over the modules with state
 // (module_states.h).
 #include <femp/app/module_states.h>
+#include <femp/base/free_heap.h>
 #include <femp/base/input_checks.h>
 
 namespace femp
@@ -34,6 +35,10 @@ namespace femp
         sections.emplace_back(entries[i].name, &bytes[i]);
       }
     const std::string dir = checkpoint->write(step, time, sections);
+    // The modules' bytes are freed on return; their memory goes back.
+    bytes.clear();
+    bytes.shrink_to_fit();
+    release_free_heap();
     out << "Checkpoint: step " << step << ", time " << time << " s -> " << dir
         << " (" << checkpoint->bytes_written() << " bytes)" << std::endl;
     return dir;
@@ -63,6 +68,7 @@ namespace femp
     for (const auto &then : restored)
       then();
     checkpoint->release();
+    release_free_heap(); // the file's image and the readers' copies
   }
 
   template class ModuleStates<2>;

@@ -2,6 +2,7 @@
 #include <deal.II/base/mpi.h>
 
 #include <femp/app/results_output.h>
+#include <femp/base/free_heap.h>
 #include <femp/base/input_checks.h>
 
 #include <iomanip>
@@ -199,6 +200,8 @@ namespace femp
   {
     TimerOutput::Scope t(timer, "output");
     write_fields(control.output_number(), control.time(), last);
+    // The fields computed for the files and the writers' buffers are freed.
+    release_free_heap();
     control.output_written();
   }
 

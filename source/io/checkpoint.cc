@@ -8,6 +8,7 @@
 #include <femp/base/progress_watchdog.h>
 #include <femp/io/checkpoint.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -26,17 +27,43 @@ namespace femp
     // reads them). A file of another version is refused.
     const std::uint32_t format_version = 6;
 
-    /// FNV-1a, 64 bits, over @p n bytes at @p p.
+    /// FNV-1a, 64 bits, over @p n bytes at @p p, continued from @p h
+    /// (the hash of the bytes before them; the default starts it).
     std::uint64_t
-    fnv1a(const char *p, const std::size_t n)
+    fnv1a(const char       *p,
+          const std::size_t n,
+          std::uint64_t     h = 1469598103934665603ull)
     {
-      std::uint64_t h = 1469598103934665603ull;
       for (std::size_t i = 0; i < n; ++i)
         {
           h ^= static_cast<unsigned char>(p[i]);
           h *= 1099511628211ull;
         }
       return h;
+    }
+
+    /// The payload of a rank's file: the number of sections, then for each
+    /// its name and its bytes, each with its length first (the layout of
+    /// StateWriter::put_string and put_vector). Visited piece by piece
+    /// (@p f(pointer, bytes)), so that it is hashed and written from the
+    /// modules' buffers without a copy of the whole.
+    template <typename F>
+    void
+    for_each_payload_piece(
+      const std::vector<std::pair<std::string, const StateWriter *>> &sections,
+      F                                                             &&f)
+    {
+      const std::uint32_t n = sections.size();
+      f(reinterpret_cast<const char *>(&n), sizeof(n));
+      for (const auto &[section, bytes] : sections)
+        {
+          const std::uint64_t ns = section.size();
+          f(reinterpret_cast<const char *>(&ns), sizeof(ns));
+          f(section.data(), section.size());
+          const std::uint64_t nb = bytes->bytes().size();
+          f(reinterpret_cast<const char *>(&nb), sizeof(nb));
+          f(bytes->bytes().data(), bytes->bytes().size());
+        }
     }
 
     std::string
@@ -196,14 +223,11 @@ namespace femp
                 ExcMessage("cannot create the checkpoint directory '" + dir +
                            "' (Checkpoint/Directory)"));
 
-    StateWriter payload;
-    payload.put<std::uint32_t>(sections.size());
-    for (const auto &[section, bytes] : sections)
-      {
-        payload.put_string(section);
-        payload.put_vector(bytes->bytes());
-      }
-    const auto &p = payload.bytes();
+    std::uint64_t payload_size = 0, checksum = fnv1a(nullptr, 0);
+    for_each_payload_piece(sections, [&](const char *q, const std::size_t n) {
+      payload_size += n;
+      checksum = fnv1a(q, n, checksum);
+    });
     StateWriter head;
     head.put(magic);
     head.put(format_version);
@@ -222,13 +246,15 @@ namespace femp
     head.put(scene.fe_lower);
     head.put(scene.fe_upper);
     head.put(scene.n_point_properties);
-    head.put<std::uint64_t>(p.size());
-    head.put(fnv1a(p.data(), p.size()));
+    head.put(payload_size);
+    head.put(checksum);
     {
       const std::string file = rank_file(dir, rank);
       std::ofstream     out(file, std::ios::binary);
       out.write(head.bytes().data(), head.bytes().size());
-      out.write(p.data(), p.size());
+      for_each_payload_piece(sections, [&](const char *q, const std::size_t n) {
+        out.write(q, n);
+      });
       out.close();
       ok = static_cast<bool>(out);
     }
@@ -270,7 +296,8 @@ namespace femp
           }
       }
     last_bytes =
-      Utilities::MPI::sum<std::uint64_t>(head.bytes().size() + p.size(), comm);
+      Utilities::MPI::sum<std::uint64_t>(head.bytes().size() + payload_size,
+                                         comm);
     last_wall = std::chrono::steady_clock::now();
     seconds += std::chrono::duration<double>(last_wall - start).count();
     return dir;
@@ -455,8 +482,17 @@ namespace femp
                 prm.resume_from,
                 "its file " + fs::path(file).filename().string() +
                   " is missing or cannot be read");
-        files.emplace_back((std::istreambuf_iterator<char>(in)),
-                           std::istreambuf_iterator<char>());
+        // One read of the whole file into a buffer of its size.
+        in.seekg(0, std::ios::end);
+        const std::streamoff size = std::max<std::streamoff>(in.tellg(), 0);
+        in.seekg(0, std::ios::beg);
+        files.emplace_back(static_cast<std::size_t>(size));
+        in.read(files.back().data(), size);
+        require(in.gcount() == size,
+                what,
+                prm.resume_from,
+                "its file " + fs::path(file).filename().string() +
+                  " cannot be read to its end");
         if (r == 0 && files[0].size() >= 20)
           std::memcpy(&n_ranks, files[0].data() + 16, 4);
         check_file(files[r], file, r, n_ranks);
