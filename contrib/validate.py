@@ -37,7 +37,13 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   exists is skipped (resumable). Variants for the domain-size check: setting 'large' (the
   domain 1.5 x wider and deeper); for the resolution study: 'h4' and 'h2'
   (4 and 2 um cells instead of 8, points at half the cell size, the ray
-  lattice refined with the cells); diagnostics 'thermal' (no melt flow) and
+  lattice refined with the cells) and 'compact' (a shorter track on a
+  smaller plate: 3 measured widths rounded down to 8 um, at least 160 um;
+  the plate 40 um before and 80 um after it, the width + 80 um across,
+  1.6 depths + 48 um below the surface, at least 96 um; Trapp 48 W: a
+  200 um track on 320 x 160 x 96 um, about a quarter of the rule's cells and
+  5/8 of its path; the evaluation windows follow the shorter path), e.g.
+  'h2+compact' for the 2 um point; diagnostics 'thermal' (no melt flow) and
   'nomarangoni' (d sigma/dT = 0); 'evapmass' (the evaporated mass leaves
   the melt: Heat transfer/Remove evaporated mass = true); 'film' (the
   recoil-driven melt film slips along the solid: Melt flow/Front wall
@@ -174,13 +180,16 @@ def refined(h):
 
 
 # Named settings of 'run' (their femp parameters; --set adds to them).
-# 'large' is the domain-size check (the scene 1.5 x wider and deeper).
-SETTINGS = {"default": {}, "large": {}, "fine": FINE}
+# 'large' is the domain-size check (the scene 1.5 x wider and deeper);
+# 'compact' the compact domain (a shorter track on a smaller plate).
+SETTINGS = {"default": {}, "large": {}, "compact": {}, "fine": FINE}
 
 H = 8e-6          # cell size, m
 GAS = 48e-6       # gas above the plate, m
 MARGIN_START = 80e-6   # plate before the track's start, m
 MARGIN_END = 160e-6    # plate after the track's end, m
+COMPACT_START = 40e-6  # the compact domain's plate before the track, m
+COMPACT_END = 80e-6    # the compact domain's plate after the track, m
 
 
 # ---------------------------------------------------------------- data
@@ -268,14 +277,17 @@ def cases():
 
 
 # ---------------------------------------------------------------- scenes
-def track_geometry(c):
+def track_geometry(c, compact=False):
     """Domain and track of a track case. The rule (the same for every
     case): the track is 3 measured widths long (at least 320 um); the plate extends 80 um
     before and 160 um after it, 2 widths + 80 um across and 1.6 depths +
     80 um below the surface (at least 160 um; at most the disc of Trapp's
     experiment, 0.5 mm, whose bottom is then insulated as in the
     calorimetry); 48 um of gas above. The domain-size check (setting
-    'large') shows what this rule costs in accuracy."""
+    'large') shows what this rule costs in accuracy. @p compact: the
+    compact domain (compact_geometry())."""
+    if compact:
+        return compact_geometry(c)
     Ltr = ceil_cells(max(320e-6, 3 * c["width"]))
     Lx = ceil_cells(MARGIN_START + Ltr + MARGIN_END)
     Ly = 2 * ceil_cells(max(120e-6, c["width"] + 40e-6))
@@ -285,7 +297,40 @@ def track_geometry(c):
         Hp, bottom = disc, False
     else:
         bottom = True
-    return dict(Ltr=Ltr, Lx=Lx, Ly=Ly, Hp=Hp, fixed_bottom=bottom)
+    return dict(Ltr=Ltr, Lx=Lx, Ly=Ly, Hp=Hp, fixed_bottom=bottom,
+                start=MARGIN_START)
+
+
+def is_compact(setting):
+    """Whether a setting (named settings joined by '+') has the compact
+    domain."""
+    return "compact" in setting.split("+")
+
+
+def path_time(c, setting="default"):
+    """The laser path's duration of track case @p c in @p setting, s: the
+    end of the run and of the evaluation windows."""
+    return track_geometry(c, is_compact(setting))["Ltr"] / c["v"]
+
+
+def compact_geometry(c):
+    """The compact domain of a track case (setting 'compact'), for the
+    finest cells: the track 3 measured widths long rounded down to 8 um
+    (at least 160 um), the plate 40 um before and 80 um after it, the
+    measured width + 80 um across (rounded up to 16 um), 1.6 depths + 48 um
+    below the surface (at least 96 um) with the bottom held at the plate
+    temperature (Trapp's disc with its insulated bottom where this reaches
+    it, as in the rule); 48 um of gas above. Trapp 48 W: a 200 um track on
+    a 320 x 160 x 96 um plate (the rule: 320 um on 560 x 240 x 160 um).
+    The evaluation windows follow its path (path_time())."""
+    Ltr = max(160e-6, H * math.floor(3 * c["width"] / H + 1e-9))
+    Ly = 2 * ceil_cells(0.5 * c["width"] + 40e-6)
+    Hp = ceil_cells(max(96e-6, 1.6 * c["depth"] + 48e-6))
+    disc = c.get("disc")
+    bottom = disc is None or Hp < disc
+    return dict(Ltr=Ltr, Lx=ceil_cells(COMPACT_START + Ltr + COMPACT_END),
+                Ly=Ly, Hp=Hp if bottom else disc, fixed_bottom=bottom,
+                start=COMPACT_START)
 
 
 def fmt(x):
@@ -346,12 +391,13 @@ def material_comment(alloy):
                     "each with its source)"}[alloy]
 
 
-def scene_text(c, scale=1.0):
+def scene_text(c, scale=1.0, compact=False):
     """The scene of case @p c; @p scale > 1 enlarges the domain across and
-    below (the domain-size check)."""
+    below (the domain-size check); @p compact: the compact domain
+    (compact_geometry())."""
     if c["v"] == 0:
         return spot_scene_text(c)
-    g = track_geometry(c)
+    g = track_geometry(c, compact)
     Ly = 2 * ceil_cells(0.5 * g["Ly"] * scale)
     Hp = g["Hp"] if not g["fixed_bottom"] else ceil_cells(g["Hp"] * scale)
     Lx = g["Lx"]
@@ -419,8 +465,8 @@ def scene_text(c, scale=1.0):
         "  set Power            = %s" % fmt(c["P"]),
         "  set Beam radius      = %s" % fmt(c["rb"]),
         "  set Scan speed       = %s" % fmt(c["v"]),
-        "  set Start point      = %s, %s, 0" % (fmt(MARGIN_START), fmt(Ly / 2)),
-        "  set End point        = %s, %s, 0" % (fmt(MARGIN_START + g["Ltr"]),
+        "  set Start point      = %s, %s, 0" % (fmt(g["start"]), fmt(Ly / 2)),
+        "  set End point        = %s, %s, 0" % (fmt(g["start"] + g["Ltr"]),
                                                  fmt(Ly / 2)),
         "  set Start time       = 0",
         "  # Rays traced into the surface, Fresnel absorption with the",
@@ -1227,8 +1273,8 @@ def run_case(args, exe, c, setting, stop=None):
     os.makedirs(d, exist_ok=True)
     scene = os.path.join(d, "scene.prm")
     scale = 1.5 if "large" in setting.split("+") else 1.0
-    text = scene_text(c, scale).replace("include ../materials/",
-                                        "include %s/prm/materials/" % ROOT)
+    text = scene_text(c, scale, is_compact(setting)).replace(
+        "include ../materials/", "include %s/prm/materials/" % ROOT)
     sets = {"Output/Directory": os.path.join(d, "output")}
     sets.update(setting_parameters(setting))
     for kv in args.set or []:
@@ -1287,7 +1333,7 @@ def run_case(args, exe, c, setting, stop=None):
     print("run %s [%s]%s ..." % (c["name"], setting,
                                  (" segment %d, from %s" % (n, resume[0]))
                                  if resume else ""), flush=True)
-    t_end = track_geometry(c)["Ltr"] / c["v"]
+    t_end = path_time(c, setting)
     log_start = os.path.getsize(log) if resume else 0
     seen = checkpoints(d)[:1]
     renew = []
@@ -1371,7 +1417,7 @@ def cmd_reevaluate(args):
     allc = {c["name"]: c for c in cases()}
     for (setting, name), r in load_results(args.out).items():
         d = os.path.join(args.out, setting, name)
-        t_end = track_geometry(allc[name])["Ltr"] / allc[name]["v"]
+        t_end = path_time(allc[name], setting)
         r.update(evaluate(os.path.join(d, "output"), t_end,
                           open(os.path.join(d, "log.txt")).read()))
         if r["t_reached"] >= t_end * (1 - 1e-6):
@@ -1422,7 +1468,7 @@ def cmd_resume_check(args):
         raise SystemExit("validate.py resume-check: --cases must match one "
                          "track, it matches %d" % len(todo))
     c = todo[0]
-    t_end = track_geometry(c)["Ltr"] / c["v"]
+    t_end = path_time(c, args.setting)
     every = "Checkpoint/Every simulated time=%s" % fmt(t_end / 3)
     base = list(args.set or [])
     out, res = args.out, {}
@@ -1802,7 +1848,7 @@ def cmd_dig(args):
             import femp_post
             outs = femp_post.Run(os.path.join(d, "output")).outputs("grid")
             c = allc[name]
-            t_path = track_geometry(c)["Ltr"] / c["v"]
+            t_path = path_time(c, setting)
             gaps = [b[1] - a[1] for a, b in zip(outs, outs[1:])]
             if len(outs) < 3 or max(gaps) > DIG_MAX_INTERVAL * (1 + 1e-6):
                 print("%s/%s: %d field outputs, %s us apart: too coarse for the "
@@ -2045,6 +2091,8 @@ SETTING_NAMES = {"default": "default free surface, 8 um cells",
                  "fine": "fine surface (height function, 2 smoothing passes, "
                          "point shifting 2), 8 um cells",
                  "large": "default free surface, domain 1.5 x wider and deeper",
+                 "compact": "default free surface, compact domain (shorter "
+                            "track, smaller plate)",
                  "median": "recoil from the median surface temperature "
                            "(former default)",
                  "cell": "recoil from the cell's own temperature",
@@ -2155,7 +2203,7 @@ def cmd_report(args):
                              r.get("wall_s") or r.get("femp_wall_s") or 0, r["np"],
                              (" (stopped at %.0f of %.0f µs)" % (
                                  r["t_reached"] * 1e6,
-                                 track_geometry(c)["Ltr"] / c["v"] * 1e6))
+                                 path_time(c, st) * 1e6))
                              if r.get("incomplete") else ""))
     lines += dig_table(res, allc, settings)
     table = "\n".join(lines) + "\n"
@@ -2319,8 +2367,9 @@ def main():
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
     ap.add_argument("--setting", default="default",
-                    help="default, fine, large, or any other name for a run "
-                    "with --set overrides")
+                    help="default, fine, large, compact, h4, h2, ... (named "
+                    "settings joined by '+', e.g. h2+compact), or any other "
+                    "name for a run with --set overrides")
     ap.add_argument("--set", action="append", metavar="SECTION/ENTRY=VALUE",
                     help="a femp parameter for this setting (repeatable)")
     ap.add_argument("--np", type=int, default=2)
