@@ -28,25 +28,6 @@
 
 using namespace femp_test;
 
-namespace
-{
-  /// Copy the output directory @p from to @p to and return its newest
-  /// checkpoint (collective).
-  std::string
-  copy_newest(const std::string &from, const std::string &to, MPI_Comm comm)
-  {
-    std::ifstream index(from + "/checkpoint/index");
-    std::string   newest;
-    index >> newest;
-    AssertThrow(!newest.empty(),
-                ExcMessage("no checkpoint written in " + from));
-    if (Utilities::MPI::this_mpi_process(comm) == 0)
-      std::filesystem::copy(from, to, std::filesystem::copy_options::recursive);
-    MPI_Barrier(comm);
-    return to + "/checkpoint/" + newest;
-  }
-} // namespace
-
 int
 main(int argc, char **argv)
 {
@@ -76,7 +57,7 @@ main(int argc, char **argv)
         read_csv_columns("common/solid_energy.csv").at("step").back();
 
       // 2. Fixed factor and quasi-static from there.
-      const auto from_fixed = copy_newest("common", "fixed", comm);
+      const auto from_fixed = copy_for_resume("common", "fixed", comm, true);
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "fixed"},
@@ -84,7 +65,7 @@ main(int argc, char **argv)
                     dt,
                     no_hg,
                     {"Checkpoint", "Resume from", from_fixed}});
-      const auto from_quasi = copy_newest("common", "quasi", comm);
+      const auto from_quasi = copy_for_resume("common", "quasi", comm, true);
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "quasi"},
@@ -134,7 +115,7 @@ main(int argc, char **argv)
         }
 
       // 3. Resumed after the switch.
-      const auto from_res = copy_newest("quasi", "resumed", comm);
+      const auto from_res = copy_for_resume("quasi", "resumed", comm, true);
       run_scene<3>(scene,
                    comm,
                    {{"Output", "Directory", "resumed"},

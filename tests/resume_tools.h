@@ -21,9 +21,12 @@ namespace femp_test
   /// Copy the output directory @p from, checkpoints included, to @p to
   /// (rank 0) and return the checkpoint to resume in the copy: the newest
   /// but one of its index (the one before the end's, if the end wrote one),
-  /// or the only one. Collective.
+  /// or the only one; with @p newest the newest. Collective.
   inline std::string
-  copy_for_resume(const std::string &from, const std::string &to, MPI_Comm comm)
+  copy_for_resume(const std::string &from,
+                  const std::string &to,
+                  MPI_Comm           comm,
+                  const bool         newest = false)
   {
     std::ifstream            index(from + "/checkpoint/index");
     std::vector<std::string> steps; // newest first
@@ -34,7 +37,8 @@ namespace femp_test
     if (dealii::Utilities::MPI::this_mpi_process(comm) == 0)
       std::filesystem::copy(from, to, std::filesystem::copy_options::recursive);
     MPI_Barrier(comm);
-    return to + "/checkpoint/" + (steps.size() > 1 ? steps[1] : steps[0]);
+    return to + "/checkpoint/" +
+           (steps.size() > 1 && !newest ? steps[1] : steps[0]);
   }
   /// Largest |a - b| of column @p col over the probe lines @p lines (at
   /// output @p output, 1: the end of a run with 'Output interval = 0'; 2:
