@@ -1859,6 +1859,10 @@ namespace femp
     // After it, likewise: the factor the quasi-static cooling took over
     // from (0: not switched).
     out.put(adaptive_from);
+    // Then the state of the leapfrog's half-step term, which the energy
+    // check takes off the balance.
+    for (const double a : ledger.half_step_values())
+      out.put(a);
   }
 
   template <int dim>
@@ -2070,6 +2074,7 @@ namespace femp
     }
     // Not in checkpoints written before they were kept: 0.
     ledger.restore_withheld(0);
+    ledger.restore_half_step({{0, 0, 0, 0}});
     adaptive_from = 0;
     for (std::size_t f = 0; f < parts.size(); ++f)
       {
@@ -2084,6 +2089,14 @@ namespace femp
             const double x = parts[f].get<double>();
             if (f == 0)
               adaptive_from = x;
+          }
+        if (!parts[f].at_end())
+          {
+            std::array<double, 4> h;
+            for (double &x : h)
+              x = parts[f].get<double>();
+            if (f == 0)
+              ledger.restore_half_step(h);
           }
       }
     // A checkpoint written without the quasi-static cooling, resumed with

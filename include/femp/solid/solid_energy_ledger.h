@@ -245,6 +245,20 @@ namespace femp
     {
       W_withheld = w;
     }
+    /// Checkpoint: the half-step term's state (H, H_sum, H_P, H_dt), so
+    /// that a resumed run's energy check reads the balance of the run that
+    /// went on.
+    std::array<double, 4>
+    half_step_values() const
+    {
+      return {{H, H_sum, H_P, H_dt}};
+    }
+    /// From the 4 values of half_step_values().
+    void
+    restore_half_step(const std::array<double, 4> &a)
+    {
+      H = a[0], H_sum = a[1], H_P = a[2], H_dt = a[3];
+    }
 
   private:
     double W_ext = 0, W_int = 0, K0 = 0, K = 0;
@@ -257,8 +271,7 @@ namespace femp
     double K_p        = 0; ///< kinetic energy of the points
     /// SolidEnergies::half_step after the last step, J; H_sum: its part
     /// up to the step before, H_P and H_dt: P_{k-1} and dt_k of the last
-    /// step (book_step()). Not in checkpoints: a resumed run sums the term
-    /// from its resume on.
+    /// step (book_step()).
     double H = 0, H_sum = 0, H_P = 0, H_dt = 0;
   };
 } // namespace femp
