@@ -56,25 +56,26 @@ main(int argc, char **argv)
       const double steps_0 =
         read_csv_columns("common/solid_energy.csv").at("step").back();
 
+      // A run into @p dir, resumed from the newest checkpoint of @p from,
+      // to the end time, with the overrides @p extra.
+      const auto resume_to_end = [&](const std::string    &from,
+                                     const std::string    &dir,
+                                     std::vector<Override> extra) {
+        const auto resume = copy_for_resume(from, dir, comm, true);
+        extra.insert(extra.begin(),
+                     {{"Output", "Directory", dir},
+                      {"Time stepping", "End time", end},
+                      dt,
+                      no_hg,
+                      {"Checkpoint", "Resume from", resume}});
+        run_scene<3>(scene, comm, extra);
+      };
+
       // 2. Fixed factor and quasi-static from there.
-      const auto from_fixed = copy_for_resume("common", "fixed", comm, true);
-      run_scene<3>(scene,
-                   comm,
-                   {{"Output", "Directory", "fixed"},
-                    {"Time stepping", "End time", end},
-                    dt,
-                    no_hg,
-                    {"Checkpoint", "Resume from", from_fixed}});
-      const auto from_quasi = copy_for_resume("common", "quasi", comm, true);
-      run_scene<3>(scene,
-                   comm,
-                   {{"Output", "Directory", "quasi"},
-                    {"Time stepping", "End time", end},
-                    dt,
-                    no_hg,
-                    quasi,
-                    {"Checkpoint", "Every simulated time", "3e-4"},
-                    {"Checkpoint", "Resume from", from_quasi}});
+      resume_to_end("common", "fixed", {});
+      resume_to_end("common",
+                    "quasi",
+                    {quasi, {"Checkpoint", "Every simulated time", "3e-4"}});
       // The switch, from the log of the quasi-static run (rank 0's).
       double t_switch = 0;
       {
@@ -115,15 +116,7 @@ main(int argc, char **argv)
         }
 
       // 3. Resumed after the switch.
-      const auto from_res = copy_for_resume("quasi", "resumed", comm, true);
-      run_scene<3>(scene,
-                   comm,
-                   {{"Output", "Directory", "resumed"},
-                    {"Time stepping", "End time", end},
-                    dt,
-                    no_hg,
-                    quasi,
-                    {"Checkpoint", "Resume from", from_res}});
+      resume_to_end("quasi", "resumed", {quasi});
       const auto e_res = read_csv_columns("resumed/solid_energy.csv");
       double     d_rows =
         e_res.at("step").size() == e_quasi.at("step").size() ? 0. : 1.;
