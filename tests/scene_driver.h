@@ -30,11 +30,21 @@ namespace femp_test
     femp::declare_all_parameters(prm);
     // 'include' lines relative to the scene's folder, as femp reads them.
     femp::parse_parameter_file(prm, file);
+    // A section "A/B" is subsection B of A.
     for (const auto &[section, entry, value] : overrides)
       {
-        prm.enter_subsection(section);
+        unsigned int depth = 0;
+        for (std::size_t a = 0;; ++depth)
+          {
+            const std::size_t b = section.find('/', a);
+            prm.enter_subsection(section.substr(a, b - a));
+            if (b == std::string::npos)
+              break;
+            a = b + 1;
+          }
         prm.set(entry, value);
-        prm.leave_subsection();
+        for (unsigned int d = 0; d <= depth; ++d)
+          prm.leave_subsection();
       }
   }
 

@@ -799,7 +799,12 @@ namespace femp
     for (const auto &[n, t] : tr_local)
       for (int d = 0; d < dim; ++d)
         vel[d][n] = tr_vel[dim * t + d];
-    return ext_nodes.empty() ? node_loop<false>(dt) : node_loop<true>(dt);
+    damped = 0;
+    if (node_damping > 0)
+      return ext_nodes.empty() ? node_loop<false, true>(dt) :
+                                 node_loop<true, true>(dt);
+    return ext_nodes.empty() ? node_loop<false, false>(dt) :
+                               node_loop<true, false>(dt);
   }
 
   /// The node update over the box in SIMD: v <- v + dt (f + f_ext) / m
@@ -807,9 +812,12 @@ namespace femp
   /// next element loop, kinetic energy, external power (gravity on the
   /// unscaled mass, external forces) of the owned nodes, and their sums
   /// m v_old . dv and m dv . dv (dv = v_new - v_old) for the leapfrog's
-  /// half-step term (SolidEnergies::half_step).
+  /// half-step term (SolidEnergies::half_step). With @p damp the nodes of
+  /// nonzero inverse mass then lose node_damping of their velocity (the
+  /// half-step sums stay those of the force), the kinetic energy taken out
+  /// summed into `damped`.
   template <int dim>
-  template <bool with_ext>
+  template <bool with_ext, bool damp>
   std::array<double, 4>
   SolidFEM<dim>::node_loop(const double dt)
   {
@@ -825,12 +833,15 @@ namespace femp
       std::memcpy(&v, p, sizeof v);
       return v;
     };
-    VD       k = {}, p = {}, hx = {}, hy = {};
-    const VD zero = {};
+    VD       k = {}, p = {}, hx = {}, hy = {}, kd = {};
+    const VD zero = {}, beta = zero + node_damping;
     for (std::size_t n = 0; n < n_box; n += W)
       {
         const VD im = dt * load(&inv_mass[n]);
-        VB       fb;
+        VD       b = {}, rd = {};
+        if constexpr (damp)
+          b = VD(VI(beta) & (im > zero));
+        VB fb;
         std::memcpy(&fb, &fix[n], sizeof fb);
         const VI fi = __builtin_convertvector(fb, VI);
         VD       v[dim], xv = {}, yv = {};
@@ -844,6 +855,12 @@ namespace femp
             v[d]          = VD(VI(vo + im * f) & free);
             xv += vo * (v[d] - vo);
             yv += (v[d] - vo) * (v[d] - vo);
+            if constexpr (damp)
+              {
+                const VD vd = b * v[d];
+                rd += vd * (2 * v[d] - vd);
+                v[d] -= vd;
+              }
             std::memcpy(&vel[d][n], &v[d], sizeof(VD));
             std::memcpy(&frc[d][n], &zero, sizeof(VD));
           }
@@ -857,6 +874,8 @@ namespace femp
           }
         const VD m = load(&owned_mass[n]);
         k += 0.5 * m * v2;
+        if constexpr (damp)
+          kd += 0.5 * m * rd;
         hx += m * xv;
         hy += m * yv;
         if constexpr (with_ext)
@@ -866,7 +885,7 @@ namespace femp
       }
     double ks = 0, ps = 0, xs = 0, ys = 0;
     for (unsigned int l = 0; l < W; ++l)
-      ks += k[l], ps += p[l], xs += hx[l], ys += hy[l];
+      ks += k[l], ps += p[l], xs += hx[l], ys += hy[l], damped += kd[l];
     kinetic = ks;
     return {{ks, ps, xs, ys}};
   }

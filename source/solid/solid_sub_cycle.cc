@@ -173,6 +173,19 @@ namespace femp
               "at least 'Mass scaling factor' times ('Safety factor "
               "after solidification' / 'Safety factor')^2 when that is "
               "set.");
+    table.add("Finite-element damping after solidification",
+              fe_damping_solidified,
+              Patterns::Double(),
+              "With 'Mass scaling after solidification = adaptive': the "
+              "fraction beta of their velocity that the nodes of the "
+              "finite-element zone (not its transition nodes) lose at "
+              "every solid step after the switch (dimensionless); range "
+              "[0, 0.1]; 0: none. Nothing else damps a vibration of the "
+              "zone, and a change of the factor at kept velocities scales "
+              "its kinetic energy with the factor, so that the controller "
+              "can hold the factor low; the kinetic energy taken out is "
+              "booked in the energy file with transfer_dissipation "
+              "(doc/solid.md \"Quasi-static cooling\").");
     table.leave_subsection();
     table.add("Light nodes",
               light_nodes,
@@ -365,6 +378,10 @@ namespace femp
                   "after solidification' / 'Safety factor')^2 when that "
                   "is set)");
       }
+    require(fe_damping_solidified >= 0 && fe_damping_solidified <= 0.1,
+            ams + "Finite-element damping after solidification",
+            fe_damping_solidified,
+            "it must lie in [0, 0.1]");
     if (adaptive_scaling)
       {
         require(mass_scaling >= min_factor && mass_scaling <= max_factor,
@@ -636,6 +653,9 @@ namespace femp
       {
         fem->new_temperatures(T);
         fem->set_external_forces(external_forces);
+        // Quasi-static cooling: the zone's nodes damped after the switch.
+        fem->set_node_damping(adaptive_from > 0 ? prm.fe_damping_solidified :
+                                                  0.);
       }
     // Same decision on every rank (gather_points() is collective).
     const bool gathered = t_solid < t * (1 - 1e-12) &&
@@ -730,7 +750,9 @@ namespace femp
     set_transition_velocities();
     const double ext_power = external_power(external_forces);
     const auto   fe_energy = grid_to_points(dt); // 3., 4. G2P, FE nodes
-    const auto   remap     = remap_work_of_step(dt);
+    if (fem) // kinetic energy the damping of the FE nodes took out
+      transfer += fem->damped_energy();
+    const auto remap = remap_work_of_step(dt);
     set_grid_velocities();
 
     // 5. Stresses (eq. 5).

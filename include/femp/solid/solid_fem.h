@@ -254,6 +254,21 @@ namespace femp
     double
     update_elements(const double dt, const double w);
 
+    /// From the next update_nodes() on, the nodes that it integrates (not
+    /// the transition nodes) lose the fraction @p beta of their velocity
+    /// after each update (quasi-static cooling, doc/solid.md); 0: none.
+    void
+    set_node_damping(const double beta)
+    {
+      node_damping = beta;
+    }
+    /// Kinetic energy of the owned nodes that the damping took out in the
+    /// last update_nodes(), J (2D: J/m).
+    double
+    damped_energy() const
+    {
+      return damped;
+    }
     /// Kinetic energy of the owned nodes (from the last update_nodes()).
     double
     kinetic_energy() const
@@ -500,6 +515,8 @@ namespace femp
     std::vector<std::uint64_t> node_zone_id; ///< zone node index, per box
     std::vector<std::uint32_t> ext_nodes;    ///< box indices
     double                     kinetic = 0;
+    /// set_node_damping() and damped_energy().
+    double node_damping = 0, damped = 0;
     /// Smallest jacobian_low() of the elements after the last
     /// update_elements() (infinite without elements).
     double min_jacobian = std::numeric_limits<double>::infinity();
@@ -651,7 +668,7 @@ namespace femp
     template <bool update>
     double
     element_loop(const double dt, const double w);
-    template <bool with_ext>
+    template <bool with_ext, bool damp>
     std::array<double, 4>
     node_loop(const double dt);
     double

@@ -107,6 +107,10 @@ namespace femp
       /// within [that factor, max_factor_solidified].
       bool   adaptive_after_solidification = false;
       double max_factor_solidified         = 1e8;
+      /// With adaptive_after_solidification: the fraction of their
+      /// velocity that the finite-element nodes lose at every solid step
+      /// after the switch (doc/solid.md "Quasi-static cooling"), -.
+      double fe_damping_solidified = 0;
       /// The switch after solidification does something.
       bool
       cools_after_solidification() const
