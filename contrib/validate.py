@@ -323,7 +323,10 @@ def compact_geometry(c):
     temperature (Trapp's disc with its insulated bottom where this reaches
     it, as in the rule); 48 um of gas above. Trapp 48 W: a 200 um track on
     a 320 x 160 x 96 um plate (the rule: 320 um on 560 x 240 x 160 um).
-    The evaluation windows follow its path (path_time())."""
+    The evaluation windows follow its path (path_time()); the pool is
+    measured from a third of the track on, as on the rule's domain (at
+    4 um cells the 40 um of plate before the track stay hot and would be
+    read as the widest section)."""
     Ltr = max(160e-6, H * math.floor(3 * c["width"] / H + 1e-9))
     Ly = 2 * ceil_cells(0.5 * c["width"] + 40e-6)
     Hp = ceil_cells(max(96e-6, 1.6 * c["depth"] + 48e-6))
