@@ -283,8 +283,9 @@ def track_geometry(c, compact=False):
     before and 160 um after it, 2 widths + 80 um across and 1.6 depths +
     80 um below the surface (at least 160 um; at most the disc of Trapp's
     experiment, 0.5 mm, whose bottom is then insulated as in the
-    calorimetry); 48 um of gas above. The domain-size check (setting
-    'large') shows what this rule costs in accuracy. @p compact: the
+    calorimetry); 48 um of gas above. melt_pool.csv measures the pool
+    from a third of the track on (scene_text()). The domain-size check
+    (setting 'large') shows what this rule costs in accuracy. @p compact: the
     compact domain (compact_geometry())."""
     if compact:
         return compact_geometry(c)
@@ -322,7 +323,10 @@ def compact_geometry(c):
     temperature (Trapp's disc with its insulated bottom where this reaches
     it, as in the rule); 48 um of gas above. Trapp 48 W: a 200 um track on
     a 320 x 160 x 96 um plate (the rule: 320 um on 560 x 240 x 160 um).
-    The evaluation windows follow its path (path_time())."""
+    The evaluation windows follow its path (path_time()); the pool is
+    measured from a third of the track on, as on the rule's domain (at
+    4 um cells the 40 um of plate before the track stay hot and would be
+    read as the widest section)."""
     Ltr = max(160e-6, H * math.floor(3 * c["width"] / H + 1e-9))
     Ly = 2 * ceil_cells(0.5 * c["width"] + 40e-6)
     Hp = ceil_cells(max(96e-6, 1.6 * c["depth"] + 48e-6))
@@ -479,6 +483,11 @@ def scene_text(c, scale=1.0, compact=False):
         "  set Output interval       = 0",
         "  set Write material points = never",
         "  set Time series interval  = %s" % fmt(min(5e-6, t_end / 100)),
+        "  # The pool and the fusion zone of melt_pool.csv from a third of",
+        "  # the track on: the cross-sections of its first measured width,",
+        "  # where the pool forms and the plate's start face keeps the metal",
+        "  # hot, are no steady track.",
+        "  set Melt pool from x      = %s" % fmt(g["start"] + g["Ltr"] / 3),
         "  set Progress interval     = 1000",
         "end",
         ""]
@@ -1104,7 +1113,8 @@ def end_state(run_dir, alloy):
 
 def width_state(run_dir, alloy):
     """What sets the fusion zone's width, from the last field output of a
-    run: the cross-section (y-z plane of cells) where the region above the
+    run: the cross-section (y-z plane of cells; from 'Output/Melt pool from
+    x' on, as melt_pool.csv measures) where the region above the
     solidus in the substrate is widest, its distance behind the beam, the
     temperature of the top substrate cells on the track axis there, and
     the sense of the melt's surface flow across the track: the mean of
@@ -1137,6 +1147,10 @@ def width_state(run_dir, alloy):
     jc = int(np.argmin(abs(y - yc)))
     # width of the region above T_s in each x slab, at the top row
     hot = (T[:, :, kt] >= Ts) & (A[:, :, kt] > 0)
+    # only the slabs that melt_pool.csv measures ('Output/Melt pool from x')
+    x_from = scene_value(scene, "Melt pool from x")
+    i0 = max(0, int(math.ceil(x_from[0] / h - 0.5 - 1e-9))) if x_from else 0
+    hot[:i0] = False
     widths = hot.sum(axis=1) * h
     i_w = int(np.argmax(widths))
     i_b = int(min(n[0] - 1, max(0, round(xb / h - 0.5))))
@@ -1161,7 +1175,7 @@ def width_state(run_dir, alloy):
     return dict(x_behind_beam=xb - (i_w + 0.5) * h, width_cells=float(widths[i_w]),
                 T_axis_top=float(T[i_w, jc, kt]),
                 flow_across_surface=mean(off), flow_across_rim=mean(rim & off),
-                **fusion_width_rows(T, A, kt, h, Ts))
+                **fusion_width_rows(T[i0:], A[i0:], kt, h, Ts))
 
 
 def fusion_width_rows(T, A, kt, h, Ts):
@@ -2320,7 +2334,10 @@ def cmd_pipeline(args):
             "Material points/Point spacing": "8e-6",
             "Time stepping/End time": str(t_end),
             "Output/Directory": os.path.join(d, "output"),
-            "Output/Time series interval": "5e-6"}
+            "Output/Time series interval": "5e-6",
+            # the pool from a third of the part of the track it runs on
+            "Output/Melt pool from x": fmt(track_geometry(c)["start"] +
+                                           c["v"] * t_end / 3)}
     args.np = 1
     rc, wall, cpu = run_timed(femp_cmd(args, exe, sets, scene), d,
                          os.path.join(d, "log.txt"))

@@ -397,7 +397,8 @@ namespace femp
                              scene.material.liquidus,
                              scene.points.substrate_top,
                              scene.material.solidus,
-                             &bodies.workpiece_cells());
+                             &bodies.workpiece_cells(),
+                             scene.output.melt_pool_from_x);
   }
 
   template ResultsOutput<2>::Writer

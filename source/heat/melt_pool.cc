@@ -269,7 +269,8 @@ namespace femp
                     const double                     T_melt,
                     const double                     surface_height,
                     const double                     T_solidus,
-                    const std::vector<std::uint8_t> *workpiece)
+                    const std::vector<std::uint8_t> *workpiece,
+                    const double                     x_min)
   {
     const double big = std::numeric_limits<double>::max();
     MeltPoolSize r;
@@ -280,17 +281,21 @@ namespace femp
     r.T_max = Utilities::MPI::max(Tmax, grid.communicator());
 
     // With the workpiece given, other metal (detached drops, powder not
-    // touching it) is taken as gas by the isotherm boxes.
-    std::vector<double> workpiece_alpha;
-    if (workpiece)
+    // touching it) is taken as gas by the isotherm boxes; so is the metal
+    // of the cells with centre x below x_min.
+    std::vector<double> counted_alpha;
+    const bool          cut = x_min > -std::numeric_limits<double>::max();
+    if (workpiece || cut)
       {
-        workpiece_alpha = alpha;
+        counted_alpha = alpha;
         for (const auto idx : grid.owned_cells())
-          if (!(*workpiece)[idx])
-            workpiece_alpha[idx] = 0;
-        grid.update_ghosts(workpiece_alpha);
+          if ((workpiece && !(*workpiece)[idx]) ||
+              (cut && grid.cell_center(idx)[0] < x_min))
+            counted_alpha[idx] = 0;
+        grid.update_ghosts(counted_alpha);
       }
-    const std::vector<double> &metal = workpiece ? workpiece_alpha : alpha;
+    const std::vector<double> &metal =
+      (workpiece || cut) ? counted_alpha : alpha;
 
     const auto pool = isotherm_box(grid, T, metal, T_melt, big);
     r.volume        = pool.volume;
@@ -323,7 +328,8 @@ namespace femp
                        double,
                        double,
                        double,
-                       const std::vector<std::uint8_t> *);
+                       const std::vector<std::uint8_t> *,
+                       double);
   template MeltPoolSize
   measure_melt_pool<3>(const BackgroundGrid<3> &,
                        const std::vector<double> &,
@@ -331,5 +337,6 @@ namespace femp
                        double,
                        double,
                        double,
-                       const std::vector<std::uint8_t> *);
+                       const std::vector<std::uint8_t> *,
+                       double);
 } // namespace femp

@@ -24,6 +24,7 @@
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -226,6 +227,16 @@ namespace femp
               progress_interval,
               Patterns::Integer(1),
               "Steps between progress lines on the screen; range [1, inf).");
+    table.add("Melt pool from x",
+              melt_pool_from_x_text,
+              Patterns::Anything(),
+              "The melt pool and the fusion zone of melt_pool.csv are "
+              "measured over the cells whose centre x is at least this "
+              "value, m (the others count as gas there): for a track "
+              "along x, the cross-sections of its start, which a face of "
+              "the domain near it may keep hot and wide, are left out. "
+              "Empty: the whole domain. Range: below the domain's upper "
+              "x.");
     if (table.declaring())
       prm.declare_entry(
         "Probe points",
@@ -279,6 +290,25 @@ namespace femp
     grid_fields = parse_selection(prm.get("Grid fields"),
                                   known_grid_fields<dim>(),
                                   "Output/Grid fields");
+
+    melt_pool_from_x = -std::numeric_limits<double>::infinity();
+    if (!Utilities::trim(melt_pool_from_x_text).empty())
+      {
+        bool ok = true;
+        try
+          {
+            melt_pool_from_x =
+              Utilities::string_to_double(melt_pool_from_x_text);
+          }
+        catch (...)
+          {
+            ok = false;
+          }
+        require(ok && std::isfinite(melt_pool_from_x),
+                "Output/Melt pool from x",
+                melt_pool_from_x_text,
+                "it must be empty (the whole domain) or a position x in m");
+      }
     probe_points.clear();
     for (const auto &p :
          Utilities::split_string_list(prm.get("Probe points"), ';'))
@@ -338,6 +368,11 @@ namespace femp
                 s.str(),
                 "every probe point must lie inside the domain");
       }
+    require(melt_pool_from_x < hi[0],
+            "Output/Melt pool from x",
+            melt_pool_from_x_text,
+            "it must lie below the domain's upper x, " + num(hi[0]) +
+              " m (else no cell is measured)");
     for (const auto &l : probe_lines)
       require(inside(l.start) && inside(l.end),
               "Output/Probe lines",

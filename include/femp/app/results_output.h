@@ -224,7 +224,8 @@ namespace femp
   /// The melt pool now (measure_melt_pool()) at the @p scene's liquidus,
   /// solidus and substrate top. Only the workpiece of @p bodies (the metal
   /// attached to the substrate) holds the pool: a detached drop, liquid or
-  /// not, is no pool. Collective.
+  /// not, is no pool; only the cells from 'Output/Melt pool from x' on
+  /// count. Collective.
   template <int dim>
   MeltPoolSize
   workpiece_melt_pool(const Scene<dim>          &scene,

@@ -9,6 +9,9 @@
 // not counted); where nothing is colder, all melt counts. Given the cells
 // of the workpiece (the metal attached to the substrate, MetalBodies), only
 // these count: a detached drop, liquid or partly solid, is no pool.
+// Given a lower bound x_min, only the cells with centre x >= x_min count
+// (the others are taken as gas): the cross-sections of a track's start,
+// which a boundary near it may keep hot and wide, are then left out.
 // Beside this liquidus box, the size as a cross-section of the track is
 // measured: the fusion zone is the region above the solidus T_s inside
 // the original substrate (cell centres below the substrate top), so the
@@ -21,6 +24,7 @@
 #include <femp/grid/background_grid.h>
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace femp
@@ -41,17 +45,20 @@ namespace femp
   /// zone inside the substrate (solidus_width, solidus_depth);
   /// @p workpiece: per cell of the local box 1 for the cells of the
   /// workpiece (MetalBodies::workpiece_cells(), valid on owned cells), the
-  /// only metal the pool and the fusion zone count (nullptr: all metal).
+  /// only metal the pool and the fusion zone count (nullptr: all metal);
+  /// @p x_min: only the cells with centre x >= x_min count, m (-inf: all).
   /// T_max is over all metal cells. Collective.
   template <int dim>
   MeltPoolSize
-  measure_melt_pool(const BackgroundGrid<dim>       &grid,
-                    const std::vector<double>       &T,
-                    const std::vector<double>       &alpha,
-                    const double                     T_melt,
-                    const double                     surface_height,
-                    const double                     T_solidus,
-                    const std::vector<std::uint8_t> *workpiece = nullptr);
+  measure_melt_pool(
+    const BackgroundGrid<dim>       &grid,
+    const std::vector<double>       &T,
+    const std::vector<double>       &alpha,
+    const double                     T_melt,
+    const double                     surface_height,
+    const double                     T_solidus,
+    const std::vector<std::uint8_t> *workpiece = nullptr,
+    const double x_min = -std::numeric_limits<double>::infinity());
 } // namespace femp
 
 #endif

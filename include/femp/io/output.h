@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -75,6 +76,11 @@ namespace femp
       bool                    probe_linear = false;
       std::vector<Point<dim>> probe_points;
       std::vector<ProbeLine>  probe_lines;
+      /// Output/Melt pool from x as written (empty: the whole domain) and
+      /// its value, m: melt_pool.csv counts the cells with centre x at or
+      /// above it (-inf: all).
+      std::string melt_pool_from_x_text;
+      double      melt_pool_from_x = -std::numeric_limits<double>::infinity();
 
       /// Declare (the members' values are the defaults) or read the
 
@@ -88,7 +94,8 @@ namespace femp
       declare_parameters(ParameterHandler &prm);
       void
       parse_parameters(ParameterHandler &prm);
-      /// Probes must lie in the domain box [lo, hi].
+      /// Probes must lie in the domain box [lo, hi], 'Melt pool from x'
+      /// below its upper x.
       void
       check(const Point<dim> &lo, const Point<dim> &hi) const;
     };
