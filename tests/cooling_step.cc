@@ -102,14 +102,8 @@ main(int argc, char **argv)
                     {"Checkpoint", "Resume from", resume_from}});
       const auto e_res = read_csv_columns("resumed/solid_energy.csv");
       checks.print("checkpoint resumed (us)", std::round(1e6 * 1.45e-4), 3);
-      double d_rows =
-        e_res.at("step").size() == e_cool.at("step").size() ? 0. : 1.;
-      for (const std::string col :
-           {"step", "mass_scaling", "internal_work", "kinetic"})
-        for (std::size_t i = 0; d_rows == 0 && i < e_res.at(col).size(); ++i)
-          d_rows = std::max(d_rows,
-                            std::abs(e_res.at(col)[i] - e_cool.at(col)[i]) /
-                              std::max(1e-300, std::abs(e_cool.at(col)[i])));
+      const double d_rows = energy_rows_difference(
+        e_res, e_cool, {"step", "mass_scaling", "internal_work", "kinetic"});
       checks.at_most("resumed against straight: energy rows (relative)",
                      d_rows,
                      1e-12);

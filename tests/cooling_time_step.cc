@@ -109,15 +109,12 @@ main(int argc, char **argv)
                     {"Time stepping", dt2, "5e-7"},
                     {"Checkpoint", "Resume from", resume_from}});
       checks.print("checkpoint resumed (us)", std::round(1e6 * 1.45e-4), 3);
-      const auto e_cool = read_csv_columns("cooling/solid_energy.csv");
-      const auto e_res  = read_csv_columns("resumed/solid_energy.csv");
-      double     d_rows =
-        e_res.at("step").size() == e_cool.at("step").size() ? 0. : 1.;
-      for (const std::string col : {"time", "step", "internal_work", "kinetic"})
-        for (std::size_t i = 0; d_rows == 0 && i < e_res.at(col).size(); ++i)
-          d_rows = std::max(d_rows,
-                            std::abs(e_res.at(col)[i] - e_cool.at(col)[i]) /
-                              std::max(1e-300, std::abs(e_cool.at(col)[i])));
+      const auto   e_cool = read_csv_columns("cooling/solid_energy.csv");
+      const auto   e_res  = read_csv_columns("resumed/solid_energy.csv");
+      const double d_rows =
+        energy_rows_difference(e_res,
+                               e_cool,
+                               {"time", "step", "internal_work", "kinetic"});
       checks.at_most("resumed against straight: solid energy rows (relative)",
                      d_rows,
                      1e-12);

@@ -22,8 +22,7 @@
 //      the switch, with a raised factor) must end with the same probe
 //      lines and solid energy rows.
 // Runs on 1 and 2 ranks with the same output.
-#include "resume_tools.h"
-#include "scene_driver.h"
+#include "cooling_step_runs.h"
 #include "test_tools.h"
 
 using namespace femp_test;
@@ -36,39 +35,19 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string scene = argv[1];
-      const std::string end   = "4e-4";
-      const Override    dt    = {"Time stepping",
-                                 "Time step after solidification",
-                                 "1e-6"};
-      const Override    no_hg = {"Solid FEM", "Hourglass coefficient", "0"};
-      const Override    quasi = {"Solid",
-                                 "Mass scaling after solidification",
-                                 "adaptive"};
+      const std::string     scene = argv[1];
+      const std::string     end   = "4e-4";
+      const CoolingStepRuns runs{scene, comm};
+      const Override        quasi = runs.quasi;
       // 1. The common state after solidification.
-      run_scene<3>(scene,
-                   comm,
-                   {{"Output", "Directory", "common"},
-                    {"Time stepping", "End time", "1.4e-4"},
-                    dt,
-                    no_hg,
-                    {"Checkpoint", "Every simulated time", "1.4e-4"}});
+      runs.common();
       const double steps_0 =
         read_csv_columns("common/solid_energy.csv").at("step").back();
 
-      // A run into @p dir, resumed from the newest checkpoint of @p from,
-      // to the end time, with the overrides @p extra.
-      const auto resume_to_end = [&](const std::string    &from,
-                                     const std::string    &dir,
-                                     std::vector<Override> extra) {
-        const auto resume = copy_for_resume(from, dir, comm, true);
-        extra.insert(extra.begin(),
-                     {{"Output", "Directory", dir},
-                      {"Time stepping", "End time", end},
-                      dt,
-                      no_hg,
-                      {"Checkpoint", "Resume from", resume}});
-        run_scene<3>(scene, comm, extra);
+      const auto resume_to_end = [&](const std::string           &from,
+                                     const std::string           &dir,
+                                     const std::vector<Override> &extra) {
+        runs.resume_to_end(from, dir, end, extra);
       };
 
       // 2. Fixed factor and quasi-static from there.
@@ -117,15 +96,11 @@ main(int argc, char **argv)
 
       // 3. Resumed after the switch.
       resume_to_end("quasi", "resumed", {quasi});
-      const auto e_res = read_csv_columns("resumed/solid_energy.csv");
-      double     d_rows =
-        e_res.at("step").size() == e_quasi.at("step").size() ? 0. : 1.;
-      for (const std::string col :
-           {"time", "step", "mass_scaling", "internal_work", "kinetic"})
-        for (std::size_t i = 0; d_rows == 0 && i < e_res.at(col).size(); ++i)
-          d_rows = std::max(d_rows,
-                            std::abs(e_res.at(col)[i] - e_quasi.at(col)[i]) /
-                              std::max(1e-300, std::abs(e_quasi.at(col)[i])));
+      const auto   e_res  = read_csv_columns("resumed/solid_energy.csv");
+      const double d_rows = energy_rows_difference(
+        e_res,
+        e_quasi,
+        {"time", "step", "mass_scaling", "internal_work", "kinetic"});
       checks.at_most("resumed against straight: solid energy rows (relative)",
                      d_rows,
                      1e-12);

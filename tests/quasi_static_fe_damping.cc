@@ -18,8 +18,7 @@
 //   3. The damped run resumed from its checkpoint at 250 us (after the
 //      switch) ends with the same solid energy rows.
 // Runs on 1 and 2 ranks with the same output.
-#include "resume_tools.h"
-#include "scene_driver.h"
+#include "cooling_step_runs.h"
 #include "test_tools.h"
 
 using namespace femp_test;
@@ -32,39 +31,20 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string scene = argv[1];
-      const Override    dt    = {"Time stepping",
-                                 "Time step after solidification",
-                                 "1e-6"};
-      const Override    no_hg = {"Solid FEM", "Hourglass coefficient", "0"};
-      const Override    quasi = {"Solid",
-                                 "Mass scaling after solidification",
-                                 "adaptive"};
-      const Override    damp  = {"Solid/Adaptive mass scaling",
-                                 "Finite-element damping after solidification",
-                                 "0.01"};
-      run_scene<3>(scene,
-                   comm,
-                   {{"Output", "Directory", "common"},
-                    {"Time stepping", "End time", "1.4e-4"},
-                    dt,
-                    no_hg,
-                    {"Checkpoint", "Every simulated time", "1.4e-4"}});
+      const std::string     scene = argv[1];
+      const CoolingStepRuns runs{scene, comm};
+      const Override        damp = {"Solid/Adaptive mass scaling",
+                                    "Finite-element damping after solidification",
+                                    "0.01"};
+      runs.common();
 
       // A quasi-static run into @p dir, resumed from the newest checkpoint
       // of @p from, to 300 us, with the overrides @p extra.
       const auto resume_to_end = [&](const std::string    &from,
                                      const std::string    &dir,
                                      std::vector<Override> extra) {
-        const auto resume = copy_for_resume(from, dir, comm, true);
-        extra.insert(extra.begin(),
-                     {{"Output", "Directory", dir},
-                      {"Time stepping", "End time", "3e-4"},
-                      dt,
-                      no_hg,
-                      quasi,
-                      {"Checkpoint", "Resume from", resume}});
-        run_scene<3>(scene, comm, extra);
+        extra.insert(extra.begin(), runs.quasi);
+        runs.resume_to_end(from, dir, "3e-4", extra);
       };
       resume_to_end("common", "plain", {});
       resume_to_end("common",
@@ -104,19 +84,15 @@ main(int argc, char **argv)
 
       // 3. Resumed after the switch.
       resume_to_end("damped", "resumed", {damp});
-      const auto e_res = read_csv_columns("resumed/solid_energy.csv");
-      double     d_rows =
-        e_res.at("step").size() == e_damped.at("step").size() ? 0. : 1.;
-      for (const std::string col : {"time",
-                                    "step",
-                                    "mass_scaling",
-                                    "internal_work",
-                                    "kinetic",
-                                    "transfer_dissipation"})
-        for (std::size_t i = 0; d_rows == 0 && i < e_res.at(col).size(); ++i)
-          d_rows = std::max(d_rows,
-                            std::abs(e_res.at(col)[i] - e_damped.at(col)[i]) /
-                              std::max(1e-300, std::abs(e_damped.at(col)[i])));
+      const auto   e_res  = read_csv_columns("resumed/solid_energy.csv");
+      const double d_rows = energy_rows_difference(e_res,
+                                                   e_damped,
+                                                   {"time",
+                                                    "step",
+                                                    "mass_scaling",
+                                                    "internal_work",
+                                                    "kinetic",
+                                                    "transfer_dissipation"});
       checks.at_most("resumed against straight: solid energy rows (relative)",
                      d_rows,
                      1e-12);

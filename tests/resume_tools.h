@@ -88,6 +88,24 @@ namespace femp_test
     return diff / peak;
   }
 
+  /// Largest relative difference between the columns @p cols of the
+  /// energy files (read_csv_columns()) @p a (the resumed run) and @p b
+  /// (the run straight through), row by row; 1 if their row counts differ.
+  template <typename Columns>
+  inline double
+  energy_rows_difference(const Columns                  &a,
+                         const Columns                  &b,
+                         const std::vector<std::string> &cols)
+  {
+    double d = a.at("step").size() == b.at("step").size() ? 0. : 1.;
+    for (const auto &col : cols)
+      for (std::size_t i = 0; d == 0 && i < a.at(col).size(); ++i)
+        d = std::max(d,
+                     std::abs(a.at(col)[i] - b.at(col)[i]) /
+                       std::max(1e-300, std::abs(b.at(col)[i])));
+    return d;
+  }
+
 } // namespace femp_test
 
 #endif
