@@ -88,6 +88,19 @@ namespace femp_test
     return diff / peak;
   }
 
+  /// probe_line_difference() of @p col over the lines CD and EF at the ends
+  /// of two runs resumed from one checkpoint (output 2), as a fraction of
+  /// the reference's (@p a) peak, rounded up to 0.01.
+  inline double
+  resumed_end_difference(const std::string &a,
+                         const std::string &b,
+                         const std::string &col)
+  {
+    const auto [diff, peak] =
+      probe_line_difference(a, b, {"CD", "EF"}, col, 0, 2);
+    return std::ceil(100 * diff / peak - 1e-9) / 100;
+  }
+
   /// Largest relative difference between the columns @p cols of the
   /// energy files (read_csv_columns()) @p a (the resumed run) and @p b
   /// (the run straight through), row by row; 1 if their row counts differ.
