@@ -33,6 +33,10 @@
 // Runs on 1 and 2 ranks with the same output.
 #include <femp/heat/melt_pool.h>
 
+#include <array>
+#include <string>
+#include <tuple>
+
 #include "test_tools.h"
 
 using namespace femp_test;
@@ -88,18 +92,15 @@ main(int argc, char **argv)
   // within 1 %.
   const auto check_sizes = [&](const std::string  &prefix,
                                const MeltPoolSize &p) {
-    checks.at_most(prefix + "liquidus width relative error",
-                   std::abs(p.width - wl) / wl,
-                   0.01);
-    checks.at_most(prefix + "liquidus depth relative error",
-                   std::abs(p.depth - dl) / dl,
-                   0.01);
-    checks.at_most(prefix + "solidus width relative error",
-                   std::abs(p.solidus_width - ws) / ws,
-                   0.01);
-    checks.at_most(prefix + "solidus depth relative error",
-                   std::abs(p.solidus_depth - ds) / ds,
-                   0.01);
+    const std::array<std::tuple<std::string, double, double>, 4> sizes = {
+      {{"liquidus width", p.width, wl},
+       {"liquidus depth", p.depth, dl},
+       {"solidus width", p.solidus_width, ws},
+       {"solidus depth", p.solidus_depth, ds}}};
+    for (const auto &[name, measured, exact] : sizes)
+      checks.at_most(prefix + name + " relative error",
+                     std::abs(measured - exact) / exact,
+                     0.01);
   };
   check_sizes("", pool);
   // With the bead counted, the solidus width would be the bead's.
