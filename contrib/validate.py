@@ -43,7 +43,10 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   1.6 depths + 48 um below the surface, at least 96 um; Trapp 48 W: a
   200 um track on 320 x 160 x 96 um, about a quarter of the rule's cells and
   5/8 of its path; the evaluation windows follow the shorter path), e.g.
-  'h2+compact' for the 2 um point; diagnostics 'thermal' (no melt flow) and
+  'h2+compact' for the 2 um point; 'long' (the track twice as long, the
+  plate with it, the pool measured from a third of that track on; the
+  evaluation windows follow the longer path: whether the pool is steady);
+  diagnostics 'thermal' (no melt flow) and
   'nomarangoni' (d sigma/dT = 0); 'evapmass' (the evaporated mass leaves
   the melt: Heat transfer/Remove evaporated mass = true); 'film' (the
   recoil-driven melt film slips along the solid: Melt flow/Front wall
@@ -182,7 +185,8 @@ def refined(h):
 # Named settings of 'run' (their femp parameters; --set adds to them).
 # 'large' is the domain-size check (the scene 1.5 x wider and deeper);
 # 'compact' the compact domain (a shorter track on a smaller plate).
-SETTINGS = {"default": {}, "large": {}, "compact": {}, "fine": FINE}
+SETTINGS = {"default": {}, "large": {}, "compact": {}, "long": {},
+            "fine": FINE}
 
 H = 8e-6          # cell size, m
 GAS = 48e-6       # gas above the plate, m
@@ -277,7 +281,7 @@ def cases():
 
 
 # ---------------------------------------------------------------- scenes
-def track_geometry(c, compact=False):
+def track_geometry(c, compact=False, length=1):
     """Domain and track of a track case. The rule (the same for every
     case): the track is 3 measured widths long (at least 320 um); the plate extends 80 um
     before and 160 um after it, 2 widths + 80 um across and 1.6 depths +
@@ -286,10 +290,12 @@ def track_geometry(c, compact=False):
     calorimetry); 48 um of gas above. melt_pool.csv measures the pool
     from a third of the track on (scene_text()). The domain-size check
     (setting 'large') shows what this rule costs in accuracy. @p compact: the
-    compact domain (compact_geometry())."""
+    compact domain (compact_geometry()). @p length: the track (and the
+    plate with it) that many times longer, the margins and the plate's
+    section unchanged (setting 'long': how far the pool is from steady)."""
     if compact:
-        return compact_geometry(c)
-    Ltr = ceil_cells(max(320e-6, 3 * c["width"]))
+        return compact_geometry(c, length)
+    Ltr = length * ceil_cells(max(320e-6, 3 * c["width"]))
     Lx = ceil_cells(MARGIN_START + Ltr + MARGIN_END)
     Ly = 2 * ceil_cells(max(120e-6, c["width"] + 40e-6))
     Hp = ceil_cells(max(160e-6, 1.6 * c["depth"] + 80e-6))
@@ -308,13 +314,20 @@ def is_compact(setting):
     return "compact" in setting.split("+")
 
 
+def track_length(setting):
+    """How many times the scene's track a setting runs: 2 with 'long' among
+    its named settings, else 1."""
+    return 2 if "long" in setting.split("+") else 1
+
+
 def path_time(c, setting="default"):
     """The laser path's duration of track case @p c in @p setting, s: the
     end of the run and of the evaluation windows."""
-    return track_geometry(c, is_compact(setting))["Ltr"] / c["v"]
+    return track_geometry(c, is_compact(setting),
+                          track_length(setting))["Ltr"] / c["v"]
 
 
-def compact_geometry(c):
+def compact_geometry(c, length=1):
     """The compact domain of a track case (setting 'compact'), for the
     finest cells: the track 3 measured widths long rounded down to 8 um
     (at least 160 um), the plate 40 um before and 80 um after it, the
@@ -327,7 +340,7 @@ def compact_geometry(c):
     measured from a third of the track on, as on the rule's domain (at
     4 um cells the 40 um of plate before the track stay hot and would be
     read as the widest section)."""
-    Ltr = max(160e-6, H * math.floor(3 * c["width"] / H + 1e-9))
+    Ltr = length * max(160e-6, H * math.floor(3 * c["width"] / H + 1e-9))
     Ly = 2 * ceil_cells(0.5 * c["width"] + 40e-6)
     Hp = ceil_cells(max(96e-6, 1.6 * c["depth"] + 48e-6))
     disc = c.get("disc")
@@ -395,13 +408,14 @@ def material_comment(alloy):
                     "each with its source)"}[alloy]
 
 
-def scene_text(c, scale=1.0, compact=False):
+def scene_text(c, scale=1.0, compact=False, length=1):
     """The scene of case @p c; @p scale > 1 enlarges the domain across and
     below (the domain-size check); @p compact: the compact domain
-    (compact_geometry())."""
+    (compact_geometry()); @p length: the track that many times longer
+    (track_geometry())."""
     if c["v"] == 0:
         return spot_scene_text(c)
-    g = track_geometry(c, compact)
+    g = track_geometry(c, compact, length)
     Ly = 2 * ceil_cells(0.5 * g["Ly"] * scale)
     Hp = g["Hp"] if not g["fixed_bottom"] else ceil_cells(g["Hp"] * scale)
     Lx = g["Lx"]
@@ -607,25 +621,42 @@ def cmd_regime(args):
             ("%.1f" % (eta * base)) if eta else "-", 0.35 * base))
 
 
+def moving_gaussian_rise(x, y, z, q, v, a, rho_cp, var_xy, var_z=0.0,
+                         t_on=0.1):
+    """Temperature rise (K) at (x, y, z) of a Gaussian source of power q (W)
+    moving at v along +x over a half-space of constant diffusivity a and
+    heat capacity rho_cp, insulated at its surface z = 0, in the frame of
+    the source (x < 0 behind it, z > 0 below the surface): the superposed
+    point releases q dt' at the times t' before now,
+    T - T0 = int_0^t_on q / rho_cp g_xy g_z dt', with the lateral Gaussian
+    g_xy of variance 2 a t' + var_xy (var_xy = r_b^2/4 for a beam of 1/e^2
+    radius r_b) and g_z the half-Gaussian of variance 2 a t' + var_z
+    mirrored at the surface (var_z = 0: a surface source). t_on: how long
+    the source has been on, s (0.1 s: the quasi-steady field of the tracks
+    here; the path's time: the field at its end, the source started from
+    rest at x = -v t_on). Quadrature on a log grid of t'."""
+    import numpy as np
+    t = np.logspace(-11, math.log10(t_on), 3000)
+    var = 2 * a * t + var_xy
+    vz = 2 * a * t + var_z
+    f = (q / rho_cp / (2 * math.pi * var)
+         * np.exp(-((x + v * t) ** 2 + y * y) / (2 * var))
+         * 2 / np.sqrt(2 * math.pi * vz) * np.exp(-z * z / (2 * vz)))
+    return float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)))
+
+
 def eagar_tsai(P, eta, rb, v, k, rho, cp, T0, Ts, z_width=0.0):
     """Width (at the depth z_width below the surface, the surface by
     default) and depth (m) of the region above Ts of the Eagar-Tsai
     solution: a Gaussian surface source (1/e^2 radius rb, absorbed power
-    eta P) moving at v over a half-space of constant properties,
-    T - T0 = int_0^inf 2 eta P / (rho c) g_xy g_z dt' with the lateral
-    Gaussian g_xy of variance 2 a t' + rb^2/4 and the 1D kernel g_z of a
-    surface point source; quadrature on a log grid of t'."""
+    eta P) moving at v over a half-space of constant properties
+    (moving_gaussian_rise(), quasi-steady)."""
     import numpy as np
     a = k / (rho * cp)
-    s2 = rb * rb / 4
-    t = np.logspace(-11, -1, 3000)
 
     def temp(x, y, z):
-        var = 2 * a * t + s2
-        f = (2 * eta * P / (rho * cp) / (2 * math.pi * var)
-             * np.exp(-((x + v * t) ** 2 + y * y) / (2 * var))
-             / np.sqrt(4 * math.pi * a * t) * np.exp(-z * z / (4 * a * t)))
-        return T0 + float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)))
+        return T0 + moving_gaussian_rise(x, y, z, eta * P, v, a, rho * cp,
+                                         rb * rb / 4)
 
     def extent(direction):
         best = 0.0
@@ -1287,7 +1318,8 @@ def run_case(args, exe, c, setting, stop=None):
     os.makedirs(d, exist_ok=True)
     scene = os.path.join(d, "scene.prm")
     scale = 1.5 if "large" in setting.split("+") else 1.0
-    text = scene_text(c, scale, is_compact(setting)).replace(
+    text = scene_text(c, scale, is_compact(setting),
+                      track_length(setting)).replace(
         "include ../materials/", "include %s/prm/materials/" % ROOT)
     sets = {"Output/Directory": os.path.join(d, "output")}
     sets.update(setting_parameters(setting))
@@ -1542,6 +1574,252 @@ def cmd_resume_check(args):
         raise SystemExit("validate.py resume-check: the runs in segments "
                          "differ from the checkpointed one: " + ", ".join(bad))
     print("resume check: the runs in segments equal the checkpointed run")
+
+
+# ---------------------------------------------------------------- tail
+# The track behind the beam (the 'tail' command): field outputs at least
+# every 'Output interval' of this setting, in HDF5, with the fields read.
+SETTINGS["tail"] = {"Output/Output interval": "2.8e-05",
+                    "Output/Format": "hdf5",
+                    "Output/Grid fields": "T,gamma,alpha,u_x,u_y,u_z"}
+
+
+def energy_figures(text):
+    """femp's energy line (J) of a run's log: laser (absorbed), evaporation,
+    convection, radiation, fixed faces, stored, and the energy created by
+    the upwind convection of T and by points moving between cells."""
+    r = {}
+    m = re.search(r"Energy \(J\): laser ([-0-9.e+]+), surface losses "
+                  r"([-0-9.e+]+) \(evaporation ([-0-9.e+]+), convection "
+                  r"([-0-9.e+]+), radiation ([-0-9.e+]+) [^)]*\), fixed faces "
+                  r"([-0-9.e+]+), stored ([-0-9.e+]+)", text)
+    if m:
+        r.update(zip(("laser", "losses", "evaporation", "convection",
+                      "radiation", "fixed_faces", "stored"),
+                     (float(x) for x in m.groups())))
+    m = re.search(r"by the upwind convection of T ([-0-9.e+]+), by points "
+                  r"moving between cells ([-0-9.e+]+)", text)
+    if m:
+        r.update(created_upwind=float(m.group(1)),
+                 created_moved=float(m.group(2)))
+    return r
+
+
+def enthalpy_table(m, T0):
+    """Per unit volume, (T grid, H(T) - H(T0)) of a material() dict: the
+    integral of rho c_p from T0 and rho L times the liquid fraction, linear
+    between solidus and liquidus."""
+    import numpy as np
+    Tg = np.linspace(200.0, 6000.0, 5801)
+    cg = np.array([m["cp"](T) for T in Tg])
+    H = np.concatenate([[0], np.cumsum(0.5 * (cg[1:] + cg[:-1]) * np.diff(Tg))])
+    H = m["rho"] * (H + m["L"] * np.clip((Tg - m["Ts"]) / (m["Tl"] - m["Ts"]), 0, 1))
+    return Tg, H - np.interp(T0, Tg, H)
+
+
+def tail_sections(g, sp, m, T0):
+    """The cross-sections (y-z slabs of cells) of one field output @p g:
+    x of each slab, the enthalpy per unit length above T0 of its metal
+    (J/m; rho (H(T) - H(T0)) alpha summed over the slab times h^2), the
+    second moments of that enthalpy about the track's axis across (var_y)
+    and about the original surface (var_z, the surface a mirror), and the
+    temperature on the axis (the mean of the two columns beside it, the
+    axis on a cell face; else its column) at the top substrate row and at
+    the rows 20, 40 and 80 um below the surface, and the slab's fusion
+    width at the surface."""
+    import numpy as np
+    h, ztop, yc = sp["h"], sp["ztop"], sp["start"][1]
+    c = np.asarray(g.centres)
+    ijk = np.floor(c / h).astype(int)
+    n = ijk.max(axis=0) + 1
+    T = np.full(n, T0)
+    A = np.zeros(n)
+    T[tuple(ijk.T)] = g["T"]
+    A[tuple(ijk.T)] = g["alpha"]
+    Tg, Hg = enthalpy_table(m, T0)
+    E = np.interp(T, Tg, Hg) * A * h * h
+    y = (np.arange(n[1]) + 0.5) * h - yc
+    z = ztop - (np.arange(n[2]) + 0.5) * h
+    E[:, :, z < 0] = 0                        # the plate only
+    e = E.sum(axis=(1, 2))
+    safe = np.where(e > 0, e, 1)
+    var_y = (E.sum(axis=2) * y[None, :] ** 2).sum(axis=1) / safe
+    var_z = (E.sum(axis=1) * z[None, :] ** 2).sum(axis=1) / safe
+    jc = np.argsort(abs(y))[:2] if abs(abs(y).min() - h / 2) < 1e-3 * h \
+        else [int(np.argmin(abs(y)))]
+    kt = int(round(ztop / h)) - 1
+    axis = {"top": T[:, jc, kt].mean(axis=1)}
+    for d in (20e-6, 40e-6, 80e-6):
+        k = int(round((ztop - d) / h - 0.5))
+        axis["%d" % round(d * 1e6)] = T[:, jc, k].mean(axis=1)
+    # the width above T_s of each slab at the surface (fusion_width_rows())
+    width = [fusion_width_rows(T[i:i + 1], A[i:i + 1], kt, h, m["Ts"])
+             ["width_surface"] for i in range(n[0])]
+    return dict(x=(np.arange(n[0]) + 0.5) * h, e=e, var_y=var_y, var_z=var_z,
+                width=np.array(width), **{"T_" + k: v for k, v in axis.items()})
+
+
+def tail_reference(q, v, m, T0, d, t_on, rb, face=None):
+    """The closed-form temperature on the track's axis at the surface d
+    behind a Gaussian surface source of net power q (moving_gaussian_rise()),
+    for the property choices (name, k, rho c_p): k and c_p averaged over
+    T0..T_s (the Kirchhoff mean: on the axis far behind the source the
+    temperature obeys int k dT = q / (2 pi R), whatever c_p), at T_s, and the
+    mean with the latent heat spread over T0..T_l (c_p + L / (T_l - T0)).
+    Returns {name: (T at the path's end (the source on for t_on), the same
+    with the plate's insulated start face @p face behind the source (its
+    mirror image of the path added), T quasi-steady)}."""
+    Ts, Tl = m["Ts"], m["Tl"]
+    mean = lambda f, hi: sum(f(T0 + (hi - T0) * (i + 0.5) / 200)
+                             for i in range(200)) / 200
+    k_mean, cp_mean = mean(m["k"], Ts), mean(m["cp"], Ts)
+    props = (("mean T0..T_s", k_mean, m["rho"] * cp_mean),
+             ("at T_s", m["k"](Ts), m["rho"] * m["cp"](Ts)),
+             ("mean, latent", k_mean,
+              m["rho"] * (cp_mean + m["L"] / (Tl - T0))))
+    out = {}
+    for name, k, rc in props:
+        a = k / rc
+        rise = lambda x, t: moving_gaussian_rise(x, 0, 0, q, v, a, rc,
+                                                 rb * rb / 4, 0, t)
+        end = rise(-d, t_on)
+        image = rise(-(2 * face - d), t_on) if face is not None else 0.0
+        out[name] = (T0 + end, T0 + end + image, T0 + rise(-d, 0.1))
+    return out
+
+
+def solidus_behind(q, v, m, T0, rb, t_on, k, rc, far=3e-3):
+    """How far behind the source the axis at the surface falls below T_s
+    (m) in moving_gaussian_rise() with net power q and constant k, rho c_p,
+    the source on for t_on (bisection between 2 r_b and @p far, or the
+    distance to the path's start v t_on where that is nearer)."""
+    a = k / rc
+    T = lambda d: T0 + moving_gaussian_rise(-d, 0, 0, q, v, a, rc,
+                                            rb * rb / 4, 0, t_on)
+    lo, hi = 2 * rb, min(far, v * t_on + 200e-6)
+    if T(hi) >= m["Ts"]:
+        return hi
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if T(mid) >= m["Ts"] else (lo, mid)
+    return lo
+
+
+def cmd_tail(args):
+    """The track behind the beam in the field outputs of finished runs
+    (setting 'tail' or any with field outputs): energy balance, the
+    enthalpy per unit length of the cross-sections and its spread, the
+    temperature on the axis, against the closed-form moving Gaussian source
+    with the run's own net power."""
+    import numpy as np
+    allc = {c["name"]: c for c in cases()}
+    rx_s = re.compile(args.settings or "tail")
+    for (setting, name), r in sorted(load_results(args.out).items()):
+        if (not re.search(args.cases or ".", name) or not rx_s.search(setting)
+                or r.get("incomplete")):
+            continue
+        c = allc[name]
+        d = os.path.join(args.out, setting, name)
+        run = femp_post.Run(os.path.join(d, "output"))
+        outs = run.outputs("grid")
+        if not outs:
+            continue
+        sp = scene_parameters(d)
+        m = material(c["alloy"])
+        T0, v = c["T0"], sp["v"]
+        t_path = path_time(c, setting)
+        en = energy_figures(open(os.path.join(d, "log.txt")).read())
+        q_abs = en["laser"] / t_path
+        q_net = (en["laser"] - en["losses"]) / t_path
+        print("\n%s [%s], h = %g um: path %.0f us; energy (mJ): absorbed %.3f "
+              "(%.1f W), evaporation %.3f, convection %.4f, radiation %.4f, "
+              "fixed faces %.3f, stored %.3f, created by upwind convection "
+              "%.3f, by moved points %.3f; net %.1f W, q_net / v = %.1f J/m" % (
+                  name, setting, sp["h"] * 1e6, t_path * 1e6,
+                  en["laser"] * 1e3, q_abs, en["evaporation"] * 1e3,
+                  en["convection"] * 1e3, en["radiation"] * 1e3,
+                  en["fixed_faces"] * 1e3, en["stored"] * 1e3,
+                  en.get("created_upwind", 0) * 1e3,
+                  en.get("created_moved", 0) * 1e3, q_net, q_net / v))
+        n_last, t_last = outs[-1]
+        s = tail_sections(run.grid(n_last), sp, m, T0)
+        xb = sp["start"][0] + v * min(t_last - sp["t0"], t_path)
+        print("  last output t = %.1f us, beam at x = %.1f um; the plate's "
+              "enthalpy above T0 %.3f mJ (the log's stored, all metal: "
+              "%.3f)" % (t_last * 1e6, xb * 1e6, s["e"].sum() * sp["h"] * 1e3,
+                         en["stored"] * 1e3))
+        face = xb - (sp["start"][0] - track_geometry(
+            c, is_compact(setting), track_length(setting))["start"])
+        ref = lambda dd: tail_reference(q_net, v, m, T0, dd, t_path, sp["rb"],
+                                        face)
+        print("  behind(um)  x(um)  E'(J/m)  sd_y  sd_z(um) width(um)  T_axis: "
+              "top  20um  40um  80um (K) | reference at the surface, path's "
+              "end / with the start face / steady (K): mean T0..Ts; at Ts; "
+              "mean+latent")
+        Ts = m["Ts"]
+        mean = lambda f: sum(f(T0 + (Ts - T0) * (i + 0.5) / 200)
+                             for i in range(200)) / 200
+        k_mean, cp_mean = mean(m["k"]), mean(m["cp"])
+        kappas = (k_mean / (m["rho"] * cp_mean), m["k"](Ts) / (m["rho"] * m["cp"](Ts)))
+        # the cross-section d0 behind the beam conducting on in 2D (exact
+        # for the second moments with constant diffusivity: var + 2 a tau);
+        # its axis temperature from the enthalpy of the Gaussian of those
+        # moments at the axis, E' / (pi sd_y sd_z), through H(T)
+        d0 = args.d0 if args.d0 is not None else 100e-6
+        i0 = int(round((xb - d0) / sp["h"] - 0.5))
+        Tg, Hg = enthalpy_table(m, T0)
+        print("  2D conduction of the slab %.0f um behind the beam (E' %.1f "
+              "J/m, sd_y %.1f, sd_z %.1f um) with the diffusivity averaged over "
+              "T0..T_s (%.2e m2/s) and at T_s (%.2e m2/s)" % (
+                  d0 * 1e6, s["e"][i0], math.sqrt(s["var_y"][i0]) * 1e6,
+                  math.sqrt(s["var_z"][i0]) * 1e6, *kappas))
+        step = max(1, int(round(20e-6 / sp["h"])))
+        for i in range(len(s["x"]) - 1, -1, -step):
+            behind = xb - s["x"][i]
+            if behind < -40e-6:
+                continue
+            rr = ref(behind) if behind > 2 * sp["rb"] else None
+            conv = ""
+            if i < i0:
+                tau = (s["x"][i0] - s["x"][i]) / v
+                pred = []
+                for a in kappas:
+                    vy, vz = s["var_y"][i0] + 2 * a * tau, s["var_z"][i0] + 2 * a * tau
+                    pred.append((math.sqrt(vy), math.sqrt(vz), float(np.interp(
+                        s["e"][i0] / (math.pi * math.sqrt(vy * vz)), Hg, Tg))))
+                conv = " | 2D: sd_y sd_z T_axis %s" % "; ".join(
+                    "%5.1f %5.1f %5.0f" % (p[0] * 1e6, p[1] * 1e6, p[2]) for p in pred)
+            print("  %8.0f %7.0f %8.1f %5.1f %5.1f %6.1f   %6.0f %6.0f %5.0f %5.0f  %s%s" % (
+                behind * 1e6, s["x"][i] * 1e6, s["e"][i],
+                math.sqrt(s["var_y"][i]) * 1e6, math.sqrt(s["var_z"][i]) * 1e6,
+                s["width"][i] * 1e6,
+                s["T_top"][i], s["T_20"][i], s["T_40"][i], s["T_80"][i],
+                " ".join("%5.0f/%5.0f/%5.0f" % v for v in rr.values())
+                if rr else "", conv))
+        for lab, k, cp in (("mean T0..T_s", k_mean, cp_mean),
+                           ("at T_s", m["k"](Ts), m["cp"](Ts))):
+            rc = m["rho"] * cp
+            print("  reference (%s, k %.1f, c_p %.0f): the axis at the surface "
+                  "below T_s %.0f um behind the beam at the path's end, %.0f um "
+                  "quasi-steady" % (lab, k, cp,
+                                    solidus_behind(q_net, v, m, T0, sp["rb"],
+                                                   t_path, k, rc) * 1e6,
+                                    solidus_behind(q_net, v, m, T0, sp["rb"],
+                                                   0.1, k, rc) * 1e6))
+        # along the path: per output, the axis at the surface 100, 200 um
+        # behind the beam and the enthalpy per length there
+        print("  t(us)  beam x(um) | 100 um behind: T_top E' | 200 um "
+              "behind: T_top E'")
+        for nn, tt in outs[1:]:
+            ss = tail_sections(run.grid(nn), sp, m, T0)
+            xbt = sp["start"][0] + v * min(tt - sp["t0"], t_path)
+            row = []
+            for dd in (100e-6, 200e-6):
+                i = int(round((xbt - dd) / sp["h"] - 0.5))
+                ok = 0 <= i < len(ss["x"]) and xbt - dd > 0
+                row.append("%6.0f %6.1f" % (ss["T_top"][i], ss["e"][i])
+                           if ok else "     -      -")
+            print("  %5.0f %8.0f | %s | %s" % (tt * 1e6, xbt * 1e6, row[0], row[1]))
 
 
 # ---------------------------------------------------------------- dig
@@ -2379,7 +2657,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=["scenes", "run", "reevaluate", "report", "all",
                                        "pipeline", "regime", "width", "conduction",
-                                       "conduction3d", "spots", "dig",
+                                       "conduction3d", "spots", "dig", "tail",
                                        "resume-check"])
     ap.add_argument("--check", action="store_true")
     ap.add_argument("--cases", default=None)
@@ -2417,6 +2695,9 @@ def main():
                     "(default: every one with field outputs fine enough)")
     ap.add_argument("--force", action="store_true",
                     help="dig: evaluate again where dig.csv exists")
+    ap.add_argument("--d0", type=float, default=None,
+                    help="tail: the cross-section conducted on in 2D, m "
+                         "behind the beam (default 1e-4)")
     ap.add_argument("--props", default=None,
                     help="conduction3d: 'file', 'nolatent', 'const' (comma-separated)")
     args = ap.parse_args()
@@ -2443,6 +2724,8 @@ def main():
         cmd_width(args)
     elif args.command == "dig":
         cmd_dig(args)
+    elif args.command == "tail":
+        cmd_tail(args)
     elif args.command == "reevaluate":
         cmd_reevaluate(args)
     elif args.command == "report":
