@@ -1620,13 +1620,15 @@ def enthalpy_table(m, T0):
 def tail_sections(g, sp, m, T0):
     """The cross-sections (y-z slabs of cells) of one field output @p g:
     x of each slab, the enthalpy per unit length above T0 of its metal
-    (J/m; rho (H(T) - H(T0)) alpha summed over the slab times h^2), the
+    (J/m; rho (H(T) - H(T0)) alpha summed over the slab times h^2, the
+    metal above the original surface included), the
     second moments of that enthalpy about the track's axis across (var_y)
     and about the original surface (var_z, the surface a mirror), and the
     temperature on the axis (the mean of the two columns beside it, the
     axis on a cell face; else its column) at the top substrate row and at
-    the rows 20, 40 and 80 um below the surface, and the slab's fusion
-    width at the surface."""
+    the rows 20, 40 and 80 um below the surface, the slab's fusion
+    width at the surface, and its metal section minus the plate's (m^2:
+    metal moved along the track)."""
     import numpy as np
     h, ztop, yc = sp["h"], sp["ztop"], sp["start"][1]
     c = np.asarray(g.centres)
@@ -1640,7 +1642,10 @@ def tail_sections(g, sp, m, T0):
     E = np.interp(T, Tg, Hg) * A * h * h
     y = (np.arange(n[1]) + 0.5) * h - yc
     z = ztop - (np.arange(n[2]) + 0.5) * h
-    E[:, :, z < 0] = 0                        # the plate only
+    e_plate = float(E[:, :, z >= 0].sum()) * h  # below the original surface, J
+    # metal moved along the track: each slab's metal section against the
+    # plate's (the cells below the original surface)
+    moved = A.sum(axis=(1, 2)) * h * h - (z >= 0).sum() * n[1] * h * h
     e = E.sum(axis=(1, 2))
     safe = np.where(e > 0, e, 1)
     var_y = (E.sum(axis=2) * y[None, :] ** 2).sum(axis=1) / safe
@@ -1656,6 +1661,7 @@ def tail_sections(g, sp, m, T0):
     width = [fusion_width_rows(T[i:i + 1], A[i:i + 1], kt, h, m["Ts"])
              ["width_surface"] for i in range(n[0])]
     return dict(x=(np.arange(n[0]) + 0.5) * h, e=e, var_y=var_y, var_z=var_z,
+                e_plate=e_plate, moved=moved,
                 width=np.array(width), **{"T_" + k: v for k, v in axis.items()})
 
 
@@ -1744,15 +1750,16 @@ def cmd_tail(args):
         n_last, t_last = outs[-1]
         s = tail_sections(run.grid(n_last), sp, m, T0)
         xb = sp["start"][0] + v * min(t_last - sp["t0"], t_path)
-        print("  last output t = %.1f us, beam at x = %.1f um; the plate's "
-              "enthalpy above T0 %.3f mJ (the log's stored, all metal: "
-              "%.3f)" % (t_last * 1e6, xb * 1e6, s["e"].sum() * sp["h"] * 1e3,
-                         en["stored"] * 1e3))
+        print("  last output t = %.1f us, beam at x = %.1f um; enthalpy above "
+              "T0 of the metal below the original surface %.3f mJ, of all "
+              "metal %.3f mJ (the log's stored: %.3f)" % (
+                  t_last * 1e6, xb * 1e6, s["e_plate"] * 1e3,
+                  s["e"].sum() * sp["h"] * 1e3, en["stored"] * 1e3))
         face = xb - (sp["start"][0] - track_geometry(
             c, is_compact(setting), track_length(setting))["start"])
         ref = lambda dd: tail_reference(q_net, v, m, T0, dd, t_path, sp["rb"],
                                         face)
-        print("  behind(um)  x(um)  E'(J/m)  sd_y  sd_z(um) width(um)  T_axis: "
+        print("  behind(um)  x(um)  E'(J/m)  sd_y  sd_z(um) width(um) moved(um2)  T_axis: "
               "top  20um  40um  80um (K) | reference at the surface, path's "
               "end / with the start face / steady (K): mean T0..Ts; at Ts; "
               "mean+latent")
@@ -1789,10 +1796,10 @@ def cmd_tail(args):
                         s["e"][i0] / (math.pi * math.sqrt(vy * vz)), Hg, Tg))))
                 conv = " | 2D: sd_y sd_z T_axis %s" % "; ".join(
                     "%5.1f %5.1f %5.0f" % (p[0] * 1e6, p[1] * 1e6, p[2]) for p in pred)
-            print("  %8.0f %7.0f %8.1f %5.1f %5.1f %6.1f   %6.0f %6.0f %5.0f %5.0f  %s%s" % (
+            print("  %8.0f %7.0f %8.1f %5.1f %5.1f %6.1f %+7.0f   %6.0f %6.0f %5.0f %5.0f  %s%s" % (
                 behind * 1e6, s["x"][i] * 1e6, s["e"][i],
                 math.sqrt(s["var_y"][i]) * 1e6, math.sqrt(s["var_z"][i]) * 1e6,
-                s["width"][i] * 1e6,
+                s["width"][i] * 1e6, s["moved"][i] * 1e12,
                 s["T_top"][i], s["T_20"][i], s["T_40"][i], s["T_80"][i],
                 " ".join("%5.0f/%5.0f/%5.0f" % v for v in rr.values())
                 if rr else "", conv))
@@ -1808,6 +1815,20 @@ def cmd_tail(args):
                                                    0.1, k, rc) * 1e6))
         # along the path: per output, the axis at the surface 100, 200 um
         # behind the beam and the enthalpy per length there
+        # melt_pool.csv along the path: medians over windows of 30 us
+        pool = run.melt_pool()
+        cols = (("width_solidus_substrate", "width"),
+                ("depth_solidus_substrate", "depth"), ("length", "length"))
+        print("  melt_pool.csv, medians over 30 us (um): window (us) | "
+              + " | ".join(k for _, k in cols))
+        t0 = 0.0
+        while t0 < t_path * (1 - 1e-9):
+            t1 = min(t0 + 30e-6, t_path)
+            vals = [window_stats(pool, key, t0, t1 * (1 + 1e-9))[0]
+                    for key, _ in cols]
+            print("  %4.0f-%4.0f | %s" % (t0 * 1e6, t1 * 1e6, " | ".join(
+                "%6.1f" % (x * 1e6) if x is not None else "     -" for x in vals)))
+            t0 = t1
         print("  t(us)  beam x(um) | 100 um behind: T_top E' | 200 um "
               "behind: T_top E'")
         for nn, tt in outs[1:]:
