@@ -1717,7 +1717,6 @@ def cmd_tail(args):
     enthalpy per unit length of the cross-sections and its spread, the
     temperature on the axis, against the closed-form moving Gaussian source
     with the run's own net power."""
-    import numpy as np
     allc = {c["name"]: c for c in cases()}
     rx_s = re.compile(args.settings or "tail")
     for (setting, name), r in sorted(load_results(args.out).items()):
@@ -1767,42 +1766,19 @@ def cmd_tail(args):
         mean = lambda f: sum(f(T0 + (Ts - T0) * (i + 0.5) / 200)
                              for i in range(200)) / 200
         k_mean, cp_mean = mean(m["k"]), mean(m["cp"])
-        kappas = (k_mean / (m["rho"] * cp_mean), m["k"](Ts) / (m["rho"] * m["cp"](Ts)))
-        # the cross-section d0 behind the beam conducting on in 2D (exact
-        # for the second moments with constant diffusivity: var + 2 a tau);
-        # its axis temperature from the enthalpy of the Gaussian of those
-        # moments at the axis, E' / (pi sd_y sd_z), through H(T)
-        d0 = args.d0 if args.d0 is not None else 100e-6
-        i0 = int(round((xb - d0) / sp["h"] - 0.5))
-        Tg, Hg = enthalpy_table(m, T0)
-        print("  2D conduction of the slab %.0f um behind the beam (E' %.1f "
-              "J/m, sd_y %.1f, sd_z %.1f um) with the diffusivity averaged over "
-              "T0..T_s (%.2e m2/s) and at T_s (%.2e m2/s)" % (
-                  d0 * 1e6, s["e"][i0], math.sqrt(s["var_y"][i0]) * 1e6,
-                  math.sqrt(s["var_z"][i0]) * 1e6, *kappas))
         step = max(1, int(round(20e-6 / sp["h"])))
         for i in range(len(s["x"]) - 1, -1, -step):
             behind = xb - s["x"][i]
             if behind < -40e-6:
                 continue
             rr = ref(behind) if behind > 2 * sp["rb"] else None
-            conv = ""
-            if i < i0:
-                tau = (s["x"][i0] - s["x"][i]) / v
-                pred = []
-                for a in kappas:
-                    vy, vz = s["var_y"][i0] + 2 * a * tau, s["var_z"][i0] + 2 * a * tau
-                    pred.append((math.sqrt(vy), math.sqrt(vz), float(np.interp(
-                        s["e"][i0] / (math.pi * math.sqrt(vy * vz)), Hg, Tg))))
-                conv = " | 2D: sd_y sd_z T_axis %s" % "; ".join(
-                    "%5.1f %5.1f %5.0f" % (p[0] * 1e6, p[1] * 1e6, p[2]) for p in pred)
-            print("  %8.0f %7.0f %8.1f %5.1f %5.1f %6.1f %+7.0f   %6.0f %6.0f %5.0f %5.0f  %s%s" % (
+            print("  %8.0f %7.0f %8.1f %5.1f %5.1f %6.1f %+7.0f   %6.0f %6.0f %5.0f %5.0f  %s" % (
                 behind * 1e6, s["x"][i] * 1e6, s["e"][i],
                 math.sqrt(s["var_y"][i]) * 1e6, math.sqrt(s["var_z"][i]) * 1e6,
                 s["width"][i] * 1e6, s["moved"][i] * 1e12,
                 s["T_top"][i], s["T_20"][i], s["T_40"][i], s["T_80"][i],
                 " ".join("%5.0f/%5.0f/%5.0f" % v for v in rr.values())
-                if rr else "", conv))
+                if rr else ""))
         for lab, k, cp in (("mean T0..T_s", k_mean, cp_mean),
                            ("at T_s", m["k"](Ts), m["cp"](Ts))):
             rc = m["rho"] * cp
@@ -2716,9 +2692,6 @@ def main():
                     "(default: every one with field outputs fine enough)")
     ap.add_argument("--force", action="store_true",
                     help="dig: evaluate again where dig.csv exists")
-    ap.add_argument("--d0", type=float, default=None,
-                    help="tail: the cross-section conducted on in 2D, m "
-                         "behind the beam (default 1e-4)")
     ap.add_argument("--props", default=None,
                     help="conduction3d: 'file', 'nolatent', 'const' (comma-separated)")
     args = ap.parse_args()
