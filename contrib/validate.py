@@ -627,7 +627,7 @@ def moving_gaussian_rise(x, y, z, q, v, a, rho_cp, var_xy, var_z=0.0,
     moving at v along +x over a half-space of constant diffusivity a and
     heat capacity rho_cp, insulated at its surface z = 0, in the frame of
     the source (x < 0 behind it, z > 0 below the surface): the superposed
-    point releases q dt' at the times t' before now,
+    point releases q dt' at each time t' before the present one,
     T - T0 = int_0^t_on q / rho_cp g_xy g_z dt', with the lateral Gaussian
     g_xy of variance 2 a t' + var_xy (var_xy = r_b^2/4 for a beam of 1/e^2
     radius r_b) and g_z the half-Gaussian of variance 2 a t' + var_z
