@@ -31,67 +31,15 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string     scene = argv[1];
-      const CoolingStepRuns runs{scene, comm};
-      const Override        damp = {"Solid/Adaptive mass scaling",
-                                    "Finite-element damping after solidification",
-                                    "0.01"};
-      runs.common();
-
-      // A quasi-static run into @p dir, resumed from the newest checkpoint
-      // of @p from, to 300 us, with the overrides @p extra.
-      const auto resume_to_end = [&](const std::string    &from,
-                                     const std::string    &dir,
-                                     std::vector<Override> extra) {
-        extra.insert(extra.begin(), runs.quasi);
-        runs.resume_to_end(from, dir, "3e-4", extra);
-      };
-      resume_to_end("common", "plain", {});
-      resume_to_end("common",
-                    "damped",
-                    {damp, {"Checkpoint", "Every simulated time", "2.5e-4"}});
-      const auto e_plain  = read_csv_columns("plain/solid_energy.csv");
-      const auto e_damped = read_csv_columns("damped/solid_energy.csv");
-      // What the damping took out: the transfer dissipation beyond the
-      // undamped run's; the balance must not move by more than 2 % of it
-      // (it would move by all of it if the energy were not booked).
-      const auto change = [](const auto &e, const std::string &col) {
-        return e.at(col).back() - e.at(col).front();
-      };
-      const double taken = change(e_damped, "transfer_dissipation") -
-                           change(e_plain, "transfer_dissipation");
-      checks.in_range("kinetic energy taken out by the damping above 0 (1: "
-                      "yes)",
-                      taken > 0 ? 1 : 0,
-                      1,
-                      1);
-      checks.at_most("balance damped - undamped over the energy taken out",
-                     std::ceil(100 *
-                                 std::abs(change(e_damped, "balance") -
-                                          change(e_plain, "balance")) /
-                                 taken -
-                               1e-9) /
-                       100,
-                     0.02);
-      for (const std::string col : {"sigma_xx", "von_mises"})
-        checks.at_most(col + " damped against undamped, / peak",
-                       resumed_end_difference("plain", "damped", col),
-                       0.03);
-
-      // 3. Resumed after the switch.
-      resume_to_end("damped", "resumed", {damp});
-      const auto   e_res  = read_csv_columns("resumed/solid_energy.csv");
-      const double d_rows = energy_rows_difference(e_res,
-                                                   e_damped,
-                                                   {"time",
-                                                    "step",
-                                                    "mass_scaling",
-                                                    "internal_work",
-                                                    "kinetic",
-                                                    "transfer_dissipation"});
-      checks.at_most("resumed against straight: solid energy rows (relative)",
-                     d_rows,
-                     1e-12);
+      const CoolingStepRuns runs{argv[1], comm};
+      runs.check_option(checks,
+                        {"Solid/Adaptive mass scaling",
+                         "Finite-element damping after solidification",
+                         "0.01"},
+                        "damped",
+                        "the damping",
+                        "damped",
+                        "undamped");
     }
   catch (const std::exception &e)
     {

@@ -1282,6 +1282,29 @@ namespace femp
 
   template <int dim>
   double
+  SolidFEM<dim>::scale_node_velocities(const double f)
+  {
+    // Nodes of nonzero inverse mass: those that update_nodes() integrates
+    // (transition nodes and nodes of no element have 0).
+    double k_old = 0, k_new = 0;
+    for (std::size_t n = 0; n < n_box; ++n)
+      if (inv_mass[n] > 0)
+        {
+          double v2 = 0;
+          for (int d = 0; d < dim; ++d)
+            {
+              v2 += vel[d][n] * vel[d][n];
+              vel[d][n] *= f;
+            }
+          k_old += 0.5 * owned_mass[n] * v2;
+          k_new += 0.5 * owned_mass[n] * f * f * v2;
+        }
+    kinetic += k_new - k_old;
+    return k_new - k_old;
+  }
+
+  template <int dim>
+  double
   SolidFEM<dim>::mass() const
   {
     double m = 0;

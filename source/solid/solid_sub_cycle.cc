@@ -186,6 +186,21 @@ namespace femp
               "can hold the factor low; the kinetic energy taken out is "
               "booked in the energy file with transfer_dissipation "
               "(doc/solid.md \"Quasi-static cooling\").");
+    table.add("Finite-element nodes at a raise after solidification",
+              fe_momentum_at_raise,
+              {{false, "velocity kept"}, {true, "momentum kept"}},
+              "With 'Mass scaling after solidification = adaptive': what "
+              "the nodes of the finite-element zone (not its transition "
+              "nodes) keep when the controller raises the factor from s "
+              "to s_new after the switch. 'velocity kept' (default): "
+              "their kinetic energy grows by s_new / s, as that of the "
+              "points. 'momentum kept': their velocities are divided by "
+              "s_new / s, so that their kinetic energy falls by that "
+              "ratio and the raises do not feed a vibration of the zone "
+              "(a lowering keeps the velocities either way); the kinetic "
+              "energy taken out is booked in the energy file with "
+              "transfer_dissipation (doc/solid.md \"Quasi-static "
+              "cooling\").");
     table.leave_subsection();
     table.add("Light nodes",
               light_nodes,
@@ -382,6 +397,11 @@ namespace femp
             ams + "Finite-element damping after solidification",
             fe_damping_solidified,
             "it must lie in [0, 0.1]");
+    require(!fe_momentum_at_raise || adaptive_after_solidification,
+            ams + "Finite-element nodes at a raise after solidification",
+            "momentum kept",
+            "it acts at the raises of the quasi-static cooling: it needs "
+            "'Solid/Mass scaling after solidification = adaptive'");
     if (adaptive_scaling)
       {
         require(mass_scaling >= min_factor && mass_scaling <= max_factor,
@@ -1969,7 +1989,9 @@ namespace femp
     const double s      = scaling.factor();
     const double target = scaling.target();
     if (target != s)
-      set_mass_scaling(target);
+      set_mass_scaling(target,
+                       prm.fe_momentum_at_raise && adaptive_from > 0 &&
+                         target > s);
   }
 
   template <int dim>
@@ -2220,11 +2242,20 @@ namespace femp
 
   template <int dim>
   void
-  SolidSubCycle<dim>::set_mass_scaling(const double s)
+  SolidSubCycle<dim>::set_mass_scaling(const double s,
+                                       const bool   keep_fe_momentum)
   {
     // Velocities kept (the kinematic velocity of the thermal expansion
     // does not depend on s); the kinetic energy follows the mass, and the
-    // jump is booked so that the balance still closes.
+    // jump is booked so that the balance still closes. With
+    // keep_fe_momentum the FE nodes' velocities are first divided by
+    // s / s_old: the kinetic energy this takes out at the old masses is
+    // booked with the transfer dissipation (as the damping of the FE
+    // nodes), and the jump at the kept (reduced) velocities follows.
+    if (keep_fe_momentum && fem)
+      ledger.take_fe_kinetic(
+        -Utilities::MPI::sum(fem->scale_node_velocities(scaling.factor() / s),
+                             comm));
     const double r = scaling.change_to(s, ledger.kinetic());
     ledger.scale_kinetic(r);
     mpm.set_mass_scaling(s);

@@ -169,6 +169,15 @@ namespace femp
       K += k_points - K_p;
       K_p = k_points;
     }
+    /// Kinetic energy @p e (global) taken out of the FE nodes between two
+    /// steps (their velocities reduced), booked with the transfer
+    /// dissipation.
+    void
+    take_fe_kinetic(const double e)
+    {
+      K -= e;
+      D_transfer += e;
+    }
     /// The masses changed by the factor @p r at kept velocities.
     void
     scale_kinetic(const double r)

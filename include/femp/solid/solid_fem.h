@@ -275,6 +275,13 @@ namespace femp
     {
       return kinetic;
     }
+    /// Multiply the velocities of the nodes that update_nodes() integrates
+    /// (not the transition nodes) by @p f (quasi-static cooling: a raise
+    /// of the factor from s to s_new at kept momentum, f = s / s_new,
+    /// doc/solid.md). Returns the change of the kinetic energy of the
+    /// owned nodes at the masses in use, J (2D: J/m).
+    double
+    scale_node_velocities(const double f);
     /// The zone's mass, kg (2D: kg/m): the lumped masses of the owned
     /// nodes over the mass-scaling factor in use, summed over the ranks.
     /// Each element carries the material's density over its cell, also

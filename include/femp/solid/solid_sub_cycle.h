@@ -111,6 +111,11 @@ namespace femp
       /// velocity that the finite-element nodes lose at every solid step
       /// after the switch (doc/solid.md "Quasi-static cooling"), -.
       double fe_damping_solidified = 0;
+      /// With adaptive_after_solidification: at a raise of the factor
+      /// after the switch the finite-element nodes keep their momentum
+      /// (velocities divided by s_new / s_old) instead of their
+      /// velocities (doc/solid.md "Quasi-static cooling").
+      bool fe_momentum_at_raise = false;
       /// The switch after solidification does something.
       bool
       cools_after_solidification() const
@@ -707,9 +712,12 @@ namespace femp
     /// Fraction of that energy that a positive balance may reach before
     /// check_energy_created() stops the run, -.
     static constexpr double energy_created_limit = 0.25;
-    /// Change the mass-scaling factor to @p s at kept velocities.
+    /// Change the mass-scaling factor to @p s at kept velocities; with
+    /// @p keep_fe_momentum the finite-element nodes (not the transition
+    /// nodes) keep their momentum instead, the kinetic energy that this
+    /// takes out booked with the transfer dissipation.
     void
-    set_mass_scaling(const double s);
+    set_mass_scaling(const double s, const bool keep_fe_momentum = false);
     /// Gather the points for a solid advance: book the kinetic energy of
     /// melted and solidified points, and stop if a point was lost
     /// (collective).
