@@ -412,6 +412,11 @@ class Run:
         t.n = n
         return t
 
+    def probe_line_summary(self, name, n=None, alpha_min=0.5,
+                           fields=("sigma_xx", "von_mises")):
+        """probe_line_summary() of probe_line(name, n)."""
+        return probe_line_summary(self.probe_line(name, n), alpha_min, fields)
+
     def track_shape(self, n=None):
         n = self._pick(self._numbers("track_shape_%05d.csv"), n,
                        "track_shape_<n>.csv")
@@ -536,6 +541,30 @@ class Run:
         pos = np.concatenate(pos) if pos else np.zeros((0, 3))
         return Fields({k: np.concatenate(v) for k, v in cols.items()},
                       self._time_of("points", n), n, pos, "points")
+
+
+def probe_line_summary(line, alpha_min=0.5,
+                       fields=("sigma_xx", "von_mises")):
+    """A reading of a probe line (a Table of probe_line_<name>_<n>.csv,
+    with its 'alpha' column) that does not hang on partly filled cells:
+    a cell's stress is the mean over its few solid points, which in a cell
+    that is mostly gas or powder changes from one realization of a build to
+    the next. Returns 'samples' (all), 'stressed' (the samples of nonzero
+    von Mises stress: solid metal; gas, powder and melt carry none),
+    'metal' (the stressed samples in cells with alpha >= alpha_min),
+    'partial' (the stressed samples with alpha < alpha_min) and, per
+    field, mean, min and max over the 'metal' samples (None where there
+    are none)."""
+    alpha = [float(a) for a in line["alpha"]]
+    stressed = [i for i, v in enumerate(line["von_mises"]) if float(v) != 0]
+    keep = [i for i in stressed if alpha[i] >= alpha_min]
+    out = {"samples": len(alpha), "stressed": len(stressed),
+           "metal": len(keep), "partial": len(stressed) - len(keep)}
+    for f in fields:
+        v = [float(line[f][i]) for i in keep]
+        out[f] = ({"mean": sum(v) / len(v), "min": min(v), "max": max(v)}
+                  if v else None)
+    return out
 
 
 def von_mises(f):
