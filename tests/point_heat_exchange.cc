@@ -68,7 +68,7 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
   heat.update_ghosts();
   points.cells_to_points(heat.temperature());
 
-  PointHeatExchange<dim> exchange(points, heat, carried_by_points);
+  PointHeatExchange<dim> exchange(points, heat, grid, carried_by_points);
   const double           H0 = heat.stored_enthalpy();
   for (auto &particle : points.particle_handler())
     {

@@ -57,10 +57,13 @@ namespace femp
                       const bool heat_enabled);
     /// An exchange without bodies of metal and surface (the heat finds
     /// the surface itself); @p carried_by_points: 'Advection by melt flow
-    /// = points'.
-    PointHeatExchange(MaterialPoints<dim> &points,
-                      HeatTransfer<dim>   &heat,
-                      const bool           carried_by_points);
+    /// = points'; @p metal_from_points (with it): 'Metal of melt cells =
+    /// points'.
+    PointHeatExchange(MaterialPoints<dim>       &points,
+                      HeatTransfer<dim>         &heat,
+                      const BackgroundGrid<dim> &grid,
+                      const bool                 carried_by_points,
+                      const bool                 metal_from_points = false);
 
     /// The start of a run: the initial temperatures, then the metal
     /// fraction of the points as they were created (no heat exchange),
@@ -191,7 +194,10 @@ namespace femp
   private:
     MaterialPoints<dim>               &points;
     HeatTransfer<dim>                 &heat;
+    const BackgroundGrid<dim>         &grid;
     const bool                         carried_by_points;
+    // 'Metal of melt cells = points' (with carried_by_points).
+    const bool metal_from_points;
     std::unique_ptr<MetalBodies<dim>>  metal_bodies;
     std::unique_ptr<MetalSurface<dim>> surface; ///< null with the heat off
     double                             moved_points = 0;
@@ -199,6 +205,12 @@ namespace femp
     SweptAccount                       swept;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
+    // DIAG (temporary)
+    std::vector<double> diag_Vp;
+    double              diag_M_prev = 0;
+    long                diag_row    = 0;
+    std::vector<double>        diag_cell_volumes() const;
+    std::vector<double>        metal_mass(const std::vector<double> &alpha) const;
 
     void
     initial_temperatures(
