@@ -3,8 +3,7 @@
 // enthalpy relation of eq. 1, the point-cell transfer of eq. 2).
 #include <femp/coupling/point_heat_exchange.h>
 
-#include <cstdio>
-#include <cstdlib>
+#include <cmath>
 
 namespace femp
 {
@@ -168,8 +167,6 @@ namespace femp
     initial_temperatures(bodies, heat_prm);
     new_metal_fraction(points.metal_fraction());
     alpha_moves = points.point_moves();
-    if (std::getenv("FEMP_ESINK_DIAG") || std::getenv("FEMP_ESINK_FIX"))
-      diag_Vp = diag_cell_volumes(); // DIAG (temporary)
   }
 
   template <int dim>
@@ -198,99 +195,14 @@ namespace femp
         // The points carry the heat: every cell whose points came from
         // cells at other temperatures takes their mean specific enthalpy
         // (cells that gained metal included).
-        auto mean_e =
+        const auto mean_e =
           points.volume_mean_over_points(heat.temperature(),
                                          [this](const double T) {
                                            return heat.specific_enthalpy(T);
                                          });
-        // DIAG (temporary)
-        static const char *diag_file = std::getenv("FEMP_ESINK_DIAG");
-        static const bool  diag_fix  = std::getenv("FEMP_ESINK_FIX") != nullptr;
-        std::vector<double> a_old, T_old, Vp_new;
-        if ((diag_file || diag_fix))
-          {
-            a_old  = heat.metal_fraction();
-            T_old  = heat.temperature();
-            Vp_new = diag_cell_volumes();
-            if (diag_Vp.empty())
-              diag_Vp = Vp_new; // (first call: no earlier record)
-          }
-        const double V =
-          std::pow(grid.h(), dim);
-        if (diag_fix)
-          for (auto &[idx, e] : mean_e)
-            {
-              const double d = a_old[idx] * V - diag_Vp[idx];
-              const double W = d + Vp_new[idx];
-              if (W > 0.25 * Vp_new[idx])
-                e = (d * heat.specific_enthalpy(T_old[idx]) + Vp_new[idx] * e) / W;
-            }
         new_metal_fraction(alpha);
         heat.take_point_enthalpy(mean_e);
-        const double H_after = heat.stored_enthalpy();
-        moved_points += H_after - H_before;
-        if (diag_file)
-          {
-            const Material &mat  = heat.material();
-            const double    Tref = heat.reference_temperature();
-            const double    rho  = mat.density;
-            const double    e0   = heat.specific_enthalpy(Tref);
-            const double    rgcg = mat.gas_density * mat.gas_specific_heat;
-            const auto     &a1   = heat.metal_fraction();
-            const auto     &T1   = heat.temperature();
-            static std::vector<double> T_prev;
-            if (T_prev.empty())
-              T_prev = T_old;
-            double Mb = 0, Ma = 0, Ma_pos = 0, Ma_neg = 0, gas = 0, Perr = 0;
-            double hp_liq = 0, hp_mid = 0, hp_sol = 0, hn_liq = 0, hn_mid = 0,
-                   hn_sol = 0, sd = 0, sad = 0, Hm = 0;
-            for (const auto idx : grid.owned_cells())
-              {
-                const double eb  = heat.specific_enthalpy(T_old[idx]) - e0;
-                const double ea  = heat.specific_enthalpy(T1[idx]) - e0;
-                const double db  = a_old[idx] * V - diag_Vp[idx];
-                const double da  = a1[idx] * V - Vp_new[idx];
-                Mb += rho * eb * db;
-                Ma += rho * ea * da;
-                (da > 0 ? Ma_pos : Ma_neg) += rho * ea * da;
-                sd += da;
-                sad += std::abs(da);
-                Perr += rho * (Vp_new[idx] * ea - diag_Vp[idx] * eb);
-                if (a_old[idx] > 0 || a1[idx] > 0)
-                  gas += V * rgcg *
-                         ((a1[idx] > 0 ? (1 - a1[idx]) * (T1[idx] - Tref) : 0) -
-                          (a_old[idx] > 0 ? (1 - a_old[idx]) * (T_old[idx] - Tref) : 0));
-                const double ep = heat.specific_enthalpy(T_prev[idx]) - e0;
-                const double hc = rho * db * (eb - ep);
-                const double Tc = T_old[idx];
-                double *bin =
-                  db > 0 ? (Tc >= mat.liquidus ? &hp_liq :
-                            Tc > mat.solidus   ? &hp_mid :
-                                                 &hp_sol) :
-                           (Tc >= mat.liquidus ? &hn_liq :
-                            Tc > mat.solidus   ? &hn_mid :
-                                                 &hn_sol);
-                *bin += hc;
-                Hm += rho * a1[idx] * V * ea;
-              }
-            static FILE *f = nullptr;
-            if (!f)
-              {
-                f = std::fopen(diag_file, "w");
-                std::fprintf(f, "row,moved_inc,M_before,M_after,dM_heat,Ma_pos,Ma_neg,gas,P_err,"
-                                "heat_dpos_liq,heat_dpos_mush,heat_dpos_sol,heat_dneg_liq,"
-                                "heat_dneg_mush,heat_dneg_sol,sum_d,sum_abs_d,n_listed,H_metal,moved_total\n");
-              }
-            std::fprintf(f, "%ld,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%zu,%.9e,%.9e\n",
-                         diag_row++, H_after - H_before, Mb, Ma, Mb - diag_M_prev,
-                         Ma_pos, Ma_neg, gas, Perr, hp_liq, hp_mid, hp_sol,
-                         hn_liq, hn_mid, hn_sol, sd, sad, mean_e.size(), Hm, moved_points);
-            std::fflush(f);
-            diag_M_prev = Ma;
-            T_prev      = T1;
-          }
-        if (diag_file || diag_fix)
-          diag_Vp = Vp_new;
+        moved_points += heat.stored_enthalpy() - H_before;
         return;
       }
     // (With a frozen temperature the field keeps its initial values.)
@@ -362,18 +274,6 @@ namespace femp
     // The next follow_points() books the change of the stored enthalpy as
     // that of moved points; the part the swept metal took is booked here.
     moved_points += a.enthalpy;
-  }
-
-  template <int dim>
-  std::vector<double>
-  PointHeatExchange<dim>::diag_cell_volumes() const
-  {
-    using P = typename MaterialPoints<dim>::PropertyIndex;
-    std::vector<double> v(grid.n_local(), 0.);
-    for (std::size_t c = 0; c < points.occupied_cells().size(); ++c)
-      for (const double *p : points.cell_point_properties(c))
-        v[points.occupied_cells()[c].first] += p[P::volume];
-    return v;
   }
 
   template class PointHeatExchange<2>;

@@ -16,7 +16,10 @@
 // losses and the laser deposited through |grad alpha| with the density
 // weighting above (the default 'first surface' laser only into the cells where
 // the vertical beam first meets metal, shared in proportion to that weight).
-// Cells without metal (alpha = 0) are not solved and carry no flux.
+// Cells without metal (alpha = 0) are not solved and carry no flux. The
+// metal's heat capacity (and the metal share of the conductivity, at most
+// alpha) is alpha's, or, where its keeper gives one (set_metal_fraction(),
+// 'Metal of melt cells = points'), the metal mass of the cell's points.
 #ifndef femp_heat_transfer_h
 #define femp_heat_transfer_h
 
@@ -205,7 +208,12 @@ namespace femp
     /// New metal fraction (owned cells and ghosts) and its free surface
     /// @p surface, found from the same alpha (MetalSurface::update(), once
     /// per change, by alpha's keeper): the heat takes its lists of surface,
-    /// first-surface and detached cells and renews the properties.
+    /// first-surface and detached cells and renews the properties. With
+    /// @p metal_mass (owned cells and ghosts, nonzero where alpha is), the
+    /// metal's mass per cell over rho_m h^dim, which may differ from alpha
+    /// (and exceed 1): the heat capacity and stored enthalpy of the metal
+    /// take it, the metal share of the conductivity min(alpha, it);
+    /// without it, alpha.
     void
     set_metal_fraction(const std::vector<double> &alpha,
                        const MetalSurface<dim>   &surface,
