@@ -20,10 +20,9 @@ namespace femp
       , grid(grid)
       , carried_by_points(prm.advection_by_melt_flow ==
                           HeatTransfer<dim>::Parameters::Advection::points)
-      , metal_from_points(
-          carried_by_points &&
-          prm.metal_of_melt_cells ==
-            HeatTransfer<dim>::Parameters::MeltMetal::points)
+      , metal_from_points(carried_by_points &&
+                          prm.metal_of_melt_cells ==
+                            HeatTransfer<dim>::Parameters::MeltMetal::points)
       // Detached drops are looked for only for the heat equation's losses.
       , metal_bodies(std::make_unique<MetalBodies<dim>>(
           grid,
@@ -38,12 +37,11 @@ namespace femp
   }
 
   template <int dim>
-  PointHeatExchange<dim>::PointHeatExchange(
-    MaterialPoints<dim>       &points,
-    HeatTransfer<dim>         &heat,
-    const BackgroundGrid<dim> &grid,
-    const bool                 carried_by_points,
-    const bool                 metal_from_points)
+  PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim>       &points,
+                                            HeatTransfer<dim>         &heat,
+                                            const BackgroundGrid<dim> &grid,
+                                            const bool carried_by_points,
+                                            const bool metal_from_points)
       : points(points)
       , heat(heat)
       , grid(grid)
@@ -78,14 +76,14 @@ namespace femp
     // alpha, except in the cells of the volume rule (a point that is or
     // has been fluid, MaterialPoints::metal_fraction()): there the volume
     // of the points, not spread to neighbours nor capped.
-    using P           = typename MaterialPoints<dim>::PropertyIndex;
-    const double Ts   = heat.material().solidus;
-    const double inv_V = 1. / std::pow(grid.h(), dim);
-    std::vector<double> m = alpha;
-    const auto &occupied = points.occupied_cells();
+    using P                      = typename MaterialPoints<dim>::PropertyIndex;
+    const double        Ts       = heat.material().solidus;
+    const double        inv_V    = 1. / std::pow(grid.h(), dim);
+    std::vector<double> m        = alpha;
+    const auto         &occupied = points.occupied_cells();
     for (std::size_t c = 0; c < occupied.size(); ++c)
       {
-        double v = 0;
+        double v    = 0;
         bool   melt = false;
         for (const double *p : points.cell_point_properties(c))
           {

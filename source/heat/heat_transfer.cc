@@ -811,7 +811,7 @@ namespace femp
     const double        rho_g_cg = mat.gas_density * mat.gas_specific_heat;
     const double        k_g      = mat.gas_conductivity;
     const double        rho_m    = mat.density;
-    const double *Tp = T.data(), *ap = alpha.data(), *mp = mass.data();
+    const double       *Tp = T.data(), *ap = alpha.data(), *mp = mass.data();
     double             *kp = conductance.data(), *cp = capacity.data();
     if (!mat.conductivity.has_padded_segments() ||
         !mat.specific_heat.has_padded_segments())
@@ -821,12 +821,13 @@ namespace femp
           {
             const double a     = ap[idx];
             const double metal = (a > 0 && status[idx] != 0) ? 1. : 0.;
-            const double ak = std::min(a, mp[idx]);
+            const double ak    = std::min(a, mp[idx]);
             kp[idx] =
               metal * (ak * mat.conductivity.value(Tp[idx]) + (1 - ak) * k_g);
-            cp[idx] = metal * (mp[idx] * rho_m * mat.specific_heat.value(Tp[idx]) +
-                               (1 - a) * rho_g_cg) +
-                      (1 - metal);
+            cp[idx] =
+              metal * (mp[idx] * rho_m * mat.specific_heat.value(Tp[idx]) +
+                       (1 - a) * rho_g_cg) +
+              (1 - metal);
           }
         return;
       }
@@ -1322,16 +1323,16 @@ namespace femp
           ++nphase;
           const double dH = (Tnew - Tc) * capacity[idx];
           Tnew            = solve_cell(mass[idx],
-                                       1 - alpha[idx],
-                                       Tc,
-                                       gamma[idx],
-                                       capacity[idx],
-                                       dH,
-                                       0.,
-                                       true,
-                                       Tnew);
-          T_new[idx] = Tnew;
-          gamma[idx] = mat.liquid_fraction(Tnew);
+                            1 - alpha[idx],
+                            Tc,
+                            gamma[idx],
+                            capacity[idx],
+                            dH,
+                            0.,
+                            true,
+                            Tnew);
+          T_new[idx]      = Tnew;
+          gamma[idx]      = mat.liquid_fraction(Tnew);
         }
     sums.nphase = nphase;
   }
@@ -1457,13 +1458,13 @@ namespace femp
     // f(T) = H(T) - H(Tc) + dtW q(T) - dH, increasing in T (q grows with T
     // below ~2 L_v M/R, 1e5 K for steel). With the sensible part only,
     // H(T) - H(Tc) = rc (T - Tc).
-    const double H0 =
-      enthalpy ? m * mat.density *
-                     (mat.specific_heat.antiderivative(Tc) +
-                      mat.latent_heat_fusion * gc) +
-                   g * mat.gas_density * mat.gas_specific_heat * Tc :
-                 0.;
-    auto f = [&](const double T, double &slope) {
+    const double H0 = enthalpy ?
+                        m * mat.density *
+                            (mat.specific_heat.antiderivative(Tc) +
+                             mat.latent_heat_fusion * gc) +
+                          g * mat.gas_density * mat.gas_specific_heat * Tc :
+                        0.;
+    auto         f  = [&](const double T, double &slope) {
       double qe = 0, qc = 0, qr = 0, dq = 0;
       if (dtW > 0)
         surface_loss(T, qe, qc, qr, dq, gas_h);
@@ -1472,8 +1473,8 @@ namespace femp
           slope = m * mat.density *
                     (mat.specific_heat.value(T) +
                      ((T > mat.solidus && T < mat.liquidus) ?
-                        mat.latent_heat_fusion / (mat.liquidus - mat.solidus) :
-                        0.)) +
+                                 mat.latent_heat_fusion / (mat.liquidus - mat.solidus) :
+                                 0.)) +
                   g * mat.gas_density * mat.gas_specific_heat +
                   dtW * std::max(0., dq);
           return enthalpy_density(m, g, T) - H0 + dtW * (qe + qc + qr) - dH;
@@ -1535,7 +1536,8 @@ namespace femp
         const double dH = rho * (e - specific_enthalpy(Tc));
         set_cell_temperature(
           idx,
-          solve_cell(1., 0., Tc, mat.liquid_fraction(Tc), 0., dH, 0., true, Tc));
+          solve_cell(
+            1., 0., Tc, mat.liquid_fraction(Tc), 0., dH, 0., true, Tc));
       }
     update_ghosts();
   }

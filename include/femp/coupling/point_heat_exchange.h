@@ -197,12 +197,12 @@ namespace femp
     }
 
   private:
-    MaterialPoints<dim>               &points;
-    HeatTransfer<dim>                 &heat;
-    const BackgroundGrid<dim>         &grid;
-    const bool                         carried_by_points;
+    MaterialPoints<dim>       &points;
+    HeatTransfer<dim>         &heat;
+    const BackgroundGrid<dim> &grid;
+    const bool                 carried_by_points;
     // 'Metal of melt cells = points' (with carried_by_points).
-    const bool metal_from_points;
+    const bool                         metal_from_points;
     std::unique_ptr<MetalBodies<dim>>  metal_bodies;
     std::unique_ptr<MetalSurface<dim>> surface; ///< null with the heat off
     double                             moved_points = 0;

@@ -422,7 +422,7 @@ namespace femp
     std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
     // The metal's mass per cell over rho_m h^dim (set_metal_fraction()):
     // alpha, or the volume of the points that carry the heat.
-    std::vector<double> mass;
+    std::vector<double>        mass;
     std::vector<std::uint8_t>  is_source;
     std::vector<std::uint32_t> source_cells;
     /// See evaporated_mass().
