@@ -121,7 +121,7 @@ namespace
     points.create_region([](const Point<dim> &x) { return x[1] < 30e-6; },
                          T0,
                          MaterialPoints<dim>::fluid);
-    PointHeatExchange<dim> exchange(points, heat, true);
+    PointHeatExchange<dim> exchange(points, heat, grid, true);
     exchange.start({}, p);
 
     const double H0 = heat.stored_enthalpy();

@@ -12,7 +12,15 @@
 //  - a cell that was gas at the last alpha pass gives its new points no
 //    stale temperature (stale_gas_cell below);
 //  - the points of fixed cells (the FE zone) get the temperatures and
-//    peaks passed to their cells when flushed (fixed_cells below).
+//    peaks passed to their cells when flushed (fixed_cells below);
+//  - bunched points (bunched_points below): a cell over-full with points
+//    passes its excess volume to the half-full cells of the top row, the
+//    top row is heated (as the laser heats the surface), the points take
+//    the cells' temperatures and move again: with 'Metal of melt cells =
+//    points' the stored enthalpy must stay what the heating made it (to
+//    round-off); with 'alpha' the heat given to the excess volume of the
+//    top row is lost (printed, and it must be large enough that the check
+//    above could fail).
 
 #include <femp/coupling/point_heat_exchange.h>
 
@@ -68,7 +76,7 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
   heat.update_ghosts();
   points.cells_to_points(heat.temperature());
 
-  PointHeatExchange<dim> exchange(points, heat, carried_by_points);
+  PointHeatExchange<dim> exchange(points, heat, grid, carried_by_points);
   const double           H0 = heat.stored_enthalpy();
   for (auto &particle : points.particle_handler())
     {
@@ -291,6 +299,63 @@ fixed_cells(Checks &checks, MPI_Comm comm)
                Utilities::MPI::sum(me.size(), comm));
 }
 
+// Stored enthalpy after a heating of the top row and a move of all points,
+// relative to that after the heating (see the header): the strip's lower
+// row full of melt, its top row half full; the points of one full cell are
+// first moved into its right neighbour, which holds twice its volume.
+double
+bunched_points(const bool metal_from_points, MPI_Comm comm)
+{
+  Strip        strip(comm);
+  const double h         = strip.h;
+  auto        &grid      = strip.grid;
+  auto        &mat       = strip.mat;
+  mat.latent_heat_fusion = 0.5;
+  Laser<dim>        laser(laser_off<dim>());
+  HeatTransfer<dim> heat(heat_parameters<dim>(1., {}), mat, laser, grid);
+  heat.initialize();
+  MaterialPoints<dim> points(strip.pp, mat, grid);
+  points.create_region(
+    [h](const Point<dim> &x) {
+      return x[0] > 0.2 && x[0] < 0.8 && x[1] < 1.5 * h;
+    },
+    2.,
+    MaterialPoints<dim>::fluid);
+  heat.set_metal_fraction(points.metal_fraction());
+  for (const auto idx : grid.owned_cells())
+    heat.set_cell_temperature(idx, 1 + grid.cell_center(idx)[0]);
+  heat.update_ghosts();
+  points.cells_to_points(heat.temperature());
+  PointHeatExchange<dim> exchange(points, heat, grid, true, metal_from_points);
+  // The lower cell at x in [0.5, 0.55) gives its points to its right
+  // neighbour.
+  for (auto &particle : points.particle_handler())
+    {
+      Point<dim> x = particle.get_location();
+      if (x[0] > 0.5 && x[0] < 0.55 && x[1] < h)
+        x[0] += h;
+      particle.set_location(x);
+    }
+  points.points_moved();
+  exchange.points_changed_cells();
+  // The heating of the top row (0.4 in T, across the melting range).
+  for (const auto idx : grid.owned_cells())
+    if (grid.cell_center(idx)[1] > h && heat.metal_fraction()[idx] > 0)
+      heat.set_cell_temperature(idx, heat.temperature()[idx] + 0.4);
+  heat.update_ghosts();
+  const double H1 = heat.stored_enthalpy();
+  points.cells_to_points(heat.temperature(), &heat.metal_fraction());
+  for (auto &particle : points.particle_handler())
+    {
+      Point<dim> x = particle.get_location();
+      x[0] += h / 3;
+      particle.set_location(x);
+    }
+  points.points_moved();
+  exchange.points_changed_cells();
+  return (heat.stored_enthalpy() - H1) / std::abs(H1);
+}
+
 int
 main(int argc, char **argv)
 {
@@ -301,5 +366,22 @@ main(int argc, char **argv)
   run(false, checks, comm);
   stale_gas_cell(checks, comm);
   fixed_cells(checks, comm);
+  {
+    const double e = std::abs(bunched_points(true, comm));
+    checks.at_most("bunched points, metal of melt cells = points: |change of "
+                   "stored enthalpy| / enthalpy, next power of ten",
+                   e > 0 ? std::pow(10., std::ceil(std::log10(e))) : 0.,
+                   1e-13);
+    // The contrast: large enough that the check above could fail.
+    const double a = bunched_points(false, comm);
+    checks.print("bunched points, metal of melt cells = alpha: change of "
+                 "stored enthalpy / enthalpy",
+                 std::round(a * 1e4) / 1e4);
+    checks.in_range("bunched points, metal of melt cells = alpha: |change| "
+                    "/ enthalpy",
+                    std::round(std::abs(a) * 1e4) / 1e4,
+                    1e-3,
+                    1.);
+  }
   return checks.exit_code();
 }

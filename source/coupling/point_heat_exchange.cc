@@ -3,6 +3,8 @@
 // enthalpy relation of eq. 1, the point-cell transfer of eq. 2).
 #include <femp/coupling/point_heat_exchange.h>
 
+#include <cmath>
+
 namespace femp
 {
   template <int dim>
@@ -15,8 +17,12 @@ namespace femp
     const bool                                    heat_enabled)
       : points(points)
       , heat(heat)
+      , grid(grid)
       , carried_by_points(prm.advection_by_melt_flow ==
                           HeatTransfer<dim>::Parameters::Advection::points)
+      , metal_from_points(carried_by_points &&
+                          prm.metal_of_melt_cells ==
+                            HeatTransfer<dim>::Parameters::MeltMetal::points)
       // Detached drops are looked for only for the heat equation's losses.
       , metal_bodies(std::make_unique<MetalBodies<dim>>(
           grid,
@@ -31,12 +37,16 @@ namespace femp
   }
 
   template <int dim>
-  PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim> &points,
-                                            HeatTransfer<dim>   &heat,
-                                            const bool carried_by_points)
+  PointHeatExchange<dim>::PointHeatExchange(MaterialPoints<dim>       &points,
+                                            HeatTransfer<dim>         &heat,
+                                            const BackgroundGrid<dim> &grid,
+                                            const bool carried_by_points,
+                                            const bool metal_from_points)
       : points(points)
       , heat(heat)
+      , grid(grid)
       , carried_by_points(carried_by_points)
+      , metal_from_points(carried_by_points && metal_from_points)
   {
   }
 
@@ -46,13 +56,47 @@ namespace femp
   {
     if (metal_bodies)
       metal_bodies->update(alpha);
+    std::vector<double> m;
+    if (metal_from_points && points.carried())
+      m = metal_mass(alpha);
+    const std::vector<double> *mass = m.empty() ? nullptr : &m;
     if (!surface)
       {
-        heat.set_metal_fraction(alpha, metal_bodies.get());
+        heat.set_metal_fraction(alpha, metal_bodies.get(), mass);
         return;
       }
     surface->update(alpha, metal_bodies.get());
-    heat.set_metal_fraction(alpha, *surface);
+    heat.set_metal_fraction(alpha, *surface, mass);
+  }
+
+  template <int dim>
+  std::vector<double>
+  PointHeatExchange<dim>::metal_mass(const std::vector<double> &alpha) const
+  {
+    // alpha, except in the cells of the volume rule (a point that is or
+    // has been fluid, MaterialPoints::metal_fraction()): there the volume
+    // of the points, not spread to neighbours nor capped.
+    using P                      = typename MaterialPoints<dim>::PropertyIndex;
+    const double        Ts       = heat.material().solidus;
+    const double        inv_V    = 1. / std::pow(grid.h(), dim);
+    std::vector<double> m        = alpha;
+    const auto         &occupied = points.occupied_cells();
+    for (std::size_t c = 0; c < occupied.size(); ++c)
+      {
+        double v    = 0;
+        bool   melt = false;
+        for (const double *p : points.cell_point_properties(c))
+          {
+            v += p[P::volume];
+            melt = melt || p[P::state] == MaterialPoints<dim>::fluid ||
+                   p[P::peak_temperature] > Ts;
+          }
+        const auto idx = occupied[c].first;
+        if (melt && v > 0 && alpha[idx] > 0)
+          m[idx] = v * inv_V;
+      }
+    grid.update_ghosts(m);
+    return m;
   }
 
   template <int dim>

@@ -179,6 +179,23 @@ namespace femp
               "temperatures creates or destroys energy, "
               "doc/verification.md). "
               "No effect without Physics/Melt flow.");
+    table.add("Metal of melt cells",
+              metal_of_melt_cells,
+              {{MeltMetal::alpha, "alpha"}, {MeltMetal::points, "points"}},
+              "With 'Advection by melt flow = points': the metal whose "
+              "heat a cell holding melt (a point that is or has been "
+              "fluid) keeps, as heat capacity and as the metal share "
+              "of its conductivity. 'alpha': its metal fraction, which "
+              "counts the excess volume of over-full neighbour cells "
+              "(points bunched by the flow) that their points carry; "
+              "the heat the temperature step gives that volume is "
+              "lost when the points next change cells, and the heat "
+              "it takes is created (booked as created by points "
+              "moving between cells). 'points': the volume of its own "
+              "points (the conductivity's metal share at most alpha), "
+              "so that the grid holds the heat the points carry and "
+              "the exchange conserves it to round-off "
+              "(doc/verification.md, 'Energy balance').");
     if (table.declaring())
       prm.declare_entry(
         "Prescribed velocity",
@@ -393,6 +410,7 @@ namespace femp
           }
     T_new       = T;
     alpha       = grid.make_field(0.);
+    mass        = alpha;
     conductance = grid.make_field(0.);
     capacity    = grid.make_field(1.);
     is_source.assign(grid.n_local(), 0);
@@ -464,7 +482,8 @@ namespace femp
   template <int dim>
   void
   HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a,
-                                        const MetalBodies<dim>    *bodies)
+                                        const MetalBodies<dim>    *bodies,
+                                        const std::vector<double> *metal_mass)
   {
     MetalSurface<dim> metal_surface(grid,
                                     mat,
@@ -472,15 +491,17 @@ namespace femp
                                     prm.detached_drops);
     if (!frozen)
       metal_surface.update(a, bodies);
-    set_metal_fraction(a, metal_surface);
+    set_metal_fraction(a, metal_surface, metal_mass);
   }
 
   template <int dim>
   void
   HeatTransfer<dim>::set_metal_fraction(const std::vector<double> &a,
-                                        const MetalSurface<dim>   &s)
+                                        const MetalSurface<dim>   &s,
+                                        const std::vector<double> *metal_mass)
   {
     alpha = a;
+    mass  = metal_mass ? *metal_mass : a;
     if (frozen)
       {
         // No heat equation: no surface lists, no properties; only the peak
@@ -790,7 +811,7 @@ namespace femp
     const double        rho_g_cg = mat.gas_density * mat.gas_specific_heat;
     const double        k_g      = mat.gas_conductivity;
     const double        rho_m    = mat.density;
-    const double       *Tp = T.data(), *ap = alpha.data();
+    const double       *Tp = T.data(), *ap = alpha.data(), *mp = mass.data();
     double             *kp = conductance.data(), *cp = capacity.data();
     if (!mat.conductivity.has_padded_segments() ||
         !mat.specific_heat.has_padded_segments())
@@ -800,11 +821,13 @@ namespace femp
           {
             const double a     = ap[idx];
             const double metal = (a > 0 && status[idx] != 0) ? 1. : 0.;
+            const double ak    = std::min(a, mp[idx]);
             kp[idx] =
-              metal * (a * mat.conductivity.value(Tp[idx]) + (1 - a) * k_g);
-            cp[idx] = metal * (a * rho_m * mat.specific_heat.value(Tp[idx]) +
-                               (1 - a) * rho_g_cg) +
-                      (1 - metal);
+              metal * (ak * mat.conductivity.value(Tp[idx]) + (1 - ak) * k_g);
+            cp[idx] =
+              metal * (mp[idx] * rho_m * mat.specific_heat.value(Tp[idx]) +
+                       (1 - a) * rho_g_cg) +
+              (1 - metal);
           }
         return;
       }
@@ -819,8 +842,9 @@ namespace femp
           const double a     = ap[idx];
           const double metal = (a > 0) & (status[idx] != 0) ? 1. : 0.;
           const double Tc    = Tp[idx];
-          kp[idx] = metal * (a * k_m.template eval<NK>(Tc) + (1 - a) * k_g);
-          cp[idx] = metal * (a * rho_m * c_m.template eval<NC>(Tc) +
+          const double ak    = std::min(a, mp[idx]);
+          kp[idx] = metal * (ak * k_m.template eval<NK>(Tc) + (1 - ak) * k_g);
+          cp[idx] = metal * (mp[idx] * rho_m * c_m.template eval<NC>(Tc) +
                              (1 - a) * rho_g_cg) +
                     (1 - metal); // 1 in gas and padding: never used for heat
         }
@@ -1227,13 +1251,29 @@ namespace femp
         const double hg   = gas_coefficient.empty() ? 0. : gas_coefficient[idx];
         double       Tnew = Tc + dH / rc;
         if (W > 0)
-          Tnew = solve_cell(
-            alpha[idx], Tc, gamma[idx], rc, dH, dt * W, false, Tnew, hg);
+          Tnew = solve_cell(mass[idx],
+                            1 - alpha[idx],
+                            Tc,
+                            gamma[idx],
+                            rc,
+                            dH,
+                            dt * W,
+                            false,
+                            Tnew,
+                            hg);
         if (needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
           {
             ++nphase;
-            Tnew = solve_cell(
-              alpha[idx], Tc, gamma[idx], rc, dH, dt * W, true, Tnew, hg);
+            Tnew = solve_cell(mass[idx],
+                              1 - alpha[idx],
+                              Tc,
+                              gamma[idx],
+                              rc,
+                              dH,
+                              dt * W,
+                              true,
+                              Tnew,
+                              hg);
           }
         if (W > 0)
           {
@@ -1282,10 +1322,17 @@ namespace femp
             continue;
           ++nphase;
           const double dH = (Tnew - Tc) * capacity[idx];
-          Tnew            = solve_cell(
-            alpha[idx], Tc, gamma[idx], capacity[idx], dH, 0., true, Tnew);
-          T_new[idx] = Tnew;
-          gamma[idx] = mat.liquid_fraction(Tnew);
+          Tnew            = solve_cell(mass[idx],
+                            1 - alpha[idx],
+                            Tc,
+                            gamma[idx],
+                            capacity[idx],
+                            dH,
+                            0.,
+                            true,
+                            Tnew);
+          T_new[idx]      = Tnew;
+          gamma[idx]      = mat.liquid_fraction(Tnew);
         }
     sums.nphase = nphase;
   }
@@ -1385,17 +1432,20 @@ namespace femp
 
   template <int dim>
   double
-  HeatTransfer<dim>::enthalpy_density(const double a, const double T) const
+  HeatTransfer<dim>::enthalpy_density(const double m,
+                                      const double g,
+                                      const double T) const
   {
-    return a * mat.density *
+    return m * mat.density *
              (mat.specific_heat.antiderivative(T) +
               mat.latent_heat_fusion * mat.liquid_fraction(T)) +
-           (1 - a) * mat.gas_density * mat.gas_specific_heat * T;
+           g * mat.gas_density * mat.gas_specific_heat * T;
   }
 
   template <int dim>
   double
-  HeatTransfer<dim>::solve_cell(const double a,
+  HeatTransfer<dim>::solve_cell(const double m,
+                                const double g,
                                 const double Tc,
                                 const double gc,
                                 const double rc,
@@ -1408,26 +1458,26 @@ namespace femp
     // f(T) = H(T) - H(Tc) + dtW q(T) - dH, increasing in T (q grows with T
     // below ~2 L_v M/R, 1e5 K for steel). With the sensible part only,
     // H(T) - H(Tc) = rc (T - Tc).
-    const double H0 =
-      enthalpy ? a * mat.density *
-                     (mat.specific_heat.antiderivative(Tc) +
-                      mat.latent_heat_fusion * gc) +
-                   (1 - a) * mat.gas_density * mat.gas_specific_heat * Tc :
-                 0.;
-    auto f = [&](const double T, double &slope) {
+    const double H0 = enthalpy ?
+                        m * mat.density *
+                            (mat.specific_heat.antiderivative(Tc) +
+                             mat.latent_heat_fusion * gc) +
+                          g * mat.gas_density * mat.gas_specific_heat * Tc :
+                        0.;
+    auto         f  = [&](const double T, double &slope) {
       double qe = 0, qc = 0, qr = 0, dq = 0;
       if (dtW > 0)
         surface_loss(T, qe, qc, qr, dq, gas_h);
       if (enthalpy)
         {
-          slope = a * mat.density *
+          slope = m * mat.density *
                     (mat.specific_heat.value(T) +
                      ((T > mat.solidus && T < mat.liquidus) ?
-                        mat.latent_heat_fusion / (mat.liquidus - mat.solidus) :
-                        0.)) +
-                  (1 - a) * mat.gas_density * mat.gas_specific_heat +
+                                 mat.latent_heat_fusion / (mat.liquidus - mat.solidus) :
+                                 0.)) +
+                  g * mat.gas_density * mat.gas_specific_heat +
                   dtW * std::max(0., dq);
-          return enthalpy_density(a, T) - H0 + dtW * (qe + qc + qr) - dH;
+          return enthalpy_density(m, g, T) - H0 + dtW * (qe + qc + qr) - dH;
         }
       slope = rc + dtW * std::max(0., dq);
       return rc * (T - Tc) + dtW * (qe + qc + qr) - dH;
@@ -1435,8 +1485,8 @@ namespace femp
     // Bracket: the slope is at least c_min, so the root lies between Tc and
     // Tc - f(Tc)/c_min; temperatures stay positive.
     const double c_min = enthalpy ?
-                           a * mat.density * mat.specific_heat.min_value() +
-                             (1 - a) * mat.gas_density * mat.gas_specific_heat :
+                           m * mat.density * mat.specific_heat.min_value() +
+                             g * mat.gas_density * mat.gas_specific_heat :
                            rc;
     // Start from the guess, or without the enthalpy tables from the
     // linearization about Tc (one Newton step; exact for the convection
@@ -1486,7 +1536,8 @@ namespace femp
         const double dH = rho * (e - specific_enthalpy(Tc));
         set_cell_temperature(
           idx,
-          solve_cell(1., Tc, mat.liquid_fraction(Tc), 0., dH, 0., true, Tc));
+          solve_cell(
+            1., 0., Tc, mat.liquid_fraction(Tc), 0., dH, 0., true, Tc));
       }
     update_ghosts();
   }
@@ -1511,8 +1562,10 @@ namespace femp
         const double a = alpha[idx];
         if (a <= 0)
           continue;
-        H += enthalpy_density(a, T[idx]) - enthalpy_density(a, Tref) +
-             a * mat.density * mat.latent_heat_fusion *
+        const double m = mass[idx];
+        H += enthalpy_density(m, 1 - a, T[idx]) -
+             enthalpy_density(m, 1 - a, Tref) +
+             m * mat.density * mat.latent_heat_fusion *
                (gamma[idx] - mat.liquid_fraction(T[idx]));
       }
     return Utilities::MPI::sum(H * V, grid.communicator());

@@ -18,9 +18,14 @@
 // the heat, the solid, the stop test and the melt pool, and of the
 // MetalSurface, which finds the free surface of the same alpha once for
 // the heat (its laser and surface losses).
+// With 'Heat transfer/Metal of melt cells = points' it gives the heat its
+// metal per cell besides alpha: in cells holding melt the volume of their
+// own points (alpha there counts the excess volume of over-full neighbours,
+// whose points carry it), so that the grid holds the heat the points carry.
 // It keeps the energy account of these exchanges ('moved_points': the
 // change of the stored enthalpy of the grid they caused, zero for a
-// conservative exchange).
+// conservative exchange; with 'alpha' it holds the heat the temperature
+// step gave or took from the excess volume, with 'points' only the gas's).
 // With 'Heat transfer/Remove evaporated mass' it takes the mass that
 // evaporated in the temperature step from the points of the surface cells
 // (MaterialPoints::remove_mass()) and keeps the account of
@@ -57,10 +62,13 @@ namespace femp
                       const bool heat_enabled);
     /// An exchange without bodies of metal and surface (the heat finds
     /// the surface itself); @p carried_by_points: 'Advection by melt flow
-    /// = points'.
-    PointHeatExchange(MaterialPoints<dim> &points,
-                      HeatTransfer<dim>   &heat,
-                      const bool           carried_by_points);
+    /// = points'; @p metal_from_points (with it): 'Metal of melt cells =
+    /// points'.
+    PointHeatExchange(MaterialPoints<dim>       &points,
+                      HeatTransfer<dim>         &heat,
+                      const BackgroundGrid<dim> &grid,
+                      const bool                 carried_by_points,
+                      const bool                 metal_from_points = false);
 
     /// The start of a run: the initial temperatures, then the metal
     /// fraction of the points as they were created (no heat exchange),
@@ -189,9 +197,12 @@ namespace femp
     }
 
   private:
-    MaterialPoints<dim>               &points;
-    HeatTransfer<dim>                 &heat;
-    const bool                         carried_by_points;
+    MaterialPoints<dim>       &points;
+    HeatTransfer<dim>         &heat;
+    const BackgroundGrid<dim> &grid;
+    const bool                 carried_by_points;
+    // 'Metal of melt cells = points' (with carried_by_points).
+    const bool                         metal_from_points;
     std::unique_ptr<MetalBodies<dim>>  metal_bodies;
     std::unique_ptr<MetalSurface<dim>> surface; ///< null with the heat off
     double                             moved_points = 0;
@@ -199,6 +210,14 @@ namespace femp
     SweptAccount                       swept;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
+
+    /// 'Metal of melt cells = points': @p alpha, except in the cells of its
+    /// volume rule (a point that is or has been fluid,
+    /// MaterialPoints::metal_fraction()), which take the volume of their own
+    /// points over the cell volume, neither spread to neighbours nor
+    /// capped at 1 (ghosts exchanged). Collective.
+    std::vector<double>
+    metal_mass(const std::vector<double> &alpha) const;
 
     void
     initial_temperatures(

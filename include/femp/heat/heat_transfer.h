@@ -16,7 +16,10 @@
 // losses and the laser deposited through |grad alpha| with the density
 // weighting above (the default 'first surface' laser only into the cells where
 // the vertical beam first meets metal, shared in proportion to that weight).
-// Cells without metal (alpha = 0) are not solved and carry no flux.
+// Cells without metal (alpha = 0) are not solved and carry no flux. The
+// metal's heat capacity (and the metal share of the conductivity, at most
+// alpha) is alpha's, or, where its keeper gives one (set_metal_fraction(),
+// 'Metal of melt cells = points'), the metal mass of the cell's points.
 #ifndef femp_heat_transfer_h
 #define femp_heat_transfer_h
 
@@ -100,6 +103,16 @@ namespace femp
         upwind
       };
       Advection advection_by_melt_flow = Advection::points;
+      /// With 'points': the metal whose heat a cell holding melt keeps
+      /// (heat capacity, and the metal share of its conductivity): alpha,
+      /// or the volume of its own points (alpha counts the excess volume
+      /// of over-full neighbours, which their points carry).
+      enum class MeltMetal
+      {
+        alpha,
+        points
+      };
+      MeltMetal metal_of_melt_cells = MeltMetal::alpha;
 
       /// Declare (the members' values are the defaults) or read the
 
@@ -195,16 +208,23 @@ namespace femp
     /// New metal fraction (owned cells and ghosts) and its free surface
     /// @p surface, found from the same alpha (MetalSurface::update(), once
     /// per change, by alpha's keeper): the heat takes its lists of surface,
-    /// first-surface and detached cells and renews the properties.
+    /// first-surface and detached cells and renews the properties. With
+    /// @p metal_mass (owned cells and ghosts, nonzero where alpha is), the
+    /// metal's mass per cell over rho_m h^dim, which may differ from alpha
+    /// (and exceed 1): the heat capacity and stored enthalpy of the metal
+    /// take it, the metal share of the conductivity min(alpha, it);
+    /// without it, alpha.
     void
     set_metal_fraction(const std::vector<double> &alpha,
-                       const MetalSurface<dim>   &surface);
+                       const MetalSurface<dim>   &surface,
+                       const std::vector<double> *metal_mass = nullptr);
     /// The same for a heat transfer used on its own (tests, studies): finds
     /// the free surface of @p alpha itself, with the detached drops of
     /// @p bodies (none when nullptr). Collective.
     void
     set_metal_fraction(const std::vector<double> &alpha,
-                       const MetalBodies<dim>    *bodies = nullptr);
+                       const MetalBodies<dim>    *bodies     = nullptr,
+                       const std::vector<double> *metal_mass = nullptr);
 
     /// The evaporative mass flux per unit surface at the surface
     /// temperature @p T_surface, kg/(m^2 s):
@@ -400,6 +420,9 @@ namespace femp
     const double evap_pref, evap_exp;
 
     std::vector<double> T, T_new, gamma, alpha, conductance, capacity, source;
+    // The metal's mass per cell over rho_m h^dim (set_metal_fraction()):
+    // alpha, or the volume of the points that carry the heat.
+    std::vector<double>        mass;
     std::vector<std::uint8_t>  is_source;
     std::vector<std::uint32_t> source_cells;
     /// See evaporated_mass().
@@ -531,9 +554,10 @@ namespace femp
     }
     void
     compute_surface_sources(const double dt, const double time);
-    /// Enthalpy per volume of a cell with metal fraction @p a at @p T.
+    /// Enthalpy per volume of a cell with metal mass fraction @p m (the
+    /// metal's mass over rho_m h^dim) and gas fraction @p g at @p T.
     double
-    enthalpy_density(const double a, const double T) const;
+    enthalpy_density(const double m, const double g, const double T) const;
     /// Surface loss flux q_evap + q_conv + q_rad at @p T (W/m^2), its parts
     /// and its derivative dq/dT; @p gas_h (W/(m^2 K)) is added to the
     /// convection coefficient (the gas conduction of a detached cell).
@@ -560,7 +584,8 @@ namespace femp
     /// with the enthalpy H of the tables (latent heat included) if
     /// @p enthalpy, else H(T) - H(Tc) = rc (T - Tc).
     double
-    solve_cell(const double a,
+    solve_cell(const double m,
+               const double g,
                const double Tc,
                const double gc,
                const double rc,
