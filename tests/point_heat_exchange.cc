@@ -51,6 +51,19 @@ struct Strip
   }
 };
 
+// Moves every point by dx along x and tells the points that they moved.
+void
+shift_points(MaterialPoints<dim> &points, const double dx)
+{
+  for (auto &particle : points.particle_handler())
+    {
+      Point<dim> x = particle.get_location();
+      x[0] += dx;
+      particle.set_location(x);
+    }
+  points.points_moved();
+}
+
 void
 run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
 {
@@ -78,13 +91,7 @@ run(const bool carried_by_points, Checks &checks, MPI_Comm comm)
 
   PointHeatExchange<dim> exchange(points, heat, grid, carried_by_points);
   const double           H0 = heat.stored_enthalpy();
-  for (auto &particle : points.particle_handler())
-    {
-      Point<dim> x = particle.get_location();
-      x[0] += h / 3;
-      particle.set_location(x);
-    }
-  points.points_moved();
+  shift_points(points, h / 3);
   exchange.points_changed_cells();
   const double dH = heat.stored_enthalpy() - H0;
   // Scale: the enthalpy of the metal, 0.6 x 2h x (c T + L) ~ 0.2.
@@ -162,13 +169,7 @@ stale_gas_cell(Checks &checks, MPI_Comm comm)
       // Move the points by a third of a cell: the cells at x in [0.8,
       // 0.85] gain the points of the cell at 0.775; give them a stale
       // temperature.
-      for (auto &particle : points.particle_handler())
-        {
-          Point<dim> x = particle.get_location();
-          x[0] += h / 3;
-          particle.set_location(x);
-        }
-      points.points_moved();
+      shift_points(points, h / 3);
       for (const auto idx : grid.owned_cells())
         {
           const double xc = grid.cell_center(idx)[0];
@@ -345,13 +346,7 @@ bunched_points(const bool metal_from_points, MPI_Comm comm)
   heat.update_ghosts();
   const double H1 = heat.stored_enthalpy();
   points.cells_to_points(heat.temperature(), &heat.metal_fraction());
-  for (auto &particle : points.particle_handler())
-    {
-      Point<dim> x = particle.get_location();
-      x[0] += h / 3;
-      particle.set_location(x);
-    }
-  points.points_moved();
+  shift_points(points, h / 3);
   exchange.points_changed_cells();
   return (heat.stored_enthalpy() - H1) / std::abs(H1);
 }

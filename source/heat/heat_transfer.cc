@@ -1250,30 +1250,26 @@ namespace femp
         const double W    = loss_weight[idx];
         const double hg   = gas_coefficient.empty() ? 0. : gas_coefficient[idx];
         double       Tnew = Tc + dH / rc;
-        if (W > 0)
-          Tnew = solve_cell(mass[idx],
+        // The cell's local solve: sensible heat only, or with the latent
+        // heat when the step crosses the melting range.
+        const auto solve = [&](const bool enthalpy) {
+          return solve_cell(mass[idx],
                             1 - alpha[idx],
                             Tc,
                             gamma[idx],
                             rc,
                             dH,
                             dt * W,
-                            false,
+                            enthalpy,
                             Tnew,
                             hg);
+        };
+        if (W > 0)
+          Tnew = solve(false);
         if (needs_local_solve(Tc, Tnew, gamma[idx], rhoL, variable_c))
           {
             ++nphase;
-            Tnew = solve_cell(mass[idx],
-                              1 - alpha[idx],
-                              Tc,
-                              gamma[idx],
-                              rc,
-                              dH,
-                              dt * W,
-                              true,
-                              Tnew,
-                              hg);
+            Tnew = solve(true);
           }
         if (W > 0)
           {
