@@ -1392,12 +1392,17 @@ def run_case(args, exe, c, setting, stop=None):
         now = checkpoints(d)[:1]
         if not getattr(args, "restart_after_checkpoint", False) or now == seen:
             return False
-        seen[:] = now
+        # femp names a checkpoint in its index before its log line says
+        # it: until that line is there, look again at the next poll.
         with open(log) as f:
             f.seek(log_start)
-            m = re.findall(r"^Checkpoint: step [0-9]+, time ([-0-9.e+]+) s",
+            m = re.findall(r"^Checkpoint: step ([0-9]+), time ([-0-9.e+]+) s",
                            f.read(), re.M)
-        if m and float(m[-1]) < t_end * (1 - 1e-6):
+        m = [t for step, t in m if now[0] == "step_%08d" % int(step)]
+        if not m:
+            return False
+        seen[:] = now
+        if float(m[-1]) < t_end * (1 - 1e-6):
             renew.append(now[0])
             return True
         return False

@@ -9,7 +9,10 @@
 // must have risen before the checkpoint resumed, the resumed run must hand
 // nothing over again, and the largest differences of the point stresses and
 // temperatures, the solid probes and the probe lines against the straight
-// run are printed and must be 0. Then rank 0 alone resumes the same checkpoint
+// run are printed and must be 0. With 'Heat transfer/Metal of melt cells =
+// points' the straight run must hold melt cells at the checkpoint (its
+// melt_pool.csv) and its flow must have moved points. Then rank 0 alone
+// resumes the same checkpoint
 // (written by all ranks): the final points, and with the solid the rows of
 // its energy and probe files after the checkpoint, must agree with the
 // straight run to round-off (argv[3]: the gate; with melt flow the
@@ -151,6 +154,22 @@ namespace
     return lines;
   }
 
+  /// The simulated time of the checkpoint @p name (its directory, e.g.
+  /// step_00000326) that the run of the lines @p log wrote, s; -1 if none.
+  double
+  checkpoint_time(const std::vector<std::string> &log, const std::string &name)
+  {
+    const std::regex written("Checkpoint: step [0-9]+, time ([-0-9.e+]+) "
+                             "s -> .*" +
+                             name);
+    std::smatch      m;
+    double           t = -1;
+    for (const auto &line : log)
+      if (std::regex_search(line, m, written))
+        t = std::stod(m[1]);
+    return t;
+  }
+
   /// Every point (id -> position and properties), gathered on rank 0.
   template <int dim>
   std::map<unsigned long, std::vector<double>>
@@ -237,8 +256,8 @@ namespace
         std::cout << what << " = " << std::setprecision(digits) << v
                   << std::endl;
     };
-    double end_time;
-    bool   layers, fe_zone, handover;
+    double end_time, cell_size;
+    bool   layers, fe_zone, handover, metal_of_points;
     {
       // The scene as femp reads it ('include' lines too).
       dealii::ParameterHandler prm;
@@ -255,6 +274,13 @@ namespace
       prm.leave_subsection();
       prm.enter_subsection("Solid FEM");
       fe_zone = fe_zone && prm.get_bool("Use finite elements");
+      prm.leave_subsection();
+      prm.enter_subsection("Heat transfer");
+      metal_of_points = prm.get("Metal of melt cells") == "points" &&
+                        prm.get("Advection by melt flow") == "points";
+      prm.leave_subsection();
+      prm.enter_subsection("Background grid");
+      cell_size = prm.get_double("Cell size");
       prm.leave_subsection();
     }
     const std::vector<Override> common = {
@@ -370,6 +396,35 @@ namespace
                 s0.moved_points == s1.moved_points &&
                 s0.pool.depth == s1.pool.depth);
 
+    // 'Heat transfer/Metal of melt cells = points': the cells holding melt
+    // take their points' volume, which the checkpoint must hold (the
+    // points' volume and melt marks change between its renewals). The
+    // scene must melt before the checkpoint and the flow move the points:
+    // the melt pool of the straight run's melt_pool.csv at the
+    // checkpoint's time, in cells, and the flow's steps and largest point
+    // speed at the end.
+    if (metal_of_points && root)
+      {
+        const double                  t_half = checkpoint_time(log0, half);
+        std::map<std::string, double> at_half;
+        for (const auto &r : csv_rows("out0/melt_pool.csv"))
+          if (r.at("time") <= t_half * (1 + 1e-9))
+            at_half = r;
+        const double cells =
+          at_half.empty() ? 0 : at_half.at("volume") / std::pow(cell_size, dim);
+        std::cout << "melt pool at the checkpoint (t = " << std::setprecision(3)
+                  << t_half * 1e6 << " us): " << std::setprecision(2)
+                  << (at_half.empty() ? 0 : at_half.at("length") * 1e6)
+                  << " um long, "
+                  << (at_half.empty() ? 0 : at_half.at("depth") * 1e6)
+                  << " um deep, " << std::lround(cells) << " cells"
+                  << std::endl;
+        verdict("melt cells at the checkpoint", cells >= 1);
+        verdict("the flow moved points (fluid steps and a largest point "
+                "speed > 0)",
+                s0.flow_steps > 0 && s0.max_fluid_speed > 0);
+      }
+
     // A build: layer_cost.csv (doc/builds.md "Cost and memory"). The
     // straight run: one row per layer (1 + the recoats of its log), the
     // windows joined from 0 to the end, the temperature steps summing to
@@ -382,17 +437,12 @@ namespace
     // the counts are printed, no wall time.
     if (layers && root)
       {
-        unsigned int     n_layers = 1;
-        double           t_half   = -1;
-        std::smatch      m;
-        const std::regex written("Checkpoint: step [0-9]+, time ([-0-9.e+]+) "
-                                 "s -> .*" +
-                                 half);
+        unsigned int n_layers = 1;
+        const double t_half   = checkpoint_time(log0, half);
+        std::smatch  m;
         for (const auto &line : log0)
           if (line.rfind("Recoat: layer", 0) == 0)
             ++n_layers;
-          else if (std::regex_search(line, m, written))
-            t_half = std::stod(m[1]);
         const auto c0     = csv_rows("out0/layer_cost.csv");
         const auto c1     = csv_rows("out1/layer_cost.csv");
         bool       joined = !c0.empty() && c0[0].at("t_start") == 0;
@@ -492,12 +542,10 @@ namespace
         const std::regex rise("FE zone hand-over at t = ([-0-9.e+]+) s: .*"
                               "the zone's top rises from ([-0-9.e+]+) to "
                               "([-0-9.e+]+) m: ([0-9]+) elements");
-        const std::regex written("Checkpoint: step [0-9]+, time ([-0-9.e+]+) "
-                                 "s -> .*" +
-                                 half);
         std::smatch      m;
         unsigned int     rises0 = 0, rises1 = 0;
-        double t_rise = 0, from = 0, to = 0, elements = 0, t_half = -1;
+        double           t_rise = 0, from = 0, to = 0, elements = 0;
+        const double     t_half = checkpoint_time(log0, half);
         for (const auto &line : log0)
           if (std::regex_search(line, m, rise))
             {
@@ -507,8 +555,6 @@ namespace
               to       = std::stod(m[3]);
               elements = std::stod(m[4]);
             }
-          else if (std::regex_search(line, m, written))
-            t_half = std::stod(m[1]);
         for (const auto &line : log1)
           rises1 += std::regex_search(line, m, rise);
         std::cout << "straight run: the FE zone rises " << rises0

@@ -148,6 +148,13 @@ namespace femp
     states.add("output", results->output());
     states.add("trigger", states.checkpoint_file());
     report->add_state(states, *point_heat, flow.get());
+    // 'Metal of melt cells = points': the heat's metal mass (read after
+    // the restore, with alpha's bodies and surface).
+    if (point_heat->metal_of_points())
+      states.add(
+        "metal mass",
+        [this](StateWriter &out) { point_heat->save_metal_mass(out); },
+        typename ModuleStates<dim>::Load());
     // The thermal history, when asked for, starts here: its state and its
     // files (written at the end of the run).
     add_thermal_history(*results, states, scene, *grid, *heat);
@@ -170,7 +177,16 @@ namespace femp
     // Once all is loaded: alpha's bodies and surface, and the series
     // written outside Output cut back to the checkpoint.
     states.after_restore([this] {
-      point_heat->metal_fraction_restored();
+      // A checkpoint written with 'Metal of melt cells = alpha' holds no
+      // metal mass: the restored points' volume.
+      auto &file = states.checkpoint_file();
+      if (point_heat->metal_of_points() && file.has_section("metal mass"))
+        {
+          auto parts = file.section("metal mass");
+          point_heat->metal_fraction_restored(&parts);
+        }
+      else
+        point_heat->metal_fraction_restored();
       results->resume(control->time());
     });
   }

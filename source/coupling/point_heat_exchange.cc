@@ -2,6 +2,7 @@
 // cells when points enter the grid or change cells (see the header; the
 // enthalpy relation of eq. 1, the point-cell transfer of eq. 2).
 #include <femp/coupling/point_heat_exchange.h>
+#include <femp/grid/cell_state.h>
 
 #include <cmath>
 
@@ -52,14 +53,15 @@ namespace femp
 
   template <int dim>
   void
-  PointHeatExchange<dim>::new_metal_fraction(const std::vector<double> &alpha)
+  PointHeatExchange<dim>::new_metal_fraction(const std::vector<double> &alpha,
+                                             const std::vector<double> *given)
   {
     if (metal_bodies)
       metal_bodies->update(alpha);
-    std::vector<double> m;
-    if (metal_from_points && points.carried())
-      m = metal_mass(alpha);
-    const std::vector<double> *mass = m.empty() ? nullptr : &m;
+    const bool by_points = metal_from_points && points.carried();
+    if (by_points)
+      given_mass = given ? *given : metal_mass(alpha);
+    const std::vector<double> *mass = by_points ? &given_mass : nullptr;
     if (!surface)
       {
         heat.set_metal_fraction(alpha, metal_bodies.get(), mass);
@@ -101,17 +103,34 @@ namespace femp
 
   template <int dim>
   void
-  PointHeatExchange<dim>::metal_fraction_restored()
+  PointHeatExchange<dim>::save_metal_mass(StateWriter &out) const
+  {
+    // The heat's: alpha where no metal mass was handed to it.
+    save_cell_fields(
+      out, grid, {given_mass.empty() ? &heat.metal_fraction() : &given_mass});
+  }
+
+  template <int dim>
+  void
+  PointHeatExchange<dim>::metal_fraction_restored(
+    std::vector<StateReader> *metal_mass)
   {
     if (!metal_bodies && !surface)
       return;
     // The heat restored alpha and the surface lists it found itself; the
     // bodies and the surface follow, and the heat takes them (the rest of
-    // its state is the same after a second set_metal_fraction()). Every
-    // rank makes the call: the drops are per rank, the updates and
+    // its state is the same after a second set_metal_fraction()), with the
+    // metal mass of the checkpoint where it holds one. Every rank makes
+    // the call: the drops are per rank, the updates and
     // set_metal_fraction() are collective.
     const std::vector<double> alpha = heat.metal_fraction();
-    new_metal_fraction(alpha);
+    std::vector<double>       saved;
+    if (metal_mass)
+      {
+        saved = grid.make_field(0.);
+        load_cell_fields(*metal_mass, grid, {&saved});
+      }
+    new_metal_fraction(alpha, metal_mass ? &saved : nullptr);
   }
 
   template <int dim>

@@ -97,9 +97,27 @@ namespace femp
     points_changed_cells();
 
     /// After a checkpoint restored the heat's alpha: the bodies of metal
-    /// and the free surface of it. Collective.
+    /// and the free surface of it, and with 'Metal of melt cells = points'
+    /// the heat's metal mass: @p metal_mass, the parts of what
+    /// save_metal_mass() wrote, or, when null (a checkpoint written with
+    /// 'alpha'), the volume of the restored points (metal_mass()).
+    /// Collective.
     void
-    metal_fraction_restored();
+    metal_fraction_restored(std::vector<StateReader> *metal_mass = nullptr);
+
+    /// 'Metal of melt cells = points' (with the points carrying the heat).
+    bool
+    metal_of_points() const
+    {
+      return metal_from_points;
+    }
+
+    /// Checkpoint: the heat's metal mass per owned cell. It is renewed
+    /// only when points change cells, while the points' volume (the
+    /// solid's deformation) and their melt marks (each temperature step)
+    /// change in between: a resume cannot find it again from the points.
+    void
+    save_metal_mass(StateWriter &out) const;
 
     /// The bodies of metal of alpha (detached drops, workpiece) that the
     /// heat, the solid, the stop test and the melt pool read (run
@@ -210,6 +228,9 @@ namespace femp
     SweptAccount                       swept;
     // MaterialPoints::point_moves() when alpha was last computed.
     std::uint64_t alpha_moves = 0;
+    // 'Metal of melt cells = points': the metal mass last handed to the
+    // heat (owned cells and ghosts), for save_metal_mass().
+    std::vector<double> given_mass;
 
     /// 'Metal of melt cells = points': @p alpha, except in the cells of its
     /// volume rule (a point that is or has been fluid,
@@ -224,9 +245,12 @@ namespace femp
       const std::vector<typename MaterialPoints<dim>::Parameters::Body> &bodies,
       const typename HeatTransfer<dim>::Parameters &heat_prm);
 
-    /// alpha changed: the bodies, the surface, then the heat.
+    /// alpha changed: the bodies, the surface, then the heat; with
+    /// 'Metal of melt cells = points' the metal mass @p given, or when
+    /// null metal_mass(alpha).
     void
-    new_metal_fraction(const std::vector<double> &alpha);
+    new_metal_fraction(const std::vector<double> &alpha,
+                       const std::vector<double> *given = nullptr);
   };
 } // namespace femp
 
