@@ -47,7 +47,7 @@
 #include <femp/solid/fe_zone_handover.h>
 #include <femp/solid/solid_sub_cycle.h>
 
-#include "solid_tools.h"
+#include "handover_tools.h"
 
 using namespace femp_test;
 
@@ -56,17 +56,6 @@ namespace
   constexpr int    dim = 2;
   constexpr double h   = 0.1;
 
-  /// Offset of a cell's two point rows from its lower face, in h: spread
-  /// apart in even cells, close together in odd ones.
-  double
-  moved(const double x)
-  {
-    const double cell = std::floor(x / h);
-    const double o    = x / h - cell;
-    const bool   even = int(cell) % 2 == 0;
-    return (cell + (o < 0.5 ? (even ? 0.02 : 0.26) : (even ? 0.98 : 0.74))) * h;
-  }
-
   enum class Defect
   {
     none,
@@ -74,14 +63,12 @@ namespace
     powder
   };
 
-  struct Scene
+  struct Scene : HandoverChoiceBlock<dim>
   {
     Scene(MPI_Comm comm, const Defect defect)
-        : block(Point<dim>(1.6, 1.0), h, 0.8, unit_material(), comm)
-        , sm(block_material("300:0.02, 400:0.005", block.material))
+        : HandoverChoiceBlock<dim>(Point<dim>(1.6, 1.0), h, comm)
     {
-      sm.poisson_ratio = 0.3;
-      using P          = typename MaterialPoints<dim>::PropertyIndex;
+      using P = typename MaterialPoints<dim>::PropertyIndex;
       for (auto &particle : block.points->particle_handler_for_update())
         {
           Point<dim> x = particle.get_location();
@@ -92,69 +79,19 @@ namespace
                                  x[1] < 0.5 && (x[0] > 0.85 || x[1] > 0.45);
           const bool powder_cell =
             x[0] > 0.5 && x[0] < 0.6 && x[1] > 0.5 && x[1] < 0.6;
-          x[0] = moved(x[0]);
-          x[1] = moved(x[1]);
+          x[0] = melt_flow_placement(x[0], h);
+          x[1] = melt_flow_placement(x[1], h);
           if (defect == Defect::pore && pore_cell)
             x[1] += 0.3;
           particle.set_location(x);
           if (defect == Defect::powder && powder_cell)
             particle.get_properties()[P::state] = MaterialPoints<dim>::powder;
         }
-      block.points->points_moved();
       auto sp       = block_supports<dim>();
       sp.gravity[1] = -0.01;
       const auto fp = fe_zone(Point<dim>(0, 0), Point<dim>(1.6, 0.2));
-      solid         = std::make_unique<SolidSubCycle<dim>>(
-        sp, fp, sm, block.grid, *block.points);
-      T = block.grid.make_field(300.);
-      solid->initialize(T, "");
-      alpha = block.points->metal_fraction();
-      typename PoreDetector<dim>::Parameters pp;
-      PoreDetector<dim>                      detector(pp, block.grid, 0.2);
-      const auto                             shares =
-        PoreDetector<dim>::powder_shares(block.grid,
-                                         *block.points,
-                                         block.material.solidus,
-                                         block.material.liquidus);
-      found = detector.find(alpha, &shares.first);
+      start(sp, fp);
     }
-    /// The new top the hand-over may rise to under a layer top of 1.0 m,
-    /// margin 0.3 m, with or without the detector's pores; @p reason: why
-    /// the choice stopped below the limit.
-    double
-    choose(std::string &reason, const bool pores = true)
-    {
-      typename FeZoneHandover<dim>::Parameters hp;
-      hp.enabled     = true;
-      hp.temperature = 1000;
-      hp.margin      = 0.3;
-      FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
-      const double        top =
-        choice.choose_top(1.0,
-                          *block.points,
-                          solid->fe_zone_cells(),
-                          std::vector<double>(),
-                          alpha,
-                          pores ? found.pore_number : std::vector<double>());
-      reason = choice.stop_reason();
-      fill   = choice.least_fill();
-      mass   = choice.row_point_mass();
-      cells  = choice.chosen_cells();
-      kept   = choice.kept_cells();
-      return top;
-    }
-    SolidBlock<dim>                     block;
-    SolidMaterial                       sm; ///< reads block.material
-    std::unique_ptr<SolidSubCycle<dim>> solid;
-    std::vector<double>                 T, alpha;
-    typename PoreDetector<dim>::Result  found;
-    /// The least fill and the points' mass of each row the last choose()
-    /// looked at.
-    std::vector<double> fill, mass;
-    /// The cells the last choose() took.
-    std::vector<std::array<int, dim>> cells;
-    /// The cells the last choose() kept as points, per class.
-    std::array<double, FeZoneHandover<dim>::n_kept> kept{};
   };
 
   /// Of @p cells, those inside the cells [@p i0, @p i1) x [@p j0, @p j1).

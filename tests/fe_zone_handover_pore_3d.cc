@@ -36,7 +36,7 @@
 #include <femp/solid/fe_zone_handover.h>
 #include <femp/solid/solid_sub_cycle.h>
 
-#include "solid_tools.h"
+#include "handover_tools.h"
 
 using namespace femp_test;
 
@@ -44,17 +44,6 @@ namespace
 {
   constexpr int    dim = 3;
   constexpr double h   = 0.1;
-
-  /// Offset of a cell's two point rows from its lower face, in h: spread
-  /// apart in even cells, close together in odd ones.
-  double
-  moved(const double x)
-  {
-    const double cell = std::floor(x / h);
-    const double o    = x / h - cell;
-    const bool   even = int(cell) % 2 == 0;
-    return (cell + (o < 0.5 ? (even ? 0.02 : 0.26) : (even ? 0.98 : 0.74))) * h;
-  }
 
   /// Whether @p x lies in the cell with indices @p c.
   bool
@@ -68,15 +57,13 @@ namespace
 
   const std::array<int, dim> pore_cell{{3, 3, 4}}, gas_cell{{4, 3, 4}};
 
-  struct Scene
+  struct Scene : HandoverChoiceBlock<dim>
   {
     /// @p gas: the pore's gas reaches the neighbour gas_cell by one
     /// sub-cell.
     Scene(MPI_Comm comm, const bool gas)
-        : block(Point<dim>(0.6, 0.6, 1.0), h, 0.8, unit_material(), comm)
-        , sm(block_material("300:0.02, 400:0.005", block.material))
+        : HandoverChoiceBlock<dim>(Point<dim>(0.6, 0.6, 1.0), h, comm)
     {
-      sm.poisson_ratio = 0.3;
       for (auto &particle : block.points->particle_handler_for_update())
         {
           Point<dim> x = particle.get_location();
@@ -90,54 +77,17 @@ namespace
           if (gas && in_cell(x, gas_cell))
             up = x[0] < 0.45 && x[1] < 0.35 && x[2] < 0.45;
           for (int d = 0; d < dim; ++d)
-            x[d] = moved(x[d]);
+            x[d] = melt_flow_placement(x[d], h);
           if (up)
             x[2] += 0.3;
           particle.set_location(x);
         }
-      block.points->points_moved();
       auto sp         = block_supports<dim>();
       sp.fixed_faces  = {"z-"};
       sp.roller_faces = {"x-", "x+", "y-", "y+"};
       sp.gravity[2]   = -0.01;
       const auto fp   = fe_zone(Point<dim>(0, 0, 0), Point<dim>(0.6, 0.6, 0.2));
-      solid           = std::make_unique<SolidSubCycle<dim>>(
-        sp, fp, sm, block.grid, *block.points);
-      T = block.grid.make_field(300.);
-      solid->initialize(T, "");
-      alpha = block.points->metal_fraction();
-      typename PoreDetector<dim>::Parameters pp;
-      PoreDetector<dim>                      detector(pp, block.grid, 0.2);
-      const auto                             shares =
-        PoreDetector<dim>::powder_shares(block.grid,
-                                         *block.points,
-                                         block.material.solidus,
-                                         block.material.liquidus);
-      found = detector.find(alpha, &shares.first);
-    }
-    /// The new top the hand-over may rise to under a layer top of 1.0 m,
-    /// margin 0.3 m, with or without the detector's pores; @p reason: why
-    /// the choice stopped below the limit.
-    double
-    choose(std::string &reason, const bool pores = true)
-    {
-      typename FeZoneHandover<dim>::Parameters hp;
-      hp.enabled     = true;
-      hp.temperature = 1000;
-      hp.margin      = 0.3;
-      FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
-      const double        top =
-        choice.choose_top(1.0,
-                          *block.points,
-                          solid->fe_zone_cells(),
-                          std::vector<double>(),
-                          alpha,
-                          pores ? found.pore_number : std::vector<double>());
-      reason     = choice.stop_reason();
-      cells      = choice.chosen_cells();
-      cells_mass = choice.chosen_point_mass();
-      kept       = choice.kept_cells();
-      return top;
+      start(sp, fp);
     }
     /// Of the cells the last choose() took: whether @p c is one.
     bool
@@ -165,16 +115,6 @@ namespace
             }
       return n;
     }
-    SolidBlock<dim>                     block;
-    SolidMaterial                       sm; ///< reads block.material
-    std::unique_ptr<SolidSubCycle<dim>> solid;
-    std::vector<double>                 T, alpha;
-    typename PoreDetector<dim>::Result  found;
-    /// The cells the last choose() took, their points' mass, and the
-    /// cells it kept as points, per class.
-    std::vector<std::array<int, dim>>               cells;
-    double                                          cells_mass = 0;
-    std::array<double, FeZoneHandover<dim>::n_kept> kept{};
   };
 } // namespace
 

@@ -25,7 +25,7 @@
 #include <femp/solid/fe_zone_handover.h>
 #include <femp/solid/solid_sub_cycle.h>
 
-#include "solid_tools.h"
+#include "handover_tools.h"
 
 using namespace femp_test;
 
@@ -34,15 +34,13 @@ namespace
   constexpr int    dim = 3;
   constexpr double h   = 0.1;
 
-  struct Scene
+  struct Scene : HandoverChoiceBlock<dim>
   {
     /// @p n_empty: how many sub-cells of the defect cell are emptied (their
     /// points moved 0.5 m up, into the gas above the block).
     Scene(MPI_Comm comm, const unsigned n_empty)
-        : block(Point<dim>(0.6, 0.6, 1.0), h, 0.8, unit_material(), comm)
-        , sm(block_material("300:0.02, 400:0.005", block.material))
+        : HandoverChoiceBlock<dim>(Point<dim>(0.6, 0.6, 1.0), h, comm)
     {
-      sm.poisson_ratio = 0.3;
       for (auto &particle : block.points->particle_handler_for_update())
         {
           Point<dim> x = particle.get_location();
@@ -60,60 +58,13 @@ namespace
               particle.set_location(x);
             }
         }
-      block.points->points_moved();
       auto sp         = block_supports<dim>();
       sp.fixed_faces  = {"z-"};
       sp.roller_faces = {"x-", "x+", "y-", "y+"};
       sp.gravity[2]   = -0.01;
       const auto fp   = fe_zone(Point<dim>(0, 0, 0), Point<dim>(0.6, 0.6, 0.2));
-      solid           = std::make_unique<SolidSubCycle<dim>>(
-        sp, fp, sm, block.grid, *block.points);
-      T = block.grid.make_field(300.);
-      solid->initialize(T, "");
-      alpha = block.points->metal_fraction();
-      typename PoreDetector<dim>::Parameters pp;
-      PoreDetector<dim>                      detector(pp, block.grid, 0.2);
-      const auto                             shares =
-        PoreDetector<dim>::powder_shares(block.grid,
-                                         *block.points,
-                                         block.material.solidus,
-                                         block.material.liquidus);
-      found = detector.find(alpha, &shares.first);
+      start(sp, fp);
     }
-    /// The new top the hand-over may rise to under a layer top of 1.0 m,
-    /// margin 0.3 m; @p reason: why the choice stopped below the limit.
-    double
-    choose(std::string &reason)
-    {
-      typename FeZoneHandover<dim>::Parameters hp;
-      hp.enabled     = true;
-      hp.temperature = 1000;
-      hp.margin      = 0.3;
-      FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
-      const double        top = choice.choose_top(1.0,
-                                           *block.points,
-                                           solid->fe_zone_cells(),
-                                           std::vector<double>(),
-                                           alpha,
-                                           found.pore_number);
-      reason                  = choice.stop_reason();
-      fill                    = choice.least_fill();
-      mass                    = choice.row_point_mass();
-      cells                   = choice.chosen_cells();
-      cells_mass              = choice.chosen_point_mass();
-      return top;
-    }
-    SolidBlock<dim>                     block;
-    SolidMaterial                       sm; ///< reads block.material
-    std::unique_ptr<SolidSubCycle<dim>> solid;
-    std::vector<double>                 T, alpha;
-    typename PoreDetector<dim>::Result  found;
-    /// The least fill and the points' mass of each row the last choose()
-    /// looked at.
-    std::vector<double> fill, mass;
-    /// The cells the last choose() took and their points' mass.
-    std::vector<std::array<int, dim>> cells;
-    double                            cells_mass = 0;
   };
 } // namespace
 

@@ -1,0 +1,117 @@
+// femp tests: the set-up shared by the tests of the hand-over's choice on a
+// block whose points the test has placed (fe_zone_handover_dense,
+// fe_zone_handover_subcell_3d, fe_zone_handover_pore_3d): the block and its
+// test material, the solid with its finite-element zone at 300 K, alpha and
+// the pore detector's pores, one choice of FeZoneHandover with what it
+// read, and the melt-flow placement of a cell's points.
+#ifndef femp_handover_tools_h
+#define femp_handover_tools_h
+
+#include <femp/builds/pore_detector.h>
+#include <femp/grid/material_points.h>
+#include <femp/solid/fe_zone_handover.h>
+#include <femp/solid/solid_sub_cycle.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "solid_tools.h"
+
+namespace femp_test
+{
+  /// Coordinate @p x of a point in cells of size @p h, moved as a melt
+  /// flow leaves the points: a cell's two point rows 0.02 h and 0.98 h
+  /// from its lower face in even cells (spread apart), 0.26 h and 0.74 h
+  /// in odd ones (close together).
+  inline double
+  melt_flow_placement(const double x, const double h)
+  {
+    const double cell = std::floor(x / h);
+    const double o    = x / h - cell;
+    const bool   even = int(cell) % 2 == 0;
+    return (cell + (o < 0.5 ? (even ? 0.02 : 0.26) : (even ? 0.98 : 0.74))) * h;
+  }
+
+  /// A block of @p size, cells of @p h, solid points up to 0.8 m of the
+  /// elastic-plastic test material (yield 0.02 Pa at 300 K, 0.005 Pa at
+  /// 400 K, Poisson 0.3). The test places its points, then calls start().
+  template <int dim>
+  struct HandoverChoiceBlock
+  {
+    HandoverChoiceBlock(const Point<dim> &size, const double h, MPI_Comm comm)
+        : block(size, h, 0.8, unit_material(), comm)
+        , sm(block_material("300:0.02, 400:0.005", block.material))
+    {
+      sm.poisson_ratio = 0.3;
+    }
+
+    /// After the points were placed: the solid with supports @p sp and
+    /// the FE zone @p fp at 300 K, alpha, and the pore detector's pores.
+    void
+    start(const typename SolidSubCycle<dim>::Parameters &sp,
+          const typename SolidFEM<dim>::Parameters      &fp)
+    {
+      block.points->points_moved();
+      solid = std::make_unique<SolidSubCycle<dim>>(
+        sp, fp, sm, block.grid, *block.points);
+      T = block.grid.make_field(300.);
+      solid->initialize(T, "");
+      alpha = block.points->metal_fraction();
+      typename PoreDetector<dim>::Parameters pp;
+      PoreDetector<dim>                      detector(pp, block.grid, 0.2);
+      const auto                             shares =
+        PoreDetector<dim>::powder_shares(block.grid,
+                                         *block.points,
+                                         block.material.solidus,
+                                         block.material.liquidus);
+      found = detector.find(alpha, &shares.first);
+    }
+
+    /// The new top the hand-over may rise to under a layer top of 1.0 m,
+    /// margin 0.3 m (hand-over temperature 1000 K), with or without the
+    /// detector's pores; @p reason: why the choice stopped below the
+    /// limit. What the choice read is kept below.
+    double
+    choose(std::string &reason, const bool pores = true)
+    {
+      typename FeZoneHandover<dim>::Parameters hp;
+      hp.enabled     = true;
+      hp.temperature = 1000;
+      hp.margin      = 0.3;
+      FeZoneHandover<dim> choice(hp, block.grid, block.material.solidus, 0.8);
+      const double        top =
+        choice.choose_top(1.0,
+                          *block.points,
+                          solid->fe_zone_cells(),
+                          std::vector<double>(),
+                          alpha,
+                          pores ? found.pore_number : std::vector<double>());
+      reason     = choice.stop_reason();
+      fill       = choice.least_fill();
+      mass       = choice.row_point_mass();
+      cells      = choice.chosen_cells();
+      cells_mass = choice.chosen_point_mass();
+      kept       = choice.kept_cells();
+      return top;
+    }
+
+    SolidBlock<dim>                     block;
+    SolidMaterial                       sm; ///< reads block.material
+    std::unique_ptr<SolidSubCycle<dim>> solid;
+    std::vector<double>                 T, alpha;
+    typename PoreDetector<dim>::Result  found;
+    /// The least fill and the points' mass of each row the last choose()
+    /// looked at.
+    std::vector<double> fill, mass;
+    /// The cells the last choose() took and their points' mass, and the
+    /// cells it kept as points, per class.
+    std::vector<std::array<int, dim>>               cells;
+    double                                          cells_mass = 0;
+    std::array<double, FeZoneHandover<dim>::n_kept> kept{};
+  };
+} // namespace femp_test
+
+#endif
