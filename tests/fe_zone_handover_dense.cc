@@ -116,12 +116,6 @@ main(int argc, char **argv)
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
   const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
-  auto       say  = [&](const std::string &what, const std::string &reason) {
-    if (root)
-      std::cout << what
-                << ": stopped by: " << (reason.empty() ? "the limit" : reason)
-                << std::endl;
-  };
   try
     {
       Scene       dense(comm, Defect::none);
@@ -149,7 +143,7 @@ main(int argc, char **argv)
                       0.3,
                       0.89);
       checks.print("irregular: the zone may rise to (m)", top, 6);
-      say("irregular", reason);
+      print_stop(comm, "irregular", reason);
       // The points' mass of the rows 0.2-0.7 m against the elements' at
       // the full density (the unit material: density 1).
       double m_points = 0;
@@ -173,12 +167,12 @@ main(int argc, char **argv)
                      "to (m)",
                      pore.choose(reason, false),
                      6);
-        say("pore, the detector's pores not read", reason);
+        print_stop(comm, "pore, the detector's pores not read", reason);
         checks.print("pore, the detector's pores not read: cells taken",
                      pore.cells.size(),
                      6);
         checks.print("pore: the zone may rise to (m)", pore.choose(reason), 6);
-        say("pore", reason);
+        print_stop(comm, "pore", reason);
         checks.in_range("pore: cells taken", pore.cells.size(), 79, 79);
         checks.in_range("pore: of them the pore's cell (x 0.8-0.9 m, y "
                         "0.4-0.5 m)",
@@ -237,7 +231,7 @@ main(int argc, char **argv)
         checks.print("powder: the zone may rise to (m)",
                      powder.choose(reason),
                      6);
-        say("powder", reason);
+        print_stop(comm, "powder", reason);
         checks.in_range("powder: cells taken", powder.cells.size(), 79, 79);
         checks.in_range("powder: of them the powder cell (x 0.5-0.6 m, "
                         "y 0.5-0.6 m)",

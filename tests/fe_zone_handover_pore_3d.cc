@@ -82,12 +82,7 @@ namespace
             x[2] += 0.3;
           particle.set_location(x);
         }
-      auto sp         = block_supports<dim>();
-      sp.fixed_faces  = {"z-"};
-      sp.roller_faces = {"x-", "x+", "y-", "y+"};
-      sp.gravity[2]   = -0.01;
-      const auto fp   = fe_zone(Point<dim>(0, 0, 0), Point<dim>(0.6, 0.6, 0.2));
-      start(sp, fp);
+      start_box_3d();
     }
     /// Of the cells the last choose() took: whether @p c is one.
     bool
@@ -124,13 +119,6 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
-  auto       say  = [&](const std::string &what, const std::string &reason) {
-    if (root)
-      std::cout << what
-                << ": stopped by: " << (reason.empty() ? "the limit" : reason)
-                << std::endl;
-  };
   try
     {
       std::string reason;
@@ -144,7 +132,7 @@ main(int argc, char **argv)
                      "to (m)",
                      pore.choose(reason, false),
                      6);
-        say("pore, the detector's pores not read", reason);
+        print_stop(comm, "pore, the detector's pores not read", reason);
         checks.in_range("pore, the detector's pores not read: cells taken "
                         "(180 less the 16 neighbours of a fill below 0.9)",
                         pore.cells.size(),
@@ -156,7 +144,7 @@ main(int argc, char **argv)
                         1,
                         1);
         checks.print("pore: the zone may rise to (m)", pore.choose(reason), 6);
-        say("pore", reason);
+        print_stop(comm, "pore", reason);
         checks.in_range("pore: cells taken", pore.cells.size(), 179, 179);
         checks.in_range("pore: of them the pore's cell (x, y 0.3-0.4 m, z "
                         "0.4-0.5 m)",
@@ -195,7 +183,7 @@ main(int argc, char **argv)
         Scene gas(comm, true);
         checks.print("gas: pores found", gas.found.pores.size(), 6);
         checks.print("gas: the zone may rise to (m)", gas.choose(reason), 6);
-        say("gas", reason);
+        print_stop(comm, "gas", reason);
         checks.in_range("gas: cells taken (180 less the pore's cell, the "
                         "gas cell and its 10 neighbours of a fill below 0.9)",
                         gas.cells.size(),

@@ -58,12 +58,7 @@ namespace
               particle.set_location(x);
             }
         }
-      auto sp         = block_supports<dim>();
-      sp.fixed_faces  = {"z-"};
-      sp.roller_faces = {"x-", "x+", "y-", "y+"};
-      sp.gravity[2]   = -0.01;
-      const auto fp   = fe_zone(Point<dim>(0, 0, 0), Point<dim>(0.6, 0.6, 0.2));
-      start(sp, fp);
+      start_box_3d();
     }
   };
 } // namespace
@@ -74,7 +69,6 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const bool root = Utilities::MPI::this_mpi_process(comm) == 0;
   try
     {
       for (const unsigned n_empty : {0u, 1u, 2u})
@@ -103,9 +97,7 @@ main(int argc, char **argv)
                          s.fill[2],
                          3);
           checks.print(name + ": the zone may rise to (m)", top, 6);
-          if (root)
-            std::cout << name << ": stopped by: "
-                      << (reason.empty() ? "the limit" : reason) << std::endl;
+          print_stop(comm, name, reason);
           const double m_points = s.cells_mass;
           bool         taken    = false; // the defect cell
           for (const auto &c : s.cells)

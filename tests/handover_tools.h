@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,6 +34,17 @@ namespace femp_test
     const double o    = x / h - cell;
     const bool   even = int(cell) % 2 == 0;
     return (cell + (o < 0.5 ? (even ? 0.02 : 0.26) : (even ? 0.98 : 0.74))) * h;
+  }
+
+  /// On rank 0 of @p comm: why the choice @p what stopped below its
+  /// limit (@p reason; empty: it reached the limit).
+  inline void
+  print_stop(MPI_Comm comm, const std::string &what, const std::string &reason)
+  {
+    if (Utilities::MPI::this_mpi_process(comm) == 0)
+      std::cout << what
+                << ": stopped by: " << (reason.empty() ? "the limit" : reason)
+                << std::endl;
   }
 
   /// A block of @p size, cells of @p h, solid points up to 0.8 m of the
@@ -68,6 +80,20 @@ namespace femp_test
                                          block.material.solidus,
                                          block.material.liquidus);
       found = detector.find(alpha, &shares.first);
+    }
+
+    /// start() for the 3D blocks 0.6 m x 0.6 m: the bottom fixed, rollers
+    /// on the four sides, gravity 0.01 m/s^2 down, the FE zone below
+    /// z = 0.2 m.
+    void
+    start_box_3d()
+    {
+      static_assert(dim == 3, "a 3D block");
+      auto sp         = block_supports<dim>();
+      sp.fixed_faces  = {"z-"};
+      sp.roller_faces = {"x-", "x+", "y-", "y+"};
+      sp.gravity[2]   = -0.01;
+      start(sp, fe_zone(Point<dim>(0, 0, 0), Point<dim>(0.6, 0.6, 0.2)));
     }
 
     /// The new top the hand-over may rise to under a layer top of 1.0 m,
