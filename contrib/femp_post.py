@@ -28,6 +28,8 @@ files (doc/output.md lists the fields and their units). What it reads:
   track_shape_<n>.csv       Run.track_shape(n)
   track_bead.csv            Run.track_bead()
   porosity.csv, pores.csv   Run.porosity(), Run.pores(n)  builds: pores
+                            pore_neighbourhood_summary(Run.grid(n)): the
+                            stress next to the pore cells and away
   tracks.csv, layers.csv    Run.tracks(), Run.layers()    builds: per track
   layer_cost.csv            Run.layer_cost()    builds: wall and size per layer
   any other femp CSV        read_csv(path)
@@ -565,6 +567,81 @@ def probe_line_summary(line, alpha_min=0.5,
         out[f] = ({"mean": sum(v) / len(v), "min": min(v), "max": max(v)}
                   if v else None)
     return out
+
+
+def pore_neighbourhood_summary(grid, mask=None, alpha_min=0.5,
+                               fields=("sigma_xx", "sigma_yy", "sigma_zz",
+                                       "von_mises"),
+                               far=2, within=None):
+    """The stress in the metal around the cells of @p mask (a boolean per
+    cell of a grid output on a uniform grid; None: the pore cells, field
+    'pore' > 0) against the metal away from them. The metal cells are the
+    stressed ones (von Mises != 0) with alpha >= alpha_min outside the
+    mask. 'next': those that share a face with a mask cell; 'away': those
+    more than @p far cells from every mask cell (the largest of the index
+    distances in x, y, z), and inside @p within (a boolean per cell, e.g.
+    the built region; None: everywhere). Returns the counts 'mask',
+    'metal', 'next', 'away', the cell numbers 'next_cells' and
+    'away_cells', and per field {'next': ..., 'away': ...}, each mean,
+    min and max (None where there are none)."""
+    _need_numpy("pore_neighbourhood_summary()")
+    c = np.asarray(grid.centres, dtype=float)
+    lo = c.min(axis=0)
+    h = min(np.diff(np.unique(np.round(c[:, d], 12))).min()
+            for d in range(c.shape[1]) if len(np.unique(c[:, d])) > 1)
+    ijk = np.rint((c - lo) / h).astype(np.int64)
+    if np.abs((c - lo) / h - ijk).max() > 1e-6:
+        raise ValueError("femp_post: pore_neighbourhood_summary() needs "
+                         "the cells of a uniform grid")
+    if mask is None:
+        mask = np.asarray(grid["pore"]) > 0
+    mask = np.asarray(mask, dtype=bool)
+    within = (np.ones(len(c), dtype=bool) if within is None
+              else np.asarray(within, dtype=bool))
+    shape = ijk.max(axis=0) + 1
+    box = np.zeros(shape, dtype=bool)
+    box[tuple(ijk[mask].T)] = True
+    # the face neighbours of the mask cells; the cells within `far` of one
+    # (grown along each axis in turn: a cube of side 2 far + 1)
+    touch = np.zeros(shape, dtype=bool)
+    for d in range(len(shape)):
+        for step in (-1, 1):
+            touch |= np.roll(box, step, axis=d) & _no_wrap(shape, d, step)
+    near = box.copy()
+    for d in range(len(shape)):
+        for _ in range(far):
+            grown = near.copy()
+            for step in (-1, 1):
+                grown |= (np.roll(near, step, axis=d)
+                          & _no_wrap(shape, d, step))
+            near = grown
+    metal = ((np.asarray(grid["von_mises"]) != 0)
+             & (np.asarray(grid["alpha"]) >= alpha_min) & ~mask)
+    at = tuple(ijk.T)
+    nxt = np.flatnonzero(metal & touch[at])
+    away = np.flatnonzero(metal & ~near[at] & within)
+    out = {"mask": int(mask.sum()), "metal": int(metal.sum()),
+           "next": len(nxt), "away": len(away),
+           "next_cells": nxt, "away_cells": away}
+    for f in fields:
+        v = np.asarray(grid[f], dtype=float)
+        out[f] = {}
+        for name, cells in (("next", nxt), ("away", away)):
+            out[f][name] = ({"mean": float(v[cells].mean()),
+                             "min": float(v[cells].min()),
+                             "max": float(v[cells].max())}
+                            if len(cells) else None)
+    return out
+
+
+def _no_wrap(shape, axis, step):
+    """Mask of the cells that np.roll(..., step, axis) filled from a real
+    neighbour (not wrapped round from the other end)."""
+    keep = np.ones(shape, dtype=bool)
+    index = [slice(None)] * len(shape)
+    index[axis] = 0 if step > 0 else -1
+    keep[tuple(index)] = False
+    return keep
 
 
 def von_mises(f):
