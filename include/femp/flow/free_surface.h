@@ -65,6 +65,10 @@ namespace femp
         cell     ///< the cell's own
       };
       RecoilTemperature recoil_temperature = RecoilTemperature::limited;
+      /// Whether the surface pressure takes the recoil net of the ambient
+      /// pressure, max(0, zeta_p p_sat(T) - p0) (Melt flow/Recoil above
+      /// ambient), instead of zeta_p p_sat(T).
+      bool recoil_above_ambient = false;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
       /// How the curvature is computed: from the divergence of alpha's
@@ -80,7 +84,8 @@ namespace femp
       /// The free-surface entries of the subsection Melt flow (the caller
       /// has entered it): Curvature, Curvature smoothing, Surface tension,
       /// Surface tension temperature derivative, Surface tension model (and
-      /// the subsection Surfactant), Recoil coefficient, Recoil temperature.
+      /// the subsection Surfactant), Recoil coefficient, Recoil temperature,
+      /// Recoil above ambient.
       static void
       declare_parameters(ParameterHandler &prm);
       /// Declare or read these entries, each from its member.
