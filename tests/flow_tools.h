@@ -30,8 +30,7 @@ namespace femp_test
                               (T - m.evaporation_temperature) /
                               (R * T * m.evaporation_temperature));
     // Melt flow/Recoil above ambient: net of the ambient pressure.
-    return prm.recoil_above_ambient ? std::max(0., p - m.ambient_pressure) :
-                                      p;
+    return prm.recoil_above_ambient ? std::max(0., p - m.ambient_pressure) : p;
   }
 
   template <int dim>
