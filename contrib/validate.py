@@ -105,8 +105,10 @@ conduction: the Eagar-Tsai (pure conduction) fusion width and depth of
 conduction3d: an independent reference for femp's conduction (numpy
   finite volumes, explicit, k(T), c_p(T) and latent heat from the material
   file, exact Gaussian source on the top faces, the measured absorptivity,
-  no flow, no losses) on the scene's plate and path: the fusion width on
-  the top row of cells and at the surface, and the depth, at cell sizes h.
+  no flow, no losses; with --evap femp's evaporation loss on the top face)
+  on the scene's plate and path: the fusion width on the top row of cells
+  and at the surface, the depth, and the hottest top-row and surface
+  temperatures, at cell sizes h.
 spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
   first part of the pulse on a plate cut to 0.64 x 0.64 x 0.30 mm: the
   melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
