@@ -497,7 +497,10 @@ namespace femp
   }
 
   // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
-  // surface cell (doc/flow.md, "Recoil pressure"). T_s (Melt flow/Recoil
+  // surface cell (doc/flow.md, "Recoil pressure"), or with Melt
+  // flow/Recoil above ambient its part above the ambient pressure p0 that
+  // the gas exerts on the whole surface (the flow's pressure is relative
+  // to it): max(0, zeta_p p_sat - p0). T_s (Melt flow/Recoil
   // temperature): 'limited' (default), the cell's own temperature limited
   // to the range of the temperatures of the other surface cells among its
   // 3^dim neighbours; 'cell', its own temperature; 'median', the median

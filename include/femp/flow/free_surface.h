@@ -13,7 +13,9 @@
 //    (Melt flow/Curvature smoothing);
 //  - the recoil pressure zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] added to
 //    p_s, from the cell's temperature limited to its surface neighbours'
-//    (or the cell's own, or their median: Melt flow/Recoil temperature);
+//    (or the cell's own, or their median: Melt flow/Recoil temperature),
+//    or its part above the ambient pressure p0 (Melt flow/Recoil above
+//    ambient);
 //  - the Marangoni traction dsigma/dT (grad T - (n.grad T) n) on the
 //    fluid-gas faces, weighted by |n_d|, spread to the face nodes, with
 //    dsigma/dT constant or, with the surfactant model, at the surface
