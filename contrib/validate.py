@@ -19,7 +19,7 @@
   contrib/validate.py conduction
   contrib/validate.py spots    [--cases REGEX] [--end-time T] [--np N]
   contrib/validate.py conduction3d [--cases REGEX] [--h 8,4] [--eta A]
-                               [--props file,nolatent,const]
+                               [--props file,nolatent,const] [--evap]
   contrib/validate.py dig      [--out build/validation] [--cases REGEX]
                                [--settings REGEX] [--force]
 
@@ -105,8 +105,10 @@ conduction: the Eagar-Tsai (pure conduction) fusion width and depth of
 conduction3d: an independent reference for femp's conduction (numpy
   finite volumes, explicit, k(T), c_p(T) and latent heat from the material
   file, exact Gaussian source on the top faces, the measured absorptivity,
-  no flow, no losses) on the scene's plate and path: the fusion width on
-  the top row of cells and at the surface, and the depth, at cell sizes h.
+  no flow, no losses; with --evap femp's evaporation loss on the top face)
+  on the scene's plate and path: the fusion width on the top row of cells
+  and at the surface, the depth, and the hottest top-row and surface
+  temperatures, at cell sizes h.
 spots: Simonds' stationary spots (default 626, 463 and 378 W) for the
   first part of the pulse on a plate cut to 0.64 x 0.64 x 0.30 mm: the
   melt onset and the times the absorbed fraction reaches 0.35, 0.45, 0.6
@@ -599,7 +601,10 @@ def material(alloy):
                 Tl=float(get("Liquidus temperature")),
                 L=float(get("Latent heat of fusion")),
                 n=float(get("Refractive index")),
-                kappa=float(get("Extinction coefficient")))
+                kappa=float(get("Extinction coefficient")),
+                Lv=float(get("Latent heat of evaporation")),
+                Tv=float(get("Evaporation temperature")),
+                M=float(get("Molar mass")))
 
 
 def cmd_regime(args):
@@ -707,7 +712,7 @@ def cmd_conduction(args):
                   m["k"](Ts), m["cp"](Ts), rows[0] * 1e6, rows[1] * 1e6))
 
 
-def conduction_3d(c, h, props="file", eta=None):
+def conduction_3d(c, h, props="file", eta=None, evap=False):
     """An independent reference for femp's heat conduction on case @p c:
     a cell-centred finite-volume solution (numpy, explicit in time) of
     rho dH/dt = div(k grad T) with the enthalpy H(T) = rho (int c dT + L f_l)
@@ -721,7 +726,11 @@ def conduction_3d(c, h, props="file", eta=None):
     Eagar-Tsai setting). Returns the fusion width read on the top row of
     cells (h/2 below the surface) and at the surface (extrapolated from the
     two top rows), and the depth, from the peak temperature of each cell,
-    median over sections at 40-70 % of the path."""
+    median over sections at 40-70 % of the path; and the hottest top-row
+    cell and extrapolated surface temperatures over those sections.
+    @p evap: the top face loses the Hertz-Knudsen-Langmuir evaporation
+    flux of femp's default (zeta_q = 0.82, the material file's L_v, M and
+    T_v, p_0 = 101325 Pa; explicit in time)."""
     import numpy as np
     m = material(c["alloy"])
     rho, Ts, Tl, T0 = m["rho"], m["Ts"], m["Tl"], c["T0"]
@@ -769,6 +778,11 @@ def conduction_3d(c, h, props="file", eta=None):
         div[:, :, -1] += (K0 - K[:, :, -1]) / (0.5 * h)   # bottom at T0
         H += dt * div / h
         H[:, :, 0] += dt * eta * P * np.outer(gx, gy) / h ** 3
+        if evap:
+            Tt = T[:, :, 0]
+            H[:, :, 0] -= dt / h * 0.82 * m["Lv"] * m["M"] / np.sqrt(
+                2 * math.pi * m["M"] * 8.314462618 * Tt) * 101325.0 * np.exp(
+                m["Lv"] * m["M"] / 8.314462618 * (Tt - m["Tv"]) / (Tt * m["Tv"]))
         T = np.interp(H, Hg, Tg)
         np.maximum(Tpk, T, out=Tpk)
 
@@ -786,6 +800,8 @@ def conduction_3d(c, h, props="file", eta=None):
     return dict(width_top_row=med([2 * edge(Tpk[i, :, 0]) for i in sec]),
                 width_surface=med([2 * edge(surf[i]) for i in sec]),
                 depth=med([edge(Tpk[i, 0, :]) for i in sec]),
+                T_top=float(Tpk[sec.start:sec.stop, :, 0].max()),
+                T_surface=float(surf[sec.start:sec.stop].max()),
                 cells=nx * ny * nz, steps=nsteps)
 
 
@@ -797,13 +813,16 @@ def cmd_conduction3d(args):
             continue
         for props in (args.props or "file,nolatent,const").split(","):
             for h in (float(x) * 1e-6 for x in (args.h or "8,4").split(",")):
-                r = conduction_3d(c, h, props, args.eta)
+                r = conduction_3d(c, h, props, args.eta, args.evap)
                 print("%-12s %-9s h %4.1f um: width top row %5.1f um, at the "
                       "surface %5.1f um, depth %5.1f um (measured %5.1f / %5.1f; "
-                      "%d cells, %d steps)" % (
+                      "%d cells, %d steps); hottest top-row cell %.0f K, "
+                      "surface %.0f K%s" % (
                           c["name"], props, h * 1e6, r["width_top_row"] * 1e6,
                           r["width_surface"] * 1e6, r["depth"] * 1e6,
-                          c["width"] * 1e6, c["depth"] * 1e6, r["cells"], r["steps"]),
+                          c["width"] * 1e6, c["depth"] * 1e6, r["cells"], r["steps"],
+                          r["T_top"], r["T_surface"],
+                          ", with evaporative cooling" if args.evap else ""),
                       flush=True)
 
 
@@ -2699,6 +2718,8 @@ def main():
                     help="dig: evaluate again where dig.csv exists")
     ap.add_argument("--props", default=None,
                     help="conduction3d: 'file', 'nolatent', 'const' (comma-separated)")
+    ap.add_argument("--evap", action="store_true",
+                    help="conduction3d: the surface loses femp's evaporation flux")
     args = ap.parse_args()
     if args.out is None:
         args.out = os.path.join(args.build, {"pipeline": "validation_pipeline",

@@ -6,6 +6,7 @@
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/material_points.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -24,10 +25,12 @@ namespace femp_test
   {
     const Material m;
     const double   R = 8.314462618;
-    return prm.recoil_coefficient * m.ambient_pressure *
-           std::exp(m.latent_heat_evaporation * m.molar_mass *
-                    (T - m.evaporation_temperature) /
-                    (R * T * m.evaporation_temperature));
+    const double   p = prm.recoil_coefficient * m.ambient_pressure *
+                     std::exp(m.latent_heat_evaporation * m.molar_mass *
+                              (T - m.evaporation_temperature) /
+                              (R * T * m.evaporation_temperature));
+    // Melt flow/Recoil above ambient: net of the ambient pressure.
+    return prm.recoil_above_ambient ? std::max(0., p - m.ambient_pressure) : p;
   }
 
   template <int dim>

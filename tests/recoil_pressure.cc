@@ -28,8 +28,13 @@
 //     peak cell, which takes p_r of its neighbours' temperature; 'cell'
 //     gives p_r(T of the cell) everywhere (relative 1e-9). The ratio of
 //     the median's recoil at the peak to the cell-wise one is printed.
+//  6. Net of the ambient pressure (Melt flow/Recoil above ambient = true):
+//     the pool of check 1 at 3300 K must carry max(0, zeta_p p_sat - p0)
+//     + rho g (H_m - z), and at 3150 K, where zeta_p p_sat < p0, the
+//     hydrostatic pressure alone (same 1 % tolerance).
 // 2D, 1 and 2 ranks give the same output.
 #include <cmath>
+#include <string>
 #include <utility>
 
 #include "flow_tools.h"
@@ -52,11 +57,18 @@ namespace
     return prm;
   }
 
+  // @p label prefixes the printed lines; @p above_ambient: Melt
+  // flow/Recoil above ambient.
   void
-  pool_at_rest(Checks &checks, MPI_Comm comm)
+  pool_at_rest(Checks           &checks,
+               MPI_Comm          comm,
+               const double      T,
+               const bool        above_ambient,
+               const std::string label)
   {
-    const double   h = 0.025, rho = 1000, g = 9.81, H = 0.3, T = 3300;
-    const auto     prm = parameters(g);
+    const double h = 0.025, rho = 1000, g = 9.81, H = 0.3;
+    auto         prm         = parameters(g);
+    prm.recoil_above_ambient = above_ambient;
     FlowScene<dim> scene(
       Point<dim>(0.4, 0.4),
       h,
@@ -89,12 +101,15 @@ namespace
       scene.max_over_points([](const Point<dim> &, ArrayView<const double> v) {
         return point_speed<dim>(v);
       });
-    checks.print("pool: recoil pressure p_r at T = 3300 K, Pa", pr);
-    checks.print("pool: rho g H_m, Pa", rho * g * Hm);
-    checks.at_most("pool: max |p - p_r - rho g (H_m - z)| / (p_r + rho g H_m)",
+    checks.print(label + ": recoil pressure p_r at T = " +
+                   std::to_string(int(T)) + " K, Pa",
+                 pr);
+    checks.print(label + ": rho g H_m, Pa", rho * g * Hm);
+    checks.at_most(label +
+                     ": max |p - p_r - rho g (H_m - z)| / (p_r + rho g H_m)",
                    err,
                    0.01);
-    checks.at_most("pool: max point speed / (g t)",
+    checks.at_most(label + ": max point speed / (g t)",
                    umax / (g * n_steps * dt),
                    1e-9);
   }
@@ -317,7 +332,11 @@ main(int argc, char **argv)
   Checks                           checks(MPI_COMM_WORLD);
   try
     {
-      pool_at_rest(checks, MPI_COMM_WORLD);
+      pool_at_rest(checks, MPI_COMM_WORLD, 3300, false, "pool");
+      // Net of the ambient pressure: zeta_p p_sat - p0 at 3300 K
+      // (zeta_p p_sat = 1.5 p0), none at 3150 K (zeta_p p_sat = 0.73 p0).
+      pool_at_rest(checks, MPI_COMM_WORLD, 3300, true, "pool, above ambient");
+      pool_at_rest(checks, MPI_COMM_WORLD, 3150, true, "pool, above ambient");
       pushed_block(checks, MPI_COMM_WORLD);
       linear_temperature_surface(checks, MPI_COMM_WORLD);
       hot_fragment(checks, MPI_COMM_WORLD);

@@ -82,6 +82,15 @@ namespace femp
               "nearest value); 'cell', the cell's own temperature; 'median', "
               "the median of the temperatures of the free-surface cells among "
               "its 3^dim neighbours, itself included.");
+    table.add("Recoil above ambient",
+              recoil_above_ambient,
+              "Whether the recoil enters the free-surface pressure net of "
+              "the ambient pressure p0 that the gas exerts everywhere else: "
+              "true: max(0, zeta_p p_sat(T) - p0), p_sat(T) = p0 exp[L_v M "
+              "(T - T_v)/(R T T_v)] (zero below the temperature at which "
+              "zeta_p p_sat = p0, 3213 K for 316L's data); false: zeta_p "
+              "p_sat(T), which is zeta_p p0 already at T_v (see doc/flow.md, "
+              "\"Recoil pressure\").");
   }
 
   template <int dim>
@@ -488,7 +497,10 @@ namespace femp
   }
 
   // Recoil pressure zeta_p p0 exp[L_v M (T_s - T_v)/(R T_s T_v)] of each
-  // surface cell (doc/flow.md, "Recoil pressure"). T_s (Melt flow/Recoil
+  // surface cell (doc/flow.md, "Recoil pressure"), or with Melt
+  // flow/Recoil above ambient its part above the ambient pressure p0 that
+  // the gas exerts on the whole surface (the flow's pressure is relative
+  // to it): max(0, zeta_p p_sat - p0). T_s (Melt flow/Recoil
   // temperature): 'limited' (default), the cell's own temperature limited
   // to the range of the temperatures of the other surface cells among its
   // 3^dim neighbours; 'cell', its own temperature; 'median', the median
@@ -548,8 +560,13 @@ namespace femp
               T = std::min(std::max(T, lo), hi);
           }
         if (T > 0)
-          p_surface[c] += prm.recoil_coefficient * mat.ambient_pressure *
-                          std::exp(a * (T - Tv) / T);
+          {
+            const double p = prm.recoil_coefficient * mat.ambient_pressure *
+                             std::exp(a * (T - Tv) / T);
+            p_surface[c] += prm.recoil_above_ambient ?
+                              std::max(0., p - mat.ambient_pressure) :
+                              p;
+          }
       }
   }
 
@@ -609,7 +626,12 @@ namespace femp
       driven = grid.make_field(0.);
     else
       std::fill(driven.begin(), driven.end(), 0.);
-    const double boiling = prm.recoil_coefficient * mat.ambient_pressure;
+    // Net of the ambient pressure the recoil starts at zero (where zeta_p
+    // p_sat reaches p0); otherwise at zeta_p p0 (at T_v).
+    const double boiling =
+      prm.recoil_above_ambient ?
+        std::max(0., (prm.recoil_coefficient - 1) * mat.ambient_pressure) :
+        prm.recoil_coefficient * mat.ambient_pressure;
     if (prm.recoil_coefficient > 0)
       for (const auto c : fluid_cells)
         {

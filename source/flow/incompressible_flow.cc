@@ -224,6 +224,7 @@ namespace femp
     surfactant               = surface.surfactant;
     recoil_coefficient       = surface.recoil_coefficient;
     recoil_temperature       = surface.recoil_temperature;
+    recoil_above_ambient     = surface.recoil_above_ambient;
     curvature_smoothing      = surface.curvature_smoothing;
     curvature                = surface.curvature;
     pressure.parse_parameters(prm);
@@ -277,6 +278,7 @@ namespace femp
     s.surfactant               = surfactant;
     s.recoil_coefficient       = recoil_coefficient;
     s.recoil_temperature       = recoil_temperature;
+    s.recoil_above_ambient     = recoil_above_ambient;
     s.curvature_smoothing      = curvature_smoothing;
     s.curvature                = curvature;
     return s;

@@ -13,7 +13,9 @@
 //    (Melt flow/Curvature smoothing);
 //  - the recoil pressure zeta_p p0 exp[L_v M (T - T_v)/(R T T_v)] added to
 //    p_s, from the cell's temperature limited to its surface neighbours'
-//    (or the cell's own, or their median: Melt flow/Recoil temperature);
+//    (or the cell's own, or their median: Melt flow/Recoil temperature),
+//    or its part above the ambient pressure p0 (Melt flow/Recoil above
+//    ambient);
 //  - the Marangoni traction dsigma/dT (grad T - (n.grad T) n) on the
 //    fluid-gas faces, weighted by |n_d|, spread to the face nodes, with
 //    dsigma/dT constant or, with the surfactant model, at the surface
@@ -65,6 +67,10 @@ namespace femp
         cell     ///< the cell's own
       };
       RecoilTemperature recoil_temperature = RecoilTemperature::limited;
+      /// Whether the surface pressure takes the recoil net of the ambient
+      /// pressure, max(0, zeta_p p_sat(T) - p0) (Melt flow/Recoil above
+      /// ambient), instead of zeta_p p_sat(T).
+      bool recoil_above_ambient = false;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
       /// How the curvature is computed: from the divergence of alpha's
@@ -80,7 +86,8 @@ namespace femp
       /// The free-surface entries of the subsection Melt flow (the caller
       /// has entered it): Curvature, Curvature smoothing, Surface tension,
       /// Surface tension temperature derivative, Surface tension model (and
-      /// the subsection Surfactant), Recoil coefficient, Recoil temperature.
+      /// the subsection Surfactant), Recoil coefficient, Recoil temperature,
+      /// Recoil above ambient.
       static void
       declare_parameters(ParameterHandler &prm);
       /// Declare or read these entries, each from its member.

@@ -136,6 +136,9 @@ namespace femp
       typename FreeSurface<dim>::Parameters::RecoilTemperature
         recoil_temperature =
           FreeSurface<dim>::Parameters::RecoilTemperature::limited;
+      /// The recoil net of the ambient pressure (Melt flow/Recoil above
+      /// ambient).
+      bool recoil_above_ambient = false;
       /// Tolerance, iteration limit and preconditioner of the pressure
       /// solve.
       typename PressureSolver<dim>::Parameters pressure;
