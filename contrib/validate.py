@@ -72,7 +72,7 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   CPU times are their sums. --restart-after-checkpoint ends femp after each
   checkpoint it writes before the end and resumes in a new process
   (each segment a fresh process), e.g. the 2 um track, in segments of a
-  working session each:
+  few hours each:
     contrib/validate.py run --np 1 --cases '^trapp_048W$' --setting h2 \
         --checkpoint-minutes 20 --restart-after-checkpoint
 resume-check: a run in segments against the same run straight through
