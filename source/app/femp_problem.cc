@@ -8,6 +8,7 @@
 #include <femp/app/run_checks.h>
 #include <femp/base/free_heap.h>
 #include <femp/base/input_checks.h>
+#include <femp/base/recoil_law.h>
 
 namespace femp
 {
@@ -54,7 +55,9 @@ namespace femp
     heat->set_absorption_model(scene.absorption);
     if (scene.heat_enabled)
       heat->enable_front_wall_piston(
-        scene.melt_flow ? scene.flow.recoil_coefficient : 0.);
+        RecoilLaw(scene.material,
+                  scene.melt_flow ? scene.flow.recoil_coefficient : 0.,
+                  scene.flow.recoil_above_ambient));
     if (!scene.heat_enabled)
       heat->freeze();
     // alpha's keeper, with the bodies of metal and the free surface of

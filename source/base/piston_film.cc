@@ -6,17 +6,12 @@
 
 namespace femp
 {
-  namespace
-  {
-    constexpr double gas_constant = 8.314462618; // J/(mol K)
-  }
-
-  PistonFilm::PistonFilm(const Material &material,
-                         const double    recoil_coefficient,
-                         const double    spot_radius,
-                         const double    T_far)
+  PistonFilm::PistonFilm(const Material  &material,
+                         const RecoilLaw &recoil,
+                         const double     spot_radius,
+                         const double     T_far)
       : mat(material)
-      , zeta_p(recoil_coefficient)
+      , recoil(recoil)
       , rim_length(spot_radius / 2)
       , H_melt(material.specific_heat.antiderivative(material.liquidus) -
                material.specific_heat.antiderivative(
@@ -30,12 +25,11 @@ namespace femp
   {
     delta = v_d     = 0;
     const double dT = T_s - mat.liquidus;
-    if (!(dT > 0) || !(zeta_p > 0) || !(H_melt > 0))
+    if (!(dT > 0) || !(H_melt > 0))
       return;
-    const double Tv  = mat.evaporation_temperature;
-    const double p_r = zeta_p * mat.ambient_pressure *
-                       std::exp(mat.latent_heat_evaporation * mat.molar_mass *
-                                (T_s - Tv) / (gas_constant * T_s * Tv));
+    const double p_r = recoil.pressure(T_s);
+    if (!(p_r > 0))
+      return;
     const double u  = std::sqrt(2 * p_r / mat.density);
     const double k  = mat.conductivity.value(0.5 * (T_s + mat.liquidus));
     const double rH = mat.density * H_melt;

@@ -4,6 +4,7 @@
 // include/femp/flow/free_surface.h.
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_table.h>
+#include <femp/base/recoil_law.h>
 #include <femp/flow/free_surface.h>
 
 #include <algorithm>
@@ -89,7 +90,8 @@ namespace femp
               "true: max(0, zeta_p p_sat(T) - p0), p_sat(T) = p0 exp[L_v M "
               "(T - T_v)/(R T T_v)] (zero below the temperature at which "
               "zeta_p p_sat = p0, 3213 K for 316L's data); false: zeta_p "
-              "p_sat(T), which is zeta_p p0 already at T_v (see doc/flow.md, "
+              "p_sat(T), which is zeta_p p0 already at T_v. The front-wall "
+              "film, expulsion and piston take the same law (see doc/flow.md, "
               "\"Recoil pressure\").");
   }
 
@@ -527,10 +529,7 @@ namespace femp
   {
     if (prm.recoil_coefficient == 0)
       return;
-    const double R_gas = 8.314462618;
-    const double Tv    = mat.evaporation_temperature;
-    const double a =
-      mat.latent_heat_evaporation * mat.molar_mass / (R_gas * Tv);
+    const RecoilLaw law(mat, prm.recoil_coefficient, prm.recoil_above_ambient);
     using RT = typename Parameters::RecoilTemperature;
     std::array<double, 27> Ts;
     for (const auto c : fluid_cells)
@@ -559,14 +558,7 @@ namespace femp
             if (lo <= hi)
               T = std::min(std::max(T, lo), hi);
           }
-        if (T > 0)
-          {
-            const double p = prm.recoil_coefficient * mat.ambient_pressure *
-                             std::exp(a * (T - Tv) / T);
-            p_surface[c] += prm.recoil_above_ambient ?
-                              std::max(0., p - mat.ambient_pressure) :
-                              p;
-          }
+        p_surface[c] += law.pressure(T);
       }
   }
 
@@ -626,12 +618,11 @@ namespace femp
       driven = grid.make_field(0.);
     else
       std::fill(driven.begin(), driven.end(), 0.);
-    // Net of the ambient pressure the recoil starts at zero (where zeta_p
-    // p_sat reaches p0); otherwise at zeta_p p0 (at T_v).
+    // The recoil at T_v: zeta_p p0, or net of the ambient pressure zero
+    // (the recoil starts where zeta_p p_sat reaches p0).
     const double boiling =
-      prm.recoil_above_ambient ?
-        std::max(0., (prm.recoil_coefficient - 1) * mat.ambient_pressure) :
-        prm.recoil_coefficient * mat.ambient_pressure;
+      RecoilLaw(mat, prm.recoil_coefficient, prm.recoil_above_ambient)
+        .at_evaporation_temperature();
     if (prm.recoil_coefficient > 0)
       for (const auto c : fluid_cells)
         {

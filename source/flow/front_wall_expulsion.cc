@@ -13,13 +13,13 @@ namespace femp
 {
   template <int dim>
   FrontWallExpulsion<dim>::FrontWallExpulsion(const BackgroundGrid<dim> &grid,
-                                              const Material &material,
-                                              const double recoil_coefficient,
-                                              const double spot_radius,
-                                              const double T_far)
+                                              const Material  &material,
+                                              const RecoilLaw &recoil,
+                                              const double     spot_radius,
+                                              const double     T_far)
       : grid(grid)
       , rho(material.density)
-      , piston(material, recoil_coefficient, spot_radius, T_far)
+      , piston(material, recoil, spot_radius, T_far)
       , around_offset(flow_cells::corner_offsets(grid, false))
       , speed(grid.make_field(0.))
   {

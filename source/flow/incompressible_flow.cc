@@ -51,6 +51,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_table.h>
 #include <femp/base/progress_watchdog.h>
+#include <femp/base/recoil_law.h>
 #include <femp/flow/incompressible_flow.h>
 #include <femp/grid/cell_state.h>
 
@@ -664,7 +665,11 @@ namespace femp
                        "Melt flow/Recoil coefficient > 0 (got " +
                          num(prm.recoil_coefficient) + ")");
     expulsion = std::make_unique<FrontWallExpulsion<dim>>(
-      grid, mat, prm.recoil_coefficient, spot_radius, T_far);
+      grid,
+      mat,
+      RecoilLaw(mat, prm.recoil_coefficient, prm.recoil_above_ambient),
+      spot_radius,
+      T_far);
   }
 
   template <int dim>

@@ -18,12 +18,12 @@ namespace femp
   template <int dim>
   FrontWallPiston<dim>::FrontWallPiston(const BackgroundGrid<dim> &grid,
                                         const Material            &material,
-                                        const double recoil_coefficient,
-                                        const double spot_radius,
-                                        const double T_far)
+                                        const RecoilLaw           &recoil,
+                                        const double               spot_radius,
+                                        const double               T_far)
       : grid(grid)
       , mat(material)
-      , balance(material, recoil_coefficient, spot_radius, T_far)
+      , balance(material, recoil, spot_radius, T_far)
   {
   }
 

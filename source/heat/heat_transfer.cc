@@ -685,22 +685,19 @@ namespace femp
 
   template <int dim>
   void
-  HeatTransfer<dim>::enable_front_wall_piston(const double recoil_coefficient)
+  HeatTransfer<dim>::enable_front_wall_piston(const RecoilLaw &recoil)
   {
     piston.reset();
     if (!prm.front_wall_piston)
       return;
-    if (!(recoil_coefficient > 0))
+    if (!(recoil.coefficient() > 0))
       throw InputError("Heat transfer/Front wall piston",
                        "true",
                        "needs the recoil pressure: Physics/Melt flow = true "
                        "and Melt flow/Recoil coefficient > 0 (got " +
-                         num(recoil_coefficient) + ")");
-    piston = std::make_unique<FrontWallPiston<dim>>(grid,
-                                                    mat,
-                                                    recoil_coefficient,
-                                                    laser.beam_radius(),
-                                                    prm.initial_temperature);
+                         num(recoil.coefficient()) + ")");
+    piston = std::make_unique<FrontWallPiston<dim>>(
+      grid, mat, recoil, laser.beam_radius(), prm.initial_temperature);
   }
 
   template <int dim>

@@ -9,32 +9,35 @@
 #define femp_base_piston_film_h
 
 #include <femp/base/material.h>
+#include <femp/base/recoil_law.h>
 
 namespace femp
 {
   class PistonFilm
   {
   public:
-    /// @p recoil_coefficient: zeta_p of the recoil pressure
-    /// zeta_p p_0 exp[L_v M (T - T_v)/(R T T_v)]; @p spot_radius: r_b, m
-    /// (the melt leaves over the rim length r_b / 2); @p T_far: the
-    /// temperature of the solid far ahead of the front, K.
-    PistonFilm(const Material &material,
-               double          recoil_coefficient,
-               double          spot_radius,
-               double          T_far);
+    /// @p recoil: the recoil pressure p_r(T) that expels the melt (the
+    /// flow's law, RecoilLaw); @p spot_radius: r_b, m (the melt leaves over
+    /// the rim length r_b / 2); @p T_far: the temperature of the solid far
+    /// ahead of the front, K.
+    PistonFilm(const Material  &material,
+               const RecoilLaw &recoil,
+               double           spot_radius,
+               double           T_far);
 
     /// At a surface temperature @p T_s (K): the film thickness @p delta (m)
     /// and the speed @p v_d (m/s) at which the front melts,
     /// delta = sqrt(k (T_s - T_l) r_b/2 / (u rho H)), u = sqrt(2 p_r / rho),
     /// v_d = k (T_s - T_l) / (delta rho H), H the enthalpy from T_far to the
-    /// melt; both 0 when T_s is not above the liquidus.
+    /// melt; both 0 when T_s is not above the liquidus or p_r(T_s) is not
+    /// above zero (no recoil expels the melt).
     void
     film(double T_s, double &delta, double &v_d) const;
 
   private:
     const Material &mat;
-    const double    zeta_p, rim_length, H_melt;
+    const RecoilLaw recoil;
+    const double    rim_length, H_melt;
   };
 } // namespace femp
 

@@ -35,6 +35,7 @@
 
 #include <femp/base/material.h>
 #include <femp/base/piston_film.h>
+#include <femp/base/recoil_law.h>
 #include <femp/grid/background_grid.h>
 
 #include <array>
@@ -49,12 +50,13 @@ namespace femp
   class FrontWallExpulsion
   {
   public:
-    /// @p recoil_coefficient: zeta_p; @p spot_radius: the beam radius r_b,
-    /// m; @p T_far: the temperature of the solid far ahead, K (the last
-    /// two for the piston's film thickness).
+    /// @p recoil: the recoil pressure p_r(T) of the free surface
+    /// (RecoilLaw); @p spot_radius: the beam radius r_b, m; @p T_far: the
+    /// temperature of the solid far ahead, K (the three for the piston's
+    /// film thickness).
     FrontWallExpulsion(const BackgroundGrid<dim> &grid,
                        const Material            &material,
-                       const double               recoil_coefficient,
+                       const RecoilLaw           &recoil,
                        const double               spot_radius,
                        const double               T_far);
 
@@ -103,7 +105,7 @@ namespace femp
     double
     bernoulli_speed(const double p_r) const;
     /// The piston's film thickness at a surface temperature @p T_s, m (0
-    /// where there is none: T_s not above the liquidus).
+    /// where there is none: T_s not above the liquidus or no recoil).
     double
     film_thickness(const double T_s) const;
 

@@ -39,6 +39,7 @@
 
 #include <femp/base/material.h>
 #include <femp/base/piston_film.h>
+#include <femp/base/recoil_law.h>
 #include <femp/grid/background_grid.h>
 #include <femp/heat/metal_surface.h>
 
@@ -54,18 +55,18 @@ namespace femp
   class FrontWallPiston
   {
   public:
-    /// @p recoil_coefficient: zeta_p of the recoil pressure
-    /// zeta_p p_0 exp[L_v M (T - T_v)/(R T T_v)]; @p spot_radius: r_b, m;
-    /// @p T_far: the temperature of the solid far ahead of the front, K.
+    /// @p recoil: the recoil pressure p_r(T) of the melt flow (RecoilLaw);
+    /// @p spot_radius: r_b, m; @p T_far: the temperature of the solid far
+    /// ahead of the front, K.
     FrontWallPiston(const BackgroundGrid<dim> &grid,
                     const Material            &material,
-                    const double               recoil_coefficient,
+                    const RecoilLaw           &recoil,
                     const double               spot_radius,
                     const double               T_far);
 
     /// The film of a surface at @p T_s (K) over solid: thickness delta (m)
     /// and drilling speed v_d (m/s) of the balances above; both zero where
-    /// T_s is not above the liquidus or the recoil is zero.
+    /// T_s is not above the liquidus or the recoil p_r(T_s) is zero.
     void
     film(const double T_s, double &delta, double &v_d) const;
 

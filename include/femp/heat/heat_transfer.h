@@ -29,6 +29,7 @@
 
 #include <femp/base/material.h>
 #include <femp/base/parameter_table.h>
+#include <femp/base/recoil_law.h>
 #include <femp/grid/background_grid.h>
 #include <femp/grid/cell_fields.h>
 #include <femp/grid/metal_bodies.h>
@@ -292,12 +293,12 @@ namespace femp
       const typename RayTracedAbsorption<dim>::Parameters &absorption);
     /// 'Front wall piston = true': the film between a boiling surface and
     /// the melting front conducts with its own thickness
-    /// (FrontWallPiston), with the recoil coefficient zeta_p of the melt
-    /// flow (> 0, else an InputError naming Heat transfer/Front wall
-    /// piston) and the laser's beam radius. Call after initialize(); does
-    /// nothing when the option is off.
+    /// (FrontWallPiston), with the recoil pressure of the melt flow
+    /// (its coefficient zeta_p > 0, else an InputError naming Heat
+    /// transfer/Front wall piston) and the laser's beam radius. Call after
+    /// initialize(); does nothing when the option is off.
     void
-    enable_front_wall_piston(const double recoil_coefficient);
+    enable_front_wall_piston(const RecoilLaw &recoil);
     /// The piston model (nullptr when off).
     const FrontWallPiston<dim> *
     front_wall_piston() const
