@@ -49,6 +49,8 @@ namespace
     prm.viscosity          = 1e-3;
     prm.gravity            = Tensor<1, dim>();
     prm.recoil_coefficient = 0.54;
+    // zeta_p p_sat(T): every surface cell above T_v boils.
+    prm.recoil_above_ambient = false;
     prm.recoil_temperature =
       FreeSurface<dim>::Parameters::RecoilTemperature::cell;
     prm.pressure.solver_tolerance = 1e-12;
@@ -107,7 +109,8 @@ main(int argc, char **argv)
   try
     {
       IncompressibleFlow<dim>::Parameters prm;
-      prm.recoil_coefficient = 0.54;
+      prm.recoil_coefficient   = 0.54;
+      prm.recoil_above_ambient = false;
       prm.recoil_temperature =
         FreeSurface<dim>::Parameters::RecoilTemperature::cell;
       // The surface pressure of the first and the last cell (the

@@ -54,6 +54,8 @@ namespace
     prm.gravity                   = Tensor<1, dim>();
     prm.gravity[dim - 1]          = -g;
     prm.recoil_coefficient        = 0.54;
+    // Checks 1-5: zeta_p p_sat(T); check 6 sets the option itself.
+    prm.recoil_above_ambient = false;
     return prm;
   }
 

@@ -111,6 +111,8 @@ namespace
     prm.gravity            = Tensor<1, dim>();
     prm.surface_tension    = 0;
     prm.recoil_coefficient = 0.54;
+    // The recoil that recoil_temperature() inverts: zeta_p p_sat(T).
+    prm.recoil_above_ambient = false;
     prm.recoil_temperature =
       FreeSurface<dim>::Parameters::RecoilTemperature::cell;
     prm.pressure.solver_tolerance = 1e-12;
