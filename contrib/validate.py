@@ -2326,6 +2326,17 @@ def rel(p, m):
     return (p / m - 1) if (p is not None and m) else None
 
 
+def retained(r):
+    """The fraction of the laser energy that the part keeps, which Trapp's
+    calorimetry measures: the absorbed fraction (the window's mean) times
+    the share of the absorbed energy that the surface losses (evaporation,
+    convection, radiation) leave in the part over the run, 1 - losses /
+    laser of femp's energy line; None without them."""
+    if r.get("absorbed") is None or not r.get("laser_J") or r.get("losses_J") is None:
+        return None
+    return r["absorbed"] * (1 - r["losses_J"] / r["laser_J"])
+
+
 def pct(x):
     return ("%+.0f %%" % (100 * x)) if x is not None else "-"
 
@@ -2419,6 +2430,9 @@ SETTING_NAMES = {"default": "default free surface, 8 um cells",
                            "8 um cells",
                  "expel": "default free surface, front-wall expulsion, "
                           "8 um cells"}
+# the retained fraction in the absorption figure, a lighter tone of COLOURS
+RETAINED_COLOURS = {"default": "#74c0fc", "h4": "#8ce99a", "h2": "#66d9e8",
+                    "fine": "#ffa94d", "median": "#ced4da", "cell": "#e599f7"}
 COLOURS = {"default": "#1f5fbf", "h4": "#2b8a3e", "h2": "#0b7285",
            "fine": "#d9480f", "large": "#5c940d", "median": "#868e96",
            "cell": "#ae3ec9", "thermal": "#e67700", "nomarangoni": "#c2255c",
@@ -2478,10 +2492,17 @@ def cmd_report(args):
         if pts:
             series.append((SETTING_NAMES[s].split(" (")[0].replace(
                 "default free surface, ", "femp, "), COLOURS[s], pts))
+        # what the part retains (the calorimetry's quantity, retained())
+        pts = [(allc[n]["P"], retained(r), 0, 0, "")
+               for (st, n), r in sorted(res.items())
+               if st == s and n.startswith("trapp") and retained(r) is not None]
+        if pts:
+            series.append(("femp retained" + ("" if s == "default" else ", " + s),
+                           RETAINED_COLOURS[s], pts))
     svg_scatter(os.path.join(args.img, "validation_absorption.svg"), series,
-                "Absorbed fraction at 500 mm/s, 316L, against power",
-                "laser power (W)", "absorbed fraction", diag=False,
-                ylim=(0, 1))
+                "Absorbed and retained fraction at 500 mm/s, 316L, against "
+                "power", "laser power (W)", "fraction of the laser energy",
+                diag=False, ylim=(0, 1))
     nist_spot_figures(res, allc, settings, args.img)
     # tables
     lines = []
@@ -2491,17 +2512,20 @@ def cmd_report(args):
         if not rows:
             continue
         lines.append("\n### %s\n" % ds)
+        trapp = ds == "Trapp 2017"
         lines.append("| case | setting | measured width (µm) | femp | error | "
                      "measured depth (µm) | femp | error | depth/width | "
-                     "absorbed (femp%s) | hits/ray | ΔH/h_s | steady (depth growth) | "
-                     "wall (s) × ranks |" % (" / Trapp" if ds == "Trapp 2017" else ""))
-        lines.append("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+                     "absorbed (femp%s) | %shits/ray | ΔH/h_s | steady (depth growth) | "
+                     "wall (s) × ranks |" % ((" / Trapp", "retained (femp / Trapp) | ")
+                                             if trapp else ("", "")))
+        lines.append("|---|---|" + "---:|" * (13 if trapp else 12))
         for st, n, r in sorted(rows, key=lambda x: (x[1], settings.index(x[0]))):
             c = allc[n]
             ab = ("%.3f" % r["absorbed"]) if r.get("absorbed") is not None else "-"
-            if ds == "Trapp 2017":
-                ab += " / %s" % (("%.3f" % c["absorptivity"]) if c.get("absorptivity")
-                                 else "-")
+            if trapp:
+                cal = (" / %.3f" % c["absorptivity"]) if c.get("absorptivity") else " / -"
+                ret = retained(r)
+                ab += cal + " | " + (("%.3f" % ret) if ret is not None else "-") + cal
             lines.append("| %s | %s | %.1f ± %.1f | %s | %s | %.1f ± %.1f | %s | %s | "
                          "%.2f | %s | %s | %s | %s | %.0f × %d%s |" % (
                              c["label"], st, c["width"] * 1e6, c["width_sd"] * 1e6,
