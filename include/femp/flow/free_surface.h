@@ -69,8 +69,8 @@ namespace femp
       RecoilTemperature recoil_temperature = RecoilTemperature::limited;
       /// Whether the surface pressure takes the recoil net of the ambient
       /// pressure, max(0, zeta_p p_sat(T) - p0) (Melt flow/Recoil above
-      /// ambient), instead of zeta_p p_sat(T).
-      bool recoil_above_ambient = false;
+      /// ambient; the default), instead of zeta_p p_sat(T).
+      bool recoil_above_ambient = true;
       /// Passes of the curvature smoothing along the surface (0: none).
       unsigned int curvature_smoothing = 0;
       /// How the curvature is computed: from the divergence of alpha's

@@ -137,8 +137,8 @@ namespace femp
         recoil_temperature =
           FreeSurface<dim>::Parameters::RecoilTemperature::limited;
       /// The recoil net of the ambient pressure (Melt flow/Recoil above
-      /// ambient).
-      bool recoil_above_ambient = false;
+      /// ambient; the default).
+      bool recoil_above_ambient = true;
       /// Tolerance, iteration limit and preconditioner of the pressure
       /// solve.
       typename PressureSolver<dim>::Parameters pressure;
