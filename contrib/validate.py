@@ -146,6 +146,9 @@ plate ('width_solidus_substrate', 'depth_solidus_substrate' of
 melt_pool.csv), the median over the last 40 % of the laser's path (the
 quasi-steady pool; its maximum there is written too). Absorbed fraction:
 the time mean of absorption.csv's 'absorbed_fraction' over the same window.
+Retained fraction (Trapp's table and the absorption figure, retained()):
+the absorbed fraction times 1 - surface losses / absorbed energy of
+femp's energy line, the heat the plate keeps, which calorimetry measures.
 """
 import argparse
 import csv
