@@ -27,7 +27,8 @@
 //   - smoothing off: the alternation is there (at least 0.5 of the
 //     scale): the mode of the mean stress from cell to cell that the
 //     points' nodal forces do not see;
-//   - smoothing on: the alternation of p at most 0.1 of the scale; the row means of p within 0.1 of the scale of those without
+//   - smoothing on: the alternation of p at most 0.1 of the scale; the row
+//   means of p within 0.1 of the scale of those without
 //     smoothing (the smoothing keeps the volume integral of each
 //     increment); the energy balance within 0.05 of the stress work.
 // Runs on 1 and 2 ranks against one output.
@@ -51,7 +52,10 @@ namespace
   };
 
   Result
-  run(const bool smoothing, const std::string &name, Checks &checks, MPI_Comm comm)
+  run(const bool         smoothing,
+      const std::string &name,
+      Checks            &checks,
+      MPI_Comm           comm)
   {
     const Point<dim> size(nx * h, ny * h, (nz + 2) * h); // room to expand
     Material         thermal = unit_material();
@@ -59,14 +63,14 @@ namespace
     thermal.liquidus         = 700;
     SolidBlock<dim> block(size, h, nz * h, thermal, comm, 300.);
 
-    SolidMaterial sm      = block_material("0:0.1", block.material);
-    sm.poisson_ratio      = 0.3;
-    sm.expansion          = 2e-5;
-    sm.youngs_modulus     = PiecewiseLinear::parse("300:100, 600:1", "E");
-    sm.pressure_smoothing = smoothing;
-    auto sp               = block_supports<dim>();
-    sp.fixed_faces        = {"z-"};
-    sp.roller_faces       = {"x-", "x+", "y-", "y+"};
+    SolidMaterial sm       = block_material("0:0.1", block.material);
+    sm.poisson_ratio       = 0.3;
+    sm.expansion           = 2e-5;
+    sm.youngs_modulus      = PiecewiseLinear::parse("300:100, 600:1", "E");
+    sm.pressure_smoothing  = smoothing;
+    auto sp                = block_supports<dim>();
+    sp.fixed_faces         = {"z-"};
+    sp.roller_faces        = {"x-", "x+", "y-", "y+"};
     const auto          fp = fe_block<dim>(false, size, 0.);
     SolidSubCycle<dim>  solid(sp, fp, sm, block.grid, *block.points);
     std::vector<double> T = block.grid.make_field(300.);
@@ -99,9 +103,10 @@ namespace
         SymmetricTensor<2, dim> s;
         for (unsigned int c = 0; c < s.n_independent_components; ++c)
           s.access_raw_entry(c) = q[P::stress + c];
-        const double p  = trace(s) / 3;
-        const auto   ds = deviator(s);
-        double *const c = sums.data() + 3 * ((ijk[2] * ny + ijk[1]) * nx + ijk[0]);
+        const double  p  = trace(s) / 3;
+        const auto    ds = deviator(s);
+        double *const c =
+          sums.data() + 3 * ((ijk[2] * ny + ijk[1]) * nx + ijk[0]);
         c[0] += p, c[1] += std::sqrt(1.5 * (ds * ds)), c[2] += 1;
       }
     Utilities::MPI::sum(sums, comm, sums);
@@ -122,8 +127,9 @@ namespace
       for (int i = 0; i < nx; ++i)
         for (int j = 0; j + 1 < ny; ++j)
           {
-            r.jump_p = std::max(r.jump_p,
-                                std::abs(cell(i, j + 1, k, 0) - cell(i, j, k, 0)));
+            r.jump_p =
+              std::max(r.jump_p,
+                       std::abs(cell(i, j + 1, k, 0) - cell(i, j, k, 0)));
             if (j == 0)
               continue;
             // The zig-zag at j: the smaller of the two steps to its
@@ -162,7 +168,7 @@ main(int argc, char **argv)
   Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
   MPI_Comm                         comm = MPI_COMM_WORLD;
   Checks                           checks(comm);
-  const Result off = run(false, "off", checks, comm);
+  const Result                     off = run(false, "off", checks, comm);
   checks.in_range("off: largest alternation of p along y / scale",
                   off.alt_p / off.scale,
                   0.5,

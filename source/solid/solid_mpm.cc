@@ -507,7 +507,7 @@ namespace femp
   {
     // The tents of the cell of the stress update at the saved coordinates
     // (corner a: bit d set for the upper node in direction d).
-    auto tents = [&](const std::size_t p, double (&N)[n_corners]) {
+    auto tents = [&](const std::size_t p, double(&N)[n_corners]) {
       for (unsigned int a = 0; a < n_corners; ++a)
         {
           double w = 1;
