@@ -61,6 +61,22 @@ namespace femp
               "the stress update (doc/solid.md \"Volumetric strain "
               "rate\"). "
               "One of point, centroid.");
+    table.add("Pressure smoothing",
+              pressure_smoothing,
+              "Whether the material points of the solid MPM smooth "
+              "their mean-stress increment over the grid nodes: after "
+              "each stress update the increment of tr(sigma)/3 of "
+              "every solid point is replaced by its volume-weighted "
+              "average at the nodes of its cell, interpolated back to "
+              "the point with the tents (the volume integral of the "
+              "increment is kept, the deviator stays the point's). "
+              "Without it the cells' mean stress can carry a "
+              "checkerboard from cell to cell (up to GPa in cooled "
+              "re-solidified metal) that the nodal forces do not see; "
+              "with it that mode does not build up. Costs a scatter "
+              "and a gather of one value per point and step, and the "
+              "P2G runs as a pass of its own (doc/solid.md "
+              "\"Pressure smoothing\").");
     table.enter_subsection("Material");
     if (table.declaring())
       prm.declare_entry(

@@ -342,8 +342,13 @@ namespace femp
     // here (p2g() consumed or cleared it). Not with the centroid's
     // volumetric strain rate: its P2G needs the centroids of the moved
     // points of whole cells (p2g(), compute_centroids()).
-    const bool fuse =
-      n > 0 && steps_since_gather > 0 && have_gravity && !centroid_volumetric();
+    // Nor with the pressure smoothing: the next P2G needs the smoothed
+    // stresses of all points.
+    const bool smooth = mat.pressure_smoothing;
+    if (smooth)
+      save_pressure_state(T_new);
+    const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity &&
+                      !centroid_volumetric() && !smooth;
     ++steps_since_gather;
     const unsigned int nf = 1 + 2 * dim + (stiffness_rows ? 1 : 0);
     double            *next_out[2 + 2 * dim] = {};
@@ -468,8 +473,92 @@ namespace femp
       loop_b(no, yes, no);
     else
       loop_b(no, no, no);
+    if (smooth)
+      work += smooth_pressure_increment();
     next_ready = fuse && !lost && left_rank == 0;
     return work;
+  }
+
+  template <int dim>
+  void
+  SolidMPM<dim>::save_pressure_state(const std::vector<double> &T_new)
+  {
+    const std::size_t n  = true_mass.size();
+    const double      ih = 1. / grid.h();
+    const double      Tm = mat.melt_temperature();
+    ps_mean.resize(n);
+    ps_volume.resize(n);
+    ps_node0.resize(n);
+    for (int d = 0; d < dim; ++d)
+      ps_xi[d].resize(n);
+    for (std::size_t p = 0; p < n; ++p)
+      {
+        ps_mean[p]   = (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3);
+        ps_volume[p] = T_new[cell[p]] < Tm ? volume[p] : 0.;
+        ps_node0[p]  = node0[p];
+        for (int d = 0; d < dim; ++d)
+          ps_xi[d][p] = (x[d][p] - corner[d][p]) * ih;
+      }
+  }
+
+  template <int dim>
+  double
+  SolidMPM<dim>::smooth_pressure_increment()
+  {
+    // The tents of the cell of the stress update at the saved coordinates
+    // (corner a: bit d set for the upper node in direction d).
+    auto tents = [&](const std::size_t p, double(&N)[n_corners]) {
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          double w = 1;
+          for (int d = 0; d < dim; ++d)
+            w *= ((a >> d) & 1) ? ps_xi[d][p] : 1 - ps_xi[d][p];
+          N[a] = w;
+        }
+    };
+    const std::size_t n = ps_mean.size();
+    ps_weight.assign(grid.n_local_nodes(), 0.);
+    ps_sum.assign(grid.n_local_nodes(), 0.);
+    double N[n_corners];
+    for (std::size_t p = 0; p < n; ++p)
+      {
+        const double V = ps_volume[p];
+        if (V == 0)
+          continue;
+        const double dm =
+          (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3) - ps_mean[p];
+        tents(p, N);
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t I = ps_node0[p] + corner_offset[a];
+            ps_weight[I] += V * N[a];
+            ps_sum[I] += V * N[a] * dm;
+          }
+      }
+    grid.sum_shared_nodes(ps_weight);
+    grid.sum_shared_nodes(ps_sum);
+    double dwork = 0;
+    for (std::size_t p = 0; p < n; ++p)
+      {
+        const double V = ps_volume[p];
+        if (V == 0)
+          continue;
+        const double dm =
+          (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3) - ps_mean[p];
+        tents(p, N);
+        double smoothed = 0;
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t I = ps_node0[p] + corner_offset[a];
+            if (ps_weight[I] > 0)
+              smoothed += N[a] * ps_sum[I] / ps_weight[I];
+          }
+        const double shift = smoothed - dm;
+        for (unsigned int c = 0; c < 3; ++c)
+          sigma[c][p] += shift;
+        dwork += 0.5 * shift * (volume[p] - V);
+      }
+    return dwork;
   }
 
   template <int dim>

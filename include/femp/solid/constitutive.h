@@ -99,6 +99,14 @@ namespace femp
       centroid
     };
     VolumetricStrainRate volumetric_strain_rate = VolumetricStrainRate::point;
+    /// Nodal smoothing of the material points' mean-stress increment
+    /// (parameter "Solid/Pressure smoothing"): after each stress update
+    /// the increment of tr(sigma)/3 of every solid point is replaced by
+    /// its volume-weighted projection to the grid nodes interpolated back
+    /// to the point; the deviator stays the point's. Removes the
+    /// cell-to-cell checkerboard of the mean stress, the pressure mode
+    /// that the points' nodal forces do not see (SolidMPM).
+    bool pressure_smoothing = false;
 
     /// Declares the entries of subsection "Solid/Material".
     /// Declare (the members' values are the defaults) or read the

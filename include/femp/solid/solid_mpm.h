@@ -408,6 +408,30 @@ namespace femp
     void
     compute_centroids();
 
+    /// Solid/Pressure smoothing (SolidMaterial::pressure_smoothing): per
+    /// point, saved by save_pressure_state() before the stress update, the
+    /// mean stress tr(sigma)/3, the volume (0 for a point whose cell is at
+    /// or above the solidus: it carries no stress and takes no part), the
+    /// first node and local coordinates of its cell (those of the stress
+    /// update; the move may change them); per local grid node the sums of
+    /// V N_a and V N_a dm of smooth_pressure_increment().
+    std::vector<double>                  ps_mean, ps_volume;
+    std::vector<std::uint32_t>           ps_node0;
+    std::array<std::vector<double>, dim> ps_xi;
+    std::vector<double>                  ps_weight, ps_sum;
+    /// Saves the state above of every point (a pass over the points).
+    void
+    save_pressure_state(const std::vector<double> &T_new);
+    /// Replaces each taking part point's increment dm of tr(sigma)/3 since
+    /// save_pressure_state() by sum_a N_a (sum_q V_q N_a dm_q) / (sum_q
+    /// V_q N_a), the sums over the points of all ranks (a node of a rank
+    /// boundary holds both ranks' sums); adds the shift to sigma_xx,
+    /// sigma_yy and sigma_zz. Returns the change of the step's stress work
+    /// sum (sigma_old + sigma_new)/2 : D dt V that the shift makes,
+    /// sum shift (V_new - V_old) / 2 (D's trace is V_new / V_old - 1).
+    double
+    smooth_pressure_increment();
+
     /// Grid velocity at x_p (FLIP; with APIC it is v).
     std::array<std::vector<double>, dim> xdot;
     double                               kinetic = 0;
