@@ -516,6 +516,10 @@ namespace femp
           N[a] = w;
         }
     };
+    // The point's increment of tr(sigma)/3 since save_pressure_state().
+    auto increment = [&](const std::size_t p) {
+      return (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3) - ps_mean[p];
+    };
     const std::size_t n = ps_mean.size();
     ps_weight.assign(grid.n_local_nodes(), 0.);
     ps_sum.assign(grid.n_local_nodes(), 0.);
@@ -525,8 +529,7 @@ namespace femp
         const double V = ps_volume[p];
         if (V == 0)
           continue;
-        const double dm =
-          (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3) - ps_mean[p];
+        const double dm = increment(p);
         tents(p, N);
         for (unsigned int a = 0; a < n_corners; ++a)
           {
@@ -543,8 +546,7 @@ namespace femp
         const double V = ps_volume[p];
         if (V == 0)
           continue;
-        const double dm =
-          (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3) - ps_mean[p];
+        const double dm = increment(p);
         tents(p, N);
         double smoothed = 0;
         for (unsigned int a = 0; a < n_corners; ++a)
