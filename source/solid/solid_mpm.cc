@@ -627,7 +627,7 @@ namespace femp
                           ps_amplitude[c],
                           ps_amplitude[o]});
               amount += std::copysign(size, qc) /
-                        (8 * std::max(ps_count[c], ps_count[o])) *
+                        (8 * (std::getenv("FEMP_PS_MIN") ? std::min(ps_count[c], ps_count[o]) : std::max(ps_count[c], ps_count[o]))) *
                         std::min(ps_cell_volume[c], ps_cell_volume[o]);
             }
         ps_shift[c] = amount / ps_cell_volume[c];
