@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <cstdlib>
 #include <type_traits>
 
 namespace femp
@@ -345,7 +344,7 @@ namespace femp
     // points of whole cells (p2g(), compute_centroids()).
     // Nor with the pressure smoothing: the next P2G needs the smoothed
     // stresses of all points.
-    const bool smooth = mat.pressure_smoothing || std::getenv("FEMP_PS_FORCE"); // TEMPORARY
+    const bool smooth = mat.pressure_smoothing;
     if (smooth)
       save_pressure_state(T_new);
     const bool fuse = n > 0 && steps_since_gather > 0 && have_gravity &&
@@ -485,15 +484,20 @@ namespace femp
   SolidMPM<dim>::save_pressure_state(const std::vector<double> &T_new)
   {
     const std::size_t n  = true_mass.size();
+    const double      ih = 1. / grid.h();
     const double      Tm = mat.melt_temperature();
     ps_mean.resize(n);
     ps_volume.resize(n);
-    ps_cell.resize(n);
+    ps_node0.resize(n);
+    for (int d = 0; d < dim; ++d)
+      ps_xi[d].resize(n);
     for (std::size_t p = 0; p < n; ++p)
       {
         ps_mean[p]   = (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3);
         ps_volume[p] = T_new[cell[p]] < Tm ? volume[p] : 0.;
-        ps_cell[p]   = cell[p];
+        ps_node0[p]  = node0[p];
+        for (int d = 0; d < dim; ++d)
+          ps_xi[d][p] = (x[d][p] - corner[d][p]) * ih;
       }
   }
 
@@ -501,145 +505,57 @@ namespace femp
   double
   SolidMPM<dim>::smooth_pressure_increment()
   {
+    // The tents of the cell of the stress update at the saved coordinates
+    // (corner a: bit d set for the upper node in direction d).
+    auto tents = [&](const std::size_t p, double(&N)[n_corners]) {
+      for (unsigned int a = 0; a < n_corners; ++a)
+        {
+          double w = 1;
+          for (int d = 0; d < dim; ++d)
+            w *= ((a >> d) & 1) ? ps_xi[d][p] : 1 - ps_xi[d][p];
+          N[a] = w;
+        }
+    };
     // The point's increment of tr(sigma)/3 since save_pressure_state().
     auto increment = [&](const std::size_t p) {
       return (sigma[0][p] + sigma[1][p] + sigma[2][p]) * (1. / 3) - ps_mean[p];
     };
-    const bool total = std::getenv("FEMP_PS_TOTAL"); // TEMPORARY
-    const std::size_t n      = ps_mean.size();
-    const std::size_t nc     = grid.n_local();
-    const auto       &status = grid.cell_status();
-    const auto       &stride = grid.strides();
-    // Pass 1: per cell the solid points' volume and volume-weighted
-    // increment (points sit in owned cells), then their ghost copies.
-    ps_cell_volume.assign(nc, 0.);
-    ps_cell_mean.assign(nc, 0.);
+    const std::size_t n = ps_mean.size();
+    ps_weight.assign(grid.n_local_nodes(), 0.);
+    ps_sum.assign(grid.n_local_nodes(), 0.);
+    double N[n_corners];
     for (std::size_t p = 0; p < n; ++p)
       {
         const double V = ps_volume[p];
         if (V == 0)
           continue;
-        ps_cell_volume[ps_cell[p]] += V;
-        ps_cell_mean[ps_cell[p]] += V * (total ? increment(p) + ps_mean[p] : increment(p));
-      }
-    // A cell takes part with at least half a cell of solid points' volume.
-    double full = 0.5;
-    for (int d = 0; d < dim; ++d)
-      full *= grid.h();
-    for (std::size_t c = 0; c < nc; ++c)
-      if (status[c] == BackgroundGrid<dim>::owned)
-        {
-          if (ps_cell_volume[c] >= full)
-            ps_cell_mean[c] /= ps_cell_volume[c];
-          else
-            ps_cell_volume[c] = 0, ps_cell_mean[c] = 0;
-        }
-    grid.update_ghosts(ps_cell_volume);
-    grid.update_ghosts(ps_cell_mean);
-    auto taking_part = [&](const std::size_t c) {
-      return status[c] != BackgroundGrid<dim>::outside &&
-             ps_cell_volume[c] > 0;
-    };
-    // Per owned cell and direction d the second difference of the cell
-    // means along d, c(K - d) - 2 c(K) + c(K + d) (0 without both
-    // neighbours taking part): a linear field has none, the alternating
-    // part of the field has one of alternating sign.
-    for (int d = 0; d < dim; ++d)
-      ps_curv[d].assign(nc, 0.);
-    for (std::size_t c = 0; c < nc; ++c)
-      {
-        if (status[c] != BackgroundGrid<dim>::owned || !taking_part(c))
-          continue;
-        for (int d = 0; d < dim; ++d)
+        const double dm = increment(p);
+        tents(p, N);
+        for (unsigned int a = 0; a < n_corners; ++a)
           {
-            const std::size_t lo = c - stride[d], hi = c + stride[d];
-            if (taking_part(lo) && taking_part(hi))
-              ps_curv[d][c] = ps_cell_mean[lo] - 2 * ps_cell_mean[c] +
-                              ps_cell_mean[hi];
+            const std::size_t I = ps_node0[p] + corner_offset[a];
+            ps_weight[I] += V * N[a];
+            ps_sum[I] += V * N[a] * dm;
           }
       }
-    for (int d = 0; d < dim; ++d)
-      grid.update_ghosts(ps_curv[d]);
-    // Per owned cell the number of directions along which its second
-    // difference and that of a face neighbour have opposite signs, kept
-    // only when at least 2: the cell-wise pressure modes alternate in two
-    // or three directions, while a front or step along one direction
-    // (which carries nodal force) alternates only along it.
-    ps_count.assign(nc, 0.);
-    ps_amplitude.assign(nc, 0.);
-    for (std::size_t c = 0; c < nc; ++c)
-      {
-        if (status[c] != BackgroundGrid<dim>::owned)
-          continue;
-        // Per direction the alternation's size there, the smaller |second
-        // difference| of the cell and a neighbour of opposite sign; the
-        // cell's amplitude is the second largest of them (the mode has it
-        // in two directions at least).
-        unsigned int m = 0;
-        double       first = 0, second = 0;
-        for (int d = 0; d < dim; ++d)
-          {
-            const double q = ps_curv[d][c];
-            double       e = 0;
-            for (const std::size_t o : {c - stride[d], c + stride[d]})
-              if (q * ps_curv[d][o] < 0)
-                e = std::max(e, std::min(std::abs(q), std::abs(ps_curv[d][o])));
-            if (e == 0)
-              continue;
-            ++m;
-            if (e > first)
-              second = first, first = e;
-            else
-              second = std::max(second, e);
-          }
-        if (m >= 2)
-          ps_count[c] = m, ps_amplitude[c] = second;
-      }
-    grid.update_ghosts(ps_amplitude);
-    grid.update_ghosts(ps_count);
-    // Per owned cell the shift of its mean: exchanges with the face
-    // neighbours across the faces where both cells count and their second
-    // differences along the face's direction have opposite signs, each
-    // sign(q) min(|q_K|, |q_O|) / (8 max(count)) in the smaller volume
-    // with q the second difference (the minmod of the two cells' views of
-    // the alternation, free of the field's slope); antisymmetric, so the
-    // volume integral is kept. One alternating pattern of any of the modes
-    // over a linear field goes to the linear field; a field without
-    // neighbouring opposite curvatures in two directions (linear,
-    // monotone, a front along one direction, a single peak) is not
-    // touched.
-    ps_shift.assign(nc, 0.);
-    for (std::size_t c = 0; c < nc; ++c)
-      {
-        if (status[c] != BackgroundGrid<dim>::owned || ps_count[c] == 0)
-          continue;
-        double amount = 0;
-        for (int d = 0; d < dim; ++d)
-          for (const std::size_t o : {c - stride[d], c + stride[d]})
-            {
-              const double qc = ps_curv[d][c], qo = ps_curv[d][o];
-              if (ps_count[o] == 0 || !(qc * qo < 0))
-                continue;
-              // Into c: (q_c - q_o) / 16 for the pure alternation.
-              const double size =
-                std::min({std::abs(qc),
-                          std::abs(qo),
-                          ps_amplitude[c],
-                          ps_amplitude[o]});
-              amount += std::copysign(size, qc) /
-                        (8 * (std::getenv("FEMP_PS_MIN") ? std::min(ps_count[c], ps_count[o]) : std::max(ps_count[c], ps_count[o]))) *
-                        std::min(ps_cell_volume[c], ps_cell_volume[o]);
-            }
-        ps_shift[c] = amount / ps_cell_volume[c];
-      }
-    // Pass 2: the shift onto the points' normal stresses.
+    grid.sum_shared_nodes(ps_weight);
+    grid.sum_shared_nodes(ps_sum);
     double dwork = 0;
     for (std::size_t p = 0; p < n; ++p)
       {
         const double V = ps_volume[p];
         if (V == 0)
           continue;
-        const double shift = ps_shift[ps_cell[p]];
+        const double dm = increment(p);
+        tents(p, N);
+        double smoothed = 0;
+        for (unsigned int a = 0; a < n_corners; ++a)
+          {
+            const std::size_t I = ps_node0[p] + corner_offset[a];
+            if (ps_weight[I] > 0)
+              smoothed += N[a] * ps_sum[I] / ps_weight[I];
+          }
+        const double shift = smoothed - dm;
         for (unsigned int c = 0; c < 3; ++c)
           sigma[c][p] += shift;
         dwork += 0.5 * shift * (volume[p] - V);

@@ -411,33 +411,24 @@ namespace femp
     /// Solid/Pressure smoothing (SolidMaterial::pressure_smoothing): per
     /// point, saved by save_pressure_state() before the stress update, the
     /// mean stress tr(sigma)/3, the volume (0 for a point whose cell is at
-    /// or above the solidus: it carries no stress and takes no part) and
-    /// the cell of the stress update (the move may change it); per cell of
-    /// the local box (owned and ghost) the solid points' volume and mean
-    /// increment, the smaller step per direction where the cell is an
-    /// extremum along it, the number of such directions, and the shift of
-    /// smooth_pressure_increment().
+    /// or above the solidus: it carries no stress and takes no part), the
+    /// first node and local coordinates of its cell (those of the stress
+    /// update; the move may change them); per local grid node the sums of
+    /// V N_a and V N_a dm of smooth_pressure_increment().
     std::vector<double>                  ps_mean, ps_volume;
-    std::vector<std::uint32_t>           ps_cell;
-    std::vector<double>                  ps_cell_volume, ps_cell_mean;
-    std::array<std::vector<double>, dim> ps_curv;
-    std::vector<double>                  ps_count, ps_amplitude, ps_shift;
+    std::vector<std::uint32_t>           ps_node0;
+    std::array<std::vector<double>, dim> ps_xi;
+    std::vector<double>                  ps_weight, ps_sum;
     /// Saves the state above of every point (a pass over the points).
     void
     save_pressure_state(const std::vector<double> &T_new);
-    /// Removes the cell-to-cell alternating part of the points' increments
-    /// dm of tr(sigma)/3 since save_pressure_state(): per cell the
-    /// volume-weighted mean of dm; between two face neighbours that are
-    /// both strict extrema along the face's direction, and each along at
-    /// least two directions, an exchange of sign(step) min(smaller steps) /
-    /// (4 max(number of directions)) in the smaller volume; each cell's
-    /// net exchange over its volume is added to its points' sigma_xx,
-    /// sigma_yy and sigma_zz. Cells take part with at least half a cell of
-    /// solid points' volume; the ghost layer carries the neighbours' values
-    /// (the same exchanges on every rank). Returns the change of the
-    /// step's stress work sum (sigma_old + sigma_new)/2 : D dt V that the
-    /// shift makes, sum shift (V_new - V_old) / 2 (D's trace is V_new /
-    /// V_old - 1).
+    /// Replaces each taking part point's increment dm of tr(sigma)/3 since
+    /// save_pressure_state() by sum_a N_a (sum_q V_q N_a dm_q) / (sum_q
+    /// V_q N_a), the sums over the points of all ranks (a node of a rank
+    /// boundary holds both ranks' sums); adds the shift to sigma_xx,
+    /// sigma_yy and sigma_zz. Returns the change of the step's stress work
+    /// sum (sigma_old + sigma_new)/2 : D dt V that the shift makes,
+    /// sum shift (V_new - V_old) / 2 (D's trace is V_new / V_old - 1).
     double
     smooth_pressure_increment();
 
