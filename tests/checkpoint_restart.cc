@@ -4,9 +4,9 @@
 // checkpoint on the straight run's partition ('Checkpoint/Partition on
 // resume = scene'): the final checkpoints (every module's raw state),
 // the time series, the .pvd indices and the thermal history must be
-// bit-identical (on the number of ranks of the test); with the solid also its energy and
-// probe files and its final energies (the final checkpoints hold the point
-// and element stresses). With 'Build/Hand over cooled metal' the FE zone
+// bit-identical (on the number of ranks of the test); with the solid also its
+// energy and probe files and its final energies (the final checkpoints hold the
+// point and element stresses). With 'Build/Hand over cooled metal' the FE zone
 // must have risen before the checkpoint resumed, the resumed run must hand
 // nothing over again, and the largest differences of the point stresses and
 // temperatures, the solid probes and the probe lines against the straight

@@ -630,8 +630,8 @@ namespace femp
         f << r.layer << "," << std::setprecision(10) << r.t_start << ","
           << r.t_end << "," << std::setprecision(15) << r.steps << ","
           << r.solid_steps << "," << r.flow_steps << "," << r.points << ","
-          << r.mpm_points << "," << r.elements << ","
-          << std::setprecision(4) << r.mpm_share_max << std::setprecision(15);
+          << r.mpm_points << "," << r.elements << "," << std::setprecision(4)
+          << r.mpm_share_max << std::setprecision(15);
         for (const auto &c : kept)
           {
             const auto it = r.kept.find(c);

@@ -288,7 +288,7 @@ namespace femp
         if (solid && resumed->has_section("fe zone"))
           {
             auto       zone_parts = resumed->section("fe zone");
-            const auto saved = read_saved_fe_zone<dim>(zone_parts);
+            const auto saved      = read_saved_fe_zone<dim>(zone_parts);
             if (saved.has_cells)
               zone = FeZone<dim>(saved.first, saved.n, saved.mask, x0, h);
             else if (fem.enabled)

@@ -1975,8 +1975,8 @@ namespace femp
     if (!fem)
       return; // the header's check refused a checkpoint with a zone
     if (saved.has_cells)
-      fem->set_cells(FeZone<dim>(
-        saved.first, saved.n, saved.mask, grid.origin(), grid.h()));
+      fem->set_cells(
+        FeZone<dim>(saved.first, saved.n, saved.mask, grid.origin(), grid.h()));
     else
       fem->set_top(saved.top);
     fe_setup_factor = saved.factor;
