@@ -510,6 +510,8 @@ namespace femp
                   r.mpm_points = v;
                 else if (n == "fe_elements")
                   r.elements = v;
+                else if (n == "mpm_share_max")
+                  r.mpm_share_max = v;
                 else if (n.rfind("kept_", 0) == 0)
                   r.kept[n] = v;
                 else if (v > 0)
@@ -543,6 +545,9 @@ namespace femp
             const auto n         = solid->sizes();
             cost_open.mpm_points = n[0];
             cost_open.elements   = n[1];
+            // The partition's balance of the solid's point loops.
+            const double n_max      = solid->largest_rank_points();
+            cost_open.mpm_share_max = n[0] > 0 ? n_max / n[0] : 0.;
           }
         if (handover)
           for (unsigned int k = 0; k < FeZoneHandover<dim>::n_kept; ++k)
@@ -610,7 +615,7 @@ namespace femp
           kept.push_back(what + std::string(FeZoneHandover<dim>::kept_name(k)));
     std::ofstream f(scene.output.directory + "/layer_cost.csv");
     f << "layer,t_start,t_end,temperature_steps,solid_steps,flow_steps,"
-         "points,mpm_points,fe_elements";
+         "points,mpm_points,fe_elements,mpm_share_max";
     for (const auto &c : kept)
       f << "," << c;
     f << ",wall_total";
@@ -625,7 +630,8 @@ namespace femp
         f << r.layer << "," << std::setprecision(10) << r.t_start << ","
           << r.t_end << "," << std::setprecision(15) << r.steps << ","
           << r.solid_steps << "," << r.flow_steps << "," << r.points << ","
-          << r.mpm_points << "," << r.elements;
+          << r.mpm_points << "," << r.elements << "," << std::setprecision(4)
+          << r.mpm_share_max << std::setprecision(15);
         for (const auto &c : kept)
           {
             const auto it = r.kept.find(c);

@@ -38,7 +38,10 @@ namespace femp
     {
       TimerOutput::Scope t(timer, "setup: grid");
       grid = std::make_unique<BackgroundGrid<dim>>(scene.grid, comm);
-      grid->create(scene.partition_cost());
+      // A resumed run weighs the cells by the checkpoint it read (a
+      // build's zone and points as they are then).
+      grid->create(scene.partition_cost(
+        states.resuming() ? &states.checkpoint_file() : nullptr));
     }
     {
       TimerOutput::Scope t(timer, "setup: material points");

@@ -7,7 +7,9 @@
 #include <femp/app/physics_switches.h>
 #include <femp/app/scene.h>
 #include <femp/base/input_checks.h>
+#include <femp/grid/saved_points.h>
 #include <femp/solid/fe_zone_depth.h>
+#include <femp/solid/saved_fe_zone.h>
 
 #include <algorithm>
 #include <iomanip>
@@ -241,31 +243,96 @@ namespace femp
     return MaterialPoints<dim>::PropertyIndex::n_used(solid, affine_points());
   }
 
+  namespace
+  {
+    /// Relative cost of a cell holding @p n material points, @p n_mpm of
+    /// them stepped by the solid's MPM (doc/performance.md, "Balancing the
+    /// ranks"): 1 per cell (the heat and flow passes over the box), 2 per
+    /// point (metal fraction, temperatures to the points, relocation) and
+    /// 40 more per MPM point (its loops run at every solid step, 7 to 17
+    /// times per temperature step).
+    unsigned int
+    cell_cost(const double n, const double n_mpm)
+    {
+      return static_cast<unsigned int>(std::lround(1 + 2 * n + 40 * n_mpm));
+    }
+  } // namespace
+
   template <int dim>
   std::function<unsigned int(const Point<dim> &)>
-  Scene<dim>::partition_cost() const
+  Scene<dim>::partition_cost(const Checkpoint<dim> *resumed) const
   {
-    // Relative cost of a background cell, for the partition of the grid
-    // over the ranks (doc/performance.md, "Balancing the ranks"), from the
-    // scene's geometry at the start: 1 per cell (the heat and flow passes
-    // over the box), 2 per material point expected in it (metal fraction,
-    // temperatures to the points, relocation) and 40 more per point that
-    // the solid steps by MPM (the substrate outside the FE zone: its point
-    // loops run at every solid step, 7 to 17 times per temperature step).
-    // The zone is the one the run starts with (the user's box: the grid is
-    // partitioned once, the cells a hand-over adds keep their cost; a
-    // resumed run gets the same partition), asked cell by cell through its
-    // mask. Without points every cell costs the same: no function.
+    // Without points every cell costs the same: no function.
     if (!points.carry_points)
       return {};
-    const double      h          = grid.cell_size;
+    const double     h  = grid.cell_size;
+    const Point<dim> x0 = grid.lower_corner;
+    if (resumed && checkpoint.partition_by_state &&
+        resumed->has_section("points"))
+      {
+        // The checkpoint's state: its points per cell, and of these the
+        // solid ones outside the FE zone it holds (raised by the
+        // hand-overs before it) as MPM points.
+        std::array<unsigned int, dim> n_cells;
+        std::uint64_t                 n_all = 1;
+        for (int d = 0; d < dim; ++d)
+          {
+            n_cells[d] = static_cast<unsigned int>(
+              std::round((grid.upper_corner[d] - x0[d]) / h));
+            n_all *= n_cells[d];
+          }
+        std::vector<std::uint32_t> n, n_solid;
+        auto                       point_parts = resumed->section("points");
+        count_saved_points<dim>(point_parts, n_all, n, n_solid);
+        FeZone<dim> zone;
+        if (solid && resumed->has_section("fe zone"))
+          {
+            auto       zone_parts = resumed->section("fe zone");
+            const auto saved      = read_saved_fe_zone<dim>(zone_parts);
+            if (saved.has_cells)
+              zone = FeZone<dim>(saved.first, saved.n, saved.mask, x0, h);
+            else if (fem.enabled)
+              {
+                Point<dim> upper = fem.upper_corner;
+                upper[dim - 1]   = saved.top;
+                zone = FeZone<dim>(true, fem.lower_corner, upper, x0, h);
+              }
+          }
+        else
+          zone = fem.zone(x0, h);
+        auto cost = std::make_shared<std::vector<unsigned int>>(n_all, 1u);
+        std::array<int, dim> ijk;
+        for (std::uint64_t g = 0; g < n_all; ++g)
+          {
+            std::uint64_t r = g;
+            for (int d = 0; d < dim; ++d)
+              ijk[d] = static_cast<int>(r % n_cells[d]), r /= n_cells[d];
+            const bool mpm = solid && !zone.contains_cell(ijk);
+            (*cost)[g]     = cell_cost(n[g], mpm ? n_solid[g] : 0.);
+          }
+        return [cost, n_cells, x0, h](const Point<dim> &c) {
+          // Padding cells of the triangulation lie outside the grid.
+          std::uint64_t g = 0;
+          for (int d = dim - 1; d >= 0; --d)
+            {
+              const int i = static_cast<int>(std::floor((c[d] - x0[d]) / h));
+              if (i < 0 || i >= static_cast<int>(n_cells[d]))
+                return 1u;
+              g = g * n_cells[d] + i;
+            }
+          return (*cost)[g];
+        };
+      }
+    // The scene's geometry at the start: the substrate below 'Substrate
+    // top' at the full point density, the powder layer at its packing
+    // fraction, the substrate's points outside the FE zone the user set
+    // (asked cell by cell through its mask) stepped by MPM.
     const double      full       = std::pow(h / points.point_spacing, dim);
     const double      top        = points.substrate_top;
     const double      powder_top = top + std::max(0., points.layer_thickness);
     const double      packing    = points.packing_fraction;
-    const FeZone<dim> fe_zone    = fem.zone(grid.lower_corner, h);
+    const FeZone<dim> fe_zone    = fem.zone(x0, h);
     const bool        with_solid = solid;
-    const Point<dim>  x0         = grid.lower_corner;
     return [=](const Point<dim> &c) {
       const double         z = c[dim - 1];
       std::array<int, dim> ijk;
@@ -277,7 +344,7 @@ namespace femp
         n = full, n_mpm = with_solid && !in_fe ? full : 0.;
       else if (z < powder_top)
         n = packing * full;
-      return static_cast<unsigned int>(std::lround(1 + 2 * n + 40 * n_mpm));
+      return cell_cost(n, n_mpm);
     };
   }
 

@@ -9,6 +9,7 @@
 #include <femp/grid/cell_state.h>
 #include <femp/grid/material_points.h>
 #include <femp/grid/powder_bed.h>
+#include <femp/grid/saved_points.h>
 
 #include <algorithm>
 #include <array>
@@ -1635,6 +1636,54 @@ namespace femp
     handler.update_cached_numbers();
     index_occupied_cells();
   }
+
+  template <int dim>
+  void
+  count_saved_points(std::vector<StateReader>   &parts,
+                     const std::uint64_t         n_cells,
+                     std::vector<std::uint32_t> &all,
+                     std::vector<std::uint32_t> &solid)
+  {
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    all.assign(n_cells, 0);
+    solid.assign(n_cells, 0);
+    for (auto &in : parts)
+      {
+        // The records of MaterialPoints::save_state(): id, cell, position,
+        // reference position, properties.
+        const auto          n_props = in.get<std::uint32_t>();
+        const auto          n       = in.get<std::uint64_t>();
+        std::vector<double> props(n_props);
+        for (std::uint64_t k = 0; k < n; ++k)
+          {
+            in.get<std::uint64_t>();
+            const auto cell = in.get<std::uint64_t>();
+            for (int d = 0; d < 2 * dim; ++d)
+              in.get<double>();
+            for (auto &v : props)
+              v = in.get<double>();
+            require(cell < n_cells,
+                    "Checkpoint/Resume from",
+                    "",
+                    "a point lies in a cell outside the grid");
+            ++all[cell];
+            if (n_props > P::state &&
+                props[P::state] == MaterialPoints<dim>::solid)
+              ++solid[cell];
+          }
+      }
+  }
+
+  template void
+  count_saved_points<2>(std::vector<StateReader> &,
+                        std::uint64_t,
+                        std::vector<std::uint32_t> &,
+                        std::vector<std::uint32_t> &);
+  template void
+  count_saved_points<3>(std::vector<StateReader> &,
+                        std::uint64_t,
+                        std::vector<std::uint32_t> &,
+                        std::vector<std::uint32_t> &);
 
   template class MaterialPoints<2>;
   template class MaterialPoints<3>;

@@ -127,6 +127,21 @@ namespace femp
               "time' may be raised. The time series in "
               "'Output/Directory' lose their rows after the "
               "checkpoint and continue.");
+    table.add("Partition on resume",
+              partition_by_state,
+              {{true, "checkpoint"}, {false, "scene"}},
+              "With 'Background grid/Partition = cost', what a run "
+              "resumed from a checkpoint weighs its cells by. "
+              "'checkpoint': the checkpoint's state (the FE zone it "
+              "holds, which a hand-over may have raised, and the "
+              "material points of each cell, solid or not), so that "
+              "a build run in checkpointed segments is balanced "
+              "again at each resume; results agree with 'scene' to "
+              "round-off and the pressure solver's tolerance. "
+              "'scene': the scene's geometry at the start, the "
+              "partition of the run that wrote the checkpoint on the "
+              "same number of ranks (it continues bit for bit). A "
+              "new run or one rank: no effect.");
     table.leave_subsection();
   }
 

@@ -12,6 +12,7 @@
 #include <femp/base/progress_watchdog.h>
 #include <femp/grid/cell_state.h>
 #include <femp/solid/fe_zone_depth.h>
+#include <femp/solid/saved_fe_zone.h>
 #include <femp/solid/solid_sub_cycle.h>
 
 #include <algorithm>
@@ -1930,36 +1931,55 @@ namespace femp
   }
 
   template <int dim>
-  void
-  SolidSubCycle<dim>::resume_fe_zone(std::vector<StateReader> &parts)
+  SavedFeZone<dim>
+  read_saved_fe_zone(std::vector<StateReader> &parts)
   {
     // The same on every rank: the first part's.
-    const double top    = parts[0].get<double>();
-    const double factor = parts[0].get<double>();
+    SavedFeZone<dim> saved;
+    saved.top    = parts[0].get<double>();
+    saved.factor = parts[0].get<double>();
     // The zone's cells (a checkpoint written without them holds a box up
     // to the top).
     std::vector<std::int32_t> box;
-    std::vector<std::uint8_t> mask;
     if (!parts[0].at_end())
       {
-        box  = parts[0].get_vector<std::int32_t>();
-        mask = parts[0].get_vector<std::uint8_t>();
+        box        = parts[0].get_vector<std::int32_t>();
+        saved.mask = parts[0].get_vector<std::uint8_t>();
       }
-    if (!fem)
-      return; // the header's check refused a checkpoint with a zone
     if (box.size() == 2 * dim)
       {
-        std::array<int, dim> first, n;
-        std::size_t          n_all = 1;
+        std::size_t n_all = 1;
         for (int d = 0; d < dim; ++d)
-          first[d] = box[d], n[d] = box[dim + d], n_all *= n[d];
-        AssertThrow(mask.size() == n_all,
+          {
+            saved.first[d] = box[d];
+            saved.n[d]     = box[dim + d];
+            n_all *= saved.n[d];
+          }
+        AssertThrow(saved.mask.size() == n_all,
                     ExcMessage("checkpoint: the FE zone's cells are damaged"));
-        fem->set_cells(FeZone<dim>(first, n, mask, grid.origin(), grid.h()));
+        saved.has_cells = true;
       }
+    return saved;
+  }
+
+  template SavedFeZone<2>
+  read_saved_fe_zone<2>(std::vector<StateReader> &);
+  template SavedFeZone<3>
+  read_saved_fe_zone<3>(std::vector<StateReader> &);
+
+  template <int dim>
+  void
+  SolidSubCycle<dim>::resume_fe_zone(std::vector<StateReader> &parts)
+  {
+    const auto saved = read_saved_fe_zone<dim>(parts);
+    if (!fem)
+      return; // the header's check refused a checkpoint with a zone
+    if (saved.has_cells)
+      fem->set_cells(
+        FeZone<dim>(saved.first, saved.n, saved.mask, grid.origin(), grid.h()));
     else
-      fem->set_top(top);
-    fe_setup_factor = factor;
+      fem->set_top(saved.top);
+    fe_setup_factor = saved.factor;
   }
 
   template <int dim>

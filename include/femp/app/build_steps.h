@@ -173,6 +173,8 @@ namespace femp
       double       t_start = 0, t_end = 0, wall = 0;
       double       steps = 0, solid_steps = 0, flow_steps = 0, max_wall = 0;
       double       points = 0, mpm_points = 0, elements = 0;
+      /// The busiest rank's share of the MPM points (1 on one rank).
+      double                        mpm_share_max = 0;
       std::map<std::string, double> parts, max_parts;
       /// With the hand-over: the cells and points kept as points at the
       /// layer's start per class (kept_cells_<class>, kept_points_<class>;

@@ -100,9 +100,12 @@ namespace femp
     typename Checkpoint<dim>::Scene
     checkpoint_scene() const;
     /// Relative cost of a background cell (centre) for the partition over
-    /// the ranks; empty: every cell costs the same.
+    /// the ranks; empty: every cell costs the same. From the scene's
+    /// geometry at the start, or, with @p resumed (the checkpoint read,
+    /// null for a new run) and 'Checkpoint/Partition on resume =
+    /// checkpoint', from the checkpoint's FE zone and points per cell.
     std::function<unsigned int(const Point<dim> &)>
-    partition_cost() const;
+    partition_cost(const Checkpoint<dim> *resumed = nullptr) const;
 
     /// The scene's printout: grid, points, solid sizes, output files and
     /// the melting regime of the laser. @p solid may be null.

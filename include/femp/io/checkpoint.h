@@ -49,6 +49,10 @@ namespace femp
       double       every_wall_minutes = 0; ///< min, 0: off
       std::string  directory          = "checkpoint";
       std::string  resume_from; ///< empty: a new run
+      /// "Partition on resume": a resumed run weighs the cells by the
+      /// checkpoint's FE zone and points (true, 'checkpoint') or by the
+      /// scene's geometry at the start (false, 'scene').
+      bool partition_by_state = true;
 
       /// Declare (the members' values are the defaults) or read the
 

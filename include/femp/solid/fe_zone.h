@@ -10,9 +10,9 @@
 // islands of material-point cells (a pore, porous metal) and columns
 // of different heights. SolidFEM meshes it and FluidSolidForces gives its
 // nodes full shares, both asking this object. The partition cost of the
-// grid (Scene::partition_cost()) asks contains_cell() of the zone the run
-// starts with, the user's box: the grid is partitioned once, before the
-// points exist, so the cells a hand-over adds keep the cost of MPM cells
+// grid (Scene::partition_cost()) asks contains_cell() of the user's box,
+// or of a resumed checkpoint's zone: the grid is partitioned once per run,
+// so the cells a hand-over adds keep the cost of MPM cells until then
 // (doc/performance.md, "Balancing the ranks"). No equation of the paper.
 #ifndef femp_fe_zone_h
 #define femp_fe_zone_h
