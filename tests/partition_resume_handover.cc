@@ -45,29 +45,6 @@ namespace
     return c.at("mpm_share_max").back();
   }
 
-  /// Largest |a - b| of the columns @p cols of the CSV files @p a and @p b
-  /// over the largest |a|, rounded up to 1e-12; 1 if a column differs in
-  /// length.
-  double
-  relative_difference(const std::string              &a,
-                      const std::string              &b,
-                      const std::vector<std::string> &cols)
-  {
-    const auto x = read_csv_columns(a), y = read_csv_columns(b);
-    double     diff = 0, peak = 0;
-    for (const auto &col : cols)
-      {
-        if (!x.count(col) || !y.count(col) ||
-            x.at(col).size() != y.at(col).size() || x.at(col).empty())
-          return 1;
-        for (std::size_t i = 0; i < x.at(col).size(); ++i)
-          {
-            diff = std::max(diff, std::abs(x.at(col)[i] - y.at(col)[i]));
-            peak = std::max(peak, std::abs(x.at(col)[i]));
-          }
-      }
-    return std::ceil(1e12 * diff / peak) / 1e12;
-  }
 } // namespace
 
 int
@@ -132,15 +109,17 @@ main(int argc, char **argv)
                          std::ceil(1e12 * diff / peak) / 1e12,
                          1e-9);
         }
-      checks.at_most("solid probes sigma_xx: 'checkpoint' against 'scene', "
-                     "/ peak",
-                     relative_difference("checkpoint/solid_probes.csv",
-                                         "scene/solid_probes.csv",
-                                         {"sigma_xx_0",
-                                          "sigma_xx_1",
-                                          "sigma_xx_2",
-                                          "sigma_xx_3"}),
-                     1e-9);
+      checks.at_most(
+        "solid probes sigma_xx: 'checkpoint' against 'scene', "
+        "/ peak",
+        [] {
+          const auto [diff, peak] = columns_difference(
+            "checkpoint/solid_probes.csv",
+            "scene/solid_probes.csv",
+            {"sigma_xx_0", "sigma_xx_1", "sigma_xx_2", "sigma_xx_3"});
+          return std::ceil(1e12 * diff / peak) / 1e12;
+        }(),
+        1e-9);
     }
   catch (const std::exception &e)
     {

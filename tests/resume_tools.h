@@ -40,11 +40,40 @@ namespace femp_test
     return to + "/checkpoint/" +
            (steps.size() > 1 && !newest ? steps[1] : steps[0]);
   }
+  /// Largest |a - b| of the columns @p cols of the CSV files @p a and @p b
+  /// (read_csv_columns()), and the largest |a - offset| there (the
+  /// reference's peak; T: its rise above @p offset). Throws if a column is
+  /// missing, empty or of another length in @p b.
+  inline std::pair<double, double>
+  columns_difference(const std::string              &a,
+                     const std::string              &b,
+                     const std::vector<std::string> &cols,
+                     const double                    offset = 0)
+  {
+    const auto x    = read_csv_columns(a);
+    const auto y    = read_csv_columns(b);
+    double     diff = 0, peak = 0;
+    for (const auto &col : cols)
+      {
+        AssertThrow(x.count(col) && y.count(col) &&
+                      x.at(col).size() == y.at(col).size() &&
+                      !x.at(col).empty(),
+                    dealii::ExcMessage(a + " and " + b + " differ in " + col));
+        const auto &u = x.at(col), &v = y.at(col);
+        for (std::size_t i = 0; i < u.size(); ++i)
+          {
+            diff = std::max(diff, std::abs(u[i] - v[i]));
+            peak = std::max(peak, std::abs(u[i] - offset));
+          }
+      }
+    return {diff, peak};
+  }
+
   /// Largest |a - b| of column @p col over the probe lines @p lines (at
   /// output @p output, 1: the end of a run with 'Output interval = 0'; 2:
   /// the end of a run resumed from such a run's end) of the output
-  /// directories @p a and @p b, and the largest |a - offset| there (the
-  /// reference's peak; T: its rise above @p offset).
+  /// directories @p a and @p b, and the largest |a - offset| there
+  /// (columns_difference()).
   inline std::pair<double, double>
   probe_line_difference(const std::string              &a,
                         const std::string              &b,
@@ -58,19 +87,10 @@ namespace femp_test
       {
         const std::string file =
           "/probe_line_" + line + "_0000" + std::to_string(output) + ".csv";
-        const auto x = read_csv_columns(a + file);
-        const auto y = read_csv_columns(b + file);
-        AssertThrow(x.count(col) && y.count(col) &&
-                      x.at(col).size() == y.at(col).size() &&
-                      !x.at(col).empty(),
-                    dealii::ExcMessage("probe lines " + line + " of " + a +
-                                       " and " + b + " differ in " + col));
-        const auto &u = x.at(col), &v = y.at(col);
-        for (std::size_t i = 0; i < u.size(); ++i)
-          {
-            diff = std::max(diff, std::abs(u[i] - v[i]));
-            peak = std::max(peak, std::abs(u[i] - offset));
-          }
+        const auto [d, p] =
+          columns_difference(a + file, b + file, {col}, offset);
+        diff = std::max(diff, d);
+        peak = std::max(peak, p);
       }
     return {diff, peak};
   }
