@@ -89,7 +89,6 @@ namespace femp
       [this](const unsigned int step, const double time) {
         return time_steps->choose(step, time, cell_fields());
       });
-    scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
   }
 
   template <int dim>
@@ -205,10 +204,16 @@ namespace femp
     setup();
     // The setup's temporary lists (points, powder, the FE zone) are freed.
     release_free_heap();
+    // The scene's printout counts the points the run goes on with: a
+    // resumed run's after the restore.
     if (states.resuming())
-      states.restore(pcout, timer);
+      {
+        states.restore(pcout, timer);
+        scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
+      }
     else
       {
+        scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
         // The exact stability limit and the projected number of steps are
         // checked before anything is written.
         time_steps->choose(0, control->time(), cell_fields());
