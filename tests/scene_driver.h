@@ -9,6 +9,7 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -61,10 +62,10 @@ namespace femp_test
     std::streambuf *old = std::cout.rdbuf();
     std::ofstream   log("scene.log");
     std::cout.rdbuf(log.rdbuf());
-    femp::FempProblem<dim> problem(prm, comm);
-    problem.run();
+    auto problem = std::make_unique<femp::FempProblem<dim>>(prm, comm);
+    femp::run_to_end(problem, prm, comm);
     std::cout.rdbuf(old);
-    return problem.summary();
+    return problem->summary();
   }
 
   /// Columns of a CSV file written by femp: lines starting with '#' are

@@ -441,7 +441,8 @@ namespace femp
     cost_solid_step = solid ? solid->n_steps() : 0;
     cost_flow_step  = flow_substeps();
     cost_sections   = cost_parts(timer);
-    cost_clock      = std::chrono::steady_clock::now();
+    cost_carried.clear();
+    cost_clock = std::chrono::steady_clock::now();
   }
 
   template <int dim>
@@ -450,7 +451,8 @@ namespace femp
                               const unsigned int        step,
                               const bool                resuming,
                               const TimerOutput        &timer,
-                              const SolidSubCycle<dim> *solid)
+                              const SolidSubCycle<dim> *solid,
+                              const CostCarry          *carried)
   {
     if (!schedule)
       return;
@@ -522,7 +524,63 @@ namespace femp
           }
       }
     open_cost(layer, t, step, timer, solid);
+    if (carried && carried->layer == layer)
+      {
+        // After a rebalance in this process: the window goes on from the
+        // layer's start, its wall and parts so far and the rebalance's
+        // wall added at its close.
+        cost_open.t_start = carried->t_start;
+        cost_step -= static_cast<unsigned int>(carried->steps);
+        cost_solid_step -= static_cast<unsigned int>(carried->solid_steps);
+        cost_flow_step -= carried->flow_steps;
+        cost_carried = carried->parts;
+        if (carried->rebalance_wall > 0)
+          cost_carried["wall_rebalance"] += carried->rebalance_wall;
+        cost_clock -=
+          std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double>(carried->wall +
+                                          carried->rebalance_wall));
+      }
     cost_started = true;
+  }
+
+  template <int dim>
+  typename BuildSteps<dim>::CostCarry
+  BuildSteps<dim>::carry_cost(const unsigned int        step,
+                              const TimerOutput        &timer,
+                              const SolidSubCycle<dim> *solid) const
+  {
+    CostCarry c;
+    if (!cost_started)
+      return c;
+    c.layer   = cost_open.layer;
+    c.t_start = cost_open.t_start;
+    c.wall    = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                           cost_clock)
+               .count();
+    c.steps       = step - cost_step;
+    c.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
+    c.flow_steps  = flow_substeps() - cost_flow_step;
+    c.parts       = cost_carried;
+    for (const auto &[col, w] : cost_parts(timer))
+      {
+        const auto   it = cost_sections.find(col);
+        const double d  = w - (it == cost_sections.end() ? 0. : it->second);
+        if (d > 0)
+          c.parts[col] += d;
+      }
+    return c;
+  }
+
+  template <int dim>
+  unsigned int
+  BuildSteps<dim>::layer_starting(const double t, const double dt) const
+  {
+    if (schedule)
+      for (const auto &l : schedule->layers())
+        if (starts_in_step(l, t, dt))
+          return l.number;
+    return 0;
   }
 
   template <int dim>
@@ -577,6 +635,8 @@ namespace femp
         if (d > 0)
           r.parts[c] = d;
       }
+    for (const auto &[c, w] : cost_carried)
+      r.parts[c] += w;
     r.steps       = step - cost_step;
     r.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
     r.flow_steps  = flow_substeps() - cost_flow_step;

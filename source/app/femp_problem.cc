@@ -10,6 +10,8 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/recoil_law.h>
 
+#include <iomanip>
+
 namespace femp
 {
   template <int dim>
@@ -197,7 +199,7 @@ namespace femp
   }
 
   template <int dim>
-  void
+  typename FempProblem<dim>::End
   FempProblem<dim>::run()
   {
     control->start_clock();
@@ -220,11 +222,32 @@ namespace femp
         report->start(*heat);
         results->write_fields(*control, timer, false);
       }
-    builds->start_cost(
-      control->time(), control->step(), states.resuming(), timer, solid.get());
+    // After a rebalance: the layer's row of layer_cost.csv goes on, with
+    // the rebalance's wall (the checkpoint, the set-up and the restore).
+    if (rebalance)
+      {
+        rebalance->cost.rebalance_wall =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                        rebalance->since)
+            .count();
+        const double ratio = mpm_imbalance();
+        pcout << "Rebalance: the checkpoint, the set-up and the restore took "
+              << rebalance->cost.rebalance_wall
+              << " s; the busiest rank holds now " << std::setprecision(3)
+              << ratio << " times the mean of the MPM points"
+              << std::setprecision(6) << std::endl;
+      }
+    builds->start_cost(control->time(),
+                       control->step(),
+                       states.resuming(),
+                       timer,
+                       solid.get(),
+                       rebalance ? &rebalance->cost : nullptr);
 
+    End end;
     while (control->running())
       {
+        const double t0 = control->time();
         const double dt = control->next_time_step();
         time_steps->begin_step();
 
@@ -280,7 +303,25 @@ namespace femp
         // 5. Output and checkpoint when due.
         output_results();
         if (states.due(control->step(), control->time()))
-          write_checkpoint();
+          end.checkpoint = write_checkpoint();
+        //    A layer started in this step and the ranks' MPM points are
+        //    uneven: a checkpoint (the trigger's, if it fired), and the run
+        //    goes on from it on a grid cut by its state (run_to_end()).
+        if (rebalance_due(t0, dt))
+          {
+            end.rebalance = true;
+            end.since     = std::chrono::steady_clock::now();
+            end.cost = builds->carry_cost(control->step(), timer, solid.get());
+            if (end.checkpoint.empty())
+              end.checkpoint = write_checkpoint();
+            if (rebalance)
+              end.timer_sums = rebalance->timer_sums;
+            add_timer_sums(timer, end.timer_sums);
+            pcout << "Rebalance: the run goes on from " << end.checkpoint
+                  << " on a grid cut by its state" << std::endl;
+            return end;
+          }
+        end.checkpoint.clear();
       }
 
     builds->record_tracks(control->time(), 0., true, *points, timer, pcout);
@@ -290,7 +331,70 @@ namespace femp
     report->finish(
       *control, *heat, *points, flow.get(), solid.get(), *point_heat);
     results->finish();
-    print_cost_report(timer, scene.output.directory, comm);
+    // The timer's sections over the whole run, every part before a
+    // rebalance included.
+    print_cost_report(timer,
+                      scene.output.directory,
+                      comm,
+                      rebalance ? rebalance->timer_sums : TimerSums());
+    return end;
+  }
+
+  template <int dim>
+  double
+  FempProblem<dim>::mpm_imbalance() const
+  {
+    if (!solid)
+      return 0.;
+    const double n     = solid->sizes()[0];
+    const double n_max = solid->largest_rank_points();
+    return n > 0 ? n_max * Utilities::MPI::n_mpi_processes(comm) / n : 0.;
+  }
+
+  template <int dim>
+  bool
+  FempProblem<dim>::rebalance_due(const double t, const double dt) const
+  {
+    const double limit = scene.build.rebalance_above;
+    if (limit <= 0 || !solid || !scene.grid.partition_by_cost ||
+        Utilities::MPI::n_mpi_processes(comm) < 2 || !control->running())
+      return false;
+    const unsigned int layer = builds->layer_starting(t, dt);
+    if (layer == 0)
+      return false;
+    // The same on every rank (a global count).
+    const double ratio = mpm_imbalance();
+    if (ratio <= limit)
+      return false;
+    pcout << "Rebalance at the start of layer " << layer
+          << " (the step from t = " << t << " s): the busiest rank holds "
+          << std::setprecision(3) << ratio
+          << " times the mean of the MPM points (Build/Rebalance above "
+             "imbalance = "
+          << limit << ")" << std::setprecision(6) << std::endl;
+    return true;
+  }
+
+  template <int dim>
+  unsigned int
+  run_to_end(std::unique_ptr<FempProblem<dim>> &problem,
+             ParameterHandler                  &prm,
+             MPI_Comm                           comm)
+  {
+    unsigned int n = 0;
+    for (auto end = problem->run(); end.rebalance; end = problem->run())
+      {
+        // The same as 'femp --resume DIR' with the checkpoint's weights.
+        prm.enter_subsection("Checkpoint");
+        prm.set("Resume from", end.checkpoint);
+        prm.set("Partition on resume", "checkpoint");
+        prm.leave_subsection();
+        problem.reset();
+        problem = std::make_unique<FempProblem<dim>>(prm, comm);
+        problem->continue_rebalance(end);
+        ++n;
+      }
+    return n;
   }
 
   template <int dim>
@@ -423,4 +527,8 @@ namespace femp
 
   template class FempProblem<2>;
   template class FempProblem<3>;
+  template unsigned int
+  run_to_end(std::unique_ptr<FempProblem<2>> &, ParameterHandler &, MPI_Comm);
+  template unsigned int
+  run_to_end(std::unique_ptr<FempProblem<3>> &, ParameterHandler &, MPI_Comm);
 } // namespace femp

@@ -373,17 +373,18 @@ namespace
     return 1;
   }
 
-  /// Phase 2: the run. Returns the exit status; an error on one rank ends
-  /// every rank.
+  /// Phase 2: the run, with its rebalances (each a fresh problem that
+  /// resumes the rebalance's checkpoint, made from @p prm). Returns the
+  /// exit status; an error on one rank ends every rank.
   int
-  run(Problem &problem, const MPI_Comm comm)
+  run(Problem &problem, dealii::ParameterHandler &prm, const MPI_Comm comm)
   {
     try
       {
         if (problem.p2)
-          problem.p2->run();
+          femp::run_to_end(problem.p2, prm, comm);
         else
-          problem.p3->run();
+          femp::run_to_end(problem.p3, prm, comm);
       }
     catch (const femp::CollectiveError &e)
       {
@@ -424,7 +425,7 @@ main(int argc, char *argv[])
   prm.enter_subsection("Run limits");
   femp::progress::start(comm, prm.get_double("Progress wall interval"));
   prm.leave_subsection();
-  const int result = run(problem, comm);
+  const int result = run(problem, prm, comm);
   femp::progress::stop();
   return result;
 }

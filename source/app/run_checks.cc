@@ -656,17 +656,28 @@ namespace femp
   }
 
   void
-  print_cost_report(const dealii::TimerOutput &timer,
-                    const std::string         &directory,
-                    const MPI_Comm             comm)
+  add_timer_sums(const dealii::TimerOutput &timer, TimerSums &sums)
   {
-    using Sections = std::map<std::string, std::pair<double, unsigned int>>;
-    Sections   mine;
     const auto wall =
       timer.get_summary_data(dealii::TimerOutput::total_wall_time);
     const auto calls = timer.get_summary_data(dealii::TimerOutput::n_calls);
     for (const auto &[name, t] : wall)
-      mine[name] = {t, calls.count(name) ? (unsigned int) calls.at(name) : 0u};
+      {
+        sums[name].first += t;
+        sums[name].second +=
+          calls.count(name) ? (unsigned int) calls.at(name) : 0u;
+      }
+  }
+
+  void
+  print_cost_report(const dealii::TimerOutput &timer,
+                    const std::string         &directory,
+                    const MPI_Comm             comm,
+                    const TimerSums           &earlier)
+  {
+    using Sections = TimerSums;
+    Sections mine  = earlier;
+    add_timer_sums(timer, mine);
     const double total = std::chrono::duration<double>(
                            std::chrono::steady_clock::now() - program_start)
                            .count();

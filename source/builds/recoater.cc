@@ -60,6 +60,18 @@ namespace femp
               "Temperature of the spread powder, K; 0: the ambient "
               "(Heat transfer/Reference temperature). Range [0, "
               "inf).");
+    table.add(
+      "Rebalance above imbalance",
+      rebalance_above,
+      Patterns::Double(0.),
+      "At the end of the step in which a layer starts (after its recoat "
+      "and hand-over), with 'Background grid/Partition = cost' on several "
+      "ranks and the solid on: when the busiest rank holds more than this "
+      "many times the mean over the ranks of the solid's MPM points, the "
+      "run writes a checkpoint and goes on from it on a grid cut by its "
+      "state, as 'femp --resume' with 'Checkpoint/Partition on resume = "
+      "checkpoint' does (doc/builds.md). Ratio, unit none; 0: never; "
+      "otherwise range [1, inf).");
     table.leave_subsection();
   }
 
@@ -81,6 +93,11 @@ namespace femp
     prm.enter_subsection("Build");
     const std::string times = prm.get("Layer start times");
     prm.leave_subsection();
+    require(rebalance_above == 0 || rebalance_above >= 1,
+            "Build/Rebalance above imbalance",
+            rebalance_above,
+            "it must be 0 (never) or a ratio in [1, inf) (the busiest "
+            "rank's MPM points over their mean over the ranks)");
     start_times.clear();
     for (const auto &t : Utilities::split_string_list(times, ','))
       {

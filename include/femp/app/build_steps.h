@@ -85,18 +85,46 @@ namespace femp
                   TimerOutput               &timer,
                   const ConditionalOStream  &pcout);
 
+    /// The open window of layer_cost.csv so far, on this rank, handed from
+    /// a run that ends for a rebalance to the one that resumes it in the
+    /// same process (start_cost()), so that the layer's row covers the
+    /// whole layer: its start, steps, walls and parts so far, and the
+    /// rebalance's wall (its checkpoint, the set-up and the restore; the
+    /// column wall_rebalance).
+    struct CostCarry
+    {
+      unsigned int                  layer   = 0;
+      double                        t_start = 0, wall = 0;
+      double                        steps = 0, solid_steps = 0, flow_steps = 0;
+      std::map<std::string, double> parts;
+      double                        rebalance_wall = 0;
+    };
     /// The cost of each layer (with a layer schedule; layer_cost.csv in
     /// 'Output/Directory', doc/builds.md "Cost and memory"): open the
     /// window of the layer in progress at @p t, macro step @p step (the
     /// start of the run, or the resume: then the rows of the layers that
     /// ended before it are read back from the file and the row of the
-    /// layer in progress counts from the resume). Collective.
+    /// layer in progress counts from the resume, unless @p carried
+    /// continues it). Collective.
     void
     start_cost(const double              t,
                const unsigned int        step,
                const bool                resuming,
                const TimerOutput        &timer,
-               const SolidSubCycle<dim> *solid);
+               const SolidSubCycle<dim> *solid,
+               const CostCarry          *carried = nullptr);
+
+    /// See CostCarry: the window at macro step @p step (empty, layer 0,
+    /// without a layer schedule).
+    CostCarry
+    carry_cost(const unsigned int        step,
+               const TimerOutput        &timer,
+               const SolidSubCycle<dim> *solid) const;
+
+    /// The number of the layer that starts in [@p t, @p t + @p dt) (the
+    /// step of its recoat); 0: none.
+    unsigned int
+    layer_starting(const double t, const double dt) const;
 
     /// Step 0 of the macro step, before the recoat: when a layer starts in
     /// [@p t, @p t + @p dt) (or at the end of the run, @p last), the row of
@@ -191,6 +219,9 @@ namespace femp
     std::map<std::string, double>         cost_sections;
     unsigned int                          cost_step = 0, cost_solid_step = 0;
     double                                cost_flow_step = 0;
+    /// Parts of the open window carried from before a rebalance
+    /// (start_cost()), s, keyed by their column.
+    std::map<std::string, double> cost_carried;
     /// The flow's sub-steps so far (0 without the flow).
     double
     flow_substeps() const;

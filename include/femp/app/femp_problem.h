@@ -24,6 +24,7 @@
 #include <femp/app/build_steps.h>
 #include <femp/app/module_states.h>
 #include <femp/app/results_output.h>
+#include <femp/app/run_checks.h>
 #include <femp/app/run_report.h>
 #include <femp/app/scene.h>
 #include <femp/app/simulation_control.h>
@@ -38,7 +39,9 @@
 #include <femp/heat/laser.h>
 #include <femp/solid/solid_sub_cycle.h>
 
+#include <chrono>
 #include <memory>
+#include <string>
 
 namespace femp
 {
@@ -56,8 +59,36 @@ namespace femp
     /// Read and check all parameters; throws InputError before any work.
     FempProblem(ParameterHandler &prm, MPI_Comm comm);
 
-    void
+    /// How run() ended: at the end of the run, or after a layer's first
+    /// step with a checkpoint for a rebalance ('Build/Rebalance above
+    /// imbalance'), which a fresh FempProblem resumes (run_to_end()).
+    struct End
+    {
+      bool rebalance = false;
+      /// The rebalance's checkpoint directory.
+      std::string checkpoint;
+      /// When this rank decided on the rebalance (before the checkpoint).
+      std::chrono::steady_clock::time_point since;
+      /// The layer's window of layer_cost.csv so far (BuildSteps).
+      typename BuildSteps<dim>::CostCarry cost;
+      /// The timer's sections of the run so far, every part before the
+      /// rebalance (the cost report at the end adds them).
+      TimerSums timer_sums;
+    };
+
+    End
     run();
+
+    /// Before run(), on a problem that resumes the checkpoint of the
+    /// rebalance @p end of the run before (in this process): the wall from
+    /// its decision to the restore's end is the rebalance's cost (printed,
+    /// and counted in the layer's row of layer_cost.csv, which goes on
+    /// from the layer's start).
+    void
+    continue_rebalance(const End &end)
+    {
+      rebalance = std::make_unique<End>(end);
+    }
 
     const Summary &
     summary() const
@@ -109,6 +140,8 @@ namespace femp
     std::unique_ptr<RunReport<dim>>      report;
     ModuleStates<dim>                    states;
     TimerOutput                          timer;
+    /// Set by continue_rebalance().
+    std::unique_ptr<End> rebalance;
 
     void
     setup();
@@ -150,7 +183,29 @@ namespace femp
     /// 5. Time series, field output and progress line when due.
     void
     output_results();
+    /// The busiest rank's MPM points over their mean over the ranks (0
+    /// without the solid or its MPM points). Collective.
+    double
+    mpm_imbalance() const;
+    /// After the step [@p t, @p t + @p dt) (5.): whether the run ends here
+    /// for a rebalance (a layer started in the step, the run goes on, and
+    /// the MPM points' imbalance exceeds 'Build/Rebalance above
+    /// imbalance' on several ranks with 'Background grid/Partition =
+    /// cost'). Collective.
+    bool
+    rebalance_due(const double t, const double dt) const;
   };
+
+  /// Run @p problem, made from @p prm, to the end of its scene: whenever its
+  /// run() ends for a rebalance, a fresh FempProblem resumes that
+  /// checkpoint with 'Checkpoint/Partition on resume = checkpoint' (both
+  /// set in @p prm, as 'femp --resume' does) and takes its place. Returns
+  /// the number of rebalances. Collective.
+  template <int dim>
+  unsigned int
+  run_to_end(std::unique_ptr<FempProblem<dim>> &problem,
+             ParameterHandler                  &prm,
+             MPI_Comm                           comm);
 } // namespace femp
 
 #endif

@@ -13,7 +13,9 @@
 
 #include <femp/base/parameter_table.h>
 
+#include <map>
 #include <string>
+#include <utility>
 
 namespace femp
 {
@@ -95,16 +97,28 @@ namespace femp
   std::string
   part_of(const std::string &section);
 
+  /// Wall time (s) and calls per timer section of this rank: the parts of
+  /// a run before its rebalances (doc/builds.md, "Rebalancing at a layer
+  /// start").
+  using TimerSums = std::map<std::string, std::pair<double, unsigned int>>;
+
+  /// @p sums with the sections of @p timer added.
+  void
+  add_timer_sums(const dealii::TimerOutput &timer, TimerSums &sums);
+
   /// The end-of-run cost (collective): on the screen (rank 0) the wall
   /// time since femp started and, per part of the step (the sections of
   /// @p timer, those named 'flow: ...' or 'setup: ...' summed as one
   /// part), the slowest rank's wall time and its share; in
   /// @p directory/timing.txt every section with its calls and its
-  /// minimum, average and maximum wall time over the ranks.
+  /// minimum, average and maximum wall time over the ranks; @p earlier: the
+  /// sections of the parts of the run before its last rebalance, added to @p
+  /// timer's.
   void
   print_cost_report(const dealii::TimerOutput &timer,
                     const std::string         &directory,
-                    const MPI_Comm             comm);
+                    const MPI_Comm             comm,
+                    const TimerSums           &earlier = {});
 } // namespace femp
 
 #endif

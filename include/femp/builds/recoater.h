@@ -86,6 +86,10 @@ namespace femp
       std::vector<double> start_times;
       /// Build/Powder temperature (K); 0: the ambient temperature.
       double powder_temperature = 0;
+      /// Build/Rebalance above imbalance: at a layer start, the busiest
+      /// rank's MPM points over their mean over the ranks above which the
+      /// run re-cuts its grid by its state; 0: never.
+      double rebalance_above = 0;
 
       /// Declare (the members' values are the defaults) or read the
 
