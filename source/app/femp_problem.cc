@@ -233,7 +233,7 @@ namespace femp
         const double ratio = mpm_imbalance();
         pcout << "Rebalance: the checkpoint, the set-up and the restore took "
               << rebalance->cost.rebalance_wall
-              << " s; the busiest rank holds now " << std::setprecision(3)
+              << " s; after it the busiest rank holds " << std::setprecision(3)
               << ratio << " times the mean of the MPM points"
               << std::setprecision(6) << std::endl;
       }
