@@ -99,27 +99,8 @@ main(int argc, char **argv)
                      0.9);
 
       // 3. The ends of both resumed runs.
-      for (const auto &[col, offset] :
-           std::vector<std::pair<std::string, double>>{{"T", 300.},
-                                                       {"sigma_xx", 0.}})
-        {
-          const auto [diff, peak] = probe_line_difference(
-            "checkpoint", "scene", {"AB"}, col, offset, 2);
-          checks.at_most(col + " on AB: 'checkpoint' against 'scene', / peak",
-                         std::ceil(1e12 * diff / peak) / 1e12,
-                         1e-9);
-        }
-      checks.at_most(
-        "solid probes sigma_xx: 'checkpoint' against 'scene', "
-        "/ peak",
-        [] {
-          const auto [diff, peak] = columns_difference(
-            "checkpoint/solid_probes.csv",
-            "scene/solid_probes.csv",
-            {"sigma_xx_0", "sigma_xx_1", "sigma_xx_2", "sigma_xx_3"});
-          return std::ceil(1e12 * diff / peak) / 1e12;
-        }(),
-        1e-9);
+      check_same_build_end(
+        checks, "checkpoint", "scene", "'checkpoint' against 'scene'", 2, 1e-9);
     }
   catch (const std::exception &e)
     {

@@ -197,26 +197,12 @@ main(int argc, char **argv)
                      1e-12);
 
       // 1. against 3.
-      for (const auto &[col, offset] :
-           std::vector<std::pair<std::string, double>>{{"T", 300.},
-                                                       {"sigma_xx", 0.}})
-        {
-          const auto [diff, peak] = probe_line_difference(
-            "rebalance", "explicit", {"AB"}, col, offset, 1);
-          checks.at_most(col + " on AB: rebalanced against explicit, / peak",
-                         std::ceil(1e12 * diff / peak) / 1e12,
-                         1e-12);
-        }
-      checks.at_most(
-        "solid probes sigma_xx: rebalanced against explicit, / peak",
-        [] {
-          const auto [diff, peak] = columns_difference(
-            "rebalance/solid_probes.csv",
-            "explicit/solid_probes.csv",
-            {"sigma_xx_0", "sigma_xx_1", "sigma_xx_2", "sigma_xx_3"});
-          return std::ceil(1e12 * diff / peak) / 1e12;
-        }(),
-        1e-12);
+      check_same_build_end(checks,
+                           "rebalance",
+                           "explicit",
+                           "rebalanced against explicit",
+                           1,
+                           1e-12);
     }
   catch (const std::exception &e)
     {

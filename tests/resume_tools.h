@@ -139,6 +139,40 @@ namespace femp_test
     return d;
   }
 
+  /// Checks that two runs of the two-layer build of
+  /// tests/checkpoint_handover.prm end alike: T and sigma_xx on its probe
+  /// line AB (at output @p output, see probe_line_difference()) and
+  /// sigma_xx at its four solid probes, each as a fraction of the peak of
+  /// @p a, rounded up to 1e-12, at most @p tolerance. @p pair names the
+  /// two runs in the checks' labels.
+  template <typename Checks>
+  inline void
+  check_same_build_end(Checks            &checks,
+                       const std::string &a,
+                       const std::string &b,
+                       const std::string &pair,
+                       const unsigned int output,
+                       const double       tolerance)
+  {
+    for (const auto &[col, offset] :
+         std::vector<std::pair<std::string, double>>{{"T", 300.},
+                                                     {"sigma_xx", 0.}})
+      {
+        const auto [diff, peak] =
+          probe_line_difference(a, b, {"AB"}, col, offset, output);
+        checks.at_most(col + " on AB: " + pair + ", / peak",
+                       std::ceil(1e12 * diff / peak) / 1e12,
+                       tolerance);
+      }
+    const auto [diff, peak] = columns_difference(
+      a + "/solid_probes.csv",
+      b + "/solid_probes.csv",
+      {"sigma_xx_0", "sigma_xx_1", "sigma_xx_2", "sigma_xx_3"});
+    checks.at_most("solid probes sigma_xx: " + pair + ", / peak",
+                   std::ceil(1e12 * diff / peak) / 1e12,
+                   tolerance);
+  }
+
 } // namespace femp_test
 
 #endif
