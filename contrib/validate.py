@@ -1307,7 +1307,8 @@ def last_time(out_dir):
 
 def checkpoints(d):
     """The checkpoints of run directory d that femp's index names (newest
-    first; femp keeps the last two, doc/checkpoint.md)."""
+    first; femp keeps the last two of the triggers, and a rebalance's only
+    while it is the newest, doc/checkpoint.md)."""
     try:
         return [x.strip() for x in open(os.path.join(d, CHECKPOINT_DIR, "index"))
                 if x.strip()]

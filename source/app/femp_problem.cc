@@ -209,13 +209,28 @@ namespace femp
     // The scene's printout counts the points the run goes on with: a
     // resumed run's after the restore.
     if (states.resuming())
+      states.restore(pcout, timer);
+    scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
+    // 'Build/Rebalance above imbalance' that cannot act says why (the same
+    // scene may run on one rank or without the solid).
+    if (scene.build.rebalance_above > 0)
       {
-        states.restore(pcout, timer);
-        scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
+        std::string why;
+        if (Utilities::MPI::n_mpi_processes(comm) < 2)
+          why = "one MPI rank";
+        else if (!solid)
+          why = "no solid (Physics/Solid stress = false)";
+        else if (!builds->layers() || builds->layers()->layers().empty())
+          why = "one layer (no layer starts: Build/Layer schedule)";
+        if (!why.empty())
+          pcout << "  rebalance: inert, " << why
+                << " (Build/Rebalance above imbalance = "
+                << scene.build.rebalance_above
+                << " acts at a layer start, on several ranks, with the solid)"
+                << std::endl;
       }
-    else
+    if (!states.resuming())
       {
-        scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
         // The exact stability limit and the projected number of steps are
         // checked before anything is written.
         time_steps->choose(0, control->time(), cell_fields());
@@ -305,15 +320,16 @@ namespace femp
         if (states.due(control->step(), control->time()))
           end.checkpoint = write_checkpoint();
         //    A layer started in this step and the ranks' MPM points are
-        //    uneven: a checkpoint (the trigger's, if it fired), and the run
-        //    goes on from it on a grid cut by its state (run_to_end()).
+        //    uneven: a checkpoint (the trigger's, if it fired; else one
+        //    kept only while it is the newest), and the run goes on from
+        //    it on a grid cut by its state (run_to_end()).
         if (rebalance_due(t0, dt))
           {
             end.rebalance = true;
             end.since     = std::chrono::steady_clock::now();
             end.cost = builds->carry_cost(control->step(), timer, solid.get());
             if (end.checkpoint.empty())
-              end.checkpoint = write_checkpoint();
+              end.checkpoint = write_checkpoint(CheckpointKind::rebalance);
             if (rebalance)
               end.timer_sums = rebalance->timer_sums;
             add_timer_sums(timer, end.timer_sums);
@@ -520,9 +536,9 @@ namespace femp
 
   template <int dim>
   std::string
-  FempProblem<dim>::write_checkpoint()
+  FempProblem<dim>::write_checkpoint(const CheckpointKind kind)
   {
-    return states.write(control->step(), control->time(), pcout, timer);
+    return states.write(control->step(), control->time(), pcout, timer, kind);
   }
 
   template class FempProblem<2>;

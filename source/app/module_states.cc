@@ -21,10 +21,11 @@ namespace femp
 
   template <int dim>
   std::string
-  ModuleStates<dim>::write(const unsigned int  step,
-                           const double        time,
-                           ConditionalOStream &out,
-                           TimerOutput        &timer)
+  ModuleStates<dim>::write(const unsigned int   step,
+                           const double         time,
+                           ConditionalOStream  &out,
+                           TimerOutput         &timer,
+                           const CheckpointKind kind)
   {
     TimerOutput::Scope       t(timer, "checkpoint");
     std::vector<StateWriter> bytes(entries.size());
@@ -34,7 +35,7 @@ namespace femp
         entries[i].save(bytes[i]);
         sections.emplace_back(entries[i].name, &bytes[i]);
       }
-    const std::string dir = checkpoint->write(step, time, sections);
+    const std::string dir = checkpoint->write(step, time, sections, kind);
     // The modules' bytes are freed on return; their memory goes back.
     bytes.clear();
     bytes.shrink_to_fit();

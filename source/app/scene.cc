@@ -166,6 +166,14 @@ namespace femp
             "path: it needs 'Physics/Melt flow = true' and 'Physics/Heat "
             "transfer = true' (without the melt flow set 'Solid/Mass "
             "scaling = adaptive')");
+    require(build.rebalance_above == 0 || grid.partition_by_cost,
+            "Build/Rebalance above imbalance",
+            build.rebalance_above,
+            "with 'Background grid/Partition = cells' it cannot act: a "
+            "rebalance re-cuts the grid by the run's cost, which only "
+            "'Background grid/Partition = cost' does; allowed: 0 (never) "
+            "with 'Partition = cells', or 'Partition = cost' with 0 or a "
+            "ratio in [1, inf)");
     require(time.time_step_solidified == 0 || heat_enabled,
             "Time stepping/Time step after solidification",
             time.time_step_solidified,

@@ -70,8 +70,11 @@ namespace femp
       "many times the mean over the ranks of the solid's MPM points, the "
       "run writes a checkpoint and goes on from it on a grid cut by its "
       "state, as 'femp --resume' with 'Checkpoint/Partition on resume = "
-      "checkpoint' does (doc/builds.md). Ratio, unit none; 0: never; "
-      "otherwise range [1, inf).");
+      "checkpoint' does (doc/builds.md); that checkpoint is kept only "
+      "until the next one. Refused with 'Background grid/Partition = "
+      "cells'; on one rank, without the solid or with one layer it is "
+      "inert (the scene's printout says so). Ratio, unit none; 0: "
+      "never; otherwise range [1, inf).");
     table.leave_subsection();
   }
 

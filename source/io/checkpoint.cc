@@ -66,6 +66,10 @@ namespace femp
         }
     }
 
+    /// The file in a checkpoint's directory that marks it as a
+    /// rebalance's (CheckpointKind::rebalance).
+    const char *const rebalance_marker = "rebalance";
+
     std::string
     rank_file(const std::string &dir, const unsigned int rank)
     {
@@ -113,7 +117,9 @@ namespace femp
               "'Output/Directory', an absolute path is allowed. Each "
               "checkpoint is a subdirectory step_<step number>; the "
               "file 'index' names the last two, older ones are "
-              "removed (doc/checkpoint.md).");
+              "removed; a rebalance's checkpoint (Build/Rebalance "
+              "above imbalance) is kept besides them only while it "
+              "is the newest (doc/checkpoint.md).");
     table.add("Resume from",
               resume_from,
               Patterns::Anything(),
@@ -213,7 +219,8 @@ namespace femp
   Checkpoint<dim>::write(
     const unsigned int                                              step,
     const double                                                    time,
-    const std::vector<std::pair<std::string, const StateWriter *>> &sections)
+    const std::vector<std::pair<std::string, const StateWriter *>> &sections,
+    const CheckpointKind                                            kind)
   {
     progress::phase("writing a checkpoint");
     namespace fs             = std::filesystem;
@@ -281,21 +288,35 @@ namespace femp
     // Every rank has written: the index now names the new checkpoint.
     if (rank == 0)
       {
-        // The newest other checkpoint of the index stays (after a resume
-        // the step just written may be in it already).
-        std::string previous;
+        // A rebalance's checkpoint carries a marker file; one rewritten for
+        // a trigger (the same step after a resume) lost it above.
+        if (kind == CheckpointKind::rebalance)
+          std::ofstream(dir + "/" + rebalance_marker)
+            << "written for a rebalance (Build/Rebalance above imbalance); "
+               "removed by the next checkpoint\n";
+        // The index names the new checkpoint first, then the newest user
+        // checkpoints of the old index (after a resume the step just
+        // written may be in it already): one beside a user checkpoint (the
+        // last two), two beside a rebalance's. An older rebalance's
+        // checkpoint is dropped, it is no longer the newest, and so is a
+        // name whose directory is gone.
+        const std::size_t        n_user = kind == CheckpointKind::user ? 1 : 2;
+        std::vector<std::string> kept;
         {
           std::ifstream index(base + "/index");
-          std::string   line;
-          while (previous.empty() && std::getline(index, line))
-            if (line != name)
-              previous = line;
+          for (std::string line;
+               kept.size() < n_user && std::getline(index, line);)
+            if (!line.empty() && line != name &&
+                std::find(kept.begin(), kept.end(), line) == kept.end() &&
+                fs::is_directory(base + "/" + line) &&
+                !fs::exists(base + "/" + line + "/" + rebalance_marker))
+              kept.push_back(line);
         }
         {
           std::ofstream index(base + "/index.tmp");
           index << name << '\n';
-          if (!previous.empty())
-            index << previous << '\n';
+          for (const auto &k : kept)
+            index << k << '\n';
         }
         std::error_code ec;
         fs::rename(base + "/index.tmp", base + "/index", ec);
@@ -306,7 +327,7 @@ namespace femp
           {
             const std::string n = entry.path().filename().string();
             if (entry.is_directory() && n.rfind("step_", 0) == 0 && n != name &&
-                n != previous)
+                std::find(kept.begin(), kept.end(), n) == kept.end())
               fs::remove_all(entry.path(), ec);
           }
       }

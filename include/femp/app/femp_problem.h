@@ -107,11 +107,11 @@ namespace femp
     {
       return *heat;
     }
-    /// Write a checkpoint of the present state now (collective; after
-    /// run(), tests compare the final states of two runs by it); returns
-    /// its directory.
+    /// Write a checkpoint of @p kind of the present state now (collective;
+    /// after run(), tests compare the final states of two runs by it);
+    /// returns its directory.
     std::string
-    write_checkpoint();
+    write_checkpoint(const CheckpointKind kind = CheckpointKind::user);
 
   private:
     MPI_Comm           comm;

@@ -100,14 +100,15 @@ namespace femp
     {
       return checkpoint->enabled() && checkpoint->due(step, time);
     }
-    /// Write every registered module's section into a checkpoint at
-    /// @p step, @p time (collective, timed on @p timer), say so on @p out;
-    /// returns its directory.
+    /// Write every registered module's section into a checkpoint of
+    /// @p kind at @p step, @p time (collective, timed on @p timer), say so
+    /// on @p out; returns its directory.
     std::string
-    write(const unsigned int  step,
-          const double        time,
-          ConditionalOStream &out,
-          TimerOutput        &timer);
+    write(const unsigned int   step,
+          const double         time,
+          ConditionalOStream  &out,
+          TimerOutput         &timer,
+          const CheckpointKind kind = CheckpointKind::user);
     /// Restore every registered module from the checkpoint read (timed on
     /// @p timer), run what follows a restore, say so on @p out, and let
     /// the checkpoint's bytes go.

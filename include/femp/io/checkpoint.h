@@ -13,7 +13,8 @@
 // A checkpoint goes into a new subdirectory; only when every rank has
 // written (barrier) does rank 0 replace the small index file (write a
 // temporary, rename), so that a run killed while writing leaves the
-// previous checkpoint valid. The last two are kept.
+// previous checkpoint valid. The last two of the user's triggers are kept,
+// and a rebalance's checkpoint only while it is the newest (CheckpointKind).
 #ifndef femp_checkpoint_h
 #define femp_checkpoint_h
 
@@ -36,6 +37,18 @@
 namespace femp
 {
   using namespace dealii;
+
+  /// What a checkpoint is written for. 'user': a trigger of the
+  /// subsection Checkpoint, or a caller's write at the end of a run; the
+  /// last two of these are kept. 'rebalance': a run that goes on from it
+  /// on a grid cut by its state ('Build/Rebalance above imbalance'); it is
+  /// kept only while it is the newest checkpoint (the next write of any
+  /// kind removes it), and it never pushes a user checkpoint out.
+  enum class CheckpointKind
+  {
+    user,
+    rebalance
+  };
 
   template <int dim>
   class Checkpoint
@@ -99,12 +112,14 @@ namespace femp
     due(const unsigned int step, const double time);
 
     /// Write a checkpoint of this rank's @p sections (name, bytes) at
-    /// @p step, @p time (collective); returns its directory.
+    /// @p step, @p time (collective) and prune the older ones by @p kind's
+    /// rule; returns its directory.
     std::string
     write(
       const unsigned int                                              step,
       const double                                                    time,
-      const std::vector<std::pair<std::string, const StateWriter *>> &sections);
+      const std::vector<std::pair<std::string, const StateWriter *>> &sections,
+      const CheckpointKind kind = CheckpointKind::user);
 
     /// Read and verify the checkpoint 'Resume from' (collective): a
     /// checkpoint that is corrupt, truncated or written for another scene
