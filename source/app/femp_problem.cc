@@ -203,6 +203,9 @@ namespace femp
   FempProblem<dim>::run()
   {
     control->start_clock();
+    // After a rebalance the progress line goes on with the run's clock.
+    if (rebalance)
+      control->continue_clock(rebalance->clock);
     setup();
     // The setup's temporary lists (points, powder, the FE zone) are freed.
     release_free_heap();
@@ -327,6 +330,7 @@ namespace femp
           {
             end.rebalance = true;
             end.since     = std::chrono::steady_clock::now();
+            end.clock     = control->clock();
             end.cost = builds->carry_cost(control->step(), timer, solid.get());
             if (end.checkpoint.empty())
               end.checkpoint = write_checkpoint(CheckpointKind::rebalance);

@@ -69,6 +69,8 @@ namespace femp
       std::string checkpoint;
       /// When this rank decided on the rebalance (before the checkpoint).
       std::chrono::steady_clock::time_point since;
+      /// The wall clock of the run so far (the progress line goes on).
+      SimulationControl::Clock clock;
       /// The layer's window of layer_cost.csv so far (BuildSteps).
       typename BuildSteps<dim>::CostCarry cost;
       /// The timer's sections of the run so far, every part before the

@@ -80,6 +80,27 @@ namespace femp
     /// Start the wall clock (for the progress line).
     void
     start_clock();
+    /// The wall clock of a run: its start and the recent (wall, simulated
+    /// time) samples of wall_time_left().
+    struct Clock
+    {
+      std::chrono::steady_clock::time_point start;
+      std::deque<std::pair<double, double>> samples;
+    };
+    Clock
+    clock() const
+    {
+      return {wall_start, rate_samples};
+    }
+    /// Go on with the wall clock @p c of the part of the run before a
+    /// rebalance (in this process), as one run: the progress line's wall
+    /// and estimate count from the run's start.
+    void
+    continue_clock(const Clock &c)
+    {
+      wall_start   = c.start;
+      rate_samples = c.samples;
+    }
     void
     set_step_chooser(const StepChooser &chooser)
     {
