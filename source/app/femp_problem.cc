@@ -14,6 +14,35 @@
 
 namespace femp
 {
+  namespace
+  {
+    /// One line of the scene's printout when a rebalance ratio
+    /// @p ratio > 0 cannot act in this run: on one rank, without the solid
+    /// or without a later layer to start.
+    void
+    say_if_rebalance_inert(ConditionalOStream &out,
+                           const MPI_Comm      comm,
+                           const double        ratio,
+                           const bool          has_solid,
+                           const bool          has_layer_starts)
+    {
+      if (ratio <= 0)
+        return;
+      std::string why;
+      if (Utilities::MPI::n_mpi_processes(comm) < 2)
+        why = "one MPI rank";
+      else if (!has_solid)
+        why = "no solid (Physics/Solid stress = false)";
+      else if (!has_layer_starts)
+        why = "one layer (no layer starts: Build/Layer schedule)";
+      if (!why.empty())
+        out << "  rebalance: inert, " << why
+            << " (Build/Rebalance above imbalance = " << ratio
+            << " acts at a layer start, on several ranks, with the solid)"
+            << std::endl;
+    }
+  } // namespace
+
   template <int dim>
   FempProblem<dim>::FempProblem(ParameterHandler &prm, MPI_Comm comm)
       : comm(comm)
@@ -216,22 +245,12 @@ namespace femp
     scene.print(pcout, comm, *grid, *points, *heat, *laser, solid.get());
     // 'Build/Rebalance above imbalance' that cannot act says why (the same
     // scene may run on one rank or without the solid).
-    if (scene.build.rebalance_above > 0)
-      {
-        std::string why;
-        if (Utilities::MPI::n_mpi_processes(comm) < 2)
-          why = "one MPI rank";
-        else if (!solid)
-          why = "no solid (Physics/Solid stress = false)";
-        else if (!builds->layers() || builds->layers()->layers().empty())
-          why = "one layer (no layer starts: Build/Layer schedule)";
-        if (!why.empty())
-          pcout << "  rebalance: inert, " << why
-                << " (Build/Rebalance above imbalance = "
-                << scene.build.rebalance_above
-                << " acts at a layer start, on several ranks, with the solid)"
-                << std::endl;
-      }
+    say_if_rebalance_inert(pcout,
+                           comm,
+                           scene.build.rebalance_above,
+                           solid != nullptr,
+                           builds->layers() &&
+                             !builds->layers()->layers().empty());
     if (!states.resuming())
       {
         // The exact stability limit and the projected number of steps are
