@@ -102,20 +102,35 @@ main(int argc, char **argv)
         all.insert(all.end(), o.begin(), o.end());
         return all;
       };
+      // The index of 'kept' names @p n checkpoints, as many step
+      // directories are left, @p n_rebalance of them a rebalance's, and
+      // every name of the index exists; returns the index.
+      auto check_kept = [&](const std::string &part,
+                            const unsigned int n,
+                            const unsigned int n_rebalance) {
+        const auto index              = index_of("kept");
+        const auto [steps, rebalance] = step_directories("kept");
+        checks.in_range(part + ": checkpoints in the index",
+                        index.size(),
+                        n,
+                        n);
+        checks.in_range(part + ": step directories", steps, n, n);
+        checks.in_range(part + ": of them a rebalance's",
+                        rebalance,
+                        n_rebalance,
+                        n_rebalance);
+        checks.in_range(part + ": the index's checkpoints exist",
+                        all_exist("kept", index),
+                        1,
+                        1);
+        return index;
+      };
       // 1.
       run_scene<2>(scene,
                    comm,
                    with({{"Time stepping", "End time", "1.45e-4"}}));
       MPI_Barrier(comm);
-      const auto first                  = index_of("kept");
-      const auto [steps_1, rebalance_1] = step_directories("kept");
-      checks.in_range("1.: checkpoints in the index", first.size(), 3, 3);
-      checks.in_range("1.: step directories", steps_1, 3, 3);
-      checks.in_range("1.: of them a rebalance's", rebalance_1, 1, 1);
-      checks.in_range("1.: the index's checkpoints exist",
-                      all_exist("kept", first),
-                      1,
-                      1);
+      const auto first = check_kept("1.", 3, 1);
       const bool newest_marked =
         !first.empty() &&
         std::filesystem::exists("kept/checkpoint/" + first[0] + "/rebalance");
@@ -141,15 +156,7 @@ main(int argc, char **argv)
                    with({{"Time stepping", "End time", "1.7e-4"},
                          {"Checkpoint", "Resume from", "kept/checkpoint"}}));
       MPI_Barrier(comm);
-      const auto second                 = index_of("kept");
-      const auto [steps_2, rebalance_2] = step_directories("kept");
-      checks.in_range("2.: checkpoints in the index", second.size(), 2, 2);
-      checks.in_range("2.: step directories", steps_2, 2, 2);
-      checks.in_range("2.: of them a rebalance's", rebalance_2, 0, 0);
-      checks.in_range("2.: the index's checkpoints exist",
-                      all_exist("kept", second),
-                      1,
-                      1);
+      const auto second = check_kept("2.", 2, 0);
       checks.in_range("2.: the older is 1.'s newest user checkpoint",
                       second.size() == 2 && first.size() > 1 &&
                         second[1] == first[1],
