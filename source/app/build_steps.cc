@@ -440,6 +440,7 @@ namespace femp
     cost_step       = step;
     cost_solid_step = solid ? solid->n_steps() : 0;
     cost_flow_step  = flow_substeps();
+    cost_fluid      = fluid_load();
     cost_sections   = cost_parts(timer);
     cost_carried.clear();
     cost_clock = std::chrono::steady_clock::now();
@@ -514,6 +515,12 @@ namespace femp
                   r.elements = v;
                 else if (n == "mpm_share_max")
                   r.mpm_share_max = v;
+                else if (n == "fluid_cells")
+                  r.fluid_cells = v;
+                else if (n == "fluid_share_max")
+                  r.fluid_share_max = v;
+                else if (n == "fluid_step_share_max")
+                  r.fluid_step_share_max = v;
                 else if (n.rfind("kept_", 0) == 0)
                   r.kept[n] = v;
                 else if (v > 0)
@@ -533,6 +540,9 @@ namespace femp
         cost_step -= static_cast<unsigned int>(carried->steps);
         cost_solid_step -= static_cast<unsigned int>(carried->solid_steps);
         cost_flow_step -= carried->flow_steps;
+        cost_fluid.all -= carried->fluid.all;
+        cost_fluid.busiest -= carried->fluid.busiest;
+        cost_fluid.own -= carried->fluid.own;
         cost_carried = carried->parts;
         if (carried->rebalance_wall > 0)
           cost_carried["wall_rebalance"] += carried->rebalance_wall;
@@ -558,10 +568,14 @@ namespace femp
     c.wall    = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                            cost_clock)
                .count();
-    c.steps       = step - cost_step;
-    c.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
-    c.flow_steps  = flow_substeps() - cost_flow_step;
-    c.parts       = cost_carried;
+    c.steps         = step - cost_step;
+    c.solid_steps   = solid ? solid->n_steps() - cost_solid_step : 0;
+    c.flow_steps    = flow_substeps() - cost_flow_step;
+    const auto f    = fluid_load();
+    c.fluid.all     = f.all - cost_fluid.all;
+    c.fluid.busiest = f.busiest - cost_fluid.busiest;
+    c.fluid.own     = f.own - cost_fluid.own;
+    c.parts         = cost_carried;
     for (const auto &[col, w] : cost_parts(timer))
       {
         const auto   it = cost_sections.find(col);
@@ -643,7 +657,17 @@ namespace femp
     // The largest wall over the ranks, in total and per part (the parts of
     // every rank).
     const MPI_Comm comm = grid_ptr->communicator();
-    r.max_wall          = Utilities::MPI::max(r.wall, comm);
+    // The flow's balance: fluid cells (global) and this rank's own.
+    const auto f  = fluid_load();
+    r.fluid_cells = f.all - cost_fluid.all;
+    if (r.fluid_cells > 0)
+      {
+        r.fluid_share_max =
+          Utilities::MPI::max(f.own - cost_fluid.own, comm) / r.fluid_cells;
+        r.fluid_step_share_max =
+          (f.busiest - cost_fluid.busiest) / r.fluid_cells;
+      }
+    r.max_wall = Utilities::MPI::max(r.wall, comm);
     for (const auto &parts : Utilities::MPI::all_gather(comm, r.parts))
       for (const auto &[c, w] : parts)
         r.max_parts[c] = std::max(r.max_parts[c], w);
@@ -675,7 +699,8 @@ namespace femp
           kept.push_back(what + std::string(FeZoneHandover<dim>::kept_name(k)));
     std::ofstream f(scene.output.directory + "/layer_cost.csv");
     f << "layer,t_start,t_end,temperature_steps,solid_steps,flow_steps,"
-         "points,mpm_points,fe_elements,mpm_share_max";
+         "points,mpm_points,fe_elements,mpm_share_max,fluid_cells,"
+         "fluid_share_max,fluid_step_share_max";
     for (const auto &c : kept)
       f << "," << c;
     f << ",wall_total";
@@ -691,7 +716,9 @@ namespace femp
           << r.t_end << "," << std::setprecision(15) << r.steps << ","
           << r.solid_steps << "," << r.flow_steps << "," << r.points << ","
           << r.mpm_points << "," << r.elements << "," << std::setprecision(4)
-          << r.mpm_share_max << std::setprecision(15);
+          << r.mpm_share_max << std::setprecision(15) << "," << r.fluid_cells
+          << "," << std::setprecision(4) << r.fluid_share_max << ","
+          << r.fluid_step_share_max << std::setprecision(15);
         for (const auto &c : kept)
           {
             const auto it = r.kept.find(c);
@@ -718,6 +745,14 @@ namespace femp
   BuildSteps<dim>::flow_substeps() const
   {
     return flow_ptr ? flow_ptr->statistics().steps : 0.;
+  }
+
+  template <int dim>
+  typename IncompressibleFlow<dim>::FluidLoad
+  BuildSteps<dim>::fluid_load() const
+  {
+    return flow_ptr ? flow_ptr->fluid_load() :
+                      typename IncompressibleFlow<dim>::FluidLoad();
   }
 
   template <int dim>

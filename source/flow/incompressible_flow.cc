@@ -898,6 +898,12 @@ namespace femp
     const bool capillary =
       prm.surface_tension > 0 || prm.recoil_coefficient > 0;
     pressure_solver.update_system(cells);
+    {
+      const auto &s = pressure_solver.statistics();
+      load.all += s.n_fluid_cells;
+      load.busiest += s.n_fluid_cells_busiest;
+      load.own += cells.fluid.size();
+    }
     pressure_solver.solve_pressure(cells,
                                    divergence,
                                    surface.surface_pressure(),

@@ -98,6 +98,8 @@ namespace femp
       double                        steps = 0, solid_steps = 0, flow_steps = 0;
       std::map<std::string, double> parts;
       double                        rebalance_wall = 0;
+      /// The flow's fluid cells so far (this rank's own ones).
+      typename IncompressibleFlow<dim>::FluidLoad fluid;
     };
     /// The cost of each layer (with a layer schedule; layer_cost.csv in
     /// 'Output/Directory', doc/builds.md "Cost and memory"): open the
@@ -132,6 +134,8 @@ namespace femp
     /// and its largest over the ranks (in total and per part of the step,
     /// as the cost report sums the timer sections), the macro
     /// (temperature) steps, solid steps and melt-flow sub-steps in it, the
+    /// melt flow's fluid cells summed over its pressure systems and the
+    /// busiest rank's share of them (over the layer and step by step), the
     /// points and the solid's MPM points and finite elements at its start (read
     /// at the window's first call, after its recoat and hand-over), with the
     /// hand-over the cells and points its choice kept as points per class
@@ -202,7 +206,13 @@ namespace femp
       double       steps = 0, solid_steps = 0, flow_steps = 0, max_wall = 0;
       double       points = 0, mpm_points = 0, elements = 0;
       /// The busiest rank's share of the MPM points (1 on one rank).
-      double                        mpm_share_max = 0;
+      double mpm_share_max = 0;
+      /// The melt flow's fluid cells summed over the layer's pressure
+      /// systems (all ranks); the largest share of them one rank owned
+      /// over the layer; the share of the rank owning the most in each
+      /// system, averaged with the systems' sizes as weights (the flow's
+      /// steps wait for their busiest rank). Both 1 on one rank.
+      double fluid_cells = 0, fluid_share_max = 0, fluid_step_share_max = 0;
       std::map<std::string, double> parts, max_parts;
       /// With the hand-over: the cells and points kept as points at the
       /// layer's start per class (kept_cells_<class>, kept_points_<class>;
@@ -219,12 +229,16 @@ namespace femp
     std::map<std::string, double>         cost_sections;
     unsigned int                          cost_step = 0, cost_solid_step = 0;
     double                                cost_flow_step = 0;
+    typename IncompressibleFlow<dim>::FluidLoad cost_fluid;
     /// Parts of the open window carried from before a rebalance
     /// (start_cost()), s, keyed by their column.
     std::map<std::string, double> cost_carried;
     /// The flow's sub-steps so far (0 without the flow).
     double
     flow_substeps() const;
+    /// The flow's fluid cells so far (zeros without the flow).
+    typename IncompressibleFlow<dim>::FluidLoad
+    fluid_load() const;
     void
     open_cost(const unsigned int        layer,
               const double              t,

@@ -365,6 +365,21 @@ namespace femp
     {
       return stats;
     }
+    /// The fluid cells of the pressure systems (one per fluid sub-step, a
+    /// halved step two) summed since this object was made (not saved in
+    /// checkpoints): over all ranks (@p all), of the rank that owns the
+    /// most in each system (@p busiest) and of this rank (@p own). Their
+    /// ratios over a window are the flow's balance over the ranks
+    /// (layer_cost.csv, doc/performance.md "Balancing the ranks").
+    struct FluidLoad
+    {
+      double all = 0, busiest = 0, own = 0;
+    };
+    const FluidLoad &
+    fluid_load() const
+    {
+      return load;
+    }
     /// Recoil-driven surface cells of the last fluid step (Melt
     /// flow/Front wall film or Front wall expulsion; 0 when both are off),
     /// over all ranks. Collective.
@@ -553,6 +568,7 @@ namespace femp
     std::unique_ptr<FrontWallExpulsion<dim>> expulsion;
 
     Statistics     stats;
+    FluidLoad      load;
     SubcycleRecord subcycles;
     /// Wall time (s) after which a long sub-cycle reports.
     double next_substep_report = 30;

@@ -86,6 +86,9 @@ namespace femp
       unsigned long n_fluid_cells     = 0; ///< global, last system
       unsigned long volume_iterations = 0; ///< CG, volume correction, total
       unsigned int  volume_skipped    = 0; ///< volume solves not converged
+      /// The fluid cells of the last system on the rank that owns the most
+      /// of them (not saved in checkpoints: 0 after a restart).
+      unsigned long n_fluid_cells_busiest = 0;
     };
 
     /// The fluid cells the system is built on (fields over the local box,
