@@ -500,6 +500,29 @@ namespace
                 steps == s0.steps && flow_steps == fluid);
         verdict("layer_cost.csv: walls >= 0, their parts within the total",
                 walls);
+        // The flow's fluid cells: some in each layer it stepped in, none
+        // in the others; the busiest rank's shares (rounded to 4 digits)
+        // between an even split and 1, exactly 1 on one rank, and the
+        // share per pressure system at least the share over the layer (a
+        // sum of maxima is at least the max of the sums).
+        const double n_ranks = Utilities::MPI::n_mpi_processes(comm);
+        bool         shares  = true;
+        for (const auto &r : c0)
+          {
+            const double n = r.at("fluid_cells"), s = r.at("fluid_share_max"),
+                         p = r.at("fluid_step_share_max");
+            if (r.at("flow_steps") == 0)
+              shares = shares && n == 0 && s == 0 && p == 0;
+            else if (n_ranks == 1)
+              shares = shares && n > 0 && s == 1 && p == 1;
+            else
+              shares = shares && n > 0 && s >= 1 / n_ranks - 1e-4 &&
+                       s <= p + 1e-4 && p <= 1;
+          }
+        verdict("layer_cost.csv: fluid cells where the flow stepped, the "
+                "busiest rank's shares of them in [1/ranks, 1], per system "
+                "at least over the layer",
+                shares);
         const unsigned int step_half = std::stoul(half.substr(5));
         bool               resumed   = c1.size() == c0.size() && c1.size() > 1;
         for (std::size_t k = 0; resumed && k < c1.size(); ++k)
@@ -511,7 +534,10 @@ namespace
                                       "flow_steps",
                                       "points",
                                       "mpm_points",
-                                      "fe_elements"})
+                                      "fe_elements",
+                                      "fluid_cells",
+                                      "fluid_share_max",
+                                      "fluid_step_share_max"})
             if (k + 1 < c1.size() || c == "layer" || c == "t_end")
               resumed = resumed && c1[k].at(c) == c0[k].at(c);
         // With the hand-over, the classes of the cells it kept as points
