@@ -14,7 +14,8 @@
 // incident = P dt to round-off, the deposit equals the booked laser energy,
 // the stored enthalpy gained equals it (the heat equation conserves it), all
 // deposits lie in metal cells. 1 and 2 ranks give the same output (with
-// the centroid of the deposit to 6 digits).
+// the centroid of the deposit to 6 digits). The deposit stays readable
+// (laser_source(), the output's field) after a later metal-fraction update.
 #include <femp/heat/ray_traced_absorption.h>
 
 #include <functional>
@@ -131,6 +132,17 @@ main(int argc, char **argv)
     checks.at_most(name + ": |deposited / standalone tracer's absorbed - 1|",
                    std::abs(deposited / ref.absorbed - 1),
                    1e-12);
+    // The output reads laser_source() after the melt flow has moved the
+    // metal (a metal-fraction update): the step's deposit must survive it.
+    heat.set_metal_fraction(alpha);
+    double kept = 0;
+    for (const auto idx : grid.owned_cells())
+      kept += heat.laser_source()[idx] * V;
+    kept = Utilities::MPI::sum(kept, comm);
+    checks.at_most(name + ": |deposit read after a metal-fraction update / "
+                          "deposit - 1|",
+                   std::abs(kept / deposited - 1),
+                   0.);
     return deposited / P;
   };
 

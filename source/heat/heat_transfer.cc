@@ -524,8 +524,9 @@ namespace femp
     detached = s.detached();
     for (const auto &dc : detached)
       gas_coefficient[dc.index] = dc.gas_h;
-    // Stale values of cells that left the lists.
-    std::fill(laser_density.begin(), laser_density.end(), 0.);
+    // Stale values of cells that left the lists (the laser's deposit is
+    // cleared where it is made: the output reads the last step's deposit
+    // after the melt flow has moved the metal).
     std::fill(loss_weight.begin(), loss_weight.end(), 0.);
 
     // Rows of the box interior that hold metal (owned or ghost); rows of gas
@@ -626,6 +627,8 @@ namespace femp
       prm.laser_deposition == Parameters::Deposition::gradient;
     const double rho_g_c_g = mat.gas_density * mat.gas_specific_heat;
     double       e_laser   = 0;
+    // This step's deposit only: no cell keeps one of a step before.
+    std::fill(laser_density.begin(), laser_density.end(), 0.);
     // Loss weights w |grad alpha| at T^n; the losses themselves are taken
     // at the new temperature in advance() (pass C).
     for (const auto &s : surface)
