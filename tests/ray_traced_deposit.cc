@@ -142,7 +142,7 @@ main(int argc, char **argv)
     checks.at_most(name + ": |deposit read after a metal-fraction update / "
                           "deposit - 1|",
                    std::abs(kept / deposited - 1),
-                   0.);
+                   1e-14);
     return deposited / P;
   };
 
