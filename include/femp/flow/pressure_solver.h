@@ -200,7 +200,7 @@ namespace femp
     /// reciprocals of the owned rows' diagonal, the same arithmetic as
     /// Ifpack's one Jacobi sweep from zero with damping 1 (deal.II's
     /// PreconditionJacobi), without its per-matrix setup (an Ifpack
-    /// object, its maps, vectors and condition estimate, a dozen
+    /// object, its maps, vectors and condition estimate, several
     /// collectives at each change of the matrix values).
     struct JacobiPreconditioner
     {
