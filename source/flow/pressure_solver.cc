@@ -4,6 +4,7 @@
 // with the same operator (paper sec. 2.3, eq. 4; doc/flow.md). See
 // include/femp/flow/pressure_solver.h.
 #include <deal.II/base/mpi.h>
+#include <deal.II/lac/exceptions.h>
 #include <deal.II/lac/solver_cg.h>
 #include <deal.II/lac/solver_control.h>
 #include <deal.II/lac/trilinos_sparsity_pattern.h>
@@ -12,6 +13,7 @@
 #include <femp/base/parameter_table.h>
 #include <femp/flow/pressure_solver.h>
 
+#include <Epetra_CrsMatrix.h>
 #include <algorithm>
 #include <optional>
 #include <sstream>
@@ -118,39 +120,48 @@ namespace femp
   void
   PressureSolver<dim>::update_system(const FluidCells &cells)
   {
-    const MPI_Comm comm        = grid.communicator();
-    const bool     set_changed = fluid_set_changed(cells);
-    n_fluid_rows               = cells.fluid.size();
-    renumbered                 = !have_matrix;
-    if (set_changed && !renumbered)
+    const MPI_Comm comm = grid.communicator();
+    // What the ranks must agree on, in one collective (a sub-step's system
+    // costs little besides its collectives on a small fluid set): per rank
+    // its fluid cells, whether its fluid set changed and whether one of
+    // its fluid cells has no row (outside the band of the numbering). The
+    // counts give the sum and the busiest rank's share (layer_cost.csv
+    // weighs the balance of the flow).
+    const bool changed_here = fluid_set_changed(cells);
+    bool       outside_band = false;
+    if (have_matrix)
       for (const auto c : cells.fluid)
         if (gid[c] < 0)
           {
-            renumbered = true;
+            outside_band = true;
             break;
           }
-    renumbered = Utilities::MPI::logical_or(renumbered, comm);
+    const unsigned long        own[3] = {cells.fluid.size(),
+                                  changed_here ? 1ul : 0ul,
+                                  outside_band ? 1ul : 0ul};
+    std::vector<unsigned long> all(3 * Utilities::MPI::n_mpi_processes(comm));
+    const int                  ierr = MPI_Allgather(
+      own, 3, MPI_UNSIGNED_LONG, all.data(), 3, MPI_UNSIGNED_LONG, comm);
+    AssertThrowMPI(ierr);
+    bool set_changed = !have_matrix, any_outside = false;
+    stats.n_fluid_cells         = 0;
+    stats.n_fluid_cells_busiest = 0;
+    for (std::size_t r = 0; r < all.size(); r += 3)
+      {
+        stats.n_fluid_cells += all[r];
+        stats.n_fluid_cells_busiest =
+          std::max(stats.n_fluid_cells_busiest, all[r]);
+        set_changed = set_changed || all[r + 1] != 0;
+        any_outside = any_outside || all[r + 2] != 0;
+      }
+    n_fluid_rows = cells.fluid.size();
+    renumbered   = !have_matrix || (set_changed && any_outside);
     if (renumbered)
       number_band(cells);
     if (set_changed)
       set_band_values(cells);
     else
       set_diagonal(cells);
-    // The fluid cells of every rank (one plain collective, as cheap as the
-    // sum it replaces): their sum and the busiest rank's (layer_cost.csv
-    // weighs the balance of the flow).
-    const unsigned long        n_own = cells.fluid.size();
-    std::vector<unsigned long> n_rank(Utilities::MPI::n_mpi_processes(comm));
-    const int                  ierr = MPI_Allgather(
-      &n_own, 1, MPI_UNSIGNED_LONG, n_rank.data(), 1, MPI_UNSIGNED_LONG, comm);
-    AssertThrowMPI(ierr);
-    stats.n_fluid_cells         = 0;
-    stats.n_fluid_cells_busiest = 0;
-    for (const unsigned long n : n_rank)
-      {
-        stats.n_fluid_cells += n;
-        stats.n_fluid_cells_busiest = std::max(stats.n_fluid_cells_busiest, n);
-      }
     // A new hierarchy whenever the set of fluid cells changed. Keeping one
     // across set changes inside the band costs more than it saves: in the
     // 0.2 ms 3D track the stale hierarchy needs 50 CG iterations per solve
@@ -169,9 +180,11 @@ namespace femp
     new_hierarchy = !use_jacobi && (renumbered || set_changed || !amg_current);
     if (use_jacobi)
       {
-        // No hierarchy: the diagonal of the current values, at every
-        // change of the matrix (it costs a pass over the owned rows).
-        jacobi.initialize(matrix);
+        // No hierarchy: the reciprocals of the current diagonal, at every
+        // change of the matrix (a pass over the owned rows).
+        jacobi.inverse_diagonal.resize(diagonal.size());
+        for (std::size_t i = 0; i < diagonal.size(); ++i)
+          jacobi.inverse_diagonal[i] = 1. / diagonal[i];
         have_matrix = true;
         amg_current = false;
       }
@@ -181,7 +194,7 @@ namespace femp
 
   template <int dim>
   bool
-  PressureSolver<dim>::fluid_set_changed(const FluidCells &cells)
+  PressureSolver<dim>::fluid_set_changed(const FluidCells &cells) const
   {
     const auto &cs          = grid.strides();
     const auto &type        = cells.type;
@@ -204,7 +217,47 @@ namespace femp
     // Cells that stopped being fluid also change the system.
     if (!set_changed)
       set_changed = cells.fluid.size() != n_fluid_rows;
-    return Utilities::MPI::logical_or(set_changed, grid.communicator());
+    return set_changed;
+  }
+
+  // The rows of the band are owned: their values are written into the
+  // filled Epetra matrix in place and need no compress() (deal.II's
+  // compress() would gather off-rank entries, of which there are none,
+  // through new Epetra maps and an exporter: a handful of collectives at
+  // each change of the values).
+  namespace
+  {
+    Epetra_CrsMatrix &
+    owned_rows_of(TrilinosWrappers::SparseMatrix &matrix)
+    {
+      return const_cast<Epetra_CrsMatrix &>(matrix.trilinos_matrix());
+    }
+
+    void
+    replace_in_row(Epetra_CrsMatrix                        &A,
+                   const TrilinosWrappers::types::int_type  row,
+                   const int                                n,
+                   const double                            *values,
+                   const TrilinosWrappers::types::int_type *columns)
+    {
+      const int ierr =
+        A.Epetra_CrsMatrix::ReplaceGlobalValues(row, n, values, columns);
+      AssertThrow(ierr == 0, LACExceptions::ExcTrilinosError(ierr));
+    }
+  } // namespace
+
+  template <int dim>
+  void
+  PressureSolver<dim>::JacobiPreconditioner::vmult(
+    TrilinosWrappers::MPI::Vector       &dst,
+    const TrilinosWrappers::MPI::Vector &src) const
+  {
+    AssertDimension(std::size_t(dst.end() - dst.begin()),
+                    inverse_diagonal.size());
+    auto       *d = dst.begin();
+    const auto *s = src.begin();
+    for (std::size_t i = 0; i < inverse_diagonal.size(); ++i)
+      d[i] = inverse_diagonal[i] * s[i];
   }
 
   template <int dim>
@@ -272,15 +325,17 @@ namespace femp
     const auto &theta = cells.theta;
     const auto  row_offset =
       owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+    auto &A = owned_rows_of(matrix);
+    diagonal.resize(band.size());
     for (std::size_t i = 0; i < band.size(); ++i)
       {
-        const std::size_t       c   = band[i];
-        const auto              row = row_offset + i;
-        const bool              f   = type[c] == fluid;
-        types::global_dof_index cols[2 * dim + 1];
-        double                  vals[2 * dim + 1];
-        unsigned int            n    = 0;
-        double                  diag = f ? 0. : 1.;
+        const std::size_t                       c   = band[i];
+        const TrilinosWrappers::types::int_type row = row_offset + i;
+        const bool                              f   = type[c] == fluid;
+        TrilinosWrappers::types::int_type       cols[2 * dim + 1];
+        double                                  vals[2 * dim + 1];
+        unsigned int                            n    = 0;
+        double                                  diag = f ? 0. : 1.;
         for (int d = 0; d < dim; ++d)
           for (const int side : {0, 1})
             {
@@ -292,7 +347,7 @@ namespace femp
                 diag += 1. / theta[2 * d + side][c];
               if (gid[e] >= 0)
                 {
-                  cols[n] = types::global_dof_index(gid[e]);
+                  cols[n] = TrilinosWrappers::types::int_type(gid[e]);
                   vals[n] = (f && ef) ? -1. : 0.;
                   ++n;
                 }
@@ -300,9 +355,9 @@ namespace femp
         cols[n] = row;
         vals[n] = diag;
         ++n;
-        matrix.set(row, n, cols, vals);
+        replace_in_row(A, row, n, vals, cols);
+        diagonal[i] = diag;
       }
-    matrix.compress(VectorOperation::insert);
   }
 
   template <int dim>
@@ -314,6 +369,9 @@ namespace femp
     const auto &cs    = grid.strides();
     const auto &type  = cells.type;
     const auto &theta = cells.theta;
+    const auto  row_offset =
+      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+    auto &A = owned_rows_of(matrix);
     for (const auto c : cells.fluid)
       {
         double diag = 0;
@@ -326,10 +384,10 @@ namespace femp
               else if (t == gas)
                 diag += 1. / theta[2 * d + side][c];
             }
-        const auto row = types::global_dof_index(gid[c]);
-        matrix.set(row, row, diag);
+        const auto row = TrilinosWrappers::types::int_type(gid[c]);
+        replace_in_row(A, row, 1, &diag, &row);
+        diagonal[row - row_offset] = diag;
       }
-    matrix.compress(VectorOperation::insert);
   }
 
   // ML keeps a reference to the matrix it was set up with: it gets its
@@ -378,6 +436,11 @@ namespace femp
     const auto  &fluid_cells = cells.fluid;
     const double f           = -rho * h * h / dt;
     rhs                      = 0; // identity rows of the band: p = 0
+    // Written in place: the rows are owned (no compress(), see
+    // owned_rows_of()).
+    const auto row_offset =
+      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+    auto *b_own = rhs.begin();
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
         double b = f * divergence[i];
@@ -389,9 +452,8 @@ namespace femp
                 if (type[side ? c + cs[d] : c - cs[d]] == gas)
                   b += p_surface[c] / theta[2 * d + side][c];
           }
-        rhs(types::global_dof_index(gid[fluid_cells[i]])) = b;
+        b_own[types::global_dof_index(gid[fluid_cells[i]]) - row_offset] = b;
       }
-    rhs.compress(VectorOperation::insert);
     // Warm start from the previous pressure (same numbering).
     if (renumbered)
       solution = 0;
@@ -479,9 +541,13 @@ namespace femp
     if (stats.n_fluid_cells == 0)
       return true;
     rhs = 0;
+    // Written in place, as in solve_pressure().
+    const auto row_offset =
+      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
+    auto *b_own = rhs.begin();
     for (std::size_t i = 0; i < cells.fluid.size(); ++i)
-      rhs(types::global_dof_index(gid[cells.fluid[i]])) = source[i];
-    rhs.compress(VectorOperation::insert);
+      b_own[types::global_dof_index(gid[cells.fluid[i]]) - row_offset] =
+        source[i];
     const double norm = rhs.l2_norm();
     if (norm > 0)
       {

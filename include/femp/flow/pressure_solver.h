@@ -160,9 +160,10 @@ namespace femp
 
   private:
     /// Whether the fluid set or the type of a neighbour changed since the
-    /// last system (collective).
+    /// last system on this rank (not collective: update_system() gathers
+    /// the ranks' answers together with their fluid cell counts).
     bool
-    fluid_set_changed(const FluidCells &cells);
+    fluid_set_changed(const FluidCells &cells) const;
     /// New band numbering, matrix graph and vectors.
     void
     number_band(const FluidCells &cells);
@@ -195,10 +196,26 @@ namespace femp
     TrilinosWrappers::SparseMatrix    matrix;
     TrilinosWrappers::SparseMatrix    amg_matrix; // ML's copy at its setup
     TrilinosWrappers::PreconditionAMG amg;
+    /// Point Jacobi: dst = src / diag, the product with the stored
+    /// reciprocals of the owned rows' diagonal, the same arithmetic as
+    /// Ifpack's one Jacobi sweep from zero with damping 1 (deal.II's
+    /// PreconditionJacobi), without its per-matrix setup (an Ifpack
+    /// object, its maps, vectors and condition estimate, several
+    /// collectives at each change of the matrix values).
+    struct JacobiPreconditioner
+    {
+      std::vector<double> inverse_diagonal; ///< per owned row, row order
+      void
+      vmult(TrilinosWrappers::MPI::Vector       &dst,
+            const TrilinosWrappers::MPI::Vector &src) const;
+    };
     /// The band of the current system is preconditioned by Jacobi (no
     /// setup) instead of the AMG hierarchy (Parameters::preconditioner).
-    bool                                 use_jacobi = false;
-    TrilinosWrappers::PreconditionJacobi jacobi;
+    bool                 use_jacobi = false;
+    JacobiPreconditioner jacobi;
+    /// The diagonal of each owned band row as last written to the matrix
+    /// (row order), for the Jacobi preconditioner.
+    std::vector<double> diagonal;
     /// A Jacobi solve needed more than the limit (auto: AMG from then on).
     bool jacobi_too_slow = false;
     /// The AMG hierarchy was set up on the current band and fluid set.
