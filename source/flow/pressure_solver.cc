@@ -181,10 +181,14 @@ namespace femp
     if (use_jacobi)
       {
         // No hierarchy: the reciprocals of the current diagonal, at every
-        // change of the matrix (a pass over the owned rows).
+        // change of the matrix (a pass over the owned rows). A zero
+        // diagonal (a fluid cell closed in by solid: an empty row) gets 0,
+        // as in Ifpack's point relaxation: the row is left out of the
+        // preconditioner instead of making it infinite.
         jacobi.inverse_diagonal.resize(diagonal.size());
         for (std::size_t i = 0; i < diagonal.size(); ++i)
-          jacobi.inverse_diagonal[i] = 1. / diagonal[i];
+          jacobi.inverse_diagonal[i] =
+            diagonal[i] != 0. ? 1. / diagonal[i] : 0.;
         have_matrix = true;
         amg_current = false;
       }
