@@ -231,10 +231,20 @@ namespace femp
   // each change of the values).
   namespace
   {
+    // deal.II 9.4 hands out the Epetra matrix as const only; the values
+    // of its filled rows may still be replaced.
     Epetra_CrsMatrix &
     owned_rows_of(TrilinosWrappers::SparseMatrix &matrix)
     {
       return const_cast<Epetra_CrsMatrix &>(matrix.trilinos_matrix());
+    }
+
+    // The first global row this rank owns (0 where it owns none): the
+    // offset of the band's local row order.
+    IndexSet::size_type
+    first_row(const IndexSet &owned_rows)
+    {
+      return owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
     }
 
     void
@@ -324,12 +334,11 @@ namespace femp
     // All values of the band rows: -1 between fluid cells, 0 for the
     // other stored neighbours, identity rows outside the fluid.
     Section     s(timer, "flow: pressure matrix values");
-    const auto &cs    = grid.strides();
-    const auto &type  = cells.type;
-    const auto &theta = cells.theta;
-    const auto  row_offset =
-      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
-    auto &A = owned_rows_of(matrix);
+    const auto &cs         = grid.strides();
+    const auto &type       = cells.type;
+    const auto &theta      = cells.theta;
+    const auto  row_offset = first_row(owned_rows);
+    auto       &A          = owned_rows_of(matrix);
     diagonal.resize(band.size());
     for (std::size_t i = 0; i < band.size(); ++i)
       {
@@ -370,12 +379,11 @@ namespace femp
   {
     // Diagonal only: the free-surface faces contribute 1/theta
     // (Dirichlet value at the interface, ghost-fluid method).
-    const auto &cs    = grid.strides();
-    const auto &type  = cells.type;
-    const auto &theta = cells.theta;
-    const auto  row_offset =
-      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
-    auto &A = owned_rows_of(matrix);
+    const auto &cs         = grid.strides();
+    const auto &type       = cells.type;
+    const auto &theta      = cells.theta;
+    const auto  row_offset = first_row(owned_rows);
+    auto       &A          = owned_rows_of(matrix);
     for (const auto c : cells.fluid)
       {
         double diag = 0;
@@ -442,9 +450,8 @@ namespace femp
     rhs                      = 0; // identity rows of the band: p = 0
     // Written in place: the rows are owned (no compress(), see
     // owned_rows_of()).
-    const auto row_offset =
-      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
-    auto *b_own = rhs.begin();
+    const auto row_offset = first_row(owned_rows);
+    auto      *b_own      = rhs.begin();
     for (std::size_t i = 0; i < fluid_cells.size(); ++i)
       {
         double b = f * divergence[i];
@@ -546,9 +553,8 @@ namespace femp
       return true;
     rhs = 0;
     // Written in place, as in solve_pressure().
-    const auto row_offset =
-      owned_rows.n_elements() > 0 ? *owned_rows.begin() : 0;
-    auto *b_own = rhs.begin();
+    const auto row_offset = first_row(owned_rows);
+    auto      *b_own      = rhs.begin();
     for (std::size_t i = 0; i < cells.fluid.size(); ++i)
       b_own[types::global_dof_index(gid[cells.fluid[i]]) - row_offset] =
         source[i];
