@@ -595,7 +595,7 @@ namespace femp
   {
     // Sub-cell occupancy (doc/method.md, "Heat transfer") everywhere, and, when
     // some point is fluid, the volume of the points in the cells that hold a
-    // fluid point (see the header; doc/flow.md, "Volume-based alpha").
+    // fluid point (see the header; doc/flow.md, "One fluid step").
     if (!prm.carry_points)
       return lattice_fraction();
     using P                       = PropertyIndex;
@@ -785,13 +785,17 @@ namespace femp
     std::vector<double> &alpha) const
   {
     // v: point volume per cell (owned cells), made a fraction of the cell
-    // volume; is_fluid: 1 in cells holding a fluid point. Excess volume
-    // (v > 1) of a fluid cell goes to its fluid face neighbours, first to
-    // fill their deficits (1 - v, in proportion), the rest in equal shares
-    // (they pass it on at the next sweep), until no fluid cell is over-full
-    // or max_sweeps is reached; each sweep conserves sum v exactly. The
+    // volume; is_fluid: 1 in cells holding a fluid point or one whose peak
+    // passed the solidus. Excess volume (v > 1) of a fluid cell goes to its
+    // fluid face neighbours, first to fill their deficits (1 - v, in
+    // proportion), the rest in equal shares (they pass it on at the next
+    // sweep), until no fluid cell is over-full by more than 1e-12 or
+    // max_sweeps is reached; each sweep conserves sum v exactly. The
     // amounts depend only on the cell and its neighbours' values, so 1 and
-    // n ranks give the same alpha.
+    // n ranks give the same alpha. The sweeps diffuse the excess: where a
+    // re-solidified track holds much of it they end at max_sweeps with
+    // alpha still changing, and no exact test ends them earlier
+    // (doc/studies/2026-12-07-alpha-pass.md).
     constexpr unsigned int     max_sweeps = 32;
     const double               inv_V      = 1. / std::pow(grid.h(), dim);
     const auto                &cells      = grid.owned_cells();

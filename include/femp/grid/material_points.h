@@ -350,7 +350,7 @@ namespace femp
     /// with the excess of over-full cells (points bunched by the flow) passed
     /// on to fluid face neighbours that are not full, then min(1, .): the metal
     /// volume of the melt is kept as the points keep it, where occupancy
-    /// lost it when points bunched (doc/flow.md, "Volume-based alpha").
+    /// lost it when points bunched (doc/flow.md, "One fluid step").
     /// On the point lattice with spacing h/n both rules give the same alpha.
     /// Without carried points: the occupancy the substrate's lattice points
     /// would give, from the lattice alone (lattice_fraction()).
