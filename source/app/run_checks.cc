@@ -9,6 +9,7 @@
 #include <femp/base/input_checks.h>
 #include <femp/base/parameter_file.h>
 #include <femp/base/parameter_lookup.h>
+#include <femp/builds/recoater.h>
 #include <femp/heat/laser.h>
 #include <femp/io/output.h>
 #include <femp/io/output_lock.h>
@@ -278,6 +279,24 @@ namespace femp
 
     const std::string path_file =
       parameter_text(prm, "Laser", "Scan path file");
+    // Layers from the scan path need its heights: the line of 'Start
+    // point' to 'End point' and the femp format lie at height 0.
+    if (parameter_choice(prm,
+                         "Build",
+                         "Layer schedule",
+                         layer_source_names()) == LayerSource::scan_path)
+      require(!path_file.empty() &&
+                parameter_choice(prm,
+                                 "Laser",
+                                 "Scan path format",
+                                 scan_path_format_choices()) !=
+                  ScanPathFormat::femp,
+              "Build/Layer schedule",
+              "scan path",
+              "it needs 'Laser/Scan path file' in a format with heights "
+              "(adamantine_segment, adamantine_event_series, additivefoam); "
+              "the femp format and the line of 'Laser/Start point' lie at one "
+              "height (one layer: 'none'; more: 'times')");
     if (path_file.empty())
       {
         const auto a = dealii::Utilities::split_string_list(

@@ -145,7 +145,10 @@ namespace femp
         // The first layer: the height of the first segment with the laser
         // on (moves before it place the beam). A later layer starts with
         // the first segment that ends higher than the layer before (the
-        // jump up to it).
+        // jump up to it). A path at one height is one layer (no layer
+        // after the first). A segment with the laser on that ends below
+        // the layer in progress belongs to no layer of a schedule that
+        // only rises: refused.
         auto seg = segments.begin();
         while (seg != segments.end() && seg->power <= 0)
           ++seg;
@@ -160,11 +163,17 @@ namespace femp
                               s.end[dim - 1] - z});
               z = s.end[dim - 1];
             }
-        require(!list.empty(),
-                "Build/Layer schedule",
-                choice_name(prm.source, layer_source_names()),
-                "the scan path's segments all lie at one height: there is "
-                "no second layer (use a format with heights, or 'none')");
+          else if (s.power > 0 && s.end[dim - 1] < z - 1e-9)
+            require(false,
+                    "Build/Layer schedule",
+                    choice_name(prm.source, layer_source_names()),
+                    "the scan path goes down: its segment from t = " +
+                      num(s.t_begin) + " s to " + num(s.t_end) +
+                      " s, with the laser on, ends at the height " +
+                      num(s.end[dim - 1]) + " m, below the height " + num(z) +
+                      " m of layer " + std::to_string(list.size() + 1) +
+                      " (Laser/Scan path file: with the laser on, the path "
+                      "must not go below the layer in progress)");
       }
     // The last layer's powder must leave two cells of gas below the top.
     if (!list.empty())

@@ -6,8 +6,10 @@
 // Schedule ('Build' subsection): from the scan path (each rise of the
 // segments' height, heat/scan_path.h, starts a layer at the beginning of
 // that segment: the jump to the new layer; a dwell with the laser off before
-// it cools the last layer) or from listed start times and one layer
-// thickness. Layer k's powder reaches the height
+// it cools the last layer; a path at one height is one layer; a segment with
+// the laser on that ends below the layer in progress is refused) or from
+// listed start times and one layer thickness. Layer k's powder reaches the
+// height
 //   top_k = substrate top + first powder layer + (z_k - z_1)
 // (z_k: its height in the scan path; with listed times z_k - z_1 = (k - 1)
 // x thickness).
@@ -122,7 +124,8 @@ namespace femp
     /// first layer's powder ends at @p first_top (substrate top + powder
     /// layer thickness). Throws InputError when a layer does not fit below
     /// the domain's top @p domain_top less two cells of @p cell_size (the
-    /// free surface needs gas above it) or the times are not increasing.
+    /// free surface needs gas above it), the times are not increasing or
+    /// the scan path goes down with the laser on.
     LayerSchedule(const Parameters                                &prm,
                   const std::vector<typename Laser<dim>::Segment> &segments,
                   const double                                     first_top,
