@@ -30,6 +30,19 @@ namespace femp
     {
       return layer.start_time >= t && layer.start_time < t + dt;
     }
+
+    /// @p a less @p b member by member: the fluid cells of a window, from
+    /// two sums of IncompressibleFlow::FluidLoad.
+    template <typename Load>
+    Load
+    load_difference(const Load &a, const Load &b)
+    {
+      Load d;
+      d.all     = a.all - b.all;
+      d.busiest = a.busiest - b.busiest;
+      d.own     = a.own - b.own;
+      return d;
+    }
   } // namespace
 
   template <int dim>
@@ -540,9 +553,7 @@ namespace femp
         cost_step -= static_cast<unsigned int>(carried->steps);
         cost_solid_step -= static_cast<unsigned int>(carried->solid_steps);
         cost_flow_step -= carried->flow_steps;
-        cost_fluid.all -= carried->fluid.all;
-        cost_fluid.busiest -= carried->fluid.busiest;
-        cost_fluid.own -= carried->fluid.own;
+        cost_fluid   = load_difference(cost_fluid, carried->fluid);
         cost_carried = carried->parts;
         if (carried->rebalance_wall > 0)
           cost_carried["wall_rebalance"] += carried->rebalance_wall;
@@ -568,14 +579,11 @@ namespace femp
     c.wall    = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                            cost_clock)
                .count();
-    c.steps         = step - cost_step;
-    c.solid_steps   = solid ? solid->n_steps() - cost_solid_step : 0;
-    c.flow_steps    = flow_substeps() - cost_flow_step;
-    const auto f    = fluid_load();
-    c.fluid.all     = f.all - cost_fluid.all;
-    c.fluid.busiest = f.busiest - cost_fluid.busiest;
-    c.fluid.own     = f.own - cost_fluid.own;
-    c.parts         = cost_carried;
+    c.steps       = step - cost_step;
+    c.solid_steps = solid ? solid->n_steps() - cost_solid_step : 0;
+    c.flow_steps  = flow_substeps() - cost_flow_step;
+    c.fluid       = load_difference(fluid_load(), cost_fluid);
+    c.parts       = cost_carried;
     for (const auto &[col, w] : cost_parts(timer))
       {
         const auto   it = cost_sections.find(col);
@@ -658,14 +666,12 @@ namespace femp
     // every rank).
     const MPI_Comm comm = grid_ptr->communicator();
     // The flow's balance: fluid cells (global) and this rank's own.
-    const auto f  = fluid_load();
-    r.fluid_cells = f.all - cost_fluid.all;
+    const auto f  = load_difference(fluid_load(), cost_fluid);
+    r.fluid_cells = f.all;
     if (r.fluid_cells > 0)
       {
-        r.fluid_share_max =
-          Utilities::MPI::max(f.own - cost_fluid.own, comm) / r.fluid_cells;
-        r.fluid_step_share_max =
-          (f.busiest - cost_fluid.busiest) / r.fluid_cells;
+        r.fluid_share_max = Utilities::MPI::max(f.own, comm) / r.fluid_cells;
+        r.fluid_step_share_max = f.busiest / r.fluid_cells;
       }
     r.max_wall = Utilities::MPI::max(r.wall, comm);
     for (const auto &parts : Utilities::MPI::all_gather(comm, r.parts))
