@@ -795,7 +795,7 @@ namespace femp
     // n ranks give the same alpha. The sweeps diffuse the excess: where a
     // re-solidified track holds much of it they end at max_sweeps with
     // alpha still changing, and no exact test ends them earlier
-    // (doc/studies/2026-12-07-alpha-pass.md).
+    // (doc/flow.md, "One fluid step").
     constexpr unsigned int     max_sweeps = 32;
     const double               inv_V      = 1. / std::pow(grid.h(), dim);
     const auto                &cells      = grid.owned_cells();
