@@ -97,7 +97,13 @@ width: what sets each finished run's fusion width (its last field
   on the axis there, the melt's surface flow across the track, and the
   widest fusion width read on the top substrate row of cells (h/2 below
   the surface) and at the original surface (the temperature extrapolated
-  from the two top rows, as femp's melt_pool.csv reads it).
+  from the two top rows, as femp's melt_pool.csv reads it); 'near96':
+  melt_pool.csv's fusion width read again (a numpy copy of femp's
+  isotherm box) on the cells from 96 um behind the beam on only, at each
+  field output in the last 40 % of the path, median (the number of
+  outputs in brackets): the pool near the beam, without the tail that
+  melt driven back along the track may keep wide at the measured
+  region's start. The reported width stays melt_pool.csv's median.
 conduction: the Eagar-Tsai (pure conduction) fusion width and depth of
   the Trapp conduction tracks with the measured absorptivity and constant
   properties (averaged over 293 K..T_s, and at T_s), and the width h/2
@@ -1265,12 +1271,145 @@ def fusion_width_rows(T, A, kt, h, Ts):
     return dict(width_top_row=float(w_top), width_surface=float(w_surf))
 
 
+def _neighbour(a, axis, side, fill):
+    """a at the face neighbour on @p side (-1, +1) along @p axis; @p fill
+    beyond the domain."""
+    import numpy as np
+    b = np.roll(a, -side, axis=axis)
+    idx = [slice(None)] * a.ndim
+    idx[axis] = -1 if side > 0 else 0
+    b[tuple(idx)] = fill
+    return b
+
+
+def _grow(seed, may, axes):
+    """seed grown through the cells where may holds, face neighbours along
+    @p axes."""
+    cur = seed & may
+    while True:
+        nxt = cur.copy()
+        for ax in axes:
+            for side in (-1, 1):
+                nxt |= _neighbour(cur, ax, side, False)
+        nxt &= may
+        if (nxt == cur).all():
+            return cur
+        cur = nxt
+
+
+def isotherm_y_extent(T, A, h, T_iso, z_top, x_min=-math.inf):
+    """The y-extent (lo, hi) of femp's isotherm box (measure_melt_pool in
+    source/heat/melt_pool.cc) on the cells of one field output, T and
+    metal fraction A indexed [x, y, z]: the metal cells with centre below
+    z_top at or above T_iso connected to colder metal, their crossings
+    interpolated towards colder metal (the cell face towards gas), and the
+    crossings at the surface, T extrapolated from the top counted cell and
+    the one below to the surface height; the cells with centre x < x_min
+    are gas. With z_top the substrate top and T_iso = T_s it is
+    melt_pool.csv's width_solidus_substrate. None: no pool."""
+    import numpy as np
+    n = T.shape
+    xc, zc = (np.arange(n[0]) + 0.5) * h, (np.arange(n[2]) + 0.5) * h
+    y = ((np.arange(n[1]) + 0.5) * h)[None, :, None]
+    metal = np.where((xc >= x_min)[:, None, None] & np.isfinite(T), A, 0.0)
+    Tf = np.where(np.isfinite(T), T, 0.0)
+    below = (zc < z_top)[None, None, :]
+    melt = (metal > 0) & (Tf >= T_iso) & below
+    cold = (metal > 0) & (Tf < T_iso)
+    seed = np.zeros(n, bool)
+    for ax in range(3):
+        for side in (-1, 1):
+            seed |= _neighbour(cold, ax, side, False)
+    seed &= melt
+    if seed.any():
+        pool = _grow(seed, melt, range(3))
+    elif not cold.any():
+        pool = melt
+    else:
+        return None
+    if not pool.any():
+        return None
+    lo, hi = math.inf, -math.inf
+    for side in (-1, 1):
+        Tn = _neighbour(Tf, 1, side, 0.0)
+        mn = _neighbour(metal, 1, side, -1.0)       # -1: beyond the domain
+        x = np.broadcast_to(y, n).copy()
+        cross = (mn > 0) & (Tn < T_iso)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(cross, x + side * h * (Tf - T_iso) / (Tf - Tn), x)
+        x = np.where(mn <= 0, x + side * 0.5 * h, x)
+        lo, hi = min(lo, x[pool].min()), max(hi, x[pool].max())
+    counted = (metal > 0) & below
+    top = counted & ~_neighbour(counted, 2, 1, False)
+    zs = np.minimum(z_top, zc[None, None, :] + h * (np.minimum(metal, 1.0) - 0.5))
+    dz = np.clip(zs - zc[None, None, :], -0.5 * h, 0.5 * h)
+    has_below = _neighbour(counted, 2, -1, False)
+    Ts = Tf + np.where(has_below, dz / h * (Tf - _neighbour(Tf, 2, -1, 0.0)), 0.0)
+    Ts = np.where(top, Ts, -1.0)
+    hot = Ts >= T_iso
+    surf = _grow(pool & hot, hot, (0, 1))
+    for side in (-1, 1):
+        Tn = _neighbour(Ts, 1, side, -1.0)
+        mn = _neighbour(metal, 1, side, -1.0)
+        x = np.broadcast_to(y, n).copy()
+        cross = (Tn >= 0) & (Tn < T_iso)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(cross, x + side * h * (Ts - T_iso) / (Ts - Tn), x)
+        x = np.where(~cross & (Tn < 0) & (mn <= 0), x + side * 0.5 * h, x)
+        if surf.any():
+            lo, hi = min(lo, x[surf].min()), max(hi, x[surf].max())
+    return lo, hi
+
+
+def near_beam_width(run_dir, alloy, behind=96e-6):
+    """The fusion width near the beam: melt_pool.csv's reading
+    (width_solidus_substrate, isotherm_y_extent()) of each field output in
+    the last 40 % of the laser's path with only the cells from x_beam -
+    @p behind on (and from 'Output/Melt pool from x' on), x_beam = the
+    start point + scan speed x time; beside it the same reading over the
+    whole measured region, which melt_pool.csv's row of that time gives.
+    Returns [(time, near, measured region)] and the median of near."""
+    import numpy as np
+    run = femp_post.Run(os.path.join(run_dir, "output"))
+    scene = open(os.path.join(run_dir, "scene.prm")).read()
+    log = open(os.path.join(run_dir, "log.txt")).read()
+    m = re.search(r"background grid: [0-9]+ cells of ([0-9.e+-]+) m", log)
+    h = float(m.group(1)) if m else scene_value(scene, "Cell size")[0]
+    ztop = scene_value(scene, "Substrate top")[0]
+    x0, xe = scene_value(scene, "Start point")[0], scene_value(scene, "End point")[0]
+    v = scene_value(scene, "Scan speed")[0]
+    t_end = scene_value(scene, "End time")[0]
+    x_from = (scene_value(scene, "Melt pool from x") or [-math.inf])[0]
+    Ts = material(alloy)["Ts"]
+    if xe < x0:
+        raise ValueError("the near-beam reading takes tracks along +x")
+    rows = []
+    for n_out, t in run.outputs():
+        if t < 0.6 * t_end:
+            continue
+        g = run.grid(n_out)
+        c = np.asarray(g.centres)
+        ijk = np.floor(c / h).astype(int)
+        T = np.full(ijk.max(axis=0) + 1, np.nan)
+        A = np.zeros(T.shape)
+        T[tuple(ijk.T)] = g["T"]
+        A[tuple(ijk.T)] = g["alpha"]
+        xb = min(x0 + v * t, xe)
+        w = []
+        for xm in (max(x_from, xb - behind), x_from):
+            b = isotherm_y_extent(T, A, h, Ts, ztop, xm)
+            w.append(b[1] - b[0] if b else 0.0)
+        rows.append((t, w[0], w[1]))
+    med = float(np.median([r[1] for r in rows])) if rows else None
+    return rows, med
+
+
 def cmd_width(args):
     """The width diagnostics of every finished run under --out."""
     allc = {c["name"]: c for c in cases()}
-    print("%-9s %-12s %8s %8s %10s %10s %12s %12s %10s %10s" % (
+    print("%-9s %-12s %8s %8s %10s %10s %12s %12s %10s %10s %10s" % (
         "setting", "case", "width", "measured", "behind(um)", "T_axis(K)",
-        "u_surface", "u_rim", "end:row", "end:surf"))
+        "u_surface", "u_rim", "end:row", "end:surf", "near96"))
     for (setting, name), r in sorted(load_results(args.out).items()):
         if not re.search(args.cases or ".", name) or r.get("incomplete"):
             continue
@@ -1281,11 +1420,17 @@ def cmd_width(args):
             print(setting, name, "no field output:", ex)
             continue
         f = lambda v: ("%+.2f" % v) if v is not None else "-"
-        print("%-9s %-12s %8.1f %8.1f %10.1f %10.0f %12s %12s %10.1f %10.1f" % (
+        try:
+            rows, near = near_beam_width(os.path.join(args.out, setting, name),
+                                         allc[name]["alloy"])
+        except ValueError:
+            rows, near = [], None
+        print("%-9s %-12s %8.1f %8.1f %10.1f %10.0f %12s %12s %10.1f %10.1f %10s" % (
             setting, name, r["width"] * 1e6, allc[name]["width"] * 1e6,
             w["x_behind_beam"] * 1e6, w["T_axis_top"],
             f(w["flow_across_surface"]), f(w["flow_across_rim"]),
-            w["width_top_row"] * 1e6, w["width_surface"] * 1e6))
+            w["width_top_row"] * 1e6, w["width_surface"] * 1e6,
+            ("%.1f (%d)" % (near * 1e6, len(rows))) if near is not None else "-"))
 
 
 def femp_cmd(args, exe, sets, scene):
