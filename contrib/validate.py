@@ -1170,6 +1170,29 @@ def end_state(run_dir, alloy):
     return r
 
 
+def cell_size(scene, log):
+    """The background grid's cell size: femp's log line, else the scene's
+    'Cell size'."""
+    m = re.search(r"background grid: [0-9]+ cells of ([0-9.e+-]+) m", log)
+    return float(m.group(1)) if m else scene_value(scene, "Cell size")[0]
+
+
+def cell_arrays(g, h, names):
+    """The cell fields @p names of one field output @p g on the structured
+    grid of cell size @p h, as arrays indexed [x, y, z]: T is NaN and the
+    other fields 0 where the output holds no cell."""
+    import numpy as np
+    ijk = np.floor(np.asarray(g.centres) / h).astype(int)
+    n = ijk.max(axis=0) + 1
+    out = []
+    for name in names:
+        a = np.full(n, np.nan) if name == "T" else np.zeros(n)
+        if name in g:
+            a[tuple(ijk.T)] = g[name]
+        out.append(a)
+    return out
+
+
 def width_state(run_dir, alloy):
     """What sets the fusion zone's width, from the last field output of a
     run: the cross-section (y-z plane of cells; from 'Output/Melt pool from
@@ -1185,22 +1208,12 @@ def width_state(run_dir, alloy):
     import numpy as np
     g = femp_post.Run(os.path.join(run_dir, "output")).grid()
     scene = open(os.path.join(run_dir, "scene.prm")).read()
-    log = open(os.path.join(run_dir, "log.txt")).read()
-    m = re.search(r"background grid: [0-9]+ cells of ([0-9.e+-]+) m", log)
-    h = float(m.group(1)) if m else scene_value(scene, "Cell size")[0]
+    h = cell_size(scene, open(os.path.join(run_dir, "log.txt")).read())
     ztop = scene_value(scene, "Substrate top")[0]
     xb, yc, _ = scene_value(scene, "End point")
     Ts = material(alloy)["Ts"]
-    c = np.asarray(g.centres)
-    ijk = np.floor(c / h).astype(int)
-    n = ijk.max(axis=0) + 1
-    T = np.full(n, np.nan)
-    A = np.zeros(n)
-    U = np.zeros(n)
-    T[tuple(ijk.T)] = g["T"]
-    A[tuple(ijk.T)] = g["alpha"]
-    if "u_y" in g:
-        U[tuple(ijk.T)] = g["u_y"]
+    T, A, U = cell_arrays(g, h, ("T", "alpha", "u_y"))
+    n = T.shape
     kt = int(round(ztop / h)) - 1            # top substrate row
     y = (np.arange(n[1]) + 0.5) * h
     jc = int(np.argmin(abs(y - yc)))
@@ -1372,9 +1385,7 @@ def near_beam_width(run_dir, alloy, behind=96e-6):
     import numpy as np
     run = femp_post.Run(os.path.join(run_dir, "output"))
     scene = open(os.path.join(run_dir, "scene.prm")).read()
-    log = open(os.path.join(run_dir, "log.txt")).read()
-    m = re.search(r"background grid: [0-9]+ cells of ([0-9.e+-]+) m", log)
-    h = float(m.group(1)) if m else scene_value(scene, "Cell size")[0]
+    h = cell_size(scene, open(os.path.join(run_dir, "log.txt")).read())
     ztop = scene_value(scene, "Substrate top")[0]
     x0, xe = scene_value(scene, "Start point")[0], scene_value(scene, "End point")[0]
     v = scene_value(scene, "Scan speed")[0]
@@ -1387,13 +1398,7 @@ def near_beam_width(run_dir, alloy, behind=96e-6):
     for n_out, t in run.outputs():
         if t < 0.6 * t_end:
             continue
-        g = run.grid(n_out)
-        c = np.asarray(g.centres)
-        ijk = np.floor(c / h).astype(int)
-        T = np.full(ijk.max(axis=0) + 1, np.nan)
-        A = np.zeros(T.shape)
-        T[tuple(ijk.T)] = g["T"]
-        A[tuple(ijk.T)] = g["alpha"]
+        T, A = cell_arrays(run.grid(n_out), h, ("T", "alpha"))
         xb = min(x0 + v * t, xe)
         w = []
         for xm in (max(x_from, xb - behind), x_from):
