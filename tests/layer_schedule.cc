@@ -13,11 +13,24 @@
 //      move);
 //   4. path 2 then a track, laser on, back down to z = 100 um: refused,
 //      the message naming 'Build/Layer schedule', the segment's times and
-//      heights and the layer it falls below (printed).
+//      heights and the layer it falls below (printed);
+//   5. path 2, a move, laser off, down to z = 100 um, then a track, laser
+//      on, from there up to z = 140 um: refused (it starts below layer 2,
+//      the layer in progress when it starts);
+//   6. layer 1 then the jump up with the laser on and the track of layer 2:
+//      two layers, layer 2 starting at the jump's start (a jump up starts
+//      at the height of the layer it leaves);
+//   7. layer 1, a move, laser off, down to z = 60 um, then the jump up with
+//      the laser on: refused (it starts below layer 1, the layer it leaves);
+//   8. an AdditiveFOAM path (the beam starts at the origin) whose first
+//      segment is a track, laser on, from z = 0 up to z = 100 um, then a
+//      track at that height: one layer (the first segment with the laser on
+//      begins layer 1, its start is not read).
 #include <femp/base/input_checks.h>
 #include <femp/builds/recoater.h>
 #include <femp/heat/scan_path.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -31,14 +44,20 @@ namespace
 {
   constexpr int dim = 3;
 
-  /// Write an adamantine_segment file @p name with the segment @p lines
-  /// ('mode x y z power_factor parameter').
+  /// Write a scan path file @p name with the segment @p lines ('mode x y z
+  /// power parameter'; the power a factor in adamantine_segment, in W in
+  /// AdditiveFOAM) and the header of @p format.
   void
-  write_path(const std::string &name, const std::vector<std::string> &lines)
+  write_path(const std::string              &name,
+             const std::vector<std::string> &lines,
+             const ScanPathFormat            format)
   {
     std::ofstream f(name);
-    f << "Number of path segments\n"
-      << lines.size() << "\nMode x y z pmod param\n";
+    if (format == ScanPathFormat::adamantine_segment)
+      f << "Number of path segments\n"
+        << lines.size() << "\nMode x y z pmod param\n";
+    else
+      f << "Mode X(m) Y(m) Z(m) Power(W) Parameter\n";
     for (const auto &l : lines)
       f << l << '\n';
   }
@@ -73,11 +92,31 @@ main(int argc, char **argv)
   prm.source = LayerSource::scan_path;
 
   const auto schedule_of = [&](const std::string              &name,
-                               const std::vector<std::string> &lines) {
-    write_path(name, lines);
-    const auto segments =
-      read_scan_path<dim>(name, ScanPathFormat::adamantine_segment, 200., 0.);
+                               const std::vector<std::string> &lines,
+                               const ScanPathFormat            format =
+                                 ScanPathFormat::adamantine_segment) {
+    write_path(name, lines, format);
+    const auto segments = read_scan_path<dim>(name, format, 200., 0.);
     return LayerSchedule<dim>(prm, segments, first_top, domain_top, h);
+  };
+  // The message of a path refused for going down ("" if accepted), printed.
+  const auto refusal = [&](const std::string              &what,
+                           const std::vector<std::string> &lines) {
+    try
+      {
+        std::string file = what + ".txt";
+        std::replace(file.begin(), file.end(), ' ', '_');
+        schedule_of(file, lines);
+      }
+    catch (const InputError &e)
+      {
+        std::cout << what << ": " << e.what() << std::endl;
+        return std::string(e.what());
+      }
+    return std::string();
+  };
+  const auto has = [](const std::string &message, const char *part) {
+    return message.find(part) != std::string::npos;
   };
   const auto print_layers = [&](const std::string        &what,
                                 const LayerSchedule<dim> &s) {
@@ -142,6 +181,58 @@ main(int argc, char **argv)
                   std::strstr(e.what(), "goes down");
       }
     checks.at_most("down: refused (0 = yes)", refused ? 0 : 1, 0);
+  }
+  // 5. A move down with the laser off, then a track with the laser on from
+  //    there back up to layer 2's height: refused, naming its start.
+  {
+    const std::string m =
+      refusal("starts below",
+              join(join(layer_1, layer_2),
+                   {"0 0 0 100e-6 0 5", "0 200e-6 0 140e-6 1 1"}));
+    checks.at_most("starts below: refused at its start below layer 2 (0 = yes)",
+                   has(m, "Build/Layer schedule") && has(m, "goes down") &&
+                       has(m, "starts at the height 0.0001 m") &&
+                       has(m, "below the height 0.00014 m of layer 2") ?
+                     0 :
+                     1,
+                   0);
+  }
+  // 6. The jump up with the laser on: two layers.
+  {
+    const auto s =
+      schedule_of("jump_on.txt",
+                  join(layer_1, {"0 0 0 140e-6 1 5", "0 200e-6 0 140e-6 1 1"}));
+    print_layers("jump on", s);
+    checks.in_range("jump on: layers after the first", s.layers().size(), 1, 1);
+    if (s.layers().size() == 1)
+      checks.in_range("jump on: start (us)",
+                      s.layers()[0].start_time * 1e6,
+                      260 - 1e-6,
+                      260 + 1e-6);
+  }
+  // 7. The jump up with the laser on from below the layer it leaves.
+  {
+    const std::string m =
+      refusal("jump from below",
+              join(layer_1, {"0 0 0 60e-6 0 5", "0 200e-6 0 140e-6 1 1"}));
+    checks.at_most(
+      "jump from below: refused at its start below layer 1 (0 = yes)",
+      has(m, "goes down") && has(m, "starts at the height 6e-05 m") &&
+          has(m, "below the height 0.0001 m of layer 1") ?
+        0 :
+        1,
+      0);
+  }
+  // 8. AdditiveFOAM: the first track starts at the origin, z = 0.
+  {
+    const auto s =
+      schedule_of("origin.txt",
+                  {"0 200e-6 0 100e-6 200 1", "0 0 0 100e-6 200 1"},
+                  ScanPathFormat::additivefoam);
+    print_layers("from the origin", s);
+    checks.at_most("from the origin: layers after the first",
+                   s.layers().size(),
+                   0);
   }
   return checks.exit_code();
 }

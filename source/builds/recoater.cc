@@ -146,34 +146,50 @@ namespace femp
         // on (moves before it place the beam). A later layer starts with
         // the first segment that ends higher than the layer before (the
         // jump up to it). A path at one height is one layer (no layer
-        // after the first). A segment with the laser on that ends below
-        // the layer in progress belongs to no layer of a schedule that
-        // only rises: refused.
+        // after the first). The layer in progress when a segment starts is
+        // the last layer begun before that segment: a jump up is scanned
+        // from the layer it leaves. A segment with the laser on that starts
+        // or ends below the layer in progress scans below it, where no
+        // layer of a schedule that only rises is: refused. The first
+        // segment with the laser on begins layer 1 and only its end is
+        // read (no layer is in progress before it; an AdditiveFOAM path
+        // starts at the origin).
         auto seg = segments.begin();
         while (seg != segments.end() && seg->power <= 0)
           ++seg;
-        const double z1 = seg != segments.end() ? seg->end[dim - 1] : 0.;
-        double       z  = z1;
-        for (; seg != segments.end(); ++seg)
-          if (const auto &s = *seg; s.end[dim - 1] > z + 1e-9)
-            {
-              list.push_back({static_cast<unsigned int>(list.size() + 2),
-                              s.t_begin,
-                              first_top + (s.end[dim - 1] - z1),
-                              s.end[dim - 1] - z});
-              z = s.end[dim - 1];
-            }
-          else if (s.power > 0 && s.end[dim - 1] < z - 1e-9)
-            require(false,
-                    "Build/Layer schedule",
-                    choice_name(prm.source, layer_source_names()),
-                    "the scan path goes down: its segment from t = " +
-                      num(s.t_begin) + " s to " + num(s.t_end) +
-                      " s, with the laser on, ends at the height " +
-                      num(s.end[dim - 1]) + " m, below the height " + num(z) +
-                      " m of layer " + std::to_string(list.size() + 1) +
-                      " (Laser/Scan path file: with the laser on, the path "
+        const auto   first_on = seg;
+        const double z1       = seg != segments.end() ? seg->end[dim - 1] : 0.;
+        double       z        = z1;
+        const auto   refuse_below = [&](const typename Laser<dim>::Segment &s,
+                                      const std::string                  &which,
+                                      const double height) {
+          require(false,
+                  "Build/Layer schedule",
+                  choice_name(prm.source, layer_source_names()),
+                  "the scan path goes down: its segment from t = " +
+                    num(s.t_begin) + " s to " + num(s.t_end) +
+                    " s, with the laser on, " + which + " at the height " +
+                    num(height) + " m, below the height " + num(z) +
+                    " m of layer " + std::to_string(list.size() + 1) +
+                    " (Laser/Scan path file: with the laser on, the path "
                       "must not go below the layer in progress)");
+        };
+        for (; seg != segments.end(); ++seg)
+          {
+            const auto &s = *seg;
+            if (s.power > 0 && seg != first_on && s.start[dim - 1] < z - 1e-9)
+              refuse_below(s, "starts", s.start[dim - 1]);
+            if (s.end[dim - 1] > z + 1e-9)
+              {
+                list.push_back({static_cast<unsigned int>(list.size() + 2),
+                                s.t_begin,
+                                first_top + (s.end[dim - 1] - z1),
+                                s.end[dim - 1] - z});
+                z = s.end[dim - 1];
+              }
+            else if (s.power > 0 && s.end[dim - 1] < z - 1e-9)
+              refuse_below(s, "ends", s.end[dim - 1]);
+          }
       }
     // The last layer's powder must leave two cells of gas below the top.
     if (!list.empty())

@@ -7,7 +7,8 @@
 // segments' height, heat/scan_path.h, starts a layer at the beginning of
 // that segment: the jump to the new layer; a dwell with the laser off before
 // it cools the last layer; a path at one height is one layer; a segment with
-// the laser on that ends below the layer in progress is refused) or from
+// the laser on that starts or ends below the layer in progress, the last
+// layer begun before it, is refused) or from
 // listed start times and one layer thickness. Layer k's powder reaches the
 // height
 //   top_k = substrate top + first powder layer + (z_k - z_1)
