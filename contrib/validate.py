@@ -1310,21 +1310,36 @@ def _grow(seed, may, axes):
         cur = nxt
 
 
-def isotherm_y_extent(T, A, h, T_iso, z_top, x_min=-math.inf):
+def isotherm_y_extent(T, A, h, T_iso, z_top, x_min=-math.inf, why=None,
+                      detached=False):
     """The y-extent (lo, hi) of femp's isotherm box (measure_melt_pool in
     source/heat/melt_pool.cc) on the cells of one field output, T and
     metal fraction A indexed [x, y, z]: the metal cells with centre below
     z_top at or above T_iso connected to colder metal, their crossings
     interpolated towards colder metal (the cell face towards gas), and the
     crossings at the surface, T extrapolated from the top counted cell and
-    the one below to the surface height; the cells with centre x < x_min
-    are gas. With z_top the substrate top and T_iso = T_s it is
-    melt_pool.csv's width_solidus_substrate. None: no pool."""
+    the one below to the surface height; the metal not face-connected to
+    the domain's bottom row (detached drops: femp counts only the
+    workpiece, attached_metal_cells in source/grid/metal_bodies.cc) and the
+    cells with centre x < x_min are gas. With z_top the substrate top and
+    T_iso = T_s it is melt_pool.csv's width_solidus_substrate. None: no
+    pool. @p why, a
+    dict, receives the branches of the box that set lo and hi ('lo', 'hi':
+    sets of the pass, 'interior' or 'surface', and the crossing: 'cross'
+    interpolated towards colder metal, 'gas' the face towards gas,
+    'boundary' the domain's face, 'centre' the cell centre; every branch
+    that reaches the extreme). @p detached: count the detached metal as
+    femp does not (tests/isotherm_y_extent.py checks that its scene has
+    some that would change the box)."""
     import numpy as np
     n = T.shape
     xc, zc = (np.arange(n[0]) + 0.5) * h, (np.arange(n[2]) + 0.5) * h
     y = ((np.arange(n[1]) + 0.5) * h)[None, :, None]
-    metal = np.where((xc >= x_min)[:, None, None] & np.isfinite(T), A, 0.0)
+    A = np.where(np.isfinite(T), A, 0.0)
+    bottom = np.zeros(n, bool)
+    bottom[:, :, 0] = True
+    workpiece = (A > 0) if detached else _grow(bottom, A > 0, range(3))
+    metal = np.where((xc >= x_min)[:, None, None] & workpiece, A, 0.0)
     Tf = np.where(np.isfinite(T), T, 0.0)
     below = (zc < z_top)[None, None, :]
     melt = (metal > 0) & (Tf >= T_iso) & below
@@ -1342,7 +1357,21 @@ def isotherm_y_extent(T, A, h, T_iso, z_top, x_min=-math.inf):
         return None
     if not pool.any():
         return None
-    lo, hi = math.inf, -math.inf
+    ext = {"lo": (math.inf, set()), "hi": (-math.inf, set())}
+
+    def extend(x, kind, cells):
+        """Widen lo and hi to the extreme x over @p cells; kind: the
+        branch of each cell's crossing (the branches of every cell at the
+        extreme are kept)."""
+        xs, ks = x[cells], kind[cells]
+        for end, v in (("lo", xs.min()), ("hi", xs.max())):
+            at = set(ks[xs == v].tolist())
+            if v == ext[end][0]:
+                ext[end][1].update(at)
+            elif (v < ext[end][0]) == (end == "lo"):
+                ext[end] = (v, at)
+
+    names = np.array(["centre", "cross", "gas", "boundary"])
     for side in (-1, 1):
         Tn = _neighbour(Tf, 1, side, 0.0)
         mn = _neighbour(metal, 1, side, -1.0)       # -1: beyond the domain
@@ -1351,7 +1380,9 @@ def isotherm_y_extent(T, A, h, T_iso, z_top, x_min=-math.inf):
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(cross, x + side * h * (Tf - T_iso) / (Tf - Tn), x)
         x = np.where(mn <= 0, x + side * 0.5 * h, x)
-        lo, hi = min(lo, x[pool].min()), max(hi, x[pool].max())
+        kind = names[np.where(cross, 1, np.where(mn < 0, 3,
+                                                 np.where(mn <= 0, 2, 0)))]
+        extend(x, np.char.add("interior ", kind), pool)
     counted = (metal > 0) & below
     top = counted & ~_neighbour(counted, 2, 1, False)
     zs = np.minimum(z_top, zc[None, None, :] + h * (np.minimum(metal, 1.0) - 0.5))
@@ -1368,10 +1399,15 @@ def isotherm_y_extent(T, A, h, T_iso, z_top, x_min=-math.inf):
         cross = (Tn >= 0) & (Tn < T_iso)
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(cross, x + side * h * (Ts - T_iso) / (Ts - Tn), x)
-        x = np.where(~cross & (Tn < 0) & (mn <= 0), x + side * 0.5 * h, x)
+        face = ~cross & (Tn < 0) & (mn <= 0)
+        x = np.where(face, x + side * 0.5 * h, x)
+        kind = names[np.where(cross, 1, np.where(face & (mn < 0), 3,
+                                                 np.where(face, 2, 0)))]
         if surf.any():
-            lo, hi = min(lo, x[surf].min()), max(hi, x[surf].max())
-    return lo, hi
+            extend(x, np.char.add("surface ", kind), surf)
+    if why is not None:
+        why.update(lo=ext["lo"][1], hi=ext["hi"][1])
+    return float(ext["lo"][0]), float(ext["hi"][0])
 
 
 def near_beam_width(run_dir, alloy, behind=96e-6):
