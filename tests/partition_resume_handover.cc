@@ -59,9 +59,14 @@ main(int argc, char **argv)
       // The zone of the scene: the plate's two lowest rows; the hand-over
       // raises it to 52 um (a margin of 32 um below the new layer's top
       // less the fusion depth) and leaves the plate's top rows as points.
+      // The powder top's line alone ('Hand-over surface limit = false'):
+      // the surface line would hold the zone at 32 um, the margin below
+      // the plate's top (the metal surface under the first layer's porous
+      // bead), and the test reads the partition of a zone at 52 um.
       const std::vector<Override> zone = {
         {"Solid FEM", "Zone upper corner", "200e-6, 8e-6"},
-        {"Build", "Hand-over margin", "3.2e-5"}};
+        {"Build", "Hand-over margin", "3.2e-5"},
+        {"Build", "Hand-over surface limit", "false"}};
       auto with = [&](std::vector<Override> o) {
         o.insert(o.end(), zone.begin(), zone.end());
         return o;

@@ -112,10 +112,12 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string           scene  = argv[1];
+      const std::string scene = argv[1];
+      // The powder top's line alone, as in partition_resume_handover.
       const std::vector<Override> common = {
         {"Solid FEM", "Zone upper corner", "200e-6, 8e-6"},
         {"Build", "Hand-over margin", "3.2e-5"},
+        {"Build", "Hand-over surface limit", "false"},
         {"Time stepping", "End time", "1.7e-4"}};
       auto with = [&](std::vector<Override> o) {
         o.insert(o.end(), common.begin(), common.end());

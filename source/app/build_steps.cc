@@ -79,8 +79,8 @@ namespace femp
         scene.handover,
         grid,
         scene.material.solidus,
-        scene.points.substrate_top +
-          std::max(0., scene.points.layer_thickness));
+        scene.points.substrate_top + std::max(0., scene.points.layer_thickness),
+        scene.points.substrate_top);
     // Tracks and layers: tracks.csv, layers.csv, probe lines per track.
     std::vector<double> starts;
     if (schedule)
@@ -259,6 +259,11 @@ namespace femp
           << (layer_start ? "before" : "so far") << " melted down to "
           << handover->last_lowest_molten() << " m), rows up to "
           << handover->limit() << " m";
+    if (scene.handover.surface_limit)
+      pcout << " and, per column, up to the lowest metal surface near it "
+               "less the penetration depth "
+            << handover->kept_penetration() << " m and the margin (down to "
+            << handover->surface_limit() << " m)";
     if (!handover->stop_reason().empty())
       pcout << " (" << handover->stop_reason() << ")";
     if (scene.handover.rule == FeZoneHandover<dim>::Parameters::Rule::reheating)

@@ -116,7 +116,25 @@ namespace femp
               Patterns::Double(),
               "With 'Hand over cooled metal': the handed cells stay this "
               "far below the new layer's powder top less the deepest "
-              "fusion depth of the layers so far, m; range [0, inf).");
+              "fusion depth of the layers so far and, with 'Hand-over "
+              "surface limit', below the lowest metal surface near their "
+              "column less the penetration depth, m; range [0, inf).");
+    table.add(
+      "Hand-over surface limit",
+      surface_limit,
+      "With 'Hand over cooled metal': the handed cells also stay the "
+      "penetration depth plus 'Hand-over margin' below the lowest metal "
+      "surface within 'Hand-over surface window' of their column, the "
+      "penetration depth being the deepest that a finished layer's melt "
+      "reached below the metal surface it met (doc/builds.md, \"Handing "
+      "cooled metal to finite elements\"). False: the powder top's line "
+      "alone.");
+    table.add("Hand-over surface window",
+              surface_window,
+              Patterns::Double(),
+              "With 'Hand-over surface limit': a column's metal surface is "
+              "the lowest of the columns whose centres lie within this "
+              "horizontal distance of its centre, m; range [0, inf).");
     table.leave_subsection();
   }
 
@@ -173,6 +191,10 @@ namespace femp
             "Build/Hand-over margin",
             margin,
             "it must be a length in [0, inf) m");
+    require(std::isfinite(surface_window) && surface_window >= 0,
+            "Build/Hand-over surface window",
+            surface_window,
+            "it must be a length in [0, inf) m");
     const std::string name = "Build/Hand over cooled metal";
     require(heat,
             name,
@@ -200,7 +222,8 @@ namespace femp
   FeZoneHandover<dim>::FeZoneHandover(const Parameters          &prm,
                                       const BackgroundGrid<dim> &grid,
                                       const double               solidus,
-                                      const double               first_top)
+                                      const double               first_top,
+                                      const double               first_surface)
       : prm(prm)
       , grid(grid)
       , solidus(solidus)
@@ -209,7 +232,102 @@ namespace femp
                                                           std::vector<double>())
       , rise(grid.n_cells()[dim - 1], 0.)
       , envelope(grid.n_cells()[dim - 1], 0.)
+      , col_lowest(n_columns(), std::numeric_limits<double>::infinity())
   {
+    if (std::isfinite(first_surface))
+      start_surface.assign(n_columns(), first_surface);
+  }
+
+  template <int dim>
+  std::size_t
+  FeZoneHandover<dim>::n_columns() const
+  {
+    std::size_t n = 1;
+    for (int d = 0; d < dim - 1; ++d)
+      n *= grid.n_cells()[d];
+    return n;
+  }
+
+  template <int dim>
+  std::vector<double>
+  FeZoneHandover<dim>::find_surface(const MaterialPoints<dim>       &points,
+                                    const std::vector<std::uint8_t> &zone,
+                                    const std::vector<double>       &alpha,
+                                    const std::vector<double>       &pore) const
+  {
+    // The cells holding a powder point (local box).
+    using P = typename MaterialPoints<dim>::PropertyIndex;
+    std::vector<std::uint8_t> powder(grid.n_local(), 0);
+    const auto               &cells = points.occupied_cells();
+    for (std::size_t c = 0; c < cells.size(); ++c)
+      for (const double *v : points.cell_point_properties(c))
+        if (v[P::state] == MaterialPoints<dim>::powder)
+          {
+            powder[cells[c].first] = 1;
+            break;
+          }
+    // Per column the row above its highest metal cell (0: none).
+    std::vector<int> above(n_columns(), 0);
+    grid.for_each_owned_cell([&](const std::size_t idx, const auto &ijk) {
+      const bool metal = zone[idx] || (!pore.empty() && pore[idx] > 0) ||
+                         (alpha[idx] >= 0.5 && !powder[idx]);
+      if (metal)
+        {
+          int &a = above[column(ijk)];
+          a      = std::max(a, int(ijk[dim - 1]) + 1);
+        }
+    });
+    MPI_Allreduce(MPI_IN_PLACE,
+                  above.data(),
+                  int(above.size()),
+                  MPI_INT,
+                  MPI_MAX,
+                  grid.communicator());
+    const double        z0 = grid.origin()[dim - 1], h = grid.h();
+    std::vector<double> s(above.size());
+    for (std::size_t c = 0; c < above.size(); ++c)
+      s[c] = z0 + above[c] * h;
+    // The lowest within the window: a box of w cells each side, one
+    // horizontal direction after the other.
+    const int w = int(std::floor(prm.surface_window / h + 1e-9));
+    if (w == 0)
+      return s;
+    std::size_t stride = 1;
+    for (int d = 0; d < dim - 1; ++d)
+      {
+        const int           n = int(grid.n_cells()[d]);
+        std::vector<double> t(s);
+        for (std::size_t c = 0; c < s.size(); ++c)
+          {
+            const int i = int((c / stride) % n);
+            for (int j = std::max(0, i - w); j <= std::min(n - 1, i + w); ++j)
+              t[c] = std::min(t[c],
+                              s[std::size_t(long(c) + (j - i) * long(stride))]);
+          }
+        s = t;
+        stride *= n;
+      }
+    return s;
+  }
+
+  template <int dim>
+  double
+  FeZoneHandover<dim>::layer_penetration() const
+  {
+    std::vector<double> low(col_lowest);
+    MPI_Allreduce(MPI_IN_PLACE,
+                  low.data(),
+                  int(low.size()),
+                  MPI_DOUBLE,
+                  MPI_MIN,
+                  grid.communicator());
+    double p = -std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < low.size(); ++c)
+      if (std::isfinite(low[c]))
+        p = std::max(p,
+                     (start_surface.empty() ? layer_top : start_surface[c]) -
+                       low[c]);
+    return p;
   }
 
   template <int dim>
@@ -235,8 +353,12 @@ namespace femp
       const double z = z0 + ijk[dim - 1] * h;
       if (alpha[idx] < 0.5)
         return;
-      if (z < lowest && T[idx] >= solidus)
-        lowest = z;
+      if (T[idx] >= solidus)
+        {
+          lowest      = std::min(lowest, z);
+          double &low = col_lowest[column(ijk)];
+          low         = std::min(low, z);
+        }
       if (!track_rise)
         return;
       const double below = (layer_top - z) / h - 0.5;
@@ -262,6 +384,11 @@ namespace femp
     if (std::isfinite(low))
       depth = std::max(depth, layer_top - low);
     lowest = std::numeric_limits<double>::infinity();
+    // Its penetration below the metal surface it met.
+    penetration = std::max(penetration, layer_penetration());
+    std::fill(col_lowest.begin(),
+              col_lowest.end(),
+              std::numeric_limits<double>::infinity());
     // Its rises per depth join the envelope; the new layer's start anew.
     MPI_Allreduce(MPI_IN_PLACE,
                   rise.data(),
@@ -282,6 +409,10 @@ namespace femp
     start_pending = true;
     layer_top     = new_top;
     used_depth    = depth;
+    // The metal surface the new layer meets.
+    start_surface    = find_surface(points, zone, alpha, pore);
+    surface          = start_surface;
+    used_penetration = penetration;
     return choose(
       new_top - depth - prm.margin, points, zone, top_lift, alpha, pore);
   }
@@ -299,6 +430,8 @@ namespace femp
     const double low = Utilities::MPI::min(lowest, grid.communicator());
     closed_lowest    = low;
     used_depth = std::isfinite(low) ? std::max(depth, layer_top - low) : depth;
+    used_penetration = std::max(penetration, layer_penetration());
+    surface          = find_surface(points, zone, alpha, pore);
     return choose(
       layer_top - used_depth - prm.margin, points, zone, top_lift, alpha, pore);
   }
@@ -334,7 +467,8 @@ namespace femp
     row_mass.clear();
     row_points.clear();
     chosen.clear();
-    chosen_mass = 0;
+    chosen_mass         = 0;
+    least_surface_limit = std::numeric_limits<double>::infinity();
     const int last_row =
       std::min<int>(int(std::floor((last_limit - z0) / h + 1e-9)),
                     int(grid.n_cells()[dim - 1]));
@@ -343,6 +477,29 @@ namespace femp
     using P = typename MaterialPoints<dim>::PropertyIndex;
     if (hi[dim - 1] < 0)
       return current_top;
+    // The surface's line per column (S_w - P - margin) and the row it
+    // allows: a cell of row j lies below it when j < surface_row.
+    const bool use_surface = prm.surface_limit && !surface.empty();
+    auto       surface_row = [&](const std::array<int, dim> &c) {
+      return int(std::floor(
+        (surface[column(c)] - used_penetration - prm.margin - z0) / h + 1e-9));
+    };
+    if (use_surface)
+      for (std::size_t col = 0; col < surface.size(); ++col)
+        {
+          bool        inside = true;
+          std::size_t rest   = col;
+          for (int d = 0; d < dim - 1; ++d)
+            {
+              const int i = int(rest % grid.n_cells()[d]);
+              rest /= grid.n_cells()[d];
+              inside = inside && i >= lo[d] && i <= hi[d];
+            }
+          if (inside)
+            least_surface_limit =
+              std::min(least_surface_limit,
+                       surface[col] - used_penetration - prm.margin);
+        }
     // The cells outside the zone at or above the limit line inside the
     // zone's horizontal extent that hold points: their cells and points
     // (over the ranks). @p in_zone tells the zone's cells.
@@ -637,7 +794,8 @@ namespace femp
       return std::make_pair(least_alpha, near_pore);
     };
     // Per candidate cell (outside the zone): bit 1 not dense, 8 kept for a
-    // pore (a pore cell, or a cell next to one that is not dense). Per row
+    // pore (a pore cell, or a cell next to one that is not dense), 16 at
+    // or above its column's surface line. Per row
     // from the zone's top, for the log: the cells not dense, their count,
     // the least fill and their horizontal extent (cell indices).
     std::vector<double> n_bad(n_rows, 0.),
@@ -656,6 +814,7 @@ namespace femp
       if (zone_cell(c))
         return;
       const long   k            = cand_box.index(c);
+      const bool   over         = use_surface && c[dim - 1] >= surface_row(c);
       const double f            = fill[k] / hat_volume(c);
       const auto [a, near_pore] = neighbourhood(c);
       const bool pore_cell      = !pore.empty() && pore[idx] > 0;
@@ -666,9 +825,13 @@ namespace femp
         cell_flags[k] |= 1;
       if (for_pore)
         cell_flags[k] |= 8;
+      if (over)
+        cell_flags[k] |= 16;
       const int r = ijk[dim - 1] - first_row;
       if (r < 0)
         return;
+      if (over)
+        flags[r] |= 16;
       row_fill[r] = std::min(row_fill[r], f);
       if (for_pore)
         flags[r] |= 8;
@@ -697,15 +860,19 @@ namespace femp
     MPI_Allreduce(
       MPI_IN_PLACE, cell_hot.data(), int(n_fill), MPI_DOUBLE, MPI_MAX, comm);
     // The rows' flags of all ranks: one maximum per bit.
-    std::vector<int> bits(4 * n_rows);
+    constexpr int    n_bits = 5;
+    std::vector<int> bits(n_bits * n_rows);
     for (int r = 0; r < n_rows; ++r)
-      for (int b = 0; b < 4; ++b)
-        bits[4 * r + b] = (flags[r] >> b) & 1;
+      for (int b = 0; b < n_bits; ++b)
+        bits[n_bits * r + b] = (flags[r] >> b) & 1;
     MPI_Allreduce(
-      MPI_IN_PLACE, bits.data(), 4 * n_rows, MPI_INT, MPI_MAX, comm);
+      MPI_IN_PLACE, bits.data(), n_bits * n_rows, MPI_INT, MPI_MAX, comm);
     for (int r = 0; r < n_rows; ++r)
-      flags[r] = bits[4 * r] | (bits[4 * r + 1] << 1) | (bits[4 * r + 2] << 2) |
-                 (bits[4 * r + 3] << 3);
+      {
+        flags[r] = 0;
+        for (int b = 0; b < n_bits; ++b)
+          flags[r] |= bits[n_bits * r + b] << b;
+      }
     MPI_Allreduce(
       MPI_IN_PLACE, hottest.data(), n_rows, MPI_DOUBLE, MPI_MAX, comm);
     // The re-heating rule: a cell's predicted peak in the new layer is its
@@ -811,11 +978,12 @@ namespace femp
         if (taken[k] || cell_points[k] == 0 || zone_cell(cell_of(k)))
           continue;
         const int  f   = cell_flags[k];
-        const Kept why = f & 2 ? powder :
-                         f & 8 ? Kept::pore :
-                         f & 1 ? not_dense :
-                         f & 4 ? too_hot :
-                                 not_connected;
+        const Kept why = f & 16 ? above_limit :
+                         f & 2  ? powder :
+                         f & 8  ? Kept::pore :
+                         f & 1  ? not_dense :
+                         f & 4  ? too_hot :
+                                  not_connected;
         kept_n_cells[why] += 1;
         kept_n_points[why] += cell_points[k];
         if (why == too_hot)
@@ -854,6 +1022,12 @@ namespace femp
             if (reheat)
               s << " (a predicted peak up to " << predicted[r] << " K)";
           }
+        if (flags[r] & 16)
+          s << (flags[r] & 15 ? ", " : "")
+            << "cells above the metal surface's line (down to "
+            << least_surface_limit << " m: the lowest metal surface near "
+            << "them less the penetration depth " << used_penetration
+            << " m and the margin)";
         reason = s.str();
       }
     return z0 + top_row * h;
@@ -887,6 +1061,18 @@ namespace femp
     for (const auto &h : history)
       out.put_vector(h);
     out.put<std::uint8_t>(start_pending);
+    // The penetration depth, the layer's lowest molten cell per column of
+    // all ranks and the surface it met.
+    out.put(penetration);
+    std::vector<double> low(col_lowest);
+    MPI_Allreduce(MPI_IN_PLACE,
+                  low.data(),
+                  int(low.size()),
+                  MPI_DOUBLE,
+                  MPI_MIN,
+                  grid.communicator());
+    out.put_vector(low);
+    out.put_vector(start_surface);
   }
 
   template <int dim>
@@ -933,7 +1119,16 @@ namespace femp
         std::vector<std::vector<double>> hist(in.get<std::uint64_t>());
         for (auto &h : hist)
           h = in.get_vector<double>();
-        const bool pending = in.get<std::uint8_t>();
+        const bool   pending = in.get<std::uint8_t>();
+        const double pen     = in.get<double>();
+        const auto   low_col = in.get_vector<double>();
+        const auto   start   = in.get_vector<double>();
+        AssertThrow(low_col.size() == col_lowest.size() &&
+                      (start.empty() || start.size() == col_lowest.size()),
+                    ExcMessage("checkpoint: the hand-over's metal surface "
+                               "does not match the grid's columns"));
+        if (f == 0)
+          penetration = pen, col_lowest = low_col, start_surface = start;
         AssertThrow(r.size() == rise.size() && e.size() == envelope.size(),
                     ExcMessage("checkpoint: the hand-over's rises per depth "
                                "do not match the grid's rows"));

@@ -12,6 +12,25 @@
 //     the grid line at or below top_n - D - margin (top_n: the new
 //     powder's top), so that the new layer's melt, as deep as the deepest
 //     so far, stays a margin above them;
+//   - and, with 'Hand-over surface limit' (the default), a cell of column
+//     c may reach up to the grid line at or below S_w(c) - P - margin:
+//     S(c) the column's metal surface, the top of its highest cell of
+//     metal (a zone cell, an open cell of a pore, or alpha >= 1/2 with no
+//     powder point: a cell of powder, or of metal with a powder grain in
+//     it, is no metal); counted from the top down, gas and powder
+//     enclosed below the surface (a lack-of-fusion void that the pore
+//     detector does not close) do not lower it; S_w(c)
+//     the lowest S over the columns whose centres lie within 'Hand-over
+//     surface window' of c's (the same array on every rank: a reduction
+//     over the ranks); P the penetration depth, the deepest that a
+//     finished layer's melt reached below the surface it met: the largest
+//     over the columns of S_w(c) at the layer's start less the bottom of
+//     the column's lowest molten cell in the layer (the first layer's
+//     surface: the substrate top; where a layer's surface is unknown, its
+//     fusion depth counts). The melt of a powder layer sinks onto the
+//     metal below it, which a ragged bead leaves deeper than top_n - D in
+//     some columns; the second line keeps the cells there under the
+//     powder as points;
 //   - a cell inside the zone's horizontal extent, below that line and
 //     outside the zone is a candidate when it is dense, its points are
 //     all solid (no powder, no fluid) and it is cool enough by the
@@ -151,6 +170,14 @@ namespace femp
       /// 'Hand-over margin', m: the rows stay this far below the deepest
       /// melt expected of the new layer; range [0, inf).
       double margin = 1e-5;
+      /// 'Hand-over surface limit': the cells stay P + margin below the
+      /// lowest metal surface near their column as well (see the file's
+      /// comment).
+      bool surface_limit = true;
+      /// 'Hand-over surface window', m: the horizontal distance from a
+      /// column's centre within which the lowest metal surface counts;
+      /// range [0, inf).
+      double surface_window = 2e-5;
       /// 'Hand-over checks per layer': the choices per layer, the first at
       /// its start, the others equally spaced over its window
       /// (choose_in_layer()); range [1, 100].
@@ -198,11 +225,15 @@ namespace femp
             const bool   layers) const;
     };
 
-    /// @p first_top: the first layer's powder top, m.
-    FeZoneHandover(const Parameters          &prm,
-                   const BackgroundGrid<dim> &grid,
-                   const double               solidus,
-                   const double               first_top);
+    /// @p first_top: the first layer's powder top, m; @p first_surface:
+    /// the metal surface under it (the substrate top), m (NaN: unknown, the
+    /// first layer's penetration is its fusion depth).
+    FeZoneHandover(
+      const Parameters          &prm,
+      const BackgroundGrid<dim> &grid,
+      const double               solidus,
+      const double               first_top,
+      const double first_surface = std::numeric_limits<double>::quiet_NaN());
 
     /// After a temperature step: the lowest molten metal of the layer
     /// (cells of the local box owned by this rank; local) and, per depth
@@ -250,6 +281,30 @@ namespace femp
     kept_depth() const
     {
       return used_depth;
+    }
+
+    /// The penetration depth the last choice kept clear below the metal
+    /// surface, m (P at a layer start; within a layer the larger of P and
+    /// the layer's own so far).
+    double
+    kept_penetration() const
+    {
+      return used_penetration;
+    }
+    /// The metal surface per column of the grid at the last choice, the
+    /// lowest within the window (S_w; m; columns lexicographic, x
+    /// fastest; the same on every rank).
+    const std::vector<double> &
+    metal_surface() const
+    {
+      return surface;
+    }
+    /// The lowest S_w(c) - P - margin over the zone's columns at the last
+    /// choice, m (+inf: no zone or the surface limit off).
+    double
+    surface_limit() const
+    {
+      return least_surface_limit;
     }
 
     /// The largest temperature rise per depth below the top over the
@@ -311,7 +366,8 @@ namespace femp
     {
       return closed_lowest;
     }
-    /// The limit of the last choice, top_n - D - margin, m.
+    /// The limit of the last choice, top_n - D - margin, m (the surface
+    /// limit below it per column: surface_limit()).
     double
     limit() const
     {
@@ -452,6 +508,38 @@ namespace femp
     double kept_prediction   = -std::numeric_limits<double>::infinity();
     double handed_prediction = -std::numeric_limits<double>::infinity();
     double depth = 0, current_top = 0, last_limit = 0, used_depth = 0;
+    /// Per column of the grid: the bottom of the lowest molten cell of the
+    /// layer (local), m; the windowed metal surface at the layer's start
+    /// (all ranks; empty: unknown) and at the last choice, m.
+    std::vector<double> col_lowest, start_surface, surface;
+    /// The penetration depth P of the finished layers and the one the
+    /// last choice used, m; the lowest surface line of the last choice.
+    double penetration = 0, used_penetration = 0,
+           least_surface_limit = std::numeric_limits<double>::infinity();
+    /// The number of columns of the grid and a cell's column.
+    std::size_t
+    n_columns() const;
+    template <typename Index>
+    std::size_t
+    column(const Index &ijk) const
+    {
+      std::size_t c = 0;
+      for (int d = dim - 2; d >= 0; --d)
+        c = c * grid.n_cells()[d] + std::size_t(ijk[d]);
+      return c;
+    }
+    /// The windowed metal surface S_w per column (see the file's comment).
+    /// Collective.
+    std::vector<double>
+    find_surface(const MaterialPoints<dim>       &points,
+                 const std::vector<std::uint8_t> &zone,
+                 const std::vector<double>       &alpha,
+                 const std::vector<double>       &pore) const;
+    /// The largest S_w at the layer's start less the lowest molten cell's
+    /// bottom over the columns of the layer so far (over the ranks; -inf:
+    /// none melted). Collective.
+    double
+    layer_penetration() const;
     /// The choice below the line @p limit (m) of choose_top() and
     /// choose_in_layer().
     double
