@@ -56,7 +56,9 @@ run: runs the scenes matching REGEX (default: the AM-Bench tracks, the
   their recoil: Melt flow/Front wall expulsion = true); 'surfactant'
   (316L only: dsigma/dT from the surfactant model with the sulphur
   activity from Pichler et al.'s slope, Melt flow/Surface tension model =
-  surfactant) and 'linear' (the constant dsigma/dT); 'a+b'
+  surfactant) and 'linear' (the constant dsigma/dT); 'kulr19' (the KU
+  Leuven tracks, kul_*, with their 37.5 um spot read as the 1/e^2
+  diameter, r_b 18.75 um, instead of the radius); 'a+b'
   combines them (e.g. 'h4+fine'). Any other setting name with --set
   overrides runs the scenes with those femp parameters (e.g. --setting
   cell --set 'Melt flow/Recoil temperature=cell').
@@ -205,6 +207,15 @@ MARGIN_START = 80e-6   # plate before the track's start, m
 MARGIN_END = 160e-6    # plate after the track's end, m
 COMPACT_START = 40e-6  # the compact domain's plate before the track, m
 COMPACT_END = 80e-6    # the compact domain's plate after the track, m
+# A run has reached its end when its last time is within this fraction of
+# the path's end: the scene writes the end time with 6 significant digits
+# (fmt()), up to 5e-6 of it below the path's Ltr / v.
+END_RTOL = 1e-5
+# Beam radius of the KU Leuven tracks (Coen et al. 2022), m: the data do
+# not give the spot; a related paper of the group gives 37.5 um, taken as
+# the 1/e^2 radius (D4sigma 75 um). The other reading (a 37.5 um 1/e^2
+# diameter) is run by --setting kulr19 (KUL_SETTINGS).
+KUL_RB = 37.5e-6
 
 
 # ---------------------------------------------------------------- data
@@ -278,6 +289,21 @@ def cases():
             label="%g W" % P,
             note="Trapp et al. 2017, %g W, 500 mm/s, 60 um 1/e^2 diameter, "
                  "0.5 mm disc" % P))
+    for r in read_table("kuleuven_316l_tracks.csv"):
+        # Secondary data set (trends only): the spot size is not in the
+        # data; 37.5 um, which a related paper of the group gives, is taken
+        # as the 1/e^2 radius (D4sigma 75 um). The plate is taken bare and
+        # at room temperature, as in the other track scenes.
+        P, v = num(r["power_W"]), num(r["speed_mm_s"])
+        out.append(dict(
+            name="kul_%03dW_%04d" % (round(P), round(v)),
+            dataset="KU Leuven 2022", alloy="316L", P=P, v=v * 1e-3,
+            rb=KUL_RB, T0=293.15,
+            width=num(r["width_um"]) * 1e-6, width_sd=None,
+            depth=num(r["depth_um"]) * 1e-6, depth_sd=None,
+            regime=r["regime"], label="%g W, %g mm/s" % (P, v),
+            note="Coen et al. 2022 (KU Leuven), %g W, %g mm/s, 37.5 um taken "
+                 "as the 1/e^2 radius (not in the data; trends only)" % (P, v)))
     for r in read_table("simonds2018_316l_spot.csv"):
         P = num(r["power_W"])
         out.append(dict(
@@ -393,7 +419,12 @@ SETTINGS.update({"h4": refined(4e-6), "h2": refined(2e-6),
                  "surfactant": {
                      "Melt flow/Surface tension model": "surfactant",
                      "Melt flow/Surfactant/Activity": "0.02313"},
-                 "linear": {"Melt flow/Surface tension model": "linear"}})
+                 "linear": {"Melt flow/Surface tension model": "linear"},
+                 # the KU Leuven tracks' other spot reading: 37.5 um as the
+                 # 1/e^2 diameter (r_b 18.75 um) instead of the radius
+                 # (KUL_RB); the scene's domain stays that of the measured
+                 # pool (kul_* cases only)
+                 "kulr19": {"Laser/Beam radius": fmt(KUL_RB / 2)}})
 
 
 def csv_rows(path):
@@ -1611,7 +1642,7 @@ def run_case(args, exe, c, setting, stop=None):
         if not m:
             return False
         seen[:] = now
-        if float(m[-1]) < t_end * (1 - 1e-6):
+        if float(m[-1]) < t_end * (1 - END_RTOL):
             renew.append(now[0])
             return True
         return False
@@ -1626,7 +1657,7 @@ def run_case(args, exe, c, setting, stop=None):
         raise
     seg.update(rc=rc)
     record(wall, cpu)
-    reached = (seg.get("t_reached") or 0) >= t_end * (1 - 1e-6)
+    reached = (seg.get("t_reached") or 0) >= t_end * (1 - END_RTOL)
     seg["ended"] = ("finished" if reached else
                     "stopped after checkpoint %s" % renew[0] if renew else
                     "stopped")
@@ -1652,7 +1683,7 @@ def run_case(args, exe, c, setting, stop=None):
         # femp's printed wall time is the last segment's; wall_s is the sum
         r["segments"] = len(segments)
         r.pop("femp_wall_s", None)
-    if r.get("t_reached", 0) >= t_end * (1 - 1e-6):
+    if r.get("t_reached", 0) >= t_end * (1 - END_RTOL):
         try:
             r.update(end_state(d, c["alloy"]))
         except (OSError, ValueError, KeyError, TypeError) as ex:
@@ -1680,7 +1711,7 @@ def cmd_reevaluate(args):
         t_end = path_time(allc[name], setting)
         r.update(evaluate(os.path.join(d, "output"), t_end,
                           open(os.path.join(d, "log.txt")).read()))
-        if r["t_reached"] >= t_end * (1 - 1e-6):
+        if r["t_reached"] >= t_end * (1 - END_RTOL):
             r.pop("incomplete", None)
             r.update(end_state(d, allc[name]["alloy"]))
         else:
@@ -2619,7 +2650,9 @@ SETTING_NAMES = {"default": "default free surface, 8 um cells",
                  "piston": "default free surface, front-wall piston, "
                            "8 um cells",
                  "expel": "default free surface, front-wall expulsion, "
-                          "8 um cells"}
+                          "8 um cells",
+                 "kulr19": "default free surface, KU Leuven spot read as a "
+                           "37.5 um 1/e^2 diameter (r_b 18.75 um), 8 um cells"}
 # the retained fraction in the absorption figure, a lighter tone of COLOURS
 RETAINED_COLOURS = {"default": "#74c0fc", "h4": "#8ce99a", "h2": "#66d9e8",
                     "fine": "#ffa94d", "median": "#ced4da", "cell": "#e599f7"}
@@ -2656,8 +2689,10 @@ def cmd_report(args):
             for (st, name), r in sorted(res.items()):
                 c = allc.get(name)
                 # the spot sweep has its own figures (nist_spot_figures)
+                # the KU Leuven tracks (trends only) have their own table
                 if (st != s or not c or r.get(what) is None
-                        or c["dataset"] == "NIST spot sweep"):
+                        or c["dataset"] in ("NIST spot sweep",
+                                            "KU Leuven 2022")):
                     continue
                 pts.append((c[what] * 1e6, r[what] * 1e6, c[what + "_sd"] * 1e6,
                             0, c["label"] if s == "default" else ""))
@@ -2732,12 +2767,117 @@ def cmd_report(args):
                                  r["t_reached"] * 1e6,
                                  path_time(c, st) * 1e6))
                              if r.get("incomplete") else ""))
+    lines += kul_table(res, allc, settings)
     lines += dig_table(res, allc, settings)
     table = "\n".join(lines) + "\n"
     f = os.path.join(args.out, "tables.md")
     open(f, "w").write(table)
     print(table)
     print("wrote", f, "and the figures in", args.img)
+
+
+def ranks(x):
+    """The ranks of the values @p x (1 = smallest; ties share their mean
+    rank)."""
+    order = sorted(range(len(x)), key=lambda i: x[i])
+    r = [0.0] * len(x)
+    i = 0
+    while i < len(order):
+        j = i
+        while j + 1 < len(order) and x[order[j + 1]] == x[order[i]]:
+            j += 1
+        for k in range(i, j + 1):
+            r[order[k]] = 0.5 * (i + j) + 1
+        i = j + 1
+    return r
+
+
+def spearman(x, y):
+    """Spearman's rank correlation of @p x and @p y (None for fewer than
+    3 pairs or a constant series)."""
+    if len(x) < 3:
+        return None
+    rx, ry = ranks(x), ranks(y)
+    mx, my = sum(rx) / len(rx), sum(ry) / len(ry)
+    sxy = sum((a - mx) * (b - my) for a, b in zip(rx, ry))
+    sxx = sum((a - mx) ** 2 for a in rx)
+    syy = sum((b - my) ** 2 for b in ry)
+    return sxy / math.sqrt(sxx * syy) if sxx > 0 and syy > 0 else None
+
+
+def regime_of(dh):
+    """femp's scene-log class of a normalized enthalpy (source/app/scene.cc):
+    conduction below 2.5, near the transition to 3, transition or keyhole
+    from 3."""
+    if dh is None:
+        return "-"
+    return ("conduction" if dh < 2.5 else "near transition" if dh < 3
+            else "transition/keyhole")
+
+
+def kul_table(res, allc, settings):
+    """The KU Leuven 316L tracks (Coen et al. 2022; a secondary data set,
+    trends only): per case femp's width and depth against the measured
+    ones, depth/width, the normalized enthalpy of the scene log and its
+    class against the authors' regime; per power and setting the trends
+    with speed: Spearman's rank correlation of width and depth with the
+    speed and the ratio of the slowest to the fastest track's depth,
+    femp's and measured on the same cases. No pass/fail."""
+    rows = [(st, n, r) for (st, n), r in res.items()
+            if n in allc and allc[n]["dataset"] == "KU Leuven 2022"]
+    if not rows:
+        return []
+    out = ["\n### KU Leuven 2022 (316L, trends only)\n",
+           "| case | setting | measured width (µm) | femp | error | measured "
+           "depth (µm) | femp | error | depth/width measured / femp | "
+           "regime (authors) | ΔH/h_s | femp's class | absorbed (femp) | "
+           "wall (s) × ranks |",
+           "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---:|---:|"]
+    for st, n, r in sorted(rows, key=lambda x: (allc[x[1]]["P"], settings.index(x[0]),
+                                               allc[x[1]]["v"])):
+        c = allc[n]
+        dh = r.get("normalized_enthalpy")
+        dw = (("%.2f" % (r["depth"] / r["width"]))
+              if r.get("depth") and r.get("width") else "-")
+        out.append("| %s | %s | %.1f | %s | %s | %.1f | %s | %s | %.2f / %s | %s | "
+                   "%s | %s | %s | %.0f × %d%s |" % (
+                       c["label"], st, c["width"] * 1e6, um(r.get("width")),
+                       pct(rel(r.get("width"), c["width"])), c["depth"] * 1e6,
+                       um(r.get("depth")), pct(rel(r.get("depth"), c["depth"])),
+                       c["depth"] / c["width"], dw, c["regime"],
+                       ("%.2f" % dh) if dh else "-", regime_of(dh),
+                       ("%.3f" % r["absorbed"]) if r.get("absorbed") is not None else "-",
+                       r.get("wall_s") or r.get("femp_wall_s") or 0, r["np"],
+                       " (incomplete)" if r.get("incomplete") else ""))
+    out += ["", "Trends with the speed (the cases femp ran; Spearman's rank "
+            "correlation with the speed, −1: falls monotonically; depth ratio: "
+            "slowest over fastest track):", "",
+            "| power | setting | speeds (mm/s) | width ρ measured / femp | "
+            "depth ρ measured / femp | depth ratio measured / femp |",
+            "|---|---|---|---:|---:|---:|"]
+    for P in sorted({allc[n]["P"] for _, n, _ in rows}):
+        for st in settings:
+            sel = sorted((allc[n]["v"], allc[n], r) for s, n, r in rows
+                         if s == st and allc[n]["P"] == P and r.get("width")
+                         and r.get("depth") and not r.get("incomplete"))
+            if not sel:
+                continue
+            v = [x[0] for x in sel]
+
+            def rho(key, femp):
+                y = [(x[2][key] if femp else x[1][key]) for x in sel]
+                q = spearman(v, y)
+                return ("%+.2f" % q) if q is not None else "-"
+
+            def ratio(femp):
+                a, b = (sel[0][2], sel[-1][2]) if femp else (sel[0][1], sel[-1][1])
+                return "%.2f" % (a["depth"] / b["depth"]) if len(sel) > 1 else "-"
+
+            out.append("| %g W | %s | %s | %s / %s | %s / %s | %s / %s |" % (
+                P, st, ", ".join("%g" % (x * 1e3) for x in v),
+                rho("width", False), rho("width", True),
+                rho("depth", False), rho("depth", True), ratio(False), ratio(True)))
+    return out
 
 
 def nist_spot_figures(res, allc, settings, img):
