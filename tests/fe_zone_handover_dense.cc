@@ -94,19 +94,6 @@ namespace
     }
   };
 
-  /// Of @p cells, those inside the cells [@p i0, @p i1) x [@p j0, @p j1).
-  double
-  count_in(const std::vector<std::array<int, dim>> &cells,
-           const int                                i0,
-           const int                                i1,
-           const int                                j0,
-           const int                                j1)
-  {
-    double n = 0;
-    for (const auto &c : cells)
-      n += c[0] >= i0 && c[0] < i1 && c[1] >= j0 && c[1] < j1;
-    return n;
-  }
 } // namespace
 
 int

@@ -33,20 +33,6 @@ namespace
 {
   constexpr int    dim = 2;
   constexpr double h   = 0.1;
-
-  /// Of @p cells, those inside the cells [@p i0, @p i1) x [@p j0, @p j1).
-  double
-  count_in(const std::vector<std::array<int, dim>> &cells,
-           const int                                i0,
-           const int                                i1,
-           const int                                j0,
-           const int                                j1)
-  {
-    double n = 0;
-    for (const auto &c : cells)
-      n += c[0] >= i0 && c[0] < i1 && c[1] >= j0 && c[1] < j1;
-    return n;
-  }
 } // namespace
 
 int

@@ -1,9 +1,10 @@
 // femp tests: the set-up shared by the tests of the hand-over's choice on a
 // block whose points the test has placed (fe_zone_handover_dense,
-// fe_zone_handover_subcell_3d, fe_zone_handover_pore_3d): the block and its
-// test material, the solid with its finite-element zone at 300 K, alpha and
-// the pore detector's pores, one choice of FeZoneHandover with what it
-// read, and the melt-flow placement of a cell's points.
+// fe_zone_handover_subcell_3d, fe_zone_handover_pore_3d,
+// fe_zone_handover_surface): the block and its test material, the solid
+// with its finite-element zone at 300 K, alpha and the pore detector's
+// pores, one choice of FeZoneHandover with what it read, the melt-flow
+// placement of a cell's points and a count of chosen cells in a 2D box.
 #ifndef femp_handover_tools_h
 #define femp_handover_tools_h
 
@@ -34,6 +35,21 @@ namespace femp_test
     const double o    = x / h - cell;
     const bool   even = int(cell) % 2 == 0;
     return (cell + (o < 0.5 ? (even ? 0.02 : 0.26) : (even ? 0.98 : 0.74))) * h;
+  }
+
+  /// Of the 2D @p cells, those inside the cells [@p i0, @p i1) x
+  /// [@p j0, @p j1).
+  inline double
+  count_in(const std::vector<std::array<int, 2>> &cells,
+           const int                              i0,
+           const int                              i1,
+           const int                              j0,
+           const int                              j1)
+  {
+    double n = 0;
+    for (const auto &c : cells)
+      n += c[0] >= i0 && c[0] < i1 && c[1] >= j0 && c[1] < j1;
+    return n;
   }
 
   /// On rank 0 of @p comm: why the choice @p what stopped below its

@@ -89,10 +89,13 @@ main(int argc, char **argv)
   Checks                           checks(comm);
   try
     {
-      const std::string           scene  = argv[1];
+      const std::string scene = argv[1];
+      // The powder top's line alone, as in rebalance_at_layer_start: the
+      // zone rises to 52 um and the layer start's rebalance fires.
       const std::vector<Override> common = {
         {"Solid FEM", "Zone upper corner", "200e-6, 8e-6"},
         {"Build", "Hand-over margin", "3.2e-5"},
+        {"Build", "Hand-over surface limit", "false"},
         {"Build", "Rebalance above imbalance", "1.2"},
         {"Checkpoint", "Every simulated time", "5e-5"},
         {"Output", "Directory", "kept"}};

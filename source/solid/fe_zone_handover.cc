@@ -311,8 +311,8 @@ namespace femp
   }
 
   template <int dim>
-  double
-  FeZoneHandover<dim>::layer_penetration() const
+  std::vector<double>
+  FeZoneHandover<dim>::all_col_lowest() const
   {
     std::vector<double> low(col_lowest);
     MPI_Allreduce(MPI_IN_PLACE,
@@ -321,7 +321,15 @@ namespace femp
                   MPI_DOUBLE,
                   MPI_MIN,
                   grid.communicator());
-    double p = -std::numeric_limits<double>::infinity();
+    return low;
+  }
+
+  template <int dim>
+  double
+  FeZoneHandover<dim>::layer_penetration() const
+  {
+    const std::vector<double> low = all_col_lowest();
+    double                    p   = -std::numeric_limits<double>::infinity();
     for (std::size_t c = 0; c < low.size(); ++c)
       if (std::isfinite(low[c]))
         p = std::max(p,
@@ -1064,14 +1072,7 @@ namespace femp
     // The penetration depth, the layer's lowest molten cell per column of
     // all ranks and the surface it met.
     out.put(penetration);
-    std::vector<double> low(col_lowest);
-    MPI_Allreduce(MPI_IN_PLACE,
-                  low.data(),
-                  int(low.size()),
-                  MPI_DOUBLE,
-                  MPI_MIN,
-                  grid.communicator());
-    out.put_vector(low);
+    out.put_vector(all_col_lowest());
     out.put_vector(start_surface);
   }
 

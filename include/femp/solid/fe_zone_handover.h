@@ -535,6 +535,10 @@ namespace femp
                  const std::vector<std::uint8_t> &zone,
                  const std::vector<double>       &alpha,
                  const std::vector<double>       &pore) const;
+    /// The layer's lowest molten cell per column over the ranks (m; +inf:
+    /// none). Collective.
+    std::vector<double>
+    all_col_lowest() const;
     /// The largest S_w at the layer's start less the lowest molten cell's
     /// bottom over the columns of the layer so far (over the ranks; -inf:
     /// none melted). Collective.
