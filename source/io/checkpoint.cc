@@ -24,8 +24,10 @@ namespace femp
     // and the factor its masses were built at) and the evaporated-mass
     // account in the section "run"; 6: the displacements of the FE
     // zone's transition nodes in the section "solid" (the hand-over's fill
-    // reads them). A file of another version is refused.
-    const std::uint32_t format_version = 6;
+    // reads them); 7: the hand-over's penetration depth, its lowest
+    // molten cell per column and the metal surface the layer met, in the
+    // section "handover". A file of another version is refused.
+    const std::uint32_t format_version = 7;
 
     /// FNV-1a, 64 bits, over @p n bytes at @p p, continued from @p h
     /// (the hash of the bytes before them; the default starts it).
